@@ -1,0 +1,1 @@
+from mtident.cli import feeddrive  # noqa: F401

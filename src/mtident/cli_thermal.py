@@ -1,0 +1,1 @@
+from mtident.cli import thermal  # noqa: F401
