@@ -19,7 +19,7 @@ import numpy as np
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import CovarianceError, DimensionError
 from mtident.ukf.adaptation import AdaptiveLaw, FadingFactor, fading_value, residual_memory
-from mtident.ukf.linalg import cholesky_downdate_or_mask, lower_factor_from_qr, safe_cholesky, symmetrize
+from mtident.ukf.linalg import cholesky_downdate_or_mask, lower_factor_from_qr, safe_cholesky, solve_gain, symmetrize
 from mtident.ukf.sigma_points import MerweScaledSigmaPoints, SigmaWeights
 from mtident.ukf.transform import MeasurementMoments, ModelFunction, Prior, measurement_moments, propagate, sqrt_factor
 
@@ -187,8 +187,8 @@ def _condition(
         innovation_cov = sy @ np.swapaxes(sy, -1, -2)
         return mean, chol, innovation_cov
     innovation_cov = moments.cov_without_noise + emission_cov
-    gain = np.swapaxes(np.linalg.solve(innovation_cov, np.swapaxes(pxy, -1, -2)), -1, -2)
-    mean = prior.mean + alpha[..., None] * np.einsum("...ij,...j->...i", gain, innovation)
+    gain = solve_gain(innovation_cov, pxy)
+    mean = prior.mean + alpha[..., None] * (gain @ innovation[..., None])[..., 0]
     cov = symmetrize(prior.cov - coefficient[..., None, None] * gain @ np.swapaxes(pxy, -1, -2))
     return mean, cov, innovation_cov
 
@@ -253,7 +253,7 @@ def _search_emission_cov(
         candidates = emission_cov[..., None, :, :] * multipliers[:, None, None]  # (..., J, 1, 1)
         pyy = moments.cov_without_noise[..., None, :, :] + candidates
         pxy = moments.cross_cov[..., None, :, :]
-        gain = np.swapaxes(np.linalg.solve(pyy, np.swapaxes(pxy, -1, -2)), -1, -2)
+        gain = solve_gain(pyy, pxy)
         if config.fading is None:
             alpha = np.ones(pyy.shape[:-2])
         else:
@@ -340,29 +340,33 @@ def filter_step(
             mean, spread, innovation_cov = _condition(prior, moments, innovation, emission_cov, alpha, config, w)
             gamma = y_safe - measurement(mean[..., None, :])[..., 0, :]
 
-    # A missing measurement leaves the prediction as the posterior.
-    mean = np.where(observed[..., None], mean, prior.mean)
-    keep = observed[..., None, None]
     if config.square_root:
-        assert prior.chol is not None
-        new_chol, new_cov = np.where(keep, spread, prior.chol), None
+        new_chol, new_cov = spread, None
     else:
-        new_chol, new_cov = None, np.where(keep, spread, prior.cov)
-    nan = np.nan
+        new_chol, new_cov = None, spread
+    if not np.all(observed):
+        # A missing measurement leaves the prediction as the posterior.
+        keep = observed[..., None, None]
+        mean = np.where(observed[..., None], mean, prior.mean)
+        new_chol = None if new_chol is None else np.where(keep, new_chol, prior.chol)
+        new_cov = None if new_cov is None else np.where(keep, new_cov, prior.cov)
+        memory = np.where(keep, memory, carry.residual_memory)
+        innovation = np.where(observed[..., None], innovation, np.nan)
+        gamma = np.where(observed[..., None], gamma, np.nan)
     new_carry = FilterCarry(
         mean=mean,
         cov=new_cov,
         chol=new_chol,
         process_cov=process_cov,
         emission_cov=emission_cov,
-        residual_memory=np.where(keep, memory, carry.residual_memory),
+        residual_memory=memory,
         updates_seen=carry.updates_seen + observed,
     )
     info = StepInfo(
-        innovation=np.where(observed[..., None], innovation, nan),
+        innovation=innovation,
         innovation_cov=innovation_cov,
         fading=alpha,
-        posterior_residual=np.where(observed[..., None], gamma, nan),
+        posterior_residual=gamma,
         adapted=adapted,
         reached=reached,
     )

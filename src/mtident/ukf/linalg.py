@@ -14,8 +14,16 @@ __all__ = [
     "cholesky_downdate_or_mask",
     "weighted_outer",
     "first_bad_index",
+    "solve_gain",
     "lower_factor_from_qr",
 ]
+
+
+def solve_gain(innovation_cov: FloatArray, cross_cov: FloatArray) -> FloatArray:
+    """Pxy Py⁻¹ for Py (..., m, m), Pxy (..., n, m), by a solve (a division when m = 1)."""
+    if innovation_cov.shape[-1] == 1:
+        return cross_cov / innovation_cov[..., 0:1, :]
+    return np.swapaxes(np.linalg.solve(innovation_cov, np.swapaxes(cross_cov, -1, -2)), -1, -2)
 
 
 def symmetrize(matrix: FloatArray) -> FloatArray:
@@ -48,7 +56,7 @@ def safe_cholesky(matrix: FloatArray, stage: str) -> FloatArray:
 
 def weighted_outer(weights: FloatArray, left: FloatArray, right: FloatArray) -> FloatArray:
     """Σᵢ wᵢ aᵢ bᵢᵀ for deviations ``left`` (..., S, n) and ``right`` (..., S, m)."""
-    return np.einsum("s,...si,...sj->...ij", weights, left, right)
+    return np.swapaxes(left * weights[:, None], -1, -2) @ right
 
 
 def lower_factor_from_qr(columns: FloatArray) -> FloatArray:

@@ -96,7 +96,7 @@ def propagate(
     """Time update: sigma points of N(mean, chol cholᵀ) through the transition (Eqs 5-10)."""
     points = sigma_points(mean, chol, weights)
     propagated = transition(points)
-    prior_mean = np.einsum("s,...si->...i", weights.mean, propagated)
+    prior_mean = weights.mean @ propagated
     deviations = propagated - prior_mean[..., None, :]
     cov = symmetrize(weighted_outer(weights.cov, deviations, deviations) + process_cov)
     prior_chol = None
@@ -121,7 +121,7 @@ def measurement_moments(
     else:
         points = prior.sigmas
     outputs = measurement(points)
-    mean = np.einsum("s,...si->...i", weights.mean, outputs)
+    mean = weights.mean @ outputs
     dy = outputs - mean[..., None, :]
     dx = points - prior.mean[..., None, :]
     return MeasurementMoments(
