@@ -1,0 +1,5 @@
+"""Reading and validating sensor logs."""
+
+from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog, read_temperature_log
+
+__all__ = ["OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TemperatureLog", "read_temperature_log"]

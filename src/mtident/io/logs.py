@@ -1,0 +1,203 @@
+"""Temperature logs: CSV with one time column and one column per sensor (DESIGN.md contract).
+
+The time column is the first one unless ``time_col`` names another. Its unit is
+minutes unless ``time_unit`` says otherwise or the header ends in ``_s``,
+``_min`` or ``_h``; ISO-8601 timestamps are read as such. Temperatures are °C.
+
+Everything that can be wrong with a user's file is reported as an
+:class:`~mtident.exceptions.InputError` naming the file, the column and the row.
+Isolated bad samples (an empty or NaN cell, an open-circuit reading) are
+replaced by NaN — the filters treat NaN as a missing measurement — and listed in
+``TemperatureLog.notes`` so the CLI can say so on stderr.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from mtident._typing import FloatArray
+from mtident.exceptions import InputError
+
+__all__ = ["TemperatureLog", "read_temperature_log", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS"]
+
+# A PT100 channel with a broken wire reads far outside any machine-tool temperature.
+OPEN_CIRCUIT_HIGH_C = 400.0
+OPEN_CIRCUIT_LOW_C = -60.0
+# Above this share of bad samples a sensor is refused rather than bridged.
+MAX_BAD_FRACTION = 0.1
+TIME_UNITS = {"s": 1.0 / 60.0, "min": 1.0, "h": 60.0}
+
+
+@dataclass(frozen=True)
+class TemperatureLog:
+    """A validated warm-up log.
+
+    Attributes
+    ----------
+    time_min : ndarray, shape (N,)
+        Minutes since the first sample, strictly increasing.
+    sensors : tuple of str
+        Sensor (column) names.
+    temperature_C : ndarray, shape (N, S)
+        Temperatures, NaN where a sample was rejected.
+    notes : tuple of str
+        What was skipped and why (for stderr).
+    source : str
+        Where the log came from.
+    """
+
+    time_min: FloatArray
+    sensors: tuple[str, ...]
+    temperature_C: FloatArray
+    notes: tuple[str, ...] = field(default=())
+    source: str = ""
+
+    def select(self, names: list[str] | None) -> TemperatureLog:
+        """The same log restricted to ``names`` (all sensors if None or ["all"])."""
+        if not names or names == ["all"]:
+            return self
+        missing = [n for n in names if n not in self.sensors]
+        if missing:
+            msg = f"{self.source}: no sensor column {missing[0]!r}; the log has: {', '.join(self.sensors)}"
+            raise InputError(msg)
+        idx = [self.sensors.index(n) for n in names]
+        return TemperatureLog(self.time_min, tuple(names), self.temperature_C[:, idx], self.notes, self.source)
+
+    def window(self, minutes: float) -> int:
+        """Number of samples with time ≤ ``minutes``."""
+        return int(np.searchsorted(self.time_min, minutes + 1e-9, side="right"))
+
+
+def _time_unit(header: str, time_unit: str | None) -> float:
+    if time_unit is not None:
+        if time_unit not in TIME_UNITS:
+            msg = f"time unit {time_unit!r} is not one of: {', '.join(TIME_UNITS)}"
+            raise InputError(msg)
+        return TIME_UNITS[time_unit]
+    for suffix, factor in TIME_UNITS.items():
+        if header.lower().endswith("_" + suffix):
+            return factor
+    return 1.0
+
+
+def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: str) -> FloatArray:
+    numeric = pd.to_numeric(column, errors="coerce")
+    if numeric.notna().all():
+        values = numeric.to_numpy(dtype=float) * _time_unit(header, time_unit)
+    else:
+        try:
+            stamps = pd.to_datetime(column, format="ISO8601")
+        except (ValueError, TypeError) as exc:
+            row = int(numeric.isna().to_numpy().argmax())
+            msg = (
+                f"{source}: time column {header!r}, row {row + 2}: {column.iloc[row]!r} is neither a number "
+                "nor an ISO-8601 timestamp"
+            )
+            raise InputError(msg) from exc
+        if stamps.isna().any():
+            row = int(stamps.isna().to_numpy().argmax())
+            msg = f"{source}: time column {header!r}, row {row + 2} is empty"
+            raise InputError(msg)
+        values = (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
+    steps = np.diff(values)
+    if np.any(steps == 0):
+        row = int(np.argmax(steps == 0)) + 1
+        msg = f"{source}: time column {header!r}, row {row + 2}: duplicate time {column.iloc[row]!r}"
+        raise InputError(msg)
+    if np.any(steps < 0):
+        row = int(np.argmax(steps < 0)) + 1
+        msg = f"{source}: time column {header!r}, row {row + 2}: time goes back ({column.iloc[row - 1]!r} then {column.iloc[row]!r}); time must increase"
+        raise InputError(msg)
+    return values - values[0]
+
+
+def read_temperature_log(
+    path: str | Path,
+    time_col: str | None = None,
+    time_unit: str | None = None,
+    min_samples: int = 5,
+) -> TemperatureLog:
+    """Read and validate a CSV temperature log.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    time_col : str, optional
+        Name of the time column (default: the first column).
+    time_unit : {"s", "min", "h"}, optional
+        Unit of a numeric time column (default: from the header suffix, else minutes).
+    min_samples : int
+        Fewest samples accepted.
+
+    Returns
+    -------
+    TemperatureLog
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, no such column, no sensor column, non-numeric
+        cells, time not increasing or duplicated, too few samples, too many bad
+        samples in a sensor.
+    """
+    source = str(path)
+    file = Path(path)
+    if not file.is_file():
+        msg = f"{source}: no such file"
+        raise InputError(msg)
+    try:
+        frame = pd.read_csv(file, skipinitialspace=True)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        msg = f"{source}: not a readable CSV file ({str(exc).splitlines()[0]})"
+        raise InputError(msg) from exc
+    frame.columns = [str(c).strip() for c in frame.columns]
+    if frame.shape[1] < 2:
+        msg = f"{source}: need a time column and at least one sensor column; found columns: {', '.join(frame.columns)}"
+        raise InputError(msg)
+    header = time_col if time_col is not None else frame.columns[0]
+    if header not in frame.columns:
+        msg = f"{source}: no time column {header!r}; the columns are: {', '.join(frame.columns)}"
+        raise InputError(msg)
+    if len(frame) < min_samples:
+        msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
+        raise InputError(msg)
+    time_min = _parse_time(frame[header], header, time_unit, source)
+
+    sensors = [c for c in frame.columns if c != header]
+    notes: list[str] = []
+    columns = []
+    for name in sensors:
+        raw = frame[name]
+        values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
+        text = raw.astype(str).str.strip()
+        non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.str.lower().isin(["nan", ""]).to_numpy()
+        if np.any(non_numeric):
+            row = int(np.argmax(non_numeric))
+            msg = f"{source}: sensor {name!r}, row {row + 2}: {raw.iloc[row]!r} is not a number"
+            raise InputError(msg)
+        missing = np.isnan(values)
+        open_circuit = (values > OPEN_CIRCUIT_HIGH_C) | (values < OPEN_CIRCUIT_LOW_C)
+        bad = missing | open_circuit
+        if np.mean(bad) > MAX_BAD_FRACTION:
+            msg = (
+                f"{source}: sensor {name!r}: {int(bad.sum())} of {len(values)} samples are empty, NaN or "
+                f"open-circuit (outside {OPEN_CIRCUIT_LOW_C:g}..{OPEN_CIRCUIT_HIGH_C:g} °C); check the wiring "
+                "or leave this sensor out with --sensor"
+            )
+            raise InputError(msg)
+        if np.any(bad):
+            rows = ", ".join(str(int(r) + 2) for r in np.flatnonzero(bad)[:5])
+            kinds = []
+            if missing.any():
+                kinds.append(f"{int(missing.sum())} empty/NaN")
+            if open_circuit.any():
+                kinds.append(f"{int(open_circuit.sum())} open-circuit")
+            notes.append(f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows {rows}{', ...' if bad.sum() > 5 else ''})")
+            values = np.where(bad, np.nan, values)
+        columns.append(values)
+    return TemperatureLog(time_min, tuple(sensors), np.column_stack(columns), tuple(notes), source)

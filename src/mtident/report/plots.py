@@ -1,0 +1,91 @@
+"""PNG figures like the papers': measured vs predicted warm-ups, RMSE vs identification time,
+and (feed drive) responses and parameter convergence."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+if TYPE_CHECKING:
+    from mtident.thermal.identify import Identification
+    from mtident.thermal.min_time import MinTimeResult
+
+__all__ = ["plot_identification", "plot_min_time", "grid"]
+
+
+def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 - (figure, flat axes)
+    """A figure with ``count`` panels in up to 3 columns; returns (figure, list of axes)."""
+    cols = min(count, 3)
+    rows = math.ceil(count / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False)
+    flat = list(axes.ravel())
+    for ax in flat[count:]:
+        ax.set_visible(False)
+    return fig, flat[:count]
+
+
+def plot_identification(result: Identification, path: str | Path) -> Path:
+    """Measured and predicted temperature per sensor, with the 95 % band, the
+    identification time, T∞ and the predicted equilibrium time (seed 000 Figs 6-8)."""
+    fig, axes = grid(len(result.sensors))
+    t = result.time_min
+    for s, ax in enumerate(axes):
+        measured = result.measured_C[:, s]
+        ax.plot(t, measured, ".", ms=2.5, color="0.45", label="measured")
+        mean, sd = result.curve_C[:, s], result.curve_sd_C[:, s]
+        inside = t <= result.window_min + 1e-9
+        ax.plot(t[inside], mean[inside], color="tab:blue", lw=1.6, label="filtered")
+        ax.plot(t[~inside], mean[~inside], color="tab:red", lw=1.6, label="predicted")
+        finite = np.isfinite(sd) & (sd < 50)
+        ax.fill_between(t[finite], (mean - 1.96 * sd)[finite], (mean + 1.96 * sd)[finite], color="tab:red", alpha=0.18, lw=0, label="95 % band")
+        ax.axvline(result.window_min, color="k", ls="--", lw=1, label=f"L = {result.window_min:g} min")
+        steady = result.steady_state_C[s]
+        if np.isfinite(steady):
+            ax.axhline(steady, color="tab:green", ls=":", lw=1.2, label=f"T∞ = {steady:.2f} °C")
+        eq = result.equilibrium_time_min[s]
+        if np.isfinite(eq) and eq < t[-1]:
+            ax.axvline(eq, color="tab:green", ls="-.", lw=1, label=f"95 % at {eq:.0f} min")
+        ax.set_title(f"{result.sensors[s]} ({result.method})", fontsize=10)
+        ax.set_xlabel("time (min)")
+        ax.set_ylabel("temperature (°C)")
+        lo = np.nanmin(measured) - 0.5
+        hi = max(np.nanmax(measured), np.nanmax(mean[np.isfinite(mean)]) if np.any(np.isfinite(mean)) else lo) + 0.5
+        ax.set_ylim(lo, min(hi, np.nanmax(measured) + 10))
+        ax.grid(alpha=0.3)
+        if s == 0:
+            ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def plot_min_time(result: MinTimeResult, path: str | Path) -> Path:
+    """RMSE against identification time for each sampling period (seed 000 Figs 5 and 9)."""
+    fig, axes = grid(len(result.sensors))
+    for s, ax in enumerate(axes):
+        for p, period in enumerate(result.periods_min):
+            curve = result.rmse_C[p, :, s]
+            ok = np.isfinite(curve)
+            ax.plot(result.windows_min[ok], curve[ok], marker=".", ms=3, lw=1, label=f"M = {period:g} min")
+        ax.axvline(result.min_identification_time_min[s], color="k", ls="--", lw=1, label=f"chosen {result.min_identification_time_min[s]:g} min")
+        ax.set_yscale("log")
+        ax.set_title(f"{result.sensors[s]} ({result.method})", fontsize=10)
+        ax.set_xlabel("identification time L (min)")
+        ax.set_ylabel("RMSE (°C)")
+        ax.grid(alpha=0.3, which="both")
+        if s == 0:
+            ax.legend(fontsize=7)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out

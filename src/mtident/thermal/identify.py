@@ -1,0 +1,479 @@
+"""Identify, then predict (seed 000 §2.1 end and §2.4; seed 001 §1.5).
+
+Filter the measurements up to the identification time L, then predict to the end
+of the record (or a horizon). All sensors of a log are filtered as one batch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from mtident._typing import BoolArray, FloatArray
+from mtident.exceptions import InputError
+from mtident.io.logs import TemperatureLog
+from mtident.thermal.lsq import fit_rise
+from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observe_temperature, rise_curve, to_physical, transition_for
+from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
+from mtident.ukf import FilterConfig, GaussianState, filter_step, forecast, run_filter
+
+__all__ = ["Identification", "identify", "rmse", "num", "model_check", "measured_equilibrium", "Z95"]
+
+Z95 = 1.959963984540054
+MIN_WINDOW_SAMPLES = 6
+
+
+@dataclass(frozen=True)
+class Identification:
+    """The identified warm-up of every sensor of a log, arrays with a sensor axis S.
+
+    Attributes
+    ----------
+    sensors : tuple of str
+    method, preset : str
+    window_min : float
+        Identification time L actually used (time of the last sample ≤ L).
+    time_min : ndarray, shape (N,)
+        The log's sample times, then the forecast horizon beyond it.
+    curve_C, curve_sd_C : ndarray, shape (N, S)
+        Estimated temperature (filtered up to L, predicted after) and its standard deviation.
+    steady_state_C, steady_state_sd_C, rate_per_min, rate_sd_per_min, start_C : ndarray, shape (S,)
+    equilibrium_time_min : ndarray, shape (S,)
+        Predicted time to 95 % of the total rise, from the start of the log.
+    rmse_C : ndarray, shape (S,)
+        Seed 000 Eq. 33 over all measured samples.
+    fit_chi2, fit_autocorr : ndarray, shape (S,)
+        Residual test of the first-order model inside the window.
+    fits : ndarray of bool, shape (S,)
+        The residual test passed; where it failed the interval was widened.
+    history : ndarray, shape (L, S, 3)
+        Filtered state at each sample up to L (convergence plots).
+    history_sd : ndarray, shape (L, S, 3)
+    measured_final_C, measured_equilibrium_time_min : ndarray, shape (S,)
+        From the log itself where it reached equilibrium, else NaN.
+    notes : tuple of str
+    """
+
+    sensors: tuple[str, ...]
+    method: str
+    preset: str
+    window_min: float
+    n_window: int
+    time_min: FloatArray
+    measured_C: FloatArray
+    curve_C: FloatArray
+    curve_sd_C: FloatArray
+    steady_state_C: FloatArray
+    steady_state_sd_C: FloatArray
+    rate_per_min: FloatArray
+    rate_sd_per_min: FloatArray
+    start_C: FloatArray
+    equilibrium_time_min: FloatArray
+    rmse_C: FloatArray
+    fit_chi2: FloatArray
+    fit_autocorr: FloatArray
+    fits: BoolArray
+    history: FloatArray
+    history_sd: FloatArray
+    measured_final_C: FloatArray
+    measured_equilibrium_time_min: FloatArray
+    notes: tuple[str, ...]
+
+    def steady_state_ci95(self) -> FloatArray:
+        """(S, 2) 95 % interval of T∞."""
+        half = Z95 * self.steady_state_sd_C
+        return np.column_stack([self.steady_state_C - half, self.steady_state_C + half])
+
+    def summary(self, index: int) -> dict[str, object]:
+        """The contract's JSON object for one sensor (DESIGN.md), plus extras."""
+        lo, hi = self.steady_state_ci95()[index]
+        rate = float(self.rate_per_min[index])
+        return {
+            "sensor": self.sensors[index],
+            "method": self.method,
+            "preset": self.preset,
+            "window_min": float(self.window_min),
+            "steady_state_C": num(self.steady_state_C[index]),
+            "steady_state_ci95_C": [num(lo), num(hi)],
+            "lambda_per_min": num(rate),
+            "lambda_sd_per_min": num(self.rate_sd_per_min[index]),
+            "time_constant_min": 1.0 / rate if rate > 0 else None,
+            "start_C": num(self.start_C[index]),
+            "total_rise_C": num(self.steady_state_C[index] - self.start_C[index]),
+            "equilibrium_time_min": num(self.equilibrium_time_min[index]),
+            "rmse_C": num(self.rmse_C[index]),
+            "model_fits": bool(self.fits[index]),
+            "residual_chi2": num(self.fit_chi2[index]),
+            "measured_final_C": num(self.measured_final_C[index]),
+            "measured_equilibrium_time_min": num(self.measured_equilibrium_time_min[index]),
+        }
+
+
+def num(value: float) -> float | None:
+    """A float for JSON, or None where it is not finite."""
+    return float(value) if np.isfinite(value) else None
+
+
+def rmse(estimate: FloatArray, measured: FloatArray) -> FloatArray:
+    """Seed 000 Eq. 33: sqrt(Σ(Tₑ − Tₒ)²/(M − 1)) over the finite samples, per column."""
+    diff = estimate - measured
+    ok = np.isfinite(diff)
+    count = ok.sum(axis=0)
+    return np.sqrt(np.where(ok, diff**2, 0.0).sum(axis=0) / np.maximum(count - 1, 1))
+
+
+def _profile_rss(time_min: FloatArray, values: FloatArray, rates: FloatArray, with_drift: bool) -> FloatArray:
+    """Residual sum of squares of a + b·e^(−λt) (+ c·t) for each λ in ``rates``, linear parameters solved out."""
+    t = time_min - time_min[0]
+    columns = [np.ones((len(rates), len(t))), np.exp(-rates[:, None] * t[None, :])]
+    if with_drift:
+        columns.append(np.broadcast_to(t / max(t[-1], 1e-9), (len(rates), len(t))))
+    basis = np.stack(columns, axis=-1)  # (G, N, k)
+    gram = np.swapaxes(basis, -1, -2) @ basis + 1e-12 * np.eye(basis.shape[-1])
+    coef = np.linalg.solve(gram, (np.swapaxes(basis, -1, -2) @ values)[..., None])[..., 0]
+    residual = values - (basis @ coef[..., None])[..., 0]
+    return np.sum(residual**2, axis=-1)
+
+
+def _best_rss(time_min: FloatArray, values: FloatArray, with_drift: bool) -> float:
+    """Smallest RSS over λ by three rounds of a zooming log-spaced grid (no local-minimum trap)."""
+    span = max(float(time_min[-1] - time_min[0]), 1e-9)
+    lo, hi = np.log(0.01 / span), np.log(100.0 / span)
+    best = np.inf
+    for _ in range(3):
+        grid = np.linspace(lo, hi, 41)
+        rss = _profile_rss(time_min, values, np.exp(grid), with_drift)
+        i = int(np.argmin(rss))
+        best = min(best, float(rss[i]))
+        step = grid[1] - grid[0]
+        lo, hi = grid[i] - step, grid[i] + step
+    return best
+
+
+def model_check(
+    time_min: FloatArray, values: FloatArray, residuals: FloatArray, sigma: FloatArray
+) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """Residual tests of the first-order model inside the window.
+
+    1. A nested-model F-test: does a + b·e^(−λt) + c·t fit significantly better
+       than a + b·e^(−λt)? A fast-plus-slow warm-up, whose slow part looks like a
+       ramp in a short window, does (F above the 99.9 % point). The test needs no
+       noise level.
+    2. χ²/dof of the filter's residuals against the noise level (at least 0.1 mK,
+       below which residuals are rounding error): below 1 + 4·sqrt(2/dof), and a
+       lag-1 autocorrelation below 3/sqrt(N) unless χ²/dof ≤ 1.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N, S)
+        The window's measurements (NaN allowed).
+    residuals : ndarray, shape (N, S)
+        Data minus the identified curve inside the window.
+    sigma : ndarray, shape (S,)
+        Noise level from :func:`~mtident.thermal.settings.noise_sigma`.
+
+    Returns
+    -------
+    chi2, autocorrelation, fits : ndarray, shape (S,)
+    """
+    from scipy.stats import f as f_distribution
+
+    chi2, corr, fits = [], [], []
+    for s in range(residuals.shape[1]):
+        ok = np.isfinite(residuals[:, s]) & np.isfinite(values[:, s])
+        r = residuals[ok, s]
+        dof = max(len(r) - 3, 1)
+        c2 = float(np.sum((r / max(sigma[s], 1e-4)) ** 2) / dof)
+        centred = r - r.mean()
+        denom = float(np.sum(centred**2))
+        ac = float(np.sum(centred[1:] * centred[:-1]) / denom) if denom > 0 else 0.0
+        passes = c2 < 1.0 + 4.0 * np.sqrt(2.0 / dof) and (c2 <= 1.0 or ac < 3.0 / np.sqrt(len(r)))
+        if passes and len(r) >= 8:
+            t, y = time_min[ok], values[ok, s]
+            rss_null = _best_rss(t, y, with_drift=False)
+            rss_alt = _best_rss(t, y, with_drift=True)
+            floor = len(y) * (1e-4) ** 2  # residuals of a noise-free curve are rounding error
+            f_stat = (rss_null - rss_alt) / max(rss_alt, floor) * (len(y) - 4)
+            passes = bool(f_stat < f_distribution.ppf(0.999, 1, len(y) - 4))
+        chi2.append(c2)
+        corr.append(ac)
+        fits.append(passes)
+    return np.array(chi2), np.array(corr), np.array(fits)
+
+
+def measured_equilibrium(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Final temperature and 95 %-rise time read off a log that ran to equilibrium.
+
+    The final temperature is the median of the last 10 samples; the log counts as
+    having reached equilibrium when its last quarter rose by less than 5 % of the
+    total rise. Otherwise NaN.
+    """
+    finals, times = [], []
+    n = len(time_min)
+    for col in values.T:
+        ok = np.isfinite(col)
+        t, y = time_min[ok], col[ok]
+        if len(y) < 40:
+            finals.append(np.nan)
+            times.append(np.nan)
+            continue
+        start = float(np.median(y[:3]))
+        final = float(np.median(y[-10:]))
+        quarter = max(n // 4, 5)
+        late_rise = float(np.median(y[-5:]) - np.median(y[-quarter : -quarter + 5]))
+        rise = final - start
+        if rise == 0 or abs(late_rise) > 0.05 * abs(rise):
+            finals.append(np.nan)
+            times.append(np.nan)
+            continue
+        smooth = np.convolve(y, np.ones(5) / 5, mode="same")
+        target = start + EQUILIBRIUM_FRACTION * rise
+        crossed = (smooth >= target) if rise > 0 else (smooth <= target)
+        crossed[:2] = False
+        crossed[-2:] = crossed[-2:] | True
+        times.append(float(t[int(np.argmax(crossed))]))
+        finals.append(final)
+    return np.array(finals), np.array(times)
+
+
+def _transition_with(dts: FloatArray, parametrisation: str = "rate"):  # noqa: ANN202 - a closure over the step intervals
+    step = transition_for(parametrisation)
+
+    def transition(points: FloatArray, k: int) -> FloatArray:
+        return step(points, dts[k])
+
+    return transition
+
+
+def identify(
+    log: TemperatureLog,
+    window_min: float,
+    method: str = "ukf",
+    preset: str = "data",
+    horizon_min: float | None = None,
+    pseudo_measurement_seed: int | None = None,
+) -> Identification:
+    """Identify every sensor of ``log`` from its first ``window_min`` minutes, then predict.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    window_min : float
+        Identification time L (minutes from the first sample).
+    method : {"ukf", "aukf", "fukf", "afukf", "lsq"}
+    preset : {"data", "xia2014", "yu2019"}
+        Initial values and tuning: from the data (default) or a paper's exactly.
+    horizon_min : float, optional
+        Predict to this time (default: the end of the log, or 4 time constants
+        beyond the window if that is later).
+    pseudo_measurement_seed : int, optional
+        Predict as seed 000 Eqs 21-22 do, feeding noisy pseudo-measurements to
+        the filter after L, from a generator with this seed. Default: the
+        deterministic forecast of the mean with its covariance.
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    InputError
+        Unknown method or preset, or too few samples in the window.
+    """
+    if method not in METHODS:
+        msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
+        raise InputError(msg)
+    # A diverging filter (the papers' presets can) is reported in the notes, not as numpy warnings.
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _identify(log, window_min, method, preset, horizon_min, pseudo_measurement_seed)
+
+
+def _identify(
+    log: TemperatureLog,
+    window_min: float,
+    method: str,
+    preset: str,
+    horizon_min: float | None,
+    pseudo_measurement_seed: int | None,
+) -> Identification:
+    n_window = log.window(window_min)
+    if n_window < MIN_WINDOW_SAMPLES:
+        msg = (
+            f"{log.source}: only {n_window} samples in the first {window_min:g} min; the identification "
+            f"needs at least {MIN_WINDOW_SAMPLES} (use a longer --window)"
+        )
+        raise InputError(msg)
+    t = log.time_min
+    y = log.temperature_C
+    S = y.shape[1]
+    tw, yw = t[:n_window], y[:n_window]
+    tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, S)
+    sigma = noise_sigma(yw)
+    notes: list[str] = list(log.notes)
+
+    # Future sample times: the log's, then a uniform extension to the horizon.
+    if method == "lsq":
+        fit = fit_rise(tw, yw, tuning.initial_mean)
+        rate_guess = fit.params[:, 1]
+    else:
+        rate_guess = tuning.initial_mean[:, 1]
+    t_future = _future_times(t, n_window, window_min, horizon_min, rate_guess)
+    times = np.concatenate([t[:n_window], t_future])
+
+    if method == "lsq":
+        params, cov = fit.params, fit.cov
+        mean_curve = rise_curve(times[:, None], params[:, 0], params[:, 1], params[:, 2])
+        jac = _rise_jacobian(times[:, None], params)
+        curve_var = np.einsum("nsi,sij,nsj->ns", jac, cov, jac)
+        history = np.broadcast_to(params, (n_window, S, 3)).copy()
+        history_sd = np.broadcast_to(np.sqrt(np.diagonal(cov, axis1=-2, axis2=-1)), (n_window, S, 3)).copy()
+        final_mean, final_cov = params, cov
+        window_fit = mean_curve[:n_window]
+    else:
+        config = filter_config(method, tuning)
+        dts = np.diff(tw, prepend=tw[0])  # the first sample is measured at t₀ itself: Δt = 0
+        record = run_filter(
+            GaussianState(tuning.initial_mean, tuning.initial_cov),
+            yw[..., None],
+            _transition_with(dts, tuning.parametrisation),
+            observe_temperature,
+            tuning.process_cov,
+            tuning.emission_cov,
+            config,
+        )
+        history, history_cov = to_physical(record.means, record.covs, tuning.parametrisation)
+        history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
+        final_mean, final_cov = history[-1], history_cov[-1]
+        future_mean, future_var = _predict_after_window(
+            record.final, final_mean, t_future, tw[-1], config, tuning, pseudo_measurement_seed
+        )
+        mean_curve = np.concatenate([history[:, :, 0], future_mean])
+        curve_var = np.concatenate([history_sd[:, :, 0] ** 2, future_var])
+        # The model curve through the final state, back over the window, for the residual test.
+        window_fit = rise_curve(tw[:, None] - tw[-1], final_mean[:, 0], final_mean[:, 1], final_mean[:, 2])
+
+    chi2, autocorr, fits = model_check(tw, yw, yw - window_fit, sigma)
+    steady_sd = np.sqrt(final_cov[:, 2, 2])
+    rate_sd = np.sqrt(final_cov[:, 1, 1])
+    for s in np.flatnonzero(~fits):
+        notes.append(
+            f"sensor {log.sensors[s]!r}: the first-order model does not fit the window (residual χ²/dof "
+            f"{chi2[s]:.2f}, lag-1 autocorrelation {autocorr[s]:.2f}); the T∞ interval was widened by "
+            f"{max(np.sqrt(chi2[s]), 2.0):.1f}x, and a longer window or a two-term model may be needed"
+        )
+    widen = np.where(fits, 1.0, np.maximum(np.sqrt(chi2), 2.0))
+    steady_sd = steady_sd * widen
+    rate_now = final_mean[:, 1]
+    no_steady = ~(np.isfinite(rate_now) & (rate_now > 0) & np.isfinite(final_mean[:, 2]) & np.isfinite(steady_sd))
+    for s in np.flatnonzero(no_steady):
+        notes.append(
+            f"sensor {log.sensors[s]!r}: no approach to a steady state in the first {tw[-1]:g} min "
+            f"(λ = {rate_now[s]:.3g}/min with the {method} filter); T∞ is not identifiable from this window — "
+            "use a longer --window"
+        )
+    steady_sd = np.where(no_steady, np.nan, steady_sd)
+    final_mean = final_mean.copy()
+    final_mean[no_steady, 2] = np.nan
+
+    start = mean_curve[0]
+    steady = final_mean[:, 2]
+    rate = final_mean[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan)
+    n_log = len(t)
+    measured_part = np.full((len(times), S), np.nan)
+    measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]
+    in_log = times <= t[-1] + 1e-9
+    errors = rmse(mean_curve[in_log], y[: int(in_log.sum())])
+    final_measured, eq_measured = measured_equilibrium(t, y)
+    return Identification(
+        sensors=log.sensors,
+        method=method,
+        preset=preset,
+        window_min=float(tw[-1]),
+        n_window=n_window,
+        time_min=times,
+        measured_C=measured_part,
+        curve_C=mean_curve,
+        curve_sd_C=np.sqrt(np.maximum(curve_var, 0.0)),
+        steady_state_C=steady,
+        steady_state_sd_C=steady_sd,
+        rate_per_min=rate,
+        rate_sd_per_min=rate_sd,
+        start_C=start,
+        equilibrium_time_min=eq_time,
+        rmse_C=errors,
+        fit_chi2=chi2,
+        fit_autocorr=autocorr,
+        fits=fits,
+        history=history,
+        history_sd=history_sd,
+        measured_final_C=final_measured,
+        measured_equilibrium_time_min=eq_measured,
+        notes=tuple(notes),
+    )
+
+
+def _future_times(t: FloatArray, n_window: int, window_min: float, horizon_min: float | None, rate: FloatArray) -> FloatArray:
+    """Sample times after the window: the log's own, then uniform steps to the horizon."""
+    logged = t[n_window:]
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    if horizon_min is None:
+        finite = rate[np.isfinite(rate) & (rate > 0)]
+        reach = 4.0 / float(np.min(finite)) if finite.size else 0.0
+        horizon_min = max(float(t[-1]), min(window_min + reach, 20 * max(float(t[-1]), window_min)))
+    if horizon_min <= t[-1]:
+        return logged[logged <= horizon_min + 1e-9]
+    extra = np.arange(t[-1] + step, horizon_min + 0.5 * step, step)
+    return np.concatenate([logged, extra])
+
+
+def _rise_jacobian(time_min: FloatArray, params: FloatArray) -> FloatArray:
+    """∂T(t)/∂[T₀, λ, T∞], shape (N, S, 3)."""
+    T0, lam, Tinf = params[:, 0], params[:, 1], params[:, 2]
+    decay = np.exp(-lam * time_min)
+    return np.stack([decay, -(T0 - Tinf) * time_min * decay, 1.0 - decay], axis=-1)
+
+
+def _predict_after_window(
+    carry,  # noqa: ANN001 - FilterCarry of the last window step
+    physical_mean: FloatArray,
+    t_future: FloatArray,
+    t_last: float,
+    config: FilterConfig,
+    tuning: ThermalTuning,
+    seed: int | None,
+) -> tuple[FloatArray, FloatArray]:
+    """Temperature mean and variance (F, S) after the window, with Q and R as adapted last.
+
+    The mean is the model curve through the state at L; its variance comes from
+    the UKF's time updates (Q included). The UT mean itself is not used: with
+    the broad posterior of a short window its sigma points include negative
+    decay rates, which pull the mean away from every plausible curve.
+    """
+    S = physical_mean.shape[0]
+    if len(t_future) == 0:
+        return np.empty((0, S)), np.empty((0, S))
+    dts = np.diff(t_future, prepend=t_last)
+    transition = _transition_with(dts, tuning.parametrisation)
+    normal = replace(config, adaptive_law=None, square_root=False)
+    if seed is None:
+        mean = rise_curve((t_future - t_last)[:, None], physical_mean[:, 0], physical_mean[:, 1], physical_mean[:, 2])
+        predicted = forecast(GaussianState(carry.mean, carry.covariance()), transition, carry.process_cov, len(dts), normal)
+        return mean, predicted.cov[:, :, 0, 0]
+    # Seed 000 Eqs 21-22: sₖ = f(x̂ₖ₋₁) + q·randn, yₖ = h(sₖ) + r·randn, then a normal UKF update.
+    rng = np.random.default_rng(seed)
+    q_sd = np.sqrt(np.diagonal(carry.process_cov, axis1=-2, axis2=-1))
+    r_sd = np.sqrt(carry.emission_cov[..., 0, 0])
+    state = replace(carry, cov=carry.covariance(), chol=None)
+    weights = normal.sigma_points.weights(3)
+    means, variances = [], []
+    for k in range(len(dts)):
+        s = transition(state.mean, k) + q_sd * rng.standard_normal(state.mean.shape)
+        pseudo = s[:, :1] + (r_sd * rng.standard_normal(r_sd.shape))[:, None]
+        state, _ = filter_step(state, pseudo, lambda p, k=k: transition(p, k), observe_temperature, normal, weights)
+        means.append(state.mean[:, 0])
+        variances.append(state.covariance()[:, 0, 0])
+    return np.array(means), np.array(variances)

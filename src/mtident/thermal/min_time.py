@@ -1,0 +1,193 @@
+"""Minimal identification time (seed 000 §2.4 and Fig. 2; seed 001 §1.5 steps 1-5).
+
+For every candidate identification time L and every sampling period M, identify
+with the data up to L, predict to M, and take the RMSE (Eq. 33) against the
+measurements up to M. The minimal identification time is the L at which the RMSE
+is smallest for all sampling periods. Choosing it needs the measurements up to
+the longest sampling period, so that is the measuring time the test really took:
+both are reported.
+
+One filter run per sensor serves every L (the state at L is the filtered state
+after L's last sample), and the predictions from all L of all sensors advance
+as one batch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mtident._typing import FloatArray
+from mtident.exceptions import InputError
+from mtident.io.logs import TemperatureLog
+from mtident.thermal.identify import MIN_WINDOW_SAMPLES, _transition_with, num, rmse
+from mtident.thermal.lsq import fit_rise
+from mtident.thermal.model import observe_temperature, rise_curve, to_physical
+from mtident.thermal.settings import METHODS, filter_config, preset_tuning, tuning_from_data
+from mtident.ukf import GaussianState, run_filter
+
+__all__ = ["MinTimeResult", "minimal_identification_time"]
+
+
+@dataclass(frozen=True)
+class MinTimeResult:
+    """RMSE against identification time for several sampling periods, per sensor.
+
+    Attributes
+    ----------
+    sensors : tuple of str
+    windows_min : ndarray, shape (W,)
+        Candidate identification times L.
+    periods_min : ndarray, shape (P,)
+        Sampling periods M.
+    rmse_C : ndarray, shape (P, W, S)
+        NaN where L ≥ M.
+    best_per_period_min : ndarray, shape (P, S)
+        argmin over L for each period.
+    min_identification_time_min : ndarray, shape (S,)
+    agreement : ndarray of bool, shape (S,)
+        All periods pick the same L (the paper's criterion); where they do not,
+        the L with the smallest summed relative RMSE is reported.
+    measuring_time_min : float
+        The longest sampling period: the test had to run this long to choose.
+    """
+
+    sensors: tuple[str, ...]
+    method: str
+    windows_min: FloatArray
+    periods_min: FloatArray
+    rmse_C: FloatArray
+    best_per_period_min: FloatArray
+    min_identification_time_min: FloatArray
+    agreement: FloatArray
+    measuring_time_min: float
+
+    def summary(self, index: int) -> dict[str, object]:
+        """The contract's JSON object for one sensor, plus extras."""
+        table = {}
+        for p, period in enumerate(self.periods_min):
+            rows = [[float(w), float(self.rmse_C[p, i, index])] for i, w in enumerate(self.windows_min) if np.isfinite(self.rmse_C[p, i, index])]
+            table[f"{period:g}"] = rows
+        return {
+            "sensor": self.sensors[index],
+            "method": self.method,
+            "min_identification_time_min": num(self.min_identification_time_min[index]),
+            "sampling_periods_min": [float(p) for p in self.periods_min],
+            "rmse_C": table,
+            "best_per_period_min": {f"{p:g}": float(b) for p, b in zip(self.periods_min, self.best_per_period_min[:, index], strict=True)},
+            "periods_agree": bool(self.agreement[index]),
+            "measuring_time_needed_min": float(self.measuring_time_min),
+        }
+
+
+def minimal_identification_time(
+    log: TemperatureLog,
+    method: str = "aukf",
+    preset: str = "data",
+    periods_min: list[float] | None = None,
+    windows_min: list[float] | None = None,
+) -> MinTimeResult:
+    """RMSE-versus-identification-time curves and the minimal identification time.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    method : str
+        One of ``METHODS``.
+    preset : {"data", "xia2014", "yu2019"}
+        For "data", each filter is initialised from the first samples of the
+        shortest window, so every L starts from the same prior.
+    periods_min : list of float
+        Sampling periods M (default 35, 40, 45, 50 as seed 000).
+    windows_min : list of float
+        Candidate L (default every sample time from 5 min to the longest period).
+
+    Raises
+    ------
+    InputError
+        The log is shorter than the longest sampling period, or no candidate L fits.
+    """
+    if method not in METHODS:
+        msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
+        raise InputError(msg)
+    # A diverging filter (the papers' presets can) shows as an infinite RMSE, not as numpy warnings.
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _search(log, method, preset, periods_min, windows_min)
+
+
+def _search(
+    log: TemperatureLog,
+    method: str,
+    preset: str,
+    periods_min: list[float] | None,
+    windows_min: list[float] | None,
+) -> MinTimeResult:
+    periods = np.array(sorted(periods_min or [35.0, 40.0, 45.0, 50.0]), dtype=float)
+    t, y = log.time_min, log.temperature_C
+    if t[-1] + 1e-9 < periods[-1]:
+        msg = f"{log.source}: the log covers {t[-1]:g} min; the longest sampling period is {periods[-1]:g} min"
+        raise InputError(msg)
+    if windows_min is None:
+        candidates = t[(t >= 5.0 - 1e-9) & (t < periods[-1])]
+    else:
+        candidates = np.array(sorted(windows_min), dtype=float)
+    counts = np.array([log.window(w) for w in candidates])
+    keep = counts >= MIN_WINDOW_SAMPLES
+    candidates, counts = candidates[keep], counts[keep]
+    if candidates.size == 0:
+        msg = f"{log.source}: no identification time has the {MIN_WINDOW_SAMPLES} samples it needs"
+        raise InputError(msg)
+    n_total = log.window(periods[-1])
+    n_max = int(counts.max())
+    S = y.shape[1]
+    W = len(candidates)
+
+    # Estimated curves (W, n_total, S): filtered up to L, predicted after.
+    curves = np.empty((W, n_total, S))
+    if method == "lsq":
+        guess = tuning_from_data(t[: counts[0]], y[: counts[0]]).initial_mean
+        for i, n in enumerate(counts):
+            fit = fit_rise(t[:n], y[:n], guess)
+            p = fit.params
+            curves[i] = rise_curve(t[:n_total, None], p[:, 0], p[:, 1], p[:, 2])
+    else:
+        prior_n = int(counts[0])
+        tuning = tuning_from_data(t[:prior_n], y[:prior_n]) if preset == "data" else preset_tuning(preset, S)
+        config = filter_config(method, tuning)
+        dts = np.diff(t[:n_max], prepend=t[0])
+        record = run_filter(
+            GaussianState(tuning.initial_mean, tuning.initial_cov),
+            y[:n_max, :, None],
+            _transition_with(dts, tuning.parametrisation),
+            observe_temperature,
+            tuning.process_cov,
+            tuning.emission_cov,
+            config,
+        )
+        physical, _ = to_physical(record.means, record.covs, tuning.parametrisation)
+        last = counts - 1
+        at_window = physical[last]  # (W, S, 3): [T, λ, T∞] after each L's last sample
+        # The prediction from L is the model curve through the state at L, for all L at once.
+        elapsed = t[None, :n_total, None] - t[last][:, None, None]  # (W, n_total, 1)
+        predicted = rise_curve(elapsed, at_window[:, None, :, 0], at_window[:, None, :, 1], at_window[:, None, :, 2])
+        filtered = physical[:, :, 0]  # (n_max, S)
+        for i, n in enumerate(counts):
+            curves[i, :n] = filtered[:n]
+            curves[i, n:] = predicted[i, n:]
+        curves = np.where(np.isfinite(curves), curves, np.inf)  # a diverged filter has no minimum there
+
+    table = np.full((len(periods), W, S), np.nan)
+    for p, period in enumerate(periods):
+        n_period = log.window(period)
+        for i, window in enumerate(candidates):
+            if window < period:
+                table[p, i] = rmse(curves[i, :n_period], y[:n_period])
+    safe = np.where(np.isfinite(table), table, np.inf)
+    best_index = np.argmin(safe, axis=1)  # (P, S)
+    best = candidates[best_index]
+    agreement = np.all(best_index == best_index[:1], axis=0)
+    relative = safe / np.min(safe, axis=1, keepdims=True)
+    overall = candidates[np.argmin(np.sum(np.where(np.isfinite(relative), relative, 1e9), axis=0), axis=0)]
+    chosen = np.where(agreement, best[0], overall)
+    return MinTimeResult(log.sensors, method, candidates, periods, table, best, chosen, agreement, float(periods[-1]))

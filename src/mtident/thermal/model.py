@@ -1,0 +1,105 @@
+"""The first-order temperature-rise model (seed 000 Eqs 29-32, seed 001 Eq. 37).
+
+T(t) = T∞ + (T₀ − T∞)·e^(−λt). As a state-space model with x = [T, λ, T∞]:
+Tₖ = T∞ + (Tₖ₋₁ − T∞)·e^(−λΔtₖ), λ and T∞ constant, y = T. Any sampling
+interval works, also uneven ones (Δtₖ per step).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mtident._typing import FloatArray
+
+__all__ = [
+    "rise_transition",
+    "slope_transition",
+    "transition_for",
+    "to_physical",
+    "observe_temperature",
+    "rise_curve",
+    "EQUILIBRIUM_FRACTION",
+    "equilibrium_time",
+    "PARAMETRISATIONS",
+]
+
+# "rate": x = [T, λ, T∞] as the papers; "slope": x = [T, s, λ] with s = dT/dt = λ(T∞ − T).
+PARAMETRISATIONS = ("rate", "slope")
+
+# The papers call the moment the rise reaches 95 % of its total the thermal equilibrium time.
+EQUILIBRIUM_FRACTION = 0.95
+
+
+def rise_transition(points: FloatArray, dt_min: FloatArray | float) -> FloatArray:
+    """Propagate states (..., 3) = [T, λ, T∞] over ``dt_min`` minutes (broadcast to ...).
+
+    Examples
+    --------
+    >>> rise_transition(np.array([20.0, 0.1, 30.0]), 10.0).round(4).tolist()
+    [26.3212, 0.1, 30.0]
+    """
+    T, lam, Tinf = points[..., 0], points[..., 1], points[..., 2]
+    return np.stack([Tinf + (T - Tinf) * np.exp(-lam * dt_min), lam, Tinf], axis=-1)
+
+
+def slope_transition(points: FloatArray, dt_min: FloatArray | float) -> FloatArray:
+    """Propagate states (..., 3) = [T, s, λ] with s = dT/dt, over ``dt_min`` minutes.
+
+    The same first-order curve as :func:`rise_transition`, written so that the
+    measurement informs T and s almost linearly and only λ enters nonlinearly:
+    Tₖ = Tₖ₋₁ + sₖ₋₁(1 − e^(−λΔt))/λ, sₖ = sₖ₋₁e^(−λΔt). With [T, λ, T∞] the
+    short-window posterior is a curved ridge (only λ(T∞ − T) is known early),
+    which a UKF's Gaussian approximation follows badly; with [T, s, λ] the UKF
+    reaches the Cramér-Rao bound (benchmarks/bench_thermal.py).
+
+    Examples
+    --------
+    >>> slope_transition(np.array([20.0, 1.0, 0.1]), 10.0).round(4).tolist()
+    [26.3212, 0.3679, 0.1]
+    """
+    T, slope, lam = points[..., 0], points[..., 1], points[..., 2]
+    x = lam * dt_min
+    small = np.abs(x) < 1e-9
+    gain = np.where(small, dt_min * (1.0 - 0.5 * x), -np.expm1(-x) / np.where(small, 1.0, lam))
+    return np.stack([T + slope * gain, slope * np.exp(-x), lam], axis=-1)
+
+
+def transition_for(parametrisation: str):  # noqa: ANN201 - returns one of the two transitions
+    """The transition of a parametrisation ("rate" or "slope")."""
+    return rise_transition if parametrisation == "rate" else slope_transition
+
+
+def to_physical(mean: FloatArray, cov: FloatArray, parametrisation: str) -> tuple[FloatArray, FloatArray]:
+    """Mean (..., 3) and covariance (..., 3, 3) of [T, λ, T∞] from either parametrisation.
+
+    For "slope", T∞ = T + s/λ and the covariance is propagated to first order
+    (J P Jᵀ).
+    """
+    if parametrisation == "rate":
+        return mean, cov
+    T, slope, lam = mean[..., 0], mean[..., 1], mean[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        steady = T + slope / lam
+        jac = np.zeros((*mean.shape[:-1], 3, 3))
+        jac[..., 0, 0] = 1.0
+        jac[..., 1, 2] = 1.0
+        jac[..., 2, 0] = 1.0
+        jac[..., 2, 1] = 1.0 / lam
+        jac[..., 2, 2] = -slope / lam**2
+    physical = np.stack([T, lam, steady], axis=-1)
+    return physical, jac @ cov @ np.swapaxes(jac, -1, -2)
+
+
+def observe_temperature(points: FloatArray) -> FloatArray:
+    """y = T (Eq. 32): (..., 3) → (..., 1)."""
+    return points[..., :1]
+
+
+def rise_curve(time_min: FloatArray, start_C: FloatArray, rate_per_min: FloatArray, steady_C: FloatArray) -> FloatArray:
+    """T(t) = T∞ + (T₀ − T∞)e^(−λt), broadcast."""
+    return steady_C + (start_C - steady_C) * np.exp(-rate_per_min * time_min)
+
+
+def equilibrium_time(rate_per_min: FloatArray) -> FloatArray:
+    """Time to 95 % of the total rise of a first-order curve: ln(20)/λ."""
+    return np.log(1.0 / (1.0 - EQUILIBRIUM_FRACTION)) / rate_per_min

@@ -1,0 +1,68 @@
+"""Reading temperature logs: units, timestamps, and every way a file can be wrong."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mtident.exceptions import InputError
+from mtident.io import read_temperature_log
+
+
+def test_minutes_seconds_hours_and_timestamps(write_csv):
+    log = read_temperature_log(write_csv("time_s,A,B\n0,20,21\n60,20.5,21.5\n120,21,22\n180,21.2,22\n240,21.4,22.1\n"))
+    np.testing.assert_allclose(log.time_min, [0, 1, 2, 3, 4])
+    assert log.sensors == ("A", "B")
+    log = read_temperature_log(write_csv("t,A\n0,20\n0.5,20.5\n1,21\n1.5,21.2\n2,21.4\n"), time_unit="h")
+    np.testing.assert_allclose(log.time_min, [0, 30, 60, 90, 120])
+    stamps = "stamp,A\n" + "".join(f"2026-11-22T08:{m:02d}:00,{20 + m / 10}\n" for m in range(0, 10, 2))
+    log = read_temperature_log(write_csv(stamps))
+    np.testing.assert_allclose(log.time_min, [0, 2, 4, 6, 8])
+
+
+def test_time_column_by_name(write_csv):
+    log = read_temperature_log(write_csv("A,minute,B\n20,0,30\n21,1,31\n22,2,32\n23,3,33\n24,4,34\n"), time_col="minute")
+    assert log.sensors == ("A", "B")
+    np.testing.assert_allclose(log.temperature_C[:, 1], [30, 31, 32, 33, 34])
+
+
+def test_isolated_bad_samples_are_skipped_with_a_note(write_csv):
+    rows = "".join(f"{k},{20 + k * 0.1 if k not in (3, 7) else ('' if k == 3 else 850.0)}\n" for k in range(30))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows))
+    assert np.isnan(log.temperature_C[3, 0]) and np.isnan(log.temperature_C[7, 0])
+    assert log.notes == ("sensor 'A': skipped 1 empty/NaN and 1 open-circuit sample(s) (rows 5, 9)",)
+
+
+@pytest.mark.parametrize(
+    ("text", "kwargs", "message"),
+    [
+        ("time_min,A\n0,20\n1,abc\n2,21\n3,21\n4,21\n", {}, r"sensor 'A', row 3: 'abc' is not a number"),
+        ("time_min,A\n0,20\n1,20\n1,21\n3,21\n4,21\n", {}, r"row 4: duplicate time"),
+        ("time_min,A\n0,20\n2,20\n1,21\n3,21\n4,21\n", {}, r"row 4: time goes back"),
+        ("time_min,A\n0,20\n1,20\n", {}, r"2 samples; at least 5 are needed"),
+        ("time_min\n0\n1\n2\n3\n4\n", {}, r"need a time column and at least one sensor column"),
+        ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_col": "clock"}, r"no time column 'clock'; the columns are: time_min, A"),
+        ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_unit": "days"}, r"time unit 'days' is not one of: s, min, h"),
+        ("time_min,A\nyesterday,20\n1,20\n2,21\n3,21\n4,21\n", {}, r"neither a number nor an ISO-8601 timestamp"),
+        ("time_min,A\n0,20\n1,\n2,\n3,500\n4,21\n", {}, r"sensor 'A': 3 of 5 samples are empty, NaN or open-circuit"),
+    ],
+)
+def test_bad_logs_are_refused_with_a_message_naming_the_problem(write_csv, text, kwargs, message):
+    with pytest.raises(InputError, match=message):
+        read_temperature_log(write_csv(text), **kwargs)
+
+
+def test_missing_file_and_unknown_sensor(tmp_path, write_csv):
+    with pytest.raises(InputError, match="no such file"):
+        read_temperature_log(tmp_path / "nope.csv")
+    log = read_temperature_log(write_csv("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n"))
+    with pytest.raises(InputError, match="no sensor column 'B'; the log has: A"):
+        log.select(["B"])
+    assert log.select(["all"]) is log
+
+
+def test_binary_file_is_refused(write_csv, tmp_path):
+    path = tmp_path / "bin.csv"
+    path.write_bytes(b"\xff\xfe\x00\x01garbage")
+    with pytest.raises(InputError, match="not a readable CSV file|need a time column"):
+        read_temperature_log(path)
