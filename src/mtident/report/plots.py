@@ -44,7 +44,8 @@ def plot_identification(result: Identification, path: str | Path) -> Path:
         ax.plot(t[inside], mean[inside], color="tab:blue", lw=1.6, label="filtered")
         ax.plot(t[~inside], mean[~inside], color="tab:red", lw=1.6, label="predicted")
         finite = np.isfinite(sd) & (sd < 50)
-        ax.fill_between(t[finite], (mean - 1.96 * sd)[finite], (mean + 1.96 * sd)[finite], color="tab:red", alpha=0.18, lw=0, label="95 % band")
+        q = result.quantile
+        ax.fill_between(t[finite], (mean - q * sd)[finite], (mean + q * sd)[finite], color="tab:red", alpha=0.18, lw=0, label="95 % band")
         ax.axvline(result.window_min, color="k", ls="--", lw=1, label=f"L = {result.window_min:g} min")
         steady = result.steady_state_C[s]
         if np.isfinite(steady):
