@@ -1,0 +1,94 @@
+"""The installed ``mtident`` command: contract JSON keys, tables, plots, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def mtident(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "mtident", *args], capture_output=True, text=True, timeout=300, check=False)
+
+
+def test_help_lists_the_command_groups():
+    out = mtident("--help")
+    assert out.returncode == 0
+    assert re.search(r"^\s+feeddrive\s", out.stdout, re.M) and re.search(r"^\s+thermal\s", out.stdout, re.M)
+    assert "identify" in mtident("thermal", "--help").stdout
+
+
+def test_thermal_identify_json_has_the_contract_keys(tmp_path):
+    png = tmp_path / "fit.png"
+    out = mtident("thermal", "identify", "@sample", "--sensor", "T3", "--window", "30", "--json", "--plot", str(png))
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert set(data) >= {"sensor", "method", "window_min", "steady_state_C", "steady_state_ci95_C", "lambda_per_min", "time_constant_min", "equilibrium_time_min", "rmse_C"}
+    assert data["sensor"] == "T3" and data["method"] == "ukf" and data["window_min"] == 30.0
+    lo, hi = data["steady_state_ci95_C"]
+    assert lo < data["steady_state_C"] < hi
+    assert lo <= data["measured_final_C"] <= hi  # the sample log ran to equilibrium
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_thermal_identify_all_sensors_json_and_table():
+    out = mtident("thermal", "identify", "@sample", "--method", "lsq", "--json")
+    data = json.loads(out.stdout)
+    assert [d["sensor"] for d in data["sensors"]] == [f"T{i}" for i in range(1, 11)]
+    table = mtident("thermal", "identify", "@sample", "--sensor", "T1,T8")
+    assert table.returncode == 0 and "T8" in table.stdout and "T∞" in table.stdout
+
+
+def test_thermal_min_time_json_has_the_contract_keys(tmp_path):
+    png = tmp_path / "rmse.png"
+    out = mtident("thermal", "min-time", "@sample", "--sensor", "T1", "--json", "--plot", str(png))
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert set(data) >= {"min_identification_time_min", "sampling_periods_min", "rmse_C"}
+    assert data["sampling_periods_min"] == [35.0, 40.0, 45.0, 50.0]
+    assert set(data["rmse_C"]) == {"35", "40", "45", "50"}
+    assert all(len(pair) == 2 for rows in data["rmse_C"].values() for pair in rows)
+    assert data["measuring_time_needed_min"] == 50.0
+    assert png.stat().st_size > 1000
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["thermal", "identify", "missing.csv"], "missing.csv: no such file"),
+        (["thermal", "identify", "@sample", "--sensor", "T99"], "no sensor column 'T99'"),
+        (["thermal", "identify", "@sample", "--window", "2"], "samples in the first 2 min"),
+        (["thermal", "min-time", "@sample", "--sampling-periods", "35,abc"], "--sampling-periods: expected comma-separated minutes"),
+        (["thermal", "min-time", "@sample", "--sampling-periods", "35,500"], "the longest sampling period is 500 min"),
+        (["thermal", "min-time", "@sample", "--windows", "30:10"], "--windows: expected START:STOP"),
+    ],
+)
+def test_user_errors_are_one_line_without_traceback(args, message):
+    out = mtident(*args)
+    assert out.returncode == 2
+    assert message in out.stderr
+    assert "Traceback" not in out.stderr
+    assert len([line for line in out.stderr.splitlines() if line.startswith("mtident: error")]) == 1
+
+
+def test_bad_csv_cell_is_reported(tmp_path):
+    path = tmp_path / "bad.csv"
+    path.write_text("time_min,A\n0,20\n1,20.1\n2,oops\n3,20.3\n4,20.4\n5,20.5\n6,20.6\n")
+    out = mtident("thermal", "identify", str(path))
+    assert out.returncode == 2 and "sensor 'A', row 4: 'oops' is not a number" in out.stderr
+
+
+def test_readme_quick_start_and_ci_agree():
+    readme = (ROOT / "README.md").read_text()
+    block = re.search(r"## Quick start\s+```bash\n(.*?)```", readme, re.S)
+    assert block is not None
+    lines = [line for line in block.group(1).splitlines() if line.strip()]
+    assert len(lines) == 2
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert lines[1] in ci
