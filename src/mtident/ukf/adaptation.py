@@ -38,11 +38,19 @@ class FadingFactor:
         with :func:`normalisation_from_reference`. For m = 1, Eq. 29 gives λ = 1
         and the normalised factor equals the plain one.
     max_factor : float
-        Upper bound on αₖ (ours; the paper has none). Default 2: the largest α
-        for which the update does not *increase* P. Beyond it the gain moves the
-        estimate past the measurement by more than the prior error, the true
-        error covariance grows by (α² − 2α)·Pxy Py⁻¹ Pxyᵀ, and combined with the
-        adaptive law the filter diverges (seen on warm-up data started 1 °C off).
+        Upper bound on αₖ (ours; the paper has none). Default 2: in the "gain"
+        form, the largest α for which the update does not *increase* P. Beyond
+        it the gain moves the estimate past the measurement by more than the
+        prior error, the true error covariance grows by (α² − 2α)·Pxy Py⁻¹ Pxyᵀ,
+        and combined with the adaptive law the filter diverges (seen on warm-up
+        data started 1 °C off).
+    form : {"gain", "covariance"}
+        "gain" multiplies the gain by α as seed 001 Eq. 12 writes it. "covariance"
+        multiplies the predicted covariance P⁻ by α before the gain is formed, as
+        strong-tracking filters do (Zhou & Frank 1996): the gain then grows
+        towards, never past, the measurement and P stays positive definite for
+        any α. The papers' presets use "gain"; mtident's data-driven tuning uses
+        "covariance".
 
     Notes
     -----
@@ -59,6 +67,7 @@ class FadingFactor:
     weakening: float = 3.0
     normalisation: FloatArray | None = None
     max_factor: float = 2.0
+    form: str = "gain"
 
 
 def normalisation_from_reference(reference_output: FloatArray) -> FloatArray:
@@ -131,8 +140,8 @@ class AdaptiveLaw:
 
     Parameters
     ----------
-    threshold : float
-        C (seed 000: 1e-4 °C; seed 001 calls it H).
+    threshold : float or ndarray, shape (...)
+        C (seed 000: 1e-4 °C; seed 001 calls it H), one per filter if an array.
     q_increase, q_decrease : float
         coff > 1 and 0 < coff < 1 (seed 000: 10 and 0.1).
     r_step_fraction : float
@@ -141,7 +150,7 @@ class AdaptiveLaw:
         Bound on the R search.
     """
 
-    threshold: float = 1e-4
+    threshold: float | FloatArray = 1e-4
     q_increase: float = 10.0
     q_decrease: float = 0.1
     r_step_fraction: float = 0.01

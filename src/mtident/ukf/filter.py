@@ -164,7 +164,14 @@ def _condition(
     config: FilterConfig,
     weights: SigmaWeights,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Posterior mean and covariance (or factor) for gain K = α Pxy Py⁻¹ (Eqs 18-20, seed 001 Eqs 12-13)."""
+    """Posterior mean and covariance (or factor) for gain K = α Pxy Py⁻¹ (Eqs 18-20, seed 001 Eqs 12-13).
+
+    With a fading factor in the "covariance" form, α scales P⁻ (and so Pxy and
+    the sigma-point part of Py) instead of the gain.
+    """
+    if config.fading is not None and config.fading.form == "covariance":
+        prior, moments = _inflate(prior, moments, alpha)
+        alpha = np.ones_like(alpha)
     coefficient = 2.0 * alpha - alpha**2  # P⁺ = P⁻ − (2α − α²) Pxy Py⁻¹ Pxyᵀ, see FadingFactor
     pxy = moments.cross_cov
     if config.square_root:
@@ -191,6 +198,14 @@ def _condition(
     mean = prior.mean + alpha[..., None] * (gain @ innovation[..., None])[..., 0]
     cov = symmetrize(prior.cov - coefficient[..., None, None] * gain @ np.swapaxes(pxy, -1, -2))
     return mean, cov, innovation_cov
+
+
+def _inflate(prior: Prior, moments: MeasurementMoments, alpha: FloatArray) -> tuple[Prior, MeasurementMoments]:
+    """P⁻ ← α P⁻ for each filter: the fading factor of a strong-tracking filter."""
+    a = alpha[..., None, None]
+    root = np.sqrt(alpha)[..., None, None]
+    inflated = Prior(prior.mean, a * prior.cov, None if prior.chol is None else root * prior.chol, prior.sigmas)
+    return inflated, MeasurementMoments(moments.mean, root * moments.deviations, a * moments.cov_without_noise, a * moments.cross_cov)
 
 
 def _joseph_factor(
@@ -253,14 +268,18 @@ def _search_emission_cov(
         candidates = emission_cov[..., None, :, :] * multipliers[:, None, None]  # (..., J, 1, 1)
         pyy = moments.cov_without_noise[..., None, :, :] + candidates
         pxy = moments.cross_cov[..., None, :, :]
-        gain = solve_gain(pyy, pxy)
         if config.fading is None:
             alpha = np.ones(pyy.shape[:-2])
         else:
             alpha = fading_value(config.fading, memory[..., None, :, :], pyy, candidates)
+            if config.fading.form == "covariance":
+                pyy = alpha[..., None, None] * moments.cov_without_noise[..., None, :, :] + candidates
+                pxy = alpha[..., None, None] * pxy
+                alpha = np.ones_like(alpha)
+        gain = solve_gain(pyy, pxy)
         means = prior.mean[..., None, :] + alpha[..., None] * np.einsum("...ij,...j->...i", gain, innovation[..., None, :])
         gamma = np.abs(y[..., None, :] - measurement(means))[..., 0]  # (..., J)
-        ok = gamma <= law.threshold
+        ok = gamma <= np.asarray(law.threshold)[..., None]
         chosen = np.where(ok.any(axis=-1), np.argmax(ok, axis=-1), np.argmin(gamma, axis=-1))
         picked = np.take_along_axis(candidates, chosen[..., None, None, None], axis=-3)[..., 0, :, :]
         result = np.where(active[..., None, None], picked, result)
