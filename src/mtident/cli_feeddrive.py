@@ -1,1 +1,130 @@
-from mtident.cli import feeddrive  # noqa: F401
+"""``mtident feeddrive ...``: modes, simulation, identification of a ball-screw feed drive."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from mtident.cli import feeddrive, print_json, user_errors
+from mtident.feeddrive import (
+    IDENTIFIED,
+    Excitation,
+    identify_feed_drive,
+    load_parameters,
+    modes,
+    read_response,
+    simulate,
+    write_response,
+)
+from mtident.feeddrive.identify import MEASUREMENT_SETS, default_guess
+from mtident.feeddrive.model import EXCITATION_KINDS
+from mtident.feeddrive.params import COORDINATES
+
+stderr = Console(stderr=True, soft_wrap=True)
+params_option = click.option("--params", "params_path", type=click.Path(dir_okay=False), help="TOML parameter file (seed 004 Table 1 names, SI units); default: the shipped set.")
+
+
+@feeddrive.command("modes")
+@params_option
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@user_errors
+def modes_command(params_path: str | None, as_json: bool) -> None:
+    """Natural frequencies, mode shapes and damping ratios (seed 004 Eq. 3)."""
+    result = modes(load_parameters(params_path))
+    if as_json:
+        print_json(
+            {
+                "natural_frequencies_Hz": [float(f) for f in result.frequencies_Hz],
+                "positive_definite": result.positive_definite,
+                "damping_ratios": [float(z) for z in result.damping_ratios],
+                "mode_shapes": {name: [float(v) for v in row] for name, row in zip(COORDINATES, result.shapes, strict=True)},
+            }
+        )
+        return
+    table = Table(title="Feed-drive modes (undamped; shapes mass-normalised)")
+    table.add_column("mode")
+    table.add_column("f (Hz)", justify="right")
+    table.add_column("ζ", justify="right")
+    for name in COORDINATES:
+        table.add_column(name, justify="right")
+    for j in range(4):
+        table.add_row(str(j + 1), f"{result.frequencies_Hz[j]:.2f}", f"{result.damping_ratios[j]:.2e}", *[f"{v:+.3g}" for v in result.shapes[:, j]])
+    Console(width=max(Console().width, 100)).print(table)
+
+
+@feeddrive.command("simulate")
+@params_option
+@click.option("--duration", "duration_s", type=click.FloatRange(min=0, min_open=True), default=2.0, show_default=True, help="Seconds.")
+@click.option("--fs", "sample_rate_Hz", type=click.FloatRange(min=0, min_open=True), default=10_000.0, show_default=True, help="Sampling rate (Hz).")
+@click.option("--impulse", "amplitude", type=float, default=20.0, show_default=True, help="Force amplitude (N or N m).")
+@click.option("--excitation", "kind", type=click.Choice(EXCITATION_KINDS), default="impulse", show_default=True)
+@click.option("--on", "coordinate", type=click.Choice(COORDINATES), default="table", show_default=True, help="Coordinate the force acts on (motor_rotation: motor torque T_m).")
+@click.option("--frequency", "frequency_Hz", type=float, default=100.0, show_default=True, help="Sine frequency, or sweep start (Hz).")
+@click.option("--frequency-end", "frequency_end_Hz", type=float, default=2000.0, show_default=True, help="Sweep end (Hz).")
+@click.option("--noise", "noise_fraction", type=click.FloatRange(min=0), default=0.0, show_default=True, help="Measurement noise, fraction of each response's RMS.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False, writable=True), required=True, help="CSV to write.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw the responses to this PNG.")
+@user_errors
+def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz: float, amplitude: float, kind: str, coordinate: str, frequency_Hz: float, frequency_end_Hz: float, noise_fraction: float, seed: int, out_path: str, plot_path: str | None) -> None:
+    """Simulate the vibration response by classical RK4 and write it as CSV."""
+    params = load_parameters(params_path)
+    excitation = Excitation(kind, COORDINATES.index(coordinate), amplitude, frequency_Hz, frequency_end_Hz)
+    response = simulate(params, excitation, sample_rate_Hz, duration_s, noise_fraction, np.random.default_rng(seed))
+    write_response(response, out_path)
+    stderr.print(f"mtident: wrote {len(response.time_s)} samples to {out_path}", highlight=False)
+    if plot_path:
+        from mtident.report.plots import plot_responses
+
+        plot_responses(response, plot_path)
+        stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
+
+
+@feeddrive.command("identify")
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--params-guess", "guess_path", type=click.Path(dir_okay=False), help="TOML starting guess (default: the shipped set ±30 %).")
+@click.option("--truth", "truth_path", type=click.Path(dir_okay=False), help="TOML true parameters (simulated data): adds the error table (seed 004 Table 3).")
+@click.option("--measured", type=click.Choice(list(MEASUREMENT_SETS)), default="all", show_default=True, help="all 12 responses, or table acceleration + motor angle and velocity.")
+@click.option("--noise", "noise_fraction", type=click.FloatRange(min=0, min_open=True), default=0.01, show_default=True, help="Measurement noise, fraction of each response's RMS.")
+@click.option("--preset", type=click.Choice(["default", "paper"]), default="default", show_default=True)
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw estimated vs measured responses and parameter convergence to this PNG.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@user_errors
+def identify_command(file: str, guess_path: str | None, truth_path: str | None, measured: str, noise_fraction: float, preset: str, plot_path: str | None, as_json: bool) -> None:
+    """Estimate stiffness and damping from a response CSV (time_s, forces, responses)."""
+    response = read_response(file)
+    guess = load_parameters(guess_path) if guess_path else default_guess()
+    truth = load_parameters(truth_path) if truth_path else None
+    steps = len(response.time_s)
+    with stderr.status(f"filtering {steps} samples…") as status:
+        result = identify_feed_drive(response, guess, measured, noise_fraction, preset, progress=lambda k, n: status.update(f"filtering: {k}/{n} samples"))
+    for note in result.notes:
+        stderr.print(f"mtident: note: {note}", highlight=False)
+    if plot_path:
+        from mtident.report.plots import plot_feed_drive_identification
+
+        plot_feed_drive_identification(result, response, plot_path, truth)
+        stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
+    summary = result.summary(truth)
+    if as_json:
+        print_json(summary)
+        return
+    table = Table(title=f"{Path(file).name}: feed-drive parameters ({preset}, measured: {measured})")
+    for column in ("parameter", "guess", "estimate", "± 2σ", "identified", *(("true", "error %") if truth else ())):
+        table.add_column(column, justify="right")
+    for i, name in enumerate(IDENTIFIED):
+        row = [name, f"{getattr(guess, name):.5g}", f"{result.parameters[i]:.5g}", f"{2 * result.parameters_sd[i]:.2g}", "yes" if result.identifiable[i] else "[yellow]no[/]"]
+        if truth:
+            row += [f"{getattr(truth, name):.5g}", f"{summary['error_percent'][name]:.3g}"]  # type: ignore[index]
+        table.add_row(*row)
+    Console(width=max(Console().width, 100)).print(table)
+    corr = Table(title="Correlation of estimated and measured responses (seed 004 Table 2)")
+    corr.add_column("response")
+    corr.add_column("r", justify="right")
+    for name, r in result.correlation.items():
+        corr.add_row(name, f"{r:.4f}")
+    Console().print(corr)

@@ -90,3 +90,50 @@ def plot_min_time(result: MinTimeResult, path: str | Path) -> Path:
     fig.savefig(out, dpi=110)
     plt.close(fig)
     return out
+
+
+def plot_responses(response, path: str | Path) -> Path:  # noqa: ANN001 - feeddrive.Response
+    """Displacements, velocities and accelerations of the four coordinates (seed 004 Figs 2-4)."""
+    from mtident.feeddrive.simulate import RESPONSE_COLUMNS
+
+    fig, axes = plt.subplots(3, 4, figsize=(16, 8), sharex=True)
+    for i, ax in enumerate(axes.ravel()):
+        ax.plot(response.time_s, response.values[:, i], lw=0.6)
+        ax.set_title(RESPONSE_COLUMNS[i], fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("time (s)")
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+    return out
+
+
+def plot_feed_drive_identification(result, response, path: str | Path, truth=None) -> Path:  # noqa: ANN001
+    """Estimated vs measured responses (seed 004 Figs 5-7) and parameter convergence with ±2σ (Figs 8-9)."""
+    from mtident.feeddrive.params import IDENTIFIED
+    from mtident.feeddrive.simulate import RESPONSE_COLUMNS
+
+    fig, axes = plt.subplots(5, 4, figsize=(16, 15))
+    t = result.time_s
+    for i, ax in enumerate(axes[:3].ravel()):
+        ax.plot(t, response.values[:, i], lw=0.5, color="0.6", label="measured")
+        ax.plot(t, result.estimated[:, i], lw=0.6, color="tab:red", label="UKF")
+        ax.set_title(RESPONSE_COLUMNS[i], fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
+    for j, ax in enumerate(axes[3:].ravel()):
+        mean, sd = result.history[:, j], result.history_sd[:, j]
+        ax.plot(t, mean, color="tab:blue", lw=1)
+        ax.fill_between(t, mean - 2 * sd, mean + 2 * sd, color="tab:blue", alpha=0.2, lw=0)
+        if truth is not None:
+            ax.axhline(getattr(truth, IDENTIFIED[j]), color="k", ls="--", lw=1)
+        ax.set_title(f"{IDENTIFIED[j]} ({'identified' if result.identifiable[j] else 'not identifiable'})", fontsize=9)
+        ax.set_xlabel("time (s)")
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=90)
+    plt.close(fig)
+    return out

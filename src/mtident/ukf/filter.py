@@ -106,7 +106,7 @@ class StepInfo:
     innovation: FloatArray  # (..., m), NaN where the measurement was missing
     innovation_cov: FloatArray  # (..., m, m)
     fading: FloatArray  # (...,) αₖ, 1 without fading
-    posterior_residual: FloatArray  # (..., m) γₖ = yₖ − h(x̂ₖ)
+    posterior_residual: FloatArray  # (..., m) γₖ = yₖ − h(x̂ₖ), NaN without an adaptive law
     adapted: BoolArray  # (...,) the adaptive law changed Q and R
     reached: BoolArray  # (...,) |γ| ≤ C after the adaptation (True where nothing was needed)
 
@@ -337,9 +337,10 @@ def filter_step(
 
     adapted = np.zeros(observed.shape, dtype=bool)
     reached = np.ones(observed.shape, dtype=bool)
-    gamma = y_safe - measurement(mean[..., None, :])[..., 0, :]
     law = config.adaptive_law
+    gamma = np.full_like(innovation, np.nan)  # computed only where the adaptive law needs it
     if law is not None:
+        gamma = y_safe - measurement(mean[..., None, :])[..., 0, :]
         g = gamma[..., 0]
         psi = innovation[..., 0]
         adapted = observed & (np.abs(g) > law.threshold)

@@ -1,0 +1,189 @@
+"""Ball-screw feed drive parameters (seed 004, Table 1) and the matrices of Eq. 2.
+
+Parameter files are TOML with Table 1's names in SI units (DESIGN.md)::
+
+    Mt = 15.0          # table mass, kg
+    Mb = 2.56          # screw mass, kg
+    Jm = 1.73e-5       # motor inertia, kg m²
+    Jb = 1.4475e-4     # screw inertia, kg m²
+    K1 = 1.374e8       # nut stiffness, N/m
+    K2 = 1.874e8       # equivalent axial stiffness of the screw, N/m
+    K3 = 1153.93       # equivalent torsional stiffness, N m/rad
+    K4 = 717.0         # torsional stiffness screw-motor, N m/rad
+    beta = 1.5915e-3   # lead/(2π), m/rad
+    Bt = 1.0           # guideway damping, N s/m
+    Bb = 1.0           # support-bearing axial damping, N s/m
+    Qm = 0.002         # motor rotational damping, N m s/rad
+    Qb = 0.002         # support-bearing rotational damping, N m s/rad
+
+β is printed in Table 1 as 2.55e-3 "Nm/rad"; it is the lead/(2π) in m/rad, and
+the printed value makes K indefinite (DESIGN.md, errata). The default uses
+β = 0.01/(2π), which reproduces the paper's frequencies.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+
+import numpy as np
+
+from mtident._typing import FloatArray
+from mtident.exceptions import InputError, UnstableModelError
+
+__all__ = [
+    "FeedDriveParameters",
+    "IDENTIFIED",
+    "load_parameters",
+    "mass_matrix",
+    "damping_matrix",
+    "stiffness_matrix",
+    "validate",
+    "PRINTED_BETA",
+    "COORDINATES",
+]
+
+PRINTED_BETA = 2.55e-3
+COORDINATES = ("table", "screw", "screw_rotation", "motor_rotation")
+# The parameters the UKF estimates (seed 004 Eq. 37, state x9..x16).
+IDENTIFIED = ("K1", "K2", "K3", "K4", "Bt", "Bb", "Qb", "Qm")
+UNITS = {
+    "Mt": "kg", "Mb": "kg", "Jm": "kg m²", "Jb": "kg m²", "K1": "N/m", "K2": "N/m", "K3": "N m/rad",
+    "K4": "N m/rad", "beta": "m/rad", "Bt": "N s/m", "Bb": "N s/m", "Qm": "N m s/rad", "Qb": "N m s/rad",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class FeedDriveParameters:
+    """The 4-DOF lumped model of a ball-screw feed drive, SI units.
+
+    Defaults: seed 004 Table 1 with the corrected β = 0.01/(2π) m/rad.
+    """
+
+    Mt: float = 15.0
+    Mb: float = 2.56
+    Jm: float = 1.73e-5
+    Jb: float = 1.4475e-4
+    K1: float = 1.374e8
+    K2: float = 1.874e8
+    K3: float = 1153.93
+    K4: float = 717.0
+    beta: float = 0.01 / (2.0 * math.pi)
+    Bt: float = 1.0
+    Bb: float = 1.0
+    Qm: float = 0.002
+    Qb: float = 0.002
+
+    def identified(self) -> FloatArray:
+        """The eight identified parameters in the order of ``IDENTIFIED``."""
+        return np.array([getattr(self, name) for name in IDENTIFIED])
+
+    def with_identified(self, values: FloatArray) -> FeedDriveParameters:
+        """A copy with the eight identified parameters replaced."""
+        return replace(self, **{name: float(v) for name, v in zip(IDENTIFIED, values, strict=True)})
+
+    def as_dict(self) -> dict[str, float]:
+        """Name → value."""
+        return asdict(self)
+
+
+def mass_matrix(p: FeedDriveParameters) -> FloatArray:
+    """[M] of Eq. 2 for coordinates (x_t, x_b, θ_b, θ_m)."""
+    return np.diag([p.Mt, p.Mb, p.Jb, p.Jm])
+
+
+def damping_matrix(p: FeedDriveParameters) -> FloatArray:
+    """[C] of Eq. 2."""
+    return np.diag([p.Bt, p.Bb, p.Qb, p.Qm])
+
+
+def stiffness_matrix(p: FeedDriveParameters) -> FloatArray:
+    """[K] of Eq. 2."""
+    b, k1 = p.beta, p.K1
+    return np.array(
+        [
+            [k1, -k1, -b * k1, 0.0],
+            [-k1, p.K2, b * k1, 0.0],
+            [-b * k1, b * k1, p.K3, -p.K4],
+            [0.0, 0.0, -p.K4, p.K4],
+        ]
+    )
+
+
+def validate(p: FeedDriveParameters) -> FeedDriveParameters:
+    """Refuse a parameter set that is not a physical, stable model.
+
+    Masses, inertias, stiffnesses and β must be positive, damping non-negative,
+    and K symmetric positive definite. Eliminating x_t shows K is positive
+    definite exactly when K2 > K1 and K3 − β²K1 > K4, so the error names which
+    of these fails.
+
+    Raises
+    ------
+    InputError
+        A value of the wrong sign, or not finite.
+    UnstableModelError
+        K is not positive definite (the model would be unstable).
+    """
+    for name in ("Mt", "Mb", "Jm", "Jb", "K1", "K2", "K3", "K4", "beta"):
+        value = getattr(p, name)
+        if not (math.isfinite(value) and value > 0):
+            msg = f"parameter {name} = {value!r}: must be a positive number ({UNITS[name]})"
+            raise InputError(msg)
+    for name in ("Bt", "Bb", "Qm", "Qb"):
+        value = getattr(p, name)
+        if not (math.isfinite(value) and value >= 0):
+            msg = f"parameter {name} = {value!r}: damping must be zero or positive ({UNITS[name]})"
+            raise InputError(msg)
+    if p.K2 <= p.K1:
+        msg = f"K2 = {p.K2:.6g} ≤ K1 = {p.K1:.6g}: K is not positive definite, the model is unstable"
+        raise UnstableModelError(msg)
+    coupling = p.beta**2 * p.K1
+    if p.K3 - coupling <= p.K4:
+        hint = ""
+        if abs(p.beta - PRINTED_BETA) < 1e-9:
+            hint = " (β = 2.55e-3 is the value printed in seed 004's Table 1; β = lead/(2π) = 0.01/(2π) ≈ 1.5915e-3 m/rad reproduces the paper's frequencies)"
+        msg = (
+            f"K3 < K4 + β²·K1 ({p.K3:.6g} < {p.K4:.6g} + {coupling:.6g} N m/rad): K is indefinite, "
+            f"the model is unstable{hint}"
+        )
+        raise UnstableModelError(msg)
+    return p
+
+
+def load_parameters(path: str | Path | None, base: FeedDriveParameters | None = None) -> FeedDriveParameters:
+    """Read a TOML parameter file over ``base`` (default: the shipped set) and validate it.
+
+    Raises
+    ------
+    InputError
+        Missing file, bad TOML, unknown name, non-numeric value.
+    UnstableModelError
+        The set gives an indefinite K.
+    """
+    params = base or FeedDriveParameters()
+    if path is None:
+        return validate(params)
+    file = Path(path)
+    if not file.is_file():
+        msg = f"{path}: no such parameter file"
+        raise InputError(msg)
+    try:
+        data = tomllib.loads(file.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        msg = f"{path}: not valid TOML ({exc})"
+        raise InputError(msg) from exc
+    known = {f.name for f in fields(FeedDriveParameters)}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        msg = f"{path}: unknown parameter {unknown[0]!r}; the names are: {', '.join(sorted(known))}"
+        raise InputError(msg)
+    values = {}
+    for name, value in data.items():
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            msg = f"{path}: parameter {name} = {value!r} is not a number"
+            raise InputError(msg)
+        values[name] = float(value)
+    return validate(replace(params, **values))

@@ -1,0 +1,173 @@
+"""Vibration response of the feed drive by classical RK4 (seed 004 §2.2, Eqs 10-14 corrected)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mtident._typing import FloatArray
+from mtident.exceptions import InputError
+from mtident.feeddrive.model import Excitation, accelerations, exact_step, input_matrix, rk4_linear_step, system_matrix
+from mtident.feeddrive.params import FeedDriveParameters, validate
+
+__all__ = ["Response", "simulate", "write_response", "read_response", "RESPONSE_COLUMNS", "FORCE_COLUMNS", "substeps_for"]
+
+RESPONSE_COLUMNS = (
+    "x_t_m", "x_b_m", "theta_b_rad", "theta_m_rad",
+    "v_t_m_per_s", "v_b_m_per_s", "omega_b_rad_per_s", "omega_m_rad_per_s",
+    "a_t_m_per_s2", "a_b_m_per_s2", "alpha_b_rad_per_s2", "alpha_m_rad_per_s2",
+)
+FORCE_COLUMNS = ("F_t_N", "F_b_N", "T_b_Nm", "T_m_Nm")
+
+
+@dataclass(frozen=True, slots=True)
+class Response:
+    """Sampled response of the four coordinates.
+
+    Attributes
+    ----------
+    time_s : ndarray, shape (N,)
+    forces : ndarray, shape (N, 4)
+        Generalized forces, held over each sample.
+    values : ndarray, shape (N, 12)
+        Displacements, velocities and accelerations (``RESPONSE_COLUMNS``), NaN where not measured.
+    """
+
+    time_s: FloatArray
+    forces: FloatArray
+    values: FloatArray
+
+    @property
+    def sample_rate_Hz(self) -> float:
+        """1 / the sampling interval."""
+        return 1.0 / float(self.time_s[1] - self.time_s[0])
+
+
+def substeps_for(p: FeedDriveParameters, h: float, max_phase_step: float = 0.01) -> int:
+    """RK4 sub-steps (a power of two) so that ω_max·h/substeps ≤ ``max_phase_step``."""
+    omega = np.abs(np.linalg.eigvals(system_matrix(p))).max()
+    needed = max(1, int(np.ceil(omega * h / max_phase_step)))
+    return 1 << (needed - 1).bit_length()
+
+
+def simulate(
+    p: FeedDriveParameters,
+    excitation: Excitation | None = None,
+    sample_rate_Hz: float = 10_000.0,
+    duration_s: float = 2.0,
+    noise_fraction: float = 0.0,
+    rng: np.random.Generator | None = None,
+    method: str = "rk4",
+    substeps: int | None = None,
+) -> Response:
+    """Simulate the response to ``excitation`` from rest.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+    excitation : Excitation
+        Default: 20 N on the table for one sample (seed 004 §3.1).
+    sample_rate_Hz, duration_s : float
+        Default 10 kHz for 2 s, as seed 004.
+    noise_fraction : float
+        White measurement noise with standard deviation ``noise_fraction`` × the
+        RMS of each response (needs ``rng``).
+    rng : numpy.random.Generator
+        Source of the noise.
+    method : {"rk4", "exact"}
+        Classical RK4 (with ``substeps`` steps per sample, default enough that
+        ω_max·h ≤ 0.01) or the matrix-exponential solution (the reference).
+
+    Returns
+    -------
+    Response
+    """
+    validate(p)
+    if sample_rate_Hz <= 0 or duration_s <= 0:
+        msg = f"sample rate {sample_rate_Hz} Hz and duration {duration_s} s must be positive"
+        raise InputError(msg)
+    if noise_fraction > 0 and rng is None:
+        msg = "measurement noise needs a seeded generator (rng=np.random.default_rng(seed))"
+        raise InputError(msg)
+    excitation = excitation or Excitation()
+    h = 1.0 / sample_rate_Hz
+    count = int(round(duration_s * sample_rate_Hz)) + 1
+    time = np.arange(count) * h
+    forces = excitation.forces(time)
+    a, b = system_matrix(p), input_matrix(p)
+    if method == "rk4":
+        phi, gamma = rk4_linear_step(a, b, h, substeps or substeps_for(p, h))
+    elif method == "exact":
+        phi, gamma = exact_step(a, b, h)
+    else:
+        msg = f"method {method!r}: expected 'rk4' or 'exact'"
+        raise InputError(msg)
+    states = np.zeros((count, 8))
+    # The input over [t_k, t_k+1) is forces[k]; the state at t_0 is rest.
+    drive = forces[:-1] @ gamma.T
+    for k in range(count - 1):
+        states[k + 1] = phi @ states[k] + drive[k]
+    values = np.hstack([states, accelerations(p, states, forces)])
+    if noise_fraction > 0:
+        assert rng is not None
+        rms = np.sqrt(np.mean(values**2, axis=0))
+        values = values + noise_fraction * rms * rng.standard_normal(values.shape)
+    return Response(time, forces, values)
+
+
+def write_response(response: Response, path: str | Path) -> Path:
+    """CSV with time_s, the four generalized forces and the twelve responses, units in the headers."""
+    import pandas as pd
+
+    frame = pd.DataFrame(np.hstack([response.time_s[:, None], response.forces, response.values]), columns=["time_s", *FORCE_COLUMNS, *RESPONSE_COLUMNS])
+    out = Path(path)
+    frame.to_csv(out, index=False, float_format="%.9e")
+    return out
+
+
+def read_response(path: str | Path) -> Response:
+    """Read a response CSV: time_s, optional force columns (default zero), any of the response columns.
+
+    Raises
+    ------
+    InputError
+        Missing file, no time_s column, no known response column, uneven sampling, non-numeric cells.
+    """
+    import pandas as pd
+
+    file = Path(path)
+    if not file.is_file():
+        msg = f"{path}: no such file"
+        raise InputError(msg)
+    try:
+        frame = pd.read_csv(file)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        msg = f"{path}: not a readable CSV file"
+        raise InputError(msg) from exc
+    if "time_s" not in frame.columns:
+        msg = f"{path}: no time_s column; the columns are: {', '.join(map(str, frame.columns))}"
+        raise InputError(msg)
+    measured = [c for c in RESPONSE_COLUMNS if c in frame.columns]
+    if not measured:
+        msg = f"{path}: no response column; expected some of: {', '.join(RESPONSE_COLUMNS)}"
+        raise InputError(msg)
+    numeric = frame.apply(pd.to_numeric, errors="coerce")
+    for column in ["time_s", *measured, *[c for c in FORCE_COLUMNS if c in frame.columns]]:
+        bad = numeric[column].isna()
+        if bad.any():
+            row = int(np.argmax(bad.to_numpy()))
+            msg = f"{path}: column {column!r}, row {row + 2}: {frame[column].iloc[row]!r} is not a number"
+            raise InputError(msg)
+    time = numeric["time_s"].to_numpy(dtype=float)
+    steps = np.diff(time)
+    if len(time) < 10 or np.any(steps <= 0) or np.ptp(steps) > 1e-6 * steps.mean():
+        msg = f"{path}: time_s must be evenly spaced and increasing, with at least 10 samples"
+        raise InputError(msg)
+    forces = np.column_stack([numeric[c].to_numpy(dtype=float) if c in frame.columns else np.zeros(len(time)) for c in FORCE_COLUMNS])
+    values = np.full((len(time), 12), np.nan)
+    for i, column in enumerate(RESPONSE_COLUMNS):
+        if column in frame.columns:
+            values[:, i] = numeric[column].to_numpy(dtype=float)
+    return Response(time, forces, values)
