@@ -194,3 +194,14 @@ def test_cli_refuses_the_printed_beta(tmp_path):
     path.write_text("beta = 2.55e-3\n")
     out = run("feeddrive", "modes", "--params", str(path), "--json")
     assert out.returncode == 2 and "K is indefinite" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_compiled_loop_equals_the_generic_engine():
+    response = simulate(FeedDriveParameters(), duration_s=0.05, noise_fraction=0.01, rng=np.random.default_rng(5))
+    compiled = identify_feed_drive(response, engine="compiled")
+    generic = identify_feed_drive(response, engine="numpy")
+    np.testing.assert_allclose(compiled.history, generic.history, rtol=1e-9)
+    np.testing.assert_allclose(compiled.history_sd, generic.history_sd, rtol=1e-8)
+    np.testing.assert_allclose(compiled.estimated, generic.estimated, rtol=1e-8, atol=1e-12 * np.abs(generic.estimated).max(axis=0))
+    with pytest.raises(InputError, match="engine 'gpu' is not one of"):
+        identify_feed_drive(response, engine="gpu")
