@@ -147,3 +147,149 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
     for i, d in enumerate(summaries):
         table.add_row(str(d["sensor"]), _fmt(d["min_identification_time_min"], 0), *[f"{b:g}" for b in result.best_per_period_min[:, i]], "yes" if d["periods_agree"] else "[yellow]no[/]")
     Console(width=max(Console().width, 100)).print(table)
+
+
+def _save_state(path: Path, payload: dict[str, object]) -> None:
+    """Write the monitor's state atomically: a killed monitor leaves the old or the new file, never half of one."""
+    import json
+    import os
+    import tempfile
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    with os.fdopen(handle, "w") as out:
+        json.dump(payload, out)
+        out.flush()
+        os.fsync(out.fileno())
+    os.replace(tmp, path)
+
+
+def _status_table(monitor, title: str) -> Table:  # noqa: ANN001 - thermal.monitor.Monitor
+    table = Table(title=title)
+    for column in ("sensor", "latest (°C)", "T∞ ± 95 % (°C)", "t_eq (min)", "status"):
+        table.add_column(column, justify="left" if column in ("sensor", "status") else "right", no_wrap=True)
+    for st in monitor.status():
+        colour = "green" if st.may_stop else "yellow"
+        table.add_row(st.sensor, _fmt(st.latest_C), f"{_fmt(st.steady_state_C)} ± {_fmt(st.half_width_C)}", _fmt(st.equilibrium_time_min, 0), f"[{colour}]{st.status}[/]")
+    return table
+
+
+@thermal.command("watch")
+@log_options
+@click.option("--tolerance", "tolerance_C", type=click.FloatRange(min=0, min_open=True), default=0.2, show_default=True, help="Stop when the T∞ 95 % half-width is within this (°C).")
+@click.option("--hold", "hold_min", type=click.FloatRange(min=0), default=10.0, show_default=True, help="Minutes the T∞ estimate must stay within ±tolerance/2.")
+@click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible.")
+@click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: <log name>.watch-state.json in the current directory).")
+@click.option("--poll", "poll_s", type=click.FloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
+@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0), help="Give up after this many seconds without a new row.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Keep a PNG of measured and predicted curves up to date.")
+@click.option("--json", "as_json", is_flag=True, help="Print the contract's JSON object when the decision is reached (or the log ends).")
+@user_errors
+def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
+    """Follow a warm-up log as it grows and say when the test can stop.
+
+    Every new row updates each sensor's filter; a sensor may stop when its T∞
+    interval is within the tolerance, the estimate has held still, and its
+    residuals fit the model. The state file lets a killed monitor resume.
+    """
+    import json
+    import sys
+    import time
+
+    from rich.live import Live
+
+    from mtident.io.follow import LogFollower
+    from mtident.thermal.monitor import Monitor, MonitorSettings
+
+    path = sample_log_path() if file == SAMPLE else Path(file)
+    if not path.is_file() and replay:
+        msg = f"{path}: no such file"
+        raise InputError(msg)
+    names = [name for entry in sensors for name in entry.split(",") if name] or None
+    state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
+    settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min)
+    follower: LogFollower | None = None
+    monitor: Monitor | None = None
+    if state_file.is_file():
+        try:
+            saved = json.loads(state_file.read_text())
+            if saved.get("log") == str(path.resolve()) and saved.get("settings") == [tolerance_C, hold_min] and saved.get("requested") == names:
+                follower = LogFollower.resume(path, saved["position"], time_col, time_unit)
+                monitor = Monitor.from_dict(saved["monitor"])
+                stderr.print(f"mtident: resuming from {state_file} at t = {monitor.last_t} min", highlight=False)
+        except (ValueError, KeyError, TypeError) as exc:
+            stderr.print(f"mtident: warning: ignoring the unreadable state file {state_file} ({exc}); starting afresh", highlight=False)
+    if follower is None:
+        follower = LogFollower(path, names, time_col, time_unit)
+
+    def save() -> None:
+        assert follower is not None and monitor is not None
+        _save_state(state_file, {"log": str(path.resolve()), "settings": [tolerance_C, hold_min], "requested": names, "position": follower.position(), "monitor": monitor.to_dict()})
+
+    live_view = sys.stdout.isatty() and not as_json
+    last_data = time.monotonic()
+    last_plot = 0.0
+    with Live(console=Console(), auto_refresh=False, transient=False) if live_view else _Nothing() as live:
+        while True:
+            rows = follower.poll()
+            for warning in rows.warnings:
+                stderr.print(f"mtident: warning: {warning}", highlight=False)
+            if monitor is None and follower.sensors:
+                monitor = Monitor(tuple(follower.sensors), settings)
+            if len(rows.time_min) and monitor is not None:
+                last_data = time.monotonic()
+                for message in monitor.feed(rows.time_min, rows.temperature_C):
+                    stderr.print(f"mtident: {message}", highlight=False)
+                save()
+                if live_view:
+                    live.update(_status_table(monitor, f"{path.name}: t = {monitor.last_t:g} min"), refresh=True)
+                if plot_path and (time.monotonic() - last_plot > 5.0 or monitor.stop_time is not None):
+                    _plot_watch(path, monitor, plot_path, time_col, time_unit)
+                    last_plot = time.monotonic()
+            if monitor is not None and monitor.stop_time is not None:
+                break
+            if replay:
+                break
+            if timeout_s is not None and time.monotonic() - last_data > timeout_s:
+                stderr.print(f"mtident: no new row for {timeout_s:g} s; stopping", highlight=False)
+                break
+            time.sleep(poll_s)
+    if monitor is None:
+        msg = f"{path}: no data rows"
+        raise InputError(msg)
+    if plot_path:
+        _plot_watch(path, monitor, plot_path, time_col, time_unit)
+    result = monitor.result()
+    if as_json:
+        print_json(result)
+        return
+    Console(width=max(Console().width, 100)).print(_status_table(monitor, f"{path.name}: t = {monitor.last_t:g} min"))
+    if result["stop_time_min"] is not None:
+        saved_text = f"; {result['time_saved_min']:.0f} min before the predicted equilibrium" if result.get("time_saved_min") is not None else ""
+        Console().print(f"[bold green]The test can stop at t = {result['stop_time_min']:g} min{saved_text}.[/]")
+    else:
+        Console().print("[bold yellow]Not yet: keep the test running.[/]")
+
+
+class _Nothing:
+    """A stand-in for rich.live.Live when there is no terminal to draw in."""
+
+    def __enter__(self) -> _Nothing:
+        return self
+
+    def __exit__(self, *args: object) -> None:
+        return None
+
+    def update(self, *args: object, **kwargs: object) -> None:
+        return None
+
+
+def _plot_watch(path: Path, monitor, plot_path: str, time_col: str | None, time_unit: str | None) -> None:  # noqa: ANN001
+    """Redraw the measured log and the monitor's current prediction."""
+    from mtident.report.plots import plot_monitor
+
+    try:
+        log = read_temperature_log(path, time_col=time_col, time_unit=time_unit).select(list(monitor.sensors))
+    except (InputError, OSError):
+        return  # the logger is mid-write; the next redraw will catch up
+    plot_monitor(log, monitor, plot_path)

@@ -137,3 +137,35 @@ def plot_feed_drive_identification(result, response, path: str | Path, truth=Non
     fig.savefig(out, dpi=90)
     plt.close(fig)
     return out
+
+
+def plot_monitor(log, monitor, path: str | Path) -> Path:  # noqa: ANN001 - TemperatureLog, thermal.monitor.Monitor
+    """Measured curves so far, the monitor's predicted curve with its T∞ band, and the stop time."""
+    from mtident.thermal.model import rise_curve
+
+    fig, axes = grid(len(log.sensors))
+    status = monitor.status()
+    now = monitor.last_t or 0.0
+    for s, ax in enumerate(axes):
+        ax.plot(log.time_min, log.temperature_C[:, s], ".", ms=2.5, color="0.45", label="measured")
+        st = status[s]
+        if np.isfinite(st.steady_state_C) and np.isfinite(st.equilibrium_time_min):
+            rate = np.log(20.0) / st.equilibrium_time_min
+            future = np.linspace(now, now + max(3.0 / rate, 60.0), 200)
+            ax.plot(future, rise_curve(future - now, st.latest_C, rate, st.steady_state_C), color="tab:red", lw=1.5, label="predicted")
+            ax.axhspan(st.steady_state_C - st.half_width_C, st.steady_state_C + st.half_width_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
+        if monitor.stop_time is not None:
+            ax.axvline(monitor.stop_time, color="k", ls="--", lw=1, label=f"stop at {monitor.stop_time:g} min")
+        ax.set_title(f"{st.sensor}: {st.status}", fontsize=10)
+        ax.set_xlabel("time (min)")
+        ax.set_ylabel("temperature (°C)")
+        ax.grid(alpha=0.3)
+        if s == 0:
+            ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    out = Path(path)
+    tmp = out.with_name(out.name + ".tmp.png")
+    fig.savefig(tmp, dpi=100)
+    plt.close(fig)
+    tmp.replace(out)
+    return out

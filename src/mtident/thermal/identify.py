@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.stats import t as student_t
+from scipy.special import stdtrit
 
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
@@ -432,7 +432,7 @@ def _identify(
         measured_final_C=final_measured,
         measured_equilibrium_time_min=eq_measured,
         notes=tuple(notes),
-        quantile=float(student_t.ppf(0.975, max(n_window - 3, 1))),
+        quantile=float(stdtrit(max(n_window - 3, 1), 0.975)),
     )
 
 

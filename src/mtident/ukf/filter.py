@@ -219,7 +219,7 @@ def _joseph_factor(
     """
     assert prior.chol is not None
     n = prior.mean.shape[-1]
-    h = np.swapaxes(np.linalg.solve(prior.cov, pxy), -1, -2)  # (..., m, n)
+    h = np.swapaxes(np.linalg.pinv(prior.cov, hermitian=True) @ pxy, -1, -2)  # (..., m, n); P⁻ may be singular
     u_t = np.linalg.solve(sy, np.swapaxes(pxy, -1, -2))
     gain = alpha[..., None, None] * np.swapaxes(np.linalg.solve(np.swapaxes(sy, -1, -2), u_t), -1, -2)
     residual_map = np.eye(n) - gain @ h

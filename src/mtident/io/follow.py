@@ -1,0 +1,182 @@
+"""Following a CSV log that a data-acquisition program is still writing.
+
+The follower never writes to the log. It remembers the byte offset of the last
+complete line it read, the file's identity (device, inode) and the last time
+stamp it accepted, so that:
+
+* new rows are picked up on the next poll;
+* a partly written last line (no newline yet) waits for its end;
+* a truncated or replaced file (the logger restarted) is read again from its
+  start, and rows at or before the last accepted time are skipped, so nothing is
+  counted twice;
+* a row that repeats a time stamp or goes back in time is refused with a warning.
+
+The position is a small dict (:meth:`LogFollower.position`) that the monitor
+keeps in its state file to resume exactly where it was.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from mtident._typing import FloatArray
+from mtident.exceptions import InputError
+from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TIME_UNITS
+
+__all__ = ["LogFollower", "Rows"]
+
+
+@dataclass(frozen=True)
+class Rows:
+    """New samples: times (minutes from the first sample ever read), temperatures (n, S), warnings."""
+
+    time_min: FloatArray
+    temperature_C: FloatArray
+    warnings: tuple[str, ...] = ()
+
+
+@dataclass
+class LogFollower:
+    """Tail a CSV temperature log (DESIGN.md contract: time column, one column per sensor)."""
+
+    path: Path
+    sensors: list[str] | None = None
+    time_col: str | None = None
+    time_unit: str | None = None
+    offset: int = 0
+    identity: tuple[int, int] | None = None
+    header: list[str] | None = None
+    origin: float | None = None  # raw time (or epoch seconds) of the first sample, defines t = 0
+    last_time: float | None = None  # minutes
+    columns: list[int] = field(default_factory=list)
+
+    def position(self) -> dict[str, object]:
+        """Everything needed to resume (for the state file)."""
+        return {
+            "offset": self.offset,
+            "identity": list(self.identity) if self.identity else None,
+            "header": self.header,
+            "origin": self.origin,
+            "last_time": self.last_time,
+            "columns": self.columns,
+            "sensors": self.sensors,
+        }
+
+    @classmethod
+    def resume(cls, path: Path, position: dict[str, object], time_col: str | None, time_unit: str | None) -> LogFollower:
+        """A follower that continues from a saved position."""
+        identity = position.get("identity")
+        return cls(
+            path=path,
+            sensors=position.get("sensors"),  # type: ignore[arg-type]
+            time_col=time_col,
+            time_unit=time_unit,
+            offset=int(position["offset"]),  # type: ignore[arg-type]
+            identity=tuple(identity) if identity else None,  # type: ignore[arg-type]
+            header=position.get("header"),  # type: ignore[arg-type]
+            origin=position.get("origin"),  # type: ignore[arg-type]
+            last_time=position.get("last_time"),  # type: ignore[arg-type]
+            columns=list(position.get("columns") or []),  # type: ignore[arg-type]
+        )
+
+    def _unit(self, name: str) -> float:
+        if self.time_unit is not None:
+            return TIME_UNITS[self.time_unit]
+        for suffix, factor in TIME_UNITS.items():
+            if name.lower().endswith("_" + suffix):
+                return factor
+        return 1.0
+
+    def _set_header(self, line: str) -> None:
+        header = [h.strip() for h in next(csv.reader([line]))]
+        if len(header) < 2:
+            msg = f"{self.path}: need a time column and at least one sensor column; found: {', '.join(header)}"
+            raise InputError(msg)
+        time_name = self.time_col or header[0]
+        if time_name not in header:
+            msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"
+            raise InputError(msg)
+        names = [h for h in header if h != time_name]
+        chosen = names if not self.sensors or self.sensors == ["all"] else self.sensors
+        missing = [s for s in chosen if s not in header]
+        if missing:
+            msg = f"{self.path}: no sensor column {missing[0]!r}; the log has: {', '.join(names)}"
+            raise InputError(msg)
+        self.header = header
+        self.sensors = list(chosen)
+        self.columns = [header.index(time_name)] + [header.index(s) for s in chosen]
+
+    def _parse_time(self, text: str) -> float:
+        """Minutes relative to the first sample; raises ValueError for an unreadable cell."""
+        assert self.header is not None
+        try:
+            raw = float(text)
+            scale = self._unit(self.header[self.columns[0]])
+            stamp = raw * scale
+        except ValueError:
+            stamp = pd.Timestamp(text.strip()).timestamp() / 60.0
+        if self.origin is None:
+            self.origin = stamp
+        return stamp - self.origin
+
+    def poll(self) -> Rows:
+        """Read the complete lines added since the last poll."""
+        try:
+            stat = os.stat(self.path)
+        except FileNotFoundError:
+            return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), ())
+        warnings: list[str] = []
+        identity = (stat.st_dev, stat.st_ino)
+        restarted = self.identity is not None and (identity != self.identity or stat.st_size < self.offset)
+        if restarted:
+            warnings.append(f"{self.path}: the log was truncated or replaced (logger restarted?); reading it again from the start, skipping rows already counted")
+            self.offset = 0
+        self.identity = identity
+        with open(self.path, "rb") as handle:
+            handle.seek(self.offset)
+            chunk = handle.read()
+        end = chunk.rfind(b"\n")
+        if end < 0:
+            return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
+        complete = chunk[: end + 1]
+        start_offset = self.offset
+        self.offset += end + 1
+        text = complete.decode("utf-8", errors="replace")
+        lines = text.splitlines()
+        if start_offset == 0 and lines:
+            header_line, lines = lines[0], lines[1:]
+            if self.header is None:
+                self._set_header(header_line)
+        times, rows = [], []
+        for line in csv.reader(io.StringIO("\n".join(lines))):
+            if not line or all(not c.strip() for c in line):
+                continue
+            try:
+                t = self._parse_time(line[self.columns[0]])
+            except (ValueError, IndexError):
+                warnings.append(f"{self.path}: refused a row with an unreadable time {line[:1]!r}")
+                continue
+            if self.last_time is not None and t <= self.last_time:
+                if not restarted:  # after a restart the old rows come again: expected, not an error
+                    warnings.append(f"{self.path}: refused the row at t = {t:g} min: it repeats or goes back from t = {self.last_time:g} min")
+                continue
+            values = []
+            for index in self.columns[1:]:
+                try:
+                    value = float(line[index])
+                except (ValueError, IndexError):
+                    value = np.nan
+                if not (OPEN_CIRCUIT_LOW_C <= value <= OPEN_CIRCUIT_HIGH_C):
+                    value = np.nan
+                values.append(value)
+            self.last_time = t
+            times.append(t)
+            rows.append(values)
+        return Rows(np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings))

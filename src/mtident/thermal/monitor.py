@@ -1,0 +1,371 @@
+"""Live thermal-test monitor: recursive identification of every sensor and the stopping rule.
+
+Each new sample advances every sensor's filter by one step (constant work per
+sample: no refit from the start). The stopping rule, per sensor:
+
+1. the 95 % interval of T∞ is within ``tolerance`` (half-width ≤ tolerance),
+2. the T∞ estimate has stayed within ±tolerance/2 of its current value for the
+   last ``hold_min`` minutes,
+3. the model check passes: over the last ``check_samples`` samples the
+   normalised innovations νₖ/√Sₖ have mean ≈ 0 and mean square ≈ 1. A
+   fast-plus-slow warm-up whose slow part the first-order model has not yet
+   seen gives innovations of one sign; the monitor then widens the filter's
+   parameter covariance (a discrete fading step) so that it learns the new
+   trend, and the T∞ history starts again;
+4. at least ``min_samples`` samples.
+
+The test may stop when every sensor may, except sensors that show no rise
+(they are reported and left out of the decision).
+
+Bad samples: a spike (|ν|/√S > ``spike_sigma``) is rejected and the step redone
+without it; NaN, empty and open-circuit cells are treated as missing (the
+filter bridges them); a gap in time is bridged by the model and reported.
+
+The whole state is a JSON-serialisable dict (:meth:`Monitor.to_dict`), so a
+monitor killed at any moment resumes with the same result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.special import stdtrit
+
+from mtident._typing import FloatArray
+from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
+from mtident.thermal.settings import ThermalTuning, filter_config, tuning_from_data
+from mtident.ukf import FilterCarry, GaussianState, filter_step, initial_carry
+
+__all__ = ["MonitorSettings", "Monitor", "SensorStatus"]
+
+
+@dataclass(frozen=True, slots=True)
+class MonitorSettings:
+    """Tuning of the stopping rule (defaults for a 1-min PT100 log)."""
+
+    tolerance_C: float = 0.2
+    hold_min: float = 10.0
+    init_min: float = 10.0
+    min_samples: int = 15
+    check_samples: int = 20
+    spike_sigma: float = 6.0
+    min_rise_C: float = 0.1
+    gap_factor: float = 5.0
+
+
+@dataclass(frozen=True, slots=True)
+class SensorStatus:
+    """What the monitor says about one sensor now."""
+
+    sensor: str
+    latest_C: float
+    steady_state_C: float
+    half_width_C: float
+    equilibrium_time_min: float
+    may_stop: bool
+    status: str
+
+
+def _tolist(value: object) -> object:
+    return value.tolist() if isinstance(value, np.ndarray) else value
+
+
+@dataclass
+class Monitor:
+    """Recursive warm-up monitor for S sensors. Feed it samples with :meth:`feed`."""
+
+    sensors: tuple[str, ...]
+    settings: MonitorSettings = MonitorSettings()
+    buffer_t: list[float] = field(default_factory=list)
+    buffer_y: list[list[float]] = field(default_factory=list)
+    tuning: ThermalTuning | None = None
+    carry: FilterCarry | None = None
+    last_t: float | None = None
+    median_dt: float | None = None
+    observed: FloatArray | None = None
+    z_history: list[list[float]] = field(default_factory=list)
+    steady_history: list[list[float]] = field(default_factory=list)  # rows: [t, T∞ per sensor]
+    nis_sum: FloatArray | None = None
+    first_T: FloatArray | None = None
+    min_T: FloatArray | None = None
+    max_T: FloatArray | None = None
+    samples: int = 0
+    recent_y: list[list[float]] = field(default_factory=list)  # last 5 raw samples, for the noise estimate
+    d4_sum: FloatArray | None = None
+    d4_count: FloatArray | None = None
+    stop_time: float | None = None
+    decision: list[dict[str, object]] | None = None
+    notes: list[str] = field(default_factory=list)
+
+    # ---- recursion --------------------------------------------------------------------
+    def feed(self, times: FloatArray, values: FloatArray) -> list[str]:
+        """Process new samples (times in min, values (n, S)); returns warnings for the engineer."""
+        messages: list[str] = []
+        for t, y in zip(np.asarray(times, float), np.asarray(values, float), strict=True):
+            messages.extend(self._one(float(t), y.copy()))
+        self.notes.extend(messages)
+        return messages
+
+    def _one(self, t: float, y: FloatArray) -> list[str]:
+        messages: list[str] = []
+        self.samples += 1
+        if self.carry is None:
+            self.buffer_t.append(t)
+            self.buffer_y.append([float(v) for v in y])
+            ready = t - self.buffer_t[0] >= self.settings.init_min and len(self.buffer_t) >= 8
+            if ready:
+                messages.extend(self._start())
+            return messages
+        return self._step(t, y)
+
+    def _start(self) -> list[str]:
+        t = np.array(self.buffer_t)
+        y = np.array(self.buffer_y)
+        filled = np.where(np.isfinite(y), y, np.nanmean(y, axis=0))
+        self.tuning = tuning_from_data(t, filled)
+        config = filter_config("ukf", self.tuning)
+        self.carry = initial_carry(GaussianState(self.tuning.initial_mean, self.tuning.initial_cov), self.tuning.process_cov, self.tuning.emission_cov, config)
+        S = len(self.sensors)
+        self.observed = np.zeros(S)
+        self.nis_sum = np.zeros(S)
+        self.first_T = np.array(self.tuning.initial_mean[:, 0])
+        self.min_T = self.first_T.copy()
+        self.max_T = self.first_T.copy()
+        self.median_dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+        self.last_t = None
+        self.d4_sum = np.zeros(S)
+        self.d4_count = np.zeros(S)
+        self.recent_y = []
+        messages = []
+        for tt, yy in zip(t, y, strict=True):
+            messages.extend(self._step(float(tt), yy.copy()))
+        self.buffer_t, self.buffer_y = [], []
+        return messages
+
+    def _step(self, t: float, y: FloatArray) -> list[str]:
+        assert self.carry is not None and self.tuning is not None and self.observed is not None
+        messages: list[str] = []
+        config = filter_config("ukf", self.tuning)
+        dt = 0.0 if self.last_t is None else t - self.last_t
+        if self.median_dt and dt > self.settings.gap_factor * self.median_dt:
+            messages.append(f"gap in the log: {dt:g} min without samples before t = {t:g} min; bridged by the model")
+        step = lambda p: slope_transition(p, dt)  # noqa: E731
+        new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config)
+        z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
+        spikes = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= 5)
+        if np.any(spikes):
+            for s in np.flatnonzero(spikes):
+                messages.append(f"sensor {self.sensors[s]!r}: rejected a spike at t = {t:g} min ({y[s]:.2f} °C, {abs(z[s]):.0f}σ from the prediction)")
+            y[spikes] = np.nan
+            new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config)
+            z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
+        for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
+            messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN or open circuit); bridged")
+        self.carry = new
+        self.last_t = t
+        self._update_noise(y)
+        ok = np.isfinite(z)
+        self.observed = self.observed + ok
+        if self.observed.max() > 3:
+            self.nis_sum = self.nis_sum + np.where(ok & (self.observed > 3), z**2, 0.0)
+        self.z_history.append([float(v) for v in z])
+        self.z_history = self.z_history[-self.settings.check_samples :]
+        physical, cov = to_physical(self.carry.mean, self.carry.covariance(), "slope")
+        temperature = physical[:, 0]
+        self.min_T = np.minimum(self.min_T, temperature)
+        self.max_T = np.maximum(self.max_T, temperature)
+        self.steady_history.append([t, *[float(v) for v in physical[:, 2]]])
+        horizon = t - self.settings.hold_min
+        while len(self.steady_history) > 2 and self.steady_history[1][0] <= horizon:
+            self.steady_history.pop(0)
+        misfit = self._misfit()
+        if np.any(misfit):
+            for s in np.flatnonzero(misfit):
+                messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); widening its parameter uncertainty to follow the new trend")
+            self._widen(misfit)
+        if self.stop_time is None:
+            status = self.status()
+            if all(st.may_stop for st in status) and not all(st.status == "no rise" for st in status):
+                self.stop_time = t
+                self.decision = [self._summary(st) for st in status]
+                messages.append(f"the test can stop at t = {t:g} min")
+        return messages
+
+    def _update_noise(self, y: FloatArray) -> None:
+        """Running noise variance from fourth differences (σ² = E[Δ⁴y²]/70), spikes excluded; sets R.
+
+        The 10-minute start window gives only a handful of differences, so R is
+        re-estimated with every sample (constant work) instead of trusted.
+        """
+        assert self.d4_sum is not None and self.d4_count is not None and self.carry is not None
+        self.recent_y = ([*self.recent_y, [float(v) for v in y]])[-5:]
+        if len(self.recent_y) < 5:
+            return
+        r = np.array(self.recent_y)
+        d4 = r[0] - 4 * r[1] + 6 * r[2] - 4 * r[3] + r[4]
+        current = np.where(self.d4_count > 0, self.d4_sum / np.maximum(self.d4_count, 1), np.inf)
+        use = np.isfinite(d4) & ((self.d4_count < 10) | (d4**2 <= 36.0 * current))
+        self.d4_sum = self.d4_sum + np.where(use, d4**2, 0.0)
+        self.d4_count = self.d4_count + use
+        ready = self.d4_count >= 5
+        if np.any(ready):
+            variance = np.where(ready, np.maximum(self.d4_sum / np.maximum(self.d4_count, 1) / 70.0, 1e-12), self.carry.emission_cov[:, 0, 0])
+            self.carry = replace(self.carry, emission_cov=variance[:, None, None])
+
+    def _misfit(self) -> np.ndarray:
+        z = np.array(self.z_history)
+        if len(z) < self.settings.check_samples:
+            return np.zeros(len(self.sensors), dtype=bool)
+        count = np.sum(np.isfinite(z), axis=0)
+        enough = count >= self.settings.check_samples // 2
+        safe = np.where(enough, count, 1)
+        mean = np.where(enough, np.nansum(z, axis=0) / safe, 0.0)
+        mean_square = np.where(enough, np.nansum(z**2, axis=0) / safe, 0.0)
+        return enough & ((np.abs(mean) * np.sqrt(safe) > 4.0) | (mean_square > 2.0 + 4.0 * np.sqrt(2.0 / safe)))
+
+    def _widen(self, mask: np.ndarray) -> None:
+        assert self.carry is not None and self.carry.chol is not None
+        factor = np.where(mask, 2.0, 1.0)[:, None, None]
+        self.carry = replace(self.carry, chol=self.carry.chol * factor)
+        for row in self.z_history:
+            for s in np.flatnonzero(mask):
+                row[s] = float("nan")
+        last = self.steady_history[-1]
+        self.steady_history = [last]
+
+    # ---- the decision -------------------------------------------------------------------
+    def status(self) -> list[SensorStatus]:
+        """Per-sensor estimate and whether it may stop now."""
+        out = []
+        if self.carry is None:
+            return [SensorStatus(name, float(self.buffer_y[-1][i]) if self.buffer_y else float("nan"), float("nan"), float("nan"), float("nan"), False, "collecting") for i, name in enumerate(self.sensors)]
+        physical, cov = to_physical(self.carry.mean, self.carry.covariance(), "slope")
+        assert self.observed is not None and self.nis_sum is not None
+        factor = np.maximum(1.0, self.nis_sum / np.maximum(self.observed - 3, 1))
+        history = np.array(self.steady_history)
+        misfit = self._misfit()
+        quantiles = stdtrit(np.maximum(self.observed - 3, 1), 0.975)
+        halves = quantiles * np.sqrt(np.maximum(cov[:, 2, 2], 0.0) * factor)
+        for s, name in enumerate(self.sensors):
+            n = int(self.observed[s])
+            half = float(halves[s])
+            steady = float(physical[s, 2])
+            rate = float(physical[s, 1])
+            span = history[-1, 0] - history[0, 0]
+            stable = span >= self.settings.hold_min - 1e-9 and bool(np.all(np.abs(history[:, 1 + s] - steady) <= self.settings.tolerance_C / 2))
+            rise = float(self.max_T[s] - self.min_T[s])
+            flat = self.samples * (self.median_dt or 1.0) >= self.settings.init_min + self.settings.hold_min and rise < self.settings.min_rise_C and half > self.settings.tolerance_C
+            eq = float(equilibrium_time(rate)) if rate > 0 else float("nan")
+            if flat:
+                state, may = "no rise", True
+            elif not np.isfinite(steady) or rate <= 0:
+                state, may = "no steady state yet", False
+            elif misfit[s]:
+                state, may = "model check", False
+            elif n < self.settings.min_samples:
+                state, may = "collecting", False
+            elif half > self.settings.tolerance_C:
+                state, may = "narrowing", False
+            elif not stable:
+                state, may = "settling", False
+            else:
+                state, may = "may stop", True
+            out.append(SensorStatus(name, float(physical[s, 0]), steady, half, eq, may, state))
+        return out
+
+    def _summary(self, st: SensorStatus) -> dict[str, object]:
+        def num(x: float) -> float | None:
+            return float(x) if np.isfinite(x) else None
+
+        return {
+            "sensor": st.sensor,
+            "steady_state_C": num(st.steady_state_C),
+            "steady_state_ci95_C": [num(st.steady_state_C - st.half_width_C), num(st.steady_state_C + st.half_width_C)],
+            "equilibrium_time_min": num(st.equilibrium_time_min),
+            "status": st.status,
+        }
+
+    def result(self) -> dict[str, object]:
+        """The contract's JSON object: the decision if reached, else the current estimates."""
+        sensors = self.decision if self.decision is not None else [self._summary(st) for st in self.status()]
+        payload: dict[str, object] = {"stop_time_min": self.stop_time, "decision": "stop" if self.stop_time is not None else "continue", "last_time_min": self.last_t}
+        eq = [d["equilibrium_time_min"] for d in sensors if d["equilibrium_time_min"] is not None and d["status"] != "no rise"]
+        if self.stop_time is not None and eq:
+            payload["time_saved_min"] = float(max(eq)) - self.stop_time  # type: ignore[arg-type]
+        if len(sensors) == 1:
+            payload.update({k: v for k, v in sensors[0].items() if k != "sensor"})
+            payload["sensor"] = sensors[0]["sensor"]
+        else:
+            payload["sensors"] = sensors
+            payload["equilibrium_time_min"] = float(max(eq)) if eq else None  # type: ignore[arg-type]
+        return payload
+
+    # ---- persistence --------------------------------------------------------------------
+    def to_dict(self) -> dict[str, object]:
+        """Everything needed to resume, as plain JSON types (floats round-trip exactly)."""
+        carry = None
+        if self.carry is not None:
+            carry = {k: _tolist(getattr(self.carry, k)) for k in ("mean", "cov", "chol", "process_cov", "emission_cov", "residual_memory", "updates_seen")}
+        tuning = None
+        if self.tuning is not None:
+            tuning = {k: _tolist(getattr(self.tuning, k)) for k in ("initial_mean", "initial_cov", "process_cov", "emission_cov", "threshold_C", "redraw", "parametrisation")}
+        return {
+            "sensors": list(self.sensors),
+            "settings": {k: getattr(self.settings, k) for k in MonitorSettings.__slots__},
+            "buffer_t": self.buffer_t,
+            "buffer_y": self.buffer_y,
+            "tuning": tuning,
+            "carry": carry,
+            "last_t": self.last_t,
+            "median_dt": self.median_dt,
+            "observed": _tolist(self.observed),
+            "z_history": self.z_history,
+            "steady_history": self.steady_history,
+            "nis_sum": _tolist(self.nis_sum),
+            "first_T": _tolist(self.first_T),
+            "min_T": _tolist(self.min_T),
+            "max_T": _tolist(self.max_T),
+            "samples": self.samples,
+            "recent_y": self.recent_y,
+            "d4_sum": _tolist(self.d4_sum),
+            "d4_count": _tolist(self.d4_count),
+            "stop_time": self.stop_time,
+            "decision": self.decision,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, object]) -> Monitor:
+        """Rebuild a monitor saved with :meth:`to_dict`."""
+        arr = lambda v: None if v is None else np.array(v, dtype=float)  # noqa: E731
+        tuning = None
+        if data["tuning"] is not None:
+            t = data["tuning"]
+            tuning = ThermalTuning(arr(t["initial_mean"]), arr(t["initial_cov"]), arr(t["process_cov"]), arr(t["emission_cov"]), arr(t["threshold_C"]), bool(t["redraw"]), str(t["parametrisation"]))  # type: ignore[index]
+        carry = None
+        if data["carry"] is not None:
+            c = data["carry"]
+            carry = FilterCarry(arr(c["mean"]), arr(c["cov"]), arr(c["chol"]), arr(c["process_cov"]), arr(c["emission_cov"]), arr(c["residual_memory"]), arr(c["updates_seen"]))  # type: ignore[index]
+        return cls(
+            sensors=tuple(data["sensors"]),  # type: ignore[arg-type]
+            settings=MonitorSettings(**data["settings"]),  # type: ignore[arg-type]
+            buffer_t=list(data["buffer_t"]),  # type: ignore[arg-type]
+            buffer_y=[list(r) for r in data["buffer_y"]],  # type: ignore[union-attr]
+            tuning=tuning,
+            carry=carry,
+            last_t=data["last_t"],  # type: ignore[arg-type]
+            median_dt=data["median_dt"],  # type: ignore[arg-type]
+            observed=arr(data["observed"]),
+            z_history=[list(r) for r in data["z_history"]],  # type: ignore[union-attr]
+            steady_history=[list(r) for r in data["steady_history"]],  # type: ignore[union-attr]
+            nis_sum=arr(data["nis_sum"]),
+            first_T=arr(data["first_T"]),
+            min_T=arr(data["min_T"]),
+            max_T=arr(data["max_T"]),
+            samples=int(data["samples"]),  # type: ignore[arg-type]
+            recent_y=[list(r) for r in data["recent_y"]],  # type: ignore[union-attr]
+            d4_sum=arr(data["d4_sum"]),
+            d4_count=arr(data["d4_count"]),
+            stop_time=data["stop_time"],  # type: ignore[arg-type]
+            decision=data["decision"],  # type: ignore[arg-type]
+        )
