@@ -177,7 +177,7 @@ def _status_table(monitor, title: str) -> Table:  # noqa: ANN001 - thermal.monit
 @thermal.command("watch")
 @log_options
 @click.option("--tolerance", "tolerance_C", type=click.FloatRange(min=0, min_open=True), default=0.2, show_default=True, help="Stop when the T∞ 95 % half-width is within this (°C).")
-@click.option("--hold", "hold_min", type=click.FloatRange(min=0), default=10.0, show_default=True, help="Minutes the T∞ estimate must stay within ±tolerance/2.")
+@click.option("--hold", "hold_min", type=click.FloatRange(min=0), default=12.0, show_default=True, help="Minutes the T∞ estimate must stay within ±tolerance/2 without creeping.")
 @click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible.")
 @click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: <log name>.watch-state.json in the current directory).")
 @click.option("--poll", "poll_s", type=click.FloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")

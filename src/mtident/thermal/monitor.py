@@ -3,9 +3,13 @@
 Each new sample advances every sensor's filter by one step (constant work per
 sample: no refit from the start). The stopping rule, per sensor:
 
-1. the 95 % interval of T∞ is within ``tolerance`` (half-width ≤ tolerance),
+1. the 95 % interval of T∞ is well within ``tolerance``: half-width ≤
+   ``interval_fraction`` × tolerance (default ½: stopping at the first moment an
+   interval fits selects a lucky moment, so a margin is kept),
 2. the T∞ estimate has stayed within ±tolerance/2 of its current value for the
-   last ``hold_min`` minutes,
+   last ``hold_min`` minutes, and its trend over that time, carried on to the
+   predicted equilibrium time, moves it by less than tolerance/2 (a slow mode
+   or ambient drift shows as a T∞ estimate that keeps creeping),
 3. the model check passes: over the last ``check_samples`` samples the
    normalised innovations νₖ/√Sₖ have mean ≈ 0 and mean square ≈ 1. A
    fast-plus-slow warm-up whose slow part the first-order model has not yet
@@ -45,7 +49,8 @@ class MonitorSettings:
     """Tuning of the stopping rule (defaults for a 1-min PT100 log)."""
 
     tolerance_C: float = 0.2
-    hold_min: float = 10.0
+    interval_fraction: float = 0.7
+    hold_min: float = 12.0
     init_min: float = 10.0
     min_samples: int = 15
     check_samples: int = 20
@@ -92,6 +97,7 @@ class Monitor:
     max_T: FloatArray | None = None
     samples: int = 0
     recent_y: list[list[float]] = field(default_factory=list)  # last 5 raw samples, for the noise estimate
+    rejected_run: FloatArray | None = None
     d4_sum: FloatArray | None = None
     d4_count: FloatArray | None = None
     stop_time: float | None = None
@@ -137,6 +143,7 @@ class Monitor:
         self.d4_sum = np.zeros(S)
         self.d4_count = np.zeros(S)
         self.recent_y = []
+        self.rejected_run = np.zeros(S)
         messages = []
         for tt, yy in zip(t, y, strict=True):
             messages.extend(self._step(float(tt), yy.copy()))
@@ -153,7 +160,18 @@ class Monitor:
         step = lambda p: slope_transition(p, dt)  # noqa: E731
         new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config)
         z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
-        spikes = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= 5)
+        wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= 5)
+        # A spike is one wild sample. Wild samples in a row are not spikes but a change the
+        # model missed: accept them and widen the filter (else it would freeze on old data).
+        spikes = wild & (self.rejected_run == 0)
+        broken = wild & (self.rejected_run > 0)
+        self.rejected_run = np.where(spikes, self.rejected_run + 1, 0.0)
+        if np.any(broken):
+            for s in np.flatnonzero(broken):
+                messages.append(f"sensor {self.sensors[s]!r}: a second wild sample in a row at t = {t:g} min; not a spike: the warm-up changed course, widening its parameter uncertainty")
+            self._widen(broken)
+            new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config)
+            z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         if np.any(spikes):
             for s in np.flatnonzero(spikes):
                 messages.append(f"sensor {self.sensors[s]!r}: rejected a spike at t = {t:g} min ({y[s]:.2f} °C, {abs(z[s]):.0f}σ from the prediction)")
@@ -175,7 +193,8 @@ class Monitor:
         temperature = physical[:, 0]
         self.min_T = np.minimum(self.min_T, temperature)
         self.max_T = np.maximum(self.max_T, temperature)
-        self.steady_history.append([t, *[float(v) for v in physical[:, 2]]])
+        # A sensor without a valid sample this step cannot be said to hold still: NaN in its history.
+        self.steady_history.append([t, *[float(v) if o else float("nan") for v, o in zip(physical[:, 2], ok, strict=True)]])
         horizon = t - self.settings.hold_min
         while len(self.steady_history) > 2 and self.steady_history[1][0] <= horizon:
             self.steady_history.pop(0)
@@ -253,10 +272,16 @@ class Monitor:
             steady = float(physical[s, 2])
             rate = float(physical[s, 1])
             span = history[-1, 0] - history[0, 0]
-            stable = span >= self.settings.hold_min - 1e-9 and bool(np.all(np.abs(history[:, 1 + s] - steady) <= self.settings.tolerance_C / 2))
-            rise = float(self.max_T[s] - self.min_T[s])
-            flat = self.samples * (self.median_dt or 1.0) >= self.settings.init_min + self.settings.hold_min and rise < self.settings.min_rise_C and half > self.settings.tolerance_C
             eq = float(equilibrium_time(rate)) if rate > 0 else float("nan")
+            column = history[:, 1 + s]
+            valid = np.isfinite(column)
+            stable = span >= self.settings.hold_min - 1e-9 and valid.sum() >= 0.8 * len(column) and bool(np.all(np.abs(column[valid] - steady) <= self.settings.tolerance_C / 2))
+            if stable and valid.sum() > 2:
+                trend = np.polyfit(history[valid, 0] - history[-1, 0], column[valid], 1)[0]
+                remaining = max(eq - history[-1, 0], self.settings.hold_min) if np.isfinite(eq) else np.inf
+                stable = bool(abs(trend) * remaining <= self.settings.tolerance_C / 2)
+            rise = float(self.max_T[s] - self.min_T[s])
+            flat = self.samples * (self.median_dt or 1.0) >= self.settings.init_min + self.settings.hold_min and rise < self.settings.min_rise_C
             if flat:
                 state, may = "no rise", True
             elif not np.isfinite(steady) or rate <= 0:
@@ -265,7 +290,7 @@ class Monitor:
                 state, may = "model check", False
             elif n < self.settings.min_samples:
                 state, may = "collecting", False
-            elif half > self.settings.tolerance_C:
+            elif half > self.settings.interval_fraction * self.settings.tolerance_C:
                 state, may = "narrowing", False
             elif not stable:
                 state, may = "settling", False
@@ -328,6 +353,7 @@ class Monitor:
             "max_T": _tolist(self.max_T),
             "samples": self.samples,
             "recent_y": self.recent_y,
+            "rejected_run": _tolist(self.rejected_run),
             "d4_sum": _tolist(self.d4_sum),
             "d4_count": _tolist(self.d4_count),
             "stop_time": self.stop_time,
@@ -364,6 +390,7 @@ class Monitor:
             max_T=arr(data["max_T"]),
             samples=int(data["samples"]),  # type: ignore[arg-type]
             recent_y=[list(r) for r in data["recent_y"]],  # type: ignore[union-attr]
+            rejected_run=arr(data["rejected_run"]),
             d4_sum=arr(data["d4_sum"]),
             d4_count=arr(data["d4_count"]),
             stop_time=data["stop_time"],  # type: ignore[arg-type]
