@@ -165,7 +165,7 @@ class Monitor:
         # model missed: accept them and widen the filter (else it would freeze on old data).
         spikes = wild & (self.rejected_run == 0)
         broken = wild & (self.rejected_run > 0)
-        self.rejected_run = np.where(spikes, self.rejected_run + 1, 0.0)
+        self.rejected_run = np.where(wild, self.rejected_run + 1, 0.0)
         if np.any(broken):
             for s in np.flatnonzero(broken):
                 messages.append(f"sensor {self.sensors[s]!r}: a second wild sample in a row at t = {t:g} min; not a spike: the warm-up changed course, widening its parameter uncertainty")
@@ -322,8 +322,12 @@ class Monitor:
             payload.update({k: v for k, v in sensors[0].items() if k != "sensor"})
             payload["sensor"] = sensors[0]["sensor"]
         else:
+            # The contract's single-sensor keys describe the slowest sensor: the one whose
+            # equilibrium the test waits for.
+            ranked = [d for d in sensors if d["equilibrium_time_min"] is not None and d["status"] != "no rise"] or sensors
+            slowest = max(ranked, key=lambda d: d["equilibrium_time_min"] or 0.0)  # type: ignore[arg-type,return-value]
+            payload.update({k: v for k, v in slowest.items() if k != "status"})
             payload["sensors"] = sensors
-            payload["equilibrium_time_min"] = float(max(eq)) if eq else None  # type: ignore[arg-type]
         return payload
 
     # ---- persistence --------------------------------------------------------------------

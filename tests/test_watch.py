@@ -1,0 +1,206 @@
+"""Live monitor: the log follower, the stopping rule, bad data, resuming after a kill."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import first_order
+
+from mtident.io.follow import LogFollower
+from mtident.thermal.monitor import Monitor, MonitorSettings
+
+T = np.arange(0.0, 401.0)
+
+
+def csv_text(t: np.ndarray, columns: dict[str, np.ndarray]) -> str:
+    lines = ["time_min," + ",".join(columns)]
+    for k, tk in enumerate(t):
+        lines.append(f"{tk:g}," + ",".join("" if np.isnan(v[k]) else f"{v[k]:.3f}" for v in columns.values()))
+    return "\n".join(lines) + "\n"
+
+
+# ---- follower ------------------------------------------------------------------------------
+
+def test_follower_reads_new_rows_and_waits_for_a_partial_line(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text("time_min,A,B\n0,20.0,21.0\n1,20.1,21.1\n")
+    follower = LogFollower(path)
+    rows = follower.poll()
+    np.testing.assert_allclose(rows.time_min, [0, 1])
+    assert follower.sensors == ["A", "B"]
+    with open(path, "a") as out:
+        out.write("2,20.2,21.2\n3,20.")  # the logger is mid-line
+    rows = follower.poll()
+    np.testing.assert_allclose(rows.time_min, [2])
+    with open(path, "a") as out:
+        out.write("3,21.3\n")
+    rows = follower.poll()
+    np.testing.assert_allclose(rows.temperature_C, [[20.3, 21.3]])
+    assert follower.poll().time_min.size == 0
+
+
+def test_follower_refuses_repeated_and_backward_times(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text("time_min,A\n0,20\n1,20.1\n1,20.2\n0.5,20.3\n2,20.4\n")
+    rows = LogFollower(path).poll()
+    np.testing.assert_allclose(rows.time_min, [0, 1, 2])
+    assert sum("repeats or goes back" in w for w in rows.warnings) == 2
+
+
+def test_follower_handles_a_replaced_log_without_double_counting(tmp_path):
+    path = tmp_path / "log.csv"
+    stamps = [f"2026-11-22T08:{m:02d}:00" for m in range(10)]
+    path.write_text("stamp,A\n" + "".join(f"{s},{20 + i / 10}\n" for i, s in enumerate(stamps[:5])))
+    follower = LogFollower(path)
+    assert follower.poll().time_min.size == 5
+    replacement = tmp_path / "new.csv"  # the logger restarts and rewrites the whole file
+    replacement.write_text("stamp,A\n" + "".join(f"{s},{20 + i / 10}\n" for i, s in enumerate(stamps[:8])))
+    os.replace(replacement, path)
+    rows = follower.poll()
+    np.testing.assert_allclose(rows.time_min, [5, 6, 7])
+    assert any("truncated or replaced" in w for w in rows.warnings)
+
+
+def test_follower_never_writes_to_the_log(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text(csv_text(T[:50], {"A": first_order(T[:50])}))
+    before = (hashlib.sha256(path.read_bytes()).hexdigest(), path.stat().st_mtime_ns)
+    follower = LogFollower(path)
+    follower.poll()
+    follower.poll()
+    assert (hashlib.sha256(path.read_bytes()).hexdigest(), path.stat().st_mtime_ns) == before
+
+
+# ---- stopping rule -------------------------------------------------------------------------
+
+def replay(columns: dict[str, np.ndarray], t: np.ndarray = T, **settings: float) -> Monitor:
+    monitor = Monitor(tuple(columns), MonitorSettings(**settings))
+    monitor.feed(t, np.column_stack(list(columns.values())))
+    return monitor
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_first_order_stops_well_before_half_the_equilibrium_time(seed):
+    y = first_order(T) + 0.02 * np.random.default_rng(seed).standard_normal(len(T))
+    monitor = replay({"S": y})
+    result = monitor.result()
+    equilibrium = np.log(20) / 0.016
+    assert result["stop_time_min"] is not None and result["stop_time_min"] < 0.6 * equilibrium
+    assert abs(result["steady_state_C"] - 26.7) <= 0.2
+    assert result["time_saved_min"] > 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_fast_plus_slow_does_not_stop_early_with_a_wrong_answer(seed):
+    truth = 17.9 + 4.0 * (1 - np.exp(-T / 8.0)) + 6.0 * (1 - np.exp(-T / 150.0))
+    final = 17.9 + 10.0
+    monitor = replay({"S": truth + 0.02 * np.random.default_rng(200 + seed).standard_normal(len(T))})
+    result = monitor.result()
+    if result["stop_time_min"] is not None:
+        assert abs(result["steady_state_C"] - final) <= 0.2, result
+
+
+def test_bad_data_is_rejected_bridged_or_reported_without_harming_other_sensors():
+    rng = np.random.default_rng(7)
+    heating = first_order(T) + 0.02 * rng.standard_normal(len(T))
+    cold = 20.0 + 0.02 * rng.standard_normal(len(T))
+    clean = replay({"heating": heating.copy(), "cold": cold.copy()}, T)
+    heating[50] = 35.0  # spike
+    heating[80:83] = np.nan  # dropout
+    keep = np.ones(len(T), dtype=bool)
+    keep[150:170] = False  # gap
+    monitor = Monitor(("heating", "cold"))
+    messages = monitor.feed(T[keep], np.column_stack([heating, cold])[keep])
+    assert any("rejected a spike at t = 50 min" in m for m in messages)
+    assert sum("no valid reading" in m for m in messages) == 3
+    assert any("gap in the log" in m for m in messages)
+    result = monitor.result()
+    statuses = {d["sensor"]: d["status"] for d in result["sensors"]}
+    assert statuses["cold"] == "no rise"
+    assert result["stop_time_min"] is not None
+    heating_estimate = next(d for d in result["sensors"] if d["sensor"] == "heating")["steady_state_C"]
+    assert abs(heating_estimate - 26.7) <= 0.2
+    # the bad samples of one sensor leave the other sensor's filter untouched
+    cold_clean = clean.carry.mean[1]
+    np.testing.assert_allclose(monitor.carry.mean[1][0], cold_clean[0], atol=0.05)
+
+
+def test_a_run_of_wild_samples_is_a_change_not_spikes():
+    y = first_order(T) + 0.02 * np.random.default_rng(3).standard_normal(len(T))
+    y[120:] += 1.0  # the machine's load changed: a step the model did not expect
+    monitor = Monitor(("S",))
+    messages = monitor.feed(T, y[:, None])
+    assert sum("rejected a spike" in m for m in messages) <= 1
+    assert any("not a spike" in m for m in messages)
+
+
+def test_state_round_trip_gives_the_same_decision():
+    rng = np.random.default_rng(11)
+    data = np.column_stack([first_order(T) + 0.02 * rng.standard_normal(len(T)), first_order(T, steady=30.0) + 0.02 * rng.standard_normal(len(T))])
+    whole = Monitor(("A", "B"))
+    whole.feed(T, data)
+    for cut in (5, 60, 90):
+        first = Monitor(("A", "B"))
+        first.feed(T[:cut], data[:cut])
+        resumed = Monitor.from_dict(json.loads(json.dumps(first.to_dict())))
+        resumed.feed(T[cut:], data[cut:])
+        assert resumed.result() == whole.result()
+
+
+# ---- the command ---------------------------------------------------------------------------
+
+def mtident(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "mtident", *args], capture_output=True, text=True, timeout=300, check=False, cwd=cwd)
+
+
+def test_watch_replay_json_contract(tmp_path):
+    out = mtident("thermal", "watch", "@sample", "--replay", "--json", "--plot", str(tmp_path / "w.png"), cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert set(data) >= {"stop_time_min", "steady_state_C", "steady_state_ci95_C", "equilibrium_time_min", "sensors"}
+    assert data["stop_time_min"] is not None and (tmp_path / "w.png").stat().st_size > 1000
+    assert (tmp_path / "spindle_warmup.watch-state.json").is_file()
+
+
+def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
+    rng = np.random.default_rng(21)
+    columns = {"A": first_order(T) + 0.02 * rng.standard_normal(len(T)), "B": first_order(T, steady=29.0, rate=0.02) + 0.02 * rng.standard_normal(len(T))}
+    full = tmp_path / "full.csv"
+    full.write_text(csv_text(T, columns))
+    reference = json.loads(mtident("thermal", "watch", str(full), "--replay", "--json", "--state", str(tmp_path / "ref.json"), cwd=tmp_path).stdout)
+
+    live = tmp_path / "live.csv"
+    lines = full.read_text().splitlines(keepends=True)
+    live.write_text("".join(lines[:40]))
+    state = tmp_path / "live-state.json"
+    cmd = [sys.executable, "-m", "mtident", "thermal", "watch", str(live), "--json", "--state", str(state), "--poll", "0.05", "--timeout", "20"]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    written = 40
+    while time.monotonic() < deadline:  # feed rows while it runs, then kill it mid-stream
+        if state.is_file():
+            with open(live, "a") as out:
+                out.write("".join(lines[written : written + 5]))
+            written += 5
+            if written >= 70:
+                break
+        time.sleep(0.05)
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    saved = json.loads(state.read_text())
+    assert 30 <= saved["monitor"]["last_t"] < 70
+    live.write_text("".join(lines))  # the logger carries on while the monitor is down
+    out = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False)
+    assert out.returncode == 0, out.stderr
+    assert "resuming from" in out.stderr
+    assert json.loads(out.stdout) == reference
