@@ -17,7 +17,7 @@ from mtident.io.logs import TemperatureLog
 from mtident.thermal.lsq import fit_rise
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observe_temperature, rise_curve, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
-from mtident.ukf import FilterConfig, GaussianState, filter_step, forecast, run_filter
+from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter
 
 __all__ = ["Identification", "identify", "rmse", "num", "model_check", "measured_equilibrium", "Z95"]
 
@@ -245,6 +245,28 @@ def measured_equilibrium(time_min: FloatArray, values: FloatArray) -> tuple[Floa
     return np.array(finals), np.array(times)
 
 
+def filter_window(
+    time_min: FloatArray, values: FloatArray, config: FilterConfig, tuning: ThermalTuning
+) -> tuple[FilterRecord, FloatArray, FloatArray]:
+    """Filter samples (N, S) of every sensor at once; the first is measured at t₀ itself (Δt = 0).
+
+    Returns the filter record and the per-step mean (N, S, 3) and covariance
+    (N, S, 3, 3) of [T, λ, T∞] whatever the parametrisation.
+    """
+    dts = np.diff(time_min, prepend=time_min[0])
+    record = run_filter(
+        GaussianState(tuning.initial_mean, tuning.initial_cov),
+        values[..., None],
+        _transition_with(dts, tuning.parametrisation),
+        observe_temperature,
+        tuning.process_cov,
+        tuning.emission_cov,
+        config,
+    )
+    means, covs = to_physical(record.means, record.covs, tuning.parametrisation)
+    return record, means, covs
+
+
 def _transition_with(dts: FloatArray, parametrisation: str = "rate"):  # noqa: ANN202 - a closure over the step intervals
     step = transition_for(parametrisation)
 
@@ -340,17 +362,7 @@ def _identify(
         window_fit = mean_curve[:n_window]
     else:
         config = filter_config(method, tuning)
-        dts = np.diff(tw, prepend=tw[0])  # the first sample is measured at t₀ itself: Δt = 0
-        record = run_filter(
-            GaussianState(tuning.initial_mean, tuning.initial_cov),
-            yw[..., None],
-            _transition_with(dts, tuning.parametrisation),
-            observe_temperature,
-            tuning.process_cov,
-            tuning.emission_cov,
-            config,
-        )
-        history, history_cov = to_physical(record.means, record.covs, tuning.parametrisation)
+        record, history, history_cov = filter_window(tw, yw, config, tuning)
         history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
         # A-posteriori variance factor: R came from a noise estimate (±20 % from ~30
         # samples); the residual variance of the best first-order fit says how far off

@@ -21,11 +21,10 @@ import numpy as np
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
-from mtident.thermal.identify import MIN_WINDOW_SAMPLES, _transition_with, num, rmse
+from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse
 from mtident.thermal.lsq import fit_rise
-from mtident.thermal.model import observe_temperature, rise_curve, to_physical
+from mtident.thermal.model import rise_curve
 from mtident.thermal.settings import METHODS, filter_config, preset_tuning, tuning_from_data
-from mtident.ukf import GaussianState, run_filter
 
 __all__ = ["MinTimeResult", "minimal_identification_time"]
 
@@ -154,18 +153,7 @@ def _search(
     else:
         prior_n = int(counts[0])
         tuning = tuning_from_data(t[:prior_n], y[:prior_n]) if preset == "data" else preset_tuning(preset, S)
-        config = filter_config(method, tuning)
-        dts = np.diff(t[:n_max], prepend=t[0])
-        record = run_filter(
-            GaussianState(tuning.initial_mean, tuning.initial_cov),
-            y[:n_max, :, None],
-            _transition_with(dts, tuning.parametrisation),
-            observe_temperature,
-            tuning.process_cov,
-            tuning.emission_cov,
-            config,
-        )
-        physical, _ = to_physical(record.means, record.covs, tuning.parametrisation)
+        _, physical, _ = filter_window(t[:n_max], y[:n_max], filter_config(method, tuning), tuning)
         last = counts - 1
         at_window = physical[last]  # (W, S, 3): [T, λ, T∞] after each L's last sample
         # The prediction from L is the model curve through the state at L, for all L at once.
