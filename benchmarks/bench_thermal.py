@@ -10,7 +10,6 @@ from __future__ import annotations
 import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 from _common import filterpy_ukf
@@ -149,7 +148,7 @@ def speed() -> None:
         peer = filterpy_min_time(log, windows, periods)
     t_peer = time.perf_counter() - start
     agree = np.mean(ours.windows_min[np.nanargmin(np.where(np.isfinite(peer), peer, np.inf), axis=1)] == ours.best_per_period_min)
-    print(f"\nMinimal-identification-time search, 10 sensors, L = 5..60 min, 4 sampling periods, aukf:")
+    print("\nMinimal-identification-time search, 10 sensors, L = 5..60 min, 4 sampling periods, aukf:")
     print(f"  mtident {t_ours:.3f} s   filterpy loop {t_peer:.1f} s   ratio filterpy/mtident = {t_peer / t_ours:.0f}x")
     print(f"  best L per (period, sensor) identical in {agree:.0%} of cases (filterpy: dense form; mtident: square-root)")
 
