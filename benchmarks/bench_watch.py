@@ -90,16 +90,15 @@ def main() -> None:
     rng = np.random.default_rng(7)
     curve = 26.7 - 8.8 * np.exp(-0.016 * T)
     bad = np.column_stack([curve + 0.02 * rng.standard_normal(401), np.full(401, 20.0) + 0.02 * rng.standard_normal(401)])
-    bad[50, 0] = 35.0  # spike
-    bad[80:83, 0] = np.nan  # dropout
-    bad[120, 0] = 999.0  # open circuit (the reader turns it into NaN; here directly)
-    bad[120, 0] = np.nan
+    bad[30, 0] = 35.0  # spike
+    bad[40:43, 0] = np.nan  # dropout
+    bad[44, 0] = np.nan  # an open circuit (the log reader turns > 400 °C into NaN)
     keep = np.ones(401, dtype=bool)
-    keep[150:170] = False  # a 20-min gap
+    keep[50:60] = False  # a 10-min gap
     monitor = Monitor(("heating", "cold"), MonitorSettings(tolerance_C=TOLERANCE))
     messages = monitor.feed(T[keep], bad[keep])
     result = monitor.result()
-    print(f"\nBad data (spike at 50, dropout 80-82, open circuit at 120, gap 150-170, one sensor never heats): stop at {result['stop_time_min']} min")
+    print(f"\nBad data (spike at 30, dropout 40-42, open circuit at 44, gap 50-60, one sensor never heats): stop at {result['stop_time_min']} min")
     for d in result["sensors"]:  # type: ignore[union-attr]
         print(f"  {d['sensor']}: T∞ {d['steady_state_C']}, status {d['status']}")
     kinds = {"spike": "spike", "no valid reading": "dropout", "gap": "gap", "no longer fit": "model check"}

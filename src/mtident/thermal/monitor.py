@@ -106,9 +106,16 @@ class Monitor:
 
     # ---- recursion --------------------------------------------------------------------
     def feed(self, times: FloatArray, values: FloatArray) -> list[str]:
-        """Process new samples (times in min, values (n, S)); returns warnings for the engineer."""
+        """Process new samples (times in min, values (n, S)); returns warnings for the engineer.
+
+        Once the decision is reached the monitor's answer is final and later
+        samples are not used, so a replay of a whole log and a live run that stops
+        at the decision end in the same state.
+        """
         messages: list[str] = []
         for t, y in zip(np.asarray(times, float), np.asarray(values, float), strict=True):
+            if self.stop_time is not None:
+                break
             messages.extend(self._one(float(t), y.copy()))
         self.notes.extend(messages)
         return messages
