@@ -111,13 +111,9 @@ def _parameter_basis(fixed: FeedDriveParameters) -> tuple[FloatArray, FloatArray
     """A is linear in the identified parameters: A(p) = A₀ + Σⱼ pⱼ Dⱼ. Returns (A₀, D (8, 8, 8))."""
     a0 = np.zeros((8, 8))
     a0[:4, 4:] = np.eye(4)
-    basis = np.empty((8, 8, 8))
-    for j in range(8):
-        unit = np.zeros(8)
-        unit[j] = 1.0
-        # _system_rows(unit) is the part of A that parameter j multiplies
-        basis[j] = 0.0
-        basis[j, 4:, :] = _system_rows(unit, fixed)
+    basis = np.zeros((8, 8, 8))
+    for j, unit in enumerate(np.eye(8)):
+        basis[j, 4:, :] = _system_rows(unit, fixed)  # the part of A that parameter j multiplies
     return a0, basis
 
 

@@ -20,6 +20,17 @@ if TYPE_CHECKING:
 __all__ = ["plot_identification", "plot_min_time", "grid"]
 
 
+def _save(fig, path: str | Path, dpi: int = 110) -> Path:  # noqa: ANN001 - a matplotlib Figure
+    """Lay out, write atomically (a watcher may be reading the old picture) and close."""
+    fig.tight_layout()
+    out = Path(path)
+    tmp = out.with_name(out.name + ".tmp.png")
+    fig.savefig(tmp, dpi=dpi)
+    plt.close(fig)
+    tmp.replace(out)
+    return out
+
+
 def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 - (figure, flat axes)
     """A figure with ``count`` panels in up to 3 columns; returns (figure, list of axes)."""
     cols = min(count, 3)
@@ -62,11 +73,7 @@ def plot_identification(result: Identification, path: str | Path) -> Path:
         ax.grid(alpha=0.3)
         if s == 0:
             ax.legend(fontsize=7, loc="lower right")
-    fig.tight_layout()
-    out = Path(path)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return _save(fig, path, 110)
 
 
 def plot_min_time(result: MinTimeResult, path: str | Path) -> Path:
@@ -85,11 +92,7 @@ def plot_min_time(result: MinTimeResult, path: str | Path) -> Path:
         ax.grid(alpha=0.3, which="both")
         if s == 0:
             ax.legend(fontsize=7)
-    fig.tight_layout()
-    out = Path(path)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return _save(fig, path, 110)
 
 
 def plot_responses(response, path: str | Path) -> Path:  # noqa: ANN001 - feeddrive.Response
@@ -103,11 +106,7 @@ def plot_responses(response, path: str | Path) -> Path:  # noqa: ANN001 - feeddr
         ax.grid(alpha=0.3)
     for ax in axes[-1]:
         ax.set_xlabel("time (s)")
-    fig.tight_layout()
-    out = Path(path)
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
-    return out
+    return _save(fig, path, 100)
 
 
 def plot_feed_drive_identification(result, response, path: str | Path, truth=None) -> Path:  # noqa: ANN001
@@ -132,11 +131,7 @@ def plot_feed_drive_identification(result, response, path: str | Path, truth=Non
         ax.set_title(f"{IDENTIFIED[j]} ({'identified' if result.identifiable[j] else 'not identifiable'})", fontsize=9)
         ax.set_xlabel("time (s)")
         ax.grid(alpha=0.3)
-    fig.tight_layout()
-    out = Path(path)
-    fig.savefig(out, dpi=90)
-    plt.close(fig)
-    return out
+    return _save(fig, path, 90)
 
 
 def plot_monitor(log, monitor, path: str | Path) -> Path:  # noqa: ANN001 - TemperatureLog, thermal.monitor.Monitor
@@ -162,10 +157,4 @@ def plot_monitor(log, monitor, path: str | Path) -> Path:  # noqa: ANN001 - Temp
         ax.grid(alpha=0.3)
         if s == 0:
             ax.legend(fontsize=7, loc="lower right")
-    fig.tight_layout()
-    out = Path(path)
-    tmp = out.with_name(out.name + ".tmp.png")
-    fig.savefig(tmp, dpi=100)
-    plt.close(fig)
-    tmp.replace(out)
-    return out
+    return _save(fig, path, 100)
