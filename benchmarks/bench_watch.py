@@ -31,7 +31,7 @@ def equilibrium_of(curve: np.ndarray) -> float:
 T_LONG = np.arange(0.0, 2001.0)
 
 
-def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None) -> tuple[str, float | None, float, float]:  # noqa: ANN001
+def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None, room_sensor=None) -> tuple[str, float | None, float, float]:  # noqa: ANN001
     """Replay one sensor; return (name, stop time, equilibrium time, |T∞ error| at stop).
 
     The truth is the curve's value at 2,000 min; with a drifting room (``ambient``
@@ -40,7 +40,7 @@ def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None)
     stays as it is then.
     """
     monitor = Monitor(("S",), MonitorSettings(tolerance_C=TOLERANCE))
-    monitor.feed(T, noisy[:, None])
+    monitor.feed(T, noisy[:, None], room_sensor)
     result = monitor.result()
     truth = clean_long[-1]
     if ambient is not None and result["stop_time_min"] is not None:
@@ -62,7 +62,10 @@ def main() -> None:
     for seed in range(5):
         rng = np.random.default_rng(100 + seed)
         curve = 26.7 - 8.8 * np.exp(-0.016 * T_LONG) + room(T_LONG)
-        rows.append(run_case(f"drift #{seed}", curve, curve[:401] + 0.02 * rng.standard_normal(401), room))
+        noisy = curve[:401] + 0.02 * rng.standard_normal(401)
+        rows.append(run_case(f"drift #{seed}", curve, noisy, room))
+        room_sensor = 17.9 + room(T) + 0.02 * rng.standard_normal(401)
+        rows.append(run_case(f"drift+ambient #{seed}", curve, noisy, room, room_sensor))
     for seed in range(5):
         rng = np.random.default_rng(200 + seed)
         curve = 17.9 + 4.0 * (1 - np.exp(-T_LONG / 8.0)) + 6.0 * (1 - np.exp(-T_LONG / 150.0))

@@ -206,3 +206,33 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "resuming from" in out.stderr
     assert json.loads(out.stdout) == reference
+
+
+def room(t: np.ndarray) -> np.ndarray:
+    return 0.15 * np.sin(2 * np.pi * t / 240.0) + 0.1 * (1 - np.exp(-t / 200.0))
+
+
+@pytest.mark.parametrize("seed", [100, 101])
+def test_ambient_reference_removes_a_drifting_room(seed):
+    rng = np.random.default_rng(seed)
+    sensor = first_order(T) + room(T) + 0.02 * rng.standard_normal(len(T))
+    ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    monitor = Monitor(("S",))
+    monitor.feed(T, sensor[:, None], ambient)
+    result = monitor.result()
+    stop = result["stop_time_min"]
+    assert stop is not None
+    # the steady state the machine reaches if the room stays as it is at the stop
+    assert abs(result["steady_state_C"] - (26.7 + room(np.array(stop)))) <= 0.2
+    resumed = Monitor.from_dict(json.loads(json.dumps(monitor.to_dict())))
+    assert resumed.ambient_level == monitor.ambient_level
+
+
+def test_watch_ambient_option(tmp_path):
+    rng = np.random.default_rng(5)
+    path = tmp_path / "room.csv"
+    path.write_text(csv_text(T, {"spindle": first_order(T) + room(T) + 0.02 * rng.standard_normal(len(T)), "room": 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))}))
+    out = mtident("thermal", "watch", str(path), "--ambient", "room", "--replay", "--json", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert data["sensor"] == "spindle" and data["stop_time_min"] is not None

@@ -178,6 +178,7 @@ def _status_table(monitor, title: str) -> Table:  # noqa: ANN001 - thermal.monit
 @log_options
 @click.option("--tolerance", "tolerance_C", type=click.FloatRange(min=0, min_open=True), default=0.2, show_default=True, help="Stop when the T∞ 95 % half-width is within this (°C).")
 @click.option("--hold", "hold_min", type=click.FloatRange(min=0), default=12.0, show_default=True, help="Minutes the T∞ estimate must stay within ±tolerance/2 without creeping.")
+@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: follow each sensor's rise over it (robust to a drifting room).")
 @click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible.")
 @click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: <log name>.watch-state.json in the current directory).")
 @click.option("--poll", "poll_s", type=click.FloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
@@ -185,7 +186,7 @@ def _status_table(monitor, title: str) -> Table:  # noqa: ANN001 - thermal.monit
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Keep a PNG of measured and predicted curves up to date.")
 @click.option("--json", "as_json", is_flag=True, help="Print the contract's JSON object when the decision is reached (or the log ends).")
 @user_errors
-def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
+def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
     Every new row updates each sensor's filter; a sensor may stop when its T∞
@@ -206,6 +207,13 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         msg = f"{path}: no such file"
         raise InputError(msg)
     names = [name for entry in sensors for name in entry.split(",") if name] or None
+    if ambient_col is not None:
+        # read the room column with the sensors; it is split off again below
+        if names is None:
+            header = path.read_text().splitlines()[0].split(",") if path.is_file() else []
+            time_name = time_col or (header[0].strip() if header else "")
+            names = [h.strip() for h in header if h.strip() not in (time_name, ambient_col)]
+        names = [n for n in names if n != ambient_col] + [ambient_col]
     state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
     settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min)
     follower: LogFollower | None = None
@@ -235,10 +243,12 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             for warning in rows.warnings:
                 stderr.print(f"mtident: warning: {warning}", highlight=False)
             if monitor is None and follower.sensors:
-                monitor = Monitor(tuple(follower.sensors), settings)
+                monitored = follower.sensors[:-1] if ambient_col else follower.sensors
+                monitor = Monitor(tuple(monitored), settings)
             if len(rows.time_min) and monitor is not None:
                 last_data = time.monotonic()
-                for message in monitor.feed(rows.time_min, rows.temperature_C):
+                values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if ambient_col else (rows.temperature_C, None)
+                for message in monitor.feed(rows.time_min, values, room):
                     stderr.print(f"mtident: {message}", highlight=False)
                 save()
                 if live_view:

@@ -98,6 +98,7 @@ class Monitor:
     samples: int = 0
     recent_y: list[list[float]] = field(default_factory=list)  # last 5 raw samples, for the noise estimate
     rejected_run: FloatArray | None = None
+    ambient_level: float | None = None
     d4_sum: FloatArray | None = None
     d4_count: FloatArray | None = None
     stop_time: float | None = None
@@ -105,17 +106,29 @@ class Monitor:
     notes: list[str] = field(default_factory=list)
 
     # ---- recursion --------------------------------------------------------------------
-    def feed(self, times: FloatArray, values: FloatArray) -> list[str]:
+    def feed(self, times: FloatArray, values: FloatArray, ambient: FloatArray | None = None) -> list[str]:
         """Process new samples (times in min, values (n, S)); returns warnings for the engineer.
+
+        With ``ambient`` (n,), a reference sensor in the room, the monitor follows
+        each sensor's rise over ambient, which is first order even when the room
+        drifts, and reports T∞ as that rise plus the room's current level (the
+        steady state the machine reaches if the room stays as it is now).
 
         Once the decision is reached the monitor's answer is final and later
         samples are not used, so a replay of a whole log and a live run that stops
         at the decision end in the same state.
         """
         messages: list[str] = []
-        for t, y in zip(np.asarray(times, float), np.asarray(values, float), strict=True):
+        rows = np.asarray(values, float)
+        room = np.full(len(rows), np.nan) if ambient is None else np.asarray(ambient, float)
+        for t, y, a in zip(np.asarray(times, float), rows, room, strict=True):
             if self.stop_time is not None:
                 break
+            if ambient is not None:
+                if np.isfinite(a):
+                    # a short running mean: the room's level without its sensor noise
+                    self.ambient_level = a if self.ambient_level is None else 0.8 * self.ambient_level + 0.2 * a
+                y = y - (self.ambient_level if self.ambient_level is not None else np.nan)
             messages.extend(self._one(float(t), y.copy()))
         self.notes.extend(messages)
         return messages
@@ -303,7 +316,8 @@ class Monitor:
                 state, may = "settling", False
             else:
                 state, may = "may stop", True
-            out.append(SensorStatus(name, float(physical[s, 0]), steady, half, eq, may, state))
+            offset = self.ambient_level or 0.0
+            out.append(SensorStatus(name, float(physical[s, 0]) + offset, steady + offset, half, eq, may, state))
         return out
 
     def _summary(self, st: SensorStatus) -> dict[str, object]:
@@ -365,6 +379,7 @@ class Monitor:
             "samples": self.samples,
             "recent_y": self.recent_y,
             "rejected_run": _tolist(self.rejected_run),
+            "ambient_level": self.ambient_level,
             "d4_sum": _tolist(self.d4_sum),
             "d4_count": _tolist(self.d4_count),
             "stop_time": self.stop_time,
@@ -402,6 +417,7 @@ class Monitor:
             samples=int(data["samples"]),  # type: ignore[arg-type]
             recent_y=[list(r) for r in data["recent_y"]],  # type: ignore[union-attr]
             rejected_run=arr(data["rejected_run"]),
+            ambient_level=data["ambient_level"],  # type: ignore[arg-type]
             d4_sum=arr(data["d4_sum"]),
             d4_count=arr(data["d4_count"]),
             stop_time=data["stop_time"],  # type: ignore[arg-type]
