@@ -180,7 +180,7 @@ class Monitor:
         step = lambda p: slope_transition(p, dt)  # noqa: E731
         new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config)
         z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
-        wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= 5)
+        wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= self.settings.check_samples)
         # A spike is one wild sample. Wild samples in a row are not spikes but a change the
         # model missed: accept them and widen the filter (else it would freeze on old data).
         spikes = wild & (self.rejected_run == 0)
@@ -261,7 +261,7 @@ class Monitor:
         safe = np.where(enough, count, 1)
         mean = np.where(enough, np.nansum(z, axis=0) / safe, 0.0)
         mean_square = np.where(enough, np.nansum(z**2, axis=0) / safe, 0.0)
-        return enough & ((np.abs(mean) * np.sqrt(safe) > 4.0) | (mean_square > 2.0 + 4.0 * np.sqrt(2.0 / safe)))
+        return enough & ((np.abs(mean) * np.sqrt(safe) > 4.5) | (mean_square > 3.0 + 4.0 * np.sqrt(2.0 / safe)))
 
     def _widen(self, mask: np.ndarray) -> None:
         assert self.carry is not None and self.carry.chol is not None
