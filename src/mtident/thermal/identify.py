@@ -19,7 +19,7 @@ from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observ
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter
 
-__all__ = ["Identification", "identify", "rmse", "num", "model_check", "measured_equilibrium", "Z95"]
+__all__ = ["Identification", "identify", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
 
 Z95 = 1.959963984540054
 MIN_WINDOW_SAMPLES = 6
@@ -157,6 +157,22 @@ def _best_rss(time_min: FloatArray, values: FloatArray, with_drift: bool) -> flo
     return best
 
 
+def first_order_suffices(time_min: FloatArray, values: FloatArray, level: float = 0.999) -> bool:
+    """Nested F-test: does a + b·e^(−λt) + c·t fit no better than a + b·e^(−λt)?
+
+    False when the ramp term is significant at ``level`` — the signature of a
+    slow mode (or drift) that a first-order model would average away. Needs no
+    noise level.
+    """
+    from scipy.stats import f as f_distribution
+
+    rss_null = _best_rss(time_min, values, with_drift=False)
+    rss_alt = _best_rss(time_min, values, with_drift=True)
+    floor = len(values) * (1e-4) ** 2  # residuals of a noise-free curve are rounding error
+    f_stat = (rss_null - rss_alt) / max(rss_alt, floor) * (len(values) - 4)
+    return bool(f_stat < f_distribution.ppf(level, 1, len(values) - 4))
+
+
 def model_check(
     time_min: FloatArray, values: FloatArray, residuals: FloatArray, sigma: FloatArray
 ) -> tuple[FloatArray, FloatArray, BoolArray]:
@@ -184,8 +200,6 @@ def model_check(
     -------
     chi2, autocorrelation, fits : ndarray, shape (S,)
     """
-    from scipy.stats import f as f_distribution
-
     chi2, corr, fits = [], [], []
     for s in range(residuals.shape[1]):
         ok = np.isfinite(residuals[:, s]) & np.isfinite(values[:, s])
@@ -198,12 +212,7 @@ def model_check(
         # χ² alone only for a gross misfit: the noise level is itself an estimate (±20 %).
         passes = c2 < 4.0 + 4.0 * np.sqrt(2.0 / dof) or ac < 3.0 / np.sqrt(len(r))
         if passes and len(r) >= 8:
-            t, y = time_min[ok], values[ok, s]
-            rss_null = _best_rss(t, y, with_drift=False)
-            rss_alt = _best_rss(t, y, with_drift=True)
-            floor = len(y) * (1e-4) ** 2  # residuals of a noise-free curve are rounding error
-            f_stat = (rss_null - rss_alt) / max(rss_alt, floor) * (len(y) - 4)
-            passes = bool(f_stat < f_distribution.ppf(0.999, 1, len(y) - 4))
+            passes = first_order_suffices(time_min[ok], values[ok, s])
         chi2.append(c2)
         corr.append(ac)
         fits.append(passes)

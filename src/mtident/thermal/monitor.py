@@ -7,16 +7,19 @@ sample: no refit from the start). The stopping rule, per sensor:
    ``interval_fraction`` × tolerance (default ½: stopping at the first moment an
    interval fits selects a lucky moment, so a margin is kept),
 2. the T∞ estimate has stayed within ±tolerance/2 of its current value for the
-   last ``hold_min`` minutes, and its trend over that time, carried on to the
-   predicted equilibrium time, moves it by less than tolerance/2 (a slow mode
-   or ambient drift shows as a T∞ estimate that keeps creeping),
+   last ``hold_min`` minutes (or a tenth of the test so far, if longer), and its
+   trend over that time, carried on towards the predicted equilibrium (at most
+   three hold periods ahead), moves it by less than tolerance/2 (a slow mode or
+   ambient drift shows as a T∞ estimate that keeps creeping),
 3. the model check passes: over the last ``check_samples`` samples the
    normalised innovations νₖ/√Sₖ have mean ≈ 0 and mean square ≈ 1. A
    fast-plus-slow warm-up whose slow part the first-order model has not yet
    seen gives innovations of one sign; the monitor then widens the filter's
    parameter covariance (a discrete fading step) so that it learns the new
    trend, and the T∞ history starts again;
-4. at least ``min_samples`` samples.
+4. at least ``min_samples`` samples and ``min_duration_min`` minutes of test
+   (default 30, the papers' identification time): a fast transient that settles
+   in minutes can hide a slow mode that only shows later.
 
 The test may stop when every sensor may, except sensors that show no rise
 (they are reported and left out of the decision).
@@ -57,6 +60,8 @@ class MonitorSettings:
     spike_sigma: float = 6.0
     min_rise_C: float = 0.1
     gap_factor: float = 5.0
+    hold_fraction: float = 0.1
+    min_duration_min: float = 30.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -215,7 +220,7 @@ class Monitor:
         self.max_T = np.maximum(self.max_T, temperature)
         # A sensor without a valid sample this step cannot be said to hold still: NaN in its history.
         self.steady_history.append([t, *[float(v) if o else float("nan") for v, o in zip(physical[:, 2], ok, strict=True)]])
-        horizon = t - self.settings.hold_min
+        horizon = t - self._hold(t)
         while len(self.steady_history) > 2 and self.steady_history[1][0] <= horizon:
             self.steady_history.pop(0)
         misfit = self._misfit()
@@ -251,6 +256,11 @@ class Monitor:
         if np.any(ready):
             variance = np.where(ready, np.maximum(self.d4_sum / np.maximum(self.d4_count, 1) / 70.0, 1e-12), self.carry.emission_cov[:, 0, 0])
             self.carry = replace(self.carry, emission_cov=variance[:, None, None])
+
+    def _hold(self, t: float) -> float:
+        """How long T∞ must hold still: ``hold_min``, or ``hold_fraction`` of the test so far if
+        longer (late in a test a slow mode shows only over a longer stretch)."""
+        return max(self.settings.hold_min, self.settings.hold_fraction * t)
 
     def _misfit(self) -> np.ndarray:
         z = np.array(self.z_history)
@@ -295,10 +305,11 @@ class Monitor:
             eq = float(equilibrium_time(rate)) if rate > 0 else float("nan")
             column = history[:, 1 + s]
             valid = np.isfinite(column)
-            stable = span >= self.settings.hold_min - 1e-9 and valid.sum() >= 0.8 * len(column) and bool(np.all(np.abs(column[valid] - steady) <= self.settings.tolerance_C / 2))
+            hold = self._hold(float(history[-1, 0]))
+            stable = span >= hold - 1e-9 and valid.sum() >= 0.8 * len(column) and bool(np.all(np.abs(column[valid] - steady) <= self.settings.tolerance_C / 2))
             if stable and valid.sum() > 2:
                 trend = np.polyfit(history[valid, 0] - history[-1, 0], column[valid], 1)[0]
-                remaining = max(eq - history[-1, 0], self.settings.hold_min) if np.isfinite(eq) else np.inf
+                remaining = min(max(eq - history[-1, 0], hold), 3 * hold) if np.isfinite(eq) else np.inf
                 stable = bool(abs(trend) * remaining <= self.settings.tolerance_C / 2)
             rise = float(self.max_T[s] - self.min_T[s])
             flat = self.samples * (self.median_dt or 1.0) >= self.settings.init_min + self.settings.hold_min and rise < self.settings.min_rise_C
@@ -308,7 +319,7 @@ class Monitor:
                 state, may = "no steady state yet", False
             elif misfit[s]:
                 state, may = "model check", False
-            elif n < self.settings.min_samples:
+            elif n < self.settings.min_samples or history[-1, 0] < self.settings.min_duration_min:
                 state, may = "collecting", False
             elif half > self.settings.interval_fraction * self.settings.tolerance_C:
                 state, may = "narrowing", False
