@@ -210,7 +210,10 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     if ambient_col is not None:
         # read the room column with the sensors; it is split off again below
         if names is None:
-            header = path.read_text().splitlines()[0].split(",") if path.is_file() else []
+            header = []
+            if path.is_file():
+                with open(path) as handle:  # the header only: the log may be large
+                    header = handle.readline().strip().split(",")
             time_name = time_col or (header[0].strip() if header else "")
             names = [h.strip() for h in header if h.strip() not in (time_name, ambient_col)]
         names = [n for n in names if n != ambient_col] + [ambient_col]

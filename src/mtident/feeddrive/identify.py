@@ -192,11 +192,17 @@ def identify_feed_drive(
     reference = guess.identified()
     notes: list[str] = []
 
-    # Scales: RMS of each response in a simulation of the guess with the same input.
-    model = simulate(guess, sample_rate_Hz=1.0 / h, duration_s=h * (len(response.time_s) - 1), method="exact") if np.any(forces) else None
-    rms_model = np.sqrt(np.mean(model.values**2, axis=0)) if model is not None else np.ones(12)
-    rms_data = np.sqrt(np.nanmean(response.values**2, axis=0))
-    scale = np.where(np.isfinite(rms_data) & (rms_data > 0), rms_data, rms_model)
+    # Scales: the RMS of each measured response; for the others, of a simulation of the
+    # guess with the same input (only run when some response is not in the file).
+    present = np.isfinite(response.values)
+    counts = present.sum(axis=0)
+    rms_data = np.sqrt(np.sum(np.where(present, response.values**2, 0.0), axis=0) / np.maximum(counts, 1))
+    known = (counts > 0) & (rms_data > 0)
+    rms_model = np.ones(12)
+    if not known.all() and np.any(forces):
+        model = simulate(guess, sample_rate_Hz=1.0 / h, duration_s=h * (len(response.time_s) - 1), method="exact")
+        rms_model = np.sqrt(np.mean(model.values**2, axis=0))
+    scale = np.where(known, rms_data, rms_model)
     scale = np.where(scale > 0, scale, 1.0)
     if preset == "paper":
         state_scale = np.ones(8)

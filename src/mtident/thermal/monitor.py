@@ -42,7 +42,7 @@ from scipy.special import stdtrit
 from mtident._typing import FloatArray
 from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
 from mtident.thermal.settings import ThermalTuning, filter_config, tuning_from_data
-from mtident.ukf import FilterCarry, GaussianState, filter_step, initial_carry
+from mtident.ukf import FilterCarry, FilterConfig, GaussianState, SigmaWeights, filter_step, initial_carry
 
 __all__ = ["MonitorSettings", "Monitor", "SensorStatus"]
 
@@ -97,13 +97,15 @@ class Monitor:
     z_history: list[list[float]] = field(default_factory=list)
     steady_history: list[list[float]] = field(default_factory=list)  # rows: [t, T∞ per sensor]
     nis_sum: FloatArray | None = None
-    first_T: FloatArray | None = None
     min_T: FloatArray | None = None
     max_T: FloatArray | None = None
     samples: int = 0
     recent_y: list[list[float]] = field(default_factory=list)  # last 5 raw samples, for the noise estimate
     rejected_run: FloatArray | None = None
     ambient_level: float | None = None
+    # derived from the tuning once per process (not saved): the step needs them every sample
+    _config: FilterConfig | None = field(default=None, repr=False, compare=False)
+    _weights: SigmaWeights | None = field(default=None, repr=False, compare=False)
     d4_sum: FloatArray | None = None
     d4_count: FloatArray | None = None
     stop_time: float | None = None
@@ -155,14 +157,13 @@ class Monitor:
         y = np.array(self.buffer_y)
         filled = np.where(np.isfinite(y), y, np.nanmean(y, axis=0))
         self.tuning = tuning_from_data(t, filled)
-        config = filter_config("ukf", self.tuning)
+        config, _ = self._filter()
         self.carry = initial_carry(GaussianState(self.tuning.initial_mean, self.tuning.initial_cov), self.tuning.process_cov, self.tuning.emission_cov, config)
         S = len(self.sensors)
         self.observed = np.zeros(S)
         self.nis_sum = np.zeros(S)
-        self.first_T = np.array(self.tuning.initial_mean[:, 0])
-        self.min_T = self.first_T.copy()
-        self.max_T = self.first_T.copy()
+        self.min_T = self.tuning.initial_mean[:, 0].copy()
+        self.max_T = self.tuning.initial_mean[:, 0].copy()
         self.median_dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
         self.last_t = None
         self.d4_sum = np.zeros(S)
@@ -178,12 +179,12 @@ class Monitor:
     def _step(self, t: float, y: FloatArray) -> list[str]:
         assert self.carry is not None and self.tuning is not None and self.observed is not None
         messages: list[str] = []
-        config = filter_config("ukf", self.tuning)
+        config, weights = self._filter()
         dt = 0.0 if self.last_t is None else t - self.last_t
         if self.median_dt and dt > self.settings.gap_factor * self.median_dt:
             messages.append(f"gap in the log: {dt:g} min without samples before t = {t:g} min; bridged by the model")
         step = lambda p: slope_transition(p, dt)  # noqa: E731
-        new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config)
+        new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
         z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= self.settings.check_samples)
         # A spike is one wild sample. Wild samples in a row are not spikes but a change the
@@ -195,13 +196,13 @@ class Monitor:
             for s in np.flatnonzero(broken):
                 messages.append(f"sensor {self.sensors[s]!r}: a second wild sample in a row at t = {t:g} min; not a spike: the warm-up changed course, widening its parameter uncertainty")
             self._widen(broken)
-            new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config)
+            new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
             z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         if np.any(spikes):
             for s in np.flatnonzero(spikes):
                 messages.append(f"sensor {self.sensors[s]!r}: rejected a spike at t = {t:g} min ({y[s]:.2f} °C, {abs(z[s]):.0f}σ from the prediction)")
             y[spikes] = np.nan
-            new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config)
+            new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
             z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
             messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN or open circuit); bridged")
@@ -235,6 +236,14 @@ class Monitor:
                 self.decision = [self._summary(st) for st in status]
                 messages.append(f"the test can stop at t = {t:g} min")
         return messages
+
+    def _filter(self) -> tuple[FilterConfig, SigmaWeights]:
+        """The UKF variant and its sigma weights for the tuning (computed once)."""
+        if self._config is None or self._weights is None:
+            assert self.tuning is not None
+            self._config = filter_config("ukf", self.tuning)
+            self._weights = self._config.sigma_points.weights(3)
+        return self._config, self._weights
 
     def _update_noise(self, y: FloatArray) -> None:
         """Running noise variance from fourth differences (σ² = E[Δ⁴y²]/70), spikes excluded; sets R.
@@ -384,7 +393,6 @@ class Monitor:
             "z_history": self.z_history,
             "steady_history": self.steady_history,
             "nis_sum": _tolist(self.nis_sum),
-            "first_T": _tolist(self.first_T),
             "min_T": _tolist(self.min_T),
             "max_T": _tolist(self.max_T),
             "samples": self.samples,
@@ -422,7 +430,6 @@ class Monitor:
             z_history=[list(r) for r in data["z_history"]],  # type: ignore[union-attr]
             steady_history=[list(r) for r in data["steady_history"]],  # type: ignore[union-attr]
             nis_sum=arr(data["nis_sum"]),
-            first_T=arr(data["first_T"]),
             min_T=arr(data["min_T"]),
             max_T=arr(data["max_T"]),
             samples=int(data["samples"]),  # type: ignore[arg-type]
