@@ -35,6 +35,22 @@ def test_uneven_sampling_is_handled():
     assert abs(result.steady_state_C[0] - PAPER_STEADY) < Z95 * result.steady_state_sd_C[0]
 
 
+def test_slope_transition_with_a_drifting_room_solves_the_heat_balance():
+    """dT/dt = λ(T_room(t) + ΔT∞ − T) with the room rising linearly over the step, against an ODE solver."""
+    from scipy.integrate import solve_ivp
+
+    lam, rise, room0, rate, dt = 0.016, 8.8, 17.9, 0.004, 7.0
+    T0 = 21.0
+    solution = solve_ivp(lambda t, T: lam * (room0 + rate * t + rise - T), (0.0, dt), [T0], rtol=1e-12, atol=1e-12)
+    T_end = solution.y[0, -1]
+    slope_end = lam * (room0 + rate * dt + rise - T_end)
+    state = np.array([T0, lam * (room0 + rise - T0), lam])
+    moved = slope_transition(state, dt, rate)
+    np.testing.assert_allclose(moved[:2], [T_end, slope_end], rtol=1e-9)
+    # T + s/λ is the steady state at the room's new level
+    assert moved[0] + moved[1] / lam == pytest.approx(room0 + rate * dt + rise, rel=1e-12)
+
+
 def test_slope_parametrisation_is_the_same_curve():
     rate_state = np.array([20.0, 0.02, 30.0])
     slope_state = np.array([20.0, 0.02 * 10.0, 0.02])

@@ -209,23 +209,73 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
 
 
 def room(t: np.ndarray) -> np.ndarray:
+    """A room drifting 0.15 °C on a 4-h air-conditioning cycle and rising 0.1 °C."""
     return 0.15 * np.sin(2 * np.pi * t / 240.0) + 0.1 * (1 - np.exp(-t / 200.0))
 
 
+def machine_in_room(t: np.ndarray, rate: float = 0.016, rise: float = 8.8) -> np.ndarray:
+    """The first-order heat balance with the drifting room as input: dT/dt = λ(T_room + ΔT∞ − T)."""
+    from scipy.integrate import solve_ivp
+
+    solution = solve_ivp(lambda tt, T: rate * (17.9 + room(tt) + rise - T), (t[0], t[-1]), [17.9], t_eval=t, rtol=1e-10, atol=1e-10, max_step=1.0)
+    return solution.y[0]
+
+
 @pytest.mark.parametrize("seed", [100, 101])
-def test_ambient_reference_removes_a_drifting_room(seed):
+def test_ambient_reference_follows_a_drifting_room(seed):
     rng = np.random.default_rng(seed)
-    sensor = first_order(T) + room(T) + 0.02 * rng.standard_normal(len(T))
+    sensor = machine_in_room(T) + 0.02 * rng.standard_normal(len(T))
     ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
     monitor = Monitor(("S",))
     monitor.feed(T, sensor[:, None], ambient)
     result = monitor.result()
     stop = result["stop_time_min"]
-    assert stop is not None
+    assert stop is not None and stop < 0.6 * np.log(20) / 0.016
     # the steady state the machine reaches if the room stays as it is at the stop
     assert abs(result["steady_state_C"] - (26.7 + room(np.array(stop)))) <= 0.2
     resumed = Monitor.from_dict(json.loads(json.dumps(monitor.to_dict())))
-    assert resumed.ambient_level == monitor.ambient_level
+    assert resumed.ambient_level == monitor.ambient_level and resumed.ambient_time == monitor.ambient_time
+
+
+@pytest.mark.parametrize("seed", [100, 101])
+def test_directly_coupled_sensor_follows_its_rise_over_the_room(seed):
+    rng = np.random.default_rng(seed)
+    sensor = first_order(T) + room(T) + 0.02 * rng.standard_normal(len(T))
+    ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    monitor = Monitor(("S",), MonitorSettings(room_coupling="direct"))
+    monitor.feed(T, sensor[:, None], ambient)
+    result = monitor.result()
+    stop = result["stop_time_min"]
+    assert stop is not None
+    assert abs(result["steady_state_C"] - (26.7 + room(np.array(stop)))) <= 0.2
+
+
+def test_unknown_room_coupling_is_refused():
+    with pytest.raises(ValueError, match="room_coupling"):
+        MonitorSettings(room_coupling="sideways")
+
+
+@pytest.mark.parametrize("seed", [101, 103])
+def test_a_wandering_estimate_blocks_the_stop(seed):
+    """Without a room sensor, a room cycle tilts the slope the filter sees, so T∞ wanders far outside
+    its own earlier intervals; the old rule stopped where the wander turned round, 0.25 °C off."""
+    rng = np.random.default_rng(seed)
+    rng.standard_normal(len(T))  # the same draws as benchmarks/bench_watch.py's second case
+    y = first_order(T) + room(T) + 0.02 * rng.standard_normal(len(T))
+    monitor = Monitor(("S",))
+    messages = monitor.feed(T, y[:, None])
+    assert any("has left the interval" in m and "--ambient" in m for m in messages)
+    result = monitor.result()
+    if result["stop_time_min"] is not None:
+        assert abs(result["steady_state_C"] - (26.7 + room(np.array(result["stop_time_min"])))) <= 0.2
+
+
+@pytest.mark.parametrize("seed", range(100, 104))
+def test_first_order_estimates_stay_inside_their_earlier_intervals(seed):
+    y = first_order(T) + 0.02 * np.random.default_rng(seed).standard_normal(len(T))
+    monitor = Monitor(("S",), MonitorSettings(tolerance_C=0.05))  # never stops: the whole log is checked
+    messages = monitor.feed(T, y[:, None])
+    assert not any("has left the interval" in m for m in messages)
 
 
 def test_watch_ambient_option(tmp_path):
@@ -236,3 +286,11 @@ def test_watch_ambient_option(tmp_path):
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert data["sensor"] == "spindle" and data["stop_time_min"] is not None
+    out = mtident("thermal", "watch", str(path), "--ambient", "room", "--room-coupling", "direct", "--replay", "--json", "--state", str(tmp_path / "d.json"), cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["stop_time_min"] is not None
+
+
+def test_room_coupling_needs_a_room_sensor(tmp_path):
+    out = mtident("thermal", "watch", "@sample", "--room-coupling", "direct", "--replay", cwd=tmp_path)
+    assert out.returncode != 0 and "--room-coupling needs --ambient" in out.stderr and "Traceback" not in out.stderr

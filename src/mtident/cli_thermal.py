@@ -178,7 +178,8 @@ def _status_table(monitor, title: str) -> Table:  # noqa: ANN001 - thermal.monit
 @log_options
 @click.option("--tolerance", "tolerance_C", type=click.FloatRange(min=0, min_open=True), default=0.2, show_default=True, help="Stop when the T∞ 95 % half-width is within this (°C).")
 @click.option("--hold", "hold_min", type=click.FloatRange(min=0), default=12.0, show_default=True, help="Minutes the T∞ estimate must stay within ±tolerance/2 without creeping.")
-@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: follow each sensor's rise over it (robust to a drifting room).")
+@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes the input of each sensor's heat balance (robust to a drifting room).")
+@click.option("--room-coupling", type=click.Choice(["lagged", "direct"]), help="With --ambient: how the sensors feel the room. lagged (default): through the machine's own time constant (a sensor in the structure); direct: at once (a sensor in the air stream or on a thin cover).")
 @click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible.")
 @click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: <log name>.watch-state.json in the current directory).")
 @click.option("--poll", "poll_s", type=click.FloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
@@ -186,7 +187,7 @@ def _status_table(monitor, title: str) -> Table:  # noqa: ANN001 - thermal.monit
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Keep a PNG of measured and predicted curves up to date.")
 @click.option("--json", "as_json", is_flag=True, help="Print the contract's JSON object when the decision is reached (or the log ends).")
 @user_errors
-def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
+def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, room_coupling: str | None, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
     Every new row updates each sensor's filter; a sensor may stop when its T∞
@@ -207,6 +208,10 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         msg = f"{path}: no such file"
         raise InputError(msg)
     names = [name for entry in sensors for name in entry.split(",") if name] or None
+    if room_coupling is not None and ambient_col is None:
+        msg = "--room-coupling needs --ambient ROOM_COLUMN: it says how the sensors feel that room sensor"
+        raise InputError(msg)
+    room_coupling = room_coupling or "lagged"
     if ambient_col is not None:
         # read the room column with the sensors; it is split off again below
         if names is None:
@@ -218,13 +223,13 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             names = [h.strip() for h in header if h.strip() not in (time_name, ambient_col)]
         names = [n for n in names if n != ambient_col] + [ambient_col]
     state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
-    settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min)
+    settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling)
     follower: LogFollower | None = None
     monitor: Monitor | None = None
     if state_file.is_file():
         try:
             saved = json.loads(state_file.read_text())
-            if saved.get("log") == str(path.resolve()) and saved.get("settings") == [tolerance_C, hold_min] and saved.get("requested") == names:
+            if saved.get("log") == str(path.resolve()) and saved.get("settings") == [tolerance_C, hold_min, room_coupling] and saved.get("requested") == names:
                 follower = LogFollower.resume(path, saved["position"], time_col, time_unit)
                 monitor = Monitor.from_dict(saved["monitor"])
                 stderr.print(f"mtident: resuming from {state_file} at t = {monitor.last_t} min", highlight=False)
@@ -235,7 +240,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 
     def save() -> None:
         assert follower is not None and monitor is not None
-        _save_state(state_file, {"log": str(path.resolve()), "settings": [tolerance_C, hold_min], "requested": names, "position": follower.position(), "monitor": monitor.to_dict()})
+        _save_state(state_file, {"log": str(path.resolve()), "settings": [tolerance_C, hold_min, room_coupling], "requested": names, "position": follower.position(), "monitor": monitor.to_dict()})
 
     live_view = sys.stdout.isatty() and not as_json
     last_data = time.monotonic()

@@ -42,7 +42,7 @@ def rise_transition(points: FloatArray, dt_min: FloatArray | float) -> FloatArra
     return np.stack([Tinf + (T - Tinf) * np.exp(-lam * dt_min), lam, Tinf], axis=-1)
 
 
-def slope_transition(points: FloatArray, dt_min: FloatArray | float) -> FloatArray:
+def slope_transition(points: FloatArray, dt_min: FloatArray | float, room_rate: FloatArray | float = 0.0) -> FloatArray:
     """Propagate states (..., 3) = [T, s, λ] with s = dT/dt, over ``dt_min`` minutes.
 
     The same first-order curve as :func:`rise_transition`, written so that the
@@ -51,6 +51,13 @@ def slope_transition(points: FloatArray, dt_min: FloatArray | float) -> FloatArr
     short-window posterior is a curved ridge (only λ(T∞ − T) is known early),
     which a UKF's Gaussian approximation follows badly; with [T, s, λ] the UKF
     reaches the Cramér-Rao bound (benchmarks/bench_thermal.py).
+
+    ``room_rate`` (°C/min over the step) makes the room the input of the same
+    heat balance: dT/dt = λ(T_room + ΔT∞ − T), the papers' first-order model
+    (one heat capacity, one conductance to the room) with a room that drifts.
+    Then s relaxes towards the room's rate r instead of 0:
+    sₖ = r + (sₖ₋₁ − r)e^(−λΔt), Tₖ = Tₖ₋₁ + rΔt + (sₖ₋₁ − r)(1 − e^(−λΔt))/λ,
+    and T + s/λ stays the steady state at the room's current level.
 
     Examples
     --------
@@ -61,7 +68,8 @@ def slope_transition(points: FloatArray, dt_min: FloatArray | float) -> FloatArr
     x = lam * dt_min
     small = np.abs(x) < 1e-9
     gain = np.where(small, dt_min * (1.0 - 0.5 * x), -np.expm1(-x) / np.where(small, 1.0, lam))
-    return np.stack([T + slope * gain, slope * np.exp(-x), lam], axis=-1)
+    excess = slope - room_rate
+    return np.stack([T + room_rate * dt_min + excess * gain, room_rate + excess * np.exp(-x), lam], axis=-1)
 
 
 def transition_for(parametrisation: str):  # noqa: ANN201 - returns one of the two transitions

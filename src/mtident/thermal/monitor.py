@@ -4,8 +4,8 @@ Each new sample advances every sensor's filter by one step (constant work per
 sample: no refit from the start). The stopping rule, per sensor:
 
 1. the 95 % interval of T∞ is well within ``tolerance``: half-width ≤
-   ``interval_fraction`` × tolerance (default ½: stopping at the first moment an
-   interval fits selects a lucky moment, so a margin is kept),
+   ``interval_fraction`` × tolerance (default 0.6: stopping at the first moment
+   an interval fits selects a lucky moment, so a margin is kept),
 2. the T∞ estimate has stayed within ±tolerance/2 of its current value for the
    last ``hold_min`` minutes (or a tenth of the test so far, if longer), and its
    trend over that time, carried on towards the predicted equilibrium (at most
@@ -19,7 +19,20 @@ sample: no refit from the start). The stopping rule, per sensor:
    trend, and the T∞ history starts again;
 4. at least ``min_samples`` samples and ``min_duration_min`` minutes of test
    (default 30, the papers' identification time): a fast transient that settles
-   in minutes can hide a slow mode that only shows later.
+   in minutes can hide a slow mode that only shows later,
+5. the estimate is consistent with the monitor's own earlier answers: over the
+   last ``consistency_window_min`` minutes, T∞ has not moved from any earlier
+   estimate by more than ``consistency_factor`` × that estimate's 95 %
+   half-width (and more than tolerance/2, which rule 2 covers). For a
+   first-order warm-up a later, better estimate lies inside the earlier
+   intervals. A room that drifts (a 4-h air-conditioning cycle) tilts the
+   slope the filter sees, so its T∞ wanders by the drift rate / λ, several
+   times its interval; where the wander turns round it holds still long enough
+   to pass rule 2 at its largest error. This rule catches that; a room sensor
+   (``ambient``) takes the drift into account (``room_coupling``: "lagged",
+   the room is the input of the sensor's first-order heat balance, for a
+   sensor in the machine's structure; "direct", the sensor follows the room at
+   once, for one in the air stream: its rise over the room is followed).
 
 The test may stop when every sensor may, except sensors that show no rise
 (they are reported and left out of the decision).
@@ -44,7 +57,11 @@ from mtident.thermal.model import equilibrium_time, observe_temperature, slope_t
 from mtident.thermal.settings import ThermalTuning, filter_config, tuning_from_data
 from mtident.ukf import FilterCarry, FilterConfig, GaussianState, SigmaWeights, filter_step, initial_carry
 
-__all__ = ["MonitorSettings", "Monitor", "SensorStatus"]
+__all__ = ["MonitorSettings", "Monitor", "SensorStatus", "ROOM_COUPLINGS"]
+
+# How a sensor feels the room (with a room sensor): "lagged", through the machine's own heat
+# balance (a sensor in the structure); "direct", at once (a sensor in the air stream, on a thin cover).
+ROOM_COUPLINGS = ("lagged", "direct")
 
 
 @dataclass(frozen=True, slots=True)
@@ -52,7 +69,7 @@ class MonitorSettings:
     """Tuning of the stopping rule (defaults for a 1-min PT100 log)."""
 
     tolerance_C: float = 0.2
-    interval_fraction: float = 0.7
+    interval_fraction: float = 0.6
     hold_min: float = 12.0
     init_min: float = 10.0
     min_samples: int = 15
@@ -62,6 +79,13 @@ class MonitorSettings:
     gap_factor: float = 5.0
     hold_fraction: float = 0.1
     min_duration_min: float = 30.0
+    consistency_window_min: float = 60.0
+    consistency_factor: float = 1.5
+    room_coupling: str = "lagged"
+
+    def __post_init__(self) -> None:
+        if self.room_coupling not in ROOM_COUPLINGS:
+            raise ValueError(f"room_coupling must be one of {ROOM_COUPLINGS}, not {self.room_coupling!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,12 +126,17 @@ class Monitor:
     samples: int = 0
     recent_y: list[list[float]] = field(default_factory=list)  # last 5 raw samples, for the noise estimate
     rejected_run: FloatArray | None = None
-    ambient_level: float | None = None
+    ambient_level: float | None = None  # the room's last valid reading, with ``ambient``
+    ambient_time: float | None = None
+    buffer_room_rate: list[float] = field(default_factory=list)
     # derived from the tuning once per process (not saved): the step needs them every sample
     _config: FilterConfig | None = field(default=None, repr=False, compare=False)
     _weights: SigmaWeights | None = field(default=None, repr=False, compare=False)
     d4_sum: FloatArray | None = None
     d4_count: FloatArray | None = None
+    # rows [t, rise T∞ per sensor, its 95 % half-width per sensor], about one per minute of the window
+    checkpoints: list[list[float]] = field(default_factory=list)
+    wandering: list[bool] | None = None
     stop_time: float | None = None
     decision: list[dict[str, object]] | None = None
     notes: list[str] = field(default_factory=list)
@@ -116,10 +145,14 @@ class Monitor:
     def feed(self, times: FloatArray, values: FloatArray, ambient: FloatArray | None = None) -> list[str]:
         """Process new samples (times in min, values (n, S)); returns warnings for the engineer.
 
-        With ``ambient`` (n,), a reference sensor in the room, the monitor follows
-        each sensor's rise over ambient, which is first order even when the room
-        drifts, and reports T∞ as that rise plus the room's current level (the
-        steady state the machine reaches if the room stays as it is now).
+        With ``ambient`` (n,), a reference sensor in the room, the room becomes the
+        input of each sensor's first-order heat balance, dT/dt = λ(T_room + ΔT∞ − T)
+        (:func:`~mtident.thermal.model.slope_transition`): the papers' model, one
+        heat capacity coupled to the room, which stays first order when the room
+        drifts. T∞ is then the steady state the machine reaches if the room stays
+        as it is now. Subtracting the room reading from the sensor instead would
+        assume the sensor follows the room air without lag; a machine's mass
+        follows it with its own time constant.
 
         Once the decision is reached the monitor's answer is final and later
         samples are not used, so a replay of a whole log and a live run that stops
@@ -131,26 +164,33 @@ class Monitor:
         for t, y, a in zip(np.asarray(times, float), rows, room, strict=True):
             if self.stop_time is not None:
                 break
-            if ambient is not None:
-                if np.isfinite(a):
-                    # a short running mean: the room's level without its sensor noise
-                    self.ambient_level = a if self.ambient_level is None else 0.8 * self.ambient_level + 0.2 * a
+            rate = 0.0
+            if np.isfinite(a):
+                # the room's mean rate since its last valid reading (a missing one: the room held still)
+                if self.ambient_level is not None and self.ambient_time is not None and t > self.ambient_time:
+                    rate = (float(a) - self.ambient_level) / (float(t) - self.ambient_time)
+                self.ambient_level, self.ambient_time = float(a), float(t)
+            if ambient is not None and self.settings.room_coupling == "direct":
+                # The raw reading, not a smoothed one: its noise stays white, so the fourth-
+                # difference noise estimate (and with it the interval) accounts for it.
                 y = y - (self.ambient_level if self.ambient_level is not None else np.nan)
-            messages.extend(self._one(float(t), y.copy()))
+                rate = 0.0
+            messages.extend(self._one(float(t), y.copy(), rate))
         self.notes.extend(messages)
         return messages
 
-    def _one(self, t: float, y: FloatArray) -> list[str]:
+    def _one(self, t: float, y: FloatArray, room_rate: float) -> list[str]:
         messages: list[str] = []
         self.samples += 1
         if self.carry is None:
             self.buffer_t.append(t)
             self.buffer_y.append([float(v) for v in y])
+            self.buffer_room_rate.append(room_rate)
             ready = t - self.buffer_t[0] >= self.settings.init_min and len(self.buffer_t) >= 8
             if ready:
                 messages.extend(self._start())
             return messages
-        return self._step(t, y)
+        return self._step(t, y, room_rate)
 
     def _start(self) -> list[str]:
         t = np.array(self.buffer_t)
@@ -171,19 +211,19 @@ class Monitor:
         self.recent_y = []
         self.rejected_run = np.zeros(S)
         messages = []
-        for tt, yy in zip(t, y, strict=True):
-            messages.extend(self._step(float(tt), yy.copy()))
-        self.buffer_t, self.buffer_y = [], []
+        for tt, yy, rate in zip(t, y, self.buffer_room_rate, strict=True):
+            messages.extend(self._step(float(tt), yy.copy(), rate))
+        self.buffer_t, self.buffer_y, self.buffer_room_rate = [], [], []
         return messages
 
-    def _step(self, t: float, y: FloatArray) -> list[str]:
+    def _step(self, t: float, y: FloatArray, room_rate: float = 0.0) -> list[str]:
         assert self.carry is not None and self.tuning is not None and self.observed is not None
         messages: list[str] = []
         config, weights = self._filter()
         dt = 0.0 if self.last_t is None else t - self.last_t
         if self.median_dt and dt > self.settings.gap_factor * self.median_dt:
             messages.append(f"gap in the log: {dt:g} min without samples before t = {t:g} min; bridged by the model")
-        step = lambda p: slope_transition(p, dt)  # noqa: E731
+        step = lambda p: slope_transition(p, dt, room_rate)  # noqa: E731
         new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
         z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= self.settings.check_samples)
@@ -229,13 +269,65 @@ class Monitor:
             for s in np.flatnonzero(misfit):
                 messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); widening its parameter uncertainty to follow the new trend")
             self._widen(misfit)
-        if self.stop_time is None:
-            status = self.status()
-            if all(st.may_stop for st in status) and not all(st.status == "no rise" for st in status):
-                self.stop_time = t
-                self.decision = [self._summary(st) for st in status]
-                messages.append(f"the test can stop at t = {t:g} min")
+        status = self.status()
+        messages.extend(self._note_wandering(status))
+        self._record_checkpoint(t, status)
+        if self.stop_time is None and all(st.may_stop for st in status) and not all(st.status == "no rise" for st in status):
+            self.stop_time = t
+            self.decision = [self._summary(st) for st in status]
+            messages.append(f"the test can stop at t = {t:g} min")
         return messages
+
+    def _record_checkpoint(self, t: float, status: list[SensorStatus]) -> None:
+        """Keep each T∞ (over the room, with ``ambient``) and its half-width, about 60 times per window."""
+        window = self.settings.consistency_window_min
+        if self.checkpoints and t - self.checkpoints[-1][0] < window / 60.0:
+            return
+        # Estimates before the minimum duration, or with intervals wider than twice the tolerance,
+        # are too far from Gaussian (T∞ = T + s/λ is a ratio) to hold later ones to.
+        mature = t >= self.settings.min_duration_min
+        usable = [mature and st.status not in ("no steady state yet", "no rise") and st.half_width_C <= 2 * self.settings.tolerance_C for st in status]
+        steady = [st.steady_state_C if use else float("nan") for st, use in zip(status, usable, strict=True)]
+        self.checkpoints.append([t, self.ambient_level or 0.0, *steady, *[st.half_width_C for st in status]])
+        while self.checkpoints and self.checkpoints[0][0] < t - window:
+            self.checkpoints.pop(0)
+
+    def _inconsistent(self, steady: FloatArray) -> tuple[np.ndarray, list[str]]:
+        """Sensors whose T∞ now lies outside an earlier interval of the window, and that interval.
+
+        With a room sensor the comparison is of T∞ over the room: T∞ itself
+        follows the room, as it should.
+        """
+        S = len(self.sensors)
+        if not self.checkpoints:
+            return np.zeros(S, dtype=bool), [""] * S
+        rows = np.array(self.checkpoints)
+        times, room, then, halves = rows[:, 0], rows[:, 1], rows[:, 2 : 2 + S], rows[:, 2 + S :]
+        room_now = self.ambient_level or 0.0
+        with np.errstate(invalid="ignore"):
+            # a shift within ±tolerance/2 is left to the hold rule: it does not change the answer
+            allowed = np.maximum(self.settings.consistency_factor * halves, self.settings.tolerance_C / 2)
+            outside = np.abs((steady - room_now)[None, :] - (then - room[:, None])) > allowed
+        outside &= np.isfinite(then) & np.isfinite(halves)
+        where = [
+            f"{then[k, s]:.2f} ± {halves[k, s]:.2f} °C at t = {times[k]:g} min" if outside[:, s].any() else ""
+            for s in range(S)
+            for k in [int(np.argmax(outside[:, s]))]
+        ]
+        return outside.any(axis=0), where
+
+    def _note_wandering(self, status: list[SensorStatus]) -> list[str]:
+        """A message when a sensor's T∞ starts wandering outside its earlier intervals."""
+        now = [st.status == "wandering" for st in status]
+        before = self.wandering or [False] * len(status)
+        self.wandering = now
+        _, where = self._inconsistent(np.array([st.steady_state_C for st in status]))
+        hint = "" if self.ambient_level is not None else "; a room sensor (--ambient) takes the room's drift into account"
+        return [
+            f"sensor {st.sensor!r}: T∞ = {st.steady_state_C:.2f} °C has left the interval {w} (by more than {self.settings.consistency_factor:g}× its half-width): not a first-order warm-up here, a slow mode or a drifting room{hint}; waiting for it to settle"
+            for st, w, n, b in zip(status, where, now, before, strict=True)
+            if n and not b
+        ]
 
     def _filter(self) -> tuple[FilterConfig, SigmaWeights]:
         """The UKF variant and its sigma weights for the tuning (computed once)."""
@@ -303,8 +395,11 @@ class Monitor:
         factor = np.maximum(1.0, self.nis_sum / np.maximum(self.observed - 3, 1))
         history = np.array(self.steady_history)
         misfit = self._misfit()
+        # with a directly coupled room the filters follow the rise over the room
+        offset = (self.ambient_level or 0.0) if self.settings.room_coupling == "direct" else 0.0
         quantiles = stdtrit(np.maximum(self.observed - 3, 1), 0.975)
         halves = quantiles * np.sqrt(np.maximum(cov[:, 2, 2], 0.0) * factor)
+        wandering, _ = self._inconsistent(physical[:, 2] + offset)
         for s, name in enumerate(self.sensors):
             n = int(self.observed[s])
             half = float(halves[s])
@@ -332,11 +427,12 @@ class Monitor:
                 state, may = "collecting", False
             elif half > self.settings.interval_fraction * self.settings.tolerance_C:
                 state, may = "narrowing", False
+            elif wandering[s]:
+                state, may = "wandering", False
             elif not stable:
                 state, may = "settling", False
             else:
                 state, may = "may stop", True
-            offset = self.ambient_level or 0.0
             out.append(SensorStatus(name, float(physical[s, 0]) + offset, steady + offset, half, eq, may, state))
         return out
 
@@ -399,8 +495,12 @@ class Monitor:
             "recent_y": self.recent_y,
             "rejected_run": _tolist(self.rejected_run),
             "ambient_level": self.ambient_level,
+            "ambient_time": self.ambient_time,
+            "buffer_room_rate": self.buffer_room_rate,
             "d4_sum": _tolist(self.d4_sum),
             "d4_count": _tolist(self.d4_count),
+            "checkpoints": self.checkpoints,
+            "wandering": self.wandering,
             "stop_time": self.stop_time,
             "decision": self.decision,
         }
@@ -436,8 +536,12 @@ class Monitor:
             recent_y=[list(r) for r in data["recent_y"]],  # type: ignore[union-attr]
             rejected_run=arr(data["rejected_run"]),
             ambient_level=data["ambient_level"],  # type: ignore[arg-type]
+            ambient_time=data.get("ambient_time"),  # type: ignore[arg-type]
+            buffer_room_rate=list(data.get("buffer_room_rate", [0.0] * len(data["buffer_t"]))),  # type: ignore[arg-type]
             d4_sum=arr(data["d4_sum"]),
             d4_count=arr(data["d4_count"]),
+            checkpoints=[list(r) for r in data.get("checkpoints", [])],  # type: ignore[union-attr]
+            wandering=data.get("wandering"),  # type: ignore[arg-type]
             stop_time=data["stop_time"],  # type: ignore[arg-type]
             decision=data["decision"],  # type: ignore[arg-type]
         )
