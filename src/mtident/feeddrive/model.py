@@ -13,7 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
@@ -127,5 +126,7 @@ def exact_step(a: FloatArray, b: FloatArray, h: float) -> tuple[FloatArray, Floa
     block = np.zeros((n + m, n + m))
     block[:n, :n] = a
     block[:n, n:] = b
+    from scipy.linalg import expm  # here, not at the top: the thermal commands never need it
+
     e = expm(block * h)
     return e[:n, :n], e[:n, n:]

@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import eigh
 
 from mtident._typing import FloatArray
 from mtident.feeddrive.params import FeedDriveParameters, damping_matrix, mass_matrix, stiffness_matrix, validate
@@ -44,6 +43,8 @@ def modes(p: FeedDriveParameters) -> Modes:
     """
     validate(p)
     m, k = mass_matrix(p), stiffness_matrix(p)
+    from scipy.linalg import eigh  # here, not at the top: the thermal commands never need it
+
     eigenvalues, shapes = eigh(k, m)
     omega = np.sqrt(eigenvalues)
     signs = np.sign(shapes[np.argmax(np.abs(shapes), axis=0), np.arange(4)])

@@ -82,6 +82,7 @@ class MonitorSettings:
     consistency_window_min: float = 60.0
     consistency_factor: float = 1.5
     room_coupling: str = "lagged"
+    quiet_min: float = 60.0
 
     def __post_init__(self) -> None:
         if self.room_coupling not in ROOM_COUPLINGS:
@@ -137,6 +138,7 @@ class Monitor:
     # rows [t, rise T∞ per sensor, its 95 % half-width per sensor], about one per minute of the window
     checkpoints: list[list[float]] = field(default_factory=list)
     wandering: list[bool] | None = None
+    last_said: dict[str, float] = field(default_factory=dict)  # "kind:sensor" -> time of the last such message
     stop_time: float | None = None
     decision: list[dict[str, object]] | None = None
     notes: list[str] = field(default_factory=list)
@@ -245,7 +247,8 @@ class Monitor:
             new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
             z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
-            messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN or open circuit); bridged")
+            if self._may_say("dropout", s, t):
+                messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN or open circuit); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
         self._update_noise(y)
@@ -267,7 +270,8 @@ class Monitor:
         misfit = self._misfit()
         if np.any(misfit):
             for s in np.flatnonzero(misfit):
-                messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); widening its parameter uncertainty to follow the new trend")
+                if self._may_say("misfit", s, t):
+                    messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); widening its parameter uncertainty to follow the new trend{self._quiet_note()}")
             self._widen(misfit)
         status = self.status()
         messages.extend(self._note_wandering(status))
@@ -292,42 +296,57 @@ class Monitor:
         while self.checkpoints and self.checkpoints[0][0] < t - window:
             self.checkpoints.pop(0)
 
-    def _inconsistent(self, steady: FloatArray) -> tuple[np.ndarray, list[str]]:
-        """Sensors whose T∞ now lies outside an earlier interval of the window, and that interval.
+    def _outside(self, steady: FloatArray) -> FloatArray:
+        """(checkpoints, S): where T∞ now lies outside an earlier estimate's allowance.
 
         With a room sensor the comparison is of T∞ over the room: T∞ itself
         follows the room, as it should.
         """
         S = len(self.sensors)
         if not self.checkpoints:
-            return np.zeros(S, dtype=bool), [""] * S
+            return np.zeros((0, S), dtype=bool)
         rows = np.array(self.checkpoints)
-        times, room, then, halves = rows[:, 0], rows[:, 1], rows[:, 2 : 2 + S], rows[:, 2 + S :]
-        room_now = self.ambient_level or 0.0
+        room, then, halves = rows[:, 1], rows[:, 2 : 2 + S], rows[:, 2 + S :]
+        # a shift within ±tolerance/2 is left to the hold rule: it does not change the answer
+        allowed = np.maximum(self.settings.consistency_factor * halves, self.settings.tolerance_C / 2)
         with np.errstate(invalid="ignore"):
-            # a shift within ±tolerance/2 is left to the hold rule: it does not change the answer
-            allowed = np.maximum(self.settings.consistency_factor * halves, self.settings.tolerance_C / 2)
-            outside = np.abs((steady - room_now)[None, :] - (then - room[:, None])) > allowed
-        outside &= np.isfinite(then) & np.isfinite(halves)
-        where = [
-            f"{then[k, s]:.2f} ± {halves[k, s]:.2f} °C at t = {times[k]:g} min" if outside[:, s].any() else ""
-            for s in range(S)
-            for k in [int(np.argmax(outside[:, s]))]
-        ]
-        return outside.any(axis=0), where
+            outside = np.abs((steady - (self.ambient_level or 0.0))[None, :] - (then - room[:, None])) > allowed
+        return outside & np.isfinite(then) & np.isfinite(halves)
 
     def _note_wandering(self, status: list[SensorStatus]) -> list[str]:
         """A message when a sensor's T∞ starts wandering outside its earlier intervals."""
         now = [st.status == "wandering" for st in status]
         before = self.wandering or [False] * len(status)
         self.wandering = now
-        _, where = self._inconsistent(np.array([st.steady_state_C for st in status]))
+        started = [s for s in range(len(status)) if now[s] and not before[s]]
+        if not started:
+            return []
+        outside = self._outside(np.array([st.steady_state_C for st in status]))
         hint = "" if self.ambient_level is not None else "; a room sensor (--ambient) takes the room's drift into account"
-        return [
-            f"sensor {st.sensor!r}: T∞ = {st.steady_state_C:.2f} °C has left the interval {w} (by more than {self.settings.consistency_factor:g}× its half-width): not a first-order warm-up here, a slow mode or a drifting room{hint}; waiting for it to settle"
-            for st, w, n, b in zip(status, where, now, before, strict=True)
-            if n and not b
-        ]
+        messages = []
+        for s in started:
+            if not self._may_say("wandering", s, float(self.last_t or 0.0)):
+                continue
+            k = int(np.argmax(outside[:, s]))
+            then, half, when = self.checkpoints[k][2 + s], self.checkpoints[k][2 + len(status) + s], self.checkpoints[k][0]
+            messages.append(
+                f"sensor {status[s].sensor!r}: T∞ = {status[s].steady_state_C:.2f} °C has left the interval {then:.2f} ± {half:.2f} °C of t = {when:g} min "
+                f"(by more than {self.settings.consistency_factor:g}× its half-width): not a first-order warm-up here, a slow mode or a drifting room{hint}; waiting for it to settle"
+            )
+        return messages
+
+    def _may_say(self, kind: str, sensor: int, t: float) -> bool:
+        """Whether to repeat a message of this kind for this sensor: at most once per ``quiet_min``
+        (a dead sensor or a slow mode would otherwise repeat it every sample)."""
+        key = f"{kind}:{self.sensors[sensor]}"
+        last = self.last_said.get(key)
+        if last is not None and t - last < self.settings.quiet_min:
+            return False
+        self.last_said[key] = t
+        return True
+
+    def _quiet_note(self) -> str:
+        return f" (not repeated within {self.settings.quiet_min:g} min)"
 
     def _filter(self) -> tuple[FilterConfig, SigmaWeights]:
         """The UKF variant and its sigma weights for the tuning (computed once)."""
@@ -399,22 +418,17 @@ class Monitor:
         offset = (self.ambient_level or 0.0) if self.settings.room_coupling == "direct" else 0.0
         quantiles = stdtrit(np.maximum(self.observed - 3, 1), 0.975)
         halves = quantiles * np.sqrt(np.maximum(cov[:, 2, 2], 0.0) * factor)
-        wandering, _ = self._inconsistent(physical[:, 2] + offset)
+        wandering = self._outside(physical[:, 2] + offset).any(axis=0)
+        rates = physical[:, 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            equilibrium = np.where(rates > 0, equilibrium_time(rates), np.nan)
+        stable = self._holds_still(history, physical[:, 2], equilibrium)
         for s, name in enumerate(self.sensors):
             n = int(self.observed[s])
             half = float(halves[s])
             steady = float(physical[s, 2])
-            rate = float(physical[s, 1])
-            span = history[-1, 0] - history[0, 0]
-            eq = float(equilibrium_time(rate)) if rate > 0 else float("nan")
-            column = history[:, 1 + s]
-            valid = np.isfinite(column)
-            hold = self._hold(float(history[-1, 0]))
-            stable = span >= hold - 1e-9 and valid.sum() >= 0.8 * len(column) and bool(np.all(np.abs(column[valid] - steady) <= self.settings.tolerance_C / 2))
-            if stable and valid.sum() > 2:
-                trend = np.polyfit(history[valid, 0] - history[-1, 0], column[valid], 1)[0]
-                remaining = min(max(eq - history[-1, 0], hold), 3 * hold) if np.isfinite(eq) else np.inf
-                stable = bool(abs(trend) * remaining <= self.settings.tolerance_C / 2)
+            rate = float(rates[s])
+            eq = float(equilibrium[s])
             rise = float(self.max_T[s] - self.min_T[s])
             flat = self.samples * (self.median_dt or 1.0) >= self.settings.init_min + self.settings.hold_min and rise < self.settings.min_rise_C
             if flat:
@@ -429,12 +443,38 @@ class Monitor:
                 state, may = "narrowing", False
             elif wandering[s]:
                 state, may = "wandering", False
-            elif not stable:
+            elif not stable[s]:
                 state, may = "settling", False
             else:
                 state, may = "may stop", True
             out.append(SensorStatus(name, float(physical[s, 0]) + offset, steady + offset, half, eq, may, state))
         return out
+
+    def _holds_still(self, history: FloatArray, steady: FloatArray, equilibrium: FloatArray) -> np.ndarray:
+        """Rule 2 for every sensor: T∞ within ±tolerance/2 over the hold, and no creep.
+
+        ``history`` rows are [t, T∞ per sensor] (NaN: no valid sample); the creep
+        is the least-squares slope of T∞ over the hold, carried on towards the
+        predicted equilibrium, at least one and at most three holds ahead.
+        """
+        times, columns = history[:, 0], history[:, 1:]
+        valid = np.isfinite(columns)
+        count = valid.sum(axis=0)
+        hold = self._hold(float(times[-1]))
+        half_band = self.settings.tolerance_C / 2
+        with np.errstate(invalid="ignore"):
+            inside = np.all(~valid | (np.abs(columns - steady[None, :]) <= half_band), axis=0)
+        stable = (times[-1] - times[0] >= hold - 1e-9) & (count >= 0.8 * len(times)) & inside
+        weights = valid.astype(float)
+        n = np.maximum(count, 1)
+        values = np.where(valid, columns, 0.0)
+        centred = (times[:, None] - (weights * times[:, None]).sum(axis=0) / n) * weights
+        spread = (centred**2).sum(axis=0)
+        trend = np.where(spread > 0, (centred * (values - values.sum(axis=0) / n)).sum(axis=0) / np.where(spread > 0, spread, 1.0), 0.0)
+        remaining = np.where(np.isfinite(equilibrium), np.clip(equilibrium - times[-1], hold, 3 * hold), np.inf)
+        with np.errstate(invalid="ignore"):
+            no_creep = np.abs(trend) * remaining <= half_band
+        return stable & ((count <= 2) | no_creep)
 
     def _summary(self, st: SensorStatus) -> dict[str, object]:
         def num(x: float) -> float | None:
@@ -501,6 +541,7 @@ class Monitor:
             "d4_count": _tolist(self.d4_count),
             "checkpoints": self.checkpoints,
             "wandering": self.wandering,
+            "last_said": self.last_said,
             "stop_time": self.stop_time,
             "decision": self.decision,
         }
@@ -542,6 +583,7 @@ class Monitor:
             d4_count=arr(data["d4_count"]),
             checkpoints=[list(r) for r in data.get("checkpoints", [])],  # type: ignore[union-attr]
             wandering=data.get("wandering"),  # type: ignore[arg-type]
+            last_said=dict(data.get("last_said", {})),  # type: ignore[arg-type]
             stop_time=data["stop_time"],  # type: ignore[arg-type]
             decision=data["decision"],  # type: ignore[arg-type]
         )
