@@ -14,7 +14,7 @@ from scipy.special import stdtrit
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
-from mtident.thermal.lsq import fit_rise
+from mtident.thermal.lsq import first_order_onset, fit_rise
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observe_temperature, rise_curve, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter
@@ -347,9 +347,20 @@ def _identify(
     y = log.temperature_C
     S = y.shape[1]
     tw, yw = t[:n_window], y[:n_window]
+    notes: list[str] = list(log.notes)
+    if preset == "data":
+        # The papers' presets fit from the first sample, as the papers do. The data tuning leaves
+        # out a flat start (a sensor lag), which a first-order model cannot follow.
+        onsets = first_order_onset(tw, yw)
+        yw = yw.copy()
+        for s in np.flatnonzero(onsets):
+            yw[: onsets[s], s] = np.nan
+            notes.append(
+                f"sensor {log.sensors[s]!r}: the first {tw[onsets[s]] - tw[0]:g} min rise slower than a first-order "
+                f"curve starts (a sensor lag, or heat still on its way); the model is fitted from t = {tw[onsets[s]]:g} min"
+            )
     tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, S)
     sigma = noise_sigma(yw)
-    notes: list[str] = list(log.notes)
 
     # Future sample times: the log's, then a uniform extension to the horizon.
     if method == "lsq":

@@ -166,11 +166,18 @@ def tuning_from_data(time_min: FloatArray, values: FloatArray) -> ThermalTuning:
     """
     start, rate, steady = quick_estimate(time_min, values)
     sigma = noise_sigma(values)
+    # A sensor whose first samples are left out (NaN: a flat start, see thermal.lsq.first_order_onset)
+    # starts at t₀ on its first-order curve carried back from its first sample.
+    first = np.array([time_min[np.flatnonzero(np.isfinite(col))[0]] for col in np.asarray(values, dtype=float).T])
+    carried = steady + (start - steady) * np.exp(rate * (first - time_min[0]))
+    carried = np.where(np.isfinite(carried), carried, start)
+    carry_sd = 0.5 * np.abs(carried - start)
+    start = carried
     slope = rate * (steady - start)
     S = len(start)
     mean = np.column_stack([start, slope, rate])
     cov = np.zeros((S, 3, 3))
-    cov[:, 0, 0] = (2.0 * sigma) ** 2
+    cov[:, 0, 0] = (2.0 * sigma) ** 2 + carry_sd**2
     cov[:, 1, 1] = np.maximum(np.abs(slope), 10.0 * sigma / max(float(np.ptp(time_min)), 1.0)) ** 2
     cov[:, 2, 2] = rate**2
     q = np.zeros((S, 3, 3))
