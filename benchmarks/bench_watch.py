@@ -40,7 +40,7 @@ def equilibrium_of(curve: np.ndarray) -> float:
 T_LONG = np.arange(0.0, 2001.0)
 
 
-def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None, room_sensor=None, coupling: str = "lagged") -> tuple[str, float | None, float, float]:  # noqa: ANN001
+def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None, room_sensor=None, coupling: str = "lagged", steady: float = 26.7) -> tuple[str, float | None, float, float]:  # noqa: ANN001
     """Replay one sensor; return (name, stop time, equilibrium time, |T∞ error| at stop).
 
     The truth is the curve's value at 2,000 min; with a drifting room (``ambient``
@@ -53,7 +53,7 @@ def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None,
     result = monitor.result()
     truth = clean_long[-1]
     if ambient is not None and result["stop_time_min"] is not None:
-        truth = 26.7 + ambient(result["stop_time_min"])
+        truth = steady + ambient(result["stop_time_min"])
     error = abs(result["steady_state_C"] - truth) if result["steady_state_C"] is not None else float("nan")  # type: ignore[operator]
     return name, result["stop_time_min"], equilibrium_of(clean_long), error  # type: ignore[return-value]
 
@@ -76,9 +76,21 @@ def machine_in_drifting_room(rate_per_min: float = 0.016, rise_C: float = 8.8) -
     return solution.y[0]
 
 
+def fast_slow_in_drifting_room() -> np.ndarray:
+    """A fast part (4 °C, τ 8 min) on a slow part (6 °C, τ 150 min) that feels the room, on ``T_LONG``."""
+    def rhs(t: float, T: np.ndarray) -> np.ndarray:
+        fast, slow = T
+        return np.array([(4.0 - fast) / 8.0, (17.9 + room(t) + 6.0 - slow) / 150.0])
+
+    solution = solve_ivp(rhs, (0.0, T_LONG[-1]), [0.0, 17.9], t_eval=T_LONG, rtol=1e-10, atol=1e-10, max_step=1.0)
+    return solution.y[0] + solution.y[1]
+
+
 KINDS = (
     "first-order",
     "fast+slow",
+    "fast+slow, drift, --ambient",
+    "fast+slow, drift, no sensor",
     "drift, no room sensor",
     "drift + --ambient",
     "drift at once, no sensor",
@@ -99,6 +111,7 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
     first_order = 26.7 - 8.8 * np.exp(-0.016 * T_LONG)
     fast_slow = 17.9 + 4.0 * (1 - np.exp(-T_LONG / 8.0)) + 6.0 * (1 - np.exp(-T_LONG / 150.0))
     lagged = machine_in_drifting_room()
+    fast_slow_drifting = fast_slow_in_drifting_room()
     at_once = first_order + room(T_LONG)
     for seed in range(count):
         rng = np.random.default_rng(seed)
@@ -106,6 +119,9 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
         room_sensor = 17.9 + room(T) + 0.02 * rng.standard_normal(401)
         out["first-order"].append(run_case(f"first-order #{seed}", first_order, first_order[:401] + noise[0]))
         out["fast+slow"].append(run_case(f"fast+slow #{seed}", fast_slow, fast_slow[:401] + noise[1]))
+        noisy = fast_slow_drifting[:401] + noise[1]
+        out["fast+slow, drift, --ambient"].append(run_case(f"fast+slow drift+ambient #{seed}", fast_slow_drifting, noisy, room, room_sensor, steady=27.9))
+        out["fast+slow, drift, no sensor"].append(run_case(f"fast+slow drift #{seed}", fast_slow_drifting, noisy, room, steady=27.9))
         for drifting, label in ((lagged, "drift"), (at_once, "drift at once")):
             noisy = drifting[:401] + noise[2]
             out[f"{label}, no room sensor" if label == "drift" else f"{label}, no sensor"].append(run_case(f"{label} #{seed}", drifting, noisy, room))

@@ -83,6 +83,7 @@ class MonitorSettings:
     consistency_factor: float = 1.5
     room_coupling: str = "lagged"
     quiet_min: float = 60.0
+    creep_holds: float = 3.0
 
     def __post_init__(self) -> None:
         if self.room_coupling not in ROOM_COUPLINGS:
@@ -471,7 +472,7 @@ class Monitor:
         centred = (times[:, None] - (weights * times[:, None]).sum(axis=0) / n) * weights
         spread = (centred**2).sum(axis=0)
         trend = np.where(spread > 0, (centred * (values - values.sum(axis=0) / n)).sum(axis=0) / np.where(spread > 0, spread, 1.0), 0.0)
-        remaining = np.where(np.isfinite(equilibrium), np.clip(equilibrium - times[-1], hold, 3 * hold), np.inf)
+        remaining = np.where(np.isfinite(equilibrium), np.clip(equilibrium - times[-1], hold, self.settings.creep_holds * hold), np.inf)
         with np.errstate(invalid="ignore"):
             no_creep = np.abs(trend) * remaining <= half_band
         return stable & ((count <= 2) | no_creep)
