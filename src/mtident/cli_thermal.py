@@ -83,7 +83,9 @@ def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
     for column in ("sensor", "T∞ ± 95 % (°C)", "λ (1/min)", "t_eq (min)", "RMSE (°C)", "model", "measured T / t_eq"):
         table.add_column(column, justify="right" if column != "sensor" else "left", no_wrap=True)
     for d in summaries:
-        lo, hi = d["steady_state_ci95_C"]
+        interval = d["steady_state_ci95_C"]
+        assert isinstance(interval, list)
+        lo, hi = interval
         half = None if lo is None or hi is None else (hi - lo) / 2
         measured = "—" if d["measured_final_C"] is None else f"{d['measured_final_C']:.2f} / {_fmt(d['measured_equilibrium_time_min'], 0)}"
         table.add_row(

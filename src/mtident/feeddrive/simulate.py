@@ -94,7 +94,7 @@ def simulate(
     excitation = excitation or Excitation()
     h = 1.0 / sample_rate_Hz
     count = int(round(duration_s * sample_rate_Hz)) + 1
-    time = np.arange(count) * h
+    time = np.arange(count, dtype=np.float64) * h
     forces = excitation.forces(time)
     a, b = system_matrix(p), input_matrix(p)
     if method == "rk4":
@@ -114,7 +114,7 @@ def simulate(
         assert rng is not None
         rms = np.sqrt(np.mean(values**2, axis=0))
         values = values + noise_fraction * rms * rng.standard_normal(values.shape)
-    return Response(time, forces, values)
+    return Response(time, forces, np.asarray(values, dtype=np.float64))
 
 
 def write_response(response: Response, path: str | Path) -> Path:
@@ -170,4 +170,4 @@ def read_response(path: str | Path) -> Response:
     for i, column in enumerate(RESPONSE_COLUMNS):
         if column in frame.columns:
             values[:, i] = numeric[column].to_numpy(dtype=float)
-    return Response(time, forces, values)
+    return Response(time, forces, np.asarray(values, dtype=np.float64))

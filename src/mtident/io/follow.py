@@ -20,6 +20,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+from typing import Any
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -70,20 +71,20 @@ class LogFollower:
         }
 
     @classmethod
-    def resume(cls, path: Path, position: dict[str, object], time_col: str | None, time_unit: str | None) -> LogFollower:
+    def resume(cls, path: Path, position: dict[str, Any], time_col: str | None, time_unit: str | None) -> LogFollower:
         """A follower that continues from a saved position."""
         identity = position.get("identity")
         return cls(
             path=path,
-            sensors=position.get("sensors"),  # type: ignore[arg-type]
+            sensors=position.get("sensors"),
             time_col=time_col,
             time_unit=time_unit,
-            offset=int(position["offset"]),  # type: ignore[arg-type]
-            identity=tuple(identity) if identity else None,  # type: ignore[arg-type]
-            header=position.get("header"),  # type: ignore[arg-type]
-            origin=position.get("origin"),  # type: ignore[arg-type]
-            last_time=position.get("last_time"),  # type: ignore[arg-type]
-            columns=list(position.get("columns") or []),  # type: ignore[arg-type]
+            offset=int(position["offset"]),
+            identity=tuple(identity) if identity else None,
+            header=position.get("header"),
+            origin=position.get("origin"),
+            last_time=position.get("last_time"),
+            columns=list(position.get("columns") or []),
         )
 
     def _unit(self, name: str) -> float:

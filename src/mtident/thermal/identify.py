@@ -17,7 +17,7 @@ from mtident.io.logs import TemperatureLog
 from mtident.thermal.lsq import first_order_onset, fit_rise
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observe_temperature, rise_curve, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
-from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter
+from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
 
 __all__ = ["Identification", "identify", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
 
@@ -353,14 +353,15 @@ def _identify(
         # out a flat start (a sensor lag), which a first-order model cannot follow.
         onsets = first_order_onset(tw, yw)
         yw = yw.copy()
-        for s in np.flatnonzero(onsets):
-            yw[: onsets[s], s] = np.nan
+        for i in np.flatnonzero(onsets):
+            yw[: onsets[i], i] = np.nan
             notes.append(
-                f"sensor {log.sensors[s]!r}: the first {tw[onsets[s]] - tw[0]:g} min rise slower than a first-order "
-                f"curve starts (a sensor lag, or heat still on its way); the model is fitted from t = {tw[onsets[s]]:g} min"
+                f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min rise slower than a first-order "
+                f"curve starts (a sensor lag, or heat still on its way); the model is fitted from t = {tw[onsets[i]]:g} min"
             )
     tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, S)
-    sigma = noise_sigma(yw)
+    # the data tuning has the noise level already (its R); the papers' R is a setting, not the noise
+    sigma = np.sqrt(tuning.emission_cov[:, 0, 0]) if preset == "data" else noise_sigma(yw)
 
     # Future sample times: the log's, then a uniform extension to the horizon.
     if method == "lsq":
@@ -408,7 +409,7 @@ def _identify(
     chi2, autocorr, fits = model_check(tw, yw, yw - window_fit, sigma)
     steady_sd = np.sqrt(final_cov[:, 2, 2])
     rate_sd = np.sqrt(final_cov[:, 1, 1])
-    for s in np.flatnonzero(~fits):
+    for s in np.flatnonzero(~fits).tolist():
         notes.append(
             f"sensor {log.sensors[s]!r}: the first-order model does not fit the window (residual χ²/dof "
             f"{chi2[s]:.2f}, lag-1 autocorrelation {autocorr[s]:.2f}); the T∞ interval was widened by "
@@ -418,7 +419,7 @@ def _identify(
     steady_sd = steady_sd * widen
     rate_now = final_mean[:, 1]
     no_steady = ~(np.isfinite(rate_now) & (rate_now > 0) & np.isfinite(final_mean[:, 2]) & np.isfinite(steady_sd))
-    for s in np.flatnonzero(no_steady):
+    for s in np.flatnonzero(no_steady).tolist():
         notes.append(
             f"sensor {log.sensors[s]!r}: no approach to a steady state in the first {tw[-1]:g} min "
             f"(λ = {rate_now[s]:.3g}/min with the {method} filter); T∞ is not identifiable from this window — "
@@ -525,7 +526,7 @@ def _predict_after_window(
     for k in range(len(dts)):
         s = transition(state.mean, k) + q_sd * rng.standard_normal(state.mean.shape)
         pseudo = s[:, :1] + (r_sd * rng.standard_normal(r_sd.shape))[:, None]
-        state, _ = filter_step(state, pseudo, lambda p, k=k: transition(p, k), observe_temperature, normal, weights)
+        state, _ = filter_step(state, pseudo, transition_at(transition, k), observe_temperature, normal, weights)
         means.append(state.mean[:, 0])
         variances.append(state.covariance()[:, 0, 0])
     return np.array(means), np.array(variances)

@@ -101,7 +101,7 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     sigma = np.maximum(noise_sigma(y), 1e-6)
     for _ in range(2):
         used = y.copy()
-        for s in np.flatnonzero(onsets):
+        for s in np.flatnonzero(onsets).tolist():
             used[: onsets[s], s] = np.nan
         start, rate, steady = quick_estimate(t, used)
         fit = fit_rise(t, used, np.column_stack([start, rate, steady]))
@@ -112,7 +112,7 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
             if not flagged.size:
                 continue
             # the lag's decay goes on past the last flagged sample: take the run of same-sign misses beyond σ/2
-            end = flagged[-1] + 1
+            end = int(flagged[-1]) + 1
             sign = np.sign(z[flagged[-1], s])
             while end < lead and sign * z[end, s] > 0.5:
                 end += 1

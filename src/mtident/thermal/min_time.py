@@ -148,8 +148,8 @@ def _search(
         guess = tuning_from_data(t[: counts[0]], y[: counts[0]]).initial_mean
         for i, n in enumerate(counts):
             fit = fit_rise(t[:n], y[:n], guess)
-            p = fit.params
-            curves[i] = rise_curve(t[:n_total, None], p[:, 0], p[:, 1], p[:, 2])
+            params = fit.params
+            curves[i] = rise_curve(t[:n_total, None], params[:, 0], params[:, 1], params[:, 2])
     else:
         prior_n = int(counts[0])
         tuning = tuning_from_data(t[:prior_n], y[:prior_n]) if preset == "data" else preset_tuning(preset, S)

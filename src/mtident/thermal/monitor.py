@@ -48,6 +48,7 @@ monitor killed at any moment resumes with the same result.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from scipy.special import stdtrit
@@ -101,6 +102,14 @@ class SensorStatus:
     equilibrium_time_min: float
     may_stop: bool
     status: str
+
+
+def _floats(value: Any) -> FloatArray:
+    return np.array(value, dtype=float)
+
+
+def _optional_floats(value: Any) -> FloatArray | None:
+    return None if value is None else np.array(value, dtype=float)
 
 
 def _tolist(value: object) -> object:
@@ -221,6 +230,7 @@ class Monitor:
 
     def _step(self, t: float, y: FloatArray, room_rate: float = 0.0) -> list[str]:
         assert self.carry is not None and self.tuning is not None and self.observed is not None
+        assert self.rejected_run is not None and self.min_T is not None and self.max_T is not None and self.nis_sum is not None
         messages: list[str] = []
         config, weights = self._filter()
         dt = 0.0 if self.last_t is None else t - self.last_t
@@ -248,7 +258,7 @@ class Monitor:
             new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
             z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
-            if self._may_say("dropout", s, t):
+            if self._may_say("dropout", int(s), t):
                 messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN or open circuit); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
@@ -271,7 +281,7 @@ class Monitor:
         misfit = self._misfit()
         if np.any(misfit):
             for s in np.flatnonzero(misfit):
-                if self._may_say("misfit", s, t):
+                if self._may_say("misfit", int(s), t):
                     messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); widening its parameter uncertainty to follow the new trend{self._quiet_note()}")
             self._widen(misfit)
         status = self.status()
@@ -411,7 +421,7 @@ class Monitor:
         if self.carry is None:
             return [SensorStatus(name, float(self.buffer_y[-1][i]) if self.buffer_y else float("nan"), float("nan"), float("nan"), float("nan"), False, "collecting") for i, name in enumerate(self.sensors)]
         physical, cov = to_physical(self.carry.mean, self.carry.covariance(), "slope")
-        assert self.observed is not None and self.nis_sum is not None
+        assert self.observed is not None and self.nis_sum is not None and self.min_T is not None and self.max_T is not None
         factor = np.maximum(1.0, self.nis_sum / np.maximum(self.observed - 3, 1))
         history = np.array(self.steady_history)
         misfit = self._misfit()
@@ -419,7 +429,7 @@ class Monitor:
         offset = (self.ambient_level or 0.0) if self.settings.room_coupling == "direct" else 0.0
         quantiles = stdtrit(np.maximum(self.observed - 3, 1), 0.975)
         halves = quantiles * np.sqrt(np.maximum(cov[:, 2, 2], 0.0) * factor)
-        wandering = self._outside(physical[:, 2] + offset).any(axis=0)
+        wandering: np.ndarray = np.asarray(self._outside(physical[:, 2] + offset).any(axis=0))
         rates = physical[:, 1]
         with np.errstate(divide="ignore", invalid="ignore"):
             equilibrium = np.where(rates > 0, equilibrium_time(rates), np.nan)
@@ -495,7 +505,7 @@ class Monitor:
         payload: dict[str, object] = {"stop_time_min": self.stop_time, "decision": "stop" if self.stop_time is not None else "continue", "last_time_min": self.last_t}
         eq = [d["equilibrium_time_min"] for d in sensors if d["equilibrium_time_min"] is not None and d["status"] != "no rise"]
         if self.stop_time is not None and eq:
-            payload["time_saved_min"] = float(max(eq)) - self.stop_time  # type: ignore[arg-type]
+            payload["time_saved_min"] = max(float(e) for e in eq) - self.stop_time  # type: ignore[arg-type]
         if len(sensors) == 1:
             payload.update({k: v for k, v in sensors[0].items() if k != "sensor"})
             payload["sensor"] = sensors[0]["sensor"]
@@ -548,43 +558,42 @@ class Monitor:
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, object]) -> Monitor:
+    def from_dict(cls, data: dict[str, Any]) -> Monitor:
         """Rebuild a monitor saved with :meth:`to_dict`."""
-        arr = lambda v: None if v is None else np.array(v, dtype=float)  # noqa: E731
         tuning = None
         if data["tuning"] is not None:
             t = data["tuning"]
-            tuning = ThermalTuning(arr(t["initial_mean"]), arr(t["initial_cov"]), arr(t["process_cov"]), arr(t["emission_cov"]), arr(t["threshold_C"]), bool(t["redraw"]), str(t["parametrisation"]))  # type: ignore[index]
+            tuning = ThermalTuning(_floats(t["initial_mean"]), _floats(t["initial_cov"]), _floats(t["process_cov"]), _floats(t["emission_cov"]), _floats(t["threshold_C"]), bool(t["redraw"]), str(t["parametrisation"]))
         carry = None
         if data["carry"] is not None:
             c = data["carry"]
-            carry = FilterCarry(arr(c["mean"]), arr(c["cov"]), arr(c["chol"]), arr(c["process_cov"]), arr(c["emission_cov"]), arr(c["residual_memory"]), arr(c["updates_seen"]))  # type: ignore[index]
+            carry = FilterCarry(_floats(c["mean"]), _floats(c["cov"]), _floats(c["chol"]), _floats(c["process_cov"]), _floats(c["emission_cov"]), _floats(c["residual_memory"]), _floats(c["updates_seen"]))
         return cls(
-            sensors=tuple(data["sensors"]),  # type: ignore[arg-type]
-            settings=MonitorSettings(**data["settings"]),  # type: ignore[arg-type]
-            buffer_t=list(data["buffer_t"]),  # type: ignore[arg-type]
-            buffer_y=[list(r) for r in data["buffer_y"]],  # type: ignore[union-attr]
+            sensors=tuple(data["sensors"]),
+            settings=MonitorSettings(**data["settings"]),
+            buffer_t=list(data["buffer_t"]),
+            buffer_y=[list(r) for r in data["buffer_y"]],
             tuning=tuning,
             carry=carry,
-            last_t=data["last_t"],  # type: ignore[arg-type]
-            median_dt=data["median_dt"],  # type: ignore[arg-type]
-            observed=arr(data["observed"]),
-            z_history=[list(r) for r in data["z_history"]],  # type: ignore[union-attr]
-            steady_history=[list(r) for r in data["steady_history"]],  # type: ignore[union-attr]
-            nis_sum=arr(data["nis_sum"]),
-            min_T=arr(data["min_T"]),
-            max_T=arr(data["max_T"]),
-            samples=int(data["samples"]),  # type: ignore[arg-type]
-            recent_y=[list(r) for r in data["recent_y"]],  # type: ignore[union-attr]
-            rejected_run=arr(data["rejected_run"]),
-            ambient_level=data["ambient_level"],  # type: ignore[arg-type]
-            ambient_time=data.get("ambient_time"),  # type: ignore[arg-type]
-            buffer_room_rate=list(data.get("buffer_room_rate", [0.0] * len(data["buffer_t"]))),  # type: ignore[arg-type]
-            d4_sum=arr(data["d4_sum"]),
-            d4_count=arr(data["d4_count"]),
-            checkpoints=[list(r) for r in data.get("checkpoints", [])],  # type: ignore[union-attr]
-            wandering=data.get("wandering"),  # type: ignore[arg-type]
-            last_said=dict(data.get("last_said", {})),  # type: ignore[arg-type]
-            stop_time=data["stop_time"],  # type: ignore[arg-type]
-            decision=data["decision"],  # type: ignore[arg-type]
+            last_t=data["last_t"],
+            median_dt=data["median_dt"],
+            observed=_optional_floats(data["observed"]),
+            z_history=[list(r) for r in data["z_history"]],
+            steady_history=[list(r) for r in data["steady_history"]],
+            nis_sum=_optional_floats(data["nis_sum"]),
+            min_T=_optional_floats(data["min_T"]),
+            max_T=_optional_floats(data["max_T"]),
+            samples=int(data["samples"]),
+            recent_y=[list(r) for r in data["recent_y"]],
+            rejected_run=_optional_floats(data["rejected_run"]),
+            ambient_level=data["ambient_level"],
+            ambient_time=data.get("ambient_time"),
+            buffer_room_rate=list(data.get("buffer_room_rate", [0.0] * len(data["buffer_t"]))),
+            d4_sum=_optional_floats(data["d4_sum"]),
+            d4_count=_optional_floats(data["d4_count"]),
+            checkpoints=[list(r) for r in data.get("checkpoints", [])],
+            wandering=data.get("wandering"),
+            last_said=dict(data.get("last_said", {})),
+            stop_time=data["stop_time"],
+            decision=data["decision"],
         )

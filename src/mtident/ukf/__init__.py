@@ -15,6 +15,7 @@ from mtident.ukf.filter import (
     forecast,
     initial_carry,
     run_filter,
+    transition_at,
 )
 from mtident.ukf.linalg import cholesky_update, safe_cholesky
 from mtident.ukf.sigma_points import MerweScaledSigmaPoints, SigmaWeights, sigma_points
@@ -37,4 +38,5 @@ __all__ = [
     "run_filter",
     "safe_cholesky",
     "sigma_points",
+    "transition_at",
 ]

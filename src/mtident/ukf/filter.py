@@ -32,6 +32,7 @@ __all__ = [
     "initial_carry",
     "filter_step",
     "run_filter",
+    "transition_at",
     "forecast",
 ]
 
@@ -319,7 +320,11 @@ def filter_step(
         A covariance lost positive definiteness; the message names the stage.
     """
     w = weights if weights is not None else config.sigma_points.weights(carry.mean.shape[-1])
-    chol = carry.chol if config.square_root else safe_cholesky(carry.cov, "sigma points of the previous posterior")
+    if config.square_root:
+        chol = carry.chol
+    else:
+        assert carry.cov is not None
+        chol = safe_cholesky(carry.cov, "sigma points of the previous posterior")
     assert chol is not None
     prior = propagate(carry.mean, chol, transition, carry.process_cov, w, config.square_root)
     observed = np.all(np.isfinite(y), axis=-1)
@@ -368,8 +373,8 @@ def filter_step(
         # A missing measurement leaves the prediction as the posterior.
         keep = observed[..., None, None]
         mean = np.where(observed[..., None], mean, prior.mean)
-        new_chol = None if new_chol is None else np.where(keep, new_chol, prior.chol)
-        new_cov = None if new_cov is None else np.where(keep, new_cov, prior.cov)
+        new_chol = None if new_chol is None or prior.chol is None else np.where(keep, new_chol, prior.chol)
+        new_cov = None if new_cov is None or prior.cov is None else np.where(keep, new_cov, prior.cov)
         memory = np.where(keep, memory, carry.residual_memory)
         innovation = np.where(observed[..., None], innovation, np.nan)
         gamma = np.where(observed[..., None], gamma, np.nan)
@@ -391,6 +396,15 @@ def filter_step(
         reached=reached,
     )
     return new_carry, info
+
+
+def transition_at(transition: StepTransition, k: int) -> Callable[[FloatArray], FloatArray]:
+    """The transition of step ``k`` as a function of the sigma points alone."""
+
+    def step(points: FloatArray) -> FloatArray:
+        return transition(points, k)
+
+    return step
 
 
 def run_filter(
@@ -461,7 +475,7 @@ def run_filter(
     adapted = np.empty((steps, *shape[:-1]), dtype=bool)
     for k in range(steps):
         try:
-            carry, info = filter_step(carry, emissions[k], lambda p, k=k: transition(p, k), measurement, config, weights)
+            carry, info = filter_step(carry, emissions[k], transition_at(transition, k), measurement, config, weights)
         except CovarianceError as exc:
             raise exc.at(k, config.name) from exc
         means[k] = carry.mean
@@ -498,7 +512,7 @@ def forecast(
             chol = safe_cholesky(cov, "forecast: sigma points")
         except CovarianceError as exc:
             raise exc.at(k, config.name) from exc
-        prior = propagate(mean, chol, lambda p, k=k: transition(p, k), process_cov, weights, False)
+        prior = propagate(mean, chol, transition_at(transition, k), process_cov, weights, False)
         mean, cov = prior.mean, prior.cov
         means[k], covs[k] = mean, cov
     return GaussianState(means, covs)

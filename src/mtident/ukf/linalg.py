@@ -48,7 +48,7 @@ def safe_cholesky(matrix: FloatArray, stage: str) -> FloatArray:
     its smallest eigenvalue (numpy alone says only "Matrix is not positive definite").
     """
     try:
-        return np.linalg.cholesky(matrix)
+        return np.asarray(np.linalg.cholesky(matrix), dtype=np.float64)
     except np.linalg.LinAlgError as exc:
         index, value = first_bad_index(matrix)
         raise CovarianceError(stage, index, value) from exc
