@@ -195,10 +195,17 @@ def _condition(
         innovation_cov = sy @ np.swapaxes(sy, -1, -2)
         return mean, chol, innovation_cov
     innovation_cov = moments.cov_without_noise + emission_cov
-    gain = solve_gain(innovation_cov, pxy)
-    mean = prior.mean + alpha[..., None] * (gain @ innovation[..., None])[..., 0]
+    mean, gain = _gain_update(prior.mean, innovation_cov, pxy, innovation, alpha)
     cov = symmetrize(prior.cov - coefficient[..., None, None] * gain @ np.swapaxes(pxy, -1, -2))
     return mean, cov, innovation_cov
+
+
+def _gain_update(
+    prior_mean: FloatArray, innovation_cov: FloatArray, cross_cov: FloatArray, innovation: FloatArray, alpha: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """x⁺ = x⁻ + α K ν with K = Pxy Py⁻¹, batched over all leading axes; returns (x⁺, K)."""
+    gain = solve_gain(innovation_cov, cross_cov)
+    return prior_mean + alpha[..., None] * np.einsum("...ij,...j->...i", gain, innovation), gain
 
 
 def _inflate(prior: Prior, moments: MeasurementMoments, alpha: FloatArray) -> tuple[Prior, MeasurementMoments]:
@@ -277,8 +284,8 @@ def _search_emission_cov(
                 pyy = alpha[..., None, None] * moments.cov_without_noise[..., None, :, :] + candidates
                 pxy = alpha[..., None, None] * pxy
                 alpha = np.ones_like(alpha)
-        gain = solve_gain(pyy, pxy)
-        means = prior.mean[..., None, :] + alpha[..., None] * np.einsum("...ij,...j->...i", gain, innovation[..., None, :])
+        # the candidates' posterior means, exactly as _condition's (dense) update computes them
+        means, _ = _gain_update(prior.mean[..., None, :], pyy, pxy, innovation[..., None, :], alpha)
         gamma = np.abs(y[..., None, :] - measurement(means))[..., 0]  # (..., J)
         ok = gamma <= np.asarray(law.threshold)[..., None]
         chosen = np.where(ok.any(axis=-1), np.argmax(ok, axis=-1), np.argmin(gamma, axis=-1))
