@@ -252,6 +252,23 @@ def test_directly_coupled_sensor_follows_its_rise_over_the_room(seed):
     assert abs(result["steady_state_C"] - (26.7 + room(np.array(stop)))) <= 0.2
 
 
+@pytest.mark.parametrize("coupling", ["lagged", "direct"])
+def test_state_round_trip_with_a_room_sensor_gives_the_same_decision(coupling):
+    rng = np.random.default_rng(12)
+    sensor = machine_in_room(T) + 0.02 * rng.standard_normal(len(T))
+    ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    ambient[25] = np.nan  # a missing room reading: the room held still
+    settings = MonitorSettings(room_coupling=coupling)
+    whole = Monitor(("S",), settings)
+    whole.feed(T, sensor[:, None], ambient)
+    for cut in (5, 26, 70):
+        first = Monitor(("S",), settings)
+        first.feed(T[:cut], sensor[:cut, None], ambient[:cut])
+        resumed = Monitor.from_dict(json.loads(json.dumps(first.to_dict())))
+        resumed.feed(T[cut:], sensor[cut:, None], ambient[cut:])
+        assert resumed.result() == whole.result()
+
+
 def test_unknown_room_coupling_is_refused():
     with pytest.raises(ValueError, match="room_coupling"):
         MonitorSettings(room_coupling="sideways")
