@@ -8,9 +8,10 @@ sample: no refit from the start). The stopping rule, per sensor:
    an interval fits selects a lucky moment, so a margin is kept),
 2. the T∞ estimate has stayed within ±tolerance/2 of its current value for the
    last ``hold_min`` minutes (or a tenth of the test so far, if longer), and its
-   trend over that time, carried on towards the predicted equilibrium (at most
-   three hold periods ahead), moves it by less than tolerance/2 (a slow mode or
-   ambient drift shows as a T∞ estimate that keeps creeping),
+   trend over that time, carried on towards the predicted equilibrium (at least
+   one and at most ``creep_holds`` hold periods ahead, default 3), moves it by
+   less than tolerance/2 (a slow mode or ambient drift shows as a T∞ estimate
+   that keeps creeping),
 3. the model check passes: over the last ``check_samples`` samples the
    normalised innovations νₖ/√Sₖ have mean ≈ 0 and mean square ≈ 1. A
    fast-plus-slow warm-up whose slow part the first-order model has not yet
@@ -40,6 +41,8 @@ The test may stop when every sensor may, except sensors that show no rise
 Bad samples: a spike (|ν|/√S > ``spike_sigma``) is rejected and the step redone
 without it; NaN, empty and open-circuit cells are treated as missing (the
 filter bridges them); a gap in time is bridged by the model and reported.
+Repeated messages of one kind for one sensor (a dead sensor, a slow mode) are
+said at most once per ``quiet_min`` minutes.
 
 The whole state is a JSON-serialisable dict (:meth:`Monitor.to_dict`), so a
 monitor killed at any moment resumes with the same result.
