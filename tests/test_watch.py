@@ -5,6 +5,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import pty
+import re
 import signal
 import subprocess
 import sys
@@ -313,3 +315,42 @@ def test_watch_ambient_option(tmp_path):
 def test_room_coupling_needs_a_room_sensor(tmp_path):
     out = mtident("thermal", "watch", "@sample", "--room-coupling", "direct", "--replay", cwd=tmp_path)
     assert out.returncode != 0 and "--room-coupling needs --ambient" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_live_table_shows_every_sensor_with_its_band_and_status():
+    from rich.console import Console
+
+    from mtident.cli_thermal import _status_table
+
+    rng = np.random.default_rng(4)
+    monitor = Monitor(("spindle", "motor"))
+    monitor.feed(T[:50], np.column_stack([first_order(T[:50]), first_order(T[:50], steady=30.0)]) + 0.02 * rng.standard_normal((50, 2)))
+    console = Console(record=True, width=120)
+    console.print(_status_table(monitor, "log.csv: t = 49 min"))
+    text = console.export_text()
+    assert "log.csv: t = 49 min" in text and "T∞ ± 95 % (°C)" in text
+    for st in monitor.status():
+        assert st.sensor in text and st.status in text and f"{st.steady_state_C:.2f}" in text
+
+
+def test_watch_in_a_terminal_draws_the_live_table(tmp_path):
+    """With a terminal on stdout the command draws the rich table in place (and does not crash)."""
+    main, secondary = pty.openpty()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mtident", "thermal", "watch", "@sample", "--replay", "--state", str(tmp_path / "s.json")],
+        stdout=secondary, stderr=subprocess.DEVNULL, cwd=tmp_path,
+    )
+    os.close(secondary)
+    chunks = []
+    while True:  # read while it writes: a full terminal buffer would stall it
+        try:
+            chunk = os.read(main, 65536)
+        except OSError:  # the terminal closed: the command has exited
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    os.close(main)
+    assert proc.wait(timeout=300) == 0
+    screen = re.sub(r"\x1b\[[0-9;?]*[A-Za-z]", "", b"".join(chunks).decode("utf-8", "replace"))  # no colours
+    assert "T∞ ± 95 %" in screen and "T10" in screen and "The test can stop at t = 313 min" in screen
