@@ -92,3 +92,22 @@ def test_readme_quick_start_and_ci_agree():
     assert len(lines) == 2
     ci = (ROOT / ".ci" / "run").read_text()
     assert lines[1] in ci
+
+
+def test_thermal_identify_with_a_room_column(tmp_path):
+    import numpy as np
+
+    t = np.arange(0.0, 121.0)
+    rng = np.random.default_rng(2)
+    room = 17.9 + 0.1 * np.sin(2 * np.pi * t / 240.0)
+    rows = ["time_min,spindle,room"] + [f"{tk:g},{26.7 - 8.8 * np.exp(-0.016 * tk) + 0.02 * rng.standard_normal():.3f},{rk + 0.02 * rng.standard_normal():.3f}" for tk, rk in zip(t, room, strict=True)]
+    path = tmp_path / "room.csv"
+    path.write_text("\n".join(rows) + "\n")
+    out = mtident("thermal", "identify", str(path), "--ambient", "room", "--window", "60", "--json")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert data["sensor"] == "spindle"  # the room column is the input, not a sensor
+    out = mtident("thermal", "identify", str(path), "--ambient", "hall", "--window", "60")
+    assert out.returncode == 2 and "no sensor column 'hall'" in out.stderr and "Traceback" not in out.stderr
+    out = mtident("thermal", "identify", str(path), "--ambient", "room", "--method", "lsq")
+    assert out.returncode == 2 and "needs a UKF method" in out.stderr

@@ -227,3 +227,52 @@ def test_a_flat_start_is_left_out_so_the_interval_still_covers():
     assert any("rise slower than a first-order curve starts" in note for note in result.notes)
     # the papers' presets keep every sample, as the papers do
     assert not any("rise slower" in note for note in identify(make_log(t, runs), 60.0, preset="xia2014").notes)
+
+
+def _machine_in_drifting_room(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """dT/dt = λ(T_room + 8.8 − T) with λ = 0.016 and a room on a 0.15 °C 4-h cycle plus a 0.1 °C rise."""
+    from scipy.integrate import solve_ivp
+
+    def room(tt):  # noqa: ANN001, ANN202
+        return 17.9 + 0.15 * np.sin(2 * np.pi * np.asarray(tt) / 240.0) + 0.1 * (1 - np.exp(-np.asarray(tt) / 200.0))
+
+    solution = solve_ivp(lambda tt, T: 0.016 * (room(tt) + 8.8 - T), (t[0], t[-1]), [17.9], t_eval=t, rtol=1e-10, atol=1e-10, max_step=1.0)
+    return solution.y[0], room(t)
+
+
+def test_a_room_sensor_keeps_a_drifting_room_out_of_the_identified_curve():
+    t = np.arange(0.0, 301.0)
+    curve, room = _machine_in_drifting_room(t)
+    rng = np.random.default_rng(1)
+    log = make_log(t, {f"r{i}": curve + 0.02 * rng.standard_normal(len(t)) for i in range(40)})
+    room_sensor = room + 0.02 * rng.standard_normal(len(t))
+    truth = 8.8 + room[90]  # the steady state at the room's level at the window's end
+    plain = identify(log, 90.0)
+    with_room = identify(log, 90.0, ambient_C=room_sensor)
+    covered = lambda r: np.mean(np.abs(r.steady_state_C - truth) <= r.quantile * r.steady_state_sd_C)  # noqa: E731
+    # measured: without the room 0.11 °C bias and 3/40 covered; with it −0.015 °C and 38/40
+    assert np.mean(plain.steady_state_C - truth) > 0.08 and covered(plain) < 0.3
+    assert abs(np.mean(with_room.steady_state_C - truth)) < 0.04 and covered(with_room) >= 0.85
+
+
+def test_room_rates_interpolate_missing_readings():
+    from mtident.thermal.identify import room_rates
+
+    t = np.array([0.0, 1.0, 2.0, 4.0])
+    np.testing.assert_allclose(room_rates(t, np.array([20.0, np.nan, 20.2, 20.6])), [0.0, 0.1, 0.1, 0.2])
+    np.testing.assert_allclose(room_rates(t, np.full(4, np.nan)), 0.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"method": "lsq"}, "needs a UKF method with the data tuning"),
+        ({"preset": "xia2014"}, "needs a UKF method with the data tuning"),
+    ],
+)
+def test_room_input_refuses_what_models_a_steady_room(kwargs, message):
+    t = np.arange(0.0, 61.0)
+    with pytest.raises(InputError, match=message):
+        identify(make_log(t, {"A": first_order(t)}), 30.0, ambient_C=np.full(len(t), 17.9), **kwargs)
+    with pytest.raises(InputError, match="3 readings for 61 samples"):
+        identify(make_log(t, {"A": first_order(t)}), 30.0, ambient_C=np.full(3, 17.9))

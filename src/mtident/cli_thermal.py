@@ -34,6 +34,20 @@ def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_uni
     return log
 
 
+def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, room_col: str | None) -> tuple[TemperatureLog, np.ndarray | None]:
+    """The log's sensors, and the room column split off from them when one is named."""
+    if room_col is None:
+        return load_log(file, sensors, time_col, time_unit), None
+    every = load_log(file, (), time_col, time_unit)
+    room = every.select([room_col]).temperature_C[:, 0]
+    names = [name for entry in sensors for name in entry.split(",") if name] or list(every.sensors)
+    names = [name for name in names if name != room_col]
+    if not names:
+        msg = f"{every.source}: no sensor column left besides the room column {room_col!r}"
+        raise InputError(msg)
+    return every.select(names), room
+
+
 def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
     func = click.option("--time-unit", type=click.Choice(list(TIME_UNITS)), help="Unit of a numeric time column (default: from its header suffix _s/_min/_h, else min).")(func)
     func = click.option("--time-col", metavar="NAME", help="Time column (default: the first column).")(func)
@@ -57,17 +71,18 @@ def _fmt(value: object, digits: int = 2) -> str:
 @click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True, help="Initial values and tuning: from the data, or a paper's exactly.")
 @click.option("--horizon", "horizon_min", type=click.FloatRange(min=0, min_open=True), help="Predict to this time (min).")
 @click.option("--pseudo-seed", type=int, help="Predict with seed 000's noisy pseudo-measurements (Eqs 21-22) from this seed.")
+@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes the input of each sensor's heat balance; T∞ at the room's level at the window's end.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw measured and predicted curves to this PNG.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, window_min: float, method: str, preset: str, horizon_min: float | None, pseudo_seed: int | None, plot_path: str | None, as_json: bool) -> None:
+def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, window_min: float, method: str, preset: str, horizon_min: float | None, pseudo_seed: int | None, ambient_col: str | None, plot_path: str | None, as_json: bool) -> None:
     """Identify the temperature rise from the first WINDOW minutes of FILE and predict the rest.
 
     FILE is a CSV log (time column, one column per sensor) or @sample for the
     10-sensor warm-up shipped with mtident.
     """
-    log = load_log(file, sensors, time_col, time_unit)
-    result = identify(log, window_min, method, preset, horizon_min, pseudo_seed)
+    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
+    result = identify(log, window_min, method, preset, horizon_min, pseudo_seed, room)
     for note in result.notes[len(log.notes):]:
         stderr.print(f"mtident: warning: {note}", highlight=False)
     if plot_path:

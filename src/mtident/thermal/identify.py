@@ -15,11 +15,11 @@ from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.lsq import first_order_onset, fit_rise
-from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observe_temperature, rise_curve, to_physical, transition_for
+from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
 
-__all__ = ["Identification", "identify", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
+__all__ = ["Identification", "identify", "room_rates", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
 
 Z95 = 1.959963984540054
 MIN_WINDOW_SAMPLES = 6
@@ -255,18 +255,21 @@ def measured_equilibrium(time_min: FloatArray, values: FloatArray) -> tuple[Floa
 
 
 def filter_window(
-    time_min: FloatArray, values: FloatArray, config: FilterConfig, tuning: ThermalTuning
+    time_min: FloatArray, values: FloatArray, config: FilterConfig, tuning: ThermalTuning, room_rate: FloatArray | None = None
 ) -> tuple[FilterRecord, FloatArray, FloatArray]:
     """Filter samples (N, S) of every sensor at once; the first is measured at t₀ itself (Δt = 0).
 
-    Returns the filter record and the per-step mean (N, S, 3) and covariance
-    (N, S, 3, 3) of [T, λ, T∞] whatever the parametrisation.
+    ``room_rate`` (N,), °C/min over each step, makes the room the input of the
+    heat balance (slope parametrisation only; see
+    :func:`~mtident.thermal.model.slope_transition`). Returns the filter record
+    and the per-step mean (N, S, 3) and covariance (N, S, 3, 3) of [T, λ, T∞]
+    whatever the parametrisation.
     """
     dts = np.diff(time_min, prepend=time_min[0])
     record = run_filter(
         GaussianState(tuning.initial_mean, tuning.initial_cov),
         values[..., None],
-        _transition_with(dts, tuning.parametrisation),
+        _transition_with(dts, tuning.parametrisation, room_rate),
         observe_temperature,
         tuning.process_cov,
         tuning.emission_cov,
@@ -276,13 +279,56 @@ def filter_window(
     return record, means, covs
 
 
-def _transition_with(dts: FloatArray, parametrisation: str = "rate"):  # noqa: ANN202 - a closure over the step intervals
+def _transition_with(dts: FloatArray, parametrisation: str = "rate", room_rate: FloatArray | None = None):  # noqa: ANN202 - a closure over the step intervals
     step = transition_for(parametrisation)
+    if room_rate is not None:
+
+        def with_room(points: FloatArray, k: int) -> FloatArray:
+            return slope_transition(points, dts[k], room_rate[k])
+
+        return with_room
 
     def transition(points: FloatArray, k: int) -> FloatArray:
         return step(points, dts[k])
 
     return transition
+
+
+def _curve_with_room(time_min: FloatArray, values: FloatArray, room_rate: FloatArray, final: FloatArray) -> FloatArray:
+    """The identified heat balance (final λ, final T∞ over the room) run over the window with the room as input.
+
+    Started from each sensor's first valid sample; ``final`` (S, 3) is [T, λ, T∞] at the window's end.
+    """
+    rate, steady_end = final[:, 1], final[:, 2]
+    dts = np.diff(time_min, prepend=time_min[0])
+    room_change = np.cumsum(room_rate * dts)  # the room's level relative to t₀
+    rise_over_room = steady_end - room_change[-1]  # T∞ − T_room, constant in the heat balance
+    first = np.array([np.flatnonzero(np.isfinite(col))[0] for col in values.T])
+    T = values[first, np.arange(values.shape[1])]
+    curve = np.full(values.shape, np.nan)
+    for k in range(len(time_min)):
+        started = k >= first
+        slope = rate * (rise_over_room + room_change[k - 1 if k else 0] - T)
+        moved = slope_transition(np.stack([T, slope, rate], axis=-1), dts[k], room_rate[k])[:, 0]
+        T = np.where(started & (k > first), moved, T)
+        curve[k] = np.where(started, T, np.nan)
+    return curve
+
+
+def room_rates(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
+    """The room's rate (°C/min) over each step, from a room sensor; missing readings interpolated.
+
+    The first step (Δt = 0) has rate 0. A room sensor with no valid reading
+    gives rate 0 throughout (the room is taken as steady).
+    """
+    t = np.asarray(time_min, dtype=float)
+    a = np.asarray(room_C, dtype=float)
+    valid = np.isfinite(a)
+    if not valid.any():
+        return np.zeros(len(t))
+    level = np.interp(t, t[valid], a[valid])
+    dts = np.diff(t, prepend=t[0])
+    return np.diff(level, prepend=level[0]) / np.where(dts > 0, dts, 1.0)
 
 
 def identify(
@@ -292,6 +338,7 @@ def identify(
     preset: str = "data",
     horizon_min: float | None = None,
     pseudo_measurement_seed: int | None = None,
+    ambient_C: FloatArray | None = None,
 ) -> Identification:
     """Identify every sensor of ``log`` from its first ``window_min`` minutes, then predict.
 
@@ -310,6 +357,12 @@ def identify(
         Predict as seed 000 Eqs 21-22 do, feeding noisy pseudo-measurements to
         the filter after L, from a generator with this seed. Default: the
         deterministic forecast of the mean with its covariance.
+    ambient_C : ndarray, shape (N,), optional
+        A room sensor at the log's sample times. The room becomes the input of
+        each sensor's first-order heat balance (as in the live monitor), so a
+        drifting room does not bend the identified curve; T∞ is then the steady
+        state at the room's level at the end of the window, and the prediction
+        holds the room there. UKF methods with the data tuning only.
 
     Returns
     -------
@@ -323,9 +376,18 @@ def identify(
     if method not in METHODS:
         msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
         raise InputError(msg)
+    room_rate = None
+    if ambient_C is not None:
+        if method == "lsq" or preset != "data":
+            msg = "a room sensor (--ambient) needs a UKF method with the data tuning: lsq and the papers' presets model a steady room"
+            raise InputError(msg)
+        if len(ambient_C) != len(log.time_min):
+            msg = f"the room sensor has {len(ambient_C)} readings for {len(log.time_min)} samples"
+            raise InputError(msg)
+        room_rate = room_rates(log.time_min, ambient_C)
     # A diverging filter (the papers' presets can) is reported in the notes, not as numpy warnings.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return _identify(log, window_min, method, preset, horizon_min, pseudo_measurement_seed)
+        return _identify(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, room_rate)
 
 
 def _identify(
@@ -335,6 +397,7 @@ def _identify(
     preset: str,
     horizon_min: float | None,
     pseudo_measurement_seed: int | None,
+    room_rate: FloatArray | None = None,
 ) -> Identification:
     n_window = log.window(window_min)
     if n_window < MIN_WINDOW_SAMPLES:
@@ -383,7 +446,7 @@ def _identify(
         window_fit = mean_curve[:n_window]
     else:
         config = filter_config(method, tuning)
-        record, history, history_cov = filter_window(tw, yw, config, tuning)
+        record, history, history_cov = filter_window(tw, yw, config, tuning, None if room_rate is None else room_rate[:n_window])
         history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
         # A-posteriori variance factor: R came from a noise estimate (±20 % from ~30
         # samples); the residual variance of the best first-order fit says how far off
@@ -404,7 +467,10 @@ def _identify(
         mean_curve = np.concatenate([history[:, :, 0], future_mean])
         curve_var = np.concatenate([history_sd[:, :, 0] ** 2, future_var])
         # The model curve through the final state, back over the window, for the residual test.
-        window_fit = rise_curve(tw[:, None] - tw[-1], final_mean[:, 0], final_mean[:, 1], final_mean[:, 2])
+        if room_rate is None:
+            window_fit = rise_curve(tw[:, None] - tw[-1], final_mean[:, 0], final_mean[:, 1], final_mean[:, 2])
+        else:
+            window_fit = _curve_with_room(tw, yw, room_rate[:n_window], final_mean)
 
     chi2, autocorr, fits = model_check(tw, yw, yw - window_fit, sigma)
     steady_sd = np.sqrt(final_cov[:, 2, 2])
