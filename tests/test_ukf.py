@@ -6,7 +6,8 @@ import inspect
 
 import numpy as np
 import pytest
-from filterpy.kalman import KalmanFilter, MerweScaledSigmaPoints as FPPoints, UnscentedKalmanFilter
+from filterpy.kalman import KalmanFilter, UnscentedKalmanFilter
+from filterpy.kalman import MerweScaledSigmaPoints as FPPoints
 
 from mtident.exceptions import CovarianceError, DimensionError, NegativeWeightWarning
 from mtident.ukf import (

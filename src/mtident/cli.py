@@ -55,5 +55,5 @@ def feeddrive() -> None:
     """Ball-screw feed drive: 4-DOF model, modes, simulation, identification."""
 
 
-from mtident import cli_thermal as _cli_thermal  # noqa: E402,F401  (registers the thermal commands)
 from mtident import cli_feeddrive as _cli_feeddrive  # noqa: E402,F401  (registers the feed-drive commands)
+from mtident import cli_thermal as _cli_thermal  # noqa: E402,F401  (registers the thermal commands)

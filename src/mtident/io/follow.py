@@ -20,9 +20,9 @@ from __future__ import annotations
 import csv
 import io
 import os
-from typing import Any
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
