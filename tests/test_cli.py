@@ -111,3 +111,6 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     assert out.returncode == 2 and "no sensor column 'hall'" in out.stderr and "Traceback" not in out.stderr
     out = mtident("thermal", "identify", str(path), "--ambient", "room", "--method", "lsq")
     assert out.returncode == 2 and "needs a UKF method" in out.stderr
+    out = mtident("thermal", "min-time", str(path), "--ambient", "room", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["min_identification_time_min"] > 0

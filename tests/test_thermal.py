@@ -276,3 +276,21 @@ def test_room_input_refuses_what_models_a_steady_room(kwargs, message):
         identify(make_log(t, {"A": first_order(t)}), 30.0, ambient_C=np.full(len(t), 17.9), **kwargs)
     with pytest.raises(InputError, match="3 readings for 61 samples"):
         identify(make_log(t, {"A": first_order(t)}), 30.0, ambient_C=np.full(3, 17.9))
+
+
+def test_min_time_with_a_room_sensor_predicts_with_the_measured_room():
+    t = np.arange(0.0, 301.0)
+    curve, room = _machine_in_drifting_room(t)
+    rng = np.random.default_rng(6)
+    log = make_log(t, {f"r{i}": curve + 0.02 * rng.standard_normal(len(t)) for i in range(10)})
+    room_sensor = room + 0.02 * rng.standard_normal(len(t))
+    search = {"periods_min": [300.0], "windows_min": [60.0, 90.0, 120.0]}
+    plain = minimal_identification_time(log, "ukf", **search)
+    with_room = minimal_identification_time(log, "ukf", ambient_C=room_sensor, **search)
+    # measured: median RMSE over 300 min from L = 60/90/120 is 0.19/0.15/0.10 °C without the room, 0.04/0.02/0.02 with it
+    assert np.all(np.median(with_room.rmse_C, axis=-1) < 0.5 * np.median(plain.rmse_C, axis=-1))
+    # a steady room reading is no input at all: the same search to the last digit
+    steady = minimal_identification_time(log, "ukf", ambient_C=np.full(len(t), 17.9), **search)
+    np.testing.assert_allclose(steady.rmse_C, plain.rmse_C, rtol=1e-12)
+    with pytest.raises(InputError, match="needs a UKF method"):
+        minimal_identification_time(log, "lsq", periods_min=[60.0], ambient_C=room_sensor)

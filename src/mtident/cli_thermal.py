@@ -129,10 +129,11 @@ def _float_list(text: str, option: str) -> list[float]:
 @click.option("--windows", default=None, help="Candidate identification times L as START:STOP[:STEP] minutes (default: every sample from 5 min to the longest period).")
 @click.option("--method", type=click.Choice(METHODS), default="aukf", show_default=True)
 @click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True)
+@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the input of each sensor's heat balance, before and after L.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw RMSE against identification time to this PNG.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, sampling_periods: str, windows: str | None, method: str, preset: str, plot_path: str | None, as_json: bool) -> None:
+def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, sampling_periods: str, windows: str | None, method: str, preset: str, ambient_col: str | None, plot_path: str | None, as_json: bool) -> None:
     """Find the minimal identification time (seed 000 §2.4): RMSE against L for several sampling periods."""
     periods = _float_list(sampling_periods, "--sampling-periods")
     candidates = None
@@ -143,9 +144,9 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
             raise InputError(msg)
         step = parts[2] if len(parts) == 3 else 1.0
         candidates = list(np.arange(parts[0], parts[1] + step / 2, step))
-    log = load_log(file, sensors, time_col, time_unit)
+    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
     with stderr.status("searching identification times…"):
-        result = minimal_identification_time(log, method, preset, periods, candidates)
+        result = minimal_identification_time(log, method, preset, periods, candidates, room)
     if plot_path:
         from mtident.report import plot_min_time
 

@@ -19,7 +19,7 @@ from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observ
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
 
-__all__ = ["Identification", "identify", "room_rates", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
+__all__ = ["Identification", "identify", "room_input", "room_rates", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
 
 Z95 = 1.959963984540054
 MIN_WINDOW_SAMPLES = 6
@@ -315,6 +315,19 @@ def _curve_with_room(time_min: FloatArray, values: FloatArray, room_rate: FloatA
     return curve
 
 
+def room_input(log: TemperatureLog, ambient_C: FloatArray | None, method: str, preset: str) -> FloatArray | None:
+    """The room's rate over each step of ``log`` from a room sensor, checked; None without one."""
+    if ambient_C is None:
+        return None
+    if method == "lsq" or preset != "data":
+        msg = "a room sensor (--ambient) needs a UKF method with the data tuning: lsq and the papers' presets model a steady room"
+        raise InputError(msg)
+    if len(ambient_C) != len(log.time_min):
+        msg = f"the room sensor has {len(ambient_C)} readings for {len(log.time_min)} samples"
+        raise InputError(msg)
+    return room_rates(log.time_min, ambient_C)
+
+
 def room_rates(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
     """The room's rate (°C/min) over each step, from a room sensor; missing readings interpolated.
 
@@ -376,15 +389,7 @@ def identify(
     if method not in METHODS:
         msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
         raise InputError(msg)
-    room_rate = None
-    if ambient_C is not None:
-        if method == "lsq" or preset != "data":
-            msg = "a room sensor (--ambient) needs a UKF method with the data tuning: lsq and the papers' presets model a steady room"
-            raise InputError(msg)
-        if len(ambient_C) != len(log.time_min):
-            msg = f"the room sensor has {len(ambient_C)} readings for {len(log.time_min)} samples"
-            raise InputError(msg)
-        room_rate = room_rates(log.time_min, ambient_C)
+    room_rate = room_input(log, ambient_C, method, preset)
     # A diverging filter (the papers' presets can) is reported in the notes, not as numpy warnings.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _identify(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, room_rate)

@@ -18,12 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtident._typing import FloatArray
+from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
-from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse
+from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
 from mtident.thermal.lsq import fit_rise
-from mtident.thermal.model import rise_curve
+from mtident.thermal.model import rise_curve, slope_transition
 from mtident.thermal.settings import METHODS, filter_config, preset_tuning, tuning_from_data
 
 __all__ = ["MinTimeResult", "minimal_identification_time"]
@@ -86,6 +86,7 @@ def minimal_identification_time(
     preset: str = "data",
     periods_min: list[float] | None = None,
     windows_min: list[float] | None = None,
+    ambient_C: FloatArray | None = None,
 ) -> MinTimeResult:
     """RMSE-versus-identification-time curves and the minimal identification time.
 
@@ -101,6 +102,11 @@ def minimal_identification_time(
         Sampling periods M (default 35, 40, 45, 50 as seed 000).
     windows_min : list of float
         Candidate L (default every sample time from 5 min to the longest period).
+    ambient_C : ndarray, shape (N,), optional
+        A room sensor: the room is the input of the heat balance, in the filter
+        up to L and in the prediction after it (the measured room is a known
+        input, so the RMSE judges the model, not the room). UKF methods with the
+        data tuning only.
 
     Raises
     ------
@@ -110,9 +116,10 @@ def minimal_identification_time(
     if method not in METHODS:
         msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
         raise InputError(msg)
+    room_rate = room_input(log, ambient_C, method, preset)
     # A diverging filter (the papers' presets can) shows as an infinite RMSE, not as numpy warnings.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return _search(log, method, preset, periods_min, windows_min)
+        return _search(log, method, preset, periods_min, windows_min, room_rate)
 
 
 def _search(
@@ -121,6 +128,7 @@ def _search(
     preset: str,
     periods_min: list[float] | None,
     windows_min: list[float] | None,
+    room_rate: FloatArray | None = None,
 ) -> MinTimeResult:
     periods = np.array(sorted(periods_min or [35.0, 40.0, 45.0, 50.0]), dtype=float)
     t, y = log.time_min, log.temperature_C
@@ -153,12 +161,15 @@ def _search(
     else:
         prior_n = int(counts[0])
         tuning = tuning_from_data(t[:prior_n], y[:prior_n]) if preset == "data" else preset_tuning(preset, S)
-        _, physical, _ = filter_window(t[:n_max], y[:n_max], filter_config(method, tuning), tuning)
+        _, physical, _ = filter_window(t[:n_max], y[:n_max], filter_config(method, tuning), tuning, None if room_rate is None else room_rate[:n_max])
         last = counts - 1
         at_window = physical[last]  # (W, S, 3): [T, λ, T∞] after each L's last sample
-        # The prediction from L is the model curve through the state at L, for all L at once.
-        elapsed = t[None, :n_total, None] - t[last][:, None, None]  # (W, n_total, 1)
-        predicted = rise_curve(elapsed, at_window[:, None, :, 0], at_window[:, None, :, 1], at_window[:, None, :, 2])
+        if room_rate is None:
+            # The prediction from L is the model curve through the state at L, for all L at once.
+            elapsed = t[None, :n_total, None] - t[last][:, None, None]  # (W, n_total, 1)
+            predicted = rise_curve(elapsed, at_window[:, None, :, 0], at_window[:, None, :, 1], at_window[:, None, :, 2])
+        else:
+            predicted = _predict_with_room(t[:n_total], room_rate[:n_total], at_window, last)
         filtered = physical[:, :, 0]  # (n_max, S)
         for i, n in enumerate(counts):
             curves[i, :n] = filtered[:n]
@@ -179,3 +190,17 @@ def _search(
     overall = candidates[np.argmin(np.sum(np.where(np.isfinite(relative), relative, 1e9), axis=0), axis=0)]
     chosen = np.where(agreement, best[0], overall)
     return MinTimeResult(log.sensors, method, candidates, periods, table, best, chosen, agreement, float(periods[-1]))
+
+
+def _predict_with_room(time_min: FloatArray, room_rate: FloatArray, at_window: FloatArray, last: IntArray) -> FloatArray:
+    """(W, N, S): the heat balance run on from each L's state with the measured room as input."""
+    W, S = at_window.shape[:2]
+    T, rate, steady = at_window[..., 0], at_window[..., 1], at_window[..., 2]
+    state = np.stack([T, rate * (steady - T), rate], axis=-1)  # [T, s, λ] at each L
+    dts = np.diff(time_min, prepend=time_min[0])
+    predicted = np.full((W, len(time_min), S), np.nan)
+    for k in range(len(time_min)):
+        moved = slope_transition(state, dts[k], room_rate[k])
+        state = np.where((k > last)[:, None, None], moved, state)
+        predicted[:, k] = state[..., 0]
+    return predicted
