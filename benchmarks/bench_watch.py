@@ -164,14 +164,14 @@ def network_steady_state(module, time_min: float) -> np.ndarray:  # noqa: ANN001
     return room_C + seen * (nodes[which] - room_C)
 
 
-def network_table(times: np.ndarray, values: np.ndarray, sensors: tuple[str, ...], together: dict, network) -> None:  # noqa: ANN001
+def network_table(times: np.ndarray, values: np.ndarray, sensors: tuple[str, ...], together: dict, network, room_C: np.ndarray | None = None) -> None:  # noqa: ANN001
     """Per sensor: the stop and error when all sensors are watched together, and when each is watched alone."""
     truth_together = network.steady_state(together["stop_time_min"]) if together["stop_time_min"] is not None else None
     print(f"{'sensor':>7} {'together: error':>16} {'alone: stop':>12} {'error °C':>9} {'±':>6}")
     worst = 0.0
     for i, name in enumerate(sensors):
         alone = Monitor((name,), MonitorSettings(tolerance_C=TOLERANCE))
-        alone.feed(times, values[:, i : i + 1])
+        alone.feed(times, values[:, i : i + 1], room_C)
         r = alone.result()
         error_together = "-" if truth_together is None else f"{together['sensors'][i]['steady_state_C'] - truth_together[i]:+.3f}"
         if r["stop_time_min"] is None:
@@ -206,6 +206,16 @@ def main() -> None:
     print(f"\nSample log (10 sensors, 400 samples): replay {elapsed:.2f} s; all sensors together stop at {result['stop_time_min']} min")
     print("truth: the generating network's steady state under the room's level at the stop (scripts/make_sample_warmup.py)")
     network_table(log.time_min, log.temperature_C, log.sensors, result, NetworkVariant(make_sample_warmup, make_sample_warmup.LINK_SCALE))
+
+    # The same log with its room sensor (@sample-room), the room as the heat balance's input.
+    room_log = read_temperature_log(sample_log_path("@sample-room"))
+    room_C = room_log.select(["room"]).temperature_C[:, 0]
+    sensors_only = room_log.select(list(log.sensors))
+    monitor = Monitor(log.sensors, MonitorSettings(tolerance_C=TOLERANCE))
+    monitor.feed(sensors_only.time_min, sensors_only.temperature_C, room_C)
+    result = monitor.result()
+    print(f"\nSample log with its room sensor (--ambient room): all sensors together stop at {result['stop_time_min']} min")
+    network_table(log.time_min, sensors_only.temperature_C, log.sensors, result, NetworkVariant(make_sample_warmup, make_sample_warmup.LINK_SCALE), room_C)
 
     # The first version of the sample: links 5x stronger, slow tails a first-order fit of 90 min
     # misses by 0.3-1 °C. Nothing in 100 min of data tells it from first order (the F-test of

@@ -18,7 +18,9 @@ t = 0 (spindle at 5,000 r/min). Surface sensors see their node through a small
 thermal resistance (a first-order lag under a minute). Readings get PT100-like
 white noise (σ = 0.02 °C) and are rounded to 0.01 °C.
 
-Deterministic: the noise comes from ``np.random.default_rng(2019)``.
+Deterministic: the noise comes from ``np.random.default_rng(2019)``. A second
+file, spindle_warmup_room.csv (``@sample-room``), is the same log with a room
+sensor column ``room`` (for ``--ambient room``).
 
 Run: python scripts/make_sample_warmup.py
 """
@@ -118,10 +120,18 @@ def main() -> None:
     noisy = {name: np.round((values + NOISE_C * rng.standard_normal(len(values))) / RESOLUTION_C) * RESOLUTION_C for name, values in clean.items()}
     for k, t in enumerate(times):
         lines.append(f"{t:g}," + ",".join(f"{noisy[name][k]:.2f}" for name in SENSORS))
-    out = Path(__file__).resolve().parents[1] / "src" / "mtident" / "data" / "spindle_warmup.csv"
+    data = Path(__file__).resolve().parents[1] / "src" / "mtident" / "data"
+    out = data / "spindle_warmup.csv"
     out.write_text("\n".join(lines) + "\n")
     finals = ", ".join(f"{name} {clean[name][-1]:.2f}" for name in SENSORS)
     print(f"wrote {out} ({len(times)} samples); final temperatures: {finals}")
+    # The same test with a room sensor beside the machine (its noise drawn after the others', so the
+    # ten sensor columns are the same numbers as above): the @sample-room log, for --ambient.
+    room = np.round((ambient_C(times) + NOISE_C * rng.standard_normal(len(times))) / RESOLUTION_C) * RESOLUTION_C
+    with_room = [lines[0] + ",room"] + [f"{line},{value:.2f}" for line, value in zip(lines[1:], room, strict=True)]
+    out = data / "spindle_warmup_room.csv"
+    out.write_text("\n".join(with_room) + "\n")
+    print(f"wrote {out} (the same log with a room column)")
 
 
 if __name__ == "__main__":

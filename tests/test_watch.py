@@ -354,3 +354,18 @@ def test_watch_in_a_terminal_draws_the_live_table(tmp_path):
     assert proc.wait(timeout=300) == 0
     screen = re.sub(r"\x1b\[[0-9;?]*[A-Za-z]", "", b"".join(chunks).decode("utf-8", "replace"))  # no colours
     assert "T∞ ± 95 %" in screen and "T10" in screen and "The test can stop at t = 313 min" in screen
+
+
+def test_the_sample_with_its_room_sensor(tmp_path):
+    from mtident.cli_thermal import sample_log_path
+    from mtident.io import read_temperature_log
+
+    plain, with_room = read_temperature_log(sample_log_path()), read_temperature_log(sample_log_path("@sample-room"))
+    assert with_room.sensors == (*plain.sensors, "room")
+    np.testing.assert_array_equal(with_room.select(list(plain.sensors)).temperature_C, plain.temperature_C)
+    out = mtident("thermal", "watch", "@sample-room", "--ambient", "room", "--replay", "--json", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    # measured: 194 min with the room sensor, 313 min without; every T∞ within 0.08 °C of the network's steady state
+    assert data["stop_time_min"] is not None and data["stop_time_min"] < 250
+    assert [d["sensor"] for d in data["sensors"]] == list(plain.sensors)

@@ -15,17 +15,24 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TIME_UNITS, TemperatureLog, read_temperature_log
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 
-SAMPLE = "@sample"
+# The logs shipped in the package (scripts/make_sample_warmup.py): the 10-sensor warm-up, and the
+# same warm-up with a room sensor column "room" (for --ambient room).
+SAMPLES = {"@sample": "spindle_warmup.csv", "@sample-room": "spindle_warmup_room.csv"}
 stderr = Console(stderr=True, soft_wrap=True)
 
 
-def sample_log_path() -> Path:
-    """The 10-sensor warm-up log shipped in the package (scripts/make_sample_warmup.py)."""
-    return Path(str(resources.files("mtident") / "data" / "spindle_warmup.csv"))
+def sample_log_path(name: str = "@sample") -> Path:
+    """A log shipped in the package, by its @-name."""
+    return Path(str(resources.files("mtident") / "data" / SAMPLES[name]))
+
+
+def log_path(file: str) -> Path:
+    """FILE as given, or the shipped log it names (@sample, @sample-room)."""
+    return sample_log_path(file) if file in SAMPLES else Path(file)
 
 
 def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None) -> TemperatureLog:
-    path = sample_log_path() if file == SAMPLE else Path(file)
+    path = log_path(file)
     log = read_temperature_log(path, time_col=time_col, time_unit=time_unit)
     names = [name for entry in sensors for name in entry.split(",") if name]
     log = log.select(names or None)
@@ -78,8 +85,9 @@ def _fmt(value: object, digits: int = 2) -> str:
 def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, window_min: float, method: str, preset: str, horizon_min: float | None, pseudo_seed: int | None, ambient_col: str | None, plot_path: str | None, as_json: bool) -> None:
     """Identify the temperature rise from the first WINDOW minutes of FILE and predict the rest.
 
-    FILE is a CSV log (time column, one column per sensor) or @sample for the
-    10-sensor warm-up shipped with mtident.
+    FILE is a CSV log (time column, one column per sensor), or @sample for the
+    10-sensor warm-up shipped with mtident (@sample-room: the same with a room
+    sensor column "room", for --ambient room).
     """
     log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
     result = identify(log, window_min, method, preset, horizon_min, pseudo_seed, room)
@@ -221,7 +229,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     from mtident.io.follow import LogFollower
     from mtident.thermal.monitor import Monitor, MonitorSettings
 
-    path = sample_log_path() if file == SAMPLE else Path(file)
+    path = log_path(file)
     if not path.is_file() and replay:
         msg = f"{path}: no such file"
         raise InputError(msg)
