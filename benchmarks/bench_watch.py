@@ -133,35 +133,25 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
 
 
 class NetworkVariant:
-    """The sample's lumped network (scripts/make_sample_warmup.py) with another link scale."""
+    """The sample's lumped network (scripts/make_sample_warmup.py) with a given link scale."""
 
     def __init__(self, module, link_scale: float) -> None:  # noqa: ANN001
         self.module, self.link_scale = module, link_scale
 
-    def _with_links(self, fn, *args):  # noqa: ANN001, ANN202
-        saved = self.module.LINK_SCALE
-        self.module.LINK_SCALE = self.link_scale
-        try:
-            return fn(*args)
-        finally:
-            self.module.LINK_SCALE = saved
-
     def noisy(self, times: np.ndarray) -> np.ndarray:
-        clean = self._with_links(self.module.simulate, times)
+        """The sensors' readings as the generator makes them (same noise seed and rounding)."""
+        clean = self.module.simulate(times, self.link_scale)
         rng = np.random.default_rng(self.module.SEED)
         return np.column_stack([np.round((v + 0.02 * rng.standard_normal(len(v))) / 0.01) * 0.01 for v in clean.values()])
 
     def steady_state(self, time_min: float) -> np.ndarray:
-        return self._with_links(network_steady_state, self.module, time_min)
-
-
-def network_steady_state(module, time_min: float) -> np.ndarray:  # noqa: ANN001
-    """Each sensor's steady state if the room stayed at its level at ``time_min``."""
-    room_C = module.ambient_C(time_min)
-    nodes = np.linalg.solve(module.conductance_matrix(), module.HEAT_W + module.CONVECTION_W_PER_K * room_C)
-    which = np.array([module.NODES.index(node) for node, _, _ in module.SENSORS.values()])
-    seen = np.array([fraction for _, _, fraction in module.SENSORS.values()])
-    return room_C + seen * (nodes[which] - room_C)
+        """Each sensor's steady state if the room stayed at its level at ``time_min``."""
+        module = self.module
+        room_C = module.ambient_C(time_min)
+        nodes = np.linalg.solve(module.conductance_matrix(self.link_scale), module.HEAT_W + module.CONVECTION_W_PER_K * room_C)
+        which = np.array([module.NODES.index(node) for node, _, _ in module.SENSORS.values()])
+        seen = np.array([fraction for _, _, fraction in module.SENSORS.values()])
+        return room_C + seen * (nodes[which] - room_C)
 
 
 def network_table(times: np.ndarray, values: np.ndarray, sensors: tuple[str, ...], together: dict, network, room_C: np.ndarray | None = None) -> None:  # noqa: ANN001

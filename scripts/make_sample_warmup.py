@@ -78,11 +78,11 @@ def ambient_C(t_min: np.ndarray | float) -> np.ndarray | float:
     return START_C + 0.3 * (1.0 - np.exp(-np.asarray(t_min) / 200.0)) + 0.1 * np.sin(2 * np.pi * np.asarray(t_min) / 150.0)
 
 
-def conductance_matrix() -> np.ndarray:
+def conductance_matrix(link_scale: float = LINK_SCALE) -> np.ndarray:
     n = len(NODES)
     G = np.zeros((n, n))
     for (a, b), g in LINKS_W_PER_K.items():
-        g *= LINK_SCALE
+        g *= link_scale
         i, j = NODES.index(a), NODES.index(b)
         G[i, i] += g
         G[j, j] += g
@@ -91,9 +91,9 @@ def conductance_matrix() -> np.ndarray:
     return G + np.diag(CONVECTION_W_PER_K)
 
 
-def simulate(times_min: np.ndarray) -> dict[str, np.ndarray]:
+def simulate(times_min: np.ndarray, link_scale: float = LINK_SCALE) -> dict[str, np.ndarray]:
     """Noise-free sensor temperatures at ``times_min``."""
-    G = conductance_matrix()
+    G = conductance_matrix(link_scale)
     n_nodes, n_sensors = len(NODES), len(SENSORS)
     lags = np.array([SENSORS[s][1] for s in SENSORS])
     seen = np.array([SENSORS[s][2] for s in SENSORS])

@@ -15,7 +15,7 @@ from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.lsq import first_order_onset, fit_rise
-from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
+from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
 
@@ -302,17 +302,12 @@ def _curve_with_room(time_min: FloatArray, values: FloatArray, room_rate: FloatA
     rate, steady_end = final[:, 1], final[:, 2]
     dts = np.diff(time_min, prepend=time_min[0])
     room_change = np.cumsum(room_rate * dts)  # the room's level relative to t₀
-    rise_over_room = steady_end - room_change[-1]  # T∞ − T_room, constant in the heat balance
     first = np.array([np.flatnonzero(np.isfinite(col))[0] for col in values.T])
     T = values[first, np.arange(values.shape[1])]
-    curve = np.full(values.shape, np.nan)
-    for k in range(len(time_min)):
-        started = k >= first
-        slope = rate * (rise_over_room + room_change[k - 1 if k else 0] - T)
-        moved = slope_transition(np.stack([T, slope, rate], axis=-1), dts[k], room_rate[k])[:, 0]
-        T = np.where(started & (k > first), moved, T)
-        curve[k] = np.where(started, T, np.nan)
-    return curve
+    # s = λ(T_room + ΔT∞ − T) at the first sample, with ΔT∞ = T∞ − T_room at the window's end
+    slope = rate * (steady_end - room_change[-1] + room_change[first] - T)
+    curve = heat_balance_path(np.stack([T, slope, rate], axis=-1), first, dts, room_rate)
+    return np.where(np.arange(len(time_min))[:, None] >= first[None, :], curve, np.nan)
 
 
 def room_input(log: TemperatureLog, ambient_C: FloatArray | None, method: str, preset: str) -> FloatArray | None:

@@ -23,7 +23,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
 from mtident.thermal.lsq import fit_rise
-from mtident.thermal.model import rise_curve, slope_transition
+from mtident.thermal.model import heat_balance_path, rise_curve
 from mtident.thermal.settings import METHODS, filter_config, preset_tuning, tuning_from_data
 
 __all__ = ["MinTimeResult", "minimal_identification_time"]
@@ -194,13 +194,7 @@ def _search(
 
 def _predict_with_room(time_min: FloatArray, room_rate: FloatArray, at_window: FloatArray, last: IntArray) -> FloatArray:
     """(W, N, S): the heat balance run on from each L's state with the measured room as input."""
-    W, S = at_window.shape[:2]
     T, rate, steady = at_window[..., 0], at_window[..., 1], at_window[..., 2]
     state = np.stack([T, rate * (steady - T), rate], axis=-1)  # [T, s, λ] at each L
-    dts = np.diff(time_min, prepend=time_min[0])
-    predicted = np.full((W, len(time_min), S), np.nan)
-    for k in range(len(time_min)):
-        moved = slope_transition(state, dts[k], room_rate[k])
-        state = np.where((k > last)[:, None, None], moved, state)
-        predicted[:, k] = state[..., 0]
-    return predicted
+    path = heat_balance_path(state, last[:, None], np.diff(time_min, prepend=time_min[0]), room_rate)
+    return np.moveaxis(path, 0, 1)

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from mtident._typing import FloatArray
+from mtident._typing import FloatArray, IntArray
 
 __all__ = [
     "rise_transition",
     "slope_transition",
+    "heat_balance_path",
     "transition_for",
     "to_physical",
     "observe_temperature",
@@ -70,6 +71,21 @@ def slope_transition(points: FloatArray, dt_min: FloatArray | float, room_rate: 
     gain = np.where(small, dt_min * (1.0 - 0.5 * x), -np.expm1(-x) / np.where(small, 1.0, lam))
     excess = slope - room_rate
     return np.stack([T + room_rate * dt_min + excess * gain, room_rate + excess * np.exp(-x), lam], axis=-1)
+
+
+def heat_balance_path(state: FloatArray, start: IntArray, dt_min: FloatArray, room_rate: FloatArray) -> FloatArray:
+    """Temperatures (N, ...) of states (..., 3) = [T, s, λ] run on with :func:`slope_transition`.
+
+    Each state holds until its ``start`` index (broadcast to ``state.shape[:-1]``)
+    and moves on from there, step k covering ``dt_min[k]`` with the room's rate
+    ``room_rate[k]``: the heat balance with the measured room as its input.
+    """
+    path = np.empty((len(dt_min), *state.shape[:-1]))
+    for k in range(len(dt_min)):
+        moved = slope_transition(state, dt_min[k], room_rate[k])
+        state = np.where((k > start)[..., None], moved, state)
+        path[k] = state[..., 0]
+    return path
 
 
 def transition_for(parametrisation: str):  # noqa: ANN201 - returns one of the two transitions
