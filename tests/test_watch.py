@@ -254,6 +254,38 @@ def test_directly_coupled_sensor_follows_its_rise_over_the_room(seed):
     assert abs(result["steady_state_C"] - (26.7 + room(np.array(stop)))) <= 0.2
 
 
+def fast_slow_in_room(t: np.ndarray) -> np.ndarray:
+    """A fast part (4 °C, τ 8 min) on a slow part (6 °C, τ 150 min) that feels the drifting room."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(tt: float, T: np.ndarray) -> np.ndarray:
+        return np.array([(4.0 - T[0]) / 8.0, (17.9 + room(tt) + 6.0 - T[1]) / 150.0])
+
+    solution = solve_ivp(rhs, (t[0], t[-1]), [0.0, 17.9], t_eval=t, rtol=1e-10, atol=1e-10, max_step=1.0)
+    return solution.y[0] + solution.y[1]
+
+
+@pytest.mark.parametrize("seed", [300, 303])
+def test_fast_plus_slow_in_a_measured_room_is_identified_again_from_the_slow_part(seed):
+    rng = np.random.default_rng(seed)
+    sensor = fast_slow_in_room(T) + 0.02 * rng.standard_normal(len(T))
+    ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    monitor = Monitor(("S",))
+    messages = monitor.feed(T, sensor[:, None], ambient)
+    assert any("identifying it again from the next 30 min" in m for m in messages)
+    result = monitor.result()
+    stop = result["stop_time_min"]
+    assert stop is not None and stop > 150  # not before the slow part is known
+    assert abs(result["steady_state_C"] - (27.9 + room(np.array(stop)))) <= 0.15
+    # killed while a re-identification waits for its data, or right after it: the same decision
+    for cut in (40, 50, 60):
+        first = Monitor(("S",))
+        first.feed(T[:cut], sensor[:cut, None], ambient[:cut])
+        resumed = Monitor.from_dict(json.loads(json.dumps(first.to_dict())))
+        resumed.feed(T[cut:], sensor[cut:, None], ambient[cut:])
+        assert resumed.result() == result
+
+
 @pytest.mark.parametrize("coupling", ["lagged", "direct"])
 def test_state_round_trip_with_a_room_sensor_gives_the_same_decision(coupling):
     rng = np.random.default_rng(12)

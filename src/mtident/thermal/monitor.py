@@ -17,7 +17,12 @@ sample: no refit from the start). The stopping rule, per sensor:
    fast-plus-slow warm-up whose slow part the first-order model has not yet
    seen gives innovations of one sign; the monitor then widens the filter's
    parameter covariance (a discrete fading step) so that it learns the new
-   trend, and the T∞ history starts again;
+   trend, and the T∞ history starts again. With a room sensor, the sensor is
+   then identified afresh from the ``restart_delay_min`` (30) minutes after
+   its last failed check (:meth:`Monitor._restart`): a filter that also learnt
+   from the fast part stays biased towards it. Without one, a failed check may
+   be the room's unmeasured drift, which a fresh filter on 30 min would follow
+   too closely; the widened filter keeps its memory;
 4. at least ``min_samples`` samples and ``min_duration_min`` minutes of test
    (default 30, the papers' identification time): a fast transient that settles
    in minutes can hide a slow mode that only shows later,
@@ -50,6 +55,7 @@ monitor killed at any moment resumes with the same result.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -88,6 +94,7 @@ class MonitorSettings:
     room_coupling: str = "lagged"
     quiet_min: float = 60.0
     creep_holds: float = 3.0
+    restart_delay_min: float = 30.0
 
     def __post_init__(self) -> None:
         if self.room_coupling not in ROOM_COUPLINGS:
@@ -105,6 +112,11 @@ class SensorStatus:
     equilibrium_time_min: float
     may_stop: bool
     status: str
+
+
+def transition_with_room(dt_min: float, room_rate: float):  # noqa: ANN201 - a transition for filter_step
+    """The heat balance's step over ``dt_min`` with the room's rate over it."""
+    return lambda points: slope_transition(points, dt_min, room_rate)
 
 
 def _floats(value: Any) -> FloatArray:
@@ -143,6 +155,9 @@ class Monitor:
     ambient_level: float | None = None  # the room's last valid reading, with ``ambient``
     ambient_time: float | None = None
     buffer_room_rate: list[float] = field(default_factory=list)
+    # per sensor, the time of the last failed model check while a re-identification waits for data (NaN: none)
+    restart_from: list[float] | None = None
+    recent_rows: list[list[float]] = field(default_factory=list)  # [t, room rate, y per sensor] over the last restart_delay_min
     # derived from the tuning once per process (not saved): the step needs them every sample
     _config: FilterConfig | None = field(default=None, repr=False, compare=False)
     _weights: SigmaWeights | None = field(default=None, repr=False, compare=False)
@@ -239,7 +254,7 @@ class Monitor:
         dt = 0.0 if self.last_t is None else t - self.last_t
         if self.median_dt and dt > self.settings.gap_factor * self.median_dt:
             messages.append(f"gap in the log: {dt:g} min without samples before t = {t:g} min; bridged by the model")
-        step = lambda p: slope_transition(p, dt, room_rate)  # noqa: E731
+        step = transition_with_room(dt, room_rate)
         new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
         z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= self.settings.check_samples)
@@ -265,6 +280,9 @@ class Monitor:
                 messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN or open circuit); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
+        self.recent_rows.append([t, room_rate, *[float(v) for v in y]])
+        while self.recent_rows[0][0] < t - self.settings.restart_delay_min:
+            self.recent_rows.pop(0)
         self._update_noise(y)
         ok = np.isfinite(z)
         self.observed = self.observed + ok
@@ -283,10 +301,22 @@ class Monitor:
             self.steady_history.pop(0)
         misfit = self._misfit()
         if np.any(misfit):
+            measured_room = self.ambient_level is not None
+            what = f"identifying it again from the next {self.settings.restart_delay_min:g} min" if measured_room else "widening its parameter uncertainty to follow the new trend"
             for s in np.flatnonzero(misfit):
                 if self._may_say("misfit", int(s), t):
-                    messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); widening its parameter uncertainty to follow the new trend{self._quiet_note()}")
+                    messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); {what}{self._quiet_note()}")
             self._widen(misfit)
+            if measured_room and self.restart_from is None:
+                self.restart_from = [float("nan")] * len(self.sensors)
+            if self.restart_from is not None:
+                for i in np.flatnonzero(misfit):
+                    self.restart_from[i] = t
+        if self.restart_from is not None:
+            with np.errstate(invalid="ignore"):
+                due = t - np.array(self.restart_from) >= self.settings.restart_delay_min
+            if np.any(due):
+                self._restart(due)
         status = self.status()
         messages.extend(self._note_wandering(status))
         self._record_checkpoint(t, status)
@@ -407,6 +437,48 @@ class Monitor:
         mean_square = np.where(enough, np.nansum(z**2, axis=0) / safe, 0.0)
         return enough & ((np.abs(mean) * np.sqrt(safe) > 4.5) | (mean_square > 3.0 + 4.0 * np.sqrt(2.0 / safe)))
 
+    def _restart(self, due: np.ndarray) -> None:
+        """Identify the ``due`` sensors again from their samples since their last failed model check.
+
+        Once the fast part of a fast-plus-slow warm-up has died away, the data
+        since then are first order again, but a filter that also learnt from the
+        fast part stays biased towards it (widening its covariance forgets only
+        part of it: T∞ came out at about twice its interval's half-width). A fresh
+        filter on the samples since the last failed check (at least
+        ``restart_delay_min`` of them; the check is widened-and-watched meanwhile)
+        sees only the new trend. Done once per slow mode, not per sample.
+        """
+        assert self.carry is not None and self.carry.chol is not None and self.restart_from is not None
+        rows = np.array(self.recent_rows)
+        t, rates, y = rows[:, 0], rows[:, 1], rows[:, 2:].copy()
+        y[(t[:, None] < np.array(self.restart_from)[None, :]) | ~due[None, :]] = np.nan
+        leading = np.cumsum(np.isfinite(y), axis=0) == 0
+        ready = due & ~leading[-1]  # a sensor without a valid sample since then keeps its widened filter
+        mean, cov = self.carry.mean.copy(), self.carry.covariance().copy()
+        if np.any(ready):
+            with np.errstate(invalid="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # the mean of a column with no valid sample
+                filled = np.where(np.isfinite(y), y, np.nanmean(y, axis=0))
+            filled[leading] = np.nan  # left out: tuning_from_data carries the start back to the window's start
+            tuning = tuning_from_data(t, filled[:, ready])
+            mean[ready], cov[ready] = tuning.initial_mean, tuning.initial_cov
+        config, weights = self._filter()
+        fresh = initial_carry(GaussianState(mean, cov), self.carry.process_cov, self.carry.emission_cov, config)
+        for k in range(len(t)):
+            dt = 0.0 if k == 0 else float(t[k] - t[k - 1])
+            fresh, _ = filter_step(fresh, y[k][:, None], transition_with_room(dt, float(rates[k])), observe_temperature, config, weights)
+        assert fresh.chol is not None
+        self.carry = replace(
+            self.carry,
+            mean=np.where(ready[:, None], fresh.mean, self.carry.mean),
+            chol=np.where(ready[:, None, None], fresh.chol, self.carry.chol),
+        )
+        self.restart_from = [float("nan") if d else r for d, r in zip(due, self.restart_from, strict=True)]
+        for row in self.z_history:
+            for s in np.flatnonzero(ready):
+                row[s] = float("nan")
+        self.steady_history = [self.steady_history[-1]]
+
     def _widen(self, mask: np.ndarray) -> None:
         assert self.carry is not None and self.carry.chol is not None
         factor = np.where(mask, 2.0, 1.0)[:, None, None]
@@ -449,7 +521,7 @@ class Monitor:
                 state, may = "no rise", True
             elif not np.isfinite(steady) or rate <= 0:
                 state, may = "no steady state yet", False
-            elif misfit[s]:
+            elif misfit[s] or (self.restart_from is not None and np.isfinite(self.restart_from[s])):
                 state, may = "model check", False
             elif n < self.settings.min_samples or history[-1, 0] < self.settings.min_duration_min:
                 state, may = "collecting", False
@@ -555,6 +627,8 @@ class Monitor:
             "d4_count": _tolist(self.d4_count),
             "checkpoints": self.checkpoints,
             "wandering": self.wandering,
+            "restart_from": self.restart_from,
+            "recent_rows": self.recent_rows,
             "last_said": self.last_said,
             "stop_time": self.stop_time,
             "decision": self.decision,
@@ -596,6 +670,8 @@ class Monitor:
             d4_count=_optional_floats(data["d4_count"]),
             checkpoints=[list(r) for r in data.get("checkpoints", [])],
             wandering=data.get("wandering"),
+            restart_from=data.get("restart_from"),
+            recent_rows=[list(r) for r in data.get("recent_rows", [])],
             last_said=dict(data.get("last_said", {})),
             stop_time=data["stop_time"],
             decision=data["decision"],
