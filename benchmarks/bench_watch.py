@@ -8,6 +8,10 @@ a stress network with stronger slow tails, and a log with bad data (spike,
 dropout, gap, a sensor that never heats). Also the replay time of the
 10-sensor, 400-sample log.
 
+Without a room sensor the monitor allows for an unmeasured room wandering by
+0.05 °C in an hour (1σ, the default ``--room-wander``); the rows marked
+"wander 0" take the room as steady, for comparison.
+
 Run: python benchmarks/bench_watch.py
 """
 
@@ -41,7 +45,7 @@ def equilibrium_of(curve: np.ndarray) -> float:
 T_LONG = np.arange(0.0, 2001.0)
 
 
-def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None, room_sensor=None, coupling: str = "lagged", steady: float = 26.7) -> tuple[str, float | None, float, float]:  # noqa: ANN001
+def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None, room_sensor=None, coupling: str = "lagged", steady: float = 26.7, wander: float = 0.05) -> tuple[str, float | None, float, float]:  # noqa: ANN001
     """Replay one sensor; return (name, stop time, equilibrium time, |T∞ error| at stop).
 
     The truth is the curve's value at 2,000 min; with a drifting room (``ambient``
@@ -49,7 +53,7 @@ def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None,
     stop, 17.9 °C + 8.8 °C + the room's offset: the temperature the machine
     settles to if the room stays as it is then.
     """
-    monitor = Monitor(("S",), MonitorSettings(tolerance_C=TOLERANCE, room_coupling=coupling))
+    monitor = Monitor(("S",), MonitorSettings(tolerance_C=TOLERANCE, room_coupling=coupling, room_wander_C_per_h=wander))
     monitor.feed(T, noisy[:, None], room_sensor)
     result = monitor.result()
     truth = clean_long[-1]
@@ -89,10 +93,14 @@ def fast_slow_in_drifting_room() -> np.ndarray:
 
 KINDS = (
     "first-order",
+    "first-order, --room-wander 0",
     "fast+slow",
+    "fast+slow, --room-wander 0",
     "fast+slow, drift, --ambient",
     "fast+slow, drift, no sensor",
+    "fast+slow, drift, wander 0",
     "drift, no room sensor",
+    "drift, no sensor, wander 0",
     "drift + --ambient",
     "drift at once, no sensor",
     "drift at once, --ambient",
@@ -119,14 +127,19 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
         noise = 0.02 * rng.standard_normal((3, 401))
         room_sensor = 17.9 + room(T) + 0.02 * rng.standard_normal(401)
         out["first-order"].append(run_case(f"first-order #{seed}", first_order, first_order[:401] + noise[0]))
+        out["first-order, --room-wander 0"].append(run_case(f"first-order, steady room #{seed}", first_order, first_order[:401] + noise[0], wander=0.0))
         out["fast+slow"].append(run_case(f"fast+slow #{seed}", fast_slow, fast_slow[:401] + noise[1]))
+        out["fast+slow, --room-wander 0"].append(run_case(f"fast+slow, steady room #{seed}", fast_slow, fast_slow[:401] + noise[1], wander=0.0))
         noisy = fast_slow_drifting[:401] + noise[1]
         out["fast+slow, drift, --ambient"].append(run_case(f"fast+slow drift+ambient #{seed}", fast_slow_drifting, noisy, room, room_sensor, steady=27.9))
         out["fast+slow, drift, no sensor"].append(run_case(f"fast+slow drift #{seed}", fast_slow_drifting, noisy, room, steady=27.9))
+        out["fast+slow, drift, wander 0"].append(run_case(f"fast+slow drift, steady room #{seed}", fast_slow_drifting, noisy, room, steady=27.9, wander=0.0))
         for drifting, label in ((lagged, "drift"), (at_once, "drift at once")):
             noisy = drifting[:401] + noise[2]
             out[f"{label}, no room sensor" if label == "drift" else f"{label}, no sensor"].append(run_case(f"{label} #{seed}", drifting, noisy, room))
             out[f"{label} + --ambient" if label == "drift" else f"{label}, --ambient"].append(run_case(f"{label}+ambient #{seed}", drifting, noisy, room, room_sensor))
+            if label == "drift":
+                out["drift, no sensor, wander 0"].append(run_case(f"drift, steady room #{seed}", drifting, noisy, room, wander=0.0))
         noisy = at_once[:401] + noise[2]
         out["at once, --room-coupling direct"].append(run_case(f"at once, direct #{seed}", at_once, noisy, room, room_sensor, "direct"))
     return out

@@ -7,6 +7,7 @@ error on stderr and exit code 2, never a traceback.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from collections.abc import Callable
 from functools import wraps
@@ -23,6 +24,18 @@ F = TypeVar("F", bound=Callable[..., Any])
 def print_json(payload: dict[str, Any]) -> None:
     """Exactly one JSON object on stdout."""
     click.echo(json.dumps(payload, indent=2, sort_keys=True, allow_nan=False))
+
+
+class FiniteFloatRange(click.FloatRange):
+    """click.FloatRange that also refuses nan and ±inf (a NaN tolerance would silently never stop)."""
+
+    name = "finite float"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return number
 
 
 def user_errors(func: F) -> F:

@@ -9,7 +9,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import feeddrive, print_json, user_errors
+from mtident.cli import FiniteFloatRange, feeddrive, print_json, user_errors
 from mtident.feeddrive import (
     IDENTIFIED,
     Excitation,
@@ -58,14 +58,14 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
 
 @feeddrive.command("simulate")
 @params_option
-@click.option("--duration", "duration_s", type=click.FloatRange(min=0, min_open=True), default=2.0, show_default=True, help="Seconds.")
-@click.option("--fs", "sample_rate_Hz", type=click.FloatRange(min=0, min_open=True), default=10_000.0, show_default=True, help="Sampling rate (Hz).")
-@click.option("--impulse", "amplitude", type=float, default=20.0, show_default=True, help="Force amplitude (N or N m).")
+@click.option("--duration", "duration_s", type=FiniteFloatRange(min=0, min_open=True), default=2.0, show_default=True, help="Seconds.")
+@click.option("--fs", "sample_rate_Hz", type=FiniteFloatRange(min=0, min_open=True), default=10_000.0, show_default=True, help="Sampling rate (Hz).")
+@click.option("--impulse", "amplitude", type=FiniteFloatRange(), default=20.0, show_default=True, help="Force amplitude (N or N m).")
 @click.option("--excitation", "kind", type=click.Choice(EXCITATION_KINDS), default="impulse", show_default=True)
 @click.option("--on", "coordinate", type=click.Choice(COORDINATES), default="table", show_default=True, help="Coordinate the force acts on (motor_rotation: motor torque T_m).")
-@click.option("--frequency", "frequency_Hz", type=float, default=100.0, show_default=True, help="Sine frequency, or sweep start (Hz).")
-@click.option("--frequency-end", "frequency_end_Hz", type=float, default=2000.0, show_default=True, help="Sweep end (Hz).")
-@click.option("--noise", "noise_fraction", type=click.FloatRange(min=0), default=0.0, show_default=True, help="Measurement noise, fraction of each response's RMS.")
+@click.option("--frequency", "frequency_Hz", type=FiniteFloatRange(), default=100.0, show_default=True, help="Sine frequency, or sweep start (Hz).")
+@click.option("--frequency-end", "frequency_end_Hz", type=FiniteFloatRange(), default=2000.0, show_default=True, help="Sweep end (Hz).")
+@click.option("--noise", "noise_fraction", type=FiniteFloatRange(min=0), default=0.0, show_default=True, help="Measurement noise, fraction of each response's RMS.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, writable=True), required=True, help="CSV to write.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw the responses to this PNG.")
@@ -89,7 +89,7 @@ def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz:
 @click.option("--params-guess", "guess_path", type=click.Path(dir_okay=False), help="TOML starting guess (default: the shipped set ±30 %).")
 @click.option("--truth", "truth_path", type=click.Path(dir_okay=False), help="TOML true parameters (simulated data): adds the error table (seed 004 Table 3).")
 @click.option("--measured", type=click.Choice(list(MEASUREMENT_SETS)), default="all", show_default=True, help="all 12 responses, or table acceleration + motor angle and velocity.")
-@click.option("--noise", "noise_fraction", type=click.FloatRange(min=0, min_open=True), default=0.01, show_default=True, help="Measurement noise, fraction of each response's RMS.")
+@click.option("--noise", "noise_fraction", type=FiniteFloatRange(min=0, min_open=True), default=0.01, show_default=True, help="Measurement noise, fraction of each response's RMS.")
 @click.option("--preset", type=click.Choice(["default", "paper"]), default="default", show_default=True)
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw estimated vs measured responses and parameter convergence to this PNG.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")

@@ -10,7 +10,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import print_json, thermal, user_errors
+from mtident.cli import FiniteFloatRange, print_json, thermal, user_errors
 from mtident.exceptions import InputError
 from mtident.io.logs import TIME_UNITS, TemperatureLog, read_temperature_log
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
@@ -73,10 +73,10 @@ def _fmt(value: object, digits: int = 2) -> str:
 
 @thermal.command("identify")
 @log_options
-@click.option("--window", "window_min", type=click.FloatRange(min=0, min_open=True), default=30.0, show_default=True, help="Identification time L in minutes from the first sample.")
+@click.option("--window", "window_min", type=FiniteFloatRange(min=0, min_open=True), default=30.0, show_default=True, help="Identification time L in minutes from the first sample.")
 @click.option("--method", type=click.Choice(METHODS), default=DEFAULT_METHOD, show_default=True, help="ukf, aukf (Xia 2014), fukf, afukf (Yu 2019) or lsq (least squares).")
 @click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True, help="Initial values and tuning: from the data, or a paper's exactly.")
-@click.option("--horizon", "horizon_min", type=click.FloatRange(min=0, min_open=True), help="Predict to this time (min).")
+@click.option("--horizon", "horizon_min", type=FiniteFloatRange(min=0, min_open=True), help="Predict to this time (min).")
 @click.option("--pseudo-seed", type=int, help="Predict with seed 000's noisy pseudo-measurements (Eqs 21-22) from this seed.")
 @click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes the input of each sensor's heat balance; T∞ at the room's level at the window's end.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw measured and predicted curves to this PNG.")
@@ -202,18 +202,19 @@ def _status_table(monitor, title: str) -> Table:  # noqa: ANN001 - thermal.monit
 
 @thermal.command("watch")
 @log_options
-@click.option("--tolerance", "tolerance_C", type=click.FloatRange(min=0, min_open=True), default=0.2, show_default=True, help="Stop when the T∞ 95 % half-width is within this (°C).")
-@click.option("--hold", "hold_min", type=click.FloatRange(min=0), default=12.0, show_default=True, help="Minutes the T∞ estimate must stay within ±tolerance/2 without creeping.")
+@click.option("--tolerance", "tolerance_C", type=FiniteFloatRange(min=0, min_open=True), default=0.2, show_default=True, help="Stop when the T∞ 95 % half-width is within this (°C).")
+@click.option("--hold", "hold_min", type=FiniteFloatRange(min=0), default=12.0, show_default=True, help="Minutes the T∞ estimate must stay within ±tolerance/2 without creeping.")
 @click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes the input of each sensor's heat balance (robust to a drifting room).")
 @click.option("--room-coupling", type=click.Choice(["lagged", "direct"]), help="With --ambient: how the sensors feel the room. lagged (default): through the machine's own time constant (a sensor in the structure); direct: at once (a sensor in the air stream or on a thin cover).")
+@click.option("--room-wander", "room_wander", type=FiniteFloatRange(min=0.0), default=0.05, show_default=True, help="Without --ambient: how far the unmeasured room may wander in one hour (°C, 1σ of a random walk). It enters each sensor's heat balance as a random input, so the T∞ band allows for it; 0 takes the room as steady.")
 @click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible.")
 @click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: <log name>.watch-state.json in the current directory).")
-@click.option("--poll", "poll_s", type=click.FloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
-@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0), help="Give up after this many seconds without a new row.")
+@click.option("--poll", "poll_s", type=FiniteFloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
+@click.option("--timeout", "timeout_s", type=FiniteFloatRange(min=0), help="Give up after this many seconds without a new row.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Keep a PNG of measured and predicted curves up to date.")
 @click.option("--json", "as_json", is_flag=True, help="Print the contract's JSON object when the decision is reached (or the log ends).")
 @user_errors
-def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, room_coupling: str | None, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
+def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, room_coupling: str | None, room_wander: float, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
     Every new row updates each sensor's filter; a sensor may stop when its T∞
@@ -249,13 +250,13 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             names = [h.strip() for h in header if h.strip() not in (time_name, ambient_col)]
         names = [n for n in names if n != ambient_col] + [ambient_col]
     state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
-    settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling)
+    settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling, room_wander_C_per_h=room_wander)
     follower: LogFollower | None = None
     monitor: Monitor | None = None
     if state_file.is_file():
         try:
             saved = json.loads(state_file.read_text())
-            if saved.get("log") == str(path.resolve()) and saved.get("settings") == [tolerance_C, hold_min, room_coupling] and saved.get("requested") == names:
+            if saved.get("log") == str(path.resolve()) and saved.get("settings") == [tolerance_C, hold_min, room_coupling, room_wander] and saved.get("requested") == names:
                 follower = LogFollower.resume(path, saved["position"], time_col, time_unit)
                 monitor = Monitor.from_dict(saved["monitor"])
                 stderr.print(f"mtident: resuming from {state_file} at t = {monitor.last_t} min", highlight=False)
@@ -266,7 +267,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 
     def save() -> None:
         assert follower is not None and monitor is not None
-        _save_state(state_file, {"log": str(path.resolve()), "settings": [tolerance_C, hold_min, room_coupling], "requested": names, "position": follower.position(), "monitor": monitor.to_dict()})
+        _save_state(state_file, {"log": str(path.resolve()), "settings": [tolerance_C, hold_min, room_coupling, room_wander], "requested": names, "position": follower.position(), "monitor": monitor.to_dict()})
 
     live_view = sys.stdout.isatty() and not as_json
     last_data = time.monotonic()

@@ -40,6 +40,13 @@ sample: no refit from the start). The stopping rule, per sensor:
    sensor in the machine's structure; "direct", the sensor follows the room at
    once, for one in the air stream: its rise over the room is followed).
 
+Without a room sensor the room is an unknown input that may wander: a random
+walk of ``room_wander_C_per_h`` (1σ in one hour, default 0.05 °C) in the heat
+balance (:meth:`Monitor._unmeasured_room_noise`). The filter then does not take a
+slope bent by the room for the warm-up's own, and the T∞ band allows for where
+the room may have gone. Set it to 0 for a room known to be steady (the papers'
+setting: earlier stops), higher for an unconditioned workshop.
+
 The test may stop when every sensor may, except sensors that show no rise
 (they are reported and left out of the decision).
 
@@ -94,11 +101,14 @@ class MonitorSettings:
     room_coupling: str = "lagged"
     quiet_min: float = 60.0
     creep_holds: float = 3.0
+    room_wander_C_per_h: float = 0.05
     restart_delay_min: float = 30.0
 
     def __post_init__(self) -> None:
         if self.room_coupling not in ROOM_COUPLINGS:
             raise ValueError(f"room_coupling must be one of {ROOM_COUPLINGS}, not {self.room_coupling!r}")
+        if not (np.isfinite(self.room_wander_C_per_h) and self.room_wander_C_per_h >= 0):
+            raise ValueError(f"room_wander_C_per_h must be a finite number ≥ 0 (°C in one hour, 1σ), not {self.room_wander_C_per_h!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -152,6 +162,7 @@ class Monitor:
     samples: int = 0
     recent_y: list[list[float]] = field(default_factory=list)  # last 5 raw samples, for the noise estimate
     rejected_run: FloatArray | None = None
+    room_measured: bool = False  # fed with ``ambient``: the room is an input, not an unknown that wanders
     ambient_level: float | None = None  # the room's last valid reading, with ``ambient``
     ambient_time: float | None = None
     buffer_room_rate: list[float] = field(default_factory=list)
@@ -191,6 +202,7 @@ class Monitor:
         messages: list[str] = []
         rows = np.asarray(values, float)
         room = np.full(len(rows), np.nan) if ambient is None else np.asarray(ambient, float)
+        self.room_measured = self.room_measured or ambient is not None
         for t, y, a in zip(np.asarray(times, float), rows, room, strict=True):
             if self.stop_time is not None:
                 break
@@ -255,6 +267,8 @@ class Monitor:
         if self.median_dt and dt > self.settings.gap_factor * self.median_dt:
             messages.append(f"gap in the log: {dt:g} min without samples before t = {t:g} min; bridged by the model")
         step = transition_with_room(dt, room_rate)
+        if not self.room_measured and self.settings.room_wander_C_per_h > 0:
+            self.carry = replace(self.carry, process_cov=self._unmeasured_room_noise(dt))
         new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
         z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
         wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= self.settings.check_samples)
@@ -301,7 +315,7 @@ class Monitor:
             self.steady_history.pop(0)
         misfit = self._misfit()
         if np.any(misfit):
-            measured_room = self.ambient_level is not None
+            measured_room = self.room_measured
             what = f"identifying it again from the next {self.settings.restart_delay_min:g} min" if measured_room else "widening its parameter uncertainty to follow the new trend"
             for s in np.flatnonzero(misfit):
                 if self._may_say("misfit", int(s), t):
@@ -436,6 +450,21 @@ class Monitor:
         mean = np.where(enough, np.nansum(z, axis=0) / safe, 0.0)
         mean_square = np.where(enough, np.nansum(z**2, axis=0) / safe, 0.0)
         return enough & ((np.abs(mean) * np.sqrt(safe) > 4.5) | (mean_square > 3.0 + 4.0 * np.sqrt(2.0 / safe)))
+
+    def _unmeasured_room_noise(self, dt: float) -> FloatArray:
+        """Q for one step with the room's unmeasured wander as a random input of the heat balance.
+
+        s = λ(T_room + ΔT∞ − T), so a room that moves by δ moves s by λδ (and T∞
+        by δ). A random walk of the room with ``room_wander_C_per_h`` (1σ) per
+        hour adds λ²σ²Δt/60 to the variance of s each step: the filter no longer
+        takes a slope bent by the room for the warm-up's own, and the T∞ interval
+        carries where the room may have gone since the data last told.
+        """
+        assert self.tuning is not None and self.carry is not None
+        q = self.tuning.process_cov.copy()
+        rate = self.carry.mean[:, 2]
+        q[:, 1, 1] += rate**2 * self.settings.room_wander_C_per_h**2 * dt / 60.0
+        return q
 
     def _restart(self, due: np.ndarray) -> None:
         """Identify the ``due`` sensors again from their samples since their last failed model check.
@@ -620,6 +649,7 @@ class Monitor:
             "samples": self.samples,
             "recent_y": self.recent_y,
             "rejected_run": _tolist(self.rejected_run),
+            "room_measured": self.room_measured,
             "ambient_level": self.ambient_level,
             "ambient_time": self.ambient_time,
             "buffer_room_rate": self.buffer_room_rate,
@@ -663,6 +693,7 @@ class Monitor:
             samples=int(data["samples"]),
             recent_y=[list(r) for r in data["recent_y"]],
             rejected_run=_optional_floats(data["rejected_run"]),
+            room_measured=bool(data.get("room_measured", data["ambient_level"] is not None)),
             ambient_level=data["ambient_level"],
             ambient_time=data.get("ambient_time"),
             buffer_room_rate=list(data.get("buffer_room_rate", [0.0] * len(data["buffer_t"]))),
