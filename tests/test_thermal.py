@@ -35,6 +35,15 @@ def test_uneven_sampling_is_handled():
     assert abs(result.steady_state_C[0] - PAPER_STEADY) < Z95 * result.steady_state_sd_C[0]
 
 
+def test_slope_transition_caps_the_growth_of_a_negative_rate():
+    # λΔt ≥ −0.5 is left as it is (the Gaussian approximation's small excursions) ...
+    state = np.array([20.0, 1.0, -0.2])
+    np.testing.assert_allclose(slope_transition(state, 1.0), [20.0 + (np.exp(0.2) - 1) / 0.2, np.exp(0.2), -0.2], rtol=1e-13)
+    # ... beyond, a sigma point of a widened filter (λ = −10/min) grows by e^0.5 a step, not e^10
+    far = slope_transition(np.array([20.0, 1.0, -10.0]), 1.0)
+    np.testing.assert_allclose(far, [20.0 + (np.exp(0.5) - 1) / 0.5, np.exp(0.5), -10.0], rtol=1e-13)
+
+
 def test_slope_transition_with_a_drifting_room_solves_the_heat_balance():
     """dT/dt = λ(T_room(t) + ΔT∞ − T) with the room rising linearly over the step, against an ODE solver."""
     from scipy.integrate import solve_ivp

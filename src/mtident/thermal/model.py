@@ -66,9 +66,12 @@ def slope_transition(points: FloatArray, dt_min: FloatArray | float, room_rate: 
     [26.3212, 0.3679, 0.1]
     """
     T, slope, lam = points[..., 0], points[..., 1], points[..., 2]
-    x = lam * dt_min
+    # Sigma points of a wide belief can reach λ < 0, where e^(−λΔt) grows. A little is part of
+    # the Gaussian approximation; a lot (a widened filter's λ = −10/min grew ×22,000 a step and
+    # diverged to 1e28) is no heat balance: the growth is capped at e^0.5 per step.
+    x = np.maximum(lam * dt_min, -0.5)
     small = np.abs(x) < 1e-9
-    gain = np.where(small, dt_min * (1.0 - 0.5 * x), -np.expm1(-x) / np.where(small, 1.0, lam))
+    gain = dt_min * np.where(small, 1.0 - 0.5 * x, -np.expm1(-x) / np.where(small, 1.0, x))
     excess = slope - room_rate
     return np.stack([T + room_rate * dt_min + excess * gain, room_rate + excess * np.exp(-x), lam], axis=-1)
 

@@ -40,6 +40,12 @@ sample: no refit from the start). The stopping rule, per sensor:
    sensor in the machine's structure; "direct", the sensor follows the room at
    once, for one in the air stream: its rise over the room is followed).
 
+A sensor flat at the start (the logger started before the spindle, or a sensor
+behind a thermal lag) is started when it rises, on the ``init_min`` minutes
+from its last flat sample, like the first start; a filter thrown far off
+course (a rate below −0.1 per sample) is identified again from the next
+``restart_delay_min`` minutes.
+
 Without a room sensor the room is an unknown input that may wander: a random
 walk of ``room_wander_C_per_h`` (1σ in one hour, default 0.05 °C) in the heat
 balance (:meth:`Monitor._unmeasured_room_noise`). The filter then does not take a
@@ -71,7 +77,7 @@ from scipy.special import stdtrit
 
 from mtident._typing import FloatArray
 from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
-from mtident.thermal.settings import ThermalTuning, filter_config, tuning_from_data
+from mtident.thermal.settings import ThermalTuning, filter_config, noise_sigma, tuning_from_data
 from mtident.ukf import FilterCarry, FilterConfig, GaussianState, SigmaWeights, filter_step, initial_carry
 
 __all__ = ["MonitorSettings", "Monitor", "SensorStatus", "ROOM_COUPLINGS"]
@@ -102,6 +108,7 @@ class MonitorSettings:
     quiet_min: float = 60.0
     creep_holds: float = 3.0
     room_wander_C_per_h: float = 0.05
+    late_rise_min: float = 3.0
     restart_delay_min: float = 30.0
 
     def __post_init__(self) -> None:
@@ -168,6 +175,7 @@ class Monitor:
     buffer_room_rate: list[float] = field(default_factory=list)
     # per sensor, the time of the last failed model check while a re-identification waits for data (NaN: none)
     restart_from: list[float] | None = None
+    waiting_rise: list[bool] | None = None  # per sensor: flat since the start, its filter waits for the rise
     recent_rows: list[list[float]] = field(default_factory=list)  # [t, room rate, y per sensor] over the last restart_delay_min
     # derived from the tuning once per process (not saved): the step needs them every sample
     _config: FilterConfig | None = field(default=None, repr=False, compare=False)
@@ -253,10 +261,31 @@ class Monitor:
         self.recent_y = []
         self.rejected_run = np.zeros(S)
         messages = []
+        # A sensor that has not begun to rise (the logger started before the spindle) gives no
+        # first-order curve to start from: its filter is started again once it rises.
+        # One that rose only after a few flat minutes is started again from the start of its rise.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a column with no valid sample
+            level = np.nanmedian(y[:3], axis=0)
+        with np.errstate(invalid="ignore"):
+            risen = np.abs(y - level) > self._rise_threshold(noise_sigma(filled))
+        onset = np.where(risen.any(axis=0), t[np.argmax(risen, axis=0)], np.inf)
+        late = onset - t[0] >= self.settings.late_rise_min
+        self.restart_from = [float(t[0]) if not np.isfinite(o) else float(o - 1.0) if lt else float("nan") for o, lt in zip(onset, late, strict=True)]
+        self.waiting_rise = [bool(lt) for lt in late]
+        for s in np.flatnonzero(late):
+            if np.isfinite(onset[s]):
+                messages.append(f"sensor {self.sensors[s]!r}: flat until t = {onset[s]:g} min; identifying it from the start of its rise")
+            else:
+                messages.append(f"sensor {self.sensors[s]!r}: no rise in the first {t[-1] - t[0]:g} min; waiting for its warm-up to begin")
         for tt, yy, rate in zip(t, y, self.buffer_room_rate, strict=True):
             messages.extend(self._step(float(tt), yy.copy(), rate))
         self.buffer_t, self.buffer_y, self.buffer_room_rate = [], [], []
         return messages
+
+    def _rise_threshold(self, sigma: FloatArray) -> FloatArray:
+        """A change that is a rise, not noise: ``min_rise_C``, or 6σ if larger."""
+        return np.maximum(self.settings.min_rise_C, 6.0 * np.asarray(sigma))
 
     def _step(self, t: float, y: FloatArray, room_rate: float = 0.0) -> list[str]:
         assert self.carry is not None and self.tuning is not None and self.observed is not None
@@ -267,11 +296,12 @@ class Monitor:
         if self.median_dt and dt > self.settings.gap_factor * self.median_dt:
             messages.append(f"gap in the log: {dt:g} min without samples before t = {t:g} min; bridged by the model")
         step = transition_with_room(dt, room_rate)
-        if not self.room_measured and self.settings.room_wander_C_per_h > 0:
-            self.carry = replace(self.carry, process_cov=self._unmeasured_room_noise(dt))
+        self.carry = replace(self.carry, process_cov=self._process_cov(self.carry.mean[:, 2], dt))
         new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
         z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
-        wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= self.settings.check_samples)
+        # a sensor waiting for its rise has no model yet to call a sample wild against
+        modelled = ~np.array(self.waiting_rise) if self.waiting_rise is not None else np.ones(len(y), dtype=bool)
+        wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= self.settings.check_samples) & modelled
         # A spike is one wild sample. Wild samples in a row are not spikes but a change the
         # model missed: accept them and widen the filter (else it would freeze on old data).
         spikes = wild & (self.rejected_run == 0)
@@ -313,7 +343,7 @@ class Monitor:
         horizon = t - self._hold(t)
         while len(self.steady_history) > 2 and self.steady_history[1][0] <= horizon:
             self.steady_history.pop(0)
-        misfit = self._misfit()
+        misfit = self._misfit() & modelled
         if np.any(misfit):
             measured_room = self.room_measured
             what = f"identifying it again from the next {self.settings.restart_delay_min:g} min" if measured_room else "widening its parameter uncertainty to follow the new trend"
@@ -321,16 +351,10 @@ class Monitor:
                 if self._may_say("misfit", int(s), t):
                     messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); {what}{self._quiet_note()}")
             self._widen(misfit)
-            if measured_room and self.restart_from is None:
-                self.restart_from = [float("nan")] * len(self.sensors)
-            if self.restart_from is not None:
-                for i in np.flatnonzero(misfit):
-                    self.restart_from[i] = t
-        if self.restart_from is not None:
-            with np.errstate(invalid="ignore"):
-                due = t - np.array(self.restart_from) >= self.settings.restart_delay_min
-            if np.any(due):
-                self._restart(due)
+        was_waiting = np.array(self.waiting_rise) if self.waiting_rise is not None else np.zeros(len(self.sensors), dtype=bool)
+        due = self._schedule_restarts(t, misfit & self.room_measured)
+        if np.any(due):
+            self._restart(due, first_start=due & was_waiting)
         status = self.status()
         messages.extend(self._note_wandering(status))
         self._record_checkpoint(t, status)
@@ -451,8 +475,45 @@ class Monitor:
         mean_square = np.where(enough, np.nansum(z**2, axis=0) / safe, 0.0)
         return enough & ((np.abs(mean) * np.sqrt(safe) > 4.5) | (mean_square > 3.0 + 4.0 * np.sqrt(2.0 / safe)))
 
-    def _unmeasured_room_noise(self, dt: float) -> FloatArray:
-        """Q for one step with the room's unmeasured wander as a random input of the heat balance.
+    def _schedule_restarts(self, t: float, misfit: np.ndarray) -> np.ndarray:
+        """Which sensors to identify afresh now, from their samples since ``restart_from``.
+
+        A sensor is identified again ``restart_delay_min`` after the last reason:
+        a failed model check (with a room sensor), a rate λ far outside the
+        physical range (a filter thrown off course), or the start of its
+        rise (a sensor flat at the start waits, its window moving on, until it
+        has risen by more than the noise).
+        """
+        assert self.carry is not None
+        S = len(self.sensors)
+        restart_from = np.array(self.restart_from if self.restart_from is not None else [float("nan")] * S)
+        waiting = np.array(self.waiting_rise if self.waiting_rise is not None else [False] * S)
+        restart_from[misfit] = t
+        # λ < 0 for a while is part of the Gaussian approximation early on; growth by a tenth
+        # a step is no warm-up (a filter widened after a change of course went to λ = −10/min)
+        thrown_off = ~(self.carry.mean[:, 2] * (self.median_dt or 1.0) > -0.1) & ~np.isfinite(restart_from)
+        restart_from[thrown_off] = t
+        if np.any(waiting):
+            # Still flat over the last 5 min: the rise has not begun, and the window for the new
+            # start begins at the latest flat sample. Once it rises the window stays put.
+            rows = np.array(self.recent_rows)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # no valid sample in the last 5 min
+                values = np.where(rows[:, 0][:, None] >= t - 5.0, rows[:, 2:], np.nan)
+                span = np.nanmax(values, axis=0) - np.nanmin(values, axis=0)
+            still_flat = waiting & ~(span >= self._rise_threshold(np.sqrt(self.carry.emission_cov[:, 0, 0])))
+            restart_from[still_flat] = t - 1.0
+        # a sensor that begins to rise is started like the first one, after ``init_min`` of its rise
+        delay = np.where(waiting, self.settings.init_min, self.settings.restart_delay_min)
+        with np.errstate(invalid="ignore"):
+            due = ~np.isnan(restart_from) & (t - restart_from >= delay)
+        waiting &= ~due
+        self.restart_from = [float(v) for v in restart_from]
+        self.waiting_rise = [bool(v) for v in waiting]
+        return due
+
+    def _process_cov(self, rate: FloatArray, dt: float) -> FloatArray:
+        """Q for one step: the tuning's, plus the room's unmeasured wander as a random input of the heat balance.
 
         s = λ(T_room + ΔT∞ − T), so a room that moves by δ moves s by λδ (and T∞
         by δ). A random walk of the room with ``room_wander_C_per_h`` (1σ) per
@@ -460,13 +521,13 @@ class Monitor:
         takes a slope bent by the room for the warm-up's own, and the T∞ interval
         carries where the room may have gone since the data last told.
         """
-        assert self.tuning is not None and self.carry is not None
+        assert self.tuning is not None
         q = self.tuning.process_cov.copy()
-        rate = self.carry.mean[:, 2]
-        q[:, 1, 1] += rate**2 * self.settings.room_wander_C_per_h**2 * dt / 60.0
+        if not self.room_measured:
+            q[:, 1, 1] += np.maximum(rate, 0.0) ** 2 * self.settings.room_wander_C_per_h**2 * dt / 60.0
         return q
 
-    def _restart(self, due: np.ndarray) -> None:
+    def _restart(self, due: np.ndarray, first_start: np.ndarray) -> None:
         """Identify the ``due`` sensors again from their samples since their last failed model check.
 
         Once the fast part of a fast-plus-slow warm-up has died away, the data
@@ -479,6 +540,7 @@ class Monitor:
         """
         assert self.carry is not None and self.carry.chol is not None and self.restart_from is not None
         rows = np.array(self.recent_rows)
+        rows = rows[rows[:, 0] >= np.nanmin(np.where(due, self.restart_from, np.nan))]
         t, rates, y = rows[:, 0], rows[:, 1], rows[:, 2:].copy()
         y[(t[:, None] < np.array(self.restart_from)[None, :]) | ~due[None, :]] = np.nan
         leading = np.cumsum(np.isfinite(y), axis=0) == 0
@@ -493,9 +555,26 @@ class Monitor:
             mean[ready], cov[ready] = tuning.initial_mean, tuning.initial_cov
         config, weights = self._filter()
         fresh = initial_carry(GaussianState(mean, cov), self.carry.process_cov, self.carry.emission_cov, config)
+        # the restarted sensors' consistency statistics start again with their new data
+        assert self.observed is not None and self.nis_sum is not None
+        observed, nis_sum = np.zeros(len(due)), np.zeros(len(due))
         for k in range(len(t)):
             dt = 0.0 if k == 0 else float(t[k] - t[k - 1])
-            fresh, _ = filter_step(fresh, y[k][:, None], transition_with_room(dt, float(rates[k])), observe_temperature, config, weights)
+            fresh = replace(fresh, process_cov=self._process_cov(fresh.mean[:, 2], dt))
+            fresh, info = filter_step(fresh, y[k][:, None], transition_with_room(dt, float(rates[k])), observe_temperature, config, weights)
+            z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
+            ok = np.isfinite(z)
+            observed += ok
+            nis_sum += np.where(ok & (observed > 3), z**2, 0.0)
+        # A sensor that only now began to rise starts its statistics and its earlier answers afresh:
+        # the filter before had nothing to fit. After a failed model check they are kept: the
+        # earlier answers and misfits are evidence that the model is in doubt.
+        fresh_statistics = ready & first_start
+        self.observed = np.where(fresh_statistics, observed, self.observed)
+        self.nis_sum = np.where(fresh_statistics, nis_sum, self.nis_sum)
+        for row in self.checkpoints:
+            for s in np.flatnonzero(fresh_statistics):
+                row[2 + s] = float("nan")
         assert fresh.chol is not None
         self.carry = replace(
             self.carry,
@@ -545,13 +624,18 @@ class Monitor:
             rate = float(rates[s])
             eq = float(equilibrium[s])
             rise = float(self.max_T[s] - self.min_T[s])
-            flat = self.samples * (self.median_dt or 1.0) >= self.settings.init_min + self.settings.hold_min and rise < self.settings.min_rise_C
-            if flat:
+            long_enough = self.samples * (self.median_dt or 1.0) >= self.settings.init_min + self.settings.hold_min
+            waiting = self.waiting_rise is not None and self.waiting_rise[s]
+            # waiting and flat over the last 5 min (its window start moved up to now): no rise yet
+            still_flat = waiting and self.restart_from is not None and self.last_t is not None and self.restart_from[s] >= self.last_t - 1.0
+            if long_enough and (rise < self.settings.min_rise_C or still_flat):
                 state, may = "no rise", True
-            elif not np.isfinite(steady) or rate <= 0:
-                state, may = "no steady state yet", False
+            elif waiting:
+                state, may = "collecting", False
             elif misfit[s] or (self.restart_from is not None and np.isfinite(self.restart_from[s])):
                 state, may = "model check", False
+            elif not np.isfinite(steady) or rate <= 0:
+                state, may = "no steady state yet", False
             elif n < self.settings.min_samples or history[-1, 0] < self.settings.min_duration_min:
                 state, may = "collecting", False
             elif half > self.settings.interval_fraction * self.settings.tolerance_C:
@@ -658,6 +742,7 @@ class Monitor:
             "checkpoints": self.checkpoints,
             "wandering": self.wandering,
             "restart_from": self.restart_from,
+            "waiting_rise": self.waiting_rise,
             "recent_rows": self.recent_rows,
             "last_said": self.last_said,
             "stop_time": self.stop_time,
@@ -702,6 +787,7 @@ class Monitor:
             checkpoints=[list(r) for r in data.get("checkpoints", [])],
             wandering=data.get("wandering"),
             restart_from=data.get("restart_from"),
+            waiting_rise=data.get("waiting_rise"),
             recent_rows=[list(r) for r in data.get("recent_rows", [])],
             last_said=dict(data.get("last_said", {})),
             stop_time=data["stop_time"],
