@@ -109,6 +109,23 @@ def test_fast_plus_slow_curve_is_not_answered_with_a_narrow_wrong_interval():
     del rng
 
 
+def test_a_warm_up_that_began_after_the_log_is_fitted_from_its_start():
+    """The logger ran 15 min before the spindle. Measured: T∞ 26.63 ± 0.25 °C at L = 60 min,
+    equilibrium 200 min against 201 measured; fitted from t₀ instead, λ came out negative and
+    T∞ was not identifiable."""
+    t = np.arange(0.0, 401.0)
+    late = first_order(np.clip(t - 15.0, 0.0, None)) + 0.02 * np.random.default_rng(0).standard_normal(len(t))
+    on_time = first_order(t) + 0.02 * np.random.default_rng(1).standard_normal(len(t))
+    result = identify(make_log(t, {"late": late, "on time": on_time}), 60.0)
+    assert any("the first 15 min stay at their first level (the warm-up began after the log)" in n for n in result.notes)
+    assert not any("'on time'" in n for n in result.notes)
+    lo, hi = result.steady_state_ci95()[0]
+    assert lo <= 26.7 <= hi and hi - lo < 0.6
+    assert abs(result.equilibrium_time_min[0] - result.measured_equilibrium_time_min[0]) < 10.0
+    assert result.start_C[0] == pytest.approx(late[:3].mean(), abs=0.03) and result.rmse_C[0] < 0.1
+    np.testing.assert_array_equal(result.curve_C[:15, 0], np.median(late[:3]))
+
+
 def test_batch_of_sensors_equals_one_at_a_time():
     t = np.arange(0.0, 60.0)
     rng = np.random.default_rng(5)

@@ -6,6 +6,7 @@ of the record (or a horizon). All sensors of a log are filtered as one batch.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -14,7 +15,7 @@ from scipy.special import stdtrit
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
-from mtident.thermal.lsq import first_order_onset, fit_rise
+from mtident.thermal.lsq import first_order_onset, fit_rise, flat_lead
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
@@ -411,17 +412,25 @@ def _identify(
     S = y.shape[1]
     tw, yw = t[:n_window], y[:n_window]
     notes: list[str] = list(log.notes)
+    # A warm-up that began after the log: flat at its first level until ``begins`` (data tuning only).
+    late_start = np.zeros(S, dtype=bool)
+    begins = np.full(S, tw[0])
     if preset == "data":
+        last_flat = flat_lead(tw, yw, noise_sigma(yw))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a sensor without a valid first sample
+            first_level = np.nanmedian(yw[:3], axis=0)
+        late_start = (last_flat > 0) & (last_flat < n_window)
+        begins = np.where(late_start, tw[np.minimum(last_flat, n_window - 1)], tw[0])
         # The papers' presets fit from the first sample, as the papers do. The data tuning leaves
-        # out a flat start (a sensor lag), which a first-order model cannot follow.
+        # out a flat start (a sensor lag, or a warm-up that began later), which a first-order model
+        # cannot follow.
         onsets = first_order_onset(tw, yw)
         yw = yw.copy()
         for i in np.flatnonzero(onsets):
             yw[: onsets[i], i] = np.nan
-            notes.append(
-                f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min rise slower than a first-order "
-                f"curve starts (a sensor lag, or heat still on its way); the model is fitted from t = {tw[onsets[i]]:g} min"
-            )
+            why = "stay at their first level (the warm-up began after the log)" if late_start[i] else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
+            notes.append(f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min {why}; the model is fitted from t = {tw[onsets[i]]:g} min")
     tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, S)
     # the data tuning has the noise level already (its R); the papers' R is a setting, not the noise
     sigma = np.sqrt(tuning.emission_cov[:, 0, 0]) if preset == "data" else noise_sigma(yw)
@@ -495,11 +504,17 @@ def _identify(
     final_mean = final_mean.copy()
     final_mean[no_steady, 2] = np.nan
 
+    if np.any(late_start):
+        # before its warm-up began the sensor stayed at its first level; the equilibrium time
+        # counts from the log's start, as the measured one does
+        before = late_start[None, :] & (times[:, None] < begins[None, :])
+        mean_curve = np.where(before, first_level[None, :], mean_curve)
+        curve_var = np.where(before, sigma[None, :] ** 2, curve_var)
     start = mean_curve[0]
     steady = final_mean[:, 2]
     rate = final_mean[:, 1]
     with np.errstate(divide="ignore", invalid="ignore"):
-        eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan)
+        eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan) + np.where(late_start, begins - tw[0], 0.0)
     n_log = len(t)
     measured_part = np.full((len(times), S), np.nan)
     measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]

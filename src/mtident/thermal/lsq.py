@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -9,7 +10,7 @@ import numpy as np
 from mtident._typing import FloatArray, IntArray
 from mtident.thermal.model import rise_curve
 
-__all__ = ["LeastSquaresFit", "fit_rise", "first_order_onset", "cramer_rao_bound"]
+__all__ = ["LeastSquaresFit", "fit_rise", "flat_lead", "first_order_onset", "cramer_rao_bound"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,6 +66,26 @@ def cramer_rao_bound(time_min: FloatArray, start_C: float, rate_per_min: float, 
     return np.linalg.inv(jac.T @ jac / sigma_C**2)
 
 
+def flat_lead(time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_rise_C: float = 0.1, min_flat_min: float = 5.0) -> IntArray:
+    """Per sensor, the index of the last sample at the first level, where a late warm-up begins.
+
+    The logger started before the spindle: the sensor stays at its first level
+    (the median of its first three samples) within max(``min_rise_C``, 6σ) for
+    ``min_flat_min`` minutes or more, then departs. 0 where it departs sooner
+    (a warm-up from the first sample); ``len(time_min)`` where it never departs.
+    """
+    t = np.asarray(time_min, dtype=float)
+    y = np.asarray(values, dtype=float)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a column with no valid sample
+        level = np.nanmedian(y[:3], axis=0)
+    with np.errstate(invalid="ignore"):
+        departed = np.abs(y - level) > np.maximum(min_rise_C, 6.0 * np.asarray(sigma))
+    first = np.argmax(departed, axis=0)
+    late = t[first] - t[0] >= min_flat_min
+    return np.where(~departed.any(axis=0), len(t), np.where(late, first - 1, 0))
+
+
 def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: float = 0.1) -> IntArray:
     """Per sensor, the index of the first sample a first-order curve describes.
 
@@ -99,6 +120,9 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     if len(t) < lead + 6:
         return onsets
     sigma = np.maximum(noise_sigma(y), 1e-6)
+    # a warm-up that begins after the log: its flat minutes go first
+    onsets = np.minimum(flat_lead(t, y, sigma), len(t) - 1)
+    lead = lead + int(onsets.max())
     for _ in range(2):
         used = y.copy()
         for s in np.flatnonzero(onsets).tolist():

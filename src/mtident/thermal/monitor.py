@@ -76,6 +76,7 @@ import numpy as np
 from scipy.special import stdtrit
 
 from mtident._typing import FloatArray
+from mtident.thermal.lsq import flat_lead
 from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
 from mtident.thermal.settings import ThermalTuning, filter_config, noise_sigma, tuning_from_data
 from mtident.ukf import FilterCarry, FilterConfig, GaussianState, SigmaWeights, filter_step, initial_carry
@@ -108,7 +109,7 @@ class MonitorSettings:
     quiet_min: float = 60.0
     creep_holds: float = 3.0
     room_wander_C_per_h: float = 0.05
-    late_rise_min: float = 3.0
+    late_rise_min: float = 5.0
     restart_delay_min: float = 30.0
 
     def __post_init__(self) -> None:
@@ -264,20 +265,16 @@ class Monitor:
         # A sensor that has not begun to rise (the logger started before the spindle) gives no
         # first-order curve to start from: its filter is started again once it rises.
         # One that rose only after a few flat minutes is started again from the start of its rise.
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # a column with no valid sample
-            level = np.nanmedian(y[:3], axis=0)
-        with np.errstate(invalid="ignore"):
-            risen = np.abs(y - level) > self._rise_threshold(noise_sigma(filled))
-        onset = np.where(risen.any(axis=0), t[np.argmax(risen, axis=0)], np.inf)
-        late = onset - t[0] >= self.settings.late_rise_min
-        self.restart_from = [float(t[0]) if not np.isfinite(o) else float(o - 1.0) if lt else float("nan") for o, lt in zip(onset, late, strict=True)]
+        last_flat = flat_lead(t, y, noise_sigma(filled), self.settings.min_rise_C, self.settings.late_rise_min)
+        late = last_flat > 0
+        never = last_flat >= len(t)
+        self.restart_from = [float(t[0]) if nv else float(t[k]) if lt else float("nan") for k, lt, nv in zip(last_flat, late, never, strict=True)]
         self.waiting_rise = [bool(lt) for lt in late]
         for s in np.flatnonzero(late):
-            if np.isfinite(onset[s]):
-                messages.append(f"sensor {self.sensors[s]!r}: flat until t = {onset[s]:g} min; identifying it from the start of its rise")
-            else:
+            if never[s]:
                 messages.append(f"sensor {self.sensors[s]!r}: no rise in the first {t[-1] - t[0]:g} min; waiting for its warm-up to begin")
+            else:
+                messages.append(f"sensor {self.sensors[s]!r}: flat until t = {t[last_flat[s] + 1]:g} min; identifying it from the start of its rise")
         for tt, yy, rate in zip(t, y, self.buffer_room_rate, strict=True):
             messages.extend(self._step(float(tt), yy.copy(), rate))
         self.buffer_t, self.buffer_y, self.buffer_room_rate = [], [], []
