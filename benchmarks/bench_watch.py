@@ -94,6 +94,7 @@ def fast_slow_in_drifting_room() -> np.ndarray:
 KINDS = (
     "first-order",
     "first-order, --room-wander 0",
+    "first-order, begins 15 min late",
     "fast+slow",
     "fast+slow, --room-wander 0",
     "fast+slow, drift, --ambient",
@@ -127,6 +128,8 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
         noise = 0.02 * rng.standard_normal((3, 401))
         room_sensor = 17.9 + room(T) + 0.02 * rng.standard_normal(401)
         out["first-order"].append(run_case(f"first-order #{seed}", first_order, first_order[:401] + noise[0]))
+        late = first_order[np.clip(np.arange(len(T_LONG)) - 15, 0, None)]  # the logger started 15 min before the spindle
+        out["first-order, begins 15 min late"].append(run_case(f"first-order, late #{seed}", late, late[:401] + noise[0]))
         out["first-order, --room-wander 0"].append(run_case(f"first-order, steady room #{seed}", first_order, first_order[:401] + noise[0], wander=0.0))
         out["fast+slow"].append(run_case(f"fast+slow #{seed}", fast_slow, fast_slow[:401] + noise[1]))
         out["fast+slow, --room-wander 0"].append(run_case(f"fast+slow, steady room #{seed}", fast_slow, fast_slow[:401] + noise[1], wander=0.0))

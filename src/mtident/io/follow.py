@@ -25,7 +25,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
@@ -122,6 +121,8 @@ class LogFollower:
             scale = self._unit(self.header[self.columns[0]])
             stamp = raw * scale
         except ValueError:
+            import pandas as pd  # only for ISO-8601 time stamps
+
             stamp = pd.Timestamp(text.strip()).timestamp() / 60.0
         if self.origin is None:
             self.origin = stamp

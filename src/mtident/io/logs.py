@@ -15,12 +15,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["TemperatureLog", "read_temperature_log", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS"]
 
@@ -85,6 +88,8 @@ def _time_unit(header: str, time_unit: str | None) -> float:
 
 
 def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: str) -> FloatArray:
+    import pandas as pd
+
     numeric = pd.to_numeric(column, errors="coerce")
     if numeric.notna().all():
         values = numeric.to_numpy(dtype=float) * _time_unit(header, time_unit)
@@ -145,6 +150,8 @@ def read_temperature_log(
         cells, time not increasing or duplicated, too few samples, too many bad
         samples in a sensor.
     """
+    import pandas as pd  # here, not at import: 0.4 s of start-up that `watch` does not need
+
     source = str(path)
     file = Path(path)
     if not file.is_file():

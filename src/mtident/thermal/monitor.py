@@ -340,7 +340,8 @@ class Monitor:
         horizon = t - self._hold(t)
         while len(self.steady_history) > 2 and self.steady_history[1][0] <= horizon:
             self.steady_history.pop(0)
-        misfit = self._misfit() & modelled
+        misfit_now = self._misfit()
+        misfit = misfit_now & modelled
         if np.any(misfit):
             measured_room = self.room_measured
             what = f"identifying it again from the next {self.settings.restart_delay_min:g} min" if measured_room else "widening its parameter uncertainty to follow the new trend"
@@ -352,7 +353,8 @@ class Monitor:
         due = self._schedule_restarts(t, misfit & self.room_measured)
         if np.any(due):
             self._restart(due, first_start=due & was_waiting)
-        status = self.status()
+        # unchanged since they were computed above unless a filter was widened or started again
+        status = self.status(None if np.any(misfit) or np.any(due) else (physical, cov, misfit_now))
         messages.extend(self._note_wandering(status))
         self._record_checkpoint(t, status)
         if self.stop_time is None and all(st.may_stop for st in status) and not all(st.status == "no rise" for st in status):
@@ -595,16 +597,15 @@ class Monitor:
         self.steady_history = [last]
 
     # ---- the decision -------------------------------------------------------------------
-    def status(self) -> list[SensorStatus]:
+    def status(self, _current: tuple[FloatArray, FloatArray, np.ndarray] | None = None) -> list[SensorStatus]:
         """Per-sensor estimate and whether it may stop now."""
         out = []
         if self.carry is None:
             return [SensorStatus(name, float(self.buffer_y[-1][i]) if self.buffer_y else float("nan"), float("nan"), float("nan"), float("nan"), False, "collecting") for i, name in enumerate(self.sensors)]
-        physical, cov = to_physical(self.carry.mean, self.carry.covariance(), "slope")
+        physical, cov, misfit = _current if _current is not None else (*to_physical(self.carry.mean, self.carry.covariance(), "slope"), self._misfit())
         assert self.observed is not None and self.nis_sum is not None and self.min_T is not None and self.max_T is not None
         factor = np.maximum(1.0, self.nis_sum / np.maximum(self.observed - 3, 1))
         history = np.array(self.steady_history)
-        misfit = self._misfit()
         # with a directly coupled room the filters follow the rise over the room
         offset = (self.ambient_level or 0.0) if self.settings.room_coupling == "direct" else 0.0
         quantiles = stdtrit(np.maximum(self.observed - 3, 1), 0.975)
