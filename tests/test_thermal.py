@@ -109,6 +109,17 @@ def test_fast_plus_slow_curve_is_not_answered_with_a_narrow_wrong_interval():
     del rng
 
 
+def test_the_sample_identified_from_28_min_covers_every_measured_final_value():
+    """The papers' identification time on the shipped log. A rule that cut the sample's lagged
+    sensors at their last flat sample (within 0.12 °C for 5-6 min) sent four T∞ 15-40 °C off."""
+    from mtident.cli_thermal import sample_log_path
+
+    result = identify(read_temperature_log(sample_log_path()), 28.0)
+    lo, hi = result.steady_state_ci95().T
+    assert np.all((lo <= result.measured_final_C) & (result.measured_final_C <= hi))
+    assert np.all(hi - lo < 30.0)
+
+
 def test_a_warm_up_that_began_after_the_log_is_fitted_from_its_start():
     """The logger ran 15 min before the spindle. Measured: T∞ 26.63 ± 0.25 °C at L = 60 min,
     equilibrium 200 min against 201 measured; fitted from t₀ instead, λ came out negative and

@@ -66,13 +66,18 @@ def cramer_rao_bound(time_min: FloatArray, start_C: float, rate_per_min: float, 
     return np.linalg.inv(jac.T @ jac / sigma_C**2)
 
 
-def flat_lead(time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_rise_C: float = 0.1, min_flat_min: float = 5.0) -> IntArray:
+def flat_lead(time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_rise_C: float = 0.1, min_flat_min: float = 10.0) -> IntArray:
     """Per sensor, the index of the last sample at the first level, where a late warm-up begins.
 
     The logger started before the spindle: the sensor stays at its first level
     (the median of its first three samples) within max(``min_rise_C``, 6σ) for
     ``min_flat_min`` minutes or more, then departs. 0 where it departs sooner
     (a warm-up from the first sample); ``len(time_min)`` where it never departs.
+    A sensor behind a thermal lag also starts slowly (the sample's stay within
+    0.12 °C of their first level for up to 6 min), but rises from the start: the
+    default 10 min leaves those to :func:`first_order_onset`'s lag rule, which fits
+    them better than a cut at the last flat sample (at L = 28 min a 5-min rule
+    sent four of the sample's ten T∞ off by 15 to 40 °C).
     """
     t = np.asarray(time_min, dtype=float)
     y = np.asarray(values, dtype=float)
