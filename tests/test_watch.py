@@ -261,11 +261,15 @@ def machine_in_room(t: np.ndarray, rate: float = 0.016, rise: float = 8.8) -> np
     return solution.y[0]
 
 
+def noisy_in_room(curve: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """A sensor's curve and the room sensor's reading, each with 0.02 °C of noise."""
+    rng = np.random.default_rng(seed)
+    return curve + 0.02 * rng.standard_normal(len(T)), 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+
+
 @pytest.mark.parametrize("seed", [100, 101])
 def test_ambient_reference_follows_a_drifting_room(seed):
-    rng = np.random.default_rng(seed)
-    sensor = machine_in_room(T) + 0.02 * rng.standard_normal(len(T))
-    ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    sensor, ambient = noisy_in_room(machine_in_room(T), seed)
     monitor = Monitor(("S",))
     monitor.feed(T, sensor[:, None], ambient)
     result = monitor.result()
@@ -279,9 +283,7 @@ def test_ambient_reference_follows_a_drifting_room(seed):
 
 @pytest.mark.parametrize("seed", [100, 101])
 def test_directly_coupled_sensor_follows_its_rise_over_the_room(seed):
-    rng = np.random.default_rng(seed)
-    sensor = first_order(T) + room(T) + 0.02 * rng.standard_normal(len(T))
-    ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    sensor, ambient = noisy_in_room(first_order(T) + room(T), seed)
     monitor = Monitor(("S",), MonitorSettings(room_coupling="direct"))
     monitor.feed(T, sensor[:, None], ambient)
     result = monitor.result()
@@ -303,9 +305,7 @@ def fast_slow_in_room(t: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("seed", [300, 303])
 def test_fast_plus_slow_in_a_measured_room_is_identified_again_from_the_slow_part(seed):
-    rng = np.random.default_rng(seed)
-    sensor = fast_slow_in_room(T) + 0.02 * rng.standard_normal(len(T))
-    ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    sensor, ambient = noisy_in_room(fast_slow_in_room(T), seed)
     monitor = Monitor(("S",))
     messages = monitor.feed(T, sensor[:, None], ambient)
     assert any("identifying it again from the next 30 min" in m for m in messages)
@@ -324,9 +324,7 @@ def test_fast_plus_slow_in_a_measured_room_is_identified_again_from_the_slow_par
 
 @pytest.mark.parametrize("coupling", ["lagged", "direct"])
 def test_state_round_trip_with_a_room_sensor_gives_the_same_decision(coupling):
-    rng = np.random.default_rng(12)
-    sensor = machine_in_room(T) + 0.02 * rng.standard_normal(len(T))
-    ambient = 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    sensor, ambient = noisy_in_room(machine_in_room(T), 12)
     ambient[25] = np.nan  # a missing room reading: the room held still
     settings = MonitorSettings(room_coupling=coupling)
     whole = Monitor(("S",), settings)
