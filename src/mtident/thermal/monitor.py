@@ -527,9 +527,10 @@ class Monitor:
         return q
 
     def _restart(self, due: np.ndarray, first_start: np.ndarray) -> None:
-        """Identify the ``due`` sensors again from their samples since their last failed model check.
+        """Identify the ``due`` sensors again from their samples since ``restart_from``.
 
-        Once the fast part of a fast-plus-slow warm-up has died away, the data
+        The reasons are in :meth:`_schedule_restarts`; the first one found in use:
+        once the fast part of a fast-plus-slow warm-up has died away, the data
         since then are first order again, but a filter that also learnt from the
         fast part stays biased towards it (widening its covariance forgets only
         part of it: T∞ came out at about twice its interval's half-width). A fresh
