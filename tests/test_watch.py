@@ -424,9 +424,11 @@ def test_watch_ambient_option(tmp_path):
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert data["sensor"] == "spindle" and data["stop_time_min"] is not None
+    assert "--room-coupling lagged" in out.stderr and "give --room-coupling direct" in out.stderr  # the assumed coupling is said
     out = mtident("thermal", "watch", str(path), "--ambient", "room", "--room-coupling", "direct", "--replay", "--json", "--state", str(tmp_path / "d.json"), cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["stop_time_min"] is not None
+    assert "give --room-coupling direct" not in out.stderr
 
 
 def test_room_coupling_needs_a_room_sensor(tmp_path):

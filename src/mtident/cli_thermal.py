@@ -238,6 +238,14 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     if room_coupling is not None and ambient_col is None:
         msg = "--room-coupling needs --ambient ROOM_COLUMN: it says how the sensors feel that room sensor"
         raise InputError(msg)
+    if ambient_col is not None and room_coupling is None:
+        # The data cannot tell the coupling within the first hours (bench_watch: a sensor that
+        # follows the room at once, taken as lagged, stopped up to 0.41 °C off), so say which is assumed.
+        stderr.print(
+            f"mtident: note: the sensors are taken to feel the room {ambient_col!r} through their own heat balance (--room-coupling lagged, "
+            "for sensors in the machine's structure); give --room-coupling direct for sensors in the air stream or on a thin cover",
+            highlight=False,
+        )
     room_coupling = room_coupling or "lagged"
     if ambient_col is not None:
         # read the room column with the sensors; it is split off again below
