@@ -277,12 +277,17 @@ def _machine_in_drifting_room(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return solution.y[0], room(t)
 
 
+def _noisy_logs_in_drifting_room(t: np.ndarray, count: int, seed: int):  # noqa: ANN202
+    """``count`` noisy sensors of the machine in the drifting room, the room sensor and the true room."""
+    curve, room = _machine_in_drifting_room(t)
+    rng = np.random.default_rng(seed)
+    log = make_log(t, {f"r{i}": curve + 0.02 * rng.standard_normal(len(t)) for i in range(count)})
+    return log, room + 0.02 * rng.standard_normal(len(t)), room
+
+
 def test_a_room_sensor_keeps_a_drifting_room_out_of_the_identified_curve():
     t = np.arange(0.0, 301.0)
-    curve, room = _machine_in_drifting_room(t)
-    rng = np.random.default_rng(1)
-    log = make_log(t, {f"r{i}": curve + 0.02 * rng.standard_normal(len(t)) for i in range(40)})
-    room_sensor = room + 0.02 * rng.standard_normal(len(t))
+    log, room_sensor, room = _noisy_logs_in_drifting_room(t, 40, seed=1)
     truth = 8.8 + room[90]  # the steady state at the room's level at the window's end
     plain = identify(log, 90.0)
     with_room = identify(log, 90.0, ambient_C=room_sensor)
@@ -317,10 +322,7 @@ def test_room_input_refuses_what_models_a_steady_room(kwargs, message):
 
 def test_min_time_with_a_room_sensor_predicts_with_the_measured_room():
     t = np.arange(0.0, 301.0)
-    curve, room = _machine_in_drifting_room(t)
-    rng = np.random.default_rng(6)
-    log = make_log(t, {f"r{i}": curve + 0.02 * rng.standard_normal(len(t)) for i in range(10)})
-    room_sensor = room + 0.02 * rng.standard_normal(len(t))
+    log, room_sensor, _ = _noisy_logs_in_drifting_room(t, 10, seed=6)
     search = {"periods_min": [300.0], "windows_min": [60.0, 90.0, 120.0]}
     plain = minimal_identification_time(log, "ukf", **search)
     with_room = minimal_identification_time(log, "ukf", ambient_C=room_sensor, **search)

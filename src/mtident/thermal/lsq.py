@@ -10,7 +10,7 @@ import numpy as np
 from mtident._typing import FloatArray, IntArray
 from mtident.thermal.model import rise_curve
 
-__all__ = ["LeastSquaresFit", "fit_rise", "flat_lead", "first_order_onset", "cramer_rao_bound"]
+__all__ = ["LeastSquaresFit", "fit_rise", "rise_threshold", "flat_lead", "first_order_onset", "cramer_rao_bound"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -66,6 +66,11 @@ def cramer_rao_bound(time_min: FloatArray, start_C: float, rate_per_min: float, 
     return np.linalg.inv(jac.T @ jac / sigma_C**2)
 
 
+def rise_threshold(sigma: FloatArray, min_rise_C: float = 0.1) -> FloatArray:
+    """A change that is a rise, not noise: ``min_rise_C``, or 6σ if larger."""
+    return np.maximum(min_rise_C, 6.0 * np.asarray(sigma))
+
+
 def flat_lead(time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_rise_C: float = 0.1, min_flat_min: float = 10.0) -> IntArray:
     """Per sensor, the index of the last sample at the first level, where a late warm-up begins.
 
@@ -85,7 +90,7 @@ def flat_lead(time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_r
         warnings.simplefilter("ignore", RuntimeWarning)  # a column with no valid sample
         level = np.nanmedian(y[:3], axis=0)
     with np.errstate(invalid="ignore"):
-        departed = np.abs(y - level) > np.maximum(min_rise_C, 6.0 * np.asarray(sigma))
+        departed = np.abs(y - level) > rise_threshold(sigma, min_rise_C)
     first = np.argmax(departed, axis=0)
     late = t[first] - t[0] >= min_flat_min
     return np.where(~departed.any(axis=0), len(t), np.where(late, first - 1, 0))

@@ -76,10 +76,10 @@ import numpy as np
 from scipy.special import stdtrit
 
 from mtident._typing import FloatArray
-from mtident.thermal.lsq import flat_lead
+from mtident.thermal.lsq import flat_lead, rise_threshold
 from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
 from mtident.thermal.settings import ThermalTuning, filter_config, noise_sigma, tuning_from_data
-from mtident.ukf import FilterCarry, FilterConfig, GaussianState, SigmaWeights, filter_step, initial_carry
+from mtident.ukf import FilterCarry, FilterConfig, GaussianState, SigmaWeights, StepInfo, filter_step, initial_carry
 
 __all__ = ["MonitorSettings", "Monitor", "SensorStatus", "ROOM_COUPLINGS"]
 
@@ -135,6 +135,18 @@ class SensorStatus:
 def transition_with_room(dt_min: float, room_rate: float):  # noqa: ANN201 - a transition for filter_step
     """The heat balance's step over ``dt_min`` with the room's rate over it."""
     return lambda points: slope_transition(points, dt_min, room_rate)
+
+
+def _normalised_innovation(info: StepInfo) -> FloatArray:
+    """ν/√S per sensor (NaN where the sample was missing)."""
+    return info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
+
+
+def _count_innovations(observed: FloatArray, nis_sum: FloatArray, z: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Valid samples per sensor, and the sum of z² after the first three (the consistency factor's)."""
+    ok = np.isfinite(z)
+    observed = observed + ok
+    return observed, nis_sum + np.where(ok & (observed > 3), z**2, 0.0)
 
 
 def _floats(value: Any) -> FloatArray:
@@ -280,10 +292,6 @@ class Monitor:
         self.buffer_t, self.buffer_y, self.buffer_room_rate = [], [], []
         return messages
 
-    def _rise_threshold(self, sigma: FloatArray) -> FloatArray:
-        """A change that is a rise, not noise: ``min_rise_C``, or 6σ if larger."""
-        return np.maximum(self.settings.min_rise_C, 6.0 * np.asarray(sigma))
-
     def _step(self, t: float, y: FloatArray, room_rate: float = 0.0) -> list[str]:
         assert self.carry is not None and self.tuning is not None and self.observed is not None
         assert self.rejected_run is not None and self.min_T is not None and self.max_T is not None and self.nis_sum is not None
@@ -295,7 +303,7 @@ class Monitor:
         step = transition_with_room(dt, room_rate)
         self.carry = replace(self.carry, process_cov=self._process_cov(self.carry.mean[:, 2], dt))
         new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
-        z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
+        z = _normalised_innovation(info)
         # a sensor waiting for its rise has no model yet to call a sample wild against
         modelled = ~np.array(self.waiting_rise) if self.waiting_rise is not None else np.ones(len(y), dtype=bool)
         wild = np.isfinite(z) & (np.abs(z) > self.settings.spike_sigma) & (self.observed >= self.settings.check_samples) & modelled
@@ -309,13 +317,13 @@ class Monitor:
                 messages.append(f"sensor {self.sensors[s]!r}: a second wild sample in a row at t = {t:g} min; not a spike: the warm-up changed course, widening its parameter uncertainty")
             self._widen(broken)
             new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
-            z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
+            z = _normalised_innovation(info)
         if np.any(spikes):
             for s in np.flatnonzero(spikes):
                 messages.append(f"sensor {self.sensors[s]!r}: rejected a spike at t = {t:g} min ({y[s]:.2f} °C, {abs(z[s]):.0f}σ from the prediction)")
             y[spikes] = np.nan
             new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
-            z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
+            z = _normalised_innovation(info)
         for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
             if self._may_say("dropout", int(s), t):
                 messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN or open circuit); bridged{self._quiet_note()}")
@@ -326,9 +334,7 @@ class Monitor:
             self.recent_rows.pop(0)
         self._update_noise(y)
         ok = np.isfinite(z)
-        self.observed = self.observed + ok
-        if self.observed.max() > 3:
-            self.nis_sum = self.nis_sum + np.where(ok & (self.observed > 3), z**2, 0.0)
+        self.observed, self.nis_sum = _count_innovations(self.observed, self.nis_sum, z)
         self.z_history.append([float(v) for v in z])
         self.z_history = self.z_history[-self.settings.check_samples :]
         physical, cov = to_physical(self.carry.mean, self.carry.covariance(), "slope")
@@ -500,7 +506,7 @@ class Monitor:
                 warnings.simplefilter("ignore", RuntimeWarning)  # no valid sample in the last 5 min
                 values = np.where(rows[:, 0][:, None] >= t - 5.0, rows[:, 2:], np.nan)
                 span = np.nanmax(values, axis=0) - np.nanmin(values, axis=0)
-            still_flat = waiting & ~(span >= self._rise_threshold(np.sqrt(self.carry.emission_cov[:, 0, 0])))
+            still_flat = waiting & ~(span >= rise_threshold(np.sqrt(self.carry.emission_cov[:, 0, 0]), self.settings.min_rise_C))
             restart_from[still_flat] = t - 1.0
         # a sensor that begins to rise is started like the first one, after ``init_min`` of its rise
         delay = np.where(waiting, self.settings.init_min, self.settings.restart_delay_min)
@@ -562,10 +568,7 @@ class Monitor:
             dt = 0.0 if k == 0 else float(t[k] - t[k - 1])
             fresh = replace(fresh, process_cov=self._process_cov(fresh.mean[:, 2], dt))
             fresh, info = filter_step(fresh, y[k][:, None], transition_with_room(dt, float(rates[k])), observe_temperature, config, weights)
-            z = info.innovation[:, 0] / np.sqrt(info.innovation_cov[:, 0, 0])
-            ok = np.isfinite(z)
-            observed += ok
-            nis_sum += np.where(ok & (observed > 3), z**2, 0.0)
+            observed, nis_sum = _count_innovations(observed, nis_sum, _normalised_innovation(info))
         # A sensor that only now began to rise starts its statistics and its earlier answers afresh:
         # the filter before had nothing to fit. After a failed model check they are kept: the
         # earlier answers and misfits are evidence that the model is in doubt.
