@@ -3,6 +3,8 @@ misfit detection, presets, minimal identification time."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from conftest import PAPER_RATE, PAPER_START, PAPER_STEADY, first_order, make_log
@@ -10,7 +12,7 @@ from conftest import PAPER_RATE, PAPER_START, PAPER_STEADY, first_order, make_lo
 from mtident.exceptions import InputError
 from mtident.io import read_temperature_log
 from mtident.thermal import METHODS, identify, minimal_identification_time
-from mtident.thermal.identify import Z95, rmse
+from mtident.thermal.identify import MIN_WINDOW_SAMPLES, Z95, rmse
 from mtident.thermal.lsq import cramer_rao_bound
 from mtident.thermal.model import rise_transition, slope_transition, to_physical
 from mtident.thermal.settings import noise_sigma, quick_estimate
@@ -135,6 +137,38 @@ def test_a_warm_up_that_began_after_the_log_is_fitted_from_its_start():
     assert abs(result.equilibrium_time_min[0] - result.measured_equilibrium_time_min[0]) < 10.0
     assert result.start_C[0] == pytest.approx(late[:3].mean(), abs=0.03) and result.rmse_C[0] < 0.1
     np.testing.assert_array_equal(result.curve_C[:15, 0], np.median(late[:3]))
+
+
+@pytest.mark.parametrize("method", ["aukf", "ukf", "lsq"])
+def test_min_time_fits_a_warm_up_that_began_after_the_log_from_its_start(method):
+    """Measured before: the late sensor's best RMSE 0.08 °C (aukf), 0.79-1.25 °C (ukf), and lsq
+    raised curve_fit's ValueError (a flat first window gave a guess outside its bounds)."""
+    t = np.arange(0.0, 121.0)
+    late = first_order(np.clip(t - 15.0, 0.0, None)) + 0.02 * np.random.default_rng(0).standard_normal(len(t))
+    on_time = first_order(t) + 0.02 * np.random.default_rng(1).standard_normal(len(t))
+    both = minimal_identification_time(make_log(t, {"late": late, "on time": on_time}), method)
+    alone = minimal_identification_time(make_log(t, {"on time": on_time}), method)
+    late_summary, on_time_summary = both.summary(0), both.summary(1)
+    assert late_summary["rise_begins_min"] == 15.0 and "rise_begins_min" not in on_time_summary
+    assert np.nanmin(both.rmse_C[:, :, 0], axis=1).max() < 0.03  # the noise is 0.02 °C
+    # no L with fewer than MIN_WINDOW_SAMPLES samples of the rise is a candidate
+    assert np.all(np.isnan(both.rmse_C[:, both.windows_min < 15.0 + MIN_WINDOW_SAMPLES - 1, 0]))
+    np.testing.assert_allclose(both.rmse_C[:, :, 1], alone.rmse_C[:, :, 0], rtol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["lsq", "ukf"])
+def test_a_sensor_that_never_heats_neither_crashes_nor_warns(method):
+    """lsq raised curve_fit's ValueError on a flat window; its interval now says it is not identified."""
+    t = np.arange(0.0, 61.0)
+    flat = 20.0 + 0.02 * np.random.default_rng(0).standard_normal(len(t))
+    log = make_log(t, {"flat": flat, "heating": first_order(t)})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = identify(log, 30.0, method)
+        minimal_identification_time(log, method)
+    lo, hi = result.steady_state_ci95()[0]
+    assert lo <= 20.0 <= hi
+    assert result.steady_state_C[1] == pytest.approx(PAPER_STEADY, abs=1e-3)
 
 
 def test_batch_of_sensors_equals_one_at_a_time():

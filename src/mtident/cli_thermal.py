@@ -155,6 +155,9 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
     log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
     with stderr.status("searching identification times…"):
         result = minimal_identification_time(log, method, preset, periods, candidates, room)
+    for name, begins in zip(result.sensors, result.rise_begins_min if result.rise_begins_min is not None else [], strict=False):
+        if np.isfinite(begins):
+            stderr.print(f"mtident: sensor {name!r} stays at its first level until t = {begins:g} min (the warm-up began after the log); fitted from there, L still counts from the log's start", highlight=False)
     if plot_path:
         from mtident.report import plot_min_time
 

@@ -36,16 +36,27 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
     guess : ndarray, shape (S, 3)
         Starting point [T₀, λ, T∞].
     """
-    from scipy.optimize import curve_fit  # here, not at the top: it costs ~0.3 s of start-up
+    from scipy.optimize import OptimizeWarning, curve_fit  # here, not at the top: it costs ~0.3 s of start-up
 
     params, covs, sigmas = [], [], []
     for s in range(values.shape[1]):
         ok = np.isfinite(values[:, s])
         t, y = time_min[ok], values[ok, s]
+        # A flat window (a sensor that never heats) gives a guess with λ ≤ 0 or NaN, which
+        # curve_fit refuses; start such a fit inside the bounds instead.
+        start = np.asarray(guess[s], dtype=float).copy()
+        level = float(np.mean(y)) if y.size else 0.0
+        start[[0, 2]] = np.where(np.isfinite(start[[0, 2]]), start[[0, 2]], level)
+        start[1] = np.clip(start[1], 1e-5, 9.0) if np.isfinite(start[1]) else 0.01
         try:
-            p, c = curve_fit(rise_curve, t, y, p0=guess[s], bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]), max_nfev=2000)
+            if y.size < 3:
+                raise RuntimeError
+            with warnings.catch_warnings():
+                # no covariance for a flat or too short window: reported as unbounded below
+                warnings.simplefilter("ignore", OptimizeWarning)
+                p, c = curve_fit(rise_curve, t, y, p0=start, bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]), max_nfev=2000)
         except RuntimeError:
-            p, c = np.asarray(guess[s], dtype=float), np.full((3, 3), np.inf)
+            p, c = start, np.full((3, 3), np.inf)
         if not np.all(np.isfinite(c)):
             c = np.diag(np.full(3, 1e12))
         params.append(p)
@@ -131,7 +142,8 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
         return onsets
     sigma = np.maximum(noise_sigma(y), 1e-6)
     # a warm-up that begins after the log: its flat minutes go first
-    onsets = np.minimum(flat_lead(t, y, sigma), len(t) - 1)
+    last_flat = flat_lead(t, y, sigma)
+    onsets = np.where(last_flat < len(t), last_flat, 0)  # a sensor that never rises has no flat lead to cut
     lead = lead + int(onsets.max())
     for _ in range(2):
         used = y.copy()

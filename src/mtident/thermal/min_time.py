@@ -10,11 +10,17 @@ both are reported.
 One filter run per sensor serves every L (the state at L is the filtered state
 after L's last sample), and the predictions from all L of all sensors advance
 as one batch.
+
+A warm-up that began after the log (flat at its first level for 10 min or
+more, :func:`~mtident.thermal.lsq.flat_lead`; data tuning only) is identified
+from its last flat sample, as ``identify`` does: its curve is held at the first
+level before that, L still counts from the log's start, and an L that has fewer
+than ``MIN_WINDOW_SAMPLES`` samples of the rise is no candidate for that sensor.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -22,9 +28,9 @@ from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
-from mtident.thermal.lsq import fit_rise
+from mtident.thermal.lsq import fit_rise, flat_lead
 from mtident.thermal.model import heat_balance_path, rise_curve
-from mtident.thermal.settings import METHODS, filter_config, preset_tuning, tuning_from_data
+from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 
 __all__ = ["MinTimeResult", "minimal_identification_time"]
 
@@ -61,6 +67,7 @@ class MinTimeResult:
     min_identification_time_min: FloatArray
     agreement: FloatArray
     measuring_time_min: float
+    rise_begins_min: FloatArray | None = None
 
     def summary(self, index: int) -> dict[str, object]:
         """The contract's JSON object for one sensor, plus extras."""
@@ -77,6 +84,7 @@ class MinTimeResult:
             "best_per_period_min": {f"{p:g}": float(b) for p, b in zip(self.periods_min, self.best_per_period_min[:, index], strict=True)},
             "periods_agree": bool(self.agreement[index]),
             "measuring_time_needed_min": float(self.measuring_time_min),
+            **({"rise_begins_min": float(self.rise_begins_min[index])} if self.rise_begins_min is not None and np.isfinite(self.rise_begins_min[index]) else {}),
         }
 
 
@@ -149,19 +157,28 @@ def _search(
     n_max = int(counts.max())
     S = y.shape[1]
     W = len(candidates)
+    onsets = np.zeros(S, dtype=int)
+    if preset == "data":
+        last_flat = flat_lead(t[:n_total], y[:n_total], noise_sigma(y[:n_total]))
+        onsets = np.where(last_flat < n_total, last_flat, 0)  # a sensor that never rises is left as it is
+    fitted = y.copy()
+    for s in np.flatnonzero(onsets):
+        fitted[: onsets[s], s] = np.nan
+    # (W, S): an L with too few samples of a late sensor's rise is no candidate for it
+    usable = counts[:, None] - onsets[None, :] >= MIN_WINDOW_SAMPLES
 
     # Estimated curves (W, n_total, S): filtered up to L, predicted after.
-    curves = np.empty((W, n_total, S))
+    curves = np.full((W, n_total, S), np.nan)
     if method == "lsq":
-        guess = tuning_from_data(t[: counts[0]], y[: counts[0]]).initial_mean
+        guess = _prior(t, y, fitted, int(counts[0]), onsets).initial_mean
         for i, n in enumerate(counts):
-            fit = fit_rise(t[:n], y[:n], guess)
-            params = fit.params
-            curves[i] = rise_curve(t[:n_total, None], params[:, 0], params[:, 1], params[:, 2])
+            if not usable[i].any():
+                continue
+            params = fit_rise(t[:n], fitted[:n][:, usable[i]], guess[usable[i]]).params
+            curves[i][:, usable[i]] = rise_curve(t[:n_total, None], params[:, 0], params[:, 1], params[:, 2])
     else:
-        prior_n = int(counts[0])
-        tuning = tuning_from_data(t[:prior_n], y[:prior_n]) if preset == "data" else preset_tuning(preset, S)
-        _, physical, _ = filter_window(t[:n_max], y[:n_max], filter_config(method, tuning), tuning, None if room_rate is None else room_rate[:n_max])
+        tuning = _prior(t, y, fitted, int(counts[0]), onsets) if preset == "data" else preset_tuning(preset, S)
+        _, physical, _ = filter_window(t[:n_max], fitted[:n_max], filter_config(method, tuning), tuning, None if room_rate is None else room_rate[:n_max])
         last = counts - 1
         at_window = physical[last]  # (W, S, 3): [T, λ, T∞] after each L's last sample
         if room_rate is None:
@@ -175,13 +192,17 @@ def _search(
             curves[i, :n] = filtered[:n]
             curves[i, n:] = predicted[i, n:]
         curves = np.where(np.isfinite(curves), curves, np.inf)  # a diverged filter has no minimum there
+    first_level = np.median(y[:3], axis=0)
+    for s in np.flatnonzero(onsets):
+        curves[:, : onsets[s], s] = first_level[s]
+    curves = np.where(usable[:, None, :], curves, np.nan)
 
     table = np.full((len(periods), W, S), np.nan)
     for p, period in enumerate(periods):
         n_period = log.window(period)
         for i, window in enumerate(candidates):
             if window < period:
-                table[p, i] = rmse(curves[i, :n_period], y[:n_period])
+                table[p, i] = np.where(usable[i], rmse(curves[i, :n_period], y[:n_period]), np.nan)
     safe = np.where(np.isfinite(table), table, np.inf)
     best_index = np.argmin(safe, axis=1)  # (P, S)
     best = candidates[best_index]
@@ -189,7 +210,22 @@ def _search(
     relative = safe / np.min(safe, axis=1, keepdims=True)
     overall = candidates[np.argmin(np.sum(np.where(np.isfinite(relative), relative, 1e9), axis=0), axis=0)]
     chosen = np.where(agreement, best[0], overall)
-    return MinTimeResult(log.sensors, method, candidates, periods, table, best, chosen, agreement, float(periods[-1]))
+    begins = np.where(onsets > 0, t[onsets], np.nan)
+    return MinTimeResult(log.sensors, method, candidates, periods, table, best, chosen, agreement, float(periods[-1]), begins)
+
+
+def _prior(time_min: FloatArray, values: FloatArray, fitted: FloatArray, n_first: int, onsets: IntArray) -> ThermalTuning:
+    """The data tuning from each sensor's first ``n_first`` samples of its rise (``fitted``: NaN before its onset)."""
+    tuning = tuning_from_data(time_min[:n_first], values[:n_first])
+    for s in np.flatnonzero(onsets):
+        onset = int(onsets[s])
+        # the late sensor's own window from its onset, carried back to the log's start
+        own = tuning_from_data(time_min[onset : onset + n_first], fitted[onset : onset + n_first, [s]], start_min=float(time_min[0]))
+        fields = {name: getattr(tuning, name).copy() for name in ("initial_mean", "initial_cov", "process_cov", "emission_cov", "threshold_C")}
+        for name, array in fields.items():
+            array[s] = getattr(own, name)[0]
+        tuning = replace(tuning, **fields)
+    return tuning
 
 
 def _predict_with_room(time_min: FloatArray, room_rate: FloatArray, at_window: FloatArray, last: IntArray) -> FloatArray:

@@ -153,8 +153,12 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     return start, rate, steady
 
 
-def tuning_from_data(time_min: FloatArray, values: FloatArray) -> ThermalTuning:
+def tuning_from_data(time_min: FloatArray, values: FloatArray, start_min: float | None = None) -> ThermalTuning:
     """The default: initial values and noise taken from the window itself.
+
+    The initial state is for ``start_min`` (default the window's first time),
+    carried back along the first-order curve from each sensor's first valid
+    sample (a flat start left out, a warm-up that began after the log).
 
     State [T, s, λ] (the "slope" parametrisation). T₀ from the first samples,
     λ and T∞ from :func:`quick_estimate` (s₀ = λ₀(T∞,₀ − T₀)), R from
@@ -169,7 +173,7 @@ def tuning_from_data(time_min: FloatArray, values: FloatArray) -> ThermalTuning:
     # A sensor whose first samples are left out (NaN: a flat start, see thermal.lsq.first_order_onset)
     # starts at t₀ on its first-order curve carried back from its first sample.
     first = np.array([time_min[np.flatnonzero(np.isfinite(col))[0]] for col in np.asarray(values, dtype=float).T])
-    carried = steady + (start - steady) * np.exp(rate * (first - time_min[0]))
+    carried = steady + (start - steady) * np.exp(rate * (first - (time_min[0] if start_min is None else start_min)))
     carried = np.where(np.isfinite(carried), carried, start)
     carry_sd = 0.5 * np.abs(carried - start)
     start = carried
