@@ -12,7 +12,7 @@ Without a room sensor the monitor allows for an unmeasured room wandering by
 0.05 °C in an hour (1σ, the default ``--room-wander``); the rows marked
 "wander 0" take the room as steady, for comparison.
 
-Run: python benchmarks/bench_watch.py
+Run: python benchmarks/bench_watch.py [SEEDS]   (20 seeded replays per kind unless given)
 """
 
 from __future__ import annotations
@@ -191,7 +191,7 @@ def network_table(times: np.ndarray, values: np.ndarray, sensors: tuple[str, ...
 
 
 def main() -> None:
-    count = 20
+    count = int(sys.argv[1]) if len(sys.argv) > 1 else 20
     print(f"Replays of {count} seeded warm-ups of each kind, σ = 0.02 °C, 1-min samples, tolerance {TOLERANCE} °C.")
     print("error = |T∞ at the stop − the curve's value at 2,000 min|; with a drifting room, the steady state under the room's offset at the stop.")
     print(f"{'kind':>31} {'stopped':>8} {'stop/t_eq median':>17} {'max':>6} {'max error °C':>13} {'error > tol':>12}")

@@ -104,7 +104,7 @@ class MonitorSettings:
     hold_fraction: float = 0.1
     min_duration_min: float = 30.0
     consistency_window_min: float = 60.0
-    consistency_factor: float = 1.5
+    consistency_factor: float = 1.0
     room_coupling: str = "lagged"
     quiet_min: float = 60.0
     creep_holds: float = 3.0
