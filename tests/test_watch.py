@@ -211,6 +211,7 @@ def test_watch_replay_json_contract(tmp_path):
     assert set(data) >= {"stop_time_min", "steady_state_C", "steady_state_ci95_C", "equilibrium_time_min", "sensors"}
     assert data["stop_time_min"] is not None and (tmp_path / "w.png").stat().st_size > 1000
     assert (tmp_path / "spindle_warmup.watch-state.json").is_file()
+    assert "no room sensor; the room is taken to wander by about 0.05 °C in an hour" in out.stderr  # the assumption is said
 
 
 def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
@@ -425,6 +426,7 @@ def test_watch_ambient_option(tmp_path):
     data = json.loads(out.stdout)
     assert data["sensor"] == "spindle" and data["stop_time_min"] is not None
     assert "--room-coupling lagged" in out.stderr and "give --room-coupling direct" in out.stderr  # the assumed coupling is said
+    assert "no room sensor" not in out.stderr
     out = mtident("thermal", "watch", str(path), "--ambient", "room", "--room-coupling", "direct", "--replay", "--json", "--state", str(tmp_path / "d.json"), cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["stop_time_min"] is not None

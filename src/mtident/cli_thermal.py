@@ -249,6 +249,14 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             "for sensors in the machine's structure); give --room-coupling direct for sensors in the air stream or on a thin cover",
             highlight=False,
         )
+    if ambient_col is None and room_wander > 0:
+        # Without a room sensor the room is an assumption (bench_watch: a room cycling by 0.15 °C,
+        # five times the default wander, stopped 2 of 100 replays just beyond a 0.2 °C tolerance).
+        stderr.print(
+            f"mtident: note: no room sensor; the room is taken to wander by about {room_wander:g} °C in an hour (--room-wander). "
+            "A room that drifts more (an air-conditioning cycle) can bias T∞ by a tenth of a degree or more: give --ambient ROOM_COLUMN if the log has one",
+            highlight=False,
+        )
     room_coupling = room_coupling or "lagged"
     if ambient_col is not None:
         # read the room column with the sensors; it is split off again below
