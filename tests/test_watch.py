@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -170,6 +171,39 @@ def test_a_warm_up_that_begins_after_the_log_is_identified_from_its_rise(delay):
     # killed while it waits for the rise, or just after its new start: the same decision
     for cut in (12, int(delay) + 5, int(delay) + 12):
         first = Monitor(("S", "cold"))
+        first.feed(T[:cut], columns[:cut])
+        resumed = Monitor.from_dict(json.loads(json.dumps(first.to_dict())))
+        resumed.feed(T[cut:], columns[cut:])
+        assert resumed.result() == result
+
+
+@pytest.mark.parametrize("connected_at", [None, 20, 60])
+def test_a_sensor_without_readings_at_the_start_waits_for_them(connected_at):
+    """A sensor with no valid reading in the start window (dead, or plugged in later) crashed the
+    monitor with an IndexError. Now it waits: never read, it is "no data" and left out of the
+    decision; read later (a warm-up already under way), it is identified from its readings."""
+    rng = np.random.default_rng(2)
+    good = first_order(T) + 0.02 * rng.standard_normal(len(T))
+    late = first_order(T, steady=30.0) + 0.02 * rng.standard_normal(len(T))
+    late[: len(T) if connected_at is None else connected_at] = np.nan
+    columns = np.column_stack([good, late])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        monitor = Monitor(("good", "late"))
+        messages = monitor.feed(T, columns)
+    assert any("'late': no valid reading in the first 10 min" in m and "waiting for its readings" in m for m in messages)
+    result = monitor.result()
+    good_alone = replay({"good": good}).result()
+    late_summary = result["sensors"][1]
+    if connected_at is None:
+        assert late_summary["status"] == "no data" and late_summary["steady_state_C"] is None
+        assert result["stop_time_min"] == good_alone["stop_time_min"]
+    else:
+        assert result["stop_time_min"] is not None and result["stop_time_min"] > connected_at
+        assert abs(late_summary["steady_state_C"] - 30.0) <= 0.2
+    # killed while it waits for its readings, or just after: the same decision
+    for cut in (12, (connected_at or 30) + 5):
+        first = Monitor(("good", "late"))
         first.feed(T[:cut], columns[:cut])
         resumed = Monitor.from_dict(json.loads(json.dumps(first.to_dict())))
         resumed.feed(T[cut:], columns[cut:])

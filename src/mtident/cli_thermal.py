@@ -322,7 +322,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         msg = f"{path}: no data rows"
         raise InputError(msg)
     if plot_path:
-        _plot_watch(path, monitor, plot_path, time_col, time_unit)
+        problem = _plot_watch(path, monitor, plot_path, time_col, time_unit)
+        if problem:
+            stderr.print(f"mtident: warning: no plot drawn: {problem}", highlight=False)
     result = monitor.result()
     if as_json:
         print_json(result)
@@ -348,12 +350,17 @@ class _Nothing:
         return None
 
 
-def _plot_watch(path: Path, monitor, plot_path: str, time_col: str | None, time_unit: str | None) -> None:  # noqa: ANN001
-    """Redraw the measured log and the monitor's current prediction."""
+def _plot_watch(path: Path, monitor, plot_path: str, time_col: str | None, time_unit: str | None) -> str | None:  # noqa: ANN001
+    """Redraw the measured log and the monitor's current prediction; why not, if it could not be read.
+
+    While the logger writes, a failed read is usually its last line half written,
+    and the next redraw catches up; the caller says the reason only for the last one.
+    """
     from mtident.report.plots import plot_monitor
 
     try:
         log = read_temperature_log(path, time_col=time_col, time_unit=time_unit).select(list(monitor.sensors))
-    except (InputError, OSError):
-        return  # the logger is mid-write; the next redraw will catch up
+    except (InputError, OSError) as exc:
+        return str(exc)
     plot_monitor(log, monitor, plot_path)
+    return None

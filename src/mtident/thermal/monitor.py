@@ -86,6 +86,8 @@ __all__ = ["MonitorSettings", "Monitor", "SensorStatus", "ROOM_COUPLINGS"]
 # How a sensor feels the room (with a room sensor): "lagged", through the machine's own heat
 # balance (a sensor in the structure); "direct", at once (a sensor in the air stream, on a thin cover).
 ROOM_COUPLINGS = ("lagged", "direct")
+# statuses of sensors left out of the decision: they give no warm-up to wait for
+_LEFT_OUT = ("no rise", "no data")
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,6 +191,7 @@ class Monitor:
     # per sensor, the time of the last failed model check while a re-identification waits for data (NaN: none)
     restart_from: list[float] | None = None
     waiting_rise: list[bool] | None = None  # per sensor: flat since the start, its filter waits for the rise
+    unread: list[bool] | None = None  # per sensor: no valid reading yet (disconnected, or dead from the start)
     recent_rows: list[list[float]] = field(default_factory=list)  # [t, room rate, y per sensor] over the last restart_delay_min
     # derived from the tuning once per process (not saved): the step needs them every sample
     _config: FilterConfig | None = field(default=None, repr=False, compare=False)
@@ -258,7 +261,13 @@ class Monitor:
     def _start(self) -> list[str]:
         t = np.array(self.buffer_t)
         y = np.array(self.buffer_y)
-        filled = np.where(np.isfinite(y), y, np.nanmean(y, axis=0))
+        # A sensor without one valid reading yet gets a flat placeholder; it waits for its rise,
+        # and its filter is moved to its first reading when one comes (:meth:`_step`).
+        unread = ~np.isfinite(y).any(axis=0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # the mean of an unread column
+            filled = np.where(np.isfinite(y), y, np.where(unread, 0.0, np.nanmean(y, axis=0)))
+        self.unread = [bool(u) for u in unread]
         self.tuning = tuning_from_data(t, filled)
         config, _ = self._filter()
         self.carry = initial_carry(GaussianState(self.tuning.initial_mean, self.tuning.initial_cov), self.tuning.process_cov, self.tuning.emission_cov, config)
@@ -277,13 +286,15 @@ class Monitor:
         # A sensor that has not begun to rise (the logger started before the spindle) gives no
         # first-order curve to start from: its filter is started again once it rises.
         # One that rose only after a few flat minutes is started again from the start of its rise.
-        last_flat = flat_lead(t, y, noise_sigma(filled), self.settings.min_rise_C, self.settings.late_rise_min)
+        last_flat = np.where(unread, len(t), flat_lead(t, y, noise_sigma(filled), self.settings.min_rise_C, self.settings.late_rise_min))
         late = last_flat > 0
         never = last_flat >= len(t)
         self.restart_from = [float(t[0]) if nv else float(t[k]) if lt else float("nan") for k, lt, nv in zip(last_flat, late, never, strict=True)]
         self.waiting_rise = [bool(lt) for lt in late]
         for s in np.flatnonzero(late):
-            if never[s]:
+            if unread[s]:
+                messages.append(f"sensor {self.sensors[s]!r}: no valid reading in the first {t[-1] - t[0]:g} min (empty, NaN, not a number or open circuit); waiting for its readings")
+            elif never[s]:
                 messages.append(f"sensor {self.sensors[s]!r}: no rise in the first {t[-1] - t[0]:g} min; waiting for its warm-up to begin")
             else:
                 messages.append(f"sensor {self.sensors[s]!r}: flat until t = {t[last_flat[s] + 1]:g} min; identifying it from the start of its rise")
@@ -301,6 +312,7 @@ class Monitor:
         if self.median_dt and dt > self.settings.gap_factor * self.median_dt:
             messages.append(f"gap in the log: {dt:g} min without samples before t = {t:g} min; bridged by the model")
         step = transition_with_room(dt, room_rate)
+        self._first_readings(y)
         self.carry = replace(self.carry, process_cov=self._process_cov(self.carry.mean[:, 2], dt))
         new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
         z = _normalised_innovation(info)
@@ -326,7 +338,7 @@ class Monitor:
             z = _normalised_innovation(info)
         for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
             if self._may_say("dropout", int(s), t):
-                messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN or open circuit); bridged{self._quiet_note()}")
+                messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN, not a number or open circuit); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
         self.recent_rows.append([t, room_rate, *[float(v) for v in y]])
@@ -363,11 +375,30 @@ class Monitor:
         status = self.status(None if np.any(misfit) or np.any(due) else (physical, cov, misfit_now))
         messages.extend(self._note_wandering(status))
         self._record_checkpoint(t, status)
-        if self.stop_time is None and all(st.may_stop for st in status) and not all(st.status == "no rise" for st in status):
+        if self.stop_time is None and all(st.may_stop for st in status) and not all(st.status in _LEFT_OUT for st in status):
             self.stop_time = t
             self.decision = [self._summary(st) for st in status]
             messages.append(f"the test can stop at t = {t:g} min")
         return messages
+
+    def _first_readings(self, y: FloatArray) -> None:
+        """A sensor read for the first time: its flat placeholder filter moves to the reading.
+
+        It is still waiting for its rise (flat since the start, as far as the
+        monitor knows), so it is started afresh once it rises.
+        """
+        if self.unread is None or not any(self.unread):
+            return
+        assert self.carry is not None and self.min_T is not None and self.max_T is not None
+        first = np.array(self.unread) & np.isfinite(y)
+        if not np.any(first):
+            return
+        mean = self.carry.mean.copy()
+        mean[first, 0] = y[first]
+        self.carry = replace(self.carry, mean=mean)
+        self.min_T = np.where(first, y, self.min_T)
+        self.max_T = np.where(first, y, self.max_T)
+        self.unread = [bool(u and not f) for u, f in zip(self.unread, first, strict=True)]
 
     def _record_checkpoint(self, t: float, status: list[SensorStatus]) -> None:
         """Keep each T∞ (over the room, with ``ambient``) and its half-width, about 60 times per window."""
@@ -377,7 +408,7 @@ class Monitor:
         # Estimates before the minimum duration, or with intervals wider than twice the tolerance,
         # are too far from Gaussian (T∞ = T + s/λ is a ratio) to hold later ones to.
         mature = t >= self.settings.min_duration_min
-        usable = [mature and st.status not in ("no steady state yet", "no rise") and st.half_width_C <= 2 * self.settings.tolerance_C for st in status]
+        usable = [mature and st.status not in ("no steady state yet", *_LEFT_OUT) and st.half_width_C <= 2 * self.settings.tolerance_C for st in status]
         steady = [st.steady_state_C if use else float("nan") for st, use in zip(status, usable, strict=True)]
         self.checkpoints.append([t, self.ambient_level or 0.0, *steady, *[st.half_width_C for st in status]])
         while self.checkpoints and self.checkpoints[0][0] < t - window:
@@ -630,7 +661,9 @@ class Monitor:
             waiting = self.waiting_rise is not None and self.waiting_rise[s]
             # waiting and flat over the last 5 min (its window start moved up to now): no rise yet
             still_flat = waiting and self.restart_from is not None and self.last_t is not None and self.restart_from[s] >= self.last_t - 1.0
-            if long_enough and (rise < self.settings.min_rise_C or still_flat):
+            if self.unread is not None and self.unread[s]:
+                state, may = ("no data", True) if long_enough else ("collecting", False)
+            elif long_enough and (rise < self.settings.min_rise_C or still_flat):
                 state, may = "no rise", True
             elif waiting:
                 state, may = "collecting", False
@@ -648,6 +681,9 @@ class Monitor:
                 state, may = "settling", False
             else:
                 state, may = "may stop", True
+            if self.unread is not None and self.unread[s]:  # its filter holds a placeholder, not an estimate
+                out.append(SensorStatus(name, float("nan"), float("nan"), float("nan"), float("nan"), may, state))
+                continue
             out.append(SensorStatus(name, float(physical[s, 0]) + offset, steady + offset, half, eq, may, state))
         return out
 
@@ -693,7 +729,7 @@ class Monitor:
         """The contract's JSON object: the decision if reached, else the current estimates."""
         sensors = self.decision if self.decision is not None else [self._summary(st) for st in self.status()]
         payload: dict[str, object] = {"stop_time_min": self.stop_time, "decision": "stop" if self.stop_time is not None else "continue", "last_time_min": self.last_t}
-        eq = [d["equilibrium_time_min"] for d in sensors if d["equilibrium_time_min"] is not None and d["status"] != "no rise"]
+        eq = [d["equilibrium_time_min"] for d in sensors if d["equilibrium_time_min"] is not None and d["status"] not in _LEFT_OUT]
         if self.stop_time is not None and eq:
             payload["time_saved_min"] = max(float(e) for e in eq) - self.stop_time  # type: ignore[arg-type]
         if len(sensors) == 1:
@@ -702,7 +738,7 @@ class Monitor:
         else:
             # The contract's single-sensor keys describe the slowest sensor: the one whose
             # equilibrium the test waits for.
-            ranked = [d for d in sensors if d["equilibrium_time_min"] is not None and d["status"] != "no rise"] or sensors
+            ranked = [d for d in sensors if d["equilibrium_time_min"] is not None and d["status"] not in _LEFT_OUT] or sensors
             slowest = max(ranked, key=lambda d: d["equilibrium_time_min"] or 0.0)  # type: ignore[arg-type,return-value]
             payload.update({k: v for k, v in slowest.items() if k != "status"})
             payload["sensors"] = sensors
@@ -745,6 +781,7 @@ class Monitor:
             "wandering": self.wandering,
             "restart_from": self.restart_from,
             "waiting_rise": self.waiting_rise,
+            "unread": self.unread,
             "recent_rows": self.recent_rows,
             "last_said": self.last_said,
             "stop_time": self.stop_time,
@@ -790,6 +827,7 @@ class Monitor:
             wandering=data.get("wandering"),
             restart_from=data.get("restart_from"),
             waiting_rise=data.get("waiting_rise"),
+            unread=data.get("unread"),
             recent_rows=[list(r) for r in data.get("recent_rows", [])],
             last_said=dict(data.get("last_said", {})),
             stop_time=data["stop_time"],
