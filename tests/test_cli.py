@@ -24,6 +24,28 @@ def test_help_lists_the_command_groups():
     assert "identify" in mtident("thermal", "--help").stdout
 
 
+def test_every_command_help_describes_its_options_without_placeholders():
+    """click described an unbounded number range as "x<=None"."""
+    import click
+    from click.testing import CliRunner
+
+    from mtident.cli import main
+
+    def paths(group: click.Group, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
+        out = []
+        for name, command in group.commands.items():
+            out.append((*prefix, name))
+            if isinstance(command, click.Group):
+                out.extend(paths(command, (*prefix, name)))
+        return out
+
+    commands = paths(main)
+    assert ("feeddrive", "simulate") in commands and ("thermal", "watch") in commands
+    for path in commands:
+        result = CliRunner().invoke(main, [*path, "--help"])
+        assert result.exit_code == 0 and "None" not in result.output, (path, result.output)
+
+
 def test_thermal_identify_json_has_the_contract_keys(tmp_path):
     png = tmp_path / "fit.png"
     out = mtident("thermal", "identify", "@sample", "--sensor", "T3", "--window", "30", "--json", "--plot", str(png))

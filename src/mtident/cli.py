@@ -31,6 +31,10 @@ class FiniteFloatRange(click.FloatRange):
 
     name = "finite float"
 
+    def _describe_range(self) -> str:
+        # click describes a range without bounds as "x<=None" in the help
+        return "" if self.min is None and self.max is None else super()._describe_range()
+
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
         number = super().convert(value, param, ctx)
         if not math.isfinite(number):
