@@ -14,6 +14,7 @@ from mtident.feeddrive import (
     IDENTIFIED,
     Excitation,
     FeedDriveParameters,
+    Response,
     default_guess,
     identify_feed_drive,
     load_parameters,
@@ -123,6 +124,13 @@ def test_response_csv_round_trip_and_errors(tmp_path):
     (tmp_path / "bad.csv").write_text("t,x\n0,1\n")
     with pytest.raises(InputError, match="no time_s column"):
         read_response(tmp_path / "bad.csv")
+    lines = path.read_text().splitlines()
+    cells = lines[3].split(",")
+    for cell, message in (("", r"row 4: empty or NaN"), ("oops", r"row 4: 'oops' is not a number")):
+        cells[5] = cell
+        (tmp_path / "bad.csv").write_text("\n".join([*lines[:3], ",".join(cells), *lines[4:]]) + "\n")
+        with pytest.raises(InputError, match=f"column 'x_t_m', {message}"):
+            read_response(tmp_path / "bad.csv")
     with pytest.raises(InputError, match="noise needs a seeded generator"):
         simulate(FeedDriveParameters(), noise_fraction=0.01)
 
@@ -166,6 +174,10 @@ def test_identify_errors():
         identify_feed_drive(response, measured="some")
     with pytest.raises(InputError, match="preset 'fast' is not one of"):
         identify_feed_drive(response, preset="fast")
+    # a dead channel (or no excitation at all) used to run, warn from numpy and return the guess
+    dead = Response(response.time_s, response.forces, np.where(np.arange(12) == 2, 0.0, response.values))
+    with pytest.raises(InputError, match="'theta_b_rad' is constant throughout"):
+        identify_feed_drive(dead)
 
 
 def run(*args):

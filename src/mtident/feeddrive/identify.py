@@ -178,6 +178,13 @@ def identify_feed_drive(
     if missing:
         msg = f"the response has no {missing[0]!r} column, which the measurement set {measured!r} needs"
         raise InputError(msg)
+    constant = [RESPONSE_COLUMNS[i] for i in indices if np.ptp(response.values[:, i]) == 0]
+    if constant:
+        msg = (
+            f"the response column {constant[0]!r} is constant throughout ({response.values[0, RESPONSE_COLUMNS.index(constant[0])]:g}): "
+            "a dead channel, or no excitation; check it, or choose a measurement set without it"
+        )
+        raise InputError(msg)
     if preset not in ("default", "paper"):
         msg = f"preset {preset!r} is not one of: default, paper"
         raise InputError(msg)

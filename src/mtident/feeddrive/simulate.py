@@ -158,7 +158,9 @@ def read_response(path: str | Path) -> Response:
         bad = numeric[column].isna()
         if bad.any():
             row = int(np.argmax(bad.to_numpy()))
-            msg = f"{path}: column {column!r}, row {row + 2}: {frame[column].iloc[row]!r} is not a number"
+            raw = frame[column].iloc[row]
+            what = "empty or NaN" if pd.isna(raw) else f"{str(raw)!r} is not a number"
+            msg = f"{path}: column {column!r}, row {row + 2}: {what}; every cell must be a number"
             raise InputError(msg)
     time = numeric["time_s"].to_numpy(dtype=float)
     steps = np.diff(time)
