@@ -365,7 +365,7 @@ class Monitor:
             what = f"identifying it again from the next {self.settings.restart_delay_min:g} min" if measured_room else "widening its parameter uncertainty to follow the new trend"
             for s in np.flatnonzero(misfit):
                 if self._may_say("misfit", int(s), t):
-                    messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode?); {what}{self._quiet_note()}")
+                    messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode, or noise above its estimate so far?); {what}{self._quiet_note()}")
             self._widen(misfit)
         was_waiting = np.array(self.waiting_rise) if self.waiting_rise is not None else np.zeros(len(self.sensors), dtype=bool)
         due = self._schedule_restarts(t, misfit & self.room_measured)
