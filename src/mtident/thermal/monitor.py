@@ -58,7 +58,10 @@ The test may stop when every sensor may, except sensors that show no rise
 
 Bad samples: a spike (|ν|/√S > ``spike_sigma``) is rejected and the step redone
 without it; NaN, empty and open-circuit cells are treated as missing (the
-filter bridges them); a gap in time is bridged by the model and reported.
+filter bridges them); a gap in time is bridged by the model and reported; a
+sensor without a valid reading in the start window (dead, or plugged in later)
+waits for its readings like a sensor that has not begun to rise, and is "no
+data", left out of the decision, if none come.
 Repeated messages of one kind for one sensor (a dead sensor, a slow mode) are
 said at most once per ``quiet_min`` minutes.
 
@@ -661,7 +664,8 @@ class Monitor:
             waiting = self.waiting_rise is not None and self.waiting_rise[s]
             # waiting and flat over the last 5 min (its window start moved up to now): no rise yet
             still_flat = waiting and self.restart_from is not None and self.last_t is not None and self.restart_from[s] >= self.last_t - 1.0
-            if self.unread is not None and self.unread[s]:
+            unread = self.unread is not None and self.unread[s]
+            if unread:
                 state, may = ("no data", True) if long_enough else ("collecting", False)
             elif long_enough and (rise < self.settings.min_rise_C or still_flat):
                 state, may = "no rise", True
@@ -681,7 +685,7 @@ class Monitor:
                 state, may = "settling", False
             else:
                 state, may = "may stop", True
-            if self.unread is not None and self.unread[s]:  # its filter holds a placeholder, not an estimate
+            if unread:  # its filter holds a placeholder, not an estimate
                 out.append(SensorStatus(name, float("nan"), float("nan"), float("nan"), float("nan"), may, state))
                 continue
             out.append(SensorStatus(name, float(physical[s, 0]) + offset, steady + offset, half, eq, may, state))
