@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import first_order
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mtident.io.follow import LogFollower
 from mtident.thermal.monitor import Monitor, MonitorSettings
@@ -484,8 +486,8 @@ def test_live_table_shows_every_sensor_with_its_band_and_status():
     console.print(_status_table(monitor, "log.csv: t = 49 min"))
     text = console.export_text()
     assert "log.csv: t = 49 min" in text and "T∞ ± 95 % (°C)" in text
-    for st in monitor.status():
-        assert st.sensor in text and st.status in text and f"{st.steady_state_C:.2f}" in text
+    for status in monitor.status():
+        assert status.sensor in text and status.status in text and f"{status.steady_state_C:.2f}" in text
 
 
 def test_watch_in_a_terminal_draws_the_live_table(tmp_path):
@@ -524,3 +526,49 @@ def test_the_sample_with_its_room_sensor(tmp_path):
     # measured: 197 min with the room sensor, 305 min without; every T∞ within 0.07 °C of the network's steady state
     assert data["stop_time_min"] is not None and data["stop_time_min"] < 250
     assert [d["sensor"] for d in data["sensors"]] == list(plain.sensors)
+
+
+# ---- damaged logs: any mix of the bad data above ----------------------------------------------
+
+STATUSES = {"collecting", "narrowing", "settling", "wandering", "model check", "may stop", "no rise", "no data", "no steady state yet"}
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    seed=st.integers(0, 2**16),
+    dropout_fraction=st.floats(0.0, 0.2),
+    dead_until=st.sampled_from([0, 8, 25, 400]),
+    late_start=st.sampled_from([0.0, 12.0]),
+    gap=st.tuples(st.integers(20, 150), st.integers(0, 25)),
+    spikes=st.integers(0, 3),
+    with_room=st.booleans(),
+    cut=st.integers(5, 150),
+)
+def test_a_damaged_log_never_crashes_warns_or_loses_the_decision(seed, dropout_fraction, dead_until, late_start, gap, spikes, with_room, cut):
+    """Dropouts, a sensor dead for a while (or for good), a late warm-up, a gap, spikes, with or
+    without a room sensor: the monitor raises nothing, warns nothing, reports known statuses, and
+    a monitor killed at ``cut`` and resumed ends where an uninterrupted one does."""
+    t = np.arange(0.0, 200.0)
+    rng = np.random.default_rng(seed)
+    columns = np.column_stack([first_order(t), first_order(np.clip(t - late_start, 0.0, None), steady=30.0), first_order(t, steady=24.0)])
+    columns = columns + 0.02 * rng.standard_normal(columns.shape)
+    columns[rng.random(columns.shape) < dropout_fraction] = np.nan
+    columns[:dead_until, 2] = np.nan
+    columns[rng.integers(15, len(t), spikes), rng.integers(0, 3, spikes)] += 15.0
+    keep = np.ones(len(t), dtype=bool)
+    keep[gap[0] : gap[0] + gap[1]] = False
+    t, columns = t[keep], columns[keep]
+    room_C = 17.9 + 0.02 * rng.standard_normal(len(t)) if with_room else None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        whole = Monitor(("a", "b", "c"))
+        whole.feed(t, columns, room_C)
+        result = whole.result()
+        cut = min(cut, len(t) - 1)
+        first = Monitor(("a", "b", "c"))
+        first.feed(t[:cut], columns[:cut], None if room_C is None else room_C[:cut])
+        resumed = Monitor.from_dict(json.loads(json.dumps(first.to_dict())))
+        resumed.feed(t[cut:], columns[cut:], None if room_C is None else room_C[cut:])
+    assert resumed.result() == result
+    assert {d["status"] for d in result["sensors"]} <= STATUSES
+    json.dumps(result)
