@@ -374,6 +374,25 @@ def test_state_round_trip_with_a_room_sensor_gives_the_same_decision(coupling):
         assert resumed.result() == whole.result()
 
 
+@pytest.mark.parametrize("coupling", ["lagged", "direct"])
+def test_missing_room_readings_are_said_once_an_hour_and_bridged(coupling):
+    """A dead room sensor used to pass unnoticed (lagged), or turned every sensor into "no data"
+    with messages that blamed the sensors (direct)."""
+    y, room_C = noisy_in_room(machine_in_room(T), 100)
+    dead_until = 30
+    room_C[:dead_until] = np.nan
+    room_C[200] = np.nan
+    monitor = Monitor(("S",), MonitorSettings(room_coupling=coupling))
+    messages = monitor.feed(T, y[:, None], room_C)
+    said = [m for m in messages if m.startswith("room sensor: no valid reading")]
+    first = "the sensors' rise over the room waits for its first reading" if coupling == "direct" else "the room is taken as steady until its first reading"
+    assert said[0].startswith("room sensor: no valid reading at t = 0 min") and first in said[0]
+    assert len(said) == 1 + (monitor.last_t is not None and monitor.last_t >= 200)  # t = 0, and t = 200 if the test ran that far
+    # lagged: the sensor's own readings are all there; direct: its rise over the room is not, until the room reads
+    assert any("'S': no valid reading" in m for m in messages) == (coupling == "direct")
+    assert monitor.result()["stop_time_min"] is not None
+
+
 @pytest.mark.parametrize("seed", [3, 14])
 def test_an_unmeasured_drifting_room_is_allowed_for(seed):
     """No room sensor: the default room wander keeps the answer within the tolerance where a

@@ -91,6 +91,8 @@ __all__ = ["MonitorSettings", "Monitor", "SensorStatus", "ROOM_COUPLINGS"]
 ROOM_COUPLINGS = ("lagged", "direct")
 # statuses of sensors left out of the decision: they give no warm-up to wait for
 _LEFT_OUT = ("no rise", "no data")
+# the room sensor's name in the message log (sensor names are the log's column names)
+_ROOM = "(room sensor)"
 
 
 @dataclass(frozen=True, slots=True)
@@ -239,6 +241,14 @@ class Monitor:
                 if self.ambient_level is not None and self.ambient_time is not None and t > self.ambient_time:
                     rate = (float(a) - self.ambient_level) / (float(t) - self.ambient_time)
                 self.ambient_level, self.ambient_time = float(a), float(t)
+            elif ambient is not None and self._may_say("dropout", _ROOM, float(t)):
+                if self.ambient_level is not None:
+                    held = "its last reading is used"
+                elif self.settings.room_coupling == "direct":
+                    held = "the sensors' rise over the room waits for its first reading"
+                else:
+                    held = "the room is taken as steady until its first reading"
+                messages.append(f"room sensor: no valid reading at t = {t:g} min (empty, NaN, not a number or open circuit); {held}{self._quiet_note()}")
             if ambient is not None and self.settings.room_coupling == "direct":
                 # The raw reading, not a smoothed one: its noise stays white, so the fourth-
                 # difference noise estimate (and with it the interval) accounts for it.
@@ -340,7 +350,7 @@ class Monitor:
             new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
             z = _normalised_innovation(info)
         for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
-            if self._may_say("dropout", int(s), t):
+            if self._may_say("dropout", self.sensors[s], t):
                 messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN, not a number or open circuit); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
@@ -367,7 +377,7 @@ class Monitor:
             measured_room = self.room_measured
             what = f"identifying it again from the next {self.settings.restart_delay_min:g} min" if measured_room else "widening its parameter uncertainty to follow the new trend"
             for s in np.flatnonzero(misfit):
-                if self._may_say("misfit", int(s), t):
+                if self._may_say("misfit", self.sensors[s], t):
                     messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min no longer fit the first-order model (a slower mode, or noise above its estimate so far?); {what}{self._quiet_note()}")
             self._widen(misfit)
         was_waiting = np.array(self.waiting_rise) if self.waiting_rise is not None else np.zeros(len(self.sensors), dtype=bool)
@@ -446,7 +456,7 @@ class Monitor:
         hint = "" if self.ambient_level is not None else "; a room sensor (--ambient) takes the room's drift into account"
         messages = []
         for s in started:
-            if not self._may_say("wandering", s, float(self.last_t or 0.0)):
+            if not self._may_say("wandering", self.sensors[s], float(self.last_t or 0.0)):
                 continue
             k = int(np.argmax(outside[:, s]))
             then, half, when = self.checkpoints[k][2 + s], self.checkpoints[k][2 + len(status) + s], self.checkpoints[k][0]
@@ -456,10 +466,10 @@ class Monitor:
             )
         return messages
 
-    def _may_say(self, kind: str, sensor: int, t: float) -> bool:
-        """Whether to repeat a message of this kind for this sensor: at most once per ``quiet_min``
-        (a dead sensor or a slow mode would otherwise repeat it every sample)."""
-        key = f"{kind}:{self.sensors[sensor]}"
+    def _may_say(self, kind: str, who: str, t: float) -> bool:
+        """Whether to repeat a message of this kind for this sensor (or the room): at most once per
+        ``quiet_min`` (a dead sensor or a slow mode would otherwise repeat it every sample)."""
+        key = f"{kind}:{who}"
         last = self.last_said.get(key)
         if last is not None and t - last < self.settings.quiet_min:
             return False
