@@ -114,6 +114,19 @@ def test_fast_plus_slow_does_not_stop_early_with_a_wrong_answer(seed):
         assert abs(result["steady_state_C"] - final) <= 0.2, result
 
 
+def test_the_model_check_message_says_which_test_failed():
+    """Early large residuals of both signs may come from a noise level estimated from few samples
+    (seed 0, a true first-order curve: σ estimated 0.014 °C, true 0.02 °C); residuals of one sign
+    from a trend the model misses."""
+    y = first_order(T) + 0.02 * np.random.default_rng(0).standard_normal(len(T))
+    messages = replay({"S": y}).notes
+    assert any("residuals at t = 19 min are larger than the noise estimated so far from 20 readings" in m for m in messages)
+    assert not any("a trend it misses" in m for m in messages)
+    truth = 17.9 + 4.0 * (1 - np.exp(-T / 8.0)) + 6.0 * (1 - np.exp(-T / 150.0))
+    messages = replay({"S": truth + 0.02 * np.random.default_rng(202).standard_normal(len(T))}).notes
+    assert any("residuals at t = 28 min no longer fit the first-order model: a trend it misses (a slower mode?)" in m for m in messages)
+
+
 def test_bad_data_is_rejected_bridged_or_reported_without_harming_other_sensors():
     rng = np.random.default_rng(7)
     heating = first_order(T) + 0.02 * rng.standard_normal(len(T))
