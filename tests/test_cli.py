@@ -106,6 +106,21 @@ def test_bad_csv_cell_is_reported(tmp_path):
     assert out.returncode == 2 and "sensor 'A', row 4: 'oops' is not a number" in out.stderr
 
 
+def test_a_dead_column_can_be_left_out_as_the_error_says(tmp_path):
+    """The advice "leave this sensor out with --sensor" did not work: every column was checked first."""
+    import numpy as np
+
+    t = np.arange(0.0, 61.0)
+    path = tmp_path / "dead.csv"
+    path.write_text("time_min,dead,A,room\n" + "".join(f"{tk:g},,{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t))
+    out = mtident("thermal", "identify", str(path), "--window", "30")
+    assert out.returncode == 2 and "leave this sensor out with --sensor" in out.stderr
+    for extra in ((), ("--ambient", "room")):
+        out = mtident("thermal", "identify", str(path), "--sensor", "A", "--window", "30", "--json", *extra)
+        assert out.returncode == 0, out.stderr
+        assert json.loads(out.stdout)["sensor"] == "A"
+
+
 def test_readme_quick_start_and_ci_agree():
     readme = (ROOT / "README.md").read_text()
     block = re.search(r"## Quick start\s+```bash\n(.*?)```", readme, re.S)

@@ -61,6 +61,18 @@ def test_missing_file_and_unknown_sensor(tmp_path, write_csv):
     assert log.select(["all"]) is log
 
 
+def test_a_dead_sensor_that_is_not_asked_for_does_not_stop_the_others(write_csv):
+    """The error for a dead sensor says "leave this sensor out with --sensor"; that used to fail
+    the same way, because every column was checked before the selection."""
+    path = write_csv("time_min,dead,B,A\n" + "".join(f"{k},,{30 + k},{20 + k}\n" for k in range(6)))
+    with pytest.raises(InputError, match="sensor 'dead': 6 of 6 samples are empty"):
+        read_temperature_log(path)
+    log = read_temperature_log(path, sensors=["A", "B"])
+    assert log.sensors == ("A", "B") and log.temperature_C[2].tolist() == [22.0, 32.0]
+    with pytest.raises(InputError, match="no sensor column 'C'; the log has: dead, B, A"):
+        read_temperature_log(path, sensors=["A", "C"])
+
+
 def test_binary_file_is_refused(write_csv, tmp_path):
     path = tmp_path / "bin.csv"
     path.write_bytes(b"\xff\xfe\x00\x01garbage")

@@ -33,9 +33,8 @@ def log_path(file: str) -> Path:
 
 def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None) -> TemperatureLog:
     path = log_path(file)
-    log = read_temperature_log(path, time_col=time_col, time_unit=time_unit)
     names = [name for entry in sensors for name in entry.split(",") if name]
-    log = log.select(names or None)
+    log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=None if names in ([], ["all"]) else names)
     for note in log.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
     return log
@@ -45,10 +44,11 @@ def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None
     """The log's sensors, and the room column split off from them when one is named."""
     if room_col is None:
         return load_log(file, sensors, time_col, time_unit), None
-    every = load_log(file, (), time_col, time_unit)
+    asked = [name for entry in sensors for name in entry.split(",") if name and name != "all"]
+    # only the asked-for columns and the room are read: a dead column elsewhere does not matter
+    every = load_log(file, tuple(dict.fromkeys([*asked, room_col])) if asked else (), time_col, time_unit)
     room = every.select([room_col]).temperature_C[:, 0]
-    names = [name for entry in sensors for name in entry.split(",") if name] or list(every.sensors)
-    names = [name for name in names if name != room_col]
+    names = [name for name in asked or list(every.sensors) if name != room_col]
     if not names:
         msg = f"{every.source}: no sensor column left besides the room column {room_col!r}"
         raise InputError(msg)
@@ -359,7 +359,7 @@ def _plot_watch(path: Path, monitor, plot_path: str, time_col: str | None, time_
     from mtident.report.plots import plot_monitor
 
     try:
-        log = read_temperature_log(path, time_col=time_col, time_unit=time_unit).select(list(monitor.sensors))
+        log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=list(monitor.sensors))
     except (InputError, OSError) as exc:
         return str(exc)
     plot_monitor(log, monitor, plot_path)

@@ -125,6 +125,7 @@ def read_temperature_log(
     time_col: str | None = None,
     time_unit: str | None = None,
     min_samples: int = 5,
+    sensors: list[str] | None = None,
 ) -> TemperatureLog:
     """Read and validate a CSV temperature log.
 
@@ -138,6 +139,9 @@ def read_temperature_log(
         Unit of a numeric time column (default: from the header suffix, else minutes).
     min_samples : int
         Fewest samples accepted.
+    sensors : list of str, optional
+        The sensor columns to read and validate, in this order (default: all).
+        A dead sensor that is not asked for does not stop the others.
 
     Returns
     -------
@@ -175,7 +179,12 @@ def read_temperature_log(
         raise InputError(msg)
     time_min = _parse_time(frame[header], header, time_unit, source)
 
-    sensors = [c for c in frame.columns if c != header]
+    available = [c for c in frame.columns if c != header]
+    missing_names = [n for n in sensors or [] if n not in available]
+    if missing_names:
+        msg = f"{source}: no sensor column {missing_names[0]!r}; the log has: {', '.join(available)}"
+        raise InputError(msg)
+    sensors = list(sensors) if sensors else available
     notes: list[str] = []
     columns = []
     for name in sensors:
