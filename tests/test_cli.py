@@ -89,6 +89,9 @@ def test_thermal_min_time_json_has_the_contract_keys(tmp_path):
         (["thermal", "min-time", "@sample", "--sampling-periods", "35,abc"], "--sampling-periods: expected comma-separated minutes"),
         (["thermal", "min-time", "@sample", "--sampling-periods", "35,500"], "the longest sampling period is 500 min"),
         (["thermal", "min-time", "@sample", "--windows", "30:10"], "--windows: expected START:STOP"),
+        (["feeddrive", "simulate", "--duration", "1e-9", "--out", "x.csv"], "gives 1 sample(s); identification needs at least 10"),
+        (["feeddrive", "simulate", "--excitation", "sine", "--frequency", "6000", "--out", "x.csv"], "the sine reaches 6000 Hz, above half the sampling rate (5000 Hz)"),
+        (["feeddrive", "simulate", "--excitation", "sweep", "--fs", "1000", "--out", "x.csv"], "the sweep reaches 2000 Hz, above half the sampling rate (500 Hz)"),
     ],
 )
 def test_user_errors_are_one_line_without_traceback(args, message):

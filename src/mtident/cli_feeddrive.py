@@ -10,6 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from mtident.cli import FiniteFloatRange, feeddrive, print_json, user_errors
+from mtident.exceptions import InputError
 from mtident.feeddrive import (
     IDENTIFIED,
     Excitation,
@@ -63,8 +64,8 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
 @click.option("--impulse", "amplitude", type=FiniteFloatRange(), default=20.0, show_default=True, help="Force amplitude (N or N m).")
 @click.option("--excitation", "kind", type=click.Choice(EXCITATION_KINDS), default="impulse", show_default=True)
 @click.option("--on", "coordinate", type=click.Choice(COORDINATES), default="table", show_default=True, help="Coordinate the force acts on (motor_rotation: motor torque T_m).")
-@click.option("--frequency", "frequency_Hz", type=FiniteFloatRange(), default=100.0, show_default=True, help="Sine frequency, or sweep start (Hz).")
-@click.option("--frequency-end", "frequency_end_Hz", type=FiniteFloatRange(), default=2000.0, show_default=True, help="Sweep end (Hz).")
+@click.option("--frequency", "frequency_Hz", type=FiniteFloatRange(min=0), default=100.0, show_default=True, help="Sine frequency, or sweep start (Hz).")
+@click.option("--frequency-end", "frequency_end_Hz", type=FiniteFloatRange(min=0), default=2000.0, show_default=True, help="Sweep end (Hz).")
 @click.option("--noise", "noise_fraction", type=FiniteFloatRange(min=0), default=0.0, show_default=True, help="Measurement noise, fraction of each response's RMS.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, writable=True), required=True, help="CSV to write.")
@@ -72,6 +73,14 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
 @user_errors
 def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz: float, amplitude: float, kind: str, coordinate: str, frequency_Hz: float, frequency_end_Hz: float, noise_fraction: float, seed: int, out_path: str, plot_path: str | None) -> None:
     """Simulate the vibration response by classical RK4 and write it as CSV."""
+    samples = int(np.floor(duration_s * sample_rate_Hz + 1e-9)) + 1
+    if samples < 10:
+        msg = f"--duration {duration_s:g} s at --fs {sample_rate_Hz:g} Hz gives {samples} sample(s); identification needs at least 10"
+        raise InputError(msg)
+    highest = {"sine": frequency_Hz, "sweep": max(frequency_Hz, frequency_end_Hz)}.get(kind, 0.0)
+    if highest > sample_rate_Hz / 2:
+        msg = f"the {kind} reaches {highest:g} Hz, above half the sampling rate ({sample_rate_Hz / 2:g} Hz): the samples would alias it; lower the frequency or raise --fs"
+        raise InputError(msg)
     params = load_parameters(params_path)
     excitation = Excitation(kind, COORDINATES.index(coordinate), amplitude, frequency_Hz, frequency_end_Hz)
     response = simulate(params, excitation, sample_rate_Hz, duration_s, noise_fraction, np.random.default_rng(seed))
