@@ -48,15 +48,15 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
         level = float(np.mean(y)) if y.size else 0.0
         start[[0, 2]] = np.where(np.isfinite(start[[0, 2]]), start[[0, 2]], level)
         start[1] = np.clip(start[1], 1e-5, 9.0) if np.isfinite(start[1]) else 0.01
-        try:
-            if y.size < 3:
-                raise RuntimeError
-            with warnings.catch_warnings():
-                # no covariance for a flat or too short window: reported as unbounded below
-                warnings.simplefilter("ignore", OptimizeWarning)
-                p, c = curve_fit(rise_curve, t, y, p0=start, bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]), max_nfev=2000)
-        except RuntimeError:
-            p, c = start, np.full((3, 3), np.inf)
+        p, c = start, np.full((3, 3), np.inf)  # no fit: the guess, not identified
+        if y.size >= 3:
+            try:
+                with warnings.catch_warnings():
+                    # no covariance for a flat window: reported as unbounded below
+                    warnings.simplefilter("ignore", OptimizeWarning)
+                    p, c = curve_fit(rise_curve, t, y, p0=start, bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]), max_nfev=2000)
+            except RuntimeError:  # no convergence within max_nfev
+                pass
         if not np.all(np.isfinite(c)):
             c = np.diag(np.full(3, 1e12))
         params.append(p)
