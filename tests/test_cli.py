@@ -154,3 +154,17 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     out = mtident("thermal", "min-time", str(path), "--ambient", "room", "--json")
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["min_identification_time_min"] > 0
+
+
+def test_plots_leave_the_users_matplotlib_alone_and_return_a_figure_without_a_path():
+    """Importing the plots used to switch matplotlib to Agg: a notebook's inline plots stopped showing."""
+    code = (
+        "import matplotlib; matplotlib.use('svg'); import mtident.report as r; "
+        "from mtident.io import read_temperature_log; from mtident.cli_thermal import sample_log_path; "
+        "from mtident.thermal import identify; "
+        "fig = r.plot_identification(identify(read_temperature_log(sample_log_path()).select(['T1', 'T2']), 30.0)); "
+        "print(matplotlib.get_backend(), type(fig).__name__, len(fig.axes))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=False)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["svg", "Figure", "2"]

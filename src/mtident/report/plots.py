@@ -1,5 +1,11 @@
-"""PNG figures like the papers': measured vs predicted warm-ups, RMSE vs identification time,
-and (feed drive) responses and parameter convergence."""
+"""Figures like the papers': measured vs predicted warm-ups, RMSE vs identification time,
+and (feed drive) responses and parameter convergence.
+
+Each ``plot_*`` function writes a PNG to ``path``, or, without one, returns the
+matplotlib Figure (a notebook shows it). The figures are built without pyplot,
+so importing this module leaves the user's matplotlib backend and open figures
+alone (it used to switch the backend to Agg, which stopped a notebook's own
+inline plots from showing)."""
 
 from __future__ import annotations
 
@@ -7,26 +13,24 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
 
 if TYPE_CHECKING:
     from mtident.thermal.identify import Identification
     from mtident.thermal.min_time import MinTimeResult
 
-__all__ = ["plot_identification", "plot_min_time", "grid"]
+__all__ = ["plot_identification", "plot_min_time", "plot_monitor", "plot_responses", "plot_feed_drive_identification", "grid"]
 
 
-def _save(fig, path: str | Path, dpi: int = 110) -> Path:  # noqa: ANN001 - a matplotlib Figure
-    """Lay out, write atomically (a watcher may be reading the old picture) and close."""
+def _save(fig: Figure, path: str | Path | None, dpi: int = 110) -> Path | Figure:
+    """Lay out; write atomically (a watcher may be reading the old picture), or return the figure without a path."""
     fig.tight_layout()
+    if path is None:
+        return fig
     out = Path(path)
     tmp = out.with_name(out.name + ".tmp.png")
     fig.savefig(tmp, dpi=dpi)
-    plt.close(fig)
     tmp.replace(out)
     return out
 
@@ -35,14 +39,15 @@ def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 -
     """A figure with ``count`` panels in up to 3 columns; returns (figure, list of axes)."""
     cols = min(count, 3)
     rows = math.ceil(count / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False)
+    fig = Figure(figsize=(width * cols, height * rows))
+    axes = fig.subplots(rows, cols, squeeze=False)
     flat = list(axes.ravel())
     for ax in flat[count:]:
         ax.set_visible(False)
     return fig, flat[:count]
 
 
-def plot_identification(result: Identification, path: str | Path) -> Path:
+def plot_identification(result: Identification, path: str | Path | None = None) -> Path | Figure:
     """Measured and predicted temperature per sensor, with the 95 % band, the
     identification time, T∞ and the predicted equilibrium time (seed 000 Figs 6-8)."""
     fig, axes = grid(len(result.sensors))
@@ -76,7 +81,7 @@ def plot_identification(result: Identification, path: str | Path) -> Path:
     return _save(fig, path, 110)
 
 
-def plot_min_time(result: MinTimeResult, path: str | Path) -> Path:
+def plot_min_time(result: MinTimeResult, path: str | Path | None = None) -> Path | Figure:
     """RMSE against identification time for each sampling period (seed 000 Figs 5 and 9)."""
     fig, axes = grid(len(result.sensors))
     for s, ax in enumerate(axes):
@@ -95,11 +100,12 @@ def plot_min_time(result: MinTimeResult, path: str | Path) -> Path:
     return _save(fig, path, 110)
 
 
-def plot_responses(response, path: str | Path) -> Path:  # noqa: ANN001 - feeddrive.Response
+def plot_responses(response, path: str | Path | None = None) -> Path | Figure:  # noqa: ANN001 - feeddrive.Response
     """Displacements, velocities and accelerations of the four coordinates (seed 004 Figs 2-4)."""
     from mtident.feeddrive.simulate import RESPONSE_COLUMNS
 
-    fig, axes = plt.subplots(3, 4, figsize=(16, 8), sharex=True)
+    fig = Figure(figsize=(16, 8))
+    axes = fig.subplots(3, 4, sharex=True)
     for i, ax in enumerate(axes.ravel()):
         ax.plot(response.time_s, response.values[:, i], lw=0.6)
         ax.set_title(RESPONSE_COLUMNS[i], fontsize=9)
@@ -109,12 +115,13 @@ def plot_responses(response, path: str | Path) -> Path:  # noqa: ANN001 - feeddr
     return _save(fig, path, 100)
 
 
-def plot_feed_drive_identification(result, response, path: str | Path, truth=None) -> Path:  # noqa: ANN001
+def plot_feed_drive_identification(result, response, path: str | Path | None = None, truth=None) -> Path | Figure:  # noqa: ANN001
     """Estimated vs measured responses (seed 004 Figs 5-7) and parameter convergence with ±2σ (Figs 8-9)."""
     from mtident.feeddrive.params import IDENTIFIED
     from mtident.feeddrive.simulate import RESPONSE_COLUMNS
 
-    fig, axes = plt.subplots(5, 4, figsize=(16, 15))
+    fig = Figure(figsize=(16, 15))
+    axes = fig.subplots(5, 4)
     t = result.time_s
     for i, ax in enumerate(axes[:3].ravel()):
         ax.plot(t, response.values[:, i], lw=0.5, color="0.6", label="measured")
@@ -134,7 +141,7 @@ def plot_feed_drive_identification(result, response, path: str | Path, truth=Non
     return _save(fig, path, 90)
 
 
-def plot_monitor(log, monitor, path: str | Path) -> Path:  # noqa: ANN001 - TemperatureLog, thermal.monitor.Monitor
+def plot_monitor(log, monitor, path: str | Path | None = None) -> Path | Figure:  # noqa: ANN001 - TemperatureLog, thermal.monitor.Monitor
     """Measured curves so far, the monitor's predicted curve with its T∞ band, and the stop time."""
     from mtident.thermal.model import rise_curve
 
