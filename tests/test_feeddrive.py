@@ -218,3 +218,10 @@ def test_compiled_loop_equals_the_generic_engine():
     np.testing.assert_array_less(np.abs(compiled.estimated - generic.estimated).max(axis=0) / scale, 1e-8)
     with pytest.raises(InputError, match="engine 'gpu' is not one of"):
         identify_feed_drive(response, engine="gpu")
+
+
+def test_results_show_their_answer_in_a_notebook_not_their_arrays():
+    response = simulate(FeedDriveParameters(), duration_s=0.005, noise_fraction=0.01, rng=np.random.default_rng(1))
+    assert repr(response).startswith("Response(51 samples at 10000 Hz, 12 of 12 responses: x_t_m, ")
+    text = repr(identify_feed_drive(response, default_guess()))
+    assert len(text.splitlines()) == 9 and text.splitlines()[1].startswith("  K1: ")

@@ -367,3 +367,18 @@ def test_min_time_with_a_room_sensor_predicts_with_the_measured_room():
     np.testing.assert_allclose(steady.rmse_C, plain.rmse_C, rtol=1e-12)
     with pytest.raises(InputError, match="needs a UKF method"):
         minimal_identification_time(log, "lsq", periods_min=[60.0], ambient_C=room_sensor)
+
+
+def test_results_show_their_answer_in_a_notebook_not_their_arrays():
+    """The dataclass reprs printed every array: 44 kB for the sample's identification."""
+    from mtident.thermal.monitor import Monitor
+
+    log = sample_log()
+    result = identify(log.select(["T1", "T2"]), 30.0)
+    text = repr(result)
+    assert len(text) < 400 and text.splitlines()[1].startswith(f"  T1: T∞ {result.steady_state_C[0]:.2f} ± ")
+    assert repr(log) == f"TemperatureLog({str(log.source)!r}: 10 sensor(s) (T1, T2, T3, T4, T5, ..., T10), 401 samples over 0-400 min, 0 note(s))"
+    assert repr(minimal_identification_time(log.select(["T1"]))).startswith("MinTimeResult(aukf: minimal L (min) T1 ")
+    monitor = Monitor(("T1",))
+    monitor.feed(log.time_min[:50], log.temperature_C[:50, :1])
+    assert repr(monitor).splitlines()[0] == "Monitor(1 sensor(s), t = 49 min, decision: continue)"

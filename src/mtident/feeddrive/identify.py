@@ -80,6 +80,13 @@ class FeedDriveIdentification:
     preset: str
     notes: tuple[str, ...]
 
+    def __repr__(self) -> str:
+        rows = [
+            f"  {name}: {value:.5g} ± {2 * sd:.2g} (2σ){'' if known else ', not identified'}"
+            for name, value, sd, known in zip(IDENTIFIED, self.parameters, self.parameters_sd, self.identifiable, strict=True)
+        ]
+        return "\n".join([f"FeedDriveIdentification({self.preset}, {len(self.time_s)} samples, measured: {', '.join(self.measured_columns)})", *rows])
+
     def errors_percent(self, truth: FeedDriveParameters) -> dict[str, float]:
         """Table 3: 100·|estimate − truth|/truth per parameter."""
         true = truth.identified()

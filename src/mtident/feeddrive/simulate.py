@@ -44,6 +44,11 @@ class Response:
         """1 / the sampling interval."""
         return 1.0 / float(self.time_s[1] - self.time_s[0])
 
+    def __repr__(self) -> str:
+        measured = [name for name, column in zip(RESPONSE_COLUMNS, self.values.T, strict=True) if np.isfinite(column).any()]
+        rate = f" at {self.sample_rate_Hz:g} Hz" if len(self.time_s) > 1 else ""
+        return f"Response({len(self.time_s)} samples{rate}, {len(measured)} of 12 responses: {', '.join(measured)})"
+
 
 def substeps_for(p: FeedDriveParameters, h: float, max_phase_step: float = 0.01) -> int:
     """RK4 sub-steps (a power of two) so that ω_max·h/substeps ≤ ``max_phase_step``."""

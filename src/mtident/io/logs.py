@@ -59,6 +59,11 @@ class TemperatureLog:
     notes: tuple[str, ...] = field(default=())
     source: str = ""
 
+    def __repr__(self) -> str:
+        names = ", ".join(self.sensors if len(self.sensors) <= 6 else [*self.sensors[:5], "...", self.sensors[-1]])
+        span = f"{self.time_min[0]:g}-{self.time_min[-1]:g} min" if len(self.time_min) else "no samples"
+        return f"TemperatureLog({self.source!r}: {len(self.sensors)} sensor(s) ({names}), {len(self.time_min)} samples over {span}, {len(self.notes)} note(s))"
+
     def select(self, names: list[str] | None) -> TemperatureLog:
         """The same log restricted to ``names`` (all sensors if None or ["all"])."""
         if not names or names == ["all"]:

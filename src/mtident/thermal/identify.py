@@ -87,6 +87,17 @@ class Identification:
     notes: tuple[str, ...]
     quantile: float = Z95
 
+    def __repr__(self) -> str:
+        # a notebook shows the answer, not ~40 kB of arrays
+        lines = [f"Identification({self.method}/{self.preset}, L = {self.window_min:g} min, {len(self.sensors)} sensor(s))"]
+        for i, name in enumerate(self.sensors):
+            half = self.quantile * self.steady_state_sd_C[i]
+            lines.append(
+                f"  {name}: T∞ {self.steady_state_C[i]:.2f} ± {half:.2f} °C, λ {self.rate_per_min[i]:.4g}/min, "
+                f"t_eq {self.equilibrium_time_min[i]:.0f} min, RMSE {self.rmse_C[i]:.3f} °C{'' if self.fits[i] else ', model check failed'}"
+            )
+        return "\n".join(lines)
+
     def steady_state_ci95(self) -> FloatArray:
         """(S, 2) 95 % interval of T∞."""
         half = self.quantile * self.steady_state_sd_C

@@ -69,6 +69,11 @@ class MinTimeResult:
     measuring_time_min: float
     rise_begins_min: FloatArray | None = None
 
+    def __repr__(self) -> str:
+        chosen = ", ".join(f"{name} {value:g}" for name, value in zip(self.sensors, self.min_identification_time_min, strict=True))
+        periods = "/".join(f"{p:g}" for p in self.periods_min)
+        return f"MinTimeResult({self.method}: minimal L (min) {chosen}; sampling periods {periods} min, measured for {self.measuring_time_min:g} min)"
+
     def summary(self, index: int) -> dict[str, object]:
         """The contract's JSON object for one sensor, plus extras."""
         table = {}

@@ -213,6 +213,16 @@ class Monitor:
     decision: list[dict[str, object]] | None = None
     notes: list[str] = field(default_factory=list)
 
+    def __repr__(self) -> str:
+        # the whole state is for to_dict; a notebook wants the answer so far
+        if self.carry is None:
+            return f"Monitor({len(self.sensors)} sensor(s), collecting the first {self.settings.init_min:g} min)"
+        decision = f"stop at t = {self.stop_time:g} min" if self.stop_time is not None else "continue"
+        lines = [f"Monitor({len(self.sensors)} sensor(s), t = {self.last_t:g} min, decision: {decision})"]
+        for st in self.status():
+            lines.append(f"  {st.sensor}: T∞ {st.steady_state_C:.2f} ± {st.half_width_C:.2f} °C, t_eq {st.equilibrium_time_min:.0f} min, {st.status}")
+        return "\n".join(lines)
+
     # ---- recursion --------------------------------------------------------------------
     def feed(self, times: FloatArray, values: FloatArray, ambient: FloatArray | None = None) -> list[str]:
         """Process new samples (times in min, values (n, S)); returns warnings for the engineer.
