@@ -78,3 +78,32 @@ def test_binary_file_is_refused(write_csv, tmp_path):
     path.write_bytes(b"\xff\xfe\x00\x01garbage")
     with pytest.raises(InputError, match="not a readable CSV file|need a time column"):
         read_temperature_log(path)
+
+
+def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
+    """A DataFrame already in memory, with a time column or a time index (numbers, stamps or
+    elapsed time); its errors count rows from 0, as the DataFrame does."""
+    import pandas as pd
+
+    t = np.arange(0.0, 6.0)
+    frame = pd.DataFrame({"time_min": t, "A": 20 + t, "B": 30 + t})
+    plain = read_temperature_log(frame, sensors=["B"])
+    assert plain.sensors == ("B",) and plain.source == "DataFrame" and plain.temperature_C[:, 0].tolist() == (30 + t).tolist()
+    by_index = [
+        frame.set_index("time_min"),
+        frame.drop(columns="time_min").set_index(pd.date_range("2026-11-22 08:00", periods=6, freq="1min", name="stamp")),
+        frame.drop(columns="time_min").set_index(pd.to_timedelta(t, unit="min").rename("elapsed")),
+    ]
+    for indexed in by_index:
+        log = read_temperature_log(indexed)
+        assert log.sensors == ("A", "B")
+        np.testing.assert_allclose(log.time_min, t)
+    bad = frame.astype({"A": object})
+    bad.loc[3, "A"] = "x"
+    with pytest.raises(InputError, match=r"DataFrame: sensor 'A', row 3: 'x' is not a number"):
+        read_temperature_log(bad)
+    back = frame.copy()
+    back.loc[4, "time_min"] = 1.0
+    # the cell as written (1), not np.float64(1.0); the same in a file's messages
+    with pytest.raises(InputError, match=r"DataFrame: time column 'time_min', row 4: time goes back \(3 then 1\)"):
+        read_temperature_log(back)

@@ -4,6 +4,9 @@ The time column is the first one unless ``time_col`` names another. Its unit is
 minutes unless ``time_unit`` says otherwise or the header ends in ``_s``,
 ``_min`` or ``_h``; ISO-8601 timestamps are read as such. Temperatures are °C.
 
+A pandas DataFrame (a notebook's table, its time as a column or as the index)
+is read the same way.
+
 Everything that can be wrong with a user's file is reported as an
 :class:`~mtident.exceptions.InputError` naming the file, the column and the row.
 Isolated bad samples (an empty or NaN cell, an open-circuit reading) are
@@ -92,11 +95,23 @@ def _time_unit(header: str, time_unit: str | None) -> float:
     return 1.0
 
 
-def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: str) -> FloatArray:
+def _cell(value: object) -> str:
+    """A cell as the user wrote it: 4, not np.float64(4.0); text quoted."""
+    if isinstance(value, (int, float, np.number)) and not isinstance(value, bool):
+        return f"{value:g}"
+    return repr(str(value))
+
+
+def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: str, first_row: int = 2) -> FloatArray:
+    """Minutes from the first sample; ``first_row`` numbers the rows in messages (2: a CSV file's first data line)."""
     import pandas as pd
 
     numeric = pd.to_numeric(column, errors="coerce")
-    if numeric.notna().all():
+    if pd.api.types.is_timedelta64_dtype(column):  # elapsed time (a DataFrame's TimedeltaIndex)
+        values = (column - column.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
+    elif pd.api.types.is_datetime64_any_dtype(column):  # time stamps already parsed (a DatetimeIndex)
+        values = (column - column.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
+    elif numeric.notna().all():
         values = numeric.to_numpy(dtype=float) * _time_unit(header, time_unit)
     else:
         try:
@@ -104,29 +119,29 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
         except (ValueError, TypeError) as exc:
             row = int(numeric.isna().to_numpy().argmax())
             msg = (
-                f"{source}: time column {header!r}, row {row + 2}: {column.iloc[row]!r} is neither a number "
+                f"{source}: time column {header!r}, row {row + first_row}: {_cell(column.iloc[row])} is neither a number "
                 "nor an ISO-8601 timestamp"
             )
             raise InputError(msg) from exc
         if stamps.isna().any():
             row = int(stamps.isna().to_numpy().argmax())
-            msg = f"{source}: time column {header!r}, row {row + 2} is empty"
+            msg = f"{source}: time column {header!r}, row {row + first_row} is empty"
             raise InputError(msg)
         values = (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
     steps = np.diff(values)
     if np.any(steps == 0):
         row = int(np.argmax(steps == 0)) + 1
-        msg = f"{source}: time column {header!r}, row {row + 2}: duplicate time {column.iloc[row]!r}"
+        msg = f"{source}: time column {header!r}, row {row + first_row}: duplicate time {_cell(column.iloc[row])}"
         raise InputError(msg)
     if np.any(steps < 0):
         row = int(np.argmax(steps < 0)) + 1
-        msg = f"{source}: time column {header!r}, row {row + 2}: time goes back ({column.iloc[row - 1]!r} then {column.iloc[row]!r}); time must increase"
+        msg = f"{source}: time column {header!r}, row {row + first_row}: time goes back ({_cell(column.iloc[row - 1])} then {_cell(column.iloc[row])}); time must increase"
         raise InputError(msg)
     return values - values[0]
 
 
 def read_temperature_log(
-    path: str | Path,
+    path: str | Path | pd.DataFrame,
     time_col: str | None = None,
     time_unit: str | None = None,
     min_samples: int = 5,
@@ -136,8 +151,9 @@ def read_temperature_log(
 
     Parameters
     ----------
-    path : str or Path
-        The CSV file.
+    path : str, Path or pandas.DataFrame
+        The CSV file, or a table already in memory (a notebook's DataFrame),
+        with the same columns; it is checked the same way.
     time_col : str, optional
         Name of the time column (default: the first column).
     time_unit : {"s", "min", "h"}, optional
@@ -161,16 +177,22 @@ def read_temperature_log(
     """
     import pandas as pd  # here, not at import: 0.4 s of start-up that `watch` does not need
 
-    source = str(path)
-    file = Path(path)
-    if not file.is_file():
-        msg = f"{source}: no such file"
-        raise InputError(msg)
-    try:
-        frame = pd.read_csv(file, skipinitialspace=True)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        msg = f"{source}: not a readable CSV file ({str(exc).splitlines()[0]})"
-        raise InputError(msg) from exc
+    first_row = 2  # in messages, a CSV file's first data line is its row 2
+    if isinstance(path, pd.DataFrame):
+        source, first_row = "DataFrame", 0
+        # a time index (set_index, resample) is the time column too
+        frame = path.reset_index() if path.index.name is not None else path.copy()
+    else:
+        source = str(path)
+        file = Path(path)
+        if not file.is_file():
+            msg = f"{source}: no such file"
+            raise InputError(msg)
+        try:
+            frame = pd.read_csv(file, skipinitialspace=True)
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+            msg = f"{source}: not a readable CSV file ({str(exc).splitlines()[0]})"
+            raise InputError(msg) from exc
     frame.columns = [str(c).strip() for c in frame.columns]
     if frame.shape[1] < 2:
         msg = f"{source}: need a time column and at least one sensor column; found columns: {', '.join(frame.columns)}"
@@ -182,7 +204,7 @@ def read_temperature_log(
     if len(frame) < min_samples:
         msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
         raise InputError(msg)
-    time_min = _parse_time(frame[header], header, time_unit, source)
+    time_min = _parse_time(frame[header], header, time_unit, source, first_row)
 
     available = [c for c in frame.columns if c != header]
     missing_names = [n for n in sensors or [] if n not in available]
@@ -199,7 +221,7 @@ def read_temperature_log(
         non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.str.lower().isin(["nan", ""]).to_numpy()
         if np.any(non_numeric):
             row = int(np.argmax(non_numeric))
-            msg = f"{source}: sensor {name!r}, row {row + 2}: {raw.iloc[row]!r} is not a number"
+            msg = f"{source}: sensor {name!r}, row {row + first_row}: {_cell(raw.iloc[row])} is not a number"
             raise InputError(msg)
         missing = np.isnan(values)
         open_circuit = (values > OPEN_CIRCUIT_HIGH_C) | (values < OPEN_CIRCUIT_LOW_C)
