@@ -207,6 +207,7 @@ def test_a_sensor_without_readings_at_the_start_waits_for_them(connected_at):
         monitor = Monitor(("good", "late"))
         messages = monitor.feed(T, columns)
     assert any("'late': no valid reading in the first 10 min" in m and "waiting for its readings" in m for m in messages)
+    assert not any("'late': no valid reading at t =" in m for m in messages)  # not "bridged": there is nothing to bridge
     result = monitor.result()
     good_alone = replay({"good": good}).result()
     late_summary = result["sensors"][1]

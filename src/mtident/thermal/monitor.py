@@ -319,6 +319,7 @@ class Monitor:
         for s in np.flatnonzero(late):
             if unread[s]:
                 messages.append(f"sensor {self.sensors[s]!r}: no valid reading in the first {t[-1] - t[0]:g} min (empty, NaN, not a number or open circuit); waiting for its readings")
+                self.last_said[f"dropout:{self.sensors[s]}"] = float(t[-1])  # said here; the next reminder in quiet_min
             elif never[s]:
                 messages.append(f"sensor {self.sensors[s]!r}: no rise in the first {t[-1] - t[0]:g} min; waiting for its warm-up to begin")
             else:
@@ -363,7 +364,10 @@ class Monitor:
             z = _normalised_innovation(info)
         for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
             if self._may_say("dropout", self.sensors[s], t):
-                messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN, not a number or open circuit); bridged{self._quiet_note()}")
+                if self.unread is not None and self.unread[s]:
+                    messages.append(f"sensor {self.sensors[s]!r}: still no valid reading at t = {t:g} min; waiting for its readings{self._quiet_note()}")
+                else:
+                    messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN, not a number or open circuit); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
         self.recent_rows.append([t, room_rate, *[float(v) for v in y]])
