@@ -31,10 +31,14 @@ def log_path(file: str) -> Path:
     return sample_log_path(file) if file in SAMPLES else Path(file)
 
 
+def asked_sensors(sensors: tuple[str, ...]) -> list[str]:
+    """The --sensor names, repeated or comma-separated; empty for all ("all" or none given)."""
+    return [name for entry in sensors for name in entry.split(",") if name and name != "all"]
+
+
 def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None) -> TemperatureLog:
     path = log_path(file)
-    names = [name for entry in sensors for name in entry.split(",") if name]
-    log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=None if names in ([], ["all"]) else names)
+    log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=asked_sensors(sensors) or None)
     for note in log.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
     return log
@@ -44,7 +48,7 @@ def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None
     """The log's sensors, and the room column split off from them when one is named."""
     if room_col is None:
         return load_log(file, sensors, time_col, time_unit), None
-    asked = [name for entry in sensors for name in entry.split(",") if name and name != "all"]
+    asked = asked_sensors(sensors)
     # only the asked-for columns and the room are read: a dead column elsewhere does not matter
     every = load_log(file, tuple(dict.fromkeys([*asked, room_col])) if asked else (), time_col, time_unit)
     room = every.select([room_col]).temperature_C[:, 0]
@@ -237,7 +241,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     if not path.is_file() and replay:
         msg = f"{path}: no such file"
         raise InputError(msg)
-    names = [name for entry in sensors for name in entry.split(",") if name] or None
+    names = asked_sensors(sensors) or None
     if room_coupling is not None and ambient_col is None:
         msg = "--room-coupling needs --ambient ROOM_COLUMN: it says how the sensors feel that room sensor"
         raise InputError(msg)

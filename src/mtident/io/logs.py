@@ -106,11 +106,13 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
     """Minutes from the first sample; ``first_row`` numbers the rows in messages (2: a CSV file's first data line)."""
     import pandas as pd
 
+    def minutes_since_first(stamps: pd.Series) -> FloatArray:
+        return (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
+
     numeric = pd.to_numeric(column, errors="coerce")
-    if pd.api.types.is_timedelta64_dtype(column):  # elapsed time (a DataFrame's TimedeltaIndex)
-        values = (column - column.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
-    elif pd.api.types.is_datetime64_any_dtype(column):  # time stamps already parsed (a DatetimeIndex)
-        values = (column - column.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
+    if pd.api.types.is_timedelta64_dtype(column) or pd.api.types.is_datetime64_any_dtype(column):
+        # a DataFrame's elapsed-time or time-stamp index, already parsed
+        values = minutes_since_first(column)
     elif numeric.notna().all():
         values = numeric.to_numpy(dtype=float) * _time_unit(header, time_unit)
     else:
@@ -127,7 +129,7 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
             row = int(stamps.isna().to_numpy().argmax())
             msg = f"{source}: time column {header!r}, row {row + first_row} is empty"
             raise InputError(msg)
-        values = (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
+        values = minutes_since_first(stamps)
     steps = np.diff(values)
     if np.any(steps == 0):
         row = int(np.argmax(steps == 0)) + 1

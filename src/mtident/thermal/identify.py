@@ -15,7 +15,7 @@ from scipy.special import stdtrit
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
-from mtident.thermal.lsq import first_order_onset, fit_rise, flat_lead
+from mtident.thermal.lsq import first_order_onset, fit_rise, late_onset
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
@@ -427,12 +427,12 @@ def _identify(
     late_start = np.zeros(S, dtype=bool)
     begins = np.full(S, tw[0])
     if preset == "data":
-        last_flat = flat_lead(tw, yw, noise_sigma(yw))
+        onset = late_onset(tw, yw, noise_sigma(yw))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # a sensor without a valid first sample
             first_level = np.nanmedian(yw[:3], axis=0)
-        late_start = (last_flat > 0) & (last_flat < n_window)
-        begins = np.where(late_start, tw[np.minimum(last_flat, n_window - 1)], tw[0])
+        late_start = onset > 0
+        begins = tw[onset]
         # The papers' presets fit from the first sample, as the papers do. The data tuning leaves
         # out a flat start (a sensor lag, or a warm-up that began later), which a first-order model
         # cannot follow.

@@ -10,7 +10,7 @@ import numpy as np
 from mtident._typing import FloatArray, IntArray
 from mtident.thermal.model import rise_curve
 
-__all__ = ["LeastSquaresFit", "fit_rise", "rise_threshold", "flat_lead", "first_order_onset", "cramer_rao_bound"]
+__all__ = ["LeastSquaresFit", "fit_rise", "rise_threshold", "flat_lead", "late_onset", "first_order_onset", "cramer_rao_bound"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -107,6 +107,14 @@ def flat_lead(time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_r
     return np.where(~departed.any(axis=0), len(t), np.where(late, first - 1, 0))
 
 
+def late_onset(time_min: FloatArray, values: FloatArray, sigma: FloatArray) -> IntArray:
+    """Per sensor, the sample a late warm-up is fitted from: its last flat sample
+    (:func:`flat_lead`), 0 for a warm-up from the log's start and for a sensor that
+    never rises (it has no rise to fit from)."""
+    last_flat = flat_lead(time_min, values, sigma)
+    return np.where(last_flat < len(time_min), last_flat, 0)
+
+
 def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: float = 0.1) -> IntArray:
     """Per sensor, the index of the first sample a first-order curve describes.
 
@@ -142,8 +150,7 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
         return onsets
     sigma = np.maximum(noise_sigma(y), 1e-6)
     # a warm-up that begins after the log: its flat minutes go first
-    last_flat = flat_lead(t, y, sigma)
-    onsets = np.where(last_flat < len(t), last_flat, 0)  # a sensor that never rises has no flat lead to cut
+    onsets = late_onset(t, y, sigma)
     lead = lead + int(onsets.max())
     for _ in range(2):
         used = y.copy()

@@ -28,7 +28,7 @@ from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
-from mtident.thermal.lsq import fit_rise, flat_lead
+from mtident.thermal.lsq import fit_rise, late_onset
 from mtident.thermal.model import heat_balance_path, rise_curve
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 
@@ -164,8 +164,7 @@ def _search(
     W = len(candidates)
     onsets = np.zeros(S, dtype=int)
     if preset == "data":
-        last_flat = flat_lead(t[:n_total], y[:n_total], noise_sigma(y[:n_total]))
-        onsets = np.where(last_flat < n_total, last_flat, 0)  # a sensor that never rises is left as it is
+        onsets = late_onset(t[:n_total], y[:n_total], noise_sigma(y[:n_total]))
     fitted = y.copy()
     for s in np.flatnonzero(onsets):
         fitted[: onsets[s], s] = np.nan
@@ -200,13 +199,13 @@ def _search(
     first_level = np.median(y[:3], axis=0)
     for s in np.flatnonzero(onsets):
         curves[:, : onsets[s], s] = first_level[s]
-    curves = np.where(usable[:, None, :], curves, np.nan)
 
     table = np.full((len(periods), W, S), np.nan)
     for p, period in enumerate(periods):
         n_period = log.window(period)
         for i, window in enumerate(candidates):
             if window < period:
+                # an unusable L has no curve for that sensor: NaN, not rmse's 0 over no samples
                 table[p, i] = np.where(usable[i], rmse(curves[i, :n_period], y[:n_period]), np.nan)
     safe = np.where(np.isfinite(table), table, np.inf)
     best_index = np.argmin(safe, axis=1)  # (P, S)

@@ -95,6 +95,8 @@ _LEFT_OUT = ("no rise", "no data")
 _MATURE_NOISE_ESTIMATE = 30
 # the room sensor's name in the message log (sensor names are the log's column names)
 _ROOM = "(room sensor)"
+# what a missing reading can be, in the messages
+_MISSING = "empty, NaN, not a number or open circuit"
 
 
 @dataclass(frozen=True, slots=True)
@@ -260,7 +262,7 @@ class Monitor:
                     held = "the sensors' rise over the room waits for its first reading"
                 else:
                     held = "the room is taken as steady until its first reading"
-                messages.append(f"room sensor: no valid reading at t = {t:g} min (empty, NaN, not a number or open circuit); {held}{self._quiet_note()}")
+                messages.append(f"room sensor: no valid reading at t = {t:g} min ({_MISSING}); {held}{self._quiet_note()}")
             if ambient is not None and self.settings.room_coupling == "direct":
                 # The raw reading, not a smoothed one: its noise stays white, so the fourth-
                 # difference noise estimate (and with it the interval) accounts for it.
@@ -318,8 +320,8 @@ class Monitor:
         self.waiting_rise = [bool(lt) for lt in late]
         for s in np.flatnonzero(late):
             if unread[s]:
-                messages.append(f"sensor {self.sensors[s]!r}: no valid reading in the first {t[-1] - t[0]:g} min (empty, NaN, not a number or open circuit); waiting for its readings")
-                self.last_said[f"dropout:{self.sensors[s]}"] = float(t[-1])  # said here; the next reminder in quiet_min
+                self._may_say("dropout", self.sensors[s], float(t[-1]))  # said here; the next reminder in quiet_min
+                messages.append(f"sensor {self.sensors[s]!r}: no valid reading in the first {t[-1] - t[0]:g} min ({_MISSING}); waiting for its readings")
             elif never[s]:
                 messages.append(f"sensor {self.sensors[s]!r}: no rise in the first {t[-1] - t[0]:g} min; waiting for its warm-up to begin")
             else:
@@ -367,7 +369,7 @@ class Monitor:
                 if self.unread is not None and self.unread[s]:
                     messages.append(f"sensor {self.sensors[s]!r}: still no valid reading at t = {t:g} min; waiting for its readings{self._quiet_note()}")
                 else:
-                    messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min (empty, NaN, not a number or open circuit); bridged{self._quiet_note()}")
+                    messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min ({_MISSING}); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
         self.recent_rows.append([t, room_rate, *[float(v) for v in y]])
@@ -387,12 +389,12 @@ class Monitor:
         horizon = t - self._hold(t)
         while len(self.steady_history) > 2 and self.steady_history[1][0] <= horizon:
             self.steady_history.pop(0)
-        misfit_now = self._misfit()
+        one_sided, too_large = self._misfit_tests()
+        misfit_now = one_sided | too_large
         misfit = misfit_now & modelled
         if np.any(misfit):
             measured_room = self.room_measured
             what = f"identifying it again from the next {self.settings.restart_delay_min:g} min" if measured_room else "widening its parameter uncertainty to follow the new trend"
-            one_sided, _ = self._misfit_tests()
             assert self.d4_count is not None
             for s in np.flatnonzero(misfit):
                 if not self._may_say("misfit", self.sensors[s], t):
