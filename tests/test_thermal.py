@@ -156,6 +156,24 @@ def test_min_time_fits_a_warm_up_that_began_after_the_log_from_its_start(method)
     np.testing.assert_allclose(both.rmse_C[:, :, 1], alone.rmse_C[:, :, 0], rtol=1e-12)
 
 
+def test_a_late_warm_up_with_its_first_sample_missing_keeps_its_first_level():
+    """identify and min-time hold a late sensor at the same first level, the median of its
+    valid first samples. min-time took np.median, so one missing first sample made that level
+    NaN there, and Eq. 33 left the whole flat lead out of every L's RMSE (here 1.20-1.32× the
+    RMSE over all samples)."""
+    t = np.arange(0.0, 121.0)
+    noise = np.where(t > 15.0, 0.02 * np.random.default_rng(0).standard_normal(len(t)), 0.0)
+    late = first_order(np.clip(t - 15.0, 0.0, None)) + noise
+    missing = late.copy()
+    missing[0] = np.nan
+    result = identify(make_log(t, {"late": missing}), 60.0)
+    np.testing.assert_array_equal(result.curve_C[:15, 0], 17.9)
+    full = minimal_identification_time(make_log(t, {"late": late}), "ukf").rmse_C
+    gap = minimal_identification_time(make_log(t, {"late": missing}), "ukf").rmse_C
+    # one sample fewer in a count of 35-50: the RMSE grows by at most 1.5 %
+    np.testing.assert_allclose(gap, full, rtol=0.015)
+
+
 @pytest.mark.parametrize("method", ["lsq", "ukf"])
 def test_a_sensor_that_never_heats_neither_crashes_nor_warns(method):
     """lsq raised curve_fit's ValueError on a flat window; its interval now says it is not identified."""

@@ -6,7 +6,6 @@ of the record (or a horizon). All sensors of a log are filtered as one batch.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -15,7 +14,7 @@ from scipy.special import stdtrit
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
-from mtident.thermal.lsq import first_order_onset, fit_rise, late_onset
+from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
@@ -428,9 +427,7 @@ def _identify(
     begins = np.full(S, tw[0])
     if preset == "data":
         onset = late_onset(tw, yw, noise_sigma(yw))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # a sensor without a valid first sample
-            first_level = np.nanmedian(yw[:3], axis=0)
+        level = first_level(yw)
         late_start = onset > 0
         begins = tw[onset]
         # The papers' presets fit from the first sample, as the papers do. The data tuning leaves
@@ -519,7 +516,7 @@ def _identify(
         # before its warm-up began the sensor stayed at its first level; the equilibrium time
         # counts from the log's start, as the measured one does
         before = late_start[None, :] & (times[:, None] < begins[None, :])
-        mean_curve = np.where(before, first_level[None, :], mean_curve)
+        mean_curve = np.where(before, level[None, :], mean_curve)
         curve_var = np.where(before, sigma[None, :] ** 2, curve_var)
     start = mean_curve[0]
     steady = final_mean[:, 2]

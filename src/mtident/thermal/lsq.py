@@ -10,7 +10,7 @@ import numpy as np
 from mtident._typing import FloatArray, IntArray
 from mtident.thermal.model import rise_curve
 
-__all__ = ["LeastSquaresFit", "fit_rise", "rise_threshold", "flat_lead", "late_onset", "first_order_onset", "cramer_rao_bound"]
+__all__ = ["LeastSquaresFit", "fit_rise", "rise_threshold", "flat_lead", "late_onset", "first_level", "first_order_onset", "cramer_rao_bound"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,6 +113,14 @@ def late_onset(time_min: FloatArray, values: FloatArray, sigma: FloatArray) -> I
     never rises (it has no rise to fit from)."""
     last_flat = flat_lead(time_min, values, sigma)
     return np.where(last_flat < len(time_min), last_flat, 0)
+
+
+def first_level(values: FloatArray) -> FloatArray:
+    """Per sensor, the level a late warm-up holds before its rise: the median of the
+    valid ones among its first three samples (NaN for a sensor with none)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a sensor without a valid first sample
+        return np.nanmedian(np.asarray(values, dtype=float)[:3], axis=0)
 
 
 def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: float = 0.1) -> IntArray:

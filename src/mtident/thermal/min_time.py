@@ -28,7 +28,7 @@ from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
-from mtident.thermal.lsq import fit_rise, late_onset
+from mtident.thermal.lsq import first_level, fit_rise, late_onset
 from mtident.thermal.model import heat_balance_path, rise_curve
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 
@@ -196,9 +196,9 @@ def _search(
             curves[i, :n] = filtered[:n]
             curves[i, n:] = predicted[i, n:]
         curves = np.where(np.isfinite(curves), curves, np.inf)  # a diverged filter has no minimum there
-    first_level = np.median(y[:3], axis=0)
+    level = first_level(y)
     for s in np.flatnonzero(onsets):
-        curves[:, : onsets[s], s] = first_level[s]
+        curves[:, : onsets[s], s] = level[s]
 
     table = np.full((len(periods), W, S), np.nan)
     for p, period in enumerate(periods):
