@@ -6,6 +6,7 @@ error on stderr and exit code 2, never a traceback.
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import sys
@@ -56,21 +57,37 @@ def user_errors(func: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
+class LazyGroup(click.Group):
+    """A command group whose commands live in a module imported when first needed.
+
+    ``mtident thermal ...`` then does not load the feed-drive code (nor ``--version`` either).
+    """
+
+    def __init__(self, *args: Any, commands_module: str, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.commands_module = commands_module
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        importlib.import_module(self.commands_module)  # registers its commands on this group
+        return super().list_commands(ctx)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        importlib.import_module(self.commands_module)
+        return super().get_command(ctx, cmd_name)
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="mtident")
 def main() -> None:
     """Machine-tool identification with unscented Kalman filters."""
 
 
-@main.group()
+@main.group(cls=LazyGroup, commands_module="mtident.cli_thermal")
 def thermal() -> None:
     """Thermal test acceleration: identify a warm-up from its first minutes."""
 
 
-@main.group()
+@main.group(cls=LazyGroup, commands_module="mtident.cli_feeddrive")
 def feeddrive() -> None:
     """Ball-screw feed drive: 4-DOF model, modes, simulation, identification."""
 
-
-from mtident import cli_feeddrive as _cli_feeddrive  # noqa: E402,F401  (registers the feed-drive commands)
-from mtident import cli_thermal as _cli_thermal  # noqa: E402,F401  (registers the thermal commands)
