@@ -172,12 +172,17 @@ def test_plots_leave_the_users_matplotlib_alone_and_return_a_figure_without_a_pa
     assert out.stdout.split() == ["svg", "Figure", "2"]
 
 
-def test_a_thermal_command_does_not_load_the_feed_drive_code():
-    """The commands load on first use: `mtident --version` took 0.60-0.78 s with every command
-    imported, 0.08-0.10 s without."""
+def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats():
+    """Start-up: commands load on first use (`mtident --version` took 0.60-0.78 s with every
+    command imported, 0.08-0.10 s without), and identify's F quantile comes from
+    scipy.special (importing scipy.stats for it cost 0.5 s of each `thermal identify`)."""
     import subprocess
     import sys
 
-    code = "import sys; from mtident.cli import main; main(['thermal', '--help'], standalone_mode=False); print('mtident.cli_feeddrive' in sys.modules, 'mtident.cli_thermal' in sys.modules)"
+    code = (
+        "import sys; from mtident.cli import main; "
+        "main(['thermal', 'identify', '@sample', '--sensor', 'T1', '--json'], standalone_mode=False); "
+        "print([m in sys.modules for m in ('mtident.cli_feeddrive', 'scipy.stats', 'mtident.cli_thermal')])"
+    )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert result.stdout.strip().splitlines()[-1] == "False True"
+    assert result.stdout.strip().splitlines()[-1] == "[False, False, True]"
