@@ -29,3 +29,30 @@ def write_csv(tmp_path: Path):
         return path
 
     return _write
+
+
+def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, bytes]:
+    """The same log as different data-acquisition programs write it (time in minutes from
+    08:00 on 22.11.2026, temperatures with two decimals), keyed by what differs."""
+    import datetime as dt
+
+    start = dt.datetime(2026, 11, 22, 8, 0, 0)
+    names = list(columns)
+    cells = [[f"{v:.2f}" for v in row] for row in np.column_stack(list(columns.values()))]
+
+    def stamp(minutes: float, fmt: str) -> str:
+        return (start + dt.timedelta(minutes=float(minutes))).strftime(fmt)
+
+    def table(header: str, rows: list[str], end: str = "\n") -> str:
+        return header + end + "".join(r + end for r in rows)
+
+    plain = table("time_min," + ",".join(names), [f"{m:g}," + ",".join(c) for m, c in zip(t, cells, strict=True)])
+    german = table("time_min;" + ";".join(names) + ";", [f"{m:g};" + ";".join(x.replace(".", ",") for x in c) + ";" for m, c in zip(t, cells, strict=True)])
+    return {
+        "plain": plain.encode(),
+        "semicolon, decimal comma, trailing delimiter, # preamble": ("# Logger XY-8, firmware 2.1\n# channels: " + " ".join(names) + "\n" + german).encode(),
+        "tab, dotted day-first stamps, CRLF, cp1252 header": table(
+            "Zeit\t" + "\t".join(f"{n} °C" for n in names), [stamp(m, "%d.%m.%Y %H:%M:%S") + "\t" + "\t".join(c) for m, c in zip(t, cells, strict=True)], "\r\n"
+        ).encode("cp1252"),
+        "time of day, UTF-8 byte-order mark": ("\ufeff" + table("clock," + ",".join(names), [stamp(m, "%H:%M:%S") + "," + ",".join(c) for m, c in zip(t, cells, strict=True)])).encode(),
+    }

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import logger_dialects
 
 from mtident.exceptions import InputError
 from mtident.io import read_temperature_log
@@ -43,13 +44,38 @@ def test_isolated_bad_samples_are_skipped_with_a_note(write_csv):
         ("time_min\n0\n1\n2\n3\n4\n", {}, r"need a time column and at least one sensor column"),
         ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_col": "clock"}, r"no time column 'clock'; the columns are: time_min, A"),
         ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_unit": "days"}, r"time unit 'days' is not one of: s, min, h"),
-        ("time_min,A\nyesterday,20\n1,20\n2,21\n3,21\n4,21\n", {}, r"neither a number nor an ISO-8601 timestamp"),
+        ("time_min,A\nyesterday,20\n1,20\n2,21\n3,21\n4,21\n", {}, r"row 2: 'yesterday' is neither a number nor a time stamp \(ISO 8601, 22.11.2026 08:00:00 or 08:00:00\)"),
+        ("stamp,A\n22.11.2026 08:00,20\n22.11.2026 08:01,20\n01/02/2026 08:02,21\n22.11.2026 08:03,21\n22.11.2026 08:04,21\n", {}, r"row 4: '01/02/2026 08:02' is neither a number nor a time stamp like the first one"),
+        ("stamp,A\n01/02/2026 08:00,20\n01/02/2026 08:01,20\n01/02/2026 08:02,21\n01/02/2026 08:03,21\n01/02/2026 08:04,21\n", {}, r"row 2: .* \(ISO 8601"),
         ("time_min,A\n0,20\n1,\n2,\n3,500\n4,21\n", {}, r"sensor 'A': 3 of 5 samples are empty, NaN or open-circuit"),
     ],
 )
 def test_bad_logs_are_refused_with_a_message_naming_the_problem(write_csv, text, kwargs, message):
     with pytest.raises(InputError, match=message):
         read_temperature_log(write_csv(text), **kwargs)
+
+
+@pytest.mark.parametrize("dialect", list(logger_dialects(np.arange(3.0), {"A": np.zeros(3)})))
+def test_logs_as_loggers_write_them_read_like_the_plain_csv(tmp_path, dialect):
+    """Semicolons with a decimal comma, tabs, a # preamble, a delimiter at the end of each line,
+    cp1252 text, a byte-order mark, CRLF, dotted day-first stamps and times of day: each
+    was refused before (or, for the trailing delimiter, read as a dead sensor "Unnamed: 3")."""
+    t = np.arange(0.0, 40.0)
+    columns = {"A": 26.7 - 8.8 * np.exp(-0.016 * t), "B": 25.0 - 7.0 * np.exp(-0.02 * t)}
+    files = logger_dialects(t, columns)
+    (tmp_path / "plain.csv").write_bytes(files["plain"])
+    (tmp_path / "other.csv").write_bytes(files[dialect])
+    plain, other = read_temperature_log(tmp_path / "plain.csv"), read_temperature_log(tmp_path / "other.csv")
+    np.testing.assert_allclose(other.time_min, plain.time_min, atol=1e-9)
+    np.testing.assert_array_equal(other.temperature_C, plain.temperature_C)
+    assert [s.removesuffix(" °C") for s in other.sensors] == ["A", "B"]
+
+
+def test_row_numbers_in_messages_count_a_preamble(write_csv):
+    log = read_temperature_log(write_csv("# logger\n# setup\ntime_min;A\n" + "".join(f"{k};{'' if k == 3 else f'20,{k}'}\n" for k in range(30))))
+    assert log.notes == ("sensor 'A': skipped 1 empty/NaN sample(s) (rows 7)",)
+    with pytest.raises(InputError, match="sensor 'A', row 5: 'x' is not a number"):
+        read_temperature_log(write_csv("# logger\n# setup\ntime_min;A\n0;20\n1;x\n2;21\n3;21\n4;21\n"))
 
 
 def test_missing_file_and_unknown_sensor(tmp_path, write_csv):

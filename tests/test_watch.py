@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import first_order
+from conftest import first_order, logger_dialects
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -51,6 +51,37 @@ def test_follower_reads_new_rows_and_waits_for_a_partial_line(tmp_path):
     rows = follower.poll()
     np.testing.assert_allclose(rows.temperature_C, [[20.3, 21.3]])
     assert follower.poll().time_min.size == 0
+
+
+@pytest.mark.parametrize("dialect", list(logger_dialects(np.arange(3.0), {"A": np.zeros(3)}))[1:])
+def test_follower_reads_logs_as_loggers_write_them_like_the_file_reader(tmp_path, dialect):
+    """Written in pieces cut anywhere (in the preamble, mid-header, mid-line), and resumed
+    from its saved position halfway, the follower reads each dialect as the whole-file reader
+    does: the same times and temperatures as the plain CSV."""
+    from mtident.io import read_temperature_log
+
+    t = np.arange(0.0, 30.0)
+    columns = {"A": first_order(t), "B": first_order(t, 18.0, 25.0, 0.02)}
+    data = logger_dialects(t, columns)[dialect]
+    (tmp_path / "plain.csv").write_bytes(logger_dialects(t, columns)["plain"])
+    expected = read_temperature_log(tmp_path / "plain.csv")
+    path = tmp_path / "live.csv"
+    path.write_bytes(b"")
+    follower = LogFollower(path)
+    times, values = [], []
+    cuts = sorted({0, 7, 40, 41, 95, 96, len(data) // 2, len(data) // 2 + 1, len(data) - 3, len(data)})
+    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+        with open(path, "ab") as out:
+            out.write(data[a:b])
+        if a == len(data) // 2:  # killed here and started again from the state file's position
+            follower = LogFollower.resume(path, json.loads(json.dumps(follower.position())), None, None)
+        rows = follower.poll()
+        assert not rows.warnings
+        times.extend(rows.time_min)
+        values.extend(rows.temperature_C)
+    np.testing.assert_allclose(times, expected.time_min, atol=1e-9)
+    np.testing.assert_array_equal(np.array(values), expected.temperature_C)
+    assert [s.removesuffix(" °C") for s in follower.sensors or []] == ["A", "B"]
 
 
 def test_follower_refuses_repeated_and_backward_times(tmp_path):

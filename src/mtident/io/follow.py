@@ -11,6 +11,11 @@ stamp it accepted, so that:
   counted twice;
 * a row that repeats a time stamp or goes back in time is refused with a warning.
 
+The file's dialect (delimiter, decimal mark, preamble, encoding, time-stamp
+format) is taken from its head as :func:`~mtident.io.logs.read_temperature_log`
+takes it (:mod:`mtident.io.dialect`), so a live log and the finished file read
+the same.
+
 The position is a small dict (:meth:`LogFollower.position`) that the monitor
 keeps in its state file to resume exactly where it was.
 """
@@ -28,6 +33,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
+from mtident.io.dialect import HEAD_BYTES, CsvDialect, sniff_dialect, stamp_format
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TIME_UNITS
 
 __all__ = ["LogFollower", "Rows"]
@@ -56,6 +62,8 @@ class LogFollower:
     origin: float | None = None  # raw time (or epoch seconds) of the first sample, defines t = 0
     last_time: float | None = None  # minutes
     columns: list[int] = field(default_factory=list)
+    dialect: CsvDialect | None = None  # from the file's head, once its header line is complete
+    time_format: str | None = None  # pandas format of the time stamps, from the first one
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -67,12 +75,15 @@ class LogFollower:
             "last_time": self.last_time,
             "columns": self.columns,
             "sensors": self.sensors,
+            "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding],
+            "time_format": self.time_format,
         }
 
     @classmethod
     def resume(cls, path: Path, position: dict[str, Any], time_col: str | None, time_unit: str | None) -> LogFollower:
         """A follower that continues from a saved position."""
         identity = position.get("identity")
+        dialect = position.get("dialect")  # absent in older state files: taken from the head again
         return cls(
             path=path,
             sensors=position.get("sensors"),
@@ -84,6 +95,8 @@ class LogFollower:
             origin=position.get("origin"),
             last_time=position.get("last_time"),
             columns=list(position.get("columns") or []),
+            dialect=None if dialect is None else CsvDialect(str(dialect[0]), str(dialect[1]), int(dialect[2]), str(dialect[3])),
+            time_format=position.get("time_format"),
         )
 
     def _unit(self, name: str) -> float:
@@ -95,7 +108,8 @@ class LogFollower:
         return 1.0
 
     def _set_header(self, line: str) -> None:
-        header = [h.strip() for h in next(csv.reader([line]))]
+        assert self.dialect is not None
+        header = [h.strip() for h in next(csv.reader([line], delimiter=self.dialect.delimiter))]
         if len(header) < 2:
             msg = f"{self.path}: need a time column and at least one sensor column; found: {', '.join(header)}"
             raise InputError(msg)
@@ -103,7 +117,7 @@ class LogFollower:
         if time_name not in header:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"
             raise InputError(msg)
-        names = [h for h in header if h != time_name]
+        names = [h for h in header if h not in (time_name, "")]  # "": a delimiter at the end of the line
         chosen = names if not self.sensors or self.sensors == ["all"] else self.sensors
         missing = [s for s in chosen if s not in header]
         if missing:
@@ -115,15 +129,19 @@ class LogFollower:
 
     def _parse_time(self, text: str) -> float:
         """Minutes relative to the first sample; raises ValueError for an unreadable cell."""
-        assert self.header is not None
+        assert self.header is not None and self.dialect is not None
         try:
-            raw = float(text)
+            raw = self.dialect.number(text)
             scale = self._unit(self.header[self.columns[0]])
             stamp = raw * scale
         except ValueError:
-            import pandas as pd  # only for ISO-8601 time stamps
+            import pandas as pd  # only for time stamps
 
-            stamp = pd.Timestamp(text.strip()).timestamp() / 60.0
+            if self.time_format is None:
+                self.time_format = stamp_format(text)
+            if self.time_format is None:
+                raise
+            stamp = pd.to_datetime(text.strip(), format=self.time_format).timestamp() / 60.0
         if self.origin is None:
             self.origin = stamp
         return stamp - self.origin
@@ -142,6 +160,10 @@ class LogFollower:
             self.offset = 0
         self.identity = identity
         with open(self.path, "rb") as handle:
+            if self.dialect is None:
+                self.dialect = sniff_dialect(handle.read(HEAD_BYTES))
+                if self.dialect is None:  # the header line is not complete yet
+                    return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
             handle.seek(self.offset)
             chunk = handle.read()
         end = chunk.rfind(b"\n")
@@ -150,14 +172,17 @@ class LogFollower:
         complete = chunk[: end + 1]
         start_offset = self.offset
         self.offset += end + 1
-        text = complete.decode("utf-8", errors="replace")
+        dialect = self.dialect
+        text = complete.decode(dialect.encoding, errors="replace")
         lines = text.splitlines()
-        if start_offset == 0 and lines:
-            header_line, lines = lines[0], lines[1:]
-            if self.header is None:
-                self._set_header(header_line)
+        if start_offset == 0:
+            lines = lines[dialect.preamble_lines :]
+            if lines:
+                header_line, lines = lines[0], lines[1:]
+                if self.header is None:
+                    self._set_header(header_line)
         times, rows = [], []
-        for line in csv.reader(io.StringIO("\n".join(lines))):
+        for line in csv.reader(io.StringIO("\n".join(lines)), delimiter=dialect.delimiter):
             if not line or all(not c.strip() for c in line):
                 continue
             try:
@@ -172,7 +197,7 @@ class LogFollower:
             values = []
             for index in self.columns[1:]:
                 try:
-                    value = float(line[index])
+                    value = dialect.number(line[index])
                 except (ValueError, IndexError):
                     value = np.nan
                 if not (OPEN_CIRCUIT_LOW_C <= value <= OPEN_CIRCUIT_HIGH_C):

@@ -2,7 +2,10 @@
 
 The time column is the first one unless ``time_col`` names another. Its unit is
 minutes unless ``time_unit`` says otherwise or the header ends in ``_s``,
-``_min`` or ``_h``; ISO-8601 timestamps are read as such. Temperatures are °C.
+``_min`` or ``_h``; ISO-8601 timestamps are read as such, and so are dotted
+day-first ones (``22.11.2026 08:00:00``) and times of day. Temperatures are °C.
+The file may be comma-, semicolon- or tab-separated, with a decimal comma, a
+``#`` preamble and cp1252 text (:mod:`mtident.io.dialect`).
 
 A pandas DataFrame (a notebook's table, its time as a column or as the index)
 is read the same way.
@@ -24,6 +27,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
+from mtident.io.dialect import HEAD_BYTES, CsvDialect, sniff_dialect, stamp_format
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -116,18 +120,20 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
     elif numeric.notna().all():
         values = numeric.to_numpy(dtype=float) * _time_unit(header, time_unit)
     else:
-        try:
-            stamps = pd.to_datetime(column, format="ISO8601")
-        except (ValueError, TypeError) as exc:
-            row = int(numeric.isna().to_numpy().argmax())
-            msg = (
-                f"{source}: time column {header!r}, row {row + first_row}: {_cell(column.iloc[row])} is neither a number "
-                "nor an ISO-8601 timestamp"
-            )
-            raise InputError(msg) from exc
+        text = column.astype(str).str.strip()
+        empty = column.isna().to_numpy() | (text == "").to_numpy()
+        if empty.any():
+            row = int(empty.argmax())
+            msg = f"{source}: time column {header!r}, row {row + first_row} is empty"
+            raise InputError(msg)
+        fmt = stamp_format(str(text.iloc[0]))
+        stamps = pd.to_datetime(text, format=fmt, errors="coerce") if fmt is not None else pd.Series(pd.NaT, index=text.index)
         if stamps.isna().any():
             row = int(stamps.isna().to_numpy().argmax())
-            msg = f"{source}: time column {header!r}, row {row + first_row} is empty"
+            msg = (
+                f"{source}: time column {header!r}, row {row + first_row}: {_cell(column.iloc[row])} is neither a number "
+                f"nor a time stamp {'like the first one' if fmt is not None and row > 0 else '(ISO 8601, 22.11.2026 08:00:00 or 08:00:00)'}"
+            )
             raise InputError(msg)
         values = minutes_since_first(stamps)
     steps = np.diff(values)
@@ -190,11 +196,26 @@ def read_temperature_log(
         if not file.is_file():
             msg = f"{source}: no such file"
             raise InputError(msg)
+        with file.open("rb") as handle:
+            head = handle.read(HEAD_BYTES)
+        # the whole file fits in the head: its last line is complete even without a newline
+        dialect = sniff_dialect(head + b"\n" if len(head) < HEAD_BYTES else head) or CsvDialect()
+        first_row += dialect.preamble_lines
         try:
-            frame = pd.read_csv(file, skipinitialspace=True)
+            frame = pd.read_csv(
+                file,
+                sep=dialect.delimiter,
+                decimal=dialect.decimal,
+                skiprows=dialect.preamble_lines,
+                encoding=dialect.encoding,
+                skipinitialspace=True,
+            )
         except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
             msg = f"{source}: not a readable CSV file ({str(exc).splitlines()[0]})"
             raise InputError(msg) from exc
+        # a delimiter at the end of every line leaves an empty column without a name
+        unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
+        frame = frame.drop(columns=unnamed)
     frame.columns = [str(c).strip() for c in frame.columns]
     if frame.shape[1] < 2:
         msg = f"{source}: need a time column and at least one sensor column; found columns: {', '.join(frame.columns)}"
@@ -236,7 +257,7 @@ def read_temperature_log(
             )
             raise InputError(msg)
         if np.any(bad):
-            rows = ", ".join(str(int(r) + 2) for r in np.flatnonzero(bad)[:5])
+            rows = ", ".join(str(int(r) + first_row) for r in np.flatnonzero(bad)[:5])
             kinds = []
             if missing.any():
                 kinds.append(f"{int(missing.sum())} empty/NaN")

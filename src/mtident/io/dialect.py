@@ -1,0 +1,116 @@
+"""How a data-acquisition program wrote its CSV: delimiter, decimal mark, preamble, encoding, time stamps.
+
+Loggers differ. European ones write ``;`` between cells and a decimal comma
+(``17,90``); many write a preamble of ``#`` lines (device, channel setup) before
+the header; Windows programs write cp1252, where ``°`` is the single byte 0xB0
+that UTF-8 refuses; a trailing delimiter leaves an empty last column; time
+stamps come as ISO 8601, as ``22.11.2026 08:00:00`` (day first, as everywhere
+dots separate the date) or as the time of day alone. Both readers of a log (the
+whole file, :func:`~mtident.io.logs.read_temperature_log`, and the live
+follower, :class:`~mtident.io.follow.LogFollower`) take the dialect from the
+file's head here, so they read a log the same way.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+__all__ = ["CsvDialect", "sniff_dialect", "stamp_format", "HEAD_BYTES"]
+
+# enough for a preamble, the header and a few rows
+HEAD_BYTES = 65536
+_DELIMITERS = (",", ";", "\t")
+_DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+\s*$")
+# Time stamps other than ISO 8601, tried in this order (pandas/strptime formats). A dotted date is
+# day first wherever it is written; a slashed one (01/02/2026) is not tried: month or day first
+# cannot be told apart.
+_STAMP_FORMATS = (
+    "%d.%m.%Y %H:%M:%S.%f",
+    "%d.%m.%Y %H:%M:%S",
+    "%d.%m.%Y %H:%M",
+    "%H:%M:%S.%f",
+    "%H:%M:%S",
+)
+
+
+@dataclass(frozen=True, slots=True)
+class CsvDialect:
+    """How one log file is written.
+
+    Attributes
+    ----------
+    delimiter : {",", ";", "\\t"}
+    decimal : {".", ","}
+    preamble_lines : int
+        Lines before the header: ``#`` comments or blank lines.
+    encoding : {"utf-8-sig", "cp1252"}
+        UTF-8 (a byte-order mark is skipped), or Windows' cp1252 where UTF-8 fails.
+    """
+
+    delimiter: str = ","
+    decimal: str = "."
+    preamble_lines: int = 0
+    encoding: str = "utf-8-sig"
+
+    def number(self, cell: str) -> float:
+        """A cell as a float under this decimal mark; ValueError if it is none."""
+        return float(cell.replace(",", ".") if self.decimal == "," else cell)
+
+
+def sniff_dialect(head: bytes) -> CsvDialect | None:
+    """The dialect of a log from its first bytes; None while its header line is incomplete.
+
+    The delimiter is the candidate that occurs most often in the header line (a
+    header has no decimal commas, so ``;`` against ``,`` is clear there, where
+    csv.Sniffer, looking at data rows, would take the decimal comma for the
+    delimiter). A decimal comma is assumed when the delimiter is not a comma and a
+    data cell reads like ``17,90``.
+    """
+    try:
+        text, encoding = head.decode("utf-8-sig"), "utf-8-sig"
+    except UnicodeDecodeError as exc:
+        # a multi-byte character cut off at the end of the head is not a decoding failure
+        if exc.start >= len(head) - 3 and _decodes(head[: exc.start]):
+            text, encoding = head[: exc.start].decode("utf-8-sig"), "utf-8-sig"
+        else:
+            text, encoding = head.decode("cp1252", errors="replace"), "cp1252"
+    lines = text.split("\n")
+    complete = lines[:-1]  # the last piece has no newline yet
+    preamble = 0
+    while preamble < len(complete) and (not complete[preamble].strip() or complete[preamble].lstrip().startswith("#")):
+        preamble += 1
+    if preamble >= len(complete):
+        return None
+    header = complete[preamble]
+    counts = {d: header.count(d) for d in _DELIMITERS}
+    delimiter = max(_DELIMITERS, key=lambda d: counts[d]) if any(counts.values()) else ","
+    decimal = "."
+    if delimiter != ",":
+        cells = (cell for line in complete[preamble + 1 : preamble + 21] for cell in line.split(delimiter))
+        if any(_DECIMAL_COMMA.match(cell) for cell in cells):
+            decimal = ","
+    return CsvDialect(delimiter, decimal, preamble, encoding)
+
+
+def _decodes(data: bytes) -> bool:
+    try:
+        data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        return False
+    return True
+
+
+def stamp_format(cell: str) -> str | None:
+    """The pandas format of a time-stamp cell: "ISO8601", one of the dotted day-first or
+    time-of-day formats, or None if it is no time stamp."""
+    import pandas as pd
+
+    text = cell.strip()
+    for fmt in ("ISO8601", *_STAMP_FORMATS):
+        try:
+            pd.to_datetime(text, format=fmt)
+        except (ValueError, TypeError):
+            continue
+        return fmt
+    return None
