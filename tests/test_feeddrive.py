@@ -121,6 +121,10 @@ def test_response_csv_round_trip_and_errors(tmp_path):
     back = read_response(path)
     np.testing.assert_allclose(back.values, response.values, rtol=1e-8)
     np.testing.assert_allclose(back.forces, response.forces)
+    # as a European acquisition program writes it: a preamble, semicolons, decimal commas
+    german = "# DAQ export\n" + path.read_text().replace(",", ";").replace(".", ",")
+    (tmp_path / "de.csv").write_text(german)
+    np.testing.assert_array_equal(read_response(tmp_path / "de.csv").values, back.values)
     (tmp_path / "bad.csv").write_text("t,x\n0,1\n")
     with pytest.raises(InputError, match="no time_s column"):
         read_response(tmp_path / "bad.csv")

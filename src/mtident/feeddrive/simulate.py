@@ -142,15 +142,14 @@ def read_response(path: str | Path) -> Response:
     """
     import pandas as pd
 
+    from mtident.io.dialect import read_csv
+
     file = Path(path)
     if not file.is_file():
         msg = f"{path}: no such file"
         raise InputError(msg)
-    try:
-        frame = pd.read_csv(file)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        msg = f"{path}: not a readable CSV file"
-        raise InputError(msg) from exc
+    frame, dialect = read_csv(file)
+    first_row = 2 + dialect.preamble_lines
     if "time_s" not in frame.columns:
         msg = f"{path}: no time_s column; the columns are: {', '.join(map(str, frame.columns))}"
         raise InputError(msg)
@@ -165,7 +164,7 @@ def read_response(path: str | Path) -> Response:
             row = int(np.argmax(bad.to_numpy()))
             raw = frame[column].iloc[row]
             what = "empty or NaN" if pd.isna(raw) else f"{str(raw)!r} is not a number"
-            msg = f"{path}: column {column!r}, row {row + 2}: {what}; every cell must be a number"
+            msg = f"{path}: column {column!r}, row {row + first_row}: {what}; every cell must be a number"
             raise InputError(msg)
     time = numeric["time_s"].to_numpy(dtype=float)
     steps = np.diff(time)

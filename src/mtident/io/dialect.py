@@ -15,13 +15,20 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
-__all__ = ["CsvDialect", "sniff_dialect", "stamp_format", "HEAD_BYTES"]
+from mtident.exceptions import InputError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["CsvDialect", "sniff_dialect", "read_csv", "stamp_format", "HEAD_BYTES"]
 
 # enough for a preamble, the header and a few rows
 HEAD_BYTES = 65536
 _DELIMITERS = (",", ";", "\t")
-_DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+\s*$")
+_DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
 # Time stamps other than ISO 8601, tried in this order (pandas/strptime formats). A dotted date is
 # day first wherever it is written; a slashed one (01/02/2026) is not tried: month or day first
 # cannot be told apart.
@@ -65,7 +72,7 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
     header has no decimal commas, so ``;`` against ``,`` is clear there, where
     csv.Sniffer, looking at data rows, would take the decimal comma for the
     delimiter). A decimal comma is assumed when the delimiter is not a comma and a
-    data cell reads like ``17,90``.
+    data cell reads like ``17,90`` or ``1,5e-05``.
     """
     try:
         text, encoding = head.decode("utf-8-sig"), "utf-8-sig"
@@ -91,6 +98,33 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
         if any(_DECIMAL_COMMA.match(cell) for cell in cells):
             decimal = ","
     return CsvDialect(delimiter, decimal, preamble, encoding)
+
+
+def read_csv(file: Path) -> tuple[pd.DataFrame, CsvDialect]:
+    """A whole CSV file as a DataFrame, read in its own dialect; InputError if it is no CSV.
+
+    An empty column without a name (a delimiter at the end of every line) is dropped.
+    """
+    import pandas as pd
+
+    with file.open("rb") as handle:
+        head = handle.read(HEAD_BYTES)
+    # the whole file fits in the head: its last line is complete even without a newline
+    dialect = sniff_dialect(head + b"\n" if len(head) < HEAD_BYTES else head) or CsvDialect()
+    try:
+        frame = pd.read_csv(
+            file,
+            sep=dialect.delimiter,
+            decimal=dialect.decimal,
+            skiprows=dialect.preamble_lines,
+            encoding=dialect.encoding,
+            skipinitialspace=True,
+        )
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        msg = f"{file}: not a readable CSV file ({str(exc).splitlines()[0]})"
+        raise InputError(msg) from exc
+    unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
+    return frame.drop(columns=unnamed), dialect
 
 
 def _decodes(data: bytes) -> bool:

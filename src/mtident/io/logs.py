@@ -27,7 +27,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import HEAD_BYTES, CsvDialect, sniff_dialect, stamp_format
+from mtident.io.dialect import read_csv, stamp_format
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -196,26 +196,8 @@ def read_temperature_log(
         if not file.is_file():
             msg = f"{source}: no such file"
             raise InputError(msg)
-        with file.open("rb") as handle:
-            head = handle.read(HEAD_BYTES)
-        # the whole file fits in the head: its last line is complete even without a newline
-        dialect = sniff_dialect(head + b"\n" if len(head) < HEAD_BYTES else head) or CsvDialect()
+        frame, dialect = read_csv(file)
         first_row += dialect.preamble_lines
-        try:
-            frame = pd.read_csv(
-                file,
-                sep=dialect.delimiter,
-                decimal=dialect.decimal,
-                skiprows=dialect.preamble_lines,
-                encoding=dialect.encoding,
-                skipinitialspace=True,
-            )
-        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-            msg = f"{source}: not a readable CSV file ({str(exc).splitlines()[0]})"
-            raise InputError(msg) from exc
-        # a delimiter at the end of every line leaves an empty column without a name
-        unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
-        frame = frame.drop(columns=unnamed)
     frame.columns = [str(c).strip() for c in frame.columns]
     if frame.shape[1] < 2:
         msg = f"{source}: need a time column and at least one sensor column; found columns: {', '.join(frame.columns)}"
