@@ -200,7 +200,7 @@ def read_temperature_log(
         first_row += dialect.preamble_lines
     frame.columns = [str(c).strip() for c in frame.columns]
     if frame.shape[1] < 2:
-        msg = f"{source}: need a time column and at least one sensor column; found columns: {', '.join(frame.columns)}"
+        msg = f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found columns: {', '.join(frame.columns)}"
         raise InputError(msg)
     header = time_col if time_col is not None else frame.columns[0]
     if header not in frame.columns:
