@@ -71,6 +71,19 @@ def test_logs_as_loggers_write_them_read_like_the_plain_csv(tmp_path, dialect):
     assert [s.removesuffix(" °C") for s in other.sensors] == ["A", "B"]
 
 
+def test_a_time_of_day_passes_midnight_in_an_overnight_test(write_csv, tmp_path):
+    """Before, 23:59 then 00:00 was refused as time going back."""
+    from mtident.io.follow import LogFollower
+
+    text = "clock,A\n" + "".join(f"{h:02d}:{m:02d}:00,{20 + k / 10}\n" for k, (h, m) in enumerate([(23, 57), (23, 58), (23, 59), (0, 0), (0, 1), (0, 3)]))
+    np.testing.assert_allclose(read_temperature_log(write_csv(text)).time_min, [0, 1, 2, 3, 4, 6])
+    np.testing.assert_allclose(LogFollower(write_csv(text)).poll().time_min, [0, 1, 2, 3, 4, 6])
+    with pytest.raises(InputError, match="row 4: time goes back"):
+        read_temperature_log(write_csv("clock,A\n08:00:00,20\n08:01:00,20\n07:59:00,21\n08:03:00,21\n08:04:00,21\n"))
+    with pytest.raises(InputError, match="no header line, only # comments"):
+        read_temperature_log(write_csv("# logger\n\n# nothing yet\n"))
+
+
 def test_row_numbers_in_messages_count_a_preamble(write_csv):
     log = read_temperature_log(write_csv("# logger\n# setup\ntime_min;A\n" + "".join(f"{k};{'' if k == 3 else f'20,{k}'}\n" for k in range(30))))
     assert log.notes == ("sensor 'A': skipped 1 empty/NaN sample(s) (rows 7)",)

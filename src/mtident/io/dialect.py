@@ -23,7 +23,7 @@ from mtident.exceptions import InputError
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["CsvDialect", "sniff_dialect", "read_csv", "stamp_format", "HEAD_BYTES"]
+__all__ = ["CsvDialect", "sniff_dialect", "read_csv", "stamp_format", "HEAD_BYTES", "TIME_OF_DAY_FORMATS", "MINUTES_PER_DAY"]
 
 # enough for a preamble, the header and a few rows
 HEAD_BYTES = 65536
@@ -32,13 +32,10 @@ _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
 # Time stamps other than ISO 8601, tried in this order (pandas/strptime formats). A dotted date is
 # day first wherever it is written; a slashed one (01/02/2026) is not tried: month or day first
 # cannot be told apart.
-_STAMP_FORMATS = (
-    "%d.%m.%Y %H:%M:%S.%f",
-    "%d.%m.%Y %H:%M:%S",
-    "%d.%m.%Y %H:%M",
-    "%H:%M:%S.%f",
-    "%H:%M:%S",
-)
+# A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
+TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S")
+_STAMP_FORMATS = ("%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M", *TIME_OF_DAY_FORMATS)
+MINUTES_PER_DAY = 1440.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -110,7 +107,12 @@ def read_csv(file: Path) -> tuple[pd.DataFrame, CsvDialect]:
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     # the whole file fits in the head: its last line is complete even without a newline
-    dialect = sniff_dialect(head + b"\n" if len(head) < HEAD_BYTES else head) or CsvDialect()
+    whole = len(head) < HEAD_BYTES
+    dialect = sniff_dialect(head + b"\n" if whole else head)
+    if dialect is None and whole and head.strip():
+        msg = f"{file}: no header line, only # comments and blank lines"
+        raise InputError(msg)
+    dialect = dialect or CsvDialect()
     try:
         frame = pd.read_csv(
             file,

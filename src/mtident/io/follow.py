@@ -33,7 +33,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import HEAD_BYTES, CsvDialect, sniff_dialect, stamp_format
+from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, sniff_dialect, stamp_format
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TIME_UNITS
 
 __all__ = ["LogFollower", "Rows"]
@@ -144,7 +144,11 @@ class LogFollower:
             stamp = pd.to_datetime(text.strip(), format=self.time_format).timestamp() / 60.0
         if self.origin is None:
             self.origin = stamp
-        return stamp - self.origin
+        t = stamp - self.origin
+        if self.time_format in TIME_OF_DAY_FORMATS and self.last_time is not None:
+            # past midnight: the day the last accepted row was in, or the next one
+            t += MINUTES_PER_DAY * max(np.ceil((self.last_time - t - MINUTES_PER_DAY / 2) / MINUTES_PER_DAY), 0.0)
+        return t
 
     def poll(self) -> Rows:
         """Read the complete lines added since the last poll."""

@@ -27,7 +27,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import read_csv, stamp_format
+from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, read_csv, stamp_format
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -136,6 +136,8 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
             )
             raise InputError(msg)
         values = minutes_since_first(stamps)
+        if fmt in TIME_OF_DAY_FORMATS:
+            values = values + MINUTES_PER_DAY * np.concatenate([[0], np.cumsum(np.diff(values) < -MINUTES_PER_DAY / 2)])
     steps = np.diff(values)
     if np.any(steps == 0):
         row = int(np.argmax(steps == 0)) + 1
