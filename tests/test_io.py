@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import logger_dialects
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mtident.exceptions import InputError
 from mtident.io import read_temperature_log
@@ -146,3 +148,59 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     # the cell as written (1), not np.float64(1.0); the same in a file's messages
     with pytest.raises(InputError, match=r"DataFrame: time column 'time_min', row 4: time goes back \(3 then 1\)"):
         read_temperature_log(back)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    delimiter=st.sampled_from([",", ";", "\t"]),
+    decimal_comma=st.booleans(),
+    preamble=st.lists(st.sampled_from(["# logger", "", "#channels: 4", "   "]), max_size=3),
+    cp1252=st.booleans(),
+    crlf=st.booleans(),
+    trailing=st.booleans(),
+    stamps=st.sampled_from(["minutes", "iso", "dotted", "time of day"]),
+    cuts=st.lists(st.integers(1, 2000), max_size=6),
+)
+def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, cp1252, crlf, trailing, stamps, cuts):
+    """Every combination of delimiter, decimal mark, preamble, encoding, line end, trailing
+    delimiter and time format, read whole and followed live in random pieces, gives the
+    plain file's times and temperatures."""
+    import datetime as dt
+
+    from mtident.io.follow import LogFollower
+
+    decimal_comma = decimal_comma and delimiter != ","
+    t = np.arange(0.0, 25.0) * 1.5
+    temperatures = np.column_stack([20.0 + 0.37 * t, 19.5 + 0.21 * t])
+    start = dt.datetime(2026, 11, 22, 23, 50, 0)  # time-of-day stamps pass midnight
+
+    def time_cell(minutes: float) -> str:
+        when = start + dt.timedelta(minutes=float(minutes))
+        return {"minutes": f"{minutes:g}", "iso": when.isoformat(), "dotted": when.strftime("%d.%m.%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]
+
+    def number(value: float) -> str:
+        return f"{value:.2f}".replace(".", ",") if decimal_comma else f"{value:.2f}"
+
+    end = "\r\n" if crlf else "\n"
+    tail = delimiter if trailing else ""
+    lines = [*preamble, delimiter.join(["time", "A °C", "B"]) + tail]
+    lines += [delimiter.join([time_cell(m), *(number(v) for v in row)]) + tail for m, row in zip(t, temperatures, strict=True)]
+    data = (end.join(lines) + end).encode("cp1252" if cp1252 else "utf-8")
+    folder = tmp_path_factory.mktemp("dialect")
+    whole = folder / "whole.csv"
+    whole.write_bytes(data)
+    log = read_temperature_log(whole)
+    assert log.sensors == ("A °C", "B")
+    np.testing.assert_allclose(log.time_min, t, atol=1e-9)
+    np.testing.assert_array_equal(log.temperature_C, [[float(f"{v:.2f}") for v in row] for row in temperatures])
+    live = folder / "live.csv"
+    live.write_bytes(b"")
+    follower = LogFollower(live)
+    times: list[float] = []
+    for a, b in zip([0, *sorted(set(cuts))], [*sorted(set(cuts)), len(data)], strict=True):
+        with open(live, "ab") as out:
+            out.write(data[a:b])
+        rows = follower.poll()
+        assert not rows.warnings
+        times.extend(rows.time_min)
+    np.testing.assert_allclose(times, t, atol=1e-9)
