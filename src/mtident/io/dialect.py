@@ -29,11 +29,11 @@ __all__ = ["CsvDialect", "sniff_dialect", "read_csv", "stamp_format", "HEAD_BYTE
 HEAD_BYTES = 65536
 _DELIMITERS = (",", ";", "\t")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
+# A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
+TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S")
 # Time stamps other than ISO 8601, tried in this order (pandas/strptime formats). A dotted date is
 # day first wherever it is written; a slashed one (01/02/2026) is not tried: month or day first
 # cannot be told apart.
-# A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
-TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S")
 _STAMP_FORMATS = ("%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M", *TIME_OF_DAY_FORMATS)
 MINUTES_PER_DAY = 1440.0
 
