@@ -533,6 +533,23 @@ def test_watch_ambient_option(tmp_path):
     assert "give --room-coupling direct" not in out.stderr
 
 
+def test_watch_ambient_finds_the_sensors_in_a_logger_dialect(tmp_path):
+    """With --ambient and no --sensor the sensors are the header's other columns. The header
+    was split at commas after a plain readline: a cp1252 log raised UnicodeDecodeError (a
+    traceback), and a ';' log had no sensors."""
+    rng = np.random.default_rng(5)
+    spindle, air = first_order(T) + room(T) + 0.02 * rng.standard_normal(len(T)), 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))
+    lines = ["# Messung 3", "Zeit;Spindel °C;Raum"] + [f"{t:g};{a:.3f};{b:.3f}".replace(".", ",") for t, a, b in zip(T, spindle, air, strict=True)]
+    path = tmp_path / "room_de.csv"
+    path.write_bytes(("\n".join(lines) + "\n").encode("cp1252"))
+    plain = tmp_path / "room.csv"
+    plain.write_text(csv_text(T, {"Spindel °C": np.round(spindle, 3), "Raum": np.round(air, 3)}))
+    out = mtident("thermal", "watch", str(path), "--ambient", "Raum", "--replay", "--json", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    expected = mtident("thermal", "watch", str(plain), "--ambient", "Raum", "--replay", "--json", cwd=tmp_path)
+    assert json.loads(out.stdout) == json.loads(expected.stdout) and json.loads(out.stdout)["sensor"] == "Spindel °C"
+
+
 def test_room_coupling_needs_a_room_sensor(tmp_path):
     out = mtident("thermal", "watch", "@sample", "--room-coupling", "direct", "--replay", cwd=tmp_path)
     assert out.returncode != 0 and "--room-coupling needs --ambient" in out.stderr and "Traceback" not in out.stderr

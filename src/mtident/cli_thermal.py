@@ -234,6 +234,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 
     from rich.live import Live
 
+    from mtident.io.dialect import header_names
     from mtident.io.follow import LogFollower
     from mtident.thermal.monitor import Monitor, MonitorSettings
 
@@ -265,12 +266,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     if ambient_col is not None:
         # read the room column with the sensors; it is split off again below
         if names is None:
-            header = []
-            if path.is_file():
-                with open(path) as handle:  # the header only: the log may be large
-                    header = handle.readline().strip().split(",")
-            time_name = time_col or (header[0].strip() if header else "")
-            names = [h.strip() for h in header if h.strip() not in (time_name, ambient_col)]
+            header = header_names(path) if path.is_file() else []
+            time_name = time_col or (header[0] if header else "")
+            names = [h for h in header if h not in (time_name, ambient_col)]
         names = [n for n in names if n != ambient_col] + [ambient_col]
     state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
     settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling, room_wander_C_per_h=room_wander)

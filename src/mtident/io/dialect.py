@@ -23,7 +23,7 @@ from mtident.exceptions import InputError
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["CsvDialect", "sniff_dialect", "read_csv", "stamp_format", "HEAD_BYTES", "TIME_OF_DAY_FORMATS", "MINUTES_PER_DAY"]
+__all__ = ["CsvDialect", "sniff_dialect", "header_names", "read_csv", "stamp_format", "HEAD_BYTES", "TIME_OF_DAY_FORMATS", "MINUTES_PER_DAY"]
 
 # enough for a preamble, the header and a few rows
 HEAD_BYTES = 65536
@@ -95,6 +95,20 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
         if any(_DECIMAL_COMMA.match(cell) for cell in cells):
             decimal = ","
     return CsvDialect(delimiter, decimal, preamble, encoding)
+
+
+def header_names(file: Path) -> list[str]:
+    """The column names of a log, read from its head only (a live log may be large); [] while
+    its header line is incomplete."""
+    import csv
+
+    with file.open("rb") as handle:
+        head = handle.read(HEAD_BYTES)
+    dialect = sniff_dialect(head)
+    if dialect is None:
+        return []
+    line = head.decode(dialect.encoding, errors="replace").split("\n")[dialect.preamble_lines]
+    return [name.strip() for name in next(csv.reader([line], delimiter=dialect.delimiter)) if name.strip()]
 
 
 def read_csv(file: Path) -> tuple[pd.DataFrame, CsvDialect]:
