@@ -111,7 +111,7 @@ class LogFollower:
         assert self.dialect is not None
         header = [h.strip() for h in next(csv.reader([line], delimiter=self.dialect.delimiter))]
         if len(header) < 2:
-            msg = f"{self.path}: need a time column and at least one sensor column; found: {', '.join(header)}"
+            msg = f"{self.path}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found: {', '.join(header)}"
             raise InputError(msg)
         time_name = self.time_col or header[0]
         if time_name not in header:
