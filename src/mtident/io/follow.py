@@ -34,7 +34,7 @@ import numpy as np
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, sniff_dialect, stamp_format
-from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TIME_UNITS
+from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, time_unit_factor
 
 __all__ = ["LogFollower", "Rows"]
 
@@ -99,14 +99,6 @@ class LogFollower:
             time_format=position.get("time_format"),
         )
 
-    def _unit(self, name: str) -> float:
-        if self.time_unit is not None:
-            return TIME_UNITS[self.time_unit]
-        for suffix, factor in TIME_UNITS.items():
-            if name.lower().endswith("_" + suffix):
-                return factor
-        return 1.0
-
     def _set_header(self, line: str) -> None:
         assert self.dialect is not None
         header = [h.strip() for h in next(csv.reader([line], delimiter=self.dialect.delimiter))]
@@ -132,7 +124,7 @@ class LogFollower:
         assert self.header is not None and self.dialect is not None
         try:
             raw = self.dialect.number(text)
-            scale = self._unit(self.header[self.columns[0]])
+            scale = time_unit_factor(self.header[self.columns[0]], self.time_unit)
             stamp = raw * scale
         except ValueError:
             import pandas as pd  # only for time stamps

@@ -32,7 +32,7 @@ from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, read_csv, s
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["TemperatureLog", "read_temperature_log", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS"]
+__all__ = ["TemperatureLog", "read_temperature_log", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
 
 # A PT100 channel with a broken wire reads far outside any machine-tool temperature.
 OPEN_CIRCUIT_HIGH_C = 400.0
@@ -87,7 +87,8 @@ class TemperatureLog:
         return int(np.searchsorted(self.time_min, minutes + 1e-9, side="right"))
 
 
-def _time_unit(header: str, time_unit: str | None) -> float:
+def time_unit_factor(header: str, time_unit: str | None) -> float:
+    """Minutes per unit of a numeric time column: ``time_unit``, else the header's suffix (_s, _min, _h), else minutes."""
     if time_unit is not None:
         if time_unit not in TIME_UNITS:
             msg = f"time unit {time_unit!r} is not one of: {', '.join(TIME_UNITS)}"
@@ -118,7 +119,7 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
         # a DataFrame's elapsed-time or time-stamp index, already parsed
         values = minutes_since_first(column)
     elif numeric.notna().all():
-        values = numeric.to_numpy(dtype=float) * _time_unit(header, time_unit)
+        values = numeric.to_numpy(dtype=float) * time_unit_factor(header, time_unit)
     else:
         text = column.astype(str).str.strip()
         empty = column.isna().to_numpy() | (text == "").to_numpy()
