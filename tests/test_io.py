@@ -158,12 +158,13 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     cp1252=st.booleans(),
     crlf=st.booleans(),
     trailing=st.booleans(),
+    quoted=st.booleans(),
     stamps=st.sampled_from(["minutes", "iso", "dotted", "time of day"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
-def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, cp1252, crlf, trailing, stamps, cuts):
+def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, cp1252, crlf, trailing, quoted, stamps, cuts):
     """Every combination of delimiter, decimal mark, preamble, encoding, line end, trailing
-    delimiter and time format, read whole and followed live in random pieces, gives the
+    delimiter, quoted cells (as spreadsheets write them) and time format, read whole and followed live in random pieces, gives the
     plain file's times and temperatures."""
     import datetime as dt
 
@@ -183,8 +184,11 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
 
     end = "\r\n" if crlf else "\n"
     tail = delimiter if trailing else ""
-    lines = [*preamble, delimiter.join(["time", "A °C", "B"]) + tail]
-    lines += [delimiter.join([time_cell(m), *(number(v) for v in row)]) + tail for m, row in zip(t, temperatures, strict=True)]
+    def row(cells: list[str]) -> str:
+        return delimiter.join(f'"{c}"' if quoted else c for c in cells) + tail
+
+    lines = [*preamble, row(["time", "A °C", "B"])]
+    lines += [row([time_cell(m), *(number(v) for v in values)]) for m, values in zip(t, temperatures, strict=True)]
     data = (end.join(lines) + end).encode("cp1252" if cp1252 else "utf-8")
     folder = tmp_path_factory.mktemp("dialect")
     whole = folder / "whole.csv"

@@ -13,6 +13,7 @@ file's head here, so they read a log the same way.
 
 from __future__ import annotations
 
+import csv
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -91,8 +92,8 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
     delimiter = max(_DELIMITERS, key=lambda d: counts[d]) if any(counts.values()) else ","
     decimal = "."
     if delimiter != ",":
-        cells = (cell for line in complete[preamble + 1 : preamble + 21] for cell in line.split(delimiter))
-        if any(_DECIMAL_COMMA.match(cell) for cell in cells):
+        rows = csv.reader(complete[preamble + 1 : preamble + 21], delimiter=delimiter)  # "17,90" quoted, as spreadsheets write it
+        if any(_DECIMAL_COMMA.match(cell) for row in rows for cell in row):
             decimal = ","
     return CsvDialect(delimiter, decimal, preamble, encoding)
 
@@ -100,8 +101,6 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
 def header_names(file: Path) -> list[str]:
     """The column names of a log, read from its head only (a live log may be large); [] while
     its header line is incomplete."""
-    import csv
-
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     dialect = sniff_dialect(head)
