@@ -178,7 +178,10 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
         table.add_column(f"best L for M={p:g}", justify="right")
     table.add_column("periods agree", justify="center")
     for i, d in enumerate(summaries):
-        table.add_row(str(d["sensor"]), _fmt(d["min_identification_time_min"], 0), *[f"{b:g}" for b in result.best_per_period_min[:, i]], "yes" if d["periods_agree"] else "[yellow]no[/]")
+        # to 0.1 min: a 1-Hz log has a candidate L every second (39.9667 min)
+        minimal = d["min_identification_time_min"]
+        best = [f"{round(float(b), 1):g}" for b in result.best_per_period_min[:, i]]
+        table.add_row(str(d["sensor"]), f"{round(minimal, 1):g}" if isinstance(minimal, float) else "—", *best, "yes" if d["periods_agree"] else "[yellow]no[/]")
     Console(width=max(Console().width, 100)).print(table)
 
 
