@@ -186,3 +186,18 @@ def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats():
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip().splitlines()[-1] == "[False, False, True]"
+
+
+def test_min_time_table_gives_l_to_a_tenth_of_a_minute_for_a_fast_log(tmp_path):
+    """A log sampled every 20 s has a candidate L every 20 s; the table printed 39.3333."""
+    import numpy as np
+
+    t = np.arange(0.0, 60.0 * 60 + 1, 20.0)
+    y = 26.7 - 8.8 * np.exp(-0.016 * t / 60.0) + 0.02 * np.random.default_rng(0).standard_normal(len(t))
+    path = tmp_path / "fast.csv"
+    path.write_text("time_s,T1\n" + "".join(f"{a:g},{b:.3f}\n" for a, b in zip(t, y, strict=True)))
+    out = mtident("thermal", "min-time", str(path))
+    assert out.returncode == 0, out.stderr
+    row = next(line for line in out.stdout.splitlines() if "T1" in line)
+    cells = [c.strip() for c in row.strip("│ ").split("│")][1:-1]
+    assert len(cells) == 5 and all(re.fullmatch(r"\d+(\.\d)?", c) for c in cells), row
