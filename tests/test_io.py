@@ -86,6 +86,17 @@ def test_a_time_of_day_passes_midnight_in_an_overnight_test(write_csv, tmp_path)
         read_temperature_log(write_csv("# logger\n\n# nothing yet\n"))
 
 
+def test_stamps_whose_offset_changes_when_summer_time_ends_stay_in_order(write_csv):
+    """02:50+02:00 is followed by 02:00+01:00, ten minutes later. pandas refused the mixed
+    offsets with a ValueError that reached the user as a traceback."""
+    from mtident.io.follow import LogFollower
+
+    stamps = ["02:30:00+02:00", "02:40:00+02:00", "02:50:00+02:00", "02:00:00+01:00", "02:10:00+01:00", "02:20:00+01:00"]
+    path = write_csv("stamp,A\n" + "".join(f"2026-10-25T{s},{20 + k / 10}\n" for k, s in enumerate(stamps)))
+    np.testing.assert_allclose(read_temperature_log(path).time_min, [0, 10, 20, 30, 40, 50])
+    np.testing.assert_allclose(LogFollower(path).poll().time_min, [0, 10, 20, 30, 40, 50])
+
+
 def test_row_numbers_in_messages_count_a_preamble(write_csv):
     log = read_temperature_log(write_csv("# logger\n# setup\ntime_min;A\n" + "".join(f"{k};{'' if k == 3 else f'20,{k}'}\n" for k in range(30))))
     assert log.notes == ("sensor 'A': skipped 1 empty/NaN sample(s) (rows 7)",)

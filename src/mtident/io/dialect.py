@@ -158,7 +158,7 @@ def stamp_format(cell: str) -> str | None:
     text = cell.strip()
     for fmt in ("ISO8601", *_STAMP_FORMATS):
         try:
-            pd.to_datetime(text, format=fmt)
+            pd.to_datetime(text, format=fmt, utc=True)
         except (ValueError, TypeError):
             continue
         return fmt

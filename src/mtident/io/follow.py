@@ -133,7 +133,7 @@ class LogFollower:
                 self.time_format = stamp_format(text)
             if self.time_format is None:
                 raise
-            stamp = pd.to_datetime(text.strip(), format=self.time_format).timestamp() / 60.0
+            stamp = pd.to_datetime(text.strip(), format=self.time_format, utc=True).timestamp() / 60.0
         if self.origin is None:
             self.origin = stamp
         t = stamp - self.origin

@@ -128,7 +128,8 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
             msg = f"{source}: time column {header!r}, row {row + first_row} is empty"
             raise InputError(msg)
         fmt = stamp_format(str(text.iloc[0]))
-        stamps = pd.to_datetime(text, format=fmt, errors="coerce") if fmt is not None else pd.Series(pd.NaT, index=text.index)
+        # as UTC: stamps with offsets that change (summer time ends during the test) stay in order
+        stamps = pd.to_datetime(text, format=fmt, errors="coerce", utc=True) if fmt is not None else pd.Series(pd.NaT, index=text.index)
         if stamps.isna().any():
             row = int(stamps.isna().to_numpy().argmax())
             msg = (
