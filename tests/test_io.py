@@ -97,6 +97,13 @@ def test_stamps_whose_offset_changes_when_summer_time_ends_stay_in_order(write_c
     np.testing.assert_allclose(LogFollower(path).poll().time_min, [0, 10, 20, 30, 40, 50])
 
 
+def test_excel_sep_line_states_the_delimiter(write_csv):
+    """Header names with commas in them: as many ',' as ';' in the header; Excel's "sep=;" decides."""
+    rows = "".join(f"{k};{20 + k / 10:.1f};{19 + k / 10:.1f}\n".replace(".", ",") for k in range(6))
+    log = read_temperature_log(write_csv("sep=;\nZeit;Temp, Spindel;Temp, Motor\n" + rows))
+    assert log.sensors == ("Temp, Spindel", "Temp, Motor") and log.temperature_C[5].tolist() == [20.5, 19.5]
+
+
 def test_row_numbers_in_messages_count_a_preamble(write_csv):
     log = read_temperature_log(write_csv("# logger\n# setup\ntime_min;A\n" + "".join(f"{k};{'' if k == 3 else f'20,{k}'}\n" for k in range(30))))
     assert log.notes == ("sensor 'A': skipped 1 empty/NaN sample(s) (rows 7)",)
@@ -165,7 +172,7 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
 @given(
     delimiter=st.sampled_from([",", ";", "\t"]),
     decimal_comma=st.booleans(),
-    preamble=st.lists(st.sampled_from(["# logger", "", "#channels: 4", "   "]), max_size=3),
+    preamble=st.lists(st.sampled_from(["# logger", "", "#channels: 4", "   ", "sep=DELIMITER"]), max_size=3),
     cp1252=st.booleans(),
     crlf=st.booleans(),
     trailing=st.booleans(),
@@ -198,7 +205,7 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     def row(cells: list[str]) -> str:
         return delimiter.join(f'"{c}"' if quoted else c for c in cells) + tail
 
-    lines = [*preamble, row(["time", "A °C", "B"])]
+    lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", "A °C", "B"])]
     lines += [row([time_cell(m), *(number(v) for v in values)]) for m, values in zip(t, temperatures, strict=True)]
     data = (end.join(lines) + end).encode("cp1252" if cp1252 else "utf-8")
     folder = tmp_path_factory.mktemp("dialect")

@@ -29,6 +29,8 @@ __all__ = ["CsvDialect", "sniff_dialect", "header_names", "read_csv", "stamp_for
 # enough for a preamble, the header and a few rows
 HEAD_BYTES = 65536
 _DELIMITERS = (",", ";", "\t")
+# Excel's first line "sep=;" states the delimiter
+_SEP_DIRECTIVE = re.compile(r"^sep=(.)\r?$")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
 # A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
 TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S")
@@ -48,7 +50,7 @@ class CsvDialect:
     delimiter : {",", ";", "\\t"}
     decimal : {".", ","}
     preamble_lines : int
-        Lines before the header: ``#`` comments or blank lines.
+        Lines before the header: ``#`` comments, blank lines, Excel's ``sep=;``.
     encoding : {"utf-8-sig", "cp1252"}
         UTF-8 (a byte-order mark is skipped), or Windows' cp1252 where UTF-8 fails.
     """
@@ -82,14 +84,20 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
             text, encoding = head.decode("cp1252", errors="replace"), "cp1252"
     lines = text.split("\n")
     complete = lines[:-1]  # the last piece has no newline yet
-    preamble = 0
-    while preamble < len(complete) and (not complete[preamble].strip() or complete[preamble].lstrip().startswith("#")):
+    preamble, stated = 0, None
+    while preamble < len(complete):
+        line = complete[preamble]
+        directive = _SEP_DIRECTIVE.match(line)
+        if directive and directive.group(1) in _DELIMITERS:
+            stated = directive.group(1)
+        elif line.strip() and not line.lstrip().startswith("#"):
+            break
         preamble += 1
     if preamble >= len(complete):
         return None
     header = complete[preamble]
     counts = {d: header.count(d) for d in _DELIMITERS}
-    delimiter = max(_DELIMITERS, key=lambda d: counts[d]) if any(counts.values()) else ","
+    delimiter = stated or (max(_DELIMITERS, key=lambda d: counts[d]) if any(counts.values()) else ",")
     decimal = "."
     if delimiter != ",":
         rows = csv.reader(complete[preamble + 1 : preamble + 21], delimiter=delimiter)  # "17,90" quoted, as spreadsheets write it
