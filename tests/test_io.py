@@ -98,10 +98,15 @@ def test_stamps_whose_offset_changes_when_summer_time_ends_stay_in_order(write_c
 
 
 def test_excel_sep_line_states_the_delimiter(write_csv):
-    """Header names with commas in them: as many ',' as ';' in the header; Excel's "sep=;" decides."""
+    """Header names with commas in them: as many ',' as ';' in the header. Excel's "sep=;"
+    decides, or else the data rows agree with both and the tie goes to ';'."""
     rows = "".join(f"{k};{20 + k / 10:.1f};{19 + k / 10:.1f}\n".replace(".", ",") for k in range(6))
-    log = read_temperature_log(write_csv("sep=;\nZeit;Temp, Spindel;Temp, Motor\n" + rows))
-    assert log.sensors == ("Temp, Spindel", "Temp, Motor") and log.temperature_C[5].tolist() == [20.5, 19.5]
+    for directive in ("sep=;\n", ""):  # without it, the data rows settle the tie
+        log = read_temperature_log(write_csv(directive + "Zeit;Temp, Spindel;Temp, Motor\n" + rows))
+        assert log.sensors == ("Temp, Spindel", "Temp, Motor") and log.temperature_C[5].tolist() == [20.5, 19.5]
+    # the same tie in a comma-separated header: its rows split into three cells only at ','
+    log = read_temperature_log(write_csv("time,T1;front,T2;rear\n" + "".join(f"{k},{20 + k / 10:.1f},{19 + k / 10:.1f}\n" for k in range(6))))
+    assert log.sensors == ("T1;front", "T2;rear")
 
 
 def test_row_numbers_in_messages_count_a_preamble(write_csv):

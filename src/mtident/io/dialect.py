@@ -68,9 +68,10 @@ class CsvDialect:
 def sniff_dialect(head: bytes) -> CsvDialect | None:
     """The dialect of a log from its first bytes; None while its header line is incomplete.
 
-    The delimiter is the candidate that occurs most often in the header line (a
-    header has no decimal commas, so ``;`` against ``,`` is clear there, where
-    csv.Sniffer, looking at data rows, would take the decimal comma for the
+    The delimiter is the one an Excel ``sep=`` line states, else the candidate
+    that splits the header line into the most cells and the data rows into as
+    many (a header has no decimal commas, so ``;`` against ``,`` is clear there,
+    where csv.Sniffer, looking at data rows, would take the decimal comma for the
     delimiter). A decimal comma is assumed when the delimiter is not a comma and a
     data cell reads like ``17,90`` or ``1,5e-05``.
     """
@@ -96,14 +97,25 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
     if preamble >= len(complete):
         return None
     header = complete[preamble]
-    counts = {d: header.count(d) for d in _DELIMITERS}
-    delimiter = stated or (max(_DELIMITERS, key=lambda d: counts[d]) if any(counts.values()) else ",")
+    delimiter = stated or _delimiter(header, complete[preamble + 1 : preamble + 21])
     decimal = "."
     if delimiter != ",":
         rows = csv.reader(complete[preamble + 1 : preamble + 21], delimiter=delimiter)  # "17,90" quoted, as spreadsheets write it
         if any(_DECIMAL_COMMA.match(cell) for row in rows for cell in row):
             decimal = ","
     return CsvDialect(delimiter, decimal, preamble, encoding)
+
+
+def _delimiter(header: str, rows: list[str]) -> str:
+    """The candidate that splits the header most often and the data rows into as many cells
+    (a tie in the header, "Zeit;Temp, Spindel;Temp, Motor", is settled by the rows)."""
+    counts = {d: len(next(csv.reader([header], delimiter=d))) for d in _DELIMITERS}
+    # on a full tie ';' and tab come first: decimal commas in the rows can match commas in the names
+    ranked = sorted((d for d in (";", "\t", ",") if counts[d] > 1), key=lambda d: -counts[d])
+    for d in ranked:
+        if all(len(row) == counts[d] for row in csv.reader([r for r in rows if r.strip()], delimiter=d)):
+            return d
+    return ranked[0] if ranked else ","
 
 
 def header_names(file: Path) -> list[str]:
