@@ -60,6 +60,10 @@ class CsvDialect:
     preamble_lines: int = 0
     encoding: str = "utf-8-sig"
 
+    def cells(self, line: str) -> list[str]:
+        """The cells of one line (a header), stripped; quotes removed."""
+        return [cell.strip() for cell in next(csv.reader([line], delimiter=self.delimiter), [])]
+
     def number(self, cell: str) -> float:
         """A cell as a float under this decimal mark; ValueError if it is none."""
         return float(cell.replace(",", ".") if self.decimal == "," else cell)
@@ -127,7 +131,7 @@ def header_names(file: Path) -> list[str]:
     if dialect is None:
         return []
     line = head.decode(dialect.encoding, errors="replace").split("\n")[dialect.preamble_lines]
-    return [name.strip() for name in next(csv.reader([line], delimiter=dialect.delimiter)) if name.strip()]
+    return [name for name in dialect.cells(line) if name]
 
 
 def read_csv(file: Path) -> tuple[pd.DataFrame, CsvDialect]:

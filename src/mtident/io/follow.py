@@ -101,7 +101,7 @@ class LogFollower:
 
     def _set_header(self, line: str) -> None:
         assert self.dialect is not None
-        header = [h.strip() for h in next(csv.reader([line], delimiter=self.dialect.delimiter))]
+        header = self.dialect.cells(line)
         if len(header) < 2:
             msg = f"{self.path}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found: {', '.join(header)}"
             raise InputError(msg)
