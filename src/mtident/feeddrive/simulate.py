@@ -144,11 +144,7 @@ def read_response(path: str | Path) -> Response:
 
     from mtident.io.dialect import read_csv
 
-    file = Path(path)
-    if not file.is_file():
-        msg = f"{path}: no such file"
-        raise InputError(msg)
-    frame, dialect = read_csv(file)
+    frame, dialect = read_csv(path)
     first_row = 2 + dialect.preamble_lines
     if "time_s" not in frame.columns:
         msg = f"{path}: no time_s column; the columns are: {', '.join(map(str, frame.columns))}"

@@ -134,20 +134,25 @@ def header_names(file: Path) -> list[str]:
     return [name for name in dialect.cells(line) if name]
 
 
-def read_csv(file: Path) -> tuple[pd.DataFrame, CsvDialect]:
-    """A whole CSV file as a DataFrame, read in its own dialect; InputError if it is no CSV.
+def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
+    """A whole CSV file as a DataFrame, read in its own dialect; InputError, naming ``path`` as
+    given, if it is missing or no CSV.
 
     An empty column without a name (a delimiter at the end of every line) is dropped.
     """
     import pandas as pd
 
+    file = Path(path)
+    if not file.is_file():
+        msg = f"{path}: no such file"
+        raise InputError(msg)
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     # the whole file fits in the head: its last line is complete even without a newline
     whole = len(head) < HEAD_BYTES
     dialect = sniff_dialect(head + b"\n" if whole else head)
     if dialect is None and whole and head.strip():
-        msg = f"{file}: no header line, only # comments and blank lines"
+        msg = f"{path}: no header line, only # comments and blank lines"
         raise InputError(msg)
     dialect = dialect or CsvDialect()
     try:
@@ -160,7 +165,7 @@ def read_csv(file: Path) -> tuple[pd.DataFrame, CsvDialect]:
             skipinitialspace=True,
         )
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        msg = f"{file}: not a readable CSV file ({str(exc).splitlines()[0]})"
+        msg = f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})"
         raise InputError(msg) from exc
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
     return frame.drop(columns=unnamed), dialect

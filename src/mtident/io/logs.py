@@ -196,11 +196,7 @@ def read_temperature_log(
         frame = path.reset_index() if path.index.name is not None else path.copy()
     else:
         source = str(path)
-        file = Path(path)
-        if not file.is_file():
-            msg = f"{source}: no such file"
-            raise InputError(msg)
-        frame, dialect = read_csv(file)
+        frame, dialect = read_csv(path)
         first_row += dialect.preamble_lines
     frame.columns = [str(c).strip() for c in frame.columns]
     if frame.shape[1] < 2:
