@@ -172,6 +172,25 @@ def _tolist(value: object) -> object:
     return value.tolist() if isinstance(value, np.ndarray) else value
 
 
+def _no_rows() -> FloatArray:
+    return np.empty((0, 0))
+
+
+def _rows(value: Any) -> FloatArray:
+    """Saved rows (a list of lists) as a 2-D array; the width of an empty one is set by the monitor."""
+    rows = np.array(value, dtype=float)
+    return rows if rows.ndim == 2 else _no_rows()
+
+
+def _append_row(rows: FloatArray, row: FloatArray | list[float]) -> FloatArray:
+    return np.concatenate([rows, np.asarray(row, dtype=float)[None, :]])
+
+
+def _since(rows: FloatArray, start: float) -> FloatArray:
+    """The rows (time in the first column, increasing) from ``start`` on."""
+    return rows[int(np.searchsorted(rows[:, 0], start, side="left")) :]
+
+
 @dataclass
 class Monitor:
     """Recursive warm-up monitor for S sensors. Feed it samples with :meth:`feed`."""
@@ -185,13 +204,15 @@ class Monitor:
     last_t: float | None = None
     median_dt: float | None = None
     observed: FloatArray | None = None
-    z_history: list[list[float]] = field(default_factory=list)
-    steady_history: list[list[float]] = field(default_factory=list)  # rows: [t, T∞ per sensor]
+    # The histories are arrays (rows appended, the oldest dropped): a list of lists turned into
+    # an array every sample cost a third of the step at 1-Hz sampling.
+    z_history: FloatArray = field(default_factory=_no_rows)  # the last check_samples ν/√S per sensor
+    steady_history: FloatArray = field(default_factory=_no_rows)  # rows: [t, T∞ per sensor] over the hold
     nis_sum: FloatArray | None = None
     min_T: FloatArray | None = None
     max_T: FloatArray | None = None
     samples: int = 0
-    recent_y: list[list[float]] = field(default_factory=list)  # last 5 raw samples, for the noise estimate
+    recent_y: FloatArray = field(default_factory=_no_rows)  # last 5 raw samples, for the noise estimate
     rejected_run: FloatArray | None = None
     room_measured: bool = False  # fed with ``ambient``: the room is an input, not an unknown that wanders
     ambient_level: float | None = None  # the room's last valid reading, with ``ambient``
@@ -201,19 +222,25 @@ class Monitor:
     restart_from: list[float] | None = None
     waiting_rise: list[bool] | None = None  # per sensor: flat since the start, its filter waits for the rise
     unread: list[bool] | None = None  # per sensor: no valid reading yet (disconnected, or dead from the start)
-    recent_rows: list[list[float]] = field(default_factory=list)  # [t, room rate, y per sensor] over the last restart_delay_min
+    recent_rows: FloatArray = field(default_factory=_no_rows)  # [t, room rate, y per sensor] over the last restart_delay_min
     # derived from the tuning once per process (not saved): the step needs them every sample
     _config: FilterConfig | None = field(default=None, repr=False, compare=False)
     _weights: SigmaWeights | None = field(default=None, repr=False, compare=False)
     d4_sum: FloatArray | None = None
     d4_count: FloatArray | None = None
     # rows [t, rise T∞ per sensor, its 95 % half-width per sensor], about one per minute of the window
-    checkpoints: list[list[float]] = field(default_factory=list)
+    checkpoints: FloatArray = field(default_factory=_no_rows)
     wandering: list[bool] | None = None
     last_said: dict[str, float] = field(default_factory=dict)  # "kind:sensor" -> time of the last such message
     stop_time: float | None = None
     decision: list[dict[str, object]] | None = None
     notes: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        S = len(self.sensors)
+        for name, width in (("z_history", S), ("steady_history", 1 + S), ("recent_y", S), ("recent_rows", 2 + S), ("checkpoints", 2 + 2 * S)):
+            if len(getattr(self, name)) == 0:
+                setattr(self, name, np.empty((0, width)))
 
     def __repr__(self) -> str:
         # the whole state is for to_dict; a notebook wants the answer so far
@@ -307,7 +334,7 @@ class Monitor:
         self.last_t = None
         self.d4_sum = np.zeros(S)
         self.d4_count = np.zeros(S)
-        self.recent_y = []
+        self.recent_y = self.recent_y[:0]
         self.rejected_run = np.zeros(S)
         messages = []
         # A sensor that has not begun to rise (the logger started before the spindle) gives no
@@ -372,23 +399,20 @@ class Monitor:
                     messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min ({_MISSING}); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
-        self.recent_rows.append([t, room_rate, *[float(v) for v in y]])
-        while self.recent_rows[0][0] < t - self.settings.restart_delay_min:
-            self.recent_rows.pop(0)
+        self.recent_rows = _since(_append_row(self.recent_rows, [t, room_rate, *y]), t - self.settings.restart_delay_min)
         self._update_noise(y)
         ok = np.isfinite(z)
         self.observed, self.nis_sum = _count_innovations(self.observed, self.nis_sum, z)
-        self.z_history.append([float(v) for v in z])
-        self.z_history = self.z_history[-self.settings.check_samples :]
+        self.z_history = _append_row(self.z_history, z)[-self.settings.check_samples :]
         physical, cov = to_physical(self.carry.mean, self.carry.covariance(), "slope")
         temperature = physical[:, 0]
         self.min_T = np.minimum(self.min_T, temperature)
         self.max_T = np.maximum(self.max_T, temperature)
         # A sensor without a valid sample this step cannot be said to hold still: NaN in its history.
-        self.steady_history.append([t, *[float(v) if o else float("nan") for v, o in zip(physical[:, 2], ok, strict=True)]])
-        horizon = t - self._hold(t)
-        while len(self.steady_history) > 2 and self.steady_history[1][0] <= horizon:
-            self.steady_history.pop(0)
+        history = _append_row(self.steady_history, [t, *np.where(ok, physical[:, 2], np.nan)])
+        # the oldest rows go while the next one is still at or beyond the hold's start (two stay)
+        beyond = int(np.searchsorted(history[1:, 0], t - self._hold(t), side="right"))
+        self.steady_history = history[min(beyond, max(len(history) - 2, 0)) :]
         one_sided, too_large = self._misfit_tests()
         misfit_now = one_sided | too_large
         misfit = misfit_now & modelled
@@ -446,27 +470,23 @@ class Monitor:
     def _record_checkpoint(self, t: float, status: list[SensorStatus]) -> None:
         """Keep each T∞ (over the room, with ``ambient``) and its half-width, about 60 times per window."""
         window = self.settings.consistency_window_min
-        if self.checkpoints and t - self.checkpoints[-1][0] < window / 60.0:
+        if len(self.checkpoints) and t - self.checkpoints[-1, 0] < window / 60.0:
             return
         # Estimates before the minimum duration, or with intervals wider than twice the tolerance,
         # are too far from Gaussian (T∞ = T + s/λ is a ratio) to hold later ones to.
         mature = t >= self.settings.min_duration_min
         usable = [mature and st.status not in ("no steady state yet", *_LEFT_OUT) and st.half_width_C <= 2 * self.settings.tolerance_C for st in status]
         steady = [st.steady_state_C if use else float("nan") for st, use in zip(status, usable, strict=True)]
-        self.checkpoints.append([t, self.ambient_level or 0.0, *steady, *[st.half_width_C for st in status]])
-        while self.checkpoints and self.checkpoints[0][0] < t - window:
-            self.checkpoints.pop(0)
+        self.checkpoints = _since(_append_row(self.checkpoints, [t, self.ambient_level or 0.0, *steady, *[st.half_width_C for st in status]]), t - window)
 
-    def _outside(self, steady: FloatArray) -> FloatArray:
+    def _outside(self, steady: FloatArray) -> np.ndarray:
         """(checkpoints, S): where T∞ now lies outside an earlier estimate's allowance.
 
         With a room sensor the comparison is of T∞ over the room: T∞ itself
         follows the room, as it should.
         """
         S = len(self.sensors)
-        if not self.checkpoints:
-            return np.zeros((0, S), dtype=bool)
-        rows = np.array(self.checkpoints)
+        rows = self.checkpoints
         room, then, halves = rows[:, 1], rows[:, 2 : 2 + S], rows[:, 2 + S :]
         # a shift within ±tolerance/2 is left to the hold rule: it does not change the answer
         allowed = np.maximum(self.settings.consistency_factor * halves, self.settings.tolerance_C / 2)
@@ -489,7 +509,7 @@ class Monitor:
             if not self._may_say("wandering", self.sensors[s], float(self.last_t or 0.0)):
                 continue
             k = int(np.argmax(outside[:, s]))
-            then, half, when = self.checkpoints[k][2 + s], self.checkpoints[k][2 + len(status) + s], self.checkpoints[k][0]
+            then, half, when = self.checkpoints[k, 2 + s], self.checkpoints[k, 2 + len(status) + s], self.checkpoints[k, 0]
             messages.append(
                 f"sensor {status[s].sensor!r}: T∞ = {status[s].steady_state_C:.2f} °C has left the interval {then:.2f} ± {half:.2f} °C of t = {when:g} min "
                 f"(by more than {self.settings.consistency_factor:g}× its half-width): not a first-order warm-up here, a slow mode or a drifting room{hint}; waiting for it to settle"
@@ -524,10 +544,10 @@ class Monitor:
         re-estimated with every sample (constant work) instead of trusted.
         """
         assert self.d4_sum is not None and self.d4_count is not None and self.carry is not None
-        self.recent_y = ([*self.recent_y, [float(v) for v in y]])[-5:]
+        self.recent_y = _append_row(self.recent_y, y)[-5:]
         if len(self.recent_y) < 5:
             return
-        r = np.array(self.recent_y)
+        r = self.recent_y
         d4 = r[0] - 4 * r[1] + 6 * r[2] - 4 * r[3] + r[4]
         current = np.where(self.d4_count > 0, self.d4_sum / np.maximum(self.d4_count, 1), np.inf)
         use = np.isfinite(d4) & ((self.d4_count < 10) | (d4**2 <= 36.0 * current))
@@ -550,7 +570,7 @@ class Monitor:
     def _misfit_tests(self) -> tuple[np.ndarray, np.ndarray]:
         """The model check over the last ``check_samples`` normalised innovations, per sensor:
         their mean is off zero (a trend the model misses), or their mean square is off one."""
-        z = np.array(self.z_history)
+        z = self.z_history
         if len(z) < self.settings.check_samples:
             none = np.zeros(len(self.sensors), dtype=bool)
             return none, none
@@ -582,7 +602,7 @@ class Monitor:
         if np.any(waiting):
             # Still flat over the last 5 min: the rise has not begun, and the window for the new
             # start begins at the latest flat sample. Once it rises the window stays put.
-            rows = np.array(self.recent_rows)
+            rows = self.recent_rows
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)  # no valid sample in the last 5 min
                 values = np.where(rows[:, 0][:, None] >= t - 5.0, rows[:, 2:], np.nan)
@@ -626,7 +646,7 @@ class Monitor:
         sees only the new trend. Done once per slow mode, not per sample.
         """
         assert self.carry is not None and self.carry.chol is not None and self.restart_from is not None
-        rows = np.array(self.recent_rows)
+        rows = self.recent_rows
         rows = rows[rows[:, 0] >= np.nanmin(np.where(due, self.restart_from, np.nan))]
         t, rates, y = rows[:, 0], rows[:, 1], rows[:, 2:].copy()
         y[(t[:, None] < np.array(self.restart_from)[None, :]) | ~due[None, :]] = np.nan
@@ -656,9 +676,7 @@ class Monitor:
         fresh_statistics = ready & first_start
         self.observed = np.where(fresh_statistics, observed, self.observed)
         self.nis_sum = np.where(fresh_statistics, nis_sum, self.nis_sum)
-        for row in self.checkpoints:
-            for s in np.flatnonzero(fresh_statistics):
-                row[2 + s] = float("nan")
+        self.checkpoints[:, 2 : 2 + len(due)][:, fresh_statistics] = np.nan
         assert fresh.chol is not None
         self.carry = replace(
             self.carry,
@@ -666,20 +684,15 @@ class Monitor:
             chol=np.where(ready[:, None, None], fresh.chol, self.carry.chol),
         )
         self.restart_from = [float("nan") if d else r for d, r in zip(due, self.restart_from, strict=True)]
-        for row in self.z_history:
-            for s in np.flatnonzero(ready):
-                row[s] = float("nan")
-        self.steady_history = [self.steady_history[-1]]
+        self.z_history[:, ready] = np.nan
+        self.steady_history = self.steady_history[-1:]
 
     def _widen(self, mask: np.ndarray) -> None:
         assert self.carry is not None and self.carry.chol is not None
         factor = np.where(mask, 2.0, 1.0)[:, None, None]
         self.carry = replace(self.carry, chol=self.carry.chol * factor)
-        for row in self.z_history:
-            for s in np.flatnonzero(mask):
-                row[s] = float("nan")
-        last = self.steady_history[-1]
-        self.steady_history = [last]
+        self.z_history[:, mask] = np.nan
+        self.steady_history = self.steady_history[-1:]
 
     # ---- the decision -------------------------------------------------------------------
     def status(self, _current: tuple[FloatArray, FloatArray, np.ndarray] | None = None) -> list[SensorStatus]:
@@ -690,7 +703,7 @@ class Monitor:
         physical, cov, misfit = _current if _current is not None else (*to_physical(self.carry.mean, self.carry.covariance(), "slope"), self._misfit())
         assert self.observed is not None and self.nis_sum is not None and self.min_T is not None and self.max_T is not None
         factor = np.maximum(1.0, self.nis_sum / np.maximum(self.observed - 3, 1))
-        history = np.array(self.steady_history)
+        history = self.steady_history
         # with a directly coupled room the filters follow the rise over the room
         offset = (self.ambient_level or 0.0) if self.settings.room_coupling == "direct" else 0.0
         quantiles = stdtrit(np.maximum(self.observed - 3, 1), 0.975)
@@ -814,13 +827,13 @@ class Monitor:
             "last_t": self.last_t,
             "median_dt": self.median_dt,
             "observed": _tolist(self.observed),
-            "z_history": self.z_history,
-            "steady_history": self.steady_history,
+            "z_history": _tolist(self.z_history),
+            "steady_history": _tolist(self.steady_history),
             "nis_sum": _tolist(self.nis_sum),
             "min_T": _tolist(self.min_T),
             "max_T": _tolist(self.max_T),
             "samples": self.samples,
-            "recent_y": self.recent_y,
+            "recent_y": _tolist(self.recent_y),
             "rejected_run": _tolist(self.rejected_run),
             "room_measured": self.room_measured,
             "ambient_level": self.ambient_level,
@@ -828,12 +841,12 @@ class Monitor:
             "buffer_room_rate": self.buffer_room_rate,
             "d4_sum": _tolist(self.d4_sum),
             "d4_count": _tolist(self.d4_count),
-            "checkpoints": self.checkpoints,
+            "checkpoints": _tolist(self.checkpoints),
             "wandering": self.wandering,
             "restart_from": self.restart_from,
             "waiting_rise": self.waiting_rise,
             "unread": self.unread,
-            "recent_rows": self.recent_rows,
+            "recent_rows": _tolist(self.recent_rows),
             "last_said": self.last_said,
             "stop_time": self.stop_time,
             "decision": self.decision,
@@ -860,13 +873,13 @@ class Monitor:
             last_t=data["last_t"],
             median_dt=data["median_dt"],
             observed=_optional_floats(data["observed"]),
-            z_history=[list(r) for r in data["z_history"]],
-            steady_history=[list(r) for r in data["steady_history"]],
+            z_history=_rows(data["z_history"]),
+            steady_history=_rows(data["steady_history"]),
             nis_sum=_optional_floats(data["nis_sum"]),
             min_T=_optional_floats(data["min_T"]),
             max_T=_optional_floats(data["max_T"]),
             samples=int(data["samples"]),
-            recent_y=[list(r) for r in data["recent_y"]],
+            recent_y=_rows(data["recent_y"]),
             rejected_run=_optional_floats(data["rejected_run"]),
             room_measured=bool(data.get("room_measured", data["ambient_level"] is not None)),
             ambient_level=data["ambient_level"],
@@ -874,12 +887,12 @@ class Monitor:
             buffer_room_rate=list(data.get("buffer_room_rate", [0.0] * len(data["buffer_t"]))),
             d4_sum=_optional_floats(data["d4_sum"]),
             d4_count=_optional_floats(data["d4_count"]),
-            checkpoints=[list(r) for r in data.get("checkpoints", [])],
+            checkpoints=_rows(data.get("checkpoints", [])),
             wandering=data.get("wandering"),
             restart_from=data.get("restart_from"),
             waiting_rise=data.get("waiting_rise"),
             unread=data.get("unread"),
-            recent_rows=[list(r) for r in data.get("recent_rows", [])],
+            recent_rows=_rows(data.get("recent_rows", [])),
             last_said=dict(data.get("last_said", {})),
             stop_time=data["stop_time"],
             decision=data["decision"],
