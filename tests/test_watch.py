@@ -564,20 +564,17 @@ def test_live_table_shows_every_sensor_with_its_band_and_status():
     monitor = Monitor(("spindle", "motor"))
     monitor.feed(T[:50], np.column_stack([first_order(T[:50]), first_order(T[:50], steady=30.0)]) + 0.02 * rng.standard_normal((50, 2)))
     console = Console(record=True, width=120)
-    console.print(_status_table(monitor, "log.csv: t = 49 min"))
+    console.print(_status_table(monitor, Path("logs/log.csv")))
     text = console.export_text()
-    assert "log.csv: t = 49 min" in text and "T∞ ± 95 % (°C)" in text
+    assert "log.csv: at t = 49 min" in text and "T∞ ± 95 % (°C)" in text
     for status in monitor.status():
         assert status.sensor in text and status.status in text and f"{status.steady_state_C:.2f}" in text
 
 
-def test_watch_in_a_terminal_draws_the_live_table(tmp_path):
-    """With a terminal on stdout the command draws the rich table in place (and does not crash)."""
+def in_a_terminal(args: list[str], cwd: Path) -> tuple[int, str]:
+    """Run mtident with a terminal on stdout (rich draws its live table); its exit code and the screen, without colours."""
     main, secondary = pty.openpty()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "mtident", "thermal", "watch", "@sample", "--replay", "--state", str(tmp_path / "s.json")],
-        stdout=secondary, stderr=subprocess.DEVNULL, cwd=tmp_path,
-    )
+    proc = subprocess.Popen([sys.executable, "-m", "mtident", *args], stdout=secondary, stderr=subprocess.DEVNULL, cwd=cwd)
     os.close(secondary)
     chunks = []
     while True:  # read while it writes: a full terminal buffer would stall it
@@ -589,9 +586,66 @@ def test_watch_in_a_terminal_draws_the_live_table(tmp_path):
             break
         chunks.append(chunk)
     os.close(main)
-    assert proc.wait(timeout=300) == 0
-    screen = re.sub(r"\x1b\[[0-9;?]*[A-Za-z]", "", b"".join(chunks).decode("utf-8", "replace"))  # no colours
+    code = proc.wait(timeout=300)
+    return code, re.sub(r"\x1b\[[0-9;?]*[A-Za-z]", "", b"".join(chunks).decode("utf-8", "replace"))
+
+
+def test_watch_in_a_terminal_draws_the_live_table(tmp_path):
+    """With a terminal on stdout the command draws the rich table in place (and does not crash)."""
+    code, screen = in_a_terminal(["thermal", "watch", "@sample", "--replay", "--state", str(tmp_path / "s.json")], tmp_path)
+    assert code == 0
     assert "T∞ ± 95 %" in screen and "T10" in screen and "The test can stop at t = 305 min" in screen
+
+
+def test_watch_in_a_terminal_at_the_start_of_a_test(tmp_path):
+    """Started on a log shorter than the start window (the usual case at the machine), the table
+    shows the sensors collecting; this was a TypeError in the live view and the final table."""
+    rng = np.random.default_rng(3)
+    log = tmp_path / "start.csv"
+    log.write_text(csv_text(T[:5], {"A": first_order(T[:5]) + 0.02 * rng.standard_normal(5)}))
+    code, screen = in_a_terminal(["thermal", "watch", str(log), "--replay"], tmp_path)
+    assert code == 0
+    assert "start.csv: at t = 4 min" in screen and "collecting" in screen and "nan" not in screen
+    assert "Not yet: keep the test running." in screen
+
+
+def test_watch_run_again_after_its_decision_gives_the_same_answer(tmp_path):
+    """The state file holds the decision: the same command again resumes and prints it (it raised in
+    the table before, the saved covariance factor's missing dense form read back as NaN)."""
+    first = mtident("thermal", "watch", "@sample", "--replay", "--json", cwd=tmp_path)
+    again = mtident("thermal", "watch", "@sample", "--replay", "--json", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert "resuming from" in again.stderr and "at t = 305 min" in again.stderr
+    assert json.loads(again.stdout) == json.loads(first.stdout)
+    table = mtident("thermal", "watch", "@sample", "--replay", cwd=tmp_path)
+    assert table.returncode == 0, table.stderr
+    assert "The test can stop at t = 305 min" in table.stdout
+
+
+def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path):
+    """Ctrl-C while following a log: no traceback, the last saved answer, where it stopped, exit 130."""
+    rng = np.random.default_rng(4)
+    log = tmp_path / "live.csv"
+    log.write_text(csv_text(T[:60], {"A": first_order(T[:60]) + 0.02 * rng.standard_normal(60)}))
+    state = tmp_path / "live-state.json"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mtident", "thermal", "watch", str(log), "--json", "--state", str(state), "--poll", "0.05"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+    )
+    deadline = time.monotonic() + 120
+    while not state.is_file() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.3)  # now it waits for new rows
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert "interrupted (Ctrl-C) at t = 59 min" in err and "the same command resumes from there" in err
+    result = json.loads(out)
+    assert result["decision"] == "continue" and result["last_time_min"] == 59.0
+    assert result["steady_state_C"] == pytest.approx(26.7, abs=0.5)
+    assert json.loads(state.read_text())["monitor"]["last_t"] == 59.0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["live-state.json", "live.csv"]  # no stray temporary file
 
 
 def test_the_sample_with_its_room_sensor(tmp_path):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from importlib import resources
 from pathlib import Path
 
@@ -68,8 +69,8 @@ def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
 
 
 def _fmt(value: object, digits: int = 2) -> str:
-    if value is None:
-        return "—"
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "—"  # no estimate yet (still collecting, or no steady state)
     if isinstance(value, float):
         return f"{value:.{digits}f}"
     return str(value)
@@ -185,23 +186,31 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
     Console(width=max(Console().width, 100)).print(table)
 
 
-def _save_state(path: Path, payload: dict[str, object]) -> None:
+def _save_state(path: Path, text: str) -> None:
     """Write the monitor's state atomically: a killed monitor leaves the old or the new file, never half of one."""
-    import json
     import os
     import tempfile
 
     path.parent.mkdir(parents=True, exist_ok=True)
     handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    with os.fdopen(handle, "w") as out:
-        json.dump(payload, out)
-        out.flush()
-        os.fsync(out.fileno())
-    os.replace(tmp, path)
+    try:
+        with os.fdopen(handle, "w") as out:
+            out.write(text)
+            out.flush()
+            os.fsync(out.fileno())
+        os.replace(tmp, path)
+    except BaseException:  # Ctrl-C or a full disk half-way: no stray temporary file beside the log
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
-def _status_table(monitor, title: str) -> Table:  # noqa: ANN001 - thermal.monitor.Monitor
-    table = Table(title=title)
+def _when(monitor) -> str:  # noqa: ANN001 - thermal.monitor.Monitor
+    """Where the monitor is in the log, for messages and the table's title."""
+    return "before the first sample" if monitor.latest_time is None else f"at t = {monitor.latest_time:g} min"
+
+
+def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monitor.Monitor
+    table = Table(title=f"{log.name}: {_when(monitor)}")
     for column in ("sensor", "latest (°C)", "T∞ ± 95 % (°C)", "t_eq (min)", "status"):
         table.add_column(column, justify="left" if column in ("sensor", "status") else "right", no_wrap=True)
     for st in monitor.status():
@@ -277,56 +286,74 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling, room_wander_C_per_h=room_wander)
     follower: LogFollower | None = None
     monitor: Monitor | None = None
+    saved_text: str | None = None  # the last state written or resumed from: what a Ctrl-C falls back to
     if state_file.is_file():
         try:
-            saved = json.loads(state_file.read_text())
+            text = state_file.read_text()
+            saved = json.loads(text)
             if saved.get("log") == str(path.resolve()) and saved.get("settings") == [tolerance_C, hold_min, room_coupling, room_wander] and saved.get("requested") == names:
                 follower = LogFollower.resume(path, saved["position"], time_col, time_unit)
                 monitor = Monitor.from_dict(saved["monitor"])
-                stderr.print(f"mtident: resuming from {state_file} at t = {monitor.last_t} min", highlight=False)
+                saved_text = text
+                stderr.print(f"mtident: resuming from {state_file} {_when(monitor)}", highlight=False)
         except (ValueError, KeyError, TypeError) as exc:
             stderr.print(f"mtident: warning: ignoring the unreadable state file {state_file} ({exc}); starting afresh", highlight=False)
     if follower is None:
         follower = LogFollower(path, names, time_col, time_unit)
 
     def save() -> None:
+        nonlocal saved_text
         assert follower is not None and monitor is not None
-        _save_state(state_file, {"log": str(path.resolve()), "settings": [tolerance_C, hold_min, room_coupling, room_wander], "requested": names, "position": follower.position(), "monitor": monitor.to_dict()})
+        text = json.dumps({"log": str(path.resolve()), "settings": [tolerance_C, hold_min, room_coupling, room_wander], "requested": names, "position": follower.position(), "monitor": monitor.to_dict()})
+        _save_state(state_file, text)
+        saved_text = text
 
     live_view = sys.stdout.isatty() and not as_json
     last_data = time.monotonic()
     last_plot = 0.0
-    with Live(console=Console(), auto_refresh=False, transient=False) if live_view else _Nothing() as live:
-        while True:
-            rows = follower.poll()
-            for warning in rows.warnings:
-                stderr.print(f"mtident: warning: {warning}", highlight=False)
-            if monitor is None and follower.sensors:
-                monitored = follower.sensors[:-1] if ambient_col else follower.sensors
-                monitor = Monitor(tuple(monitored), settings)
-            if len(rows.time_min) and monitor is not None:
-                last_data = time.monotonic()
-                values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if ambient_col else (rows.temperature_C, None)
-                # in pieces, so that the table moves on through a long replay (300 min at 1 Hz: 42 s)
-                for start in range(0, len(rows.time_min), _FEED_ROWS):
-                    part = slice(start, start + _FEED_ROWS)
-                    for message in monitor.feed(rows.time_min[part], values[part], None if room is None else room[part]):
-                        stderr.print(f"mtident: {message}", highlight=False)
-                    if live_view:
-                        live.update(_status_table(monitor, f"{path.name}: t = {monitor.last_t:g} min"), refresh=True)
-                # saved with the follower's position, which is at the end of these rows
-                save()
-                if plot_path and (time.monotonic() - last_plot > 5.0 or monitor.stop_time is not None):
-                    _plot_watch(path, monitor, plot_path, time_col, time_unit)
-                    last_plot = time.monotonic()
-            if monitor is not None and monitor.stop_time is not None:
-                break
-            if replay:
-                break
-            if timeout_s is not None and time.monotonic() - last_data > timeout_s:
-                stderr.print(f"mtident: no new row for {timeout_s:g} s; stopping", highlight=False)
-                break
-            time.sleep(poll_s)
+    interrupted = False
+    try:
+        with Live(console=Console(), auto_refresh=False, transient=False) if live_view else _Nothing() as live:
+            while True:
+                rows = follower.poll()
+                for warning in rows.warnings:
+                    stderr.print(f"mtident: warning: {warning}", highlight=False)
+                if monitor is None and follower.sensors:
+                    monitored = follower.sensors[:-1] if ambient_col else follower.sensors
+                    monitor = Monitor(tuple(monitored), settings)
+                if len(rows.time_min) and monitor is not None:
+                    last_data = time.monotonic()
+                    values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if ambient_col else (rows.temperature_C, None)
+                    # in pieces, so that the table moves on through a long replay (300 min at 1 Hz: 42 s)
+                    for start in range(0, len(rows.time_min), _FEED_ROWS):
+                        part = slice(start, start + _FEED_ROWS)
+                        for message in monitor.feed(rows.time_min[part], values[part], None if room is None else room[part]):
+                            stderr.print(f"mtident: {message}", highlight=False)
+                        if live_view:
+                            live.update(_status_table(monitor, path), refresh=True)
+                    # saved with the follower's position, which is at the end of these rows
+                    save()
+                    if plot_path and (time.monotonic() - last_plot > 5.0 or monitor.stop_time is not None):
+                        _plot_watch(path, monitor, plot_path, time_col, time_unit)
+                        last_plot = time.monotonic()
+                if monitor is not None and monitor.stop_time is not None:
+                    break
+                if replay:
+                    break
+                if timeout_s is not None and time.monotonic() - last_data > timeout_s:
+                    stderr.print(f"mtident: no new row for {timeout_s:g} s; stopping", highlight=False)
+                    break
+                time.sleep(poll_s)
+    except KeyboardInterrupt:
+        # The monitor may have been stopped half-way through a sample: fall back to the state last
+        # written, which the same command resumes from.
+        interrupted = True
+        monitor = Monitor.from_dict(json.loads(saved_text)["monitor"]) if saved_text is not None else None
+        where = _when(monitor) if monitor is not None else "before the first sample"
+        kept = f"the state is in {state_file}; the same command resumes from there" if saved_text is not None else "nothing was saved"
+        stderr.print(f"mtident: interrupted (Ctrl-C) {where}; {kept}", highlight=False)
+        if monitor is None:
+            sys.exit(130)
     if monitor is None:
         msg = f"{path}: no data rows"
         raise InputError(msg)
@@ -337,13 +364,15 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     result = monitor.result()
     if as_json:
         print_json(result)
-        return
-    Console(width=max(Console().width, 100)).print(_status_table(monitor, f"{path.name}: t = {monitor.last_t:g} min"))
-    if result["stop_time_min"] is not None:
-        saved_text = f"; {result['time_saved_min']:.0f} min before the predicted equilibrium" if result.get("time_saved_min") is not None else ""
-        Console().print(f"[bold green]The test can stop at t = {result['stop_time_min']:g} min{saved_text}.[/]")
     else:
-        Console().print("[bold yellow]Not yet: keep the test running.[/]")
+        Console(width=max(Console().width, 100)).print(_status_table(monitor, path))
+        if result["stop_time_min"] is not None:
+            gain = f"; {result['time_saved_min']:.0f} min before the predicted equilibrium" if result.get("time_saved_min") is not None else ""
+            Console().print(f"[bold green]The test can stop at t = {result['stop_time_min']:g} min{gain}.[/]")
+        else:
+            Console().print("[bold yellow]Not yet: keep the test running.[/]")
+    if interrupted:
+        sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
 
 
 # rows fed between two redraws of the live table

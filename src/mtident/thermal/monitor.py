@@ -252,6 +252,11 @@ class Monitor:
             lines.append(f"  {st.sensor}: T∞ {st.steady_state_C:.2f} ± {st.half_width_C:.2f} °C, t_eq {st.equilibrium_time_min:.0f} min, {st.status}")
         return "\n".join(lines)
 
+    @property
+    def latest_time(self) -> float | None:
+        """The time of the last sample fed (min), also while the start window is collected."""
+        return self.last_t if self.last_t is not None else (self.buffer_t[-1] if self.buffer_t else None)
+
     # ---- recursion --------------------------------------------------------------------
     def feed(self, times: FloatArray, values: FloatArray, ambient: FloatArray | None = None) -> list[str]:
         """Process new samples (times in min, values (n, S)); returns warnings for the engineer.
@@ -792,7 +797,7 @@ class Monitor:
     def result(self) -> dict[str, object]:
         """The contract's JSON object: the decision if reached, else the current estimates."""
         sensors = self.decision if self.decision is not None else [self._summary(st) for st in self.status()]
-        payload: dict[str, object] = {"stop_time_min": self.stop_time, "decision": "stop" if self.stop_time is not None else "continue", "last_time_min": self.last_t}
+        payload: dict[str, object] = {"stop_time_min": self.stop_time, "decision": "stop" if self.stop_time is not None else "continue", "last_time_min": self.latest_time}
         eq = [d["equilibrium_time_min"] for d in sensors if d["equilibrium_time_min"] is not None and d["status"] not in _LEFT_OUT]
         if self.stop_time is not None and eq:
             payload["time_saved_min"] = max(float(e) for e in eq) - self.stop_time  # type: ignore[arg-type]
@@ -862,7 +867,7 @@ class Monitor:
         carry = None
         if data["carry"] is not None:
             c = data["carry"]
-            carry = FilterCarry(_floats(c["mean"]), _floats(c["cov"]), _floats(c["chol"]), _floats(c["process_cov"]), _floats(c["emission_cov"]), _floats(c["residual_memory"]), _floats(c["updates_seen"]))
+            carry = FilterCarry(_floats(c["mean"]), _optional_floats(c["cov"]), _optional_floats(c["chol"]), _floats(c["process_cov"]), _floats(c["emission_cov"]), _floats(c["residual_memory"]), _floats(c["updates_seen"]))
         return cls(
             sensors=tuple(data["sensors"]),
             settings=MonitorSettings(**data["settings"]),
