@@ -707,3 +707,22 @@ def test_a_damaged_log_never_crashes_warns_or_loses_the_decision(seed, dropout_f
     assert resumed.result() == result
     assert {d["status"] for d in result["sensors"]} <= STATUSES
     json.dumps(result)
+
+
+def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path):
+    """Started before the logger: it says it waits, picks the log up when it appears, and says
+    why if it never does."""
+    never = mtident("thermal", "watch", "later.csv", "--poll", "0.05", "--timeout", "0.5", cwd=tmp_path)
+    assert never.returncode == 2
+    assert "waiting for later.csv to appear" in never.stderr and "later.csv: no such file (not created within the --timeout of 0.5 s)" in never.stderr
+
+    rng = np.random.default_rng(5)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mtident", "thermal", "watch", "later.csv", "--json", "--poll", "0.05", "--timeout", "30"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+    )
+    time.sleep(1.0)
+    (tmp_path / "later.csv").write_text(csv_text(T, {"A": first_order(T) + 0.02 * rng.standard_normal(len(T))}))
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert json.loads(out)["decision"] == "stop"

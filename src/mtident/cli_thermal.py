@@ -300,6 +300,8 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             stderr.print(f"mtident: warning: ignoring the unreadable state file {state_file} ({exc}); starting afresh", highlight=False)
     if follower is None:
         follower = LogFollower(path, names, time_col, time_unit)
+    if not path.is_file():
+        stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
 
     def save() -> None:
         nonlocal saved_text
@@ -355,7 +357,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         if monitor is None:
             sys.exit(130)
     if monitor is None:
-        msg = f"{path}: no data rows"
+        msg = f"{path}: no data rows" if path.is_file() else f"{path}: no such file (not created within the --timeout of {timeout_s:g} s)"
         raise InputError(msg)
     if plot_path:
         problem = _plot_watch(path, monitor, plot_path, time_col, time_unit)
