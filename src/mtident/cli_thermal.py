@@ -291,11 +291,22 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         try:
             text = state_file.read_text()
             saved = json.loads(text)
-            if saved.get("log") == str(path.resolve()) and saved.get("settings") == [tolerance_C, hold_min, room_coupling, room_wander] and saved.get("requested") == names:
+            differs = [
+                what
+                for what, now, then in (
+                    ("the log", str(path.resolve()), saved.get("log")),
+                    ("--tolerance, --hold, --room-coupling or --room-wander", [tolerance_C, hold_min, room_coupling, room_wander], saved.get("settings")),
+                    ("the sensors", names, saved.get("requested")),
+                )
+                if now != then
+            ]
+            if not differs:
                 follower = LogFollower.resume(path, saved["position"], time_col, time_unit)
                 monitor = Monitor.from_dict(saved["monitor"])
                 saved_text = text
                 stderr.print(f"mtident: resuming from {state_file} {_when(monitor)}", highlight=False)
+            else:
+                stderr.print(f"mtident: note: the state file {state_file} was written for other {' and '.join(differs)}; starting afresh (it will be overwritten)", highlight=False)
         except (ValueError, KeyError, TypeError) as exc:
             stderr.print(f"mtident: warning: ignoring the unreadable state file {state_file} ({exc}); starting afresh", highlight=False)
     if follower is None:
