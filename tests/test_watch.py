@@ -729,3 +729,37 @@ def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path):
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 0, err
     assert json.loads(out)["decision"] == "stop"
+
+
+@pytest.mark.parametrize(
+    ("sensors", "times", "values", "ambient", "message"),
+    [
+        (("A", "B"), T[:20], np.zeros((20, 1)), None, "expected times (n,), values (n, 2) for the sensors A, B; got times (20,), values (20, 1)"),
+        (("A",), T[:10], np.zeros((20, 1)), None, "got times (10,), values (20, 1)"),
+        (("A",), T[:20], np.zeros((20, 1)), np.zeros(5), "and ambient (n,); got times (20,), values (20, 1), ambient (5,)"),
+        (("A",), T[20::-1], np.zeros((21, 1)), None, "time 1 of this batch (19 min) does not come after the one before it (20 min); times must increase"),
+        (("A",), np.r_[T[:5], T[4:10]], np.zeros((11, 1)), None, "time 5 of this batch (4 min) does not come after the one before it (4 min)"),
+        (("A",), np.r_[T[:5], np.nan], np.zeros((6, 1)), None, "time 5 of this batch is not a finite number of minutes"),
+        (("A",), T[:3], [["x"], ["y"], ["z"]], None, "must be numbers (could not convert string to float: 'x')"),
+    ],
+)
+def test_monitor_feed_names_what_is_wrong_with_its_samples(sensors, times, values, ambient, message):
+    from mtident.exceptions import InputError
+
+    monitor = Monitor(sensors)
+    with pytest.raises(InputError, match=re.escape(message)):
+        monitor.feed(times, values, ambient)
+    assert monitor.samples == 0  # nothing of a refused batch was used
+
+
+def test_monitor_feed_refuses_times_before_those_it_has_seen_and_takes_one_sensor_as_a_column():
+    from mtident.exceptions import InputError
+
+    rng = np.random.default_rng(6)
+    y = first_order(T) + 0.02 * rng.standard_normal(len(T))
+    column, flat = Monitor(("A",)), Monitor("A")  # a single name is one sensor
+    column.feed(T[:20], y[:20, None])
+    flat.feed(T[:20], y[:20])
+    assert flat.sensors == ("A",) and json.dumps(flat.to_dict()) == json.dumps(column.to_dict())
+    with pytest.raises(InputError, match=re.escape("time 0 of this batch (15 min) does not come after the one before it (19 min)")):
+        column.feed(T[15:30], y[15:30, None])

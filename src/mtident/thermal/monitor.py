@@ -79,6 +79,7 @@ import numpy as np
 from scipy.special import stdtrit
 
 from mtident._typing import FloatArray
+from mtident.exceptions import InputError
 from mtident.thermal.lsq import flat_lead, rise_threshold
 from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
 from mtident.thermal.settings import ThermalTuning, filter_config, noise_sigma, tuning_from_data
@@ -237,6 +238,9 @@ class Monitor:
     notes: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
+        if isinstance(self.sensors, str):  # Monitor("T1"): one sensor, not one per letter
+            self.sensors = (self.sensors,)
+        self.sensors = tuple(self.sensors)
         S = len(self.sensors)
         for name, width in (("z_history", S), ("steady_history", 1 + S), ("recent_y", S), ("recent_rows", 2 + S), ("checkpoints", 2 + 2 * S)):
             if len(getattr(self, name)) == 0:
@@ -274,11 +278,10 @@ class Monitor:
         samples are not used, so a replay of a whole log and a live run that stops
         at the decision end in the same state.
         """
+        times, rows, room = self._checked(times, values, ambient)
         messages: list[str] = []
-        rows = np.asarray(values, float)
-        room = np.full(len(rows), np.nan) if ambient is None else np.asarray(ambient, float)
         self.room_measured = self.room_measured or ambient is not None
-        for t, y, a in zip(np.asarray(times, float), rows, room, strict=True):
+        for t, y, a in zip(times, rows, room, strict=True):
             if self.stop_time is not None:
                 break
             rate = 0.0
@@ -303,6 +306,33 @@ class Monitor:
             messages.extend(self._one(float(t), y.copy(), rate))
         self.notes.extend(messages)
         return messages
+
+    def _checked(self, times: FloatArray, values: FloatArray, ambient: FloatArray | None) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The samples as (n,), (n, S) and (n,) float arrays, or an :class:`InputError` naming what is wrong.
+
+        A missing reading is NaN in ``values`` or ``ambient``; times must be known
+        and move on (a log follower refuses repeated and backward rows before this).
+        """
+        S = len(self.sensors)
+        try:
+            t = np.asarray(times, dtype=float)
+            y = np.asarray(values, dtype=float)
+            room = np.full(len(t), np.nan) if ambient is None else np.asarray(ambient, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"Monitor.feed: times, values and ambient must be numbers ({exc})") from None
+        if y.ndim == 1 and S == 1:
+            y = y[:, None]  # one sensor's readings as a plain column
+        if t.ndim != 1 or y.shape != (len(t), S) or room.shape != (len(t),):
+            shapes = f"times {t.shape}, values {y.shape}" + ("" if ambient is None else f", ambient {room.shape}")
+            raise InputError(f"Monitor.feed: expected times (n,), values (n, {S}) for the sensors {', '.join(self.sensors)}" + ("" if ambient is None else " and ambient (n,)") + f"; got {shapes}")
+        if not np.all(np.isfinite(t)):
+            raise InputError(f"Monitor.feed: time {int(np.argmin(np.isfinite(t)))} of this batch is not a finite number of minutes")
+        previous = np.concatenate([[-np.inf if self.latest_time is None else self.latest_time], t[:-1]])
+        back = np.flatnonzero(t <= previous)
+        if len(back):
+            k = int(back[0])
+            raise InputError(f"Monitor.feed: time {k} of this batch ({t[k]:g} min) does not come after the one before it ({previous[k]:g} min); times must increase")
+        return t, y, room
 
     def _one(self, t: float, y: FloatArray, room_rate: float) -> list[str]:
         messages: list[str] = []
