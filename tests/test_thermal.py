@@ -400,3 +400,27 @@ def test_results_show_their_answer_in_a_notebook_not_their_arrays():
     monitor = Monitor(("T1",))
     monitor.feed(log.time_min[:50], log.temperature_C[:50, :1])
     assert repr(monitor).splitlines()[0] == "Monitor(1 sensor(s), t = 49 min, decision: continue)"
+
+
+def test_identify_and_min_time_take_a_dataframe_and_refuse_what_they_cannot_use():
+    """A notebook's DataFrame is read like a CSV file (it raised AttributeError before); other
+    types and impossible windows are named."""
+    import pandas as pd
+
+    t = np.arange(0.0, 120.0)
+    rng = np.random.default_rng(8)
+    frame = pd.DataFrame({"time_min": t, "A": 26.7 - 8.8 * np.exp(-0.016 * t) + 0.02 * rng.standard_normal(len(t))})
+    from_frame = identify(frame, window_min=60).summary(0)
+    assert from_frame == identify(read_temperature_log(frame), window_min=60).summary(0)
+    low, high = from_frame["steady_state_ci95_C"]
+    assert low < 26.7 < high and high - low < 0.5
+    assert minimal_identification_time(frame).min_identification_time_min.tolist() == minimal_identification_time(read_temperature_log(frame)).min_identification_time_min.tolist()
+    with pytest.raises(InputError, match=r"identify takes a TemperatureLog \(read_temperature_log\(path or DataFrame\)\) or a pandas DataFrame, not ndarray"):
+        identify(frame.to_numpy(), window_min=30)  # type: ignore[arg-type]
+    for window in (-5.0, 0.0, float("nan")):
+        with pytest.raises(InputError, match="window_min must be a positive number of minutes"):
+            identify(frame, window_min=window)
+    with pytest.raises(InputError, match=r"periods_min must be positive numbers of minutes, not \[0\]"):
+        minimal_identification_time(frame, periods_min=[0])
+    with pytest.raises(InputError, match=r"windows_min must be positive numbers of minutes, not \[\]"):
+        minimal_identification_time(frame, windows_min=[])

@@ -152,6 +152,21 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
     return values - values[0]
 
 
+def as_temperature_log(log: object, caller: str) -> TemperatureLog:
+    """``log`` as a :class:`TemperatureLog`: a DataFrame is read (and checked) like a CSV file.
+
+    Anything else is an :class:`InputError` that says what ``caller`` takes.
+    """
+    if isinstance(log, TemperatureLog):
+        return log
+    import pandas as pd
+
+    if isinstance(log, pd.DataFrame):
+        return read_temperature_log(log)
+    msg = f"{caller} takes a TemperatureLog (read_temperature_log(path or DataFrame)) or a pandas DataFrame, not {type(log).__name__}"
+    raise InputError(msg)
+
+
 def read_temperature_log(
     path: str | Path | pd.DataFrame,
     time_col: str | None = None,

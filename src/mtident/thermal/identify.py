@@ -13,7 +13,7 @@ from scipy.special import fdtri, stdtrit
 
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
-from mtident.io.logs import TemperatureLog
+from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
@@ -392,6 +392,10 @@ def identify(
     """
     if method not in METHODS:
         msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
+        raise InputError(msg)
+    log = as_temperature_log(log, "identify")
+    if not (np.isfinite(window_min) and window_min > 0):
+        msg = f"window_min must be a positive number of minutes, not {window_min!r}"
         raise InputError(msg)
     room_rate = room_input(log, ambient_C, method, preset)
     # A diverging filter (the papers' presets can) is reported in the notes, not as numpy warnings.

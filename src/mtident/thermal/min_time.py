@@ -26,7 +26,7 @@ import numpy as np
 
 from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
-from mtident.io.logs import TemperatureLog
+from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
 from mtident.thermal.lsq import first_level, fit_rise, late_onset
 from mtident.thermal.model import heat_balance_path, rise_curve
@@ -129,6 +129,11 @@ def minimal_identification_time(
     if method not in METHODS:
         msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
         raise InputError(msg)
+    log = as_temperature_log(log, "minimal_identification_time")
+    for name, values in (("periods_min", periods_min), ("windows_min", windows_min)):
+        if values is not None and not (len(values) and np.all(np.isfinite(values)) and np.all(np.asarray(values, dtype=float) > 0)):
+            msg = f"{name} must be positive numbers of minutes, not {values!r}"
+            raise InputError(msg)
     room_rate = room_input(log, ambient_C, method, preset)
     # A diverging filter (the papers' presets can) shows as an infinite RMSE, not as numpy warnings.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
