@@ -315,12 +315,14 @@ class Monitor:
         """
         S = len(self.sensors)
         try:
-            t = np.asarray(times, dtype=float)
+            t = np.atleast_1d(np.asarray(times, dtype=float))
             y = np.asarray(values, dtype=float)
-            room = np.full(len(t), np.nan) if ambient is None else np.asarray(ambient, dtype=float)
+            room = np.full(len(t), np.nan) if ambient is None else np.atleast_1d(np.asarray(ambient, dtype=float))
         except (TypeError, ValueError) as exc:
             raise InputError(f"Monitor.feed: times, values and ambient must be numbers ({exc})") from None
-        if y.ndim == 1 and S == 1:
+        if np.ndim(times) == 0 and y.ndim <= 1:
+            y = y.reshape(1, -1)  # one row as it arrives: a time and a reading per sensor
+        elif y.ndim == 1 and S == 1:
             y = y[:, None]  # one sensor's readings as a plain column
         if t.ndim != 1 or y.shape != (len(t), S) or room.shape != (len(t),):
             shapes = f"times {t.shape}, values {y.shape}" + ("" if ambient is None else f", ambient {room.shape}")
