@@ -622,7 +622,7 @@ def test_watch_run_again_after_its_decision_gives_the_same_answer(tmp_path):
     assert "The test can stop at t = 305 min" in table.stdout
     other = mtident("thermal", "watch", "@sample", "--replay", "--json", "--tolerance", "0.3", cwd=tmp_path)
     assert "resuming" not in other.stderr
-    assert "was written for other --tolerance, --hold, --room-coupling or --room-wander; starting afresh" in other.stderr
+    assert "was written for other settings (--tolerance, --hold, --room-coupling or --room-wander); starting afresh" in other.stderr
 
 
 def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path):

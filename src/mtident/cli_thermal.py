@@ -294,9 +294,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             differs = [
                 what
                 for what, now, then in (
-                    ("the log", str(path.resolve()), saved.get("log")),
-                    ("--tolerance, --hold, --room-coupling or --room-wander", [tolerance_C, hold_min, room_coupling, room_wander], saved.get("settings")),
-                    ("the sensors", names, saved.get("requested")),
+                    ("another log", str(path.resolve()), saved.get("log")),
+                    ("other settings (--tolerance, --hold, --room-coupling or --room-wander)", [tolerance_C, hold_min, room_coupling, room_wander], saved.get("settings")),
+                    ("other sensors", names, saved.get("requested")),
                 )
                 if now != then
             ]
@@ -306,7 +306,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
                 saved_text = text
                 stderr.print(f"mtident: resuming from {state_file} {_when(monitor)}", highlight=False)
             else:
-                stderr.print(f"mtident: note: the state file {state_file} was written for other {' and '.join(differs)}; starting afresh (it will be overwritten)", highlight=False)
+                stderr.print(f"mtident: note: the state file {state_file} was written for {' and '.join(differs)}; starting afresh (it will be overwritten)", highlight=False)
         except (ValueError, KeyError, TypeError) as exc:
             stderr.print(f"mtident: warning: ignoring the unreadable state file {state_file} ({exc}); starting afresh", highlight=False)
     if follower is None:
