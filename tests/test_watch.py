@@ -763,6 +763,8 @@ def test_monitor_feed_refuses_times_before_those_it_has_seen_and_takes_one_senso
     assert flat.sensors == ("A",) and json.dumps(flat.to_dict()) == json.dumps(column.to_dict())
     with pytest.raises(InputError, match=re.escape("time 0 of this batch (15 min) does not come after the one before it (19 min)")):
         column.feed(T[15:30], y[15:30, None])
+    with pytest.raises(InputError, match="Monitor needs at least one sensor name"):
+        Monitor(())
     by_row = Monitor(("A",))  # row by row as they arrive: a time and the readings
     for k in range(20):
         by_row.feed(float(T[k]), [y[k]])

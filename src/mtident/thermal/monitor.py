@@ -241,6 +241,8 @@ class Monitor:
         if isinstance(self.sensors, str):  # Monitor("T1"): one sensor, not one per letter
             self.sensors = (self.sensors,)
         self.sensors = tuple(self.sensors)
+        if not self.sensors:
+            raise InputError("Monitor needs at least one sensor name, e.g. Monitor(('T1', 'T2'))")
         S = len(self.sensors)
         for name, width in (("z_history", S), ("steady_history", 1 + S), ("recent_y", S), ("recent_rows", 2 + S), ("checkpoints", 2 + 2 * S)):
             if len(getattr(self, name)) == 0:
