@@ -15,7 +15,7 @@ from mtident.thermal import METHODS, identify, minimal_identification_time
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, Z95, rmse
 from mtident.thermal.lsq import cramer_rao_bound
 from mtident.thermal.model import rise_transition, slope_transition, to_physical
-from mtident.thermal.settings import noise_sigma, quick_estimate
+from mtident.thermal.settings import display_resolution, noise_sigma, quick_estimate
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -79,6 +79,31 @@ def test_quick_estimate_and_noise_level():
     rng = np.random.default_rng(0)
     noisy = first_order(np.arange(400.0))[:, None] + 0.02 * rng.standard_normal((400, 1))
     np.testing.assert_allclose(noise_sigma(noisy), [0.02], rtol=0.1)  # MAD of 396 fourth differences: ~5 % spread
+
+
+@pytest.mark.parametrize(("step", "expected"), [(0.1, 0.1), (0.01, 0.01), (1 / 16, 0.0625), (0.5, 0.5), (None, 0.0)])
+def test_display_resolution_is_the_step_the_readings_are_rounded_to(step, expected):
+    t = np.arange(0.0, 31.0)
+    curve = first_order(t)
+    readings = curve if step is None else np.round(curve / step) * step
+    assert display_resolution(readings[:, None]) == pytest.approx([expected])
+    # a flat column shows no step (a constant 20.0 is not a 1 °C display); NaN cells are skipped
+    assert display_resolution(np.array([[20.0], [20.0], [np.nan], [20.0]])) == pytest.approx([0.0])
+
+
+@pytest.mark.parametrize("step", [0.1, 0.01, 1 / 16])
+def test_a_clean_curve_logged_in_rounded_steps_is_identified_within_its_interval(step):
+    """Rounding a smooth curve makes most fourth differences exactly 0: the noise used to come out
+    as 1e-9 °C, and a 0.1 °C log ended in 'covariance not positive definite'."""
+    t = np.arange(0.0, 401.0)
+    readings = np.round(first_order(t) / step) * step
+    sigma = noise_sigma(readings[:30, None])[0]
+    assert step / np.sqrt(12.0) - 1e-12 <= sigma < step
+    result = identify(make_log(t, {"S": readings}), 30.0)
+    assert abs(result.steady_state_C[0] - PAPER_STEADY) <= result.quantile * result.steady_state_sd_C[0]
+    # as wide as noise of q/√12 allows (the Cramér-Rao bound of that noise), not a collapse or a blow-up
+    bound = np.sqrt(cramer_rao_bound(t[:31], PAPER_START, PAPER_RATE, PAPER_STEADY, sigma)[2, 2])
+    assert 0.5 * bound < result.steady_state_sd_C[0] < 2.0 * bound
 
 
 def test_monte_carlo_default_method_reaches_the_cramer_rao_bound_with_calibrated_intervals():

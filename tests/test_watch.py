@@ -145,6 +145,21 @@ def test_fast_plus_slow_does_not_stop_early_with_a_wrong_answer(seed):
         assert abs(result["steady_state_C"] - final) <= 0.2, result
 
 
+@pytest.mark.parametrize(("step", "noise"), [(0.01, 0.0), (1 / 16, 0.0), (1 / 16, 0.005), (0.1, 0.0)])
+def test_readings_rounded_to_a_display_step_stop_with_the_right_answer(step, noise):
+    """A clean 0.01 °C log never stopped (its filter, told the noise was 1e-9 °C, ran off to T∞ = −44 °C),
+    and a 1/16 °C sensor called every other sample a spike: the noise is never taken below q/√12."""
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 401.0)
+    readings = np.round((first_order(t) + noise * rng.standard_normal(len(t))) / step) * step
+    monitor = Monitor(("S",), MonitorSettings(tolerance_C=0.2))
+    messages = monitor.feed(t, readings[:, None])
+    result = monitor.result()
+    assert result["stop_time_min"] is not None and result["stop_time_min"] < 0.7 * 187
+    assert abs(result["steady_state_C"] - 26.7) < 0.2
+    assert not [m for m in messages if "spike" in m or "wild" in m]
+
+
 def test_the_model_check_message_says_which_test_failed():
     """Early large residuals of both signs may come from a noise level estimated from few samples
     (seed 0, a true first-order curve: σ estimated 0.014 °C, true 0.02 °C); residuals of one sign

@@ -82,7 +82,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.thermal.lsq import flat_lead, rise_threshold
 from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
-from mtident.thermal.settings import ThermalTuning, filter_config, noise_sigma, tuning_from_data
+from mtident.thermal.settings import ThermalTuning, display_resolution, filter_config, noise_sigma, tuning_from_data
 from mtident.ukf import FilterCarry, FilterConfig, GaussianState, SigmaWeights, StepInfo, filter_step, initial_carry
 
 __all__ = ["MonitorSettings", "Monitor", "SensorStatus", "ROOM_COUPLINGS"]
@@ -229,6 +229,8 @@ class Monitor:
     _weights: SigmaWeights | None = field(default=None, repr=False, compare=False)
     d4_sum: FloatArray | None = None
     d4_count: FloatArray | None = None
+    # per sensor, the step its readings are rounded to (°C; 0: none seen): the noise is never below its rounding
+    display_step: FloatArray | None = None
     # rows [t, rise T∞ per sensor, its 95 % half-width per sensor], about one per minute of the window
     checkpoints: FloatArray = field(default_factory=_no_rows)
     wandering: list[bool] | None = None
@@ -373,6 +375,7 @@ class Monitor:
         self.last_t = None
         self.d4_sum = np.zeros(S)
         self.d4_count = np.zeros(S)
+        self.display_step = display_resolution(y)
         self.recent_y = self.recent_y[:0]
         self.rejected_run = np.zeros(S)
         messages = []
@@ -594,7 +597,11 @@ class Monitor:
         self.d4_count = self.d4_count + use
         ready = self.d4_count >= 5
         if np.any(ready):
-            variance = np.where(ready, np.maximum(self.d4_sum / np.maximum(self.d4_count, 1) / 70.0, 1e-12), self.carry.emission_cov[:, 0, 0])
+            # Rounded readings (a 1/16 °C sensor) give fourth differences mostly 0 and now and then
+            # a whole step, which the outlier guard above leaves out: the running mean alone fell to
+            # a tenth of the rounding's q²/12 and every later sample looked like a spike.
+            rounding = (self.display_step if self.display_step is not None else 0.0) ** 2 / 12.0
+            variance = np.where(ready, np.maximum(self.d4_sum / np.maximum(self.d4_count, 1) / 70.0, np.maximum(rounding, 1e-12)), self.carry.emission_cov[:, 0, 0])
             self.carry = replace(self.carry, emission_cov=variance[:, None, None])
 
     def _hold(self, t: float) -> float:
@@ -698,6 +705,9 @@ class Monitor:
                 filled = np.where(np.isfinite(y), y, np.nanmean(y, axis=0))
             filled[leading] = np.nan  # left out: tuning_from_data carries the start back to the window's start
             tuning = tuning_from_data(t, filled[:, ready])
+            if self.display_step is not None:  # a sensor flat at the start showed no step then
+                seen = display_resolution(y[:, ready])
+                self.display_step[ready] = np.where(seen > 0, seen, self.display_step[ready])
             mean[ready], cov[ready] = tuning.initial_mean, tuning.initial_cov
         config, weights = self._filter()
         fresh = initial_carry(GaussianState(mean, cov), self.carry.process_cov, self.carry.emission_cov, config)
@@ -880,6 +890,7 @@ class Monitor:
             "buffer_room_rate": self.buffer_room_rate,
             "d4_sum": _tolist(self.d4_sum),
             "d4_count": _tolist(self.d4_count),
+            "display_step": _tolist(self.display_step),
             "checkpoints": _tolist(self.checkpoints),
             "wandering": self.wandering,
             "restart_from": self.restart_from,
@@ -926,6 +937,7 @@ class Monitor:
             buffer_room_rate=list(data.get("buffer_room_rate", [0.0] * len(data["buffer_t"]))),
             d4_sum=_optional_floats(data["d4_sum"]),
             d4_count=_optional_floats(data["d4_count"]),
+            display_step=_optional_floats(data.get("display_step")),
             checkpoints=_rows(data.get("checkpoints", [])),
             wandering=data.get("wandering"),
             restart_from=data.get("restart_from"),

@@ -8,6 +8,7 @@ adaptive law) and ``lsq`` (batch least squares, the baseline).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -25,6 +26,7 @@ __all__ = [
     "tuning_from_data",
     "preset_tuning",
     "noise_sigma",
+    "display_resolution",
     "quick_estimate",
 ]
 
@@ -93,13 +95,49 @@ def filter_config(method: str, tuning: ThermalTuning) -> FilterConfig:
     raise InputError(msg)
 
 
+# Display steps a logger rounds to, coarsest first: decimal ones, and the binary ones of digital
+# sensors (a DS18B20 reads in steps of 1/16 °C at 12 bits, 1/2 °C at 9 bits).
+_DISPLAY_STEPS_C = tuple(sorted({1.0, 0.5, 0.25, 0.125, 0.1, 0.0625, 0.05, 0.03125, 0.01, 0.005, 0.001}, reverse=True))
+
+
+def display_resolution(values: FloatArray) -> FloatArray:
+    """The step each sensor's readings are rounded to (°C), 0 where none is seen.
+
+    The coarsest of the usual display steps (0.1, 0.01, 1/16 °C, ...) of which
+    every valid reading is a whole multiple; a column with fewer than three
+    distinct readings shows no step (a flat ``20.0`` is not a 1 °C display).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N, S)
+    """
+    out = []
+    for column in np.asarray(values, dtype=float).T:
+        finite = np.unique(column[np.isfinite(column)])
+        step = 0.0
+        if len(finite) >= 3:
+            for candidate in _DISPLAY_STEPS_C:
+                multiples = finite / candidate
+                if np.all(np.abs(multiples - np.round(multiples)) < 1e-6):
+                    step = candidate
+                    break
+        out.append(step)
+    return np.array(out)
+
+
 def noise_sigma(values: FloatArray) -> FloatArray:
     """Measurement noise per sensor from fourth differences, robust to spikes (MAD).
 
     For white noise of standard deviation σ, Δ⁴y has standard deviation σ√70; a
     smooth warm-up curve contributes only D·(λΔt)⁴ to it (about 1e-6 °C for the
     papers' curves), so a noise-free curve gives σ ≈ 0 and is fitted exactly.
-    Quantisation (a 0.01 °C display) shows up as noise of about 0.003 °C.
+
+    A rounded reading (a logger's 0.01 or 0.1 °C display) is never better than
+    its rounding, q/√12 for a display step q (:func:`display_resolution`). The
+    MAD alone does not see it: on a smooth curve most fourth differences of the
+    rounded readings are exactly 0, the MAD was 0, and a filter told the noise
+    was 1e-9 °C chased the rounding off course (a clean 0.1 °C log ended in a
+    Cholesky failure, a 0.01 °C one never stopped the live monitor).
 
     Parameters
     ----------
@@ -114,7 +152,7 @@ def noise_sigma(values: FloatArray) -> FloatArray:
             continue
         mad = np.median(np.abs(d4 - np.median(d4))) * 1.4826
         out.append(max(mad / np.sqrt(70.0), 1e-9))
-    return np.array(out)
+    return np.maximum(np.array(out), display_resolution(values) / np.sqrt(12.0))
 
 
 def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -134,7 +172,10 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     size = len(t) // 3
     thirds = [np.arange(len(t) - 3 * size + j * size, len(t) - 3 * size + (j + 1) * size) for j in range(3)]
     seg_t = np.array([t[i].mean() for i in thirds])
-    seg_y = np.stack([np.nanmean(y[i], axis=0) for i in thirds])  # (3, S)
+    with warnings.catch_warnings():
+        # a third without a valid sample (a sensor back from a long gap) is NaN: the fallbacks below take over
+        warnings.simplefilter("ignore", RuntimeWarning)
+        seg_y = np.stack([np.nanmean(y[i], axis=0) for i in thirds])  # (3, S)
     start = np.array([col[np.isfinite(col)][0] for col in y.T])
     tau = (seg_t[2] - seg_t[0]) / 2.0
     d1, d2 = seg_y[1] - seg_y[0], seg_y[2] - seg_y[1]
