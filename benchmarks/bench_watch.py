@@ -95,6 +95,8 @@ KINDS = (
     "first-order",
     "first-order, --room-wander 0",
     "first-order, begins 15 min late",
+    "first-order, 0.1 °C display",
+    "first-order, 1/16 °C, σ 0.005",
     "fast+slow",
     "fast+slow, --room-wander 0",
     "fast+slow, drift, --ambient",
@@ -130,6 +132,10 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
         out["first-order"].append(run_case(f"first-order #{seed}", first_order, first_order[:401] + noise[0]))
         late = first_order[np.clip(np.arange(len(T_LONG)) - 15, 0, None)]  # the logger started 15 min before the spindle
         out["first-order, begins 15 min late"].append(run_case(f"first-order, late #{seed}", late, late[:401] + noise[0]))
+        # a logger's display rounds the readings: the noise is at least the rounding's
+        for kind, step, sigma in (("first-order, 0.1 °C display", 0.1, 0.02), ("first-order, 1/16 °C, σ 0.005", 1 / 16, 0.005)):
+            rounded = np.round((first_order[:401] + sigma / 0.02 * noise[0]) / step) * step
+            out[kind].append(run_case(f"{kind} #{seed}", first_order, rounded))
         out["first-order, --room-wander 0"].append(run_case(f"first-order, steady room #{seed}", first_order, first_order[:401] + noise[0], wander=0.0))
         out["fast+slow"].append(run_case(f"fast+slow #{seed}", fast_slow, fast_slow[:401] + noise[1]))
         out["fast+slow, --room-wander 0"].append(run_case(f"fast+slow, steady room #{seed}", fast_slow, fast_slow[:401] + noise[1], wander=0.0))
