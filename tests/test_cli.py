@@ -67,6 +67,9 @@ def test_thermal_identify_all_sensors_json_and_table():
     assert [d["sensor"] for d in data["sensors"]] == [f"T{i}" for i in range(1, 11)]
     table = mtident("thermal", "identify", "@sample", "--sensor", "T1,T8")
     assert table.returncode == 0 and "T8" in table.stdout and "T∞" in table.stdout
+    # a name given twice is one sensor; a space after a comma is no part of the name
+    spaced = mtident("thermal", "identify", "@sample", "--method", "lsq", "--json", "--sensor", "T8, T1", "--sensor", "T8")
+    assert [d["sensor"] for d in json.loads(spaced.stdout)["sensors"]] == ["T8", "T1"]
 
 
 def test_thermal_min_time_json_has_the_contract_keys(tmp_path):

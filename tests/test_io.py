@@ -50,6 +50,8 @@ def test_isolated_bad_samples_are_skipped_with_a_note(write_csv):
         ("stamp,A\n22.11.2026 08:00,20\n22.11.2026 08:01,20\n01/02/2026 08:02,21\n22.11.2026 08:03,21\n22.11.2026 08:04,21\n", {}, r"row 4: '01/02/2026 08:02' is neither a number nor a time stamp like the first one"),
         ("stamp,A\n01/02/2026 08:00,20\n01/02/2026 08:01,20\n01/02/2026 08:02,21\n01/02/2026 08:03,21\n01/02/2026 08:04,21\n", {}, r"row 2: .* \(ISO 8601"),
         ("time_min,A\n0,20\n1,\n2,\n3,500\n4,21\n", {}, r"sensor 'A': 3 of 5 samples are empty, NaN or open-circuit"),
+        ("time_min,A,B,A\n0,20,20,20\n1,20,20,20\n2,21,21,21\n3,21,21,21\n4,21,21,21\n", {}, r"the column name 'A' appears twice \(columns 2 and 4\); give each column its own name"),
+        ("time_min;A; A\n0;20;20\n1;20;20\n2;21;21\n3;21;21\n4;21;21\n", {}, r"the column name 'A' appears twice \(columns 2 and 3\)"),
     ],
 )
 def test_bad_logs_are_refused_with_a_message_naming_the_problem(write_csv, text, kwargs, message):

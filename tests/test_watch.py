@@ -20,6 +20,7 @@ from conftest import first_order, logger_dialects
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
+from mtident.exceptions import InputError
 from mtident.io.follow import LogFollower
 from mtident.thermal.monitor import Monitor, MonitorSettings
 
@@ -90,6 +91,17 @@ def test_follower_refuses_repeated_and_backward_times(tmp_path):
     rows = LogFollower(path).poll()
     np.testing.assert_allclose(rows.time_min, [0, 1, 2])
     assert sum("repeats or goes back" in w for w in rows.warnings) == 2
+
+
+def test_follower_and_watch_refuse_two_columns_of_one_name(tmp_path):
+    """Both columns were read from the first one: the second sensor showed the first one's curve."""
+    path = tmp_path / "log.csv"
+    path.write_text("time_min,T1,T1\n0,20,21\n1,20.1,21.2\n")
+    with pytest.raises(InputError, match=r"log.csv: the column name 'T1' appears twice \(columns 2 and 3\)"):
+        LogFollower(path).poll()
+    out = mtident("thermal", "watch", "log.csv", "--replay", cwd=tmp_path)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert "the column name 'T1' appears twice" in out.stderr
 
 
 def test_follower_handles_a_replaced_log_without_double_counting(tmp_path):
@@ -761,8 +773,6 @@ def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path):
     ],
 )
 def test_monitor_feed_names_what_is_wrong_with_its_samples(sensors, times, values, ambient, message):
-    from mtident.exceptions import InputError
-
     monitor = Monitor(sensors)
     with pytest.raises(InputError, match=re.escape(message)):
         monitor.feed(times, values, ambient)
@@ -770,7 +780,6 @@ def test_monitor_feed_names_what_is_wrong_with_its_samples(sensors, times, value
 
 
 def test_monitor_feed_refuses_times_before_those_it_has_seen_and_takes_one_sensor_as_a_column():
-    from mtident.exceptions import InputError
 
     rng = np.random.default_rng(6)
     y = first_order(T) + 0.02 * rng.standard_normal(len(T))

@@ -33,8 +33,8 @@ def log_path(file: str) -> Path:
 
 
 def asked_sensors(sensors: tuple[str, ...]) -> list[str]:
-    """The --sensor names, repeated or comma-separated; empty for all ("all" or none given)."""
-    return [name for entry in sensors for name in entry.split(",") if name and name != "all"]
+    """The --sensor names, repeated or comma-separated, each once; empty for all ("all" or none given)."""
+    return list(dict.fromkeys(name.strip() for entry in sensors for name in entry.split(",") if name.strip() and name.strip() != "all"))
 
 
 def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None) -> TemperatureLog:

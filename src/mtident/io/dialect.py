@@ -24,7 +24,7 @@ from mtident.exceptions import InputError
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["CsvDialect", "sniff_dialect", "header_names", "read_csv", "stamp_format", "HEAD_BYTES", "TIME_OF_DAY_FORMATS", "MINUTES_PER_DAY"]
+__all__ = ["CsvDialect", "sniff_dialect", "header_names", "check_unique_names", "read_csv", "stamp_format", "HEAD_BYTES", "TIME_OF_DAY_FORMATS", "MINUTES_PER_DAY"]
 
 # enough for a preamble, the header and a few rows
 HEAD_BYTES = 65536
@@ -130,8 +130,22 @@ def header_names(file: Path) -> list[str]:
     dialect = sniff_dialect(head)
     if dialect is None:
         return []
-    line = head.decode(dialect.encoding, errors="replace").split("\n")[dialect.preamble_lines]
-    return [name for name in dialect.cells(line) if name]
+    return [name for name in dialect.cells(_header_line(head, dialect)) if name]
+
+
+def _header_line(head: bytes, dialect: CsvDialect) -> str:
+    return head.decode(dialect.encoding, errors="replace").split("\n")[dialect.preamble_lines]
+
+
+def check_unique_names(header: list[str], source: str | Path) -> None:
+    """InputError if two columns share a name: which one a sensor name meant could not be told
+    (pandas would call the second 'T1.1', a reader by name would read the first twice)."""
+    seen: dict[str, int] = {}
+    for position, name in enumerate(header, start=1):
+        if name and name in seen:
+            msg = f"{source}: the column name {name!r} appears twice (columns {seen[name]} and {position}); give each column its own name"
+            raise InputError(msg)
+        seen[name] = position
 
 
 def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
@@ -155,6 +169,8 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         msg = f"{path}: no header line, only # comments and blank lines"
         raise InputError(msg)
     dialect = dialect or CsvDialect()
+    if head.strip():
+        check_unique_names(dialect.cells(_header_line(head, dialect)), path)
     try:
         frame = pd.read_csv(
             file,

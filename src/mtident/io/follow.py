@@ -33,7 +33,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, sniff_dialect, stamp_format
+from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, check_unique_names, sniff_dialect, stamp_format
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, time_unit_factor
 
 __all__ = ["LogFollower", "Rows"]
@@ -105,6 +105,7 @@ class LogFollower:
         if len(header) < 2:
             msg = f"{self.path}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found: {', '.join(header)}"
             raise InputError(msg)
+        check_unique_names(header, self.path)
         time_name = self.time_col or header[0]
         if time_name not in header:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"

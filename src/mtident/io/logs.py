@@ -27,7 +27,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, read_csv, stamp_format
+from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, check_unique_names, read_csv, stamp_format
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -214,6 +214,7 @@ def read_temperature_log(
         frame, dialect = read_csv(path)
         first_row += dialect.preamble_lines
     frame.columns = [str(c).strip() for c in frame.columns]
+    check_unique_names(list(frame.columns), source)
     if frame.shape[1] < 2:
         msg = f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found columns: {', '.join(frame.columns)}"
         raise InputError(msg)
