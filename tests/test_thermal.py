@@ -106,6 +106,17 @@ def test_a_clean_curve_logged_in_rounded_steps_is_identified_within_its_interval
     assert 0.5 * bound < result.steady_state_sd_C[0] < 2.0 * bound
 
 
+def test_a_sensor_that_does_not_rise_has_no_equilibrium_time():
+    """It was given one (30 min: a λ fitted to a flat line) and said to fit."""
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 121.0)
+    log = make_log(t, {"heating": first_order(t) + 0.02 * rng.standard_normal(len(t)), "cold": 20.0 + 0.02 * rng.standard_normal(len(t))})
+    result = identify(log, 30.0)
+    assert np.isnan(result.equilibrium_time_min[1]) and result.summary(1)["equilibrium_time_min"] is None
+    assert result.equilibrium_time_min[0] == pytest.approx(187.0, abs=25.0)
+    assert [n for n in result.notes if "no rise" in n] == ["sensor 'cold': no rise in the first 30 min (0.08 °C from lowest to highest): no warm-up to identify; it has no equilibrium time"]
+
+
 def test_monte_carlo_default_method_reaches_the_cramer_rao_bound_with_calibrated_intervals():
     """200 seeded runs of the paper's curve (σ = 0.02 °C, L = 28 min), batched as 200 sensors."""
     rng = np.random.default_rng(2014)
