@@ -107,6 +107,32 @@ def test_user_errors_are_one_line_without_traceback(args, message):
     assert len([line for line in out.stderr.splitlines() if line.startswith("mtident: error")]) == 1
 
 
+@pytest.mark.parametrize(
+    ("plot", "message"),
+    [
+        ("no-such-folder/fit.png", "the folder 'no-such-folder' of 'no-such-folder/fit.png' does not exist"),
+        ("fit.txt", "'.txt' is not a picture format matplotlib writes; use one of:"),
+        (".", "'.' is a folder; give a file name such as 'plot.png'"),
+    ],
+)
+@pytest.mark.parametrize("command", [["thermal", "identify", "@sample"], ["thermal", "watch", "@sample", "--replay"], ["feeddrive", "simulate", "--duration", "0.01", "--out", "r.csv"]])
+def test_a_bad_plot_path_is_refused_before_the_work(tmp_path, command, plot, message):
+    """A mistyped folder used to end the whole run in an errno message about a temporary file."""
+    out = subprocess.run([sys.executable, "-m", "mtident", *command, "--plot", plot], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert message in out.stderr
+    assert not list(tmp_path.iterdir())  # nothing was computed or written
+
+
+@pytest.mark.parametrize(("name", "magic"), [("fit.svg", b"<?xml"), ("fit.pdf", b"%PDF"), ("fit.PNG", b"\x89PNG"), ("fit", b"\x89PNG")])
+def test_the_plot_suffix_chooses_the_picture_format(tmp_path, name, magic):
+    """'fit.svg' used to be written as a PNG (the temporary file's suffix chose the format)."""
+    out = subprocess.run([sys.executable, "-m", "mtident", "thermal", "identify", "@sample", "--sensor", "T1", "--plot", name], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / name).read_bytes().startswith(magic)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]  # no temporary file left beside it
+
+
 def test_bad_csv_cell_is_reported(tmp_path):
     path = tmp_path / "bad.csv"
     path.write_text("time_min,A\n0,20\n1,20.1\n2,oops\n3,20.3\n4,20.4\n5,20.5\n6,20.6\n")

@@ -43,6 +43,34 @@ class FiniteFloatRange(click.FloatRange):
         return number
 
 
+class PicturePath(click.ParamType):
+    """A --plot file: its folder exists and is writable, its suffix a format matplotlib writes
+    (checked before the work: a mistyped folder used to end a long replay in an errno message
+    about a temporary file, and 'fit.svg' was written as a PNG)."""
+
+    name = "picture"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        import os
+        from pathlib import Path
+
+        from mtident.report.plots import picture_format
+
+        path = Path(value)
+        folder = path.parent
+        if path.is_dir():
+            self.fail(f"{value!r} is a folder; give a file name such as {str(path / 'plot.png')!r}", param, ctx)
+        if not folder.is_dir():
+            self.fail(f"the folder {str(folder)!r} of {value!r} does not exist", param, ctx)
+        if not os.access(folder, os.W_OK):
+            self.fail(f"the folder {str(folder)!r} of {value!r} is not writable", param, ctx)
+        try:
+            picture_format(path)
+        except ValueError as exc:
+            self.fail(str(exc), param, ctx)
+        return str(path)
+
+
 def user_errors(func: F) -> F:
     """Turn MtidentError (and missing files) into a one-line error and exit code 2."""
 

@@ -9,7 +9,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, feeddrive, print_json, user_errors
+from mtident.cli import FiniteFloatRange, PicturePath, feeddrive, print_json, user_errors
 from mtident.exceptions import InputError
 from mtident.feeddrive import (
     IDENTIFIED,
@@ -69,7 +69,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
 @click.option("--noise", "noise_fraction", type=FiniteFloatRange(min=0), default=0.0, show_default=True, help="Measurement noise, fraction of each response's RMS.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, writable=True), required=True, help="CSV to write.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw the responses to this PNG.")
+@click.option("--plot", "plot_path", type=PicturePath(), help="Draw the responses to this picture (PNG; .svg or .pdf by the suffix).")
 @user_errors
 def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz: float, amplitude: float, kind: str, coordinate: str, frequency_Hz: float, frequency_end_Hz: float, noise_fraction: float, seed: int, out_path: str, plot_path: str | None) -> None:
     """Simulate the vibration response by classical RK4 and write it as CSV."""
@@ -100,7 +100,7 @@ def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz:
 @click.option("--measured", type=click.Choice(list(MEASUREMENT_SETS)), default="all", show_default=True, help="all 12 responses, or table acceleration + motor angle and velocity.")
 @click.option("--noise", "noise_fraction", type=FiniteFloatRange(min=0, min_open=True), default=0.01, show_default=True, help="Measurement noise, fraction of each response's RMS.")
 @click.option("--preset", type=click.Choice(["default", "paper"]), default="default", show_default=True)
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw estimated vs measured responses and parameter convergence to this PNG.")
+@click.option("--plot", "plot_path", type=PicturePath(), help="Draw estimated vs measured responses and parameter convergence to this picture (PNG; .svg or .pdf by the suffix).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def identify_command(file: str, guess_path: str | None, truth_path: str | None, measured: str, noise_fraction: float, preset: str, plot_path: str | None, as_json: bool) -> None:

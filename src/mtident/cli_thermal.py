@@ -11,7 +11,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, print_json, thermal, user_errors
+from mtident.cli import FiniteFloatRange, PicturePath, print_json, thermal, user_errors
 from mtident.exceptions import InputError
 from mtident.io.logs import TIME_UNITS, TemperatureLog, read_temperature_log
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
@@ -84,7 +84,7 @@ def _fmt(value: object, digits: int = 2) -> str:
 @click.option("--horizon", "horizon_min", type=FiniteFloatRange(min=0, min_open=True), help="Predict to this time (min).")
 @click.option("--pseudo-seed", type=int, help="Predict with seed 000's noisy pseudo-measurements (Eqs 21-22) from this seed.")
 @click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes the input of each sensor's heat balance; T∞ at the room's level at the window's end.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw measured and predicted curves to this PNG.")
+@click.option("--plot", "plot_path", type=PicturePath(), help="Draw measured and predicted curves to this picture (PNG; .svg or .pdf by the suffix).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, window_min: float, method: str, preset: str, horizon_min: float | None, pseudo_seed: int | None, ambient_col: str | None, plot_path: str | None, as_json: bool) -> None:
@@ -143,7 +143,7 @@ def _float_list(text: str, option: str) -> list[float]:
 @click.option("--method", type=click.Choice(METHODS), default="aukf", show_default=True)
 @click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True)
 @click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the input of each sensor's heat balance, before and after L.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Draw RMSE against identification time to this PNG.")
+@click.option("--plot", "plot_path", type=PicturePath(), help="Draw RMSE against identification time to this picture (PNG; .svg or .pdf by the suffix).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, sampling_periods: str, windows: str | None, method: str, preset: str, ambient_col: str | None, plot_path: str | None, as_json: bool) -> None:
@@ -230,7 +230,7 @@ def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monito
 @click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: <log name>.watch-state.json in the current directory).")
 @click.option("--poll", "poll_s", type=FiniteFloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
 @click.option("--timeout", "timeout_s", type=FiniteFloatRange(min=0), help="Give up after this many seconds without a new row.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, writable=True), help="Keep a PNG of measured and predicted curves up to date.")
+@click.option("--plot", "plot_path", type=PicturePath(), help="Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.")
 @click.option("--json", "as_json", is_flag=True, help="Print the contract's JSON object when the decision is reached (or the log ends).")
 @user_errors
 def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, room_coupling: str | None, room_wander: float, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:

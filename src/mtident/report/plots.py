@@ -23,15 +23,36 @@ if TYPE_CHECKING:
 __all__ = ["plot_identification", "plot_min_time", "plot_monitor", "plot_responses", "plot_feed_drive_identification", "grid"]
 
 
+def picture_format(path: str | Path) -> str:
+    """The format a picture is written in: its suffix (``png`` without one); ValueError naming
+    the formats matplotlib writes if it writes none such."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    suffix = Path(path).suffix.lower().lstrip(".") or "png"
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if suffix not in formats:
+        msg = f"'.{suffix}' is not a picture format matplotlib writes; use one of: {', '.join('.' + f for f in sorted(formats))}"
+        raise ValueError(msg)
+    return suffix
+
+
 def _save(fig: Figure, path: str | Path | None, dpi: int = 110) -> Path | Figure:
-    """Lay out; write atomically (a watcher may be reading the old picture), or return the figure without a path."""
+    """Lay out; write atomically (a watcher may be reading the old picture), or return the figure without a path.
+
+    The format follows the suffix (``fit.svg`` is an SVG; the temporary file's own suffix
+    used to make every picture a PNG)."""
     fig.tight_layout()
     if path is None:
         return fig
     out = Path(path)
-    tmp = out.with_name(out.name + ".tmp.png")
-    fig.savefig(tmp, dpi=dpi)
-    tmp.replace(out)
+    fmt = picture_format(out)
+    tmp = out.with_name(out.name + ".tmp")
+    try:
+        fig.savefig(tmp, dpi=dpi, format=fmt)
+        tmp.replace(out)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
     return out
 
 
