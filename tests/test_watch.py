@@ -511,6 +511,49 @@ def test_a_bad_room_wander_is_refused(value):
         MonitorSettings(room_wander_C_per_h=value)
 
 
+@pytest.mark.parametrize("value", [-0.1, float("nan"), float("inf")])
+def test_a_bad_bin_is_refused(value):
+    with pytest.raises(ValueError, match="bin_min"):
+        MonitorSettings(bin_min=value)
+
+
+def one_hertz_warm_up(seed: int, step: float, noise: float, minutes: float = 150.0) -> tuple[np.ndarray, np.ndarray]:
+    t = np.arange(0.0, minutes, 1.0 / 60.0)
+    rng = np.random.default_rng(seed)
+    return t, np.round((first_order(t) + noise * rng.standard_normal(len(t))) / step) * step
+
+
+@pytest.mark.parametrize("noise", [0.005, 0.02])
+def test_a_one_hertz_log_through_a_coarse_display_stops_with_the_right_answer(noise):
+    """At 1 Hz a 0.1 °C display keeps its rounding for a minute at a time; fed sample by sample as
+    if independent, the monitor never stopped (σ = 0.005 °C) or stopped at 290 min (0.02 °C)."""
+    t, readings = one_hertz_warm_up(1, 0.1, noise)
+    monitor = Monitor(("S",))
+    messages = monitor.feed(t, readings[:, None])
+    result = monitor.result()
+    assert result["stop_time_min"] is not None and result["stop_time_min"] < 0.5 * 187
+    assert abs(result["steady_state_C"] - 26.7) < 0.1
+    assert len(messages) == 1  # only the decision
+
+
+def test_a_one_hertz_log_resumes_mid_bin_to_the_same_decision():
+    t, readings = one_hertz_warm_up(2, 0.01, 0.02, minutes=80.0)
+    whole = Monitor(("S",))
+    whole.feed(t, readings[:, None])
+    pieces = Monitor(("S",))
+    for start, stop in ((0, 7), (7, 1203), (1203, 1204), (1204, 3333), (3333, len(t))):
+        pieces = Monitor.from_dict(json.loads(json.dumps(pieces.to_dict())))
+        pieces.feed(t[start:stop], readings[start:stop, None])
+    assert pieces.result() == whole.result() and whole.result()["stop_time_min"] is not None
+    # a row as it arrives gives the same as a batch, and the time it reports is the latest row's
+    rows = Monitor(("S",))
+    for k in range(2000):
+        rows.feed(t[k], [readings[k]])
+    batch = Monitor(("S",))
+    batch.feed(t[:2000], readings[:2000])
+    assert rows.result() == batch.result() and rows.latest_time == pytest.approx(t[1999])
+
+
 def test_watch_refuses_a_non_finite_tolerance(tmp_path):
     out = mtident("thermal", "watch", "@sample", "--replay", "--tolerance", "nan", cwd=tmp_path)
     assert out.returncode == 2 and "not a finite number" in out.stderr and "Traceback" not in out.stderr

@@ -206,7 +206,9 @@ def _save_state(path: Path, text: str) -> None:
 
 def _when(monitor) -> str:  # noqa: ANN001 - thermal.monitor.Monitor
     """Where the monitor is in the log, for messages and the table's title."""
-    return "before the first sample" if monitor.latest_time is None else f"at t = {monitor.latest_time:g} min"
+    from mtident.thermal.monitor import minutes
+
+    return "before the first sample" if monitor.latest_time is None else f"at t = {minutes(monitor.latest_time)} min"
 
 
 def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monitor.Monitor
@@ -248,7 +250,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 
     from mtident.io.dialect import header_names
     from mtident.io.follow import LogFollower
-    from mtident.thermal.monitor import Monitor, MonitorSettings
+    from mtident.thermal.monitor import Monitor, MonitorSettings, minutes
 
     path = log_path(file)
     if not path.is_file() and replay:
@@ -381,7 +383,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         Console(width=max(Console().width, 100)).print(_status_table(monitor, path))
         if result["stop_time_min"] is not None:
             gain = f"; {result['time_saved_min']:.0f} min before the predicted equilibrium" if result.get("time_saved_min") is not None else ""
-            Console().print(f"[bold green]The test can stop at t = {result['stop_time_min']:g} min{gain}.[/]")
+            Console().print(f"[bold green]The test can stop at t = {minutes(monitor.stop_time or 0.0)} min{gain}.[/]")
         else:
             Console().print("[bold yellow]Not yet: keep the test running.[/]")
     if interrupted:

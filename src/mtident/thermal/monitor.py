@@ -65,8 +65,17 @@ data", left out of the decision, if none come.
 Repeated messages of one kind for one sensor (a dead sensor, a slow mode) are
 said at most once per ``quiet_min`` minutes.
 
+A log faster than ``bin_min`` (default 10 s: a 1-Hz log) is fed in bins of
+about that length, their mean time and readings (:meth:`Monitor._take_bin`): a
+display's rounding stays the same for many samples at 1 Hz, and a filter told
+they were independent grew sure of the wrong answer (a 0.1 °C display at 1 Hz
+never stopped); the bins also cut the work per sample. The noise is never
+taken below the rounding of the raw readings' display step
+(:func:`~mtident.thermal.settings.display_resolution`).
+
 The whole state is a JSON-serialisable dict (:meth:`Monitor.to_dict`), so a
-monitor killed at any moment resumes with the same result.
+monitor killed at any moment (also in the middle of a bin) resumes with the
+same result.
 """
 
 from __future__ import annotations
@@ -82,10 +91,10 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.thermal.lsq import flat_lead, rise_threshold
 from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
-from mtident.thermal.settings import ThermalTuning, display_resolution, filter_config, noise_sigma, tuning_from_data
+from mtident.thermal.settings import DISPLAY_STEPS_C, ThermalTuning, filter_config, noise_sigma, on_display_steps, step_from_grid, tuning_from_data
 from mtident.ukf import FilterCarry, FilterConfig, GaussianState, SigmaWeights, StepInfo, filter_step, initial_carry
 
-__all__ = ["MonitorSettings", "Monitor", "SensorStatus", "ROOM_COUPLINGS"]
+__all__ = ["MonitorSettings", "Monitor", "SensorStatus", "ROOM_COUPLINGS", "minutes"]
 
 # How a sensor feels the room (with a room sensor): "lagged", through the machine's own heat
 # balance (a sensor in the structure); "direct", at once (a sensor in the air stream, on a thin cover).
@@ -123,8 +132,11 @@ class MonitorSettings:
     room_wander_C_per_h: float = 0.05
     late_rise_min: float = 5.0
     restart_delay_min: float = 30.0
+    bin_min: float = 1.0 / 6.0
 
     def __post_init__(self) -> None:
+        if not (np.isfinite(self.bin_min) and self.bin_min >= 0):
+            raise ValueError(f"bin_min must be a finite number of minutes ≥ 0, not {self.bin_min!r}")
         if self.room_coupling not in ROOM_COUPLINGS:
             raise ValueError(f"room_coupling must be one of {ROOM_COUPLINGS}, not {self.room_coupling!r}")
         if not (np.isfinite(self.room_wander_C_per_h) and self.room_wander_C_per_h >= 0):
@@ -142,6 +154,11 @@ class SensorStatus:
     equilibrium_time_min: float
     may_stop: bool
     status: str
+
+
+def minutes(value: float) -> str:
+    """A time for the engineer, to a tenth of a minute (a 1-Hz log's bins end at times like 62.5917)."""
+    return f"{value:.1f}".removesuffix(".0")
 
 
 def transition_with_room(dt_min: float, room_rate: float):  # noqa: ANN201 - a transition for filter_step
@@ -229,8 +246,13 @@ class Monitor:
     _weights: SigmaWeights | None = field(default=None, repr=False, compare=False)
     d4_sum: FloatArray | None = None
     d4_count: FloatArray | None = None
-    # per sensor, the step its readings are rounded to (°C; 0: none seen): the noise is never below its rounding
-    display_step: FloatArray | None = None
+    # The raw readings, per sensor: for each display step whether every one was a whole multiple of
+    # it, and the lowest and highest: the noise is never taken below the display's rounding.
+    on_grid: np.ndarray | None = None
+    raw_low: FloatArray | None = None
+    raw_high: FloatArray | None = None
+    # the raw rows of the bin being gathered (a log faster than bin_min): [t, room, y per sensor]
+    pending: FloatArray = field(default_factory=_no_rows)
     # rows [t, rise T∞ per sensor, its 95 % half-width per sensor], about one per minute of the window
     checkpoints: FloatArray = field(default_factory=_no_rows)
     wandering: list[bool] | None = None
@@ -246,23 +268,28 @@ class Monitor:
         if not self.sensors:
             raise InputError("Monitor needs at least one sensor name, e.g. Monitor(('T1', 'T2'))")
         S = len(self.sensors)
-        for name, width in (("z_history", S), ("steady_history", 1 + S), ("recent_y", S), ("recent_rows", 2 + S), ("checkpoints", 2 + 2 * S)):
+        for name, width in (("z_history", S), ("steady_history", 1 + S), ("recent_y", S), ("recent_rows", 2 + S), ("checkpoints", 2 + 2 * S), ("pending", 2 + S)):
             if len(getattr(self, name)) == 0:
                 setattr(self, name, np.empty((0, width)))
+        if self.on_grid is None or self.raw_low is None or self.raw_high is None:
+            self.on_grid = np.ones((S, len(DISPLAY_STEPS_C)), dtype=bool)
+            self.raw_low, self.raw_high = np.full(S, np.inf), np.full(S, -np.inf)
 
     def __repr__(self) -> str:
         # the whole state is for to_dict; a notebook wants the answer so far
         if self.carry is None:
             return f"Monitor({len(self.sensors)} sensor(s), collecting the first {self.settings.init_min:g} min)"
-        decision = f"stop at t = {self.stop_time:g} min" if self.stop_time is not None else "continue"
-        lines = [f"Monitor({len(self.sensors)} sensor(s), t = {self.last_t:g} min, decision: {decision})"]
+        decision = f"stop at t = {minutes(self.stop_time)} min" if self.stop_time is not None else "continue"
+        lines = [f"Monitor({len(self.sensors)} sensor(s), t = {minutes(self.latest_time or 0.0)} min, decision: {decision})"]
         for st in self.status():
             lines.append(f"  {st.sensor}: T∞ {st.steady_state_C:.2f} ± {st.half_width_C:.2f} °C, t_eq {st.equilibrium_time_min:.0f} min, {st.status}")
         return "\n".join(lines)
 
     @property
     def latest_time(self) -> float | None:
-        """The time of the last sample fed (min), also while the start window is collected."""
+        """The time of the last sample fed (min), also while the start window or a bin is collected."""
+        if len(self.pending):
+            return float(self.pending[-1, 0])
         return self.last_t if self.last_t is not None else (self.buffer_t[-1] if self.buffer_t else None)
 
     # ---- recursion --------------------------------------------------------------------
@@ -285,9 +312,19 @@ class Monitor:
         times, rows, room = self._checked(times, values, ambient)
         messages: list[str] = []
         self.room_measured = self.room_measured or ambient is not None
-        for t, y, a in zip(times, rows, room, strict=True):
+        for raw_t, raw_y, raw_a in zip(times, rows, room, strict=True):
             if self.stop_time is not None:
                 break
+            previous = self.latest_time
+            self._note_reading(raw_y)
+            self.pending = _append_row(self.pending, [raw_t, raw_a, *raw_y])
+            # A log faster than bin_min (1 Hz) is fed as bins of about bin_min, their mean time and
+            # readings: a display's rounding stays the same for many samples, and the filter, told
+            # they were independent, stopped late or never (0.1 °C at 1 Hz). A slower log is fed
+            # sample by sample, as before.
+            if previous is not None and (raw_t - self.pending[0, 0]) + (raw_t - previous) < self.settings.bin_min * (1.0 - 1e-9):
+                continue
+            t, y, a = self._take_bin()
             rate = 0.0
             if np.isfinite(a):
                 # the room's mean rate since its last valid reading (a missing one: the room held still)
@@ -301,7 +338,7 @@ class Monitor:
                     held = "the sensors' rise over the room waits for its first reading"
                 else:
                     held = "the room is taken as steady until its first reading"
-                messages.append(f"room sensor: no valid reading at t = {t:g} min ({_MISSING}); {held}{self._quiet_note()}")
+                messages.append(f"room sensor: no valid reading at t = {minutes(t)} min ({_MISSING}); {held}{self._quiet_note()}")
             if ambient is not None and self.settings.room_coupling == "direct":
                 # The raw reading, not a smoothed one: its noise stays white, so the fourth-
                 # difference noise estimate (and with it the interval) accounts for it.
@@ -310,6 +347,26 @@ class Monitor:
             messages.extend(self._one(float(t), y.copy(), rate))
         self.notes.extend(messages)
         return messages
+
+    def _note_reading(self, y: FloatArray) -> None:
+        assert self.on_grid is not None and self.raw_low is not None and self.raw_high is not None
+        self.on_grid &= on_display_steps(y)
+        self.raw_low, self.raw_high = np.fmin(self.raw_low, y), np.fmax(self.raw_high, y)
+
+    def _display_step(self) -> FloatArray:
+        """Per sensor, the step the raw readings are rounded to (°C; 0: none seen)."""
+        assert self.on_grid is not None and self.raw_low is not None and self.raw_high is not None
+        return step_from_grid(self.on_grid, self.raw_high - self.raw_low)
+
+    def _take_bin(self) -> tuple[float, FloatArray, float]:
+        """The gathered bin as one sample: its mean time, readings and room (NaN where none was valid)."""
+        rows, self.pending = self.pending, self.pending[:0]
+        if len(rows) == 1:
+            return float(rows[0, 0]), rows[0, 2:].copy(), float(rows[0, 1])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a sensor without a valid reading in the bin
+            means = np.nanmean(rows, axis=0)
+        return float(means[0]), means[2:], float(means[1])
 
     def _checked(self, times: FloatArray, values: FloatArray, ambient: FloatArray | None) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The samples as (n,), (n, S) and (n,) float arrays, or an :class:`InputError` naming what is wrong.
@@ -375,7 +432,6 @@ class Monitor:
         self.last_t = None
         self.d4_sum = np.zeros(S)
         self.d4_count = np.zeros(S)
-        self.display_step = display_resolution(y)
         self.recent_y = self.recent_y[:0]
         self.rejected_run = np.zeros(S)
         messages = []
@@ -394,7 +450,7 @@ class Monitor:
             elif never[s]:
                 messages.append(f"sensor {self.sensors[s]!r}: no rise in the first {t[-1] - t[0]:g} min; waiting for its warm-up to begin")
             else:
-                messages.append(f"sensor {self.sensors[s]!r}: flat until t = {t[last_flat[s] + 1]:g} min; identifying it from the start of its rise")
+                messages.append(f"sensor {self.sensors[s]!r}: flat until t = {minutes(t[last_flat[s] + 1])} min; identifying it from the start of its rise")
         for tt, yy, rate in zip(t, y, self.buffer_room_rate, strict=True):
             messages.extend(self._step(float(tt), yy.copy(), rate))
         self.buffer_t, self.buffer_y, self.buffer_room_rate = [], [], []
@@ -407,7 +463,7 @@ class Monitor:
         config, weights = self._filter()
         dt = 0.0 if self.last_t is None else t - self.last_t
         if self.median_dt and dt > self.settings.gap_factor * self.median_dt:
-            messages.append(f"gap in the log: {dt:g} min without samples before t = {t:g} min; bridged by the model")
+            messages.append(f"gap in the log: {dt:g} min without samples before t = {minutes(t)} min; bridged by the model")
         step = transition_with_room(dt, room_rate)
         self._first_readings(y)
         self.carry = replace(self.carry, process_cov=self._process_cov(self.carry.mean[:, 2], dt))
@@ -423,22 +479,22 @@ class Monitor:
         self.rejected_run = np.where(wild, self.rejected_run + 1, 0.0)
         if np.any(broken):
             for s in np.flatnonzero(broken):
-                messages.append(f"sensor {self.sensors[s]!r}: a second wild sample in a row at t = {t:g} min; not a spike: the warm-up changed course, widening its parameter uncertainty")
+                messages.append(f"sensor {self.sensors[s]!r}: a second wild sample in a row at t = {minutes(t)} min; not a spike: the warm-up changed course, widening its parameter uncertainty")
             self._widen(broken)
             new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
             z = _normalised_innovation(info)
         if np.any(spikes):
             for s in np.flatnonzero(spikes):
-                messages.append(f"sensor {self.sensors[s]!r}: rejected a spike at t = {t:g} min ({y[s]:.2f} °C, {abs(z[s]):.0f}σ from the prediction)")
+                messages.append(f"sensor {self.sensors[s]!r}: rejected a spike at t = {minutes(t)} min ({y[s]:.2f} °C, {abs(z[s]):.0f}σ from the prediction)")
             y[spikes] = np.nan
             new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
             z = _normalised_innovation(info)
         for s in np.flatnonzero(~np.isfinite(y) & ~spikes):
             if self._may_say("dropout", self.sensors[s], t):
                 if self.unread is not None and self.unread[s]:
-                    messages.append(f"sensor {self.sensors[s]!r}: still no valid reading at t = {t:g} min; waiting for its readings{self._quiet_note()}")
+                    messages.append(f"sensor {self.sensors[s]!r}: still no valid reading at t = {minutes(t)} min; waiting for its readings{self._quiet_note()}")
                 else:
-                    messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {t:g} min ({_MISSING}); bridged{self._quiet_note()}")
+                    messages.append(f"sensor {self.sensors[s]!r}: no valid reading at t = {minutes(t)} min ({_MISSING}); bridged{self._quiet_note()}")
         self.carry = new
         self.last_t = t
         self.recent_rows = _since(_append_row(self.recent_rows, [t, room_rate, *y]), t - self.settings.restart_delay_min)
@@ -474,7 +530,7 @@ class Monitor:
                     why = "no longer fit the first-order model: a trend it misses (a slower mode?)"
                 else:
                     why = "no longer fit the first-order model (a slower mode?)"
-                messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {t:g} min {why}; {what}{self._quiet_note()}")
+                messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {minutes(t)} min {why}; {what}{self._quiet_note()}")
             self._widen(misfit)
         was_waiting = np.array(self.waiting_rise) if self.waiting_rise is not None else np.zeros(len(self.sensors), dtype=bool)
         due = self._schedule_restarts(t, misfit & self.room_measured)
@@ -487,7 +543,7 @@ class Monitor:
         if self.stop_time is None and all(st.may_stop for st in status) and not all(st.status in _LEFT_OUT for st in status):
             self.stop_time = t
             self.decision = [self._summary(st) for st in status]
-            messages.append(f"the test can stop at t = {t:g} min")
+            messages.append(f"the test can stop at t = {minutes(t)} min")
         return messages
 
     def _first_readings(self, y: FloatArray) -> None:
@@ -553,7 +609,7 @@ class Monitor:
             k = int(np.argmax(outside[:, s]))
             then, half, when = self.checkpoints[k, 2 + s], self.checkpoints[k, 2 + len(status) + s], self.checkpoints[k, 0]
             messages.append(
-                f"sensor {status[s].sensor!r}: T∞ = {status[s].steady_state_C:.2f} °C has left the interval {then:.2f} ± {half:.2f} °C of t = {when:g} min "
+                f"sensor {status[s].sensor!r}: T∞ = {status[s].steady_state_C:.2f} °C has left the interval {then:.2f} ± {half:.2f} °C of t = {minutes(when)} min "
                 f"(by more than {self.settings.consistency_factor:g}× its half-width): not a first-order warm-up here, a slow mode or a drifting room{hint}; waiting for it to settle"
             )
         return messages
@@ -600,7 +656,7 @@ class Monitor:
             # Rounded readings (a 1/16 °C sensor) give fourth differences mostly 0 and now and then
             # a whole step, which the outlier guard above leaves out: the running mean alone fell to
             # a tenth of the rounding's q²/12 and every later sample looked like a spike.
-            rounding = (self.display_step if self.display_step is not None else 0.0) ** 2 / 12.0
+            rounding = self._display_step() ** 2 / 12.0
             variance = np.where(ready, np.maximum(self.d4_sum / np.maximum(self.d4_count, 1) / 70.0, np.maximum(rounding, 1e-12)), self.carry.emission_cov[:, 0, 0])
             self.carry = replace(self.carry, emission_cov=variance[:, None, None])
 
@@ -705,9 +761,6 @@ class Monitor:
                 filled = np.where(np.isfinite(y), y, np.nanmean(y, axis=0))
             filled[leading] = np.nan  # left out: tuning_from_data carries the start back to the window's start
             tuning = tuning_from_data(t, filled[:, ready])
-            if self.display_step is not None:  # a sensor flat at the start showed no step then
-                seen = display_resolution(y[:, ready])
-                self.display_step[ready] = np.where(seen > 0, seen, self.display_step[ready])
             mean[ready], cov[ready] = tuning.initial_mean, tuning.initial_cov
         config, weights = self._filter()
         fresh = initial_carry(GaussianState(mean, cov), self.carry.process_cov, self.carry.emission_cov, config)
@@ -890,7 +943,10 @@ class Monitor:
             "buffer_room_rate": self.buffer_room_rate,
             "d4_sum": _tolist(self.d4_sum),
             "d4_count": _tolist(self.d4_count),
-            "display_step": _tolist(self.display_step),
+            "on_grid": _tolist(self.on_grid),
+            "raw_low": _tolist(self.raw_low),
+            "raw_high": _tolist(self.raw_high),
+            "pending": _tolist(self.pending),
             "checkpoints": _tolist(self.checkpoints),
             "wandering": self.wandering,
             "restart_from": self.restart_from,
@@ -937,7 +993,10 @@ class Monitor:
             buffer_room_rate=list(data.get("buffer_room_rate", [0.0] * len(data["buffer_t"]))),
             d4_sum=_optional_floats(data["d4_sum"]),
             d4_count=_optional_floats(data["d4_count"]),
-            display_step=_optional_floats(data.get("display_step")),
+            on_grid=None if data.get("on_grid") is None else np.array(data["on_grid"], dtype=bool),
+            raw_low=_optional_floats(data.get("raw_low")),
+            raw_high=_optional_floats(data.get("raw_high")),
+            pending=_rows(data.get("pending", [])),
             checkpoints=_rows(data.get("checkpoints", [])),
             wandering=data.get("wandering"),
             restart_from=data.get("restart_from"),

@@ -27,6 +27,9 @@ __all__ = [
     "preset_tuning",
     "noise_sigma",
     "display_resolution",
+    "on_display_steps",
+    "step_from_grid",
+    "DISPLAY_STEPS_C",
     "quick_estimate",
 ]
 
@@ -97,32 +100,37 @@ def filter_config(method: str, tuning: ThermalTuning) -> FilterConfig:
 
 # Display steps a logger rounds to, coarsest first: decimal ones, and the binary ones of digital
 # sensors (a DS18B20 reads in steps of 1/16 °C at 12 bits, 1/2 °C at 9 bits).
-_DISPLAY_STEPS_C = tuple(sorted({1.0, 0.5, 0.25, 0.125, 0.1, 0.0625, 0.05, 0.03125, 0.01, 0.005, 0.001}, reverse=True))
+DISPLAY_STEPS_C = np.array(sorted({1.0, 0.5, 0.25, 0.125, 0.1, 0.0625, 0.05, 0.03125, 0.01, 0.005, 0.001}, reverse=True))
+
+
+def on_display_steps(values: FloatArray) -> np.ndarray:
+    """(..., S, len(DISPLAY_STEPS_C)): whether each reading is a whole multiple of each step (NaN: yes)."""
+    multiples = np.asarray(values, dtype=float)[..., None] / DISPLAY_STEPS_C
+    with np.errstate(invalid="ignore"):
+        return ~(np.abs(multiples - np.round(multiples)) >= 1e-6)
+
+
+def step_from_grid(on_grid: np.ndarray, spread: FloatArray) -> FloatArray:
+    """Per sensor, the coarsest step every reading is a multiple of and the readings span at least
+    twice (a flat ``20.0`` is not a 1 °C display); 0 where there is none."""
+    usable = on_grid & (np.asarray(spread, dtype=float)[:, None] >= 2.0 * DISPLAY_STEPS_C - 1e-9)
+    return np.where(usable.any(axis=1), DISPLAY_STEPS_C[np.argmax(usable, axis=1)], 0.0)
 
 
 def display_resolution(values: FloatArray) -> FloatArray:
-    """The step each sensor's readings are rounded to (°C), 0 where none is seen.
-
-    The coarsest of the usual display steps (0.1, 0.01, 1/16 °C, ...) of which
-    every valid reading is a whole multiple; a column with fewer than three
-    distinct readings shows no step (a flat ``20.0`` is not a 1 °C display).
+    """The step each sensor's readings are rounded to (°C), 0 where none is seen: the coarsest of
+    the usual display steps (0.1, 0.01, 1/16 °C, ...) that fits every valid reading
+    (:func:`step_from_grid`).
 
     Parameters
     ----------
     values : ndarray, shape (N, S)
     """
-    out = []
-    for column in np.asarray(values, dtype=float).T:
-        finite = np.unique(column[np.isfinite(column)])
-        step = 0.0
-        if len(finite) >= 3:
-            for candidate in _DISPLAY_STEPS_C:
-                multiples = finite / candidate
-                if np.all(np.abs(multiples - np.round(multiples)) < 1e-6):
-                    step = candidate
-                    break
-        out.append(step)
-    return np.array(out)
+    y = np.asarray(values, dtype=float)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a column without a valid reading
+        spread = np.nan_to_num(np.nanmax(y, axis=0) - np.nanmin(y, axis=0))
+    return step_from_grid(np.asarray(on_display_steps(y).all(axis=0)), spread)
 
 
 def noise_sigma(values: FloatArray) -> FloatArray:
