@@ -34,6 +34,7 @@ from mtident.thermal.monitor import Monitor, MonitorSettings  # noqa: E402
 
 TOLERANCE = 0.2
 T = np.arange(0.0, 401.0)
+T_1HZ = np.arange(0.0, 240.0, 1.0 / 60.0)
 
 
 def equilibrium_of(curve: np.ndarray) -> float:
@@ -45,7 +46,7 @@ def equilibrium_of(curve: np.ndarray) -> float:
 T_LONG = np.arange(0.0, 2001.0)
 
 
-def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None, room_sensor=None, coupling: str = "lagged", steady: float = 26.7, wander: float = 0.05) -> tuple[str, float | None, float, float]:  # noqa: ANN001
+def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None, room_sensor=None, coupling: str = "lagged", steady: float = 26.7, wander: float = 0.05, times: np.ndarray = T) -> tuple[str, float | None, float, float]:  # noqa: ANN001
     """Replay one sensor; return (name, stop time, equilibrium time, |T∞ error| at stop).
 
     The truth is the curve's value at 2,000 min; with a drifting room (``ambient``
@@ -54,7 +55,7 @@ def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None,
     settles to if the room stays as it is then.
     """
     monitor = Monitor(("S",), MonitorSettings(tolerance_C=TOLERANCE, room_coupling=coupling, room_wander_C_per_h=wander))
-    monitor.feed(T, noisy[:, None], room_sensor)
+    monitor.feed(times, noisy[:, None], room_sensor)
     result = monitor.result()
     truth = clean_long[-1]
     if ambient is not None and result["stop_time_min"] is not None:
@@ -97,6 +98,7 @@ KINDS = (
     "first-order, begins 15 min late",
     "first-order, 0.1 °C display",
     "first-order, 1/16 °C, σ 0.005",
+    "first-order, 1 Hz, 0.1 °C display",
     "fast+slow",
     "fast+slow, --room-wander 0",
     "fast+slow, drift, --ambient",
@@ -136,6 +138,9 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
         for kind, step, sigma in (("first-order, 0.1 °C display", 0.1, 0.02), ("first-order, 1/16 °C, σ 0.005", 1 / 16, 0.005)):
             rounded = np.round((first_order[:401] + sigma / 0.02 * noise[0]) / step) * step
             out[kind].append(run_case(f"{kind} #{seed}", first_order, rounded))
+        # a 1-Hz logger with a 0.1 °C display: the rounding holds for many rows (the monitor bins them)
+        fast = np.round((26.7 - 8.8 * np.exp(-0.016 * T_1HZ) + 0.02 * rng.standard_normal(len(T_1HZ))) / 0.1) * 0.1
+        out["first-order, 1 Hz, 0.1 °C display"].append(run_case(f"first-order, 1 Hz #{seed}", first_order, fast, times=T_1HZ))
         out["first-order, --room-wander 0"].append(run_case(f"first-order, steady room #{seed}", first_order, first_order[:401] + noise[0], wander=0.0))
         out["fast+slow"].append(run_case(f"fast+slow #{seed}", fast_slow, fast_slow[:401] + noise[1]))
         out["fast+slow, --room-wander 0"].append(run_case(f"fast+slow, steady room #{seed}", fast_slow, fast_slow[:401] + noise[1], wander=0.0))
