@@ -165,6 +165,7 @@ def plot_feed_drive_identification(result, response, path: str | Path | None = N
 def plot_monitor(log, monitor, path: str | Path | None = None) -> Path | Figure:  # noqa: ANN001 - TemperatureLog, thermal.monitor.Monitor
     """Measured curves so far, the monitor's predicted curve with its T∞ band, and the stop time."""
     from mtident.thermal.model import rise_curve
+    from mtident.thermal.monitor import minutes
 
     fig, axes = grid(len(log.sensors))
     status = monitor.status()
@@ -178,7 +179,7 @@ def plot_monitor(log, monitor, path: str | Path | None = None) -> Path | Figure:
             ax.plot(future, rise_curve(future - now, st.latest_C, rate, st.steady_state_C), color="tab:red", lw=1.5, label="predicted")
             ax.axhspan(st.steady_state_C - st.half_width_C, st.steady_state_C + st.half_width_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
         if monitor.stop_time is not None:
-            ax.axvline(monitor.stop_time, color="k", ls="--", lw=1, label=f"stop at {monitor.stop_time:g} min")
+            ax.axvline(monitor.stop_time, color="k", ls="--", lw=1, label=f"stop at {minutes(monitor.stop_time)} min")
         ax.set_title(f"{st.sensor}: {st.status}", fontsize=10)
         ax.set_xlabel("time (min)")
         ax.set_ylabel("temperature (°C)")
