@@ -13,7 +13,7 @@ from mtident.exceptions import InputError
 from mtident.io import read_temperature_log
 from mtident.thermal import METHODS, identify, minimal_identification_time
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, Z95, rmse
-from mtident.thermal.lsq import cramer_rao_bound
+from mtident.thermal.lsq import cramer_rao_bound, first_order_onset
 from mtident.thermal.model import rise_transition, slope_transition, to_physical
 from mtident.thermal.settings import display_resolution, noise_sigma, quick_estimate
 
@@ -115,6 +115,20 @@ def test_a_sensor_that_does_not_rise_has_no_equilibrium_time():
     assert np.isnan(result.equilibrium_time_min[1]) and result.summary(1)["equilibrium_time_min"] is None
     assert result.equilibrium_time_min[0] == pytest.approx(187.0, abs=25.0)
     assert [n for n in result.notes if "no rise" in n] == ["sensor 'cold': no rise in the first 30 min (0.08 °C from lowest to highest): no warm-up to identify; it has no equilibrium time"]
+
+
+@pytest.mark.parametrize("period_min", [1.0, 1.0 / 60.0])
+def test_a_sensor_lag_is_told_from_noise_at_any_sampling_rate(period_min):
+    """At 1 Hz the 2.5σ rule saw a lag in nearly every true first-order curve (180 leading samples)."""
+    rng = np.random.default_rng(8)
+    t = np.arange(0.0, 30.0 + 1e-9, period_min)
+    plain = (20 + 10 * (1 - np.exp(-t / 94)))[:, None] + 0.02 * rng.standard_normal((len(t), 40))
+    lagged = (20 + 10 * (1 - (94 * np.exp(-t / 94) - np.exp(-t)) / 93))[:, None] + 0.02 * rng.standard_normal((len(t), 10))  # a 1-min lag
+    assert np.count_nonzero(first_order_onset(t, plain)) <= 4  # ~4 % by design
+    onsets_min = t[first_order_onset(t, lagged)]
+    assert np.all(onsets_min <= 6.0)
+    # at 1 min the lag shows in a sample or two, not always beyond the noise; at 1 Hz in dozens
+    assert np.count_nonzero(onsets_min) >= (5 if period_min == 1.0 else 10)
 
 
 def test_monte_carlo_default_method_reaches_the_cramer_rao_bound_with_calibrated_intervals():

@@ -6,9 +6,13 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import ndtr, ndtri
 
 from mtident._typing import FloatArray, IntArray
 from mtident.thermal.model import rise_curve
+
+# how often a true first-order curve is taken for a lagged one: 2.5σ on each of 3 leading samples
+_LAG_FALSE_FLAG = 3 * 2 * float(ndtr(-2.5))
 
 __all__ = ["LeastSquaresFit", "fit_rise", "rise_threshold", "flat_lead", "late_onset", "first_level", "first_order_onset", "cramer_rao_bound"]
 
@@ -160,6 +164,10 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     # a warm-up that begins after the log: its flat minutes go first
     onsets = late_onset(t, y, sigma)
     lead = lead + int(onsets.max())
+    # 2.5σ over the 3 leading samples of a 1-min log: one false flag in 27 curves. A 1-Hz log has
+    # 180 leading samples, and 2.5σ flagged nearly every true first-order curve as lagged; the
+    # threshold keeps that rate whatever the number of samples.
+    threshold = max(2.5, float(-ndtri(_LAG_FALSE_FLAG / 2.0 / lead)))
     for _ in range(2):
         used = y.copy()
         for s in np.flatnonzero(onsets).tolist():
@@ -169,7 +177,7 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
         curve = rise_curve(t[:, None], fit.params[:, 0], fit.params[:, 1], fit.params[:, 2])
         z = (y[:lead] - curve[:lead]) / sigma
         for s in range(y.shape[1]):
-            flagged = np.flatnonzero(np.abs(z[:, s]) > 2.5)
+            flagged = np.flatnonzero(np.abs(z[:, s]) > threshold)
             if not flagged.size:
                 continue
             # the lag's decay goes on past the last flagged sample: take the run of same-sign misses beyond σ/2
