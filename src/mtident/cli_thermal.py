@@ -238,9 +238,10 @@ def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monito
 def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, room_coupling: str | None, room_wander: float, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
-    Every new row updates each sensor's filter; a sensor may stop when its T∞
-    interval is within the tolerance, the estimate has held still, and its
-    residuals fit the model. The state file lets a killed monitor resume.
+    Every new row updates each sensor's filter (rows faster than one in 10 s, as
+    10-s bins); a sensor may stop when its T∞ interval is within the tolerance,
+    the estimate has held still, and its residuals fit the model. The state file
+    lets a killed monitor resume.
     """
     import json
     import sys
