@@ -214,7 +214,8 @@ def read_temperature_log(
         frame, dialect = read_csv(path)
         first_row += dialect.preamble_lines
     frame.columns = [str(c).strip() for c in frame.columns]
-    check_unique_names(list(frame.columns), source)
+    if isinstance(path, pd.DataFrame):  # a CSV file's header was checked by read_csv, before pandas renamed a repeat
+        check_unique_names(list(frame.columns), source)
     if frame.shape[1] < 2:
         msg = f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found columns: {', '.join(frame.columns)}"
         raise InputError(msg)

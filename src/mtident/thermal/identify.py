@@ -6,7 +6,6 @@ of the record (or a horizon). All sensors of a log are filtered as one batch.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -17,7 +16,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
-from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
+from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, reading_range, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
 
 __all__ = ["Identification", "identify", "room_input", "room_rates", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
@@ -528,9 +527,7 @@ def _identify(
         eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan) + np.where(late_start, begins - tw[0], 0.0)
     # A sensor that does not rise in the window (never heated, or not connected) is at its level;
     # a λ fitted to its noise would give it an "equilibrium time" it never had.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # a column without a valid sample
-        rise = np.nanmax(yw, axis=0) - np.nanmin(yw, axis=0)
+    rise = reading_range(yw)
     no_rise = rise < rise_threshold(sigma)
     for s in np.flatnonzero(no_rise).tolist():
         notes.append(f"sensor {log.sensors[s]!r}: no rise in the first {tw[-1]:g} min ({rise[s]:.2f} °C from lowest to highest): no warm-up to identify; it has no equilibrium time")

@@ -27,6 +27,7 @@ __all__ = [
     "preset_tuning",
     "noise_sigma",
     "display_resolution",
+    "reading_range",
     "on_display_steps",
     "step_from_grid",
     "DISPLAY_STEPS_C",
@@ -126,11 +127,15 @@ def display_resolution(values: FloatArray) -> FloatArray:
     ----------
     values : ndarray, shape (N, S)
     """
+    return step_from_grid(np.asarray(on_display_steps(values).all(axis=0)), np.nan_to_num(reading_range(values)))
+
+
+def reading_range(values: FloatArray) -> FloatArray:
+    """Per sensor, the highest valid reading less the lowest (NaN for a column without one)."""
     y = np.asarray(values, dtype=float)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a column without a valid reading
-        spread = np.nan_to_num(np.nanmax(y, axis=0) - np.nanmin(y, axis=0))
-    return step_from_grid(np.asarray(on_display_steps(y).all(axis=0)), spread)
+        return np.nanmax(y, axis=0) - np.nanmin(y, axis=0)
 
 
 def noise_sigma(values: FloatArray) -> FloatArray:
