@@ -845,3 +845,33 @@ def test_monitor_feed_refuses_times_before_those_it_has_seen_and_takes_one_senso
     for k in range(20):
         by_row.feed(float(T[k]), [y[k]])
     assert json.dumps(by_row.to_dict()) == json.dumps(column.to_dict())
+
+
+@pytest.mark.parametrize(("interval_s", "rows_per_bin"), [(1.0, 10), (0.5, 20), (5.0, 2), (6.0, 2), (7.0, 1), (9.5, 1), (10.0, 1), (60.0, 1)])
+def test_rows_are_gathered_into_bins_nearest_ten_seconds(interval_s, rows_per_bin):
+    """A fast log is fed in bins of the row count nearest 10 s; a 10-s logger whose clock runs a
+    little fast (rows 9.5 s apart) was fed in pairs, 19 s a sample."""
+    t = np.arange(0.0, 1800.0, interval_s) / 60.0
+    monitor = Monitor(("S",), MonitorSettings(tolerance_C=1e-3))  # never stops: every row is fed
+    monitor.feed(t, first_order(t)[:, None] + 0.02 * np.random.default_rng(1).standard_normal((len(t), 1)))
+    # the first row is fed alone (no interval to judge by yet), then bins of rows_per_bin
+    assert monitor.samples == 1 + (len(t) - 1) // rows_per_bin
+    assert len(monitor.pending) == (len(t) - 1) % rows_per_bin
+
+
+def test_a_jittery_ten_second_log_is_fed_row_by_row():
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(9.0, 11.0, 360)) / 60.0
+    monitor = Monitor(("S",), MonitorSettings(tolerance_C=1e-3))
+    monitor.feed(t, first_order(t)[:, None] + 0.02 * rng.standard_normal((len(t), 1)))
+    assert monitor.samples == len(t) and len(monitor.pending) == 0
+
+
+def test_a_row_back_in_time_is_refused_also_after_a_closed_bin():
+    """A closed bin's mean time lies before its last row: a row between them was taken as new."""
+    t = np.arange(0.0, 31.0) / 60.0  # the first row alone, then three bins of 10
+    monitor = Monitor(("S",))
+    monitor.feed(t, first_order(t)[:, None])
+    assert len(monitor.pending) == 0 and monitor.latest_time == pytest.approx(t[-1])
+    with pytest.raises(InputError, match="does not come after"):
+        monitor.feed(t[-1] - 2.0 / 60.0, [first_order(t[-1])])

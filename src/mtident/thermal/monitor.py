@@ -181,6 +181,15 @@ def _count_innovations(observed: FloatArray, nis_sum: FloatArray, z: FloatArray)
     return observed, nis_sum + np.where(ok & (observed > 3), z**2, 0.0)
 
 
+def _bin_wants_more(span: float, interval: float, bin_min: float) -> bool:
+    """Whether a bin whose rows span ``span`` minutes, ``interval`` apart, is nearer ``bin_min`` with one more row.
+
+    Each row stands for about one interval, so the bin covers span + interval now
+    and span + 2·interval with another row.
+    """
+    return span + 1.5 * interval < bin_min * (1.0 - 1e-9)
+
+
 def _floats(value: Any) -> FloatArray:
     return np.array(value, dtype=float)
 
@@ -256,6 +265,9 @@ class Monitor:
     raw_high: FloatArray | None = None
     # the raw rows of the bin being gathered (a log faster than bin_min): [t, room, y per sensor]
     pending: FloatArray = field(default_factory=_no_rows)
+    # the last raw row's time: a closed bin's mean time lies before it, and neither the next row's
+    # interval nor the check that times move on may be measured from the mean
+    last_row_t: float | None = None
     # rows [t, rise T∞ per sensor, its 95 % half-width per sensor], about one per minute of the window
     checkpoints: FloatArray = field(default_factory=_no_rows)
     wandering: list[bool] | None = None
@@ -291,7 +303,9 @@ class Monitor:
     @property
     def latest_time(self) -> float | None:
         """The time of the last sample fed (min), also while the start window or a bin is collected."""
-        if len(self.pending):
+        if self.last_row_t is not None:
+            return self.last_row_t
+        if len(self.pending):  # a state file written before last_row_t was kept
             return float(self.pending[-1, 0])
         return self.last_t if self.last_t is not None else (self.buffer_t[-1] if self.buffer_t else None)
 
@@ -321,11 +335,14 @@ class Monitor:
             previous = self.latest_time
             self._note_reading(raw_y)
             self.pending = _append_row(self.pending, [raw_t, raw_a, *raw_y])
+            self.last_row_t = float(raw_t)
             # A log faster than bin_min (1 Hz) is fed as bins of about bin_min, their mean time and
             # readings: a display's rounding stays the same for many samples, and the filter, told
             # they were independent, stopped late or never (0.1 °C at 1 Hz). A slower log is fed
-            # sample by sample, as before.
-            if previous is not None and (raw_t - self.pending[0, 0]) + (raw_t - previous) < self.settings.bin_min * (1.0 - 1e-9):
+            # sample by sample, as before. The bin closes when one more row would take it further
+            # from bin_min than it is (10 rows at 1 Hz): a 10-s logger whose rows come 9.5 s apart
+            # is fed row by row, not in 20-s pairs.
+            if previous is not None and _bin_wants_more(raw_t - self.pending[0, 0], raw_t - previous, self.settings.bin_min):
                 continue
             t, y, a = self._take_bin()
             rate = 0.0
@@ -960,6 +977,7 @@ class Monitor:
             "raw_low": _tolist(self.raw_low),
             "raw_high": _tolist(self.raw_high),
             "pending": _tolist(self.pending),
+            "last_row_t": self.last_row_t,
             "checkpoints": _tolist(self.checkpoints),
             "wandering": self.wandering,
             "restart_from": self.restart_from,
@@ -1010,6 +1028,7 @@ class Monitor:
             raw_low=_optional_floats(data.get("raw_low")),
             raw_high=_optional_floats(data.get("raw_high")),
             pending=_rows(data.get("pending", [])),
+            last_row_t=data.get("last_row_t"),
             checkpoints=_rows(data.get("checkpoints", [])),
             wandering=data.get("wandering"),
             restart_from=data.get("restart_from"),
