@@ -230,3 +230,4 @@ def test_min_time_table_gives_l_to_a_tenth_of_a_minute_for_a_fast_log(tmp_path):
     row = next(line for line in out.stdout.splitlines() if "T1" in line)
     cells = [c.strip() for c in row.strip("│ ").split("│")][1:-1]
     assert len(cells) == 5 and all(re.fullmatch(r"\d+(\.\d)?", c) for c in cells), row
+

@@ -185,11 +185,12 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     trailing=st.booleans(),
     quoted=st.booleans(),
     stamps=st.sampled_from(["minutes", "iso", "dotted", "time of day"]),
+    units=st.sampled_from(["none", "min", "s"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
-def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, cp1252, crlf, trailing, quoted, stamps, cuts):
+def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, cp1252, crlf, trailing, quoted, stamps, units, cuts):
     """Every combination of delimiter, decimal mark, preamble, encoding, line end, trailing
-    delimiter, quoted cells (as spreadsheets write them) and time format, read whole and followed live in random pieces, gives the
+    delimiter, quoted cells (as spreadsheets write them) time format and a units row under the header, read whole and followed live in random pieces, gives the
     plain file's times and temperatures."""
     import datetime as dt
 
@@ -202,6 +203,8 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
 
     def time_cell(minutes: float) -> str:
         when = start + dt.timedelta(minutes=float(minutes))
+        if stamps == "minutes" and units == "s":
+            return f"{60 * minutes:g}"
         return {"minutes": f"{minutes:g}", "iso": when.isoformat(), "dotted": when.strftime("%d.%m.%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]
 
     def number(value: float) -> str:
@@ -213,6 +216,8 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
         return delimiter.join(f'"{c}"' if quoted else c for c in cells) + tail
 
     lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", "A °C", "B"])]
+    if units != "none":  # the time's unit only where the time is a number
+        lines.append(row([units if stamps == "minutes" else "", "°C", "[°C]"]))
     lines += [row([time_cell(m), *(number(v) for v in values)]) for m, values in zip(t, temperatures, strict=True)]
     data = (end.join(lines) + end).encode("cp1252" if cp1252 else "utf-8")
     folder = tmp_path_factory.mktemp("dialect")
@@ -233,3 +238,84 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
         assert not rows.warnings
         times.extend(rows.time_min)
     np.testing.assert_allclose(times, t, atol=1e-9)
+
+
+UNITS_LOG = "time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n" + "".join(
+    f"{60 * m:g};{20 + 0.1 * m:.2f};{293.15 + 0.1 * m:.2f};{68 + 0.18 * m:.2f};{1000 + m:g}\n".replace(".", ",") for m in range(12)
+)
+
+
+def test_a_units_row_states_the_time_unit_and_the_temperature_scale(write_csv):
+    """Many loggers write a units row under the header; it was refused ("'[s]' is neither a number
+    nor a time stamp"). Its time unit is used, K and °F are converted to °C, and a channel that is
+    no temperature is left out with a note (refused if asked for)."""
+    log = read_temperature_log(write_csv(UNITS_LOG))
+    assert log.sensors == ("T1", "T2", "T3")
+    np.testing.assert_allclose(log.time_min, np.arange(12.0))
+    np.testing.assert_allclose(log.temperature_C, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 3, axis=1), atol=1e-9)
+    assert any("'T2': read in K" in n for n in log.notes) and any("'T3': read in °F" in n for n in log.notes)
+    assert any("not temperatures by the units row: speed (rpm)" in n for n in log.notes)
+    with pytest.raises(InputError, match=r"sensor 'speed' is in 'rpm' by the units row, not a temperature"):
+        read_temperature_log(write_csv(UNITS_LOG), sensors=["speed"])
+    # a bad cell's row number counts the units row
+    with pytest.raises(InputError, match=r"sensor 'T1', row 5: 'x' is not a number"):
+        read_temperature_log(write_csv(UNITS_LOG.replace("20,20", "x")))
+
+
+@pytest.mark.parametrize("cut", [5, len("time;T1;T2;T3;speed\n") + 3, len("time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n") + 4])
+def test_a_live_log_reads_its_units_row_like_the_whole_file(tmp_path, cut):
+    """Also when the units row is not yet written at the first look (a cut after the header)."""
+    from mtident.io.follow import LogFollower
+
+    data = UNITS_LOG.encode()
+    cut = len(UNITS_LOG[:cut].encode())
+    live = tmp_path / "live.csv"
+    live.write_bytes(data[:cut])
+    follower = LogFollower(live)
+    first = follower.poll()
+    live.write_bytes(data)
+    second = follower.poll()
+    times = np.concatenate([first.time_min, second.time_min])
+    values = np.concatenate([first.temperature_C.reshape(-1, 3), second.temperature_C])
+    np.testing.assert_allclose(times, np.arange(12.0))
+    np.testing.assert_allclose(values, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 3, axis=1), atol=1e-9)
+    assert follower.sensors == ["T1", "T2", "T3"]
+    warnings = first.warnings + second.warnings
+    assert not any("refused" in w for w in warnings) and any("speed (rpm)" in w for w in warnings)
+
+
+def test_a_first_row_without_readings_is_no_units_row(write_csv):
+    """A time stamp with every sensor empty has no unit in it: it stays a data row."""
+    log = read_temperature_log(write_csv("time,T1,T2\n2026-11-22T08:00:00,,\n" + "".join(f"2026-11-22T08:{m:02d}:00,{20 + m / 10:.1f},{21 + m / 10:.1f}\n" for m in range(1, 20))))
+    assert len(log.time_min) == 20 and np.isnan(log.temperature_C[0]).all()
+
+
+def test_a_live_decimal_comma_log_whose_header_comes_first_reads_its_numbers(tmp_path):
+    """A logger writes its header at the start and a row a minute later; the follower took the
+    dialect from the header alone (decimal point) and read every '20,5' as NaN."""
+    from mtident.io.follow import LogFollower
+
+    live = tmp_path / "live.csv"
+    live.write_text("Zeit;Temp, Spindel;Temp, Motor\n")
+    follower = LogFollower(live)
+    assert len(follower.poll().time_min) == 0
+    live.write_text("Zeit;Temp, Spindel;Temp, Motor\n0;20,5;19,5\n1;20,6;19,6\n")
+    rows = follower.poll()
+    np.testing.assert_array_equal(rows.temperature_C, [[20.5, 19.5], [20.6, 19.6]])
+    assert follower.sensors == ["Temp, Spindel", "Temp, Motor"]
+
+
+def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
+    from mtident.io.follow import LogFollower
+
+    live = tmp_path / "live.csv"
+    live.write_text("time;T1\n0;20,5\n")
+    follower = LogFollower(live)
+    follower.poll()
+    position = follower.position()
+    assert position["dialect"] == [";", ",", 0, "utf-8-sig", []]
+    position["dialect"] = position["dialect"][:4]  # as a state file of the last version wrote it
+    with open(live, "a") as out:
+        out.write("1;20,6\n")
+    rows = LogFollower.resume(live, position, None, None).poll()
+    np.testing.assert_array_equal(rows.temperature_C, [[20.6]])

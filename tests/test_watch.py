@@ -875,3 +875,24 @@ def test_a_row_back_in_time_is_refused_also_after_a_closed_bin():
     assert len(monitor.pending) == 0 and monitor.latest_time == pytest.approx(t[-1])
     with pytest.raises(InputError, match="does not come after"):
         monitor.feed(t[-1] - 2.0 / 60.0, [first_order(t[-1])])
+
+
+def test_a_log_with_a_units_row_and_a_speed_channel(tmp_path):
+    """identify and watch read a units row (time in s, a room sensor in K) and leave out a channel
+    that is no temperature; before, the units row was refused as a bad time."""
+    t = np.arange(0.0, 121.0)
+    rng = np.random.default_rng(4)
+    spindle = 26.7 - 8.8 * np.exp(-0.016 * t) + 0.02 * rng.standard_normal(len(t))
+    rows = "".join(f"{60 * m:g},{s:.3f},{291.05 + 0.02 * rng.standard_normal():.3f},{3000 + m:g}\n" for m, s in zip(t, spindle, strict=True))
+    log = tmp_path / "units.csv"
+    log.write_text("time,spindle,room,speed\n[s],[°C],[K],[rpm]\n" + rows)
+    identify = mtident("thermal", "identify", str(log), "--window", "30", "--json", cwd=tmp_path)
+    assert identify.returncode == 0, identify.stderr
+    assert [s["sensor"] for s in json.loads(identify.stdout)["sensors"]] == ["spindle", "room"]
+    assert "speed (rpm)" in identify.stderr
+    watch = mtident("thermal", "watch", str(log), "--replay", "--ambient", "room", "--json", cwd=tmp_path)
+    assert watch.returncode == 0, watch.stderr
+    result = json.loads(watch.stdout)
+    assert result["sensor"] == "spindle" and abs(result["steady_state_C"] - 26.7) < 0.3
+    refused = mtident("thermal", "identify", str(log), "--sensor", "speed", cwd=tmp_path)
+    assert refused.returncode == 2 and "not a temperature" in refused.stderr and "Traceback" not in refused.stderr

@@ -283,7 +283,8 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         if names is None:
             header = header_names(path) if path.is_file() else []
             time_name = time_col or (header[0] if header else "")
-            names = [h for h in header if h not in (time_name, ambient_col)]
+            temperatures = header_names(path, temperatures_only=True) if path.is_file() else []  # by a units row
+            names = [h for h in header if h not in (time_name, ambient_col) and h in temperatures]
         names = [n for n in names if n != ambient_col] + [ambient_col]
     state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
     settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling, room_wander_C_per_h=room_wander)

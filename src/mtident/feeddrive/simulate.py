@@ -145,7 +145,7 @@ def read_response(path: str | Path) -> Response:
     from mtident.io.dialect import read_csv
 
     frame, dialect = read_csv(path)
-    first_row = 2 + dialect.preamble_lines
+    first_row = 1 + dialect.head_lines  # the row number of the first data line in messages
     if "time_s" not in frame.columns:
         msg = f"{path}: no time_s column; the columns are: {', '.join(map(str, frame.columns))}"
         raise InputError(msg)

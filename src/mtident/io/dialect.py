@@ -5,7 +5,9 @@ Loggers differ. European ones write ``;`` between cells and a decimal comma
 the header; Windows programs write cp1252, where ``°`` is the single byte 0xB0
 that UTF-8 refuses; a trailing delimiter leaves an empty last column; time
 stamps come as ISO 8601, as ``22.11.2026 08:00:00`` (day first, as everywhere
-dots separate the date) or as the time of day alone. Both readers of a log (the
+dots separate the date) or as the time of day alone; many write a row of units
+under the header (``min;°C;°C``, ``[s],[K]``), which states the time unit and the
+temperature scale (:func:`celsius_conversion`). Both readers of a log (the
 whole file, :func:`~mtident.io.logs.read_temperature_log`, and the live
 follower, :class:`~mtident.io.follow.LogFollower`) take the dialect from the
 file's head here, so they read a log the same way.
@@ -15,7 +17,7 @@ from __future__ import annotations
 
 import csv
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -24,7 +26,19 @@ from mtident.exceptions import InputError
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["CsvDialect", "sniff_dialect", "header_names", "check_unique_names", "read_csv", "stamp_format", "HEAD_BYTES", "TIME_OF_DAY_FORMATS", "MINUTES_PER_DAY"]
+__all__ = [
+    "CsvDialect",
+    "sniff_dialect",
+    "header_names",
+    "check_unique_names",
+    "read_csv",
+    "stamp_format",
+    "celsius_conversion",
+    "temperature_columns",
+    "HEAD_BYTES",
+    "TIME_OF_DAY_FORMATS",
+    "MINUTES_PER_DAY",
+]
 
 # enough for a preamble, the header and a few rows
 HEAD_BYTES = 65536
@@ -39,6 +53,15 @@ TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S")
 # cannot be told apart.
 _STAMP_FORMATS = ("%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M", *TIME_OF_DAY_FORMATS)
 MINUTES_PER_DAY = 1440.0
+# A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
+# as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
+# gives (scale, offset) to °C.
+_TIME_UNIT_NAMES = {"s": "s", "sec": "s", "secs": "s", "second": "s", "seconds": "s", "min": "min", "mins": "min", "minute": "min", "minutes": "min", "h": "h", "hr": "h", "hrs": "h", "hour": "h", "hours": "h"}
+_TEMPERATURE_UNITS = {
+    **dict.fromkeys(("c", "degc", "celsius", "gradc", "degreesc", "degreec"), (1.0, 0.0)),
+    **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),
+    **dict.fromkeys(("f", "degf", "fahrenheit", "degreesf", "degreef"), (5.0 / 9.0, -160.0 / 9.0)),
+}
 
 
 @dataclass(frozen=True, slots=True)
@@ -53,12 +76,17 @@ class CsvDialect:
         Lines before the header: ``#`` comments, blank lines, Excel's ``sep=;``.
     encoding : {"utf-8-sig", "cp1252"}
         UTF-8 (a byte-order mark is skipped), or Windows' cp1252 where UTF-8 fails.
+    units : tuple of (str, str)
+        Each column's unit from a units row under the header (``min;°C;°C``);
+        empty if there is none. The data rows begin after it.
     """
 
     delimiter: str = ","
     decimal: str = "."
     preamble_lines: int = 0
     encoding: str = "utf-8-sig"
+    # (column name, unit) from a units row under the header; () if the log has none
+    units: tuple[tuple[str, str], ...] = ()
 
     def cells(self, line: str) -> list[str]:
         """The cells of one line (a header), stripped; quotes removed."""
@@ -68,9 +96,64 @@ class CsvDialect:
         """A cell as a float under this decimal mark; ValueError if it is none."""
         return float(cell.replace(",", ".") if self.decimal == "," else cell)
 
+    @property
+    def head_lines(self) -> int:
+        """Lines before the first data row: the preamble, the header and a units row."""
+        return self.preamble_lines + 1 + bool(self.units)
 
-def sniff_dialect(head: bytes) -> CsvDialect | None:
-    """The dialect of a log from its first bytes; None while its header line is incomplete.
+    def unit_of(self, column: str) -> str:
+        """The column's unit as the units row writes it ("" without one)."""
+        return dict(self.units).get(column, "")
+
+    def time_unit(self, column: str) -> str | None:
+        """"s", "min" or "h" if the units row states the time column's unit, else None."""
+        return _TIME_UNIT_NAMES.get(_unit_key(self.unit_of(column)))
+
+
+def _unit_key(cell: str) -> str:
+    return re.sub(r"[\s\[\]()°º.Â_]", "", cell).lower()
+
+
+def celsius_conversion(unit: str) -> tuple[float, float] | None:
+    """(scale, offset) taking a reading in ``unit`` to °C (°C = scale·reading + offset): (1, 0) for
+    °C and for no unit, (1, −273.15) for K, (5/9, −160/9) for °F; None for a unit that is no
+    temperature (V, %, rpm)."""
+    if not unit.strip():
+        return 1.0, 0.0
+    return _TEMPERATURE_UNITS.get(_unit_key(unit))
+
+
+def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, source: str | Path) -> tuple[list[str], list[str]]:
+    """The sensor columns to read, and notes, by the units row.
+
+    A column whose unit is no temperature (a logger's speed or voltage channel)
+    is left out of the default selection with a note, and refused when ``asked``
+    for by name; one in K or °F is converted, with a note.
+    """
+    kept, notes, other = [], [], []
+    for name in names:
+        conversion = celsius_conversion(dialect.unit_of(name))
+        unit = dialect.unit_of(name).strip().strip("[]()").strip()  # as written, without brackets
+        if conversion is None:
+            if asked:
+                msg = f"{source}: sensor {name!r} is in {unit!r} by the units row, not a temperature (°C, K or °F)"
+                raise InputError(msg)
+            other.append(f"{name} ({unit})")
+            continue
+        if conversion != (1.0, 0.0):
+            notes.append(f"sensor {name!r}: read in {unit} (units row), converted to °C")
+        kept.append(name)
+    if other:
+        notes.append(f"left out, not temperatures by the units row: {', '.join(other)}")
+    if not kept:
+        msg = f"{source}: no temperature column: the units row gives {', '.join(other)}"
+        raise InputError(msg)
+    return kept, notes
+
+
+def sniff_dialect(head: bytes, wait_for_row: bool = False) -> CsvDialect | None:
+    """The dialect of a log from its first bytes; None while its header line is incomplete
+    (with ``wait_for_row``, a live log's: until its first data row is complete).
 
     The delimiter is the one an Excel ``sep=`` line states, else the candidate
     that splits the header line into the most cells and the data rows into as
@@ -98,7 +181,7 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
         elif line.strip() and not line.lstrip().startswith("#"):
             break
         preamble += 1
-    if preamble >= len(complete):
+    if preamble + wait_for_row >= len(complete):
         return None
     header = complete[preamble]
     delimiter = stated or _delimiter(header, complete[preamble + 1 : preamble + 21])
@@ -107,7 +190,32 @@ def sniff_dialect(head: bytes) -> CsvDialect | None:
         rows = csv.reader(complete[preamble + 1 : preamble + 21], delimiter=delimiter)  # "17,90" quoted, as spreadsheets write it
         if any(_DECIMAL_COMMA.match(cell) for row in rows for cell in row):
             decimal = ","
-    return CsvDialect(delimiter, decimal, preamble, encoding)
+    dialect = CsvDialect(delimiter, decimal, preamble, encoding)
+    if preamble + 1 < len(complete):
+        below = [cell.strip() for cell in next(csv.reader([complete[preamble + 1]], delimiter=delimiter), [])]
+        if _is_units_row(below, dialect):
+            dialect = replace(dialect, units=tuple(zip(dialect.cells(header), below, strict=False)))
+    if wait_for_row and preamble + 1 + bool(dialect.units) >= len(complete):
+        # A live log's header comes before its rows; the delimiter (a tie in the header) and the
+        # decimal mark are told by a data row: sniffed from the header alone, a decimal-comma log
+        # read every reading as NaN.
+        return None
+    return dialect
+
+
+def _is_units_row(cells: list[str], dialect: CsvDialect) -> bool:
+    """No cell is a number and one at least is a unit this module knows: a units row, not a data
+    row (a data row's time stamp with every sensor empty has no unit in it)."""
+
+    def number(cell: str) -> bool:
+        try:
+            dialect.number(cell)
+        except ValueError:
+            return False
+        return True
+
+    known = [c for c in cells if _unit_key(c) in _TIME_UNIT_NAMES or _unit_key(c) in _TEMPERATURE_UNITS]
+    return bool(known) and not any(number(c) for c in cells if c)
 
 
 def _delimiter(header: str, rows: list[str]) -> str:
@@ -122,15 +230,17 @@ def _delimiter(header: str, rows: list[str]) -> str:
     return ranked[0] if ranked else ","
 
 
-def header_names(file: Path) -> list[str]:
+def header_names(file: Path, temperatures_only: bool = False) -> list[str]:
     """The column names of a log, read from its head only (a live log may be large); [] while
-    its header line is incomplete."""
+    its header line is incomplete. ``temperatures_only`` leaves out the columns a units row
+    gives a unit other than a temperature's."""
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     dialect = sniff_dialect(head)
     if dialect is None:
         return []
-    return [name for name in dialect.cells(_header_line(head, dialect)) if name]
+    names = [name for name in dialect.cells(_header_line(head, dialect)) if name]
+    return [n for n in names if not temperatures_only or celsius_conversion(dialect.unit_of(n)) is not None]
 
 
 def _header_line(head: bytes, dialect: CsvDialect) -> str:
@@ -176,7 +286,8 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
             file,
             sep=dialect.delimiter,
             decimal=dialect.decimal,
-            skiprows=dialect.preamble_lines,
+            # the preamble, and a units row under the header
+            skiprows=[*range(dialect.preamble_lines), *([dialect.preamble_lines + 1] if dialect.units else [])],
             encoding=dialect.encoding,
             skipinitialspace=True,
         )

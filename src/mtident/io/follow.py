@@ -33,7 +33,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, check_unique_names, sniff_dialect, stamp_format
+from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, sniff_dialect, stamp_format, temperature_columns
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, time_unit_factor
 
 __all__ = ["LogFollower", "Rows"]
@@ -75,7 +75,7 @@ class LogFollower:
             "last_time": self.last_time,
             "columns": self.columns,
             "sensors": self.sensors,
-            "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding],
+            "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units]],
             "time_format": self.time_format,
         }
 
@@ -95,11 +95,13 @@ class LogFollower:
             origin=position.get("origin"),
             last_time=position.get("last_time"),
             columns=list(position.get("columns") or []),
-            dialect=None if dialect is None else CsvDialect(str(dialect[0]), str(dialect[1]), int(dialect[2]), str(dialect[3])),
+            # a state file written before units rows were read has four entries
+            dialect=None if dialect is None else CsvDialect(str(dialect[0]), str(dialect[1]), int(dialect[2]), str(dialect[3]), tuple((str(n), str(u)) for n, u in (dialect[4] if len(dialect) > 4 else []))),
             time_format=position.get("time_format"),
         )
 
-    def _set_header(self, line: str) -> None:
+    def _set_header(self, line: str) -> list[str]:
+        """Take the header line: the time column and the sensors' columns; returns notes (units)."""
         assert self.dialect is not None
         header = self.dialect.cells(line)
         if len(header) < 2:
@@ -111,21 +113,25 @@ class LogFollower:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"
             raise InputError(msg)
         names = [h for h in header if h not in (time_name, "")]  # "": a delimiter at the end of the line
-        chosen = names if not self.sensors or self.sensors == ["all"] else self.sensors
+        asked = bool(self.sensors) and self.sensors != ["all"]
+        chosen = self.sensors if asked and self.sensors is not None else names
         missing = [s for s in chosen if s not in header]
         if missing:
             msg = f"{self.path}: no sensor column {missing[0]!r}; the log has: {', '.join(names)}"
             raise InputError(msg)
+        chosen, notes = temperature_columns(list(chosen), asked, self.dialect, self.path)
         self.header = header
         self.sensors = list(chosen)
         self.columns = [header.index(time_name)] + [header.index(s) for s in chosen]
+        return notes
 
     def _parse_time(self, text: str) -> float:
         """Minutes relative to the first sample; raises ValueError for an unreadable cell."""
         assert self.header is not None and self.dialect is not None
         try:
             raw = self.dialect.number(text)
-            scale = time_unit_factor(self.header[self.columns[0]], self.time_unit)
+            time_name = self.header[self.columns[0]]
+            scale = time_unit_factor(time_name, self.time_unit, self.dialect.time_unit(time_name))
             stamp = raw * scale
         except ValueError:
             import pandas as pd  # only for time stamps
@@ -158,8 +164,8 @@ class LogFollower:
         self.identity = identity
         with open(self.path, "rb") as handle:
             if self.dialect is None:
-                self.dialect = sniff_dialect(handle.read(HEAD_BYTES))
-                if self.dialect is None:  # the header line is not complete yet
+                self.dialect = sniff_dialect(handle.read(HEAD_BYTES), wait_for_row=True)
+                if self.dialect is None:  # no complete data row yet
                     return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
             handle.seek(self.offset)
             chunk = handle.read()
@@ -175,9 +181,11 @@ class LogFollower:
         if start_offset == 0:
             lines = lines[dialect.preamble_lines :]
             if lines:
-                header_line, lines = lines[0], lines[1:]
+                header_line, lines = lines[0], lines[1 + bool(dialect.units) :]
                 if self.header is None:
-                    self._set_header(header_line)
+                    warnings.extend(self._set_header(header_line))
+        assert self.header is not None
+        conversions = np.array([celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]).reshape(-1, 2)
         times, rows = [], []
         for line in csv.reader(io.StringIO("\n".join(lines)), delimiter=dialect.delimiter):
             if not line or all(not c.strip() for c in line):
@@ -191,12 +199,14 @@ class LogFollower:
                 if not restarted:  # after a restart the old rows come again: expected, not an error
                     warnings.append(f"{self.path}: refused the row at t = {t:g} min: it repeats or goes back from t = {self.last_time:g} min")
                 continue
-            values = []
+            values: list[float] = []
             for index in self.columns[1:]:
                 try:
                     value = dialect.number(line[index])
                 except (ValueError, IndexError):
                     value = np.nan
+                scale, offset = conversions[len(values)]
+                value = scale * value + offset
                 if not (OPEN_CIRCUIT_LOW_C <= value <= OPEN_CIRCUIT_HIGH_C):
                     value = np.nan
                 values.append(value)

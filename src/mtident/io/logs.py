@@ -27,7 +27,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, check_unique_names, read_csv, stamp_format
+from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, read_csv, stamp_format, temperature_columns
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -87,8 +87,9 @@ class TemperatureLog:
         return int(np.searchsorted(self.time_min, minutes + 1e-9, side="right"))
 
 
-def time_unit_factor(header: str, time_unit: str | None) -> float:
-    """Minutes per unit of a numeric time column: ``time_unit``, else the header's suffix (_s, _min, _h), else minutes."""
+def time_unit_factor(header: str, time_unit: str | None, stated: str | None = None) -> float:
+    """Minutes per unit of a numeric time column: ``time_unit``, else the header's suffix (_s, _min,
+    _h), else the unit a units row ``stated`` for it, else minutes."""
     if time_unit is not None:
         if time_unit not in TIME_UNITS:
             msg = f"time unit {time_unit!r} is not one of: {', '.join(TIME_UNITS)}"
@@ -97,7 +98,7 @@ def time_unit_factor(header: str, time_unit: str | None) -> float:
     for suffix, factor in TIME_UNITS.items():
         if header.lower().endswith("_" + suffix):
             return factor
-    return 1.0
+    return TIME_UNITS[stated] if stated is not None else 1.0
 
 
 def _cell(value: object) -> str:
@@ -107,7 +108,7 @@ def _cell(value: object) -> str:
     return repr(str(value))
 
 
-def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: str, first_row: int = 2) -> FloatArray:
+def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: str, first_row: int = 2, stated_unit: str | None = None) -> FloatArray:
     """Minutes from the first sample; ``first_row`` numbers the rows in messages (2: a CSV file's first data line)."""
     import pandas as pd
 
@@ -119,7 +120,7 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
         # a DataFrame's elapsed-time or time-stamp index, already parsed
         values = minutes_since_first(column)
     elif numeric.notna().all():
-        values = numeric.to_numpy(dtype=float) * time_unit_factor(header, time_unit)
+        values = numeric.to_numpy(dtype=float) * time_unit_factor(header, time_unit, stated_unit)
     else:
         text = column.astype(str).str.strip()
         empty = column.isna().to_numpy() | (text == "").to_numpy()
@@ -204,7 +205,8 @@ def read_temperature_log(
     """
     import pandas as pd  # here, not at import: 0.4 s of start-up that `watch` does not need
 
-    first_row = 2  # in messages, a CSV file's first data line is its row 2
+    first_row = 1  # in messages, a CSV file's first data line is its row 2 (after the header)
+    dialect = CsvDialect()
     if isinstance(path, pd.DataFrame):
         source, first_row = "DataFrame", 0
         # a time index (set_index, resample) is the time column too
@@ -212,7 +214,7 @@ def read_temperature_log(
     else:
         source = str(path)
         frame, dialect = read_csv(path)
-        first_row += dialect.preamble_lines
+        first_row += dialect.head_lines
     frame.columns = [str(c).strip() for c in frame.columns]
     if isinstance(path, pd.DataFrame):  # a CSV file's header was checked by read_csv, before pandas renamed a repeat
         check_unique_names(list(frame.columns), source)
@@ -226,19 +228,22 @@ def read_temperature_log(
     if len(frame) < min_samples:
         msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
         raise InputError(msg)
-    time_min = _parse_time(frame[header], header, time_unit, source, first_row)
+    time_min = _parse_time(frame[header], header, time_unit, source, first_row, dialect.time_unit(header))
 
     available = [c for c in frame.columns if c != header]
     missing_names = [n for n in sensors or [] if n not in available]
     if missing_names:
         msg = f"{source}: no sensor column {missing_names[0]!r}; the log has: {', '.join(available)}"
         raise InputError(msg)
-    sensors = list(sensors) if sensors else available
-    notes: list[str] = []
+    sensors, notes = temperature_columns(list(sensors) if sensors else available, bool(sensors), dialect, source)
     columns = []
     for name in sensors:
         raw = frame[name]
-        values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
+        scale, offset = celsius_conversion(dialect.unit_of(name)) or (1.0, 0.0)
+        # One bad cell leaves a decimal-comma column as text: its good cells must still read as numbers
+        # (the message named the first good cell, '20,00', instead of the bad one).
+        cells = raw.astype(str).str.replace(",", ".", regex=False).where(raw.notna()) if dialect.decimal == "," and not pd.api.types.is_numeric_dtype(raw) else raw
+        values = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
         text = raw.astype(str).str.strip()
         non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.str.lower().isin(["nan", ""]).to_numpy()
         if np.any(non_numeric):
