@@ -184,13 +184,13 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     crlf=st.booleans(),
     trailing=st.booleans(),
     quoted=st.booleans(),
-    stamps=st.sampled_from(["minutes", "iso", "dotted", "time of day"]),
+    stamps=st.sampled_from(["minutes", "iso", "dotted", "time of day", "date, clock", "iso date, clock"]),
     units=st.sampled_from(["none", "min", "s"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
 def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, cp1252, crlf, trailing, quoted, stamps, units, cuts):
     """Every combination of delimiter, decimal mark, preamble, encoding, line end, trailing
-    delimiter, quoted cells (as spreadsheets write them) time format and a units row under the header, read whole and followed live in random pieces, gives the
+    delimiter, quoted cells (as spreadsheets write them), time format (also a date and a time of day in two columns) and a units row under the header, read whole and followed live in random pieces, gives the
     plain file's times and temperatures."""
     import datetime as dt
 
@@ -201,11 +201,13 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     temperatures = np.column_stack([20.0 + 0.37 * t, 19.5 + 0.21 * t])
     start = dt.datetime(2026, 11, 22, 23, 50, 0)  # time-of-day stamps pass midnight
 
-    def time_cell(minutes: float) -> str:
+    def time_cells(minutes: float) -> list[str]:
         when = start + dt.timedelta(minutes=float(minutes))
         if stamps == "minutes" and units == "s":
-            return f"{60 * minutes:g}"
-        return {"minutes": f"{minutes:g}", "iso": when.isoformat(), "dotted": when.strftime("%d.%m.%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]
+            return [f"{60 * minutes:g}"]
+        if stamps.endswith("date, clock"):  # a stamp in two columns
+            return [when.strftime("%Y-%m-%d" if stamps.startswith("iso") else "%d.%m.%Y"), when.strftime("%H:%M:%S")]
+        return [{"minutes": f"{minutes:g}", "iso": when.isoformat(), "dotted": when.strftime("%d.%m.%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]]
 
     def number(value: float) -> str:
         return f"{value:.2f}".replace(".", ",") if decimal_comma else f"{value:.2f}"
@@ -215,10 +217,11 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     def row(cells: list[str]) -> str:
         return delimiter.join(f'"{c}"' if quoted else c for c in cells) + tail
 
-    lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", "A °C", "B"])]
+    clock = ["clock"] if stamps.endswith("date, clock") else []
+    lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", *clock, "A °C", "B"])]
     if units != "none":  # the time's unit only where the time is a number
-        lines.append(row([units if stamps == "minutes" else "", "°C", "[°C]"]))
-    lines += [row([time_cell(m), *(number(v) for v in values)]) for m, values in zip(t, temperatures, strict=True)]
+        lines.append(row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]"]))
+    lines += [row([*time_cells(m), *(number(v) for v in values)]) for m, values in zip(t, temperatures, strict=True)]
     data = (end.join(lines) + end).encode("cp1252" if cp1252 else "utf-8")
     folder = tmp_path_factory.mktemp("dialect")
     whole = folder / "whole.csv"
@@ -319,3 +322,15 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
         out.write("1;20,6\n")
     rows = LogFollower.resume(live, position, None, None).poll()
     np.testing.assert_array_equal(rows.temperature_C, [[20.6]])
+
+
+def test_a_date_and_a_time_of_day_in_two_columns_are_one_stamp(write_csv):
+    """Datum;Uhrzeit as European loggers write them: refused before ("'01.03.2026' is neither a
+    number nor a time stamp"); the clock column is no sensor."""
+    text = "Datum;Uhrzeit;T1\n" + "".join(f"01.03.2026;23:{50 + m // 2}:{30 * (m % 2):02d};{20 + m / 10:.1f}\n" for m in range(10))
+    text += "02.03.2026;00:00:00;21.0\n02.03.2026;00:01:00;21.1\n"  # past midnight: the date tells
+    log = read_temperature_log(write_csv(text))
+    assert log.sensors == ("T1",)
+    np.testing.assert_allclose(log.time_min, [*np.arange(10) * 0.5, 10.0, 11.0])
+    with pytest.raises(InputError, match=r"time column 'Datum \+ Uhrzeit', row 4 is empty"):
+        read_temperature_log(write_csv(text.replace("01.03.2026;23:51:00", "01.03.2026;")))

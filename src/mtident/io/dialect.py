@@ -33,6 +33,7 @@ __all__ = [
     "check_unique_names",
     "read_csv",
     "stamp_format",
+    "date_and_clock",
     "celsius_conversion",
     "temperature_columns",
     "HEAD_BYTES",
@@ -53,6 +54,8 @@ TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S")
 # cannot be told apart.
 _STAMP_FORMATS = ("%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M", *TIME_OF_DAY_FORMATS)
 MINUTES_PER_DAY = 1440.0
+# a date without a time: the first of two time-stamp columns
+_DATE_FORMATS = ("%d.%m.%Y", "%Y-%m-%d")
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
 # as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
 # gives (scale, offset) to °C.
@@ -304,6 +307,23 @@ def _decodes(data: bytes) -> bool:
     except UnicodeDecodeError:
         return False
     return True
+
+
+def date_and_clock(date_cell: str, clock_cell: str) -> bool:
+    """Whether two cells are a date alone and a time of day: a logger that writes its time stamp
+    in two columns (``Datum;Uhrzeit``, ``Date\tTime``), read as one stamp, date first."""
+    import pandas as pd
+
+    def parses(cell: str, formats: tuple[str, ...]) -> bool:
+        for fmt in formats:
+            try:
+                pd.to_datetime(cell.strip(), format=fmt)
+            except (ValueError, TypeError):
+                continue
+            return True
+        return False
+
+    return parses(date_cell, _DATE_FORMATS) and parses(clock_cell, TIME_OF_DAY_FORMATS)
 
 
 def stamp_format(cell: str) -> str | None:

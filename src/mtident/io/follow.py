@@ -33,7 +33,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, sniff_dialect, stamp_format, temperature_columns
+from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, date_and_clock, sniff_dialect, stamp_format, temperature_columns
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, time_unit_factor
 
 __all__ = ["LogFollower", "Rows"]
@@ -64,6 +64,7 @@ class LogFollower:
     columns: list[int] = field(default_factory=list)
     dialect: CsvDialect | None = None  # from the file's head, once its header line is complete
     time_format: str | None = None  # pandas format of the time stamps, from the first one
+    clock_column: int | None = None  # the time of day's column where the date is in the time column
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -77,6 +78,7 @@ class LogFollower:
             "sensors": self.sensors,
             "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units]],
             "time_format": self.time_format,
+            "clock_column": self.clock_column,
         }
 
     @classmethod
@@ -98,10 +100,15 @@ class LogFollower:
             # a state file written before units rows were read has four entries
             dialect=None if dialect is None else CsvDialect(str(dialect[0]), str(dialect[1]), int(dialect[2]), str(dialect[3]), tuple((str(n), str(u)) for n, u in (dialect[4] if len(dialect) > 4 else []))),
             time_format=position.get("time_format"),
+            clock_column=position.get("clock_column"),
         )
 
-    def _set_header(self, line: str) -> list[str]:
-        """Take the header line: the time column and the sensors' columns; returns notes (units)."""
+    def _set_header(self, line: str, first_row: list[str]) -> list[str]:
+        """Take the header line: the time column and the sensors' columns; returns notes (units).
+
+        ``first_row`` (the first data row's cells) tells whether the time stamp is
+        written in two columns, a date and a time of day.
+        """
         assert self.dialect is not None
         header = self.dialect.cells(line)
         if len(header) < 2:
@@ -112,7 +119,11 @@ class LogFollower:
         if time_name not in header:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"
             raise InputError(msg)
-        names = [h for h in header if h not in (time_name, "")]  # "": a delimiter at the end of the line
+        following = header.index(time_name) + 1
+        if following < min(len(header), len(first_row)) and date_and_clock(first_row[header.index(time_name)], first_row[following]):
+            self.clock_column = following
+        clock_name = header[self.clock_column] if self.clock_column is not None else None
+        names = [h for h in header if h not in (time_name, clock_name, "")]  # "": a delimiter at the end of the line
         asked = bool(self.sensors) and self.sensors != ["all"]
         chosen = self.sensors if asked and self.sensors is not None else names
         missing = [s for s in chosen if s not in header]
@@ -183,7 +194,8 @@ class LogFollower:
             if lines:
                 header_line, lines = lines[0], lines[1 + bool(dialect.units) :]
                 if self.header is None:
-                    warnings.extend(self._set_header(header_line))
+                    first_row = next((cells for cells in csv.reader(lines, delimiter=dialect.delimiter) if any(c.strip() for c in cells)), [])
+                    warnings.extend(self._set_header(header_line, first_row))
         assert self.header is not None
         conversions = np.array([celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]).reshape(-1, 2)
         times, rows = [], []
@@ -191,7 +203,7 @@ class LogFollower:
             if not line or all(not c.strip() for c in line):
                 continue
             try:
-                t = self._parse_time(line[self.columns[0]])
+                t = self._parse_time(line[self.columns[0]] if self.clock_column is None else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}")
             except (ValueError, IndexError):
                 warnings.append(f"{self.path}: refused a row with an unreadable time {line[:1]!r}")
                 continue

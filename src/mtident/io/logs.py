@@ -27,7 +27,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, read_csv, stamp_format, temperature_columns
+from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, date_and_clock, read_csv, stamp_format, temperature_columns
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -153,6 +153,19 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
     return values - values[0]
 
 
+def _clock_column(frame: pd.DataFrame, header: str) -> str | None:
+    """The column after the time column if the two hold a date and a time of day (the first row
+    tells), else None."""
+    columns = list(frame.columns)
+    following = columns.index(header) + 1
+    if following >= len(columns) or not len(frame):
+        return None
+    date, clock = frame[header].iloc[0], frame[columns[following]].iloc[0]
+    if not (isinstance(date, str) and isinstance(clock, str)):
+        return None
+    return str(columns[following]) if date_and_clock(date, clock) else None
+
+
 def as_temperature_log(log: object, caller: str) -> TemperatureLog:
     """``log`` as a :class:`TemperatureLog`: a DataFrame is read (and checked) like a CSV file.
 
@@ -228,9 +241,14 @@ def read_temperature_log(
     if len(frame) < min_samples:
         msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
         raise InputError(msg)
-    time_min = _parse_time(frame[header], header, time_unit, source, first_row, dialect.time_unit(header))
+    clock = _clock_column(frame, header)
+    if clock is None:
+        time_min = _parse_time(frame[header], header, time_unit, source, first_row, dialect.time_unit(header))
+    else:  # the date in one column, the time of day in the next: one stamp
+        stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
+        time_min = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row)
 
-    available = [c for c in frame.columns if c != header]
+    available = [c for c in frame.columns if c not in (header, clock)]
     missing_names = [n for n in sensors or [] if n not in available]
     if missing_names:
         msg = f"{source}: no sensor column {missing_names[0]!r}; the log has: {', '.join(available)}"
