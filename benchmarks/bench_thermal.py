@@ -14,8 +14,7 @@ import warnings
 import numpy as np
 from _common import filterpy_ukf
 
-from mtident.cli_thermal import sample_log_path
-from mtident.io import read_temperature_log
+from mtident.io import read_temperature_log, sample_log_path
 from mtident.io.logs import TemperatureLog
 from mtident.thermal import identify, minimal_identification_time
 from mtident.thermal.lsq import cramer_rao_bound

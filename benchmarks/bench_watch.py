@@ -28,8 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
 
 import make_sample_warmup  # noqa: E402 - the sample's generator, for its true steady states
 
-from mtident.cli_thermal import sample_log_path  # noqa: E402
-from mtident.io import read_temperature_log  # noqa: E402
+from mtident.io import read_temperature_log, sample_log_path  # noqa: E402
 from mtident.thermal.monitor import Monitor, MonitorSettings  # noqa: E402
 
 TOLERANCE = 0.2

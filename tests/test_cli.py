@@ -191,7 +191,7 @@ def test_plots_leave_the_users_matplotlib_alone_and_return_a_figure_without_a_pa
     """Importing the plots used to switch matplotlib to Agg: a notebook's inline plots stopped showing."""
     code = (
         "import matplotlib; matplotlib.use('svg'); import mtident.report as r; "
-        "from mtident.io import read_temperature_log; from mtident.cli_thermal import sample_log_path; "
+        "from mtident.io import read_temperature_log; from mtident.io import sample_log_path; "
         "from mtident.thermal import identify; "
         "fig = r.plot_identification(identify(read_temperature_log(sample_log_path()).select(['T1', 'T2']), 30.0)); "
         "print(matplotlib.get_backend(), type(fig).__name__, len(fig.axes))"

@@ -334,3 +334,12 @@ def test_a_date_and_a_time_of_day_in_two_columns_are_one_stamp(write_csv):
     np.testing.assert_allclose(log.time_min, [*np.arange(10) * 0.5, 10.0, 11.0])
     with pytest.raises(InputError, match=r"time column 'Datum \+ Uhrzeit', row 4 is empty"):
         read_temperature_log(write_csv(text.replace("01.03.2026;23:51:00", "01.03.2026;")))
+
+
+def test_the_shipped_logs_by_name():
+    from mtident.io import sample_log_path
+
+    assert read_temperature_log("@sample").sensors == read_temperature_log(sample_log_path()).sensors
+    assert "room" in read_temperature_log("@sample-room").sensors
+    with pytest.raises(InputError, match="no shipped log '@smaple'; there are: @sample, @sample-room"):
+        sample_log_path("@smaple")

@@ -164,7 +164,7 @@ def test_fast_plus_slow_curve_is_not_answered_with_a_narrow_wrong_interval():
 def test_the_sample_identified_from_28_min_covers_every_measured_final_value():
     """The papers' identification time on the shipped log. A rule that cut the sample's lagged
     sensors at their last flat sample (within 0.12 °C for 5-6 min) sent four T∞ 15-40 °C off."""
-    from mtident.cli_thermal import sample_log_path
+    from mtident.io import sample_log_path
 
     result = identify(read_temperature_log(sample_log_path()), 28.0)
     lo, hi = result.steady_state_ci95().T
@@ -289,7 +289,7 @@ def test_pseudo_measurement_prediction_is_seeded():
 
 
 def sample_log():
-    from mtident.cli_thermal import sample_log_path
+    from mtident.io import sample_log_path
 
     return read_temperature_log(sample_log_path())
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from importlib import resources
 from pathlib import Path
 
 import click
@@ -13,18 +12,12 @@ from rich.table import Table
 
 from mtident.cli import FiniteFloatRange, PicturePath, print_json, thermal, user_errors
 from mtident.exceptions import InputError
-from mtident.io.logs import TIME_UNITS, TemperatureLog, read_temperature_log
+from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 
 # The logs shipped in the package (scripts/make_sample_warmup.py): the 10-sensor warm-up, and the
 # same warm-up with a room sensor column "room" (for --ambient room).
-SAMPLES = {"@sample": "spindle_warmup.csv", "@sample-room": "spindle_warmup_room.csv"}
 stderr = Console(stderr=True, soft_wrap=True)
-
-
-def sample_log_path(name: str = "@sample") -> Path:
-    """A log shipped in the package, by its @-name."""
-    return Path(str(resources.files("mtident") / "data" / SAMPLES[name]))
 
 
 def log_path(file: str) -> Path:

@@ -32,7 +32,7 @@ from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect,
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["TemperatureLog", "read_temperature_log", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
+__all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
 
 # A PT100 channel with a broken wire reads far outside any machine-tool temperature.
 OPEN_CIRCUIT_HIGH_C = 400.0
@@ -85,6 +85,20 @@ class TemperatureLog:
     def window(self, minutes: float) -> int:
         """Number of samples with time ≤ ``minutes``."""
         return int(np.searchsorted(self.time_min, minutes + 1e-9, side="right"))
+
+
+# the logs shipped in the package, by the names the CLI and read_temperature_log take
+SAMPLES = {"@sample": "spindle_warmup.csv", "@sample-room": "spindle_warmup_room.csv"}
+
+
+def sample_log_path(name: str = "@sample") -> Path:
+    """A log shipped in the package, by its @-name (@sample, @sample-room)."""
+    from importlib import resources
+
+    if name not in SAMPLES:
+        msg = f"no shipped log {name!r}; there are: {', '.join(SAMPLES)}"
+        raise InputError(msg)
+    return Path(str(resources.files("mtident") / "data" / SAMPLES[name]))
 
 
 def time_unit_factor(header: str, time_unit: str | None, stated: str | None = None) -> float:
@@ -194,7 +208,8 @@ def read_temperature_log(
     ----------
     path : str, Path or pandas.DataFrame
         The CSV file, or a table already in memory (a notebook's DataFrame),
-        with the same columns; it is checked the same way.
+        with the same columns; it is checked the same way. "@sample" and
+        "@sample-room" name the logs shipped in the package.
     time_col : str, optional
         Name of the time column (default: the first column).
     time_unit : {"s", "min", "h"}, optional
@@ -225,6 +240,8 @@ def read_temperature_log(
         # a time index (set_index, resample) is the time column too
         frame = path.reset_index() if path.index.name is not None else path.copy()
     else:
+        if isinstance(path, str) and path in SAMPLES:
+            path = sample_log_path(path)
         source = str(path)
         frame, dialect = read_csv(path)
         first_row += dialect.head_lines
