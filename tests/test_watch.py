@@ -810,6 +810,34 @@ def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path):
     assert json.loads(out)["decision"] == "stop"
 
 
+def test_watch_with_a_room_sensor_waits_for_a_log_not_created_yet_and_resumes(tmp_path):
+    """With --ambient and no --sensor, a log that appeared after the start ended in "Monitor needs at
+    least one sensor name" (the sensors were taken from a header not yet written)."""
+    rng = np.random.default_rng(6)
+    columns = {"A": first_order(T) + room(T) + 0.02 * rng.standard_normal(len(T)), "room": 17.9 + room(T) + 0.02 * rng.standard_normal(len(T))}
+    text = csv_text(T, columns)
+    lines = text.splitlines(keepends=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mtident", "thermal", "watch", "later.csv", "--ambient", "room", "--json", "--poll", "0.05", "--timeout", "3"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+    )
+    time.sleep(1.0)
+    (tmp_path / "later.csv").write_text("".join(lines[:41]))  # the header and 40 min
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    first = json.loads(out)
+    assert first["sensor"] == "A" and first["last_time_min"] == 39.0
+    (tmp_path / "later.csv").write_text(text)
+    again = mtident("thermal", "watch", "later.csv", "--ambient", "room", "--json", "--replay", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert "resuming from" in again.stderr and "starting afresh" not in again.stderr
+    whole = mtident("thermal", "watch", "later.csv", "--ambient", "room", "--json", "--replay", "--state", "other.json", cwd=tmp_path)
+    assert json.loads(again.stdout) == json.loads(whole.stdout)
+    (tmp_path / "room_only.csv").write_text(csv_text(T, {"room": columns["room"]}))
+    alone = mtident("thermal", "watch", "room_only.csv", "--ambient", "room", "--replay", cwd=tmp_path)
+    assert alone.returncode == 2 and "room_only.csv: no sensor column besides the room sensor 'room'" in alone.stderr
+
+
 @pytest.mark.parametrize(
     ("sensors", "times", "values", "ambient", "message"),
     [

@@ -273,12 +273,14 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     room_coupling = room_coupling or "lagged"
     if ambient_col is not None:
         # read the room column with the sensors; it is split off again below
-        if names is None:
-            header = header_names(path) if path.is_file() else []
+        if names is None and path.is_file():
+            header = header_names(path)
             time_name = time_col or (header[0] if header else "")
-            temperatures = header_names(path, temperatures_only=True) if path.is_file() else []  # by a units row
+            temperatures = header_names(path, temperatures_only=True)  # by a units row
             names = [h for h in header if h not in (time_name, ambient_col) and h in temperatures]
-        names = [n for n in names if n != ambient_col] + [ambient_col]
+        # a log not created yet: the follower reads every sensor and the room last once its header comes
+        if names is not None:
+            names = [n for n in names if n != ambient_col] + [ambient_col]
     state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
     settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling, room_wander_C_per_h=room_wander)
     follower: LogFollower | None = None
@@ -307,14 +309,17 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         except (ValueError, KeyError, TypeError) as exc:
             stderr.print(f"mtident: warning: ignoring the unreadable state file {state_file} ({exc}); starting afresh", highlight=False)
     if follower is None:
-        follower = LogFollower(path, names, time_col, time_unit)
+        follower = LogFollower(path, names, time_col, time_unit, room=ambient_col)
     if not path.is_file():
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
 
     def save() -> None:
         nonlocal saved_text
         assert follower is not None and monitor is not None
-        text = json.dumps({"log": str(path.resolve()), "settings": [tolerance_C, hold_min, room_coupling, room_wander], "requested": names, "position": follower.position(), "monitor": monitor.to_dict()})
+        # the sensors as resolved from the header (also for a log that was not there at the start):
+        # a resumed run compares them with its own
+        requested = names if names is not None or ambient_col is None else follower.sensors
+        text = json.dumps({"log": str(path.resolve()), "settings": [tolerance_C, hold_min, room_coupling, room_wander], "requested": requested, "position": follower.position(), "monitor": monitor.to_dict()})
         _save_state(state_file, text)
         saved_text = text
 
@@ -330,6 +335,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
                     stderr.print(f"mtident: warning: {warning}", highlight=False)
                 if monitor is None and follower.sensors:
                     monitored = follower.sensors[:-1] if ambient_col else follower.sensors
+                    if not monitored:
+                        msg = f"{path}: no sensor column besides the room sensor {ambient_col!r}"
+                        raise InputError(msg)
                     monitor = Monitor(tuple(monitored), settings)
                 if len(rows.time_min) and monitor is not None:
                     last_data = time.monotonic()

@@ -65,6 +65,7 @@ class LogFollower:
     dialect: CsvDialect | None = None  # from the file's head, once its header line is complete
     time_format: str | None = None  # pandas format of the time stamps, from the first one
     clock_column: int | None = None  # the time of day's column where the date is in the time column
+    room: str | None = None  # a room sensor's column, read last, after all the sensors (none named)
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -79,6 +80,7 @@ class LogFollower:
             "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units]],
             "time_format": self.time_format,
             "clock_column": self.clock_column,
+            "room": self.room,
         }
 
     @classmethod
@@ -101,6 +103,7 @@ class LogFollower:
             dialect=None if dialect is None else CsvDialect(str(dialect[0]), str(dialect[1]), int(dialect[2]), str(dialect[3]), tuple((str(n), str(u)) for n, u in (dialect[4] if len(dialect) > 4 else []))),
             time_format=position.get("time_format"),
             clock_column=position.get("clock_column"),
+            room=position.get("room"),
         )
 
     def _set_header(self, line: str, first_row: list[str]) -> list[str]:
@@ -126,11 +129,17 @@ class LogFollower:
         names = [h for h in header if h not in (time_name, clock_name, "")]  # "": a delimiter at the end of the line
         asked = bool(self.sensors) and self.sensors != ["all"]
         chosen = self.sensors if asked and self.sensors is not None else names
+        if not asked and self.room is not None:
+            chosen = [n for n in chosen if n != self.room] + [self.room]
         missing = [s for s in chosen if s not in header]
         if missing:
             msg = f"{self.path}: no sensor column {missing[0]!r}; the log has: {', '.join(names)}"
             raise InputError(msg)
-        chosen, notes = temperature_columns(list(chosen), asked, self.dialect, self.path)
+        if not asked and self.room is not None:  # the room sensor, named, must be a temperature
+            sensors, notes = temperature_columns(chosen[:-1], False, self.dialect, self.path)
+            chosen = [*sensors, *temperature_columns([self.room], True, self.dialect, self.path)[0]]
+        else:
+            chosen, notes = temperature_columns(list(chosen), asked, self.dialect, self.path)
         self.header = header
         self.sensors = list(chosen)
         self.columns = [header.index(time_name)] + [header.index(s) for s in chosen]
