@@ -343,3 +343,19 @@ def test_the_shipped_logs_by_name():
     assert "room" in read_temperature_log("@sample-room").sensors
     with pytest.raises(InputError, match="no shipped log '@smaple'; there are: @sample, @sample-room"):
         sample_log_path("@smaple")
+
+
+def test_a_time_column_in_seconds_read_as_minutes_gets_a_hint(write_csv, tmp_path):
+    """A 2-h log in seconds under a plain 'Time' header read as 5 days of minutes; identify then
+    said 'use a longer --window' and watch called the sensor 'no rise', with no word on the unit."""
+    from mtident.io.follow import LogFollower
+
+    text = "Time,T1\n" + "".join(f"{s},{20 + s / 7200:.4f}\n" for s in range(0, 7201, 10))
+    log = read_temperature_log(write_csv(text))
+    assert any("time column 'Time' is read as minutes" in n and "7200 min (5.0 days)" in n and "--time-unit s" in n for n in log.notes)
+    assert not any("read as minutes" in n for n in read_temperature_log(write_csv(text), time_unit="s").notes)
+    assert not any("read as minutes" in n for n in read_temperature_log(write_csv(text.replace("Time,", "Time_s,"))).notes)
+    live = tmp_path / "live.csv"
+    live.write_text(text)
+    warnings = LogFollower(live).poll().warnings
+    assert sum("read as minutes" in w for w in warnings) == 1

@@ -34,7 +34,7 @@ import numpy as np
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, date_and_clock, sniff_dialect, stamp_format, temperature_columns
-from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, time_unit_factor
+from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, time_unit_assumed, time_unit_factor
 
 __all__ = ["LogFollower", "Rows"]
 
@@ -216,6 +216,10 @@ class LogFollower:
             except (ValueError, IndexError):
                 warnings.append(f"{self.path}: refused a row with an unreadable time {line[:1]!r}")
                 continue
+            if t > UNLIKELY_MINUTES >= (self.last_time or 0.0) and self.time_format is None:
+                time_name = self.header[self.columns[0]]
+                if time_unit_assumed(time_name, self.time_unit, dialect.time_unit(time_name)):
+                    warnings.append(f"{self.path}: {seconds_hint(time_name, t)}")
             if self.last_time is not None and t <= self.last_time:
                 if not restarted:  # after a restart the old rows come again: expected, not an error
                     warnings.append(f"{self.path}: refused the row at t = {t:g} min: it repeats or goes back from t = {self.last_time:g} min")

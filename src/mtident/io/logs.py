@@ -32,7 +32,7 @@ from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect,
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
+__all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES", "time_unit_assumed", "seconds_hint", "UNLIKELY_MINUTES", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
 
 # A PT100 channel with a broken wire reads far outside any machine-tool temperature.
 OPEN_CIRCUIT_HIGH_C = 400.0
@@ -113,6 +113,20 @@ def time_unit_factor(header: str, time_unit: str | None, stated: str | None = No
         if header.lower().endswith("_" + suffix):
             return factor
     return TIME_UNITS[stated] if stated is not None else 1.0
+
+
+# A warm-up is hours long: a time column read as minutes (no unit given anywhere) that runs past two
+# days is more likely seconds.
+UNLIKELY_MINUTES = 2 * 1440.0
+
+
+def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) -> bool:
+    """Whether :func:`time_unit_factor` falls back to minutes: no --time-unit, header suffix or units row."""
+    return time_unit is None and stated is None and not any(header.lower().endswith("_" + suffix) for suffix in TIME_UNITS)
+
+
+def seconds_hint(header: str, span_min: float) -> str:
+    return f"time column {header!r} is read as minutes (no unit in its name, a units row or --time-unit) and runs to {span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give --time-unit s"
 
 
 def _cell(value: object) -> str:
@@ -259,8 +273,12 @@ def read_temperature_log(
         msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
         raise InputError(msg)
     clock = _clock_column(frame, header)
+    notes: list[str] = []
     if clock is None:
         time_min = _parse_time(frame[header], header, time_unit, source, first_row, dialect.time_unit(header))
+        numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
+        if numeric and time_unit_assumed(header, time_unit, dialect.time_unit(header)) and time_min[-1] > UNLIKELY_MINUTES:
+            notes.append(seconds_hint(header, float(time_min[-1])))
     else:  # the date in one column, the time of day in the next: one stamp
         stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
         time_min = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row)
@@ -270,7 +288,8 @@ def read_temperature_log(
     if missing_names:
         msg = f"{source}: no sensor column {missing_names[0]!r}; the log has: {', '.join(available)}"
         raise InputError(msg)
-    sensors, notes = temperature_columns(list(sensors) if sensors else available, bool(sensors), dialect, source)
+    sensors, unit_notes = temperature_columns(list(sensors) if sensors else available, bool(sensors), dialect, source)
+    notes.extend(unit_notes)
     columns = []
     for name in sensors:
         raw = frame[name]
