@@ -359,3 +359,14 @@ def test_a_time_column_in_seconds_read_as_minutes_gets_a_hint(write_csv, tmp_pat
     live.write_text(text)
     warnings = LogFollower(live).poll().warnings
     assert sum("read as minutes" in w for w in warnings) == 1
+
+
+def test_a_unit_at_the_end_of_a_column_name(write_csv):
+    """'Time [s]' was read as minutes (only a _s suffix counted); 'T1 [°F]' as °C. A name whose
+    brackets hold no unit ('T2 (spindle)') is a plain °C sensor."""
+    text = "Time [s],T1 [°F],T2 (spindle)\n" + "".join(f"{60 * m},{68 + 0.18 * m:.2f},{20 + 0.1 * m:.1f}\n" for m in range(12))
+    log = read_temperature_log(write_csv(text))
+    assert log.sensors == ("T1 [°F]", "T2 (spindle)")
+    np.testing.assert_allclose(log.time_min, np.arange(12.0))
+    np.testing.assert_allclose(log.temperature_C, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 2, axis=1), atol=1e-9)
+    assert log.notes == ("sensor 'T1 [°F]': read in °F (its name), converted to °C",)

@@ -54,6 +54,8 @@ TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S")
 # cannot be told apart.
 _STAMP_FORMATS = ("%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M", *TIME_OF_DAY_FORMATS)
 MINUTES_PER_DAY = 1440.0
+# a unit at the end of a column's name: "Time [s]", "T1 (°C)"
+_UNIT_IN_NAME = re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*$")
 # a date without a time: the first of two time-stamp columns
 _DATE_FORMATS = ("%d.%m.%Y", "%Y-%m-%d")
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
@@ -105,8 +107,14 @@ class CsvDialect:
         return self.preamble_lines + 1 + bool(self.units)
 
     def unit_of(self, column: str) -> str:
-        """The column's unit as the units row writes it ("" without one)."""
-        return dict(self.units).get(column, "")
+        """The column's unit as the units row writes it, else as its name ends ("Time [s]",
+        "T1 (°F)": a unit this module knows only); "" without one."""
+        if self.units:
+            return dict(self.units).get(column, "")
+        named = _UNIT_IN_NAME.search(column)
+        if named is None or _unit_key(named.group(1)) not in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS):
+            return ""  # "T (spindle)" names a place, not a unit
+        return named.group(1)
 
     def time_unit(self, column: str) -> str | None:
         """"s", "min" or "h" if the units row states the time column's unit, else None."""
@@ -127,29 +135,30 @@ def celsius_conversion(unit: str) -> tuple[float, float] | None:
 
 
 def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, source: str | Path) -> tuple[list[str], list[str]]:
-    """The sensor columns to read, and notes, by the units row.
+    """The sensor columns to read, and notes, by their units (a units row, or a unit in the name).
 
     A column whose unit is no temperature (a logger's speed or voltage channel)
     is left out of the default selection with a note, and refused when ``asked``
     for by name; one in K or °F is converted, with a note.
     """
+    by = "the units row" if dialect.units else "its name"
     kept, notes, other = [], [], []
     for name in names:
         conversion = celsius_conversion(dialect.unit_of(name))
         unit = dialect.unit_of(name).strip().strip("[]()").strip()  # as written, without brackets
         if conversion is None:
             if asked:
-                msg = f"{source}: sensor {name!r} is in {unit!r} by the units row, not a temperature (°C, K or °F)"
+                msg = f"{source}: sensor {name!r} is in {unit!r} by {by}, not a temperature (°C, K or °F)"
                 raise InputError(msg)
             other.append(f"{name} ({unit})")
             continue
         if conversion != (1.0, 0.0):
-            notes.append(f"sensor {name!r}: read in {unit} (units row), converted to °C")
+            notes.append(f"sensor {name!r}: read in {unit} ({by}), converted to °C")
         kept.append(name)
     if other:
-        notes.append(f"left out, not temperatures by the units row: {', '.join(other)}")
+        notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
     if not kept:
-        msg = f"{source}: no temperature column: the units row gives {', '.join(other)}"
+        msg = f"{source}: no temperature column: {by} gives {', '.join(other)}"
         raise InputError(msg)
     return kept, notes
 
