@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -70,6 +71,17 @@ def test_thermal_identify_all_sensors_json_and_table():
     # a name given twice is one sensor; a space after a comma is no part of the name
     spaced = mtident("thermal", "identify", "@sample", "--method", "lsq", "--json", "--sensor", "T8, T1", "--sensor", "T8")
     assert [d["sensor"] for d in json.loads(spaced.stdout)["sensors"]] == ["T8", "T1"]
+
+
+def test_a_sensor_whose_name_holds_a_comma_can_be_asked_for(tmp_path):
+    """'Temp, Spindel' (a logger's channel name) was split into 'Temp' and 'Spindel': no such column."""
+    t = np.arange(0.0, 61.0)
+    rows = "".join(f"{m:g};{26.7 - 8.8 * np.exp(-0.016 * m):.3f};{20 + 0.01 * m:.2f}\n".replace(".", ",") for m in t)
+    log = tmp_path / "komma.csv"
+    log.write_text("Zeit;Temp, Spindel;Temp, Motor\n" + rows)
+    out = mtident("thermal", "identify", str(log), "--sensor", "Temp, Spindel", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["sensor"] == "Temp, Spindel"
 
 
 def test_thermal_min_time_json_has_the_contract_keys(tmp_path):

@@ -25,14 +25,22 @@ def log_path(file: str) -> Path:
     return sample_log_path(file) if file in SAMPLES else Path(file)
 
 
-def asked_sensors(sensors: tuple[str, ...]) -> list[str]:
-    """The --sensor names, repeated or comma-separated, each once; empty for all ("all" or none given)."""
-    return list(dict.fromkeys(name.strip() for entry in sensors for name in entry.split(",") if name.strip() and name.strip() != "all"))
+def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
+    """The --sensor names, repeated or comma-separated, each once; empty for all ("all" or none given).
+
+    An entry that is a column of the log as it stands is one name, commas and
+    all ("Temp, Spindel", as some loggers name their channels).
+    """
+    from mtident.io.dialect import header_names
+
+    columns = set(header_names(path)) if sensors and path.is_file() else set()
+    names = (name.strip() for entry in sensors for name in ([entry] if entry.strip() in columns else entry.split(",")))
+    return list(dict.fromkeys(name for name in names if name and name != "all"))
 
 
 def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None) -> TemperatureLog:
     path = log_path(file)
-    log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=asked_sensors(sensors) or None)
+    log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=asked_sensors(sensors, path) or None)
     for note in log.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
     return log
@@ -42,7 +50,7 @@ def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None
     """The log's sensors, and the room column split off from them when one is named."""
     if room_col is None:
         return load_log(file, sensors, time_col, time_unit), None
-    asked = asked_sensors(sensors)
+    asked = asked_sensors(sensors, log_path(file))
     # only the asked-for columns and the room are read: a dead column elsewhere does not matter
     every = load_log(file, tuple(dict.fromkeys([*asked, room_col])) if asked else (), time_col, time_unit)
     room = every.select([room_col]).temperature_C[:, 0]
@@ -54,7 +62,7 @@ def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None
 
 
 def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
-    func = click.option("--time-unit", type=click.Choice(list(TIME_UNITS)), help="Unit of a numeric time column (default: from its header suffix _s/_min/_h, else min).")(func)
+    func = click.option("--time-unit", type=click.Choice(list(TIME_UNITS)), help="Unit of a numeric time column (default: from its name, Time_s or Time [s], or a units row; else min).")(func)
     func = click.option("--time-col", metavar="NAME", help="Time column (default: the first column).")(func)
     func = click.option("--sensor", "sensors", multiple=True, metavar="NAME", help="Sensor column(s) to use; repeat or comma-separate (default: all).")(func)
     func = click.argument("file", metavar="FILE")(func)
@@ -250,7 +258,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     if not path.is_file() and replay:
         msg = f"{path}: no such file"
         raise InputError(msg)
-    names = asked_sensors(sensors) or None
+    names = asked_sensors(sensors, path) or None
     if room_coupling is not None and ambient_col is None:
         msg = "--room-coupling needs --ambient ROOM_COLUMN: it says how the sensors feel that room sensor"
         raise InputError(msg)
