@@ -370,3 +370,15 @@ def test_a_unit_at_the_end_of_a_column_name(write_csv):
     np.testing.assert_allclose(log.time_min, np.arange(12.0))
     np.testing.assert_allclose(log.temperature_C, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 2, axis=1), atol=1e-9)
     assert log.notes == ("sensor 'T1 [°F]': read in °F (its name), converted to °C",)
+
+
+def test_a_text_column_is_no_sensor_unless_asked_for(write_csv):
+    """A logger's status channel ('OK' in every row) stopped identify: "'OK' is not a number"."""
+    text = "time,T1,Status\n" + "".join(f"{m},{20 + m / 10:.1f},OK\n" for m in range(10))
+    log = read_temperature_log(write_csv(text))
+    assert log.sensors == ("T1",) and log.notes == ("left out, no numbers in them: Status",)
+    with pytest.raises(InputError, match=r"sensor 'Status', row 2: 'OK' is not a number"):
+        read_temperature_log(write_csv(text), sensors=["T1", "Status"])
+    # a sensor with one bad cell is still refused by name: it has numbers
+    with pytest.raises(InputError, match=r"sensor 'T1', row 4: 'oops' is not a number"):
+        read_temperature_log(write_csv(text.replace("2,20.2", "2,oops")))

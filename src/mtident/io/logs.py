@@ -181,6 +181,17 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
     return values - values[0]
 
 
+def _text_only(column: pd.Series) -> bool:
+    """Whether a column holds text and not one number (empty cells aside)."""
+    import pandas as pd
+
+    if pd.api.types.is_numeric_dtype(column):
+        return False
+    cells = column.dropna().astype(str).str.strip()
+    cells = cells[(cells != "") & (cells.str.lower() != "nan")]
+    return len(cells) > 0 and not pd.to_numeric(cells.str.replace(",", ".", regex=False), errors="coerce").notna().any()
+
+
 def _clock_column(frame: pd.DataFrame, header: str) -> str | None:
     """The column after the time column if the two hold a date and a time of day (the first row
     tells), else None."""
@@ -288,6 +299,13 @@ def read_temperature_log(
     if missing_names:
         msg = f"{source}: no sensor column {missing_names[0]!r}; the log has: {', '.join(available)}"
         raise InputError(msg)
+    if not sensors:
+        # A column of text alone (a logger's status or comment channel) is no sensor; one asked for
+        # by name is read, and its first text cell named.
+        text_only = [name for name in available if _text_only(frame[name])]
+        if text_only and len(text_only) < len(available):
+            notes.append(f"left out, no numbers in them: {', '.join(text_only)}")
+            available = [name for name in available if name not in text_only]
     sensors, unit_notes = temperature_columns(list(sensors) if sensors else available, bool(sensors), dialect, source)
     notes.extend(unit_notes)
     columns = []
