@@ -373,10 +373,15 @@ def test_a_unit_at_the_end_of_a_column_name(write_csv):
 
 
 def test_a_text_column_is_no_sensor_unless_asked_for(write_csv):
-    """A logger's status channel ('OK' in every row) stopped identify: "'OK' is not a number"."""
+    """A logger's status channel ('OK' in every row) stopped identify: "'OK' is not a number", and
+    watch showed it as a sensor without data."""
+    from mtident.io.follow import LogFollower
+
     text = "time,T1,Status\n" + "".join(f"{m},{20 + m / 10:.1f},OK\n" for m in range(10))
     log = read_temperature_log(write_csv(text))
     assert log.sensors == ("T1",) and log.notes == ("left out, no numbers in them: Status",)
+    follower = LogFollower(write_csv(text, "live.csv"))
+    assert follower.poll().warnings == ("left out, no numbers in them: Status",) and follower.sensors == ["T1"]
     with pytest.raises(InputError, match=r"sensor 'Status', row 2: 'OK' is not a number"):
         read_temperature_log(write_csv(text), sensors=["T1", "Status"])
     # a sensor with one bad cell is still refused by name: it has numbers

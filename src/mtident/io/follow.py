@@ -106,11 +106,13 @@ class LogFollower:
             room=position.get("room"),
         )
 
-    def _set_header(self, line: str, first_row: list[str]) -> list[str]:
+    def _set_header(self, line: str, rows: list[list[str]]) -> list[str]:
         """Take the header line: the time column and the sensors' columns; returns notes (units).
 
-        ``first_row`` (the first data row's cells) tells whether the time stamp is
-        written in two columns, a date and a time of day.
+        ``rows`` (the data rows' cells written so far, one at least) tell whether
+        the time stamp is written in two columns, a date and a time of day, and
+        which columns hold text alone (a status channel: no sensor, as the file
+        reader has it).
         """
         assert self.dialect is not None
         header = self.dialect.cells(line)
@@ -122,6 +124,7 @@ class LogFollower:
         if time_name not in header:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"
             raise InputError(msg)
+        first_row = rows[0] if rows else []
         following = header.index(time_name) + 1
         if following < min(len(header), len(first_row)) and date_and_clock(first_row[header.index(time_name)], first_row[following]):
             self.clock_column = following
@@ -129,6 +132,12 @@ class LogFollower:
         names = [h for h in header if h not in (time_name, clock_name, "")]  # "": a delimiter at the end of the line
         asked = bool(self.sensors) and self.sensors != ["all"]
         chosen = self.sensors if asked and self.sensors is not None else names
+        notes = []
+        if not asked:
+            text_only = [n for n in chosen if n != self.room and self._text_only(header.index(n), rows)]
+            if text_only and len(text_only) < len([n for n in chosen if n != self.room]):
+                notes.append(f"left out, no numbers in them: {', '.join(text_only)}")
+                chosen = [n for n in chosen if n not in text_only]
         if not asked and self.room is not None:
             chosen = [n for n in chosen if n != self.room] + [self.room]
         missing = [s for s in chosen if s not in header]
@@ -136,14 +145,29 @@ class LogFollower:
             msg = f"{self.path}: no sensor column {missing[0]!r}; the log has: {', '.join(names)}"
             raise InputError(msg)
         if not asked and self.room is not None:  # the room sensor, named, must be a temperature
-            sensors, notes = temperature_columns(chosen[:-1], False, self.dialect, self.path)
+            sensors, unit_notes = temperature_columns(chosen[:-1], False, self.dialect, self.path)
             chosen = [*sensors, *temperature_columns([self.room], True, self.dialect, self.path)[0]]
         else:
-            chosen, notes = temperature_columns(list(chosen), asked, self.dialect, self.path)
+            chosen, unit_notes = temperature_columns(list(chosen), asked, self.dialect, self.path)
+        notes.extend(unit_notes)
         self.header = header
         self.sensors = list(chosen)
         self.columns = [header.index(time_name)] + [header.index(s) for s in chosen]
         return notes
+
+    def _text_only(self, index: int, rows: list[list[str]]) -> bool:
+        """Whether column ``index`` holds text and not one number in ``rows`` (empty cells aside)."""
+        assert self.dialect is not None
+        cells = [row[index].strip() for row in rows if index < len(row) and row[index].strip() and row[index].strip().lower() != "nan"]
+
+        def number(cell: str) -> bool:
+            try:
+                self.dialect.number(cell)  # type: ignore[union-attr]
+            except ValueError:
+                return False
+            return True
+
+        return bool(cells) and not any(number(c) for c in cells)
 
     def _parse_time(self, text: str) -> float:
         """Minutes relative to the first sample; raises ValueError for an unreadable cell."""
@@ -203,8 +227,8 @@ class LogFollower:
             if lines:
                 header_line, lines = lines[0], lines[1 + bool(dialect.units) :]
                 if self.header is None:
-                    first_row = next((cells for cells in csv.reader(lines, delimiter=dialect.delimiter) if any(c.strip() for c in cells)), [])
-                    warnings.extend(self._set_header(header_line, first_row))
+                    rows_so_far = [cells for cells in csv.reader(lines, delimiter=dialect.delimiter) if any(c.strip() for c in cells)]
+                    warnings.extend(self._set_header(header_line, rows_so_far))
         assert self.header is not None
         conversions = np.array([celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]).reshape(-1, 2)
         times, rows = [], []
