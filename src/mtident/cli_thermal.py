@@ -15,8 +15,6 @@ from mtident.exceptions import InputError
 from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 
-# The logs shipped in the package (scripts/make_sample_warmup.py): the 10-sensor warm-up, and the
-# same warm-up with a room sensor column "room" (for --ambient room).
 stderr = Console(stderr=True, soft_wrap=True)
 
 

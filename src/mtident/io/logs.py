@@ -87,7 +87,8 @@ class TemperatureLog:
         return int(np.searchsorted(self.time_min, minutes + 1e-9, side="right"))
 
 
-# the logs shipped in the package, by the names the CLI and read_temperature_log take
+# The logs shipped in the package (scripts/make_sample_warmup.py), by the names the CLI and
+# read_temperature_log take: the 10-sensor warm-up, and the same with a room sensor column "room".
 SAMPLES = {"@sample": "spindle_warmup.csv", "@sample-room": "spindle_warmup_room.csv"}
 
 
@@ -101,18 +102,21 @@ def sample_log_path(name: str = "@sample") -> Path:
     return Path(str(resources.files("mtident") / "data" / SAMPLES[name]))
 
 
+def _suffix_unit(header: str) -> str | None:
+    """The unit a time column's name ends in: Time_s, t_min, hours_h."""
+    return next((unit for unit in TIME_UNITS if header.lower().endswith("_" + unit)), None)
+
+
 def time_unit_factor(header: str, time_unit: str | None, stated: str | None = None) -> float:
     """Minutes per unit of a numeric time column: ``time_unit``, else the header's suffix (_s, _min,
-    _h), else the unit a units row ``stated`` for it, else minutes."""
+    _h), else the unit ``stated`` by a units row or in the name's brackets (``Time [s]``), else minutes."""
     if time_unit is not None:
         if time_unit not in TIME_UNITS:
             msg = f"time unit {time_unit!r} is not one of: {', '.join(TIME_UNITS)}"
             raise InputError(msg)
         return TIME_UNITS[time_unit]
-    for suffix, factor in TIME_UNITS.items():
-        if header.lower().endswith("_" + suffix):
-            return factor
-    return TIME_UNITS[stated] if stated is not None else 1.0
+    unit = _suffix_unit(header) or stated
+    return TIME_UNITS[unit] if unit is not None else 1.0
 
 
 # A warm-up is hours long: a time column read as minutes (no unit given anywhere) that runs past two
@@ -122,7 +126,7 @@ UNLIKELY_MINUTES = 2 * 1440.0
 
 def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) -> bool:
     """Whether :func:`time_unit_factor` falls back to minutes: no --time-unit, header suffix or units row."""
-    return time_unit is None and stated is None and not any(header.lower().endswith("_" + suffix) for suffix in TIME_UNITS)
+    return time_unit is None and stated is None and _suffix_unit(header) is None
 
 
 def seconds_hint(header: str, span_min: float) -> str:
