@@ -46,9 +46,9 @@ def test_isolated_bad_samples_are_skipped_with_a_note(write_csv):
         ("time_min\n0\n1\n2\n3\n4\n", {}, r"need a time column and at least one sensor column"),
         ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_col": "clock"}, r"no time column 'clock'; the columns are: time_min, A"),
         ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_unit": "days"}, r"time unit 'days' is not one of: s, min, h"),
-        ("time_min,A\nyesterday,20\n1,20\n2,21\n3,21\n4,21\n", {}, r"row 2: 'yesterday' is neither a number nor a time stamp \(ISO 8601, 22.11.2026 08:00:00 or 08:00:00\)"),
+        ("time_min,A\nyesterday,20\n1,20\n2,21\n3,21\n4,21\n", {}, r"row 2: 'yesterday' is neither a number nor a time stamp \(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:00:00\)"),
         ("stamp,A\n22.11.2026 08:00,20\n22.11.2026 08:01,20\n01/02/2026 08:02,21\n22.11.2026 08:03,21\n22.11.2026 08:04,21\n", {}, r"row 4: '01/02/2026 08:02' is neither a number nor a time stamp like the first one"),
-        ("stamp,A\n01/02/2026 08:00,20\n01/02/2026 08:01,20\n01/02/2026 08:02,21\n01/02/2026 08:03,21\n01/02/2026 08:04,21\n", {}, r"row 2: .* \(ISO 8601"),
+        ("stamp,A\nFeb 1 2026 08:00,20\nFeb 1 2026 08:01,20\nFeb 1 2026 08:02,21\nFeb 1 2026 08:03,21\nFeb 1 2026 08:04,21\n", {}, r"row 2: .* \(ISO 8601"),
         ("time_min,A\n0,20\n1,\n2,\n3,500\n4,21\n", {}, r"sensor 'A': 3 of 5 samples are empty, NaN or open-circuit"),
         ("time_min,A,B,A\n0,20,20,20\n1,20,20,20\n2,21,21,21\n3,21,21,21\n4,21,21,21\n", {}, r"the column name 'A' appears twice \(columns 2 and 4\); give each column its own name"),
         ("time_min;A; A\n0;20;20\n1;20;20\n2;21;21\n3;21;21\n4;21;21\n", {}, r"the column name 'A' appears twice \(columns 2 and 3\)"),
@@ -184,7 +184,7 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     crlf=st.booleans(),
     trailing=st.booleans(),
     quoted=st.booleans(),
-    stamps=st.sampled_from(["minutes", "iso", "dotted", "time of day", "date, clock", "iso date, clock"]),
+    stamps=st.sampled_from(["minutes", "iso", "dotted", "time of day", "date, clock", "iso date, clock", "us slashed", "day-first slashed"]),
     units=st.sampled_from(["none", "min", "s"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
@@ -203,6 +203,10 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
 
     def time_cells(minutes: float) -> list[str]:
         when = start + dt.timedelta(minutes=float(minutes))
+        if stamps == "us slashed":
+            return [when.strftime("%m/%d/%Y %I:%M:%S %p")]
+        if stamps == "day-first slashed":  # 01/11 then 02/11 at midnight: read month first, a month's jump
+            return [(when - dt.timedelta(days=21)).strftime("%d/%m/%Y %H:%M:%S")]
         if stamps == "minutes" and units == "s":
             return [f"{60 * minutes:g}"]
         if stamps.endswith("date, clock"):  # a stamp in two columns
@@ -387,3 +391,37 @@ def test_a_text_column_is_no_sensor_unless_asked_for(write_csv):
     # a sensor with one bad cell is still refused by name: it has numbers
     with pytest.raises(InputError, match=r"sensor 'T1', row 4: 'oops' is not a number"):
         read_temperature_log(write_csv(text.replace("2,20.2", "2,oops")))
+
+
+@pytest.mark.parametrize(
+    ("fmt", "start"),
+    [
+        ("%m/%d/%Y %I:%M:%S %p", "2026-11-22 23:50"),  # a US logger (HOBO): month first, AM/PM
+        ("%d/%m/%Y %H:%M:%S", "2026-11-01 23:50"),  # day first, 01/11 -> 02/11 at midnight: not Jan 11 -> Feb 11
+        ("%m/%d/%Y %H:%M:%S", "2026-01-11 23:50"),  # month first, the same dates the other way
+        ("%d.%m.%y %H:%M", "2026-11-22 23:50"),  # two-digit year, no seconds
+        ("%H:%M", "2026-11-22 23:50"),  # a clock without seconds passes midnight
+    ],
+)
+def test_slashed_dates_am_pm_and_clocks_without_seconds(tmp_path, fmt, start):
+    """Each was refused ("neither a number nor a time stamp"); a slashed date is read month first
+    unless the first stamp or the first change of date says day first, whole and live alike."""
+    import datetime as dt
+
+    from mtident.io.follow import LogFollower
+
+    first = dt.datetime.fromisoformat(start)
+    minutes = np.arange(0.0, 30.0)
+    text = "stamp,T1\n" + "".join(f"{(first + dt.timedelta(minutes=float(m))).strftime(fmt)},{20 + m / 10:.1f}\n" for m in minutes)
+    path = tmp_path / "log.csv"
+    path.write_text(text)
+    np.testing.assert_allclose(read_temperature_log(path).time_min, minutes)
+    live = tmp_path / "live.csv"
+    follower = LogFollower(live)
+    times: list[float] = []
+    for cut in (60, 400, len(text)):  # the change of date comes in the last piece
+        live.write_text(text[:cut])
+        rows = follower.poll()
+        assert not rows.warnings
+        times.extend(rows.time_min)
+    np.testing.assert_allclose(times, minutes)

@@ -33,12 +33,14 @@ __all__ = [
     "check_unique_names",
     "read_csv",
     "stamp_format",
+    "other_date_order",
     "date_and_clock",
     "celsius_conversion",
     "temperature_columns",
     "HEAD_BYTES",
     "TIME_OF_DAY_FORMATS",
     "MINUTES_PER_DAY",
+    "IMPLAUSIBLE_STEP_MIN",
 ]
 
 # enough for a preamble, the header and a few rows
@@ -48,16 +50,21 @@ _DELIMITERS = (",", ";", "\t")
 _SEP_DIRECTIVE = re.compile(r"^sep=(.)\r?$")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
 # A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
-TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S")
+TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M", "%I:%M:%S %p", "%I:%M %p")
 # Time stamps other than ISO 8601, tried in this order (pandas/strptime formats). A dotted date is
-# day first wherever it is written; a slashed one (01/02/2026) is not tried: month or day first
-# cannot be told apart.
-_STAMP_FORMATS = ("%d.%m.%Y %H:%M:%S.%f", "%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M", *TIME_OF_DAY_FORMATS)
+# day first wherever it is written. A slashed one is month first (US loggers, 11/22/2026 3:05:00 PM)
+# unless the first stamp says day first (22/11/2026); where the first stamp cannot tell (01/02),
+# the order whose steps are plausible at the first change of date is taken (:func:`other_date_order`).
+_DOTTED = tuple(f"%d.%m.{year} {clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
+_SLASHED = tuple(f"{date} {clock}" for date in ("%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y") for clock in TIME_OF_DAY_FORMATS)
+_STAMP_FORMATS = (*_DOTTED, *_SLASHED, "%Y-%m-%d %I:%M:%S %p", "%Y-%m-%d %I:%M %p", *TIME_OF_DAY_FORMATS)
 MINUTES_PER_DAY = 1440.0
+# a step that long between two rows of a warm-up log is a date read in the wrong order
+IMPLAUSIBLE_STEP_MIN = 20 * MINUTES_PER_DAY
 # a unit at the end of a column's name: "Time [s]", "T1 (°C)"
 _UNIT_IN_NAME = re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*$")
 # a date without a time: the first of two time-stamp columns
-_DATE_FORMATS = ("%d.%m.%Y", "%Y-%m-%d")
+_DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%Y-%m-%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y")
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
 # as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
 # gives (scale, offset) to °C.
@@ -333,6 +340,13 @@ def date_and_clock(date_cell: str, clock_cell: str) -> bool:
         return False
 
     return parses(date_cell, _DATE_FORMATS) and parses(clock_cell, TIME_OF_DAY_FORMATS)
+
+
+def other_date_order(fmt: str | None) -> str | None:
+    """The same format with day and month swapped, for a slashed date; None for any other."""
+    if fmt is not None and fmt.startswith(("%m/%d/", "%d/%m/")):
+        return ("%d/%m/" if fmt.startswith("%m/%d/") else "%m/%d/") + fmt[6:]
+    return None
 
 
 def stamp_format(cell: str) -> str | None:

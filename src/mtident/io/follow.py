@@ -33,7 +33,20 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import HEAD_BYTES, MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, date_and_clock, sniff_dialect, stamp_format, temperature_columns
+from mtident.io.dialect import (
+    HEAD_BYTES,
+    IMPLAUSIBLE_STEP_MIN,
+    MINUTES_PER_DAY,
+    TIME_OF_DAY_FORMATS,
+    CsvDialect,
+    celsius_conversion,
+    check_unique_names,
+    date_and_clock,
+    other_date_order,
+    sniff_dialect,
+    stamp_format,
+    temperature_columns,
+)
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, time_unit_assumed, time_unit_factor
 
 __all__ = ["LogFollower", "Rows"]
@@ -66,6 +79,7 @@ class LogFollower:
     time_format: str | None = None  # pandas format of the time stamps, from the first one
     clock_column: int | None = None  # the time of day's column where the date is in the time column
     room: str | None = None  # a room sensor's column, read last, after all the sensors (none named)
+    first_stamp: str | None = None  # the first time stamp as written: a slashed date may be read again the other way
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -81,6 +95,7 @@ class LogFollower:
             "time_format": self.time_format,
             "clock_column": self.clock_column,
             "room": self.room,
+            "first_stamp": self.first_stamp,
         }
 
     @classmethod
@@ -104,6 +119,7 @@ class LogFollower:
             time_format=position.get("time_format"),
             clock_column=position.get("clock_column"),
             room=position.get("room"),
+            first_stamp=position.get("first_stamp"),
         )
 
     def _set_header(self, line: str, rows: list[list[str]]) -> list[str]:
@@ -182,9 +198,11 @@ class LogFollower:
 
             if self.time_format is None:
                 self.time_format = stamp_format(text)
+                self.first_stamp = text.strip()
             if self.time_format is None:
                 raise
-            stamp = pd.to_datetime(text.strip(), format=self.time_format, utc=True).timestamp() / 60.0
+            turned = self._slashed_date_turned(text.strip())
+            stamp = turned if turned is not None else pd.to_datetime(text.strip(), format=self.time_format, utc=True).timestamp() / 60.0
         if self.origin is None:
             self.origin = stamp
         t = stamp - self.origin
@@ -192,6 +210,32 @@ class LogFollower:
             # past midnight: the day the last accepted row was in, or the next one
             t += MINUTES_PER_DAY * max(np.ceil((self.last_time - t - MINUTES_PER_DAY / 2) / MINUTES_PER_DAY), 0.0)
         return t
+
+    def _slashed_date_turned(self, text: str) -> float | None:
+        """The stamp read with day and month swapped, where a slashed date read as the first stamp
+        told does not parse or jumps by weeks and the other order steps on plausibly (01/12 then
+        02/12 just after midnight: a day, not a month); from then on the other order is used, and
+        t = 0 is the first stamp read that way. None where the format stays."""
+        import pandas as pd
+
+        swapped = other_date_order(self.time_format)
+        if swapped is None or self.first_stamp is None or self.origin is None or self.last_time is None:
+            return None
+        try:
+            t = pd.to_datetime(text, format=self.time_format, utc=True).timestamp() / 60.0 - self.origin
+            if t - self.last_time < IMPLAUSIBLE_STEP_MIN:
+                return None
+        except ValueError:
+            pass
+        try:
+            origin = pd.to_datetime(self.first_stamp, format=swapped, utc=True).timestamp() / 60.0
+            stamp = pd.to_datetime(text, format=swapped, utc=True).timestamp() / 60.0
+        except ValueError:
+            return None
+        if not 0.0 < stamp - origin - self.last_time < IMPLAUSIBLE_STEP_MIN:
+            return None
+        self.time_format, self.origin = swapped, origin
+        return stamp
 
     def poll(self) -> Rows:
         """Read the complete lines added since the last poll."""

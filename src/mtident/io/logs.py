@@ -27,7 +27,19 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import MINUTES_PER_DAY, TIME_OF_DAY_FORMATS, CsvDialect, celsius_conversion, check_unique_names, date_and_clock, read_csv, stamp_format, temperature_columns
+from mtident.io.dialect import (
+    IMPLAUSIBLE_STEP_MIN,
+    MINUTES_PER_DAY,
+    TIME_OF_DAY_FORMATS,
+    CsvDialect,
+    celsius_conversion,
+    check_unique_names,
+    date_and_clock,
+    other_date_order,
+    read_csv,
+    stamp_format,
+    temperature_columns,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -163,11 +175,16 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
         fmt = stamp_format(str(text.iloc[0]))
         # as UTC: stamps with offsets that change (summer time ends during the test) stay in order
         stamps = pd.to_datetime(text, format=fmt, errors="coerce", utc=True) if fmt is not None else pd.Series(pd.NaT, index=text.index)
+        swapped = other_date_order(fmt)
+        if swapped is not None:  # a slashed date: day and month the other way round, if that reads better
+            other = pd.to_datetime(text, format=swapped, errors="coerce", utc=True)
+            if other.notna().all() and (stamps.isna().any() or _longest_step(other) < min(_longest_step(stamps), IMPLAUSIBLE_STEP_MIN)):
+                stamps = other
         if stamps.isna().any():
             row = int(stamps.isna().to_numpy().argmax())
             msg = (
                 f"{source}: time column {header!r}, row {row + first_row}: {_cell(column.iloc[row])} is neither a number "
-                f"nor a time stamp {'like the first one' if fmt is not None and row > 0 else '(ISO 8601, 22.11.2026 08:00:00 or 08:00:00)'}"
+                f"nor a time stamp {'like the first one' if fmt is not None and row > 0 else '(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:00:00)'}"
             )
             raise InputError(msg)
         values = minutes_since_first(stamps)
@@ -183,6 +200,13 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
         msg = f"{source}: time column {header!r}, row {row + first_row}: time goes back ({_cell(column.iloc[row - 1])} then {_cell(column.iloc[row])}); time must increase"
         raise InputError(msg)
     return values - values[0]
+
+
+def _longest_step(stamps: pd.Series) -> float:
+    """The largest step between neighbouring valid stamps, back or forth (min)."""
+    valid = stamps.dropna()
+    minutes = valid.diff().dt.total_seconds().to_numpy()[1:] / 60.0
+    return float(np.max(np.abs(minutes))) if len(minutes) else 0.0
 
 
 def _text_only(column: pd.Series) -> bool:
