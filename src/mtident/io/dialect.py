@@ -5,7 +5,9 @@ Loggers differ. European ones write ``;`` between cells and a decimal comma
 the header; Windows programs write cp1252, where ``°`` is the single byte 0xB0
 that UTF-8 refuses; a trailing delimiter leaves an empty last column; time
 stamps come as ISO 8601, as ``22.11.2026 08:00:00`` (day first, as everywhere
-dots separate the date) or as the time of day alone; many write a row of units
+dots separate the date), as ``11/22/2026 3:05:00 PM`` (month first, as US loggers
+write it, unless the log shows day first), as the time of day alone, or as a date
+and a time of day in two columns; many write a row of units
 under the header (``min;°C;°C``, ``[s],[K]``), which states the time unit and the
 temperature scale (:func:`celsius_conversion`). Both readers of a log (the
 whole file, :func:`~mtident.io.logs.read_temperature_log`, and the live
