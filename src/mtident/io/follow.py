@@ -194,15 +194,12 @@ class LogFollower:
             scale = time_unit_factor(time_name, self.time_unit, self.dialect.time_unit(time_name))
             stamp = raw * scale
         except ValueError:
-            import pandas as pd  # only for time stamps
-
             if self.time_format is None:
                 self.time_format = stamp_format(text)
                 self.first_stamp = text.strip()
             if self.time_format is None:
                 raise
-            turned = self._slashed_date_turned(text.strip())
-            stamp = turned if turned is not None else pd.to_datetime(text.strip(), format=self.time_format, utc=True).timestamp() / 60.0
+            stamp = self._stamp_minutes(text.strip())
         if self.origin is None:
             self.origin = stamp
         t = stamp - self.origin
@@ -211,31 +208,38 @@ class LogFollower:
             t += MINUTES_PER_DAY * max(np.ceil((self.last_time - t - MINUTES_PER_DAY / 2) / MINUTES_PER_DAY), 0.0)
         return t
 
-    def _slashed_date_turned(self, text: str) -> float | None:
-        """The stamp read with day and month swapped, where a slashed date read as the first stamp
-        told does not parse or jumps by weeks and the other order steps on plausibly (01/12 then
-        02/12 just after midnight: a day, not a month); from then on the other order is used, and
-        t = 0 is the first stamp read that way. None where the format stays."""
-        import pandas as pd
+    def _stamp_minutes(self, text: str) -> float:
+        """A time stamp in minutes since 1970 in the log's format; ValueError if it is none.
+
+        A slashed date read as the first stamp told that does not parse, or jumps by
+        weeks, is read with day and month swapped where that steps on plausibly
+        (01/12 then 02/12 just after midnight: a day, not a month); from then on the
+        other order is used, and t = 0 is the first stamp read that way.
+        """
+        import pandas as pd  # only for time stamps
+
+        def minutes(cell: str, fmt: str | None) -> float:
+            return float(pd.to_datetime(cell, format=fmt, utc=True).timestamp() / 60.0)
 
         swapped = other_date_order(self.time_format)
         if swapped is None or self.first_stamp is None or self.origin is None or self.last_time is None:
-            return None
+            return minutes(text, self.time_format)
         try:
-            t = pd.to_datetime(text, format=self.time_format, utc=True).timestamp() / 60.0 - self.origin
-            if t - self.last_time < IMPLAUSIBLE_STEP_MIN:
-                return None
+            stamp = minutes(text, self.time_format)
+            if stamp - self.origin - self.last_time < IMPLAUSIBLE_STEP_MIN:
+                return stamp
         except ValueError:
-            pass
+            stamp = None
         try:
-            origin = pd.to_datetime(self.first_stamp, format=swapped, utc=True).timestamp() / 60.0
-            stamp = pd.to_datetime(text, format=swapped, utc=True).timestamp() / 60.0
+            origin, turned = minutes(self.first_stamp, swapped), minutes(text, swapped)
         except ValueError:
-            return None
-        if not 0.0 < stamp - origin - self.last_time < IMPLAUSIBLE_STEP_MIN:
-            return None
+            origin = turned = float("nan")
+        if not 0.0 < turned - origin - self.last_time < IMPLAUSIBLE_STEP_MIN:
+            if stamp is None:
+                raise ValueError(text)
+            return stamp
         self.time_format, self.origin = swapped, origin
-        return stamp
+        return turned
 
     def poll(self) -> Rows:
         """Read the complete lines added since the last poll."""
