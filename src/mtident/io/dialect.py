@@ -18,6 +18,7 @@ file's head here, so they read a log the same way.
 from __future__ import annotations
 
 import csv
+import math
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -36,6 +37,7 @@ __all__ = [
     "read_csv",
     "stamp_format",
     "other_date_order",
+    "after_midnight",
     "date_and_clock",
     "celsius_conversion",
     "temperature_columns",
@@ -342,6 +344,15 @@ def date_and_clock(date_cell: str, clock_cell: str) -> bool:
         return False
 
     return parses(date_cell, _DATE_FORMATS) and parses(clock_cell, TIME_OF_DAY_FORMATS)
+
+
+def after_midnight(previous_min: float | None, t_min: float) -> float:
+    """A time of day (minutes from the first one) on the day of the row before, or a later one: an
+    overnight test passes midnight, and a step back of more than 12 h is the next day. Both readers
+    of a log use it, row by row."""
+    if previous_min is None:
+        return t_min
+    return t_min + MINUTES_PER_DAY * max(math.ceil((previous_min - t_min - MINUTES_PER_DAY / 2) / MINUTES_PER_DAY), 0)
 
 
 def other_date_order(fmt: str | None) -> str | None:

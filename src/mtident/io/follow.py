@@ -36,9 +36,9 @@ from mtident.exceptions import InputError
 from mtident.io.dialect import (
     HEAD_BYTES,
     IMPLAUSIBLE_STEP_MIN,
-    MINUTES_PER_DAY,
     TIME_OF_DAY_FORMATS,
     CsvDialect,
+    after_midnight,
     celsius_conversion,
     check_unique_names,
     date_and_clock,
@@ -203,9 +203,8 @@ class LogFollower:
         if self.origin is None:
             self.origin = stamp
         t = stamp - self.origin
-        if self.time_format in TIME_OF_DAY_FORMATS and self.last_time is not None:
-            # past midnight: the day the last accepted row was in, or the next one
-            t += MINUTES_PER_DAY * max(np.ceil((self.last_time - t - MINUTES_PER_DAY / 2) / MINUTES_PER_DAY), 0.0)
+        if self.time_format in TIME_OF_DAY_FORMATS:
+            t = after_midnight(self.last_time, t)
         return t
 
     def _stamp_minutes(self, text: str) -> float:

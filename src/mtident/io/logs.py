@@ -29,9 +29,9 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.dialect import (
     IMPLAUSIBLE_STEP_MIN,
-    MINUTES_PER_DAY,
     TIME_OF_DAY_FORMATS,
     CsvDialect,
+    after_midnight,
     celsius_conversion,
     check_unique_names,
     date_and_clock,
@@ -189,7 +189,9 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
             raise InputError(msg)
         values = minutes_since_first(stamps)
         if fmt in TIME_OF_DAY_FORMATS:
-            values = values + MINUTES_PER_DAY * np.concatenate([[0], np.cumsum(np.diff(values) < -MINUTES_PER_DAY / 2)])
+            previous: float | None = None
+            for k, t in enumerate(values):  # row by row, as the live follower reads them
+                values[k] = previous = after_midnight(previous, float(t))
     steps = np.diff(values)
     if np.any(steps == 0):
         row = int(np.argmax(steps == 0)) + 1
