@@ -128,7 +128,7 @@ class CsvDialect:
         return named.group(1)
 
     def time_unit(self, column: str) -> str | None:
-        """"s", "min" or "h" if the units row states the time column's unit, else None."""
+        """"s", "min" or "h" if the units row or the column's name states its unit, else None."""
         return _TIME_UNIT_NAMES.get(_unit_key(self.unit_of(column)))
 
 
