@@ -337,6 +337,8 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         with Live(console=Console(), auto_refresh=False, transient=False) if live_view else _Nothing() as live:
             while True:
                 rows = follower.poll()
+                for note in rows.notes:
+                    stderr.print(f"mtident: note: {note}", highlight=False)
                 for warning in rows.warnings:
                     stderr.print(f"mtident: warning: {warning}", highlight=False)
                 if monitor is None and follower.sensors:

@@ -54,11 +54,13 @@ __all__ = ["LogFollower", "Rows"]
 
 @dataclass(frozen=True)
 class Rows:
-    """New samples: times (minutes from the first sample ever read), temperatures (n, S), warnings."""
+    """New samples: times (minutes from the first sample ever read), temperatures (n, S), warnings,
+    and notes (how the header was read: units converted, columns left out)."""
 
     time_min: FloatArray
     temperature_C: FloatArray
     warnings: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
 
 
 @dataclass
@@ -247,6 +249,7 @@ class LogFollower:
         except FileNotFoundError:
             return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), ())
         warnings: list[str] = []
+        notes: list[str] = []
         identity = (stat.st_dev, stat.st_ino)
         restarted = self.identity is not None and (identity != self.identity or stat.st_size < self.offset)
         if restarted:
@@ -275,7 +278,7 @@ class LogFollower:
                 header_line, lines = lines[0], lines[1 + bool(dialect.units) :]
                 if self.header is None:
                     rows_so_far = [cells for cells in csv.reader(lines, delimiter=dialect.delimiter) if any(c.strip() for c in cells)]
-                    warnings.extend(self._set_header(header_line, rows_so_far))
+                    notes.extend(self._set_header(header_line, rows_so_far))
         assert self.header is not None
         conversions = np.array([celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]).reshape(-1, 2)
         times, rows = [], []
@@ -309,4 +312,4 @@ class LogFollower:
             self.last_time = t
             times.append(t)
             rows.append(values)
-        return Rows(np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings))
+        return Rows(np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings), tuple(notes))
