@@ -332,6 +332,8 @@ def _decodes(data: bytes) -> bool:
 def date_and_clock(date_cell: str, clock_cell: str) -> bool:
     """Whether two cells are a date alone and a time of day: a logger that writes its time stamp
     in two columns (``Datum;Uhrzeit``, ``Date\tTime``), read as one stamp, date first."""
+    if ":" not in clock_cell or not any(mark in date_cell for mark in "./-"):
+        return False  # not worth importing pandas (0.5 s that a numeric live log does not need)
     import pandas as pd
 
     def parses(cell: str, formats: tuple[str, ...]) -> bool:
