@@ -205,6 +205,27 @@ def test_cli_modes_simulate_identify(tmp_path):
     assert set(data["correlation"]) >= {"x_t_m", "a_t_m_per_s2"}
 
 
+def test_cli_identifies_from_the_responses_a_file_has(tmp_path):
+    """A machine's own log has a few responses: the default "all" refused it ("no 'x_t_m' column");
+    now the responses present are used. A file without any force column was read with zero
+    excitation, silently; it is refused."""
+    csv = tmp_path / "r.csv"
+    assert run("feeddrive", "simulate", "--duration", "0.2", "--out", str(csv)).returncode == 0
+    lines = [line.split(",") for line in csv.read_text().splitlines()]
+    keep = [lines[0].index(c) for c in ("time_s", "F_t_N", "a_t_m_per_s2", "theta_m_rad", "omega_m_rad_per_s")]
+    partial = tmp_path / "partial.csv"
+    partial.write_text("".join(",".join(row[i] for i in keep) + "\n" for row in lines))
+    out = run("feeddrive", "identify", str(partial), "--json")
+    assert out.returncode == 0, out.stderr
+    assert set(json.loads(out.stdout)["correlation"]) == {"a_t_m_per_s2", "theta_m_rad", "omega_m_rad_per_s"}
+    every = run("feeddrive", "identify", str(partial), "--measured", "all")
+    assert every.returncode == 2 and "no 'x_t_m' column, which the measurement set 'all' needs" in every.stderr
+    unforced = tmp_path / "unforced.csv"
+    unforced.write_text("".join(",".join(row[i] for i in keep[:1] + keep[2:]) + "\n" for row in lines))
+    refused = run("feeddrive", "identify", str(unforced))
+    assert refused.returncode == 2 and "no force column; the excitation must be measured" in refused.stderr and "Traceback" not in refused.stderr
+
+
 def test_cli_refuses_the_printed_beta(tmp_path):
     path = tmp_path / "printed.toml"
     path.write_text("beta = 2.55e-3\n")

@@ -153,6 +153,10 @@ def read_response(path: str | Path) -> Response:
     if not measured:
         msg = f"{path}: no response column; expected some of: {', '.join(RESPONSE_COLUMNS)}"
         raise InputError(msg)
+    if not any(c in frame.columns for c in FORCE_COLUMNS):
+        # an excitation taken as zero leaves nothing to identify: the result would be the guess
+        msg = f"{path}: no force column; the excitation must be measured in one at least of: {', '.join(FORCE_COLUMNS)} (the others are taken as zero)"
+        raise InputError(msg)
     numeric = frame.apply(pd.to_numeric, errors="coerce")
     for column in ["time_s", *measured, *[c for c in FORCE_COLUMNS if c in frame.columns]]:
         bad = numeric[column].isna()
