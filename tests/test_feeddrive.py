@@ -250,3 +250,19 @@ def test_results_show_their_answer_in_a_notebook_not_their_arrays():
     assert repr(response).startswith("Response(51 samples at 10000 Hz, 12 of 12 responses: x_t_m, ")
     text = repr(identify_feed_drive(response, default_guess()))
     assert len(text.splitlines()) == 9 and text.splitlines()[1].startswith("  K1: ")
+
+
+def test_a_response_time_printed_with_few_digits_is_the_even_grid(tmp_path):
+    """3 kHz printed to six decimals steps 0.000333 / 0.000334 s: refused before as uneven. Within
+    1 % the even grid is taken; a missing sample (a step of two) is refused, naming its row."""
+    response = simulate(FeedDriveParameters(), sample_rate_Hz=3000.0, duration_s=0.01)
+    path = write_response(response, tmp_path / "r.csv")
+    lines = path.read_text().splitlines()
+    rounded = [lines[0]] + [",".join([f"{float(line.split(',')[0]):.6f}", *line.split(",")[1:]]) for line in lines[1:]]
+    (tmp_path / "rounded.csv").write_text("\n".join(rounded) + "\n")
+    back = read_response(tmp_path / "rounded.csv")
+    np.testing.assert_allclose(np.diff(back.time_s), 1 / 3000.0, rtol=1e-9)
+    np.testing.assert_array_equal(back.values, read_response(path).values)
+    (tmp_path / "gap.csv").write_text("\n".join(lines[:6] + lines[7:]) + "\n")
+    with pytest.raises(InputError, match=r"evenly spaced \(within 1 %\).*row 7 comes 0.000666667 s after the one before, against a median step of 0.000333333 s"):
+        read_response(tmp_path / "gap.csv")
