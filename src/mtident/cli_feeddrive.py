@@ -21,7 +21,7 @@ from mtident.feeddrive import (
     simulate,
     write_response,
 )
-from mtident.feeddrive.identify import MEASUREMENT_SETS, default_guess
+from mtident.feeddrive.identify import MEASUREMENT_SETS, PRESENT, default_guess
 from mtident.feeddrive.model import EXCITATION_KINDS
 from mtident.feeddrive.params import COORDINATES
 
@@ -99,8 +99,8 @@ def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz:
 @click.option("--truth", "truth_path", type=click.Path(dir_okay=False), help="TOML true parameters (simulated data): adds the error table (seed 004 Table 3).")
 @click.option(
     "--measured",
-    type=click.Choice(["present", *MEASUREMENT_SETS]),
-    default="present",
+    type=click.Choice([PRESENT, *MEASUREMENT_SETS]),
+    default=PRESENT,
     show_default=True,
     help="present: every response column the file has; all: the 12 (refused if one is missing); realistic: table acceleration + motor angle and velocity.",
 )
@@ -116,9 +116,7 @@ def identify_command(file: str, guess_path: str | None, truth_path: str | None, 
     truth = load_parameters(truth_path) if truth_path else None
     steps = len(response.time_s)
     with stderr.status(f"filtering {steps} samples…") as status:
-        # "present": the responses the file has (a machine's own log seldom has all 12)
-        which = tuple(i for i in range(response.values.shape[1]) if not np.all(np.isnan(response.values[:, i]))) if measured == "present" else measured
-        result = identify_feed_drive(response, guess, which, noise_fraction, preset, progress=lambda k, n: status.update(f"filtering: {k}/{n} samples"))
+        result = identify_feed_drive(response, guess, measured, noise_fraction, preset, progress=lambda k, n: status.update(f"filtering: {k}/{n} samples"))
     for note in result.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
     if plot_path:

@@ -23,12 +23,12 @@ import numpy as np
 
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import CovarianceError, InputError, NegativeWeightWarning
-from mtident.feeddrive.model import accelerations, exact_step, input_matrix, rk4_linear_step, system_matrix
+from mtident.feeddrive.model import exact_step, input_matrix, rk4_linear_step, system_matrix
 from mtident.feeddrive.params import IDENTIFIED, FeedDriveParameters, validate
-from mtident.feeddrive.simulate import RESPONSE_COLUMNS, Response, simulate, substeps_for
+from mtident.feeddrive.simulate import RESPONSE_COLUMNS, Response, run_responses, simulate, substeps_for
 from mtident.ukf import FilterConfig, GaussianState, MerweScaledSigmaPoints, filter_step, initial_carry
 
-__all__ = ["FeedDriveIdentification", "identify_feed_drive", "MEASUREMENT_SETS", "default_guess"]
+__all__ = ["FeedDriveIdentification", "identify_feed_drive", "MEASUREMENT_SETS", "PRESENT", "default_guess"]
 
 # Which responses are measured: all 12 (seed 004), or what a machine usually has:
 # table acceleration (accelerometer), motor angle and velocity (encoder).
@@ -36,6 +36,8 @@ MEASUREMENT_SETS = {
     "all": tuple(range(12)),
     "realistic": (RESPONSE_COLUMNS.index("a_t_m_per_s2"), RESPONSE_COLUMNS.index("theta_m_rad"), RESPONSE_COLUMNS.index("omega_m_rad_per_s")),
 }
+# The measurement set of the responses a file has (a machine's own log seldom has all 12).
+PRESENT = "present"
 # K1 low and K2 high keep the guess stable (K2 > K1).
 GUESS_FACTORS = np.array([0.7, 1.3, 1.3, 0.7, 1.3, 0.7, 1.3, 0.7])
 
@@ -158,12 +160,7 @@ def _open_loop_check(estimate: FeedDriveParameters, response: Response, states: 
         phi, gamma = exact_step(system_matrix(estimate), input_matrix(estimate), float(response.time_s[1] - response.time_s[0]))
     except (InputError, np.linalg.LinAlgError):
         return []  # a non-physical estimate: the filter's own notes and intervals speak for it
-    x = np.empty((len(response.time_s) - start, 8))
-    x[0] = states[start]
-    drive = response.forces[start:-1] @ gamma.T
-    for k in range(len(x) - 1):
-        x[k + 1] = phi @ x[k] + drive[k]
-    replay = np.hstack([x, accelerations(estimate, x, response.forces[start:])])[:, idx]
+    replay = run_responses(estimate, phi, gamma, states[start], response.forces[start:])[:, idx]
     with np.errstate(invalid="ignore", over="ignore"):
         misfit = np.sqrt(np.nanmean(((replay - response.values[start:, idx]) / noise) ** 2, axis=0))
     worst = int(np.nanargmax(np.where(np.isfinite(misfit), misfit, np.inf))) if np.any(~(misfit <= _OPEN_LOOP_LIMIT)) else -1
@@ -196,7 +193,7 @@ def identify_feed_drive(
     guess : FeedDriveParameters
         Starting point; masses, inertias and β are taken as known. Default:
         :func:`default_guess` (±30 % off the shipped set).
-    measured : {"all", "realistic"} or tuple of int
+    measured : {"all", "realistic", "present"} or tuple of int
         Which of the 12 responses the filter uses (must be present in ``response``).
     noise_fraction : float
         Measurement noise standard deviation as a fraction of each response's RMS.
@@ -213,11 +210,12 @@ def identify_feed_drive(
         :mod:`mtident.ukf` engine; both compute the same filter.
     """
     guess = validate(guess or default_guess())
-    if isinstance(measured, str) and measured not in MEASUREMENT_SETS:
-        msg = f"measurement set {measured!r} is not one of: {', '.join(MEASUREMENT_SETS)}"
+    if isinstance(measured, str) and measured not in (PRESENT, *MEASUREMENT_SETS):
+        msg = f"measurement set {measured!r} is not one of: {', '.join((PRESENT, *MEASUREMENT_SETS))}"
         raise InputError(msg)
-    indices = MEASUREMENT_SETS[measured] if isinstance(measured, str) else tuple(measured)
-    missing = [RESPONSE_COLUMNS[i] for i in indices if np.all(np.isnan(response.values[:, i]))]
+    in_file = tuple(i for i in range(len(RESPONSE_COLUMNS)) if not np.all(np.isnan(response.values[:, i])))
+    indices = in_file if measured == PRESENT else MEASUREMENT_SETS[measured] if isinstance(measured, str) else tuple(measured)
+    missing = [RESPONSE_COLUMNS[i] for i in indices if i not in in_file]
     if missing:
         msg = f"the response has no {missing[0]!r} column, which the measurement set {measured!r} needs"
         raise InputError(msg)

@@ -12,7 +12,7 @@ from mtident.exceptions import InputError
 from mtident.feeddrive.model import Excitation, accelerations, exact_step, input_matrix, rk4_linear_step, system_matrix
 from mtident.feeddrive.params import FeedDriveParameters, validate
 
-__all__ = ["Response", "simulate", "write_response", "read_response", "RESPONSE_COLUMNS", "FORCE_COLUMNS", "substeps_for"]
+__all__ = ["Response", "simulate", "run_responses", "write_response", "read_response", "RESPONSE_COLUMNS", "FORCE_COLUMNS", "substeps_for"]
 
 RESPONSE_COLUMNS = (
     "x_t_m", "x_b_m", "theta_b_rad", "theta_m_rad",
@@ -55,6 +55,19 @@ def substeps_for(p: FeedDriveParameters, h: float, max_phase_step: float = 0.01)
     omega = np.abs(np.linalg.eigvals(system_matrix(p))).max()
     needed = max(1, int(np.ceil(omega * h / max_phase_step)))
     return 1 << (needed - 1).bit_length()
+
+
+def run_responses(p: FeedDriveParameters, phi: FloatArray, gamma: FloatArray, start: FloatArray, forces: FloatArray) -> FloatArray:
+    """The 12 responses (N, 12) from state ``start`` under ``forces`` (N, 4), stepped by (phi, gamma).
+
+    The input over [t_k, t_k+1) is forces[k]; row 0 is ``start``.
+    """
+    states = np.empty((len(forces), 8))
+    states[0] = start
+    drive = forces[:-1] @ gamma.T
+    for k in range(len(forces) - 1):
+        states[k + 1] = phi @ states[k] + drive[k]
+    return np.hstack([states, accelerations(p, states, forces)])
 
 
 def simulate(
@@ -109,12 +122,7 @@ def simulate(
     else:
         msg = f"method {method!r}: expected 'rk4' or 'exact'"
         raise InputError(msg)
-    states = np.zeros((count, 8))
-    # The input over [t_k, t_k+1) is forces[k]; the state at t_0 is rest.
-    drive = forces[:-1] @ gamma.T
-    for k in range(count - 1):
-        states[k + 1] = phi @ states[k] + drive[k]
-    values = np.hstack([states, accelerations(p, states, forces)])
+    values = run_responses(p, phi, gamma, np.zeros(8), forces)
     if noise_fraction > 0:
         assert rng is not None
         rms = np.sqrt(np.mean(values**2, axis=0))
