@@ -426,3 +426,16 @@ def test_slashed_dates_am_pm_and_clocks_without_seconds(tmp_path, fmt, start):
         assert not rows.warnings
         times.extend(rows.time_min)
     np.testing.assert_allclose(times, minutes)
+
+
+def test_header_sensors_are_the_ones_the_first_poll_takes(write_csv):
+    """watch --ambient resolved the sensors from the header with its own rules (a status column was
+    kept as a sensor there, left out by the follower); it now asks the follower."""
+    from mtident.io.follow import LogFollower
+
+    path = write_csv("time,room,T1,Status\n" + "".join(f"{m},18.0,{20 + m / 10:.1f},OK\n" for m in range(10)))
+    assert LogFollower(path, None, room="room").header_sensors() == ["T1", "room"]
+    follower = LogFollower(path, None, room="room")
+    follower.poll()
+    assert follower.sensors == ["T1", "room"]
+    assert LogFollower(write_csv("time,T1\n", "empty.csv"), None).header_sensors() is None

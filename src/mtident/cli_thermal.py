@@ -248,7 +248,6 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 
     from rich.live import Live
 
-    from mtident.io.dialect import header_names
     from mtident.io.follow import LogFollower
     from mtident.thermal.monitor import Monitor, MonitorSettings, minutes
 
@@ -280,10 +279,8 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     if ambient_col is not None:
         # read the room column with the sensors; it is split off again below
         if names is None and path.is_file():
-            header = header_names(path)
-            time_name = time_col or (header[0] if header else "")
-            temperatures = header_names(path, temperatures_only=True)  # by a units row
-            names = [h for h in header if h not in (time_name, ambient_col) and h in temperatures]
+            # the sensors as the follower will take them (a resumed run compares them with its state)
+            names = LogFollower(path, None, time_col, time_unit, room=ambient_col).header_sensors()
         # a log not created yet: the follower reads every sensor and the room last once its header comes
         if names is not None:
             names = [n for n in names if n != ambient_col] + [ambient_col]

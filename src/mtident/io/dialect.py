@@ -41,6 +41,7 @@ __all__ = [
     "date_and_clock",
     "celsius_conversion",
     "temperature_columns",
+    "text_only_cells",
     "HEAD_BYTES",
     "TIME_OF_DAY_FORMATS",
     "MINUTES_PER_DAY",
@@ -134,6 +135,21 @@ class CsvDialect:
 
 def _unit_key(cell: str) -> str:
     return re.sub(r"[\s\[\]()°º.Â_]", "", cell).lower()
+
+
+def text_only_cells(cells: list[str]) -> bool:
+    """Whether a column's cells hold text and not one number (empty and NaN cells aside; a decimal
+    comma counts as a number): a logger's status channel, no sensor. Both readers of a log use it."""
+
+    def number(cell: str) -> bool:
+        try:
+            float(cell.replace(",", "."))
+        except ValueError:
+            return False
+        return True
+
+    written = [c.strip() for c in cells if c.strip() and c.strip().lower() != "nan"]
+    return bool(written) and not any(number(c) for c in written)
 
 
 def celsius_conversion(unit: str) -> tuple[float, float] | None:
@@ -253,17 +269,15 @@ def _delimiter(header: str, rows: list[str]) -> str:
     return ranked[0] if ranked else ","
 
 
-def header_names(file: Path, temperatures_only: bool = False) -> list[str]:
+def header_names(file: Path) -> list[str]:
     """The column names of a log, read from its head only (a live log may be large); [] while
-    its header line is incomplete. ``temperatures_only`` leaves out the columns a units row
-    gives a unit other than a temperature's."""
+    its header line is incomplete."""
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     dialect = sniff_dialect(head)
     if dialect is None:
         return []
-    names = [name for name in dialect.cells(_header_line(head, dialect)) if name]
-    return [n for n in names if not temperatures_only or celsius_conversion(dialect.unit_of(n)) is not None]
+    return [name for name in dialect.cells(_header_line(head, dialect)) if name]
 
 
 def _header_line(head: bytes, dialect: CsvDialect) -> str:

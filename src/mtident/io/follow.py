@@ -25,7 +25,7 @@ from __future__ import annotations
 import csv
 import io
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +46,7 @@ from mtident.io.dialect import (
     sniff_dialect,
     stamp_format,
     temperature_columns,
+    text_only_cells,
 )
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, time_unit_assumed, time_unit_factor
 
@@ -152,19 +153,23 @@ class LogFollower:
         chosen = self.sensors if asked and self.sensors is not None else names
         notes = []
         if not asked:
-            text_only = [n for n in chosen if n != self.room and self._text_only(header.index(n), rows)]
+            text_only = [n for n in chosen if n != self.room and text_only_cells([row[header.index(n)] for row in rows if header.index(n) < len(row)])]
             if text_only and len(text_only) < len([n for n in chosen if n != self.room]):
                 notes.append(f"left out, no numbers in them: {', '.join(text_only)}")
                 chosen = [n for n in chosen if n not in text_only]
-        if not asked and self.room is not None:
-            chosen = [n for n in chosen if n != self.room] + [self.room]
+        room_last = None if asked else self.room  # read after the sensors
+        if room_last is not None:
+            chosen = [n for n in chosen if n != room_last] + [room_last]
         missing = [s for s in chosen if s not in header]
         if missing:
             msg = f"{self.path}: no sensor column {missing[0]!r}; the log has: {', '.join(names)}"
             raise InputError(msg)
-        if not asked and self.room is not None:  # the room sensor, named, must be a temperature
+        if room_last is not None and len(chosen) == 1:
+            msg = f"{self.path}: no sensor column besides the room sensor {room_last!r}"
+            raise InputError(msg)
+        if room_last is not None:  # the room sensor, named, must be a temperature
             sensors, unit_notes = temperature_columns(chosen[:-1], False, self.dialect, self.path)
-            chosen = [*sensors, *temperature_columns([self.room], True, self.dialect, self.path)[0]]
+            chosen = [*sensors, *temperature_columns(chosen[-1:], True, self.dialect, self.path)[0]]
         else:
             chosen, unit_notes = temperature_columns(list(chosen), asked, self.dialect, self.path)
         notes.extend(unit_notes)
@@ -173,19 +178,31 @@ class LogFollower:
         self.columns = [header.index(time_name)] + [header.index(s) for s in chosen]
         return notes
 
-    def _text_only(self, index: int, rows: list[list[str]]) -> bool:
-        """Whether column ``index`` holds text and not one number in ``rows`` (empty cells aside)."""
+    def _data_lines(self, lines: list[str], notes: list[str]) -> list[str]:
+        """The data lines among the log's first lines (preamble, header and units row taken off);
+        the header is taken on the first call, its notes added to ``notes``."""
         assert self.dialect is not None
-        cells = [row[index].strip() for row in rows if index < len(row) and row[index].strip() and row[index].strip().lower() != "nan"]
+        lines = lines[self.dialect.preamble_lines :]
+        if not lines:
+            return []
+        header_line, lines = lines[0], lines[1 + bool(self.dialect.units) :]
+        if self.header is None:
+            rows_so_far = [cells for cells in csv.reader(lines, delimiter=self.dialect.delimiter) if any(c.strip() for c in cells)]
+            notes.extend(self._set_header(header_line, rows_so_far))
+        return lines
 
-        def number(cell: str) -> bool:
-            try:
-                self.dialect.number(cell)  # type: ignore[union-attr]
-            except ValueError:
-                return False
-            return True
-
-        return bool(cells) and not any(number(c) for c in cells)
+    def header_sensors(self) -> list[str] | None:
+        """The sensor columns (the room last) as the first poll will take them, from the log's head
+        alone; None while it has no complete data row. For a caller that must know them before
+        reading (a resumed monitor compares them with its state file's)."""
+        with open(self.path, "rb") as handle:
+            head = handle.read(HEAD_BYTES)
+        probe = replace(self, dialect=sniff_dialect(head, wait_for_row=True), header=None)
+        if probe.dialect is None:
+            return None
+        complete = head[: head.rfind(b"\n") + 1].decode(probe.dialect.encoding, errors="replace")
+        probe._data_lines(complete.splitlines(), [])
+        return probe.sensors
 
     def _parse_time(self, text: str) -> float:
         """Minutes relative to the first sample; raises ValueError for an unreadable cell."""
@@ -273,12 +290,7 @@ class LogFollower:
         text = complete.decode(dialect.encoding, errors="replace")
         lines = text.splitlines()
         if start_offset == 0:
-            lines = lines[dialect.preamble_lines :]
-            if lines:
-                header_line, lines = lines[0], lines[1 + bool(dialect.units) :]
-                if self.header is None:
-                    rows_so_far = [cells for cells in csv.reader(lines, delimiter=dialect.delimiter) if any(c.strip() for c in cells)]
-                    notes.extend(self._set_header(header_line, rows_so_far))
+            lines = self._data_lines(lines, notes)
         assert self.header is not None
         conversions = np.array([celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]).reshape(-1, 2)
         times, rows = [], []

@@ -39,6 +39,7 @@ from mtident.io.dialect import (
     read_csv,
     stamp_format,
     temperature_columns,
+    text_only_cells,
 )
 
 if TYPE_CHECKING:
@@ -215,11 +216,7 @@ def _text_only(column: pd.Series) -> bool:
     """Whether a column holds text and not one number (empty cells aside)."""
     import pandas as pd
 
-    if pd.api.types.is_numeric_dtype(column):
-        return False
-    cells = column.dropna().astype(str).str.strip()
-    cells = cells[(cells != "") & (cells.str.lower() != "nan")]
-    return len(cells) > 0 and not pd.to_numeric(cells.str.replace(",", ".", regex=False), errors="coerce").notna().any()
+    return not pd.api.types.is_numeric_dtype(column) and text_only_cells(column.dropna().astype(str).tolist())
 
 
 def _clock_column(frame: pd.DataFrame, header: str) -> str | None:
