@@ -64,4 +64,8 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
             "Zeit\t" + "\t".join(f"{n} °C" for n in names), [stamp(m, "%d.%m.%Y %H:%M:%S") + "\t" + "\t".join(c) for m, c in zip(t, cells, strict=True)], "\r\n"
         ).encode("cp1252"),
         "time of day, UTF-8 byte-order mark": ("\ufeff" + table("clock," + ",".join(names), [stamp(m, "%H:%M:%S") + "," + ",".join(c) for m, c in zip(t, cells, strict=True)])).encode(),
+        # a logger's settings before its table, without '#' (as Graphtec, Yokogawa and Hioki write them)
+        "settings written before the header": ("Logger: GL240\nStart: 22.11.2026 08:00:00\nInterval,60,s\n\n" + plain).encode(),
+        # Excel's "Unicode text": UTF-16 with a byte-order mark, tabs, CRLF
+        "UTF-16, tabs (Excel's Unicode text)": table("time_min\t" + "\t".join(f"{n} °C" for n in names), [f"{m:g}\t" + "\t".join(c) for m, c in zip(t, cells, strict=True)], "\r\n").encode("utf-16"),
     }

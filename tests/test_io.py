@@ -179,8 +179,8 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
 @given(
     delimiter=st.sampled_from([",", ";", "\t"]),
     decimal_comma=st.booleans(),
-    preamble=st.lists(st.sampled_from(["# logger", "", "#channels: 4", "   ", "sep=DELIMITER"]), max_size=3),
-    cp1252=st.booleans(),
+    preamble=st.lists(st.sampled_from(["# logger", "", "#channels: 4", "   ", "sep=DELIMITER", "Logger: GL240", "Interval: 60 s", "Start,22.11.2026"]), max_size=3),
+    encoding=st.sampled_from(["utf-8", "cp1252", "utf-16", "utf-16-le", "utf-16-be"]),
     crlf=st.booleans(),
     trailing=st.booleans(),
     quoted=st.booleans(),
@@ -188,8 +188,9 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     units=st.sampled_from(["none", "min", "s"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
-def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, cp1252, crlf, trailing, quoted, stamps, units, cuts):
-    """Every combination of delimiter, decimal mark, preamble, encoding, line end, trailing
+def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, encoding, crlf, trailing, quoted, stamps, units, cuts):
+    """Every combination of delimiter, decimal mark, preamble (also a logger's settings without
+    '#'), encoding (also UTF-16 with and without a byte-order mark), line end, trailing
     delimiter, quoted cells (as spreadsheets write them), time format (also a date and a time of day in two columns) and a units row under the header, read whole and followed live in random pieces, gives the
     plain file's times and temperatures."""
     import datetime as dt
@@ -226,7 +227,7 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     if units != "none":  # the time's unit only where the time is a number
         lines.append(row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]"]))
     lines += [row([*time_cells(m), *(number(v) for v in values)]) for m, values in zip(t, temperatures, strict=True)]
-    data = (end.join(lines) + end).encode("cp1252" if cp1252 else "utf-8")
+    data = (end.join(lines) + end).encode(encoding)
     folder = tmp_path_factory.mktemp("dialect")
     whole = folder / "whole.csv"
     whole.write_bytes(data)
@@ -439,3 +440,22 @@ def test_header_sensors_are_the_ones_the_first_poll_takes(write_csv):
     follower.poll()
     assert follower.sensors == ["T1", "room"]
     assert LogFollower(write_csv("time,T1\n", "empty.csv"), None).header_sensors() is None
+
+
+def test_a_short_first_row_keeps_the_header(write_csv):
+    """The header is looked for further down only where a later line heads a table; a first data
+    row with a cell missing (a channel not ready) must not make the rows below a "header"."""
+    rows = "".join(f"{k},{20 + k / 10:.2f},{19 + k / 10:.2f}\n" for k in range(1, 20))
+    log = read_temperature_log(write_csv("time_min,A,B\n0,20.1\n" + rows))
+    assert log.sensors == ("A", "B")
+    np.testing.assert_allclose(log.time_min, np.arange(20.0))
+    assert np.isnan(log.temperature_C[0, 1]) and log.temperature_C[1, 1] == 19.1
+
+
+def test_settings_before_the_header_with_as_many_cells_are_no_header(write_csv):
+    """'Interval,60,s' splits into as many cells as the table 'time_min,A,B', but no data row
+    follows it: the header is the line that a data row follows."""
+    rows = "".join(f"{k},{20 + k / 10:.2f},{19 + k / 10:.2f}\n" for k in range(10))
+    log = read_temperature_log(write_csv("Logger: GL240\nInterval,60,s\nChannels,2,K\ntime_min,A,B\n" + rows))
+    assert log.sensors == ("A", "B")
+    np.testing.assert_allclose(log.temperature_C[:, 0], 20 + np.arange(10) / 10)

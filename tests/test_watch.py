@@ -54,6 +54,21 @@ def test_follower_reads_new_rows_and_waits_for_a_partial_line(tmp_path):
     assert follower.poll().time_min.size == 0
 
 
+def test_follower_waits_for_a_data_row_below_a_loggers_settings(tmp_path):
+    """A logger writes its settings (no '#') and the header before its first row: the follower
+    must not take the first settings line for the header meanwhile (it keeps the dialect)."""
+    path = tmp_path / "live.csv"
+    path.write_text("Logger: GL240\nInterval,60,s\n\ntime_min;A;B\n[min];[°C];[°C]\n")
+    follower = LogFollower(path)
+    rows = follower.poll()
+    assert len(rows.time_min) == 0 and follower.dialect is None
+    with path.open("a") as out:
+        out.write("0;20,0;19,0\n1;20,1;19,1\n")
+    rows = follower.poll()
+    np.testing.assert_array_equal(rows.temperature_C, [[20.0, 19.0], [20.1, 19.1]])
+    assert follower.sensors == ["A", "B"] and not rows.warnings
+
+
 @pytest.mark.parametrize("dialect", list(logger_dialects(np.arange(3.0), {"A": np.zeros(3)}))[1:])
 def test_follower_reads_logs_as_loggers_write_them_like_the_file_reader(tmp_path, dialect):
     """Written in pieces cut anywhere (in the preamble, mid-header, mid-line), and resumed

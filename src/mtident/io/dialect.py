@@ -1,9 +1,9 @@
 """How a data-acquisition program wrote its CSV: delimiter, decimal mark, preamble, encoding, time stamps.
 
 Loggers differ. European ones write ``;`` between cells and a decimal comma
-(``17,90``); many write a preamble of ``#`` lines (device, channel setup) before
-the header; Windows programs write cp1252, where ``°`` is the single byte 0xB0
-that UTF-8 refuses; a trailing delimiter leaves an empty last column; time
+(``17,90``); many write a preamble (device, channel setup), as ``#`` lines or
+as plain lines, before the header; Windows programs write cp1252, where ``°`` is
+the single byte 0xB0 that UTF-8 refuses, or UTF-16 (Excel's "Unicode text"); a trailing delimiter leaves an empty last column; time
 stamps come as ISO 8601, as ``22.11.2026 08:00:00`` (day first, as everywhere
 dots separate the date), as ``11/22/2026 3:05:00 PM`` (month first, as US loggers
 write it, unless the log shows day first), as the time of day alone, or as a date
@@ -90,9 +90,11 @@ class CsvDialect:
     delimiter : {",", ";", "\\t"}
     decimal : {".", ","}
     preamble_lines : int
-        Lines before the header: ``#`` comments, blank lines, Excel's ``sep=;``.
-    encoding : {"utf-8-sig", "cp1252"}
-        UTF-8 (a byte-order mark is skipped), or Windows' cp1252 where UTF-8 fails.
+        Lines before the header: ``#`` comments, blank lines, Excel's ``sep=;``, a
+        logger's settings written before its table.
+    encoding : {"utf-8-sig", "cp1252", "utf-16-le", "utf-16-be"}
+        UTF-8 (a byte-order mark is skipped), Windows' cp1252 where UTF-8 fails, or
+        UTF-16 (Excel's "Unicode text"), told by its byte-order mark.
     units : tuple of (str, str)
         Each column's unit from a units row under the header (``min;°C;°C``);
         empty if there is none. The data rows begin after it.
@@ -112,6 +114,20 @@ class CsvDialect:
     def number(self, cell: str) -> float:
         """A cell as a float under this decimal mark; ValueError if it is none."""
         return float(cell.replace(",", ".") if self.decimal == "," else cell)
+
+    def decode(self, data: bytes) -> str:
+        """Bytes of the log, read from a line's start, as text (a byte-order mark dropped)."""
+        return data.decode(self.encoding, errors="replace").removeprefix("\ufeff")
+
+    def complete_length(self, data: bytes) -> int:
+        """How many bytes of ``data`` (read from a line's start) are complete lines."""
+        newline = "\n".encode(self.encoding.removesuffix("-sig"))
+        end = len(data)
+        while (at := data.rfind(newline, 0, end)) >= 0:
+            if at % len(newline) == 0:  # UTF-16: a newline's two bytes, not the halves of two characters
+                return at + len(newline)
+            end = at + len(newline) - 1
+        return 0
 
     @property
     def head_lines(self) -> int:
@@ -190,27 +206,23 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
     return kept, notes
 
 
-def sniff_dialect(head: bytes, wait_for_row: bool = False) -> CsvDialect | None:
+def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) -> CsvDialect | None:
     """The dialect of a log from its first bytes; None while its header line is incomplete
-    (with ``wait_for_row``, a live log's: until its first data row is complete).
+    (with ``wait_for_row``, a live log's: until its first data row is complete). ``whole``: the
+    head is the whole file, its last line complete without a newline.
 
     The delimiter is the one an Excel ``sep=`` line states, else the candidate
     that splits the header line into the most cells and the data rows into as
     many (a header has no decimal commas, so ``;`` against ``,`` is clear there,
     where csv.Sniffer, looking at data rows, would take the decimal comma for the
     delimiter). A decimal comma is assumed when the delimiter is not a comma and a
-    data cell reads like ``17,90`` or ``1,5e-05``.
+    data cell reads like ``17,90`` or ``1,5e-05``. The header is the first line
+    that is no comment, or, where the lines after it do not continue its table,
+    the line that heads the table below (:func:`_table_start`).
     """
-    try:
-        text, encoding = head.decode("utf-8-sig"), "utf-8-sig"
-    except UnicodeDecodeError as exc:
-        # a multi-byte character cut off at the end of the head is not a decoding failure
-        if exc.start >= len(head) - 3 and _decodes(head[: exc.start]):
-            text, encoding = head[: exc.start].decode("utf-8-sig"), "utf-8-sig"
-        else:
-            text, encoding = head.decode("cp1252", errors="replace"), "cp1252"
+    text, encoding = _decoded_head(head)
     lines = text.split("\n")
-    complete = lines[:-1]  # the last piece has no newline yet
+    complete = lines if whole else lines[:-1]  # the last piece has no newline yet
     preamble, stated = 0, None
     while preamble < len(complete):
         line = complete[preamble]
@@ -220,6 +232,10 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False) -> CsvDialect | None:
         elif line.strip() and not line.lstrip().startswith("#"):
             break
         preamble += 1
+    table_start = _table_start(complete, preamble, stated, wait_for_row)
+    if table_start is None:  # a live log's settings written, its table not yet
+        return None
+    preamble = table_start
     if preamble + wait_for_row >= len(complete):
         return None
     header = complete[preamble]
@@ -240,6 +256,76 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False) -> CsvDialect | None:
         # read every reading as NaN.
         return None
     return dialect
+
+
+def _decoded_head(head: bytes) -> tuple[str, str]:
+    """The head as text, and its encoding: UTF-16 by its byte-order mark (Excel's "Unicode
+    text", Windows programs) or by a zero byte in every other place, else UTF-8, else cp1252."""
+    utf16 = _utf16(head)
+    if utf16 is not None:
+        return head[: len(head) // 2 * 2].decode(utf16, errors="replace").removeprefix("\ufeff"), utf16
+    try:
+        return head.decode("utf-8-sig"), "utf-8-sig"
+    except UnicodeDecodeError as exc:
+        # a multi-byte character cut off at the end of the head is not a decoding failure
+        if exc.start >= len(head) - 3 and _decodes(head[: exc.start]):
+            return head[: exc.start].decode("utf-8-sig"), "utf-8-sig"
+        return head.decode("cp1252", errors="replace"), "cp1252"
+
+
+def _utf16(head: bytes) -> str | None:
+    if head.startswith(b"\xff\xfe"):
+        return "utf-16-le"
+    if head.startswith(b"\xfe\xff"):
+        return "utf-16-be"
+    sample = head[:200]
+    if len(sample) >= 8 and sample.count(0) * 2 >= len(sample) - 1:  # ASCII text in UTF-16 without a mark
+        return "utf-16-le" if not any(sample[1::2]) else "utf-16-be" if not any(sample[0::2]) else None
+    return None
+
+
+def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row: bool) -> int | None:
+    """The header's line among the complete ``lines``: ``first`` (the first that is no comment),
+    unless the lines after it do not continue its table and a later line heads one: a logger's
+    settings ("Logger: GL240", "Interval,60,s") written before the header without ``#``.
+
+    A later line heads a table when it begins like no data row, the lines after it (up to 20)
+    have as many cells, and the first of them (or the one after a units row) begins like a data
+    row, with its time. A live log (``wait_for_row``) whose first line heads nothing waits (None)
+    until a data row follows the header; a log whose rows do not match its header in number (a
+    delimiter at the end of each row) keeps ``first``.
+    """
+    following = [line for line in lines[first + 1 : first + 21] if line.strip()]
+    if first >= len(lines) or not following or _same_cells(lines[first], following, stated) is not None:
+        return first
+    for k in range(first + 1, len(lines)):
+        following = [line for line in lines[k + 1 : k + 21] if line.strip()]
+        delimiter = _same_cells(lines[k], following, stated) if following and not _data_like(lines[k]) else None
+        if delimiter is None:
+            continue
+        below = next(csv.reader(following[:1], delimiter=delimiter))
+        first_row = following[1:2] if _is_units_row([c.strip() for c in below], CsvDialect(delimiter)) else following[:1]
+        if first_row and _data_like(first_row[0]):
+            return k
+    written = [line for line in lines if line.strip()]
+    if wait_for_row and not _data_like(written[-1]):
+        return None
+    return first
+
+
+def _same_cells(header: str, rows: list[str], stated: str | None) -> str | None:
+    """A delimiter that splits ``header`` into two cells or more and every row into as many."""
+    for delimiter in (stated,) if stated else _DELIMITERS:
+        count = len(next(csv.reader([header], delimiter=delimiter), []))
+        if count >= 2 and all(len(row) == count for row in csv.reader(rows, delimiter=delimiter)):
+            return delimiter
+    return None
+
+
+def _data_like(line: str) -> bool:
+    """A line that begins like a data row: with a number or a date (a digit, a sign or a point)."""
+    text = line.strip().lstrip('"')
+    return text[:1].isdigit() or (text[:1] in "+-." and text[1:2].isdigit())
 
 
 def _is_units_row(cells: list[str], dialect: CsvDialect) -> bool:
@@ -281,7 +367,7 @@ def header_names(file: Path) -> list[str]:
 
 
 def _header_line(head: bytes, dialect: CsvDialect) -> str:
-    return head.decode(dialect.encoding, errors="replace").split("\n")[dialect.preamble_lines]
+    return dialect.decode(head).split("\n")[dialect.preamble_lines]
 
 
 def check_unique_names(header: list[str], source: str | Path) -> None:
@@ -311,7 +397,7 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         head = handle.read(HEAD_BYTES)
     # the whole file fits in the head: its last line is complete even without a newline
     whole = len(head) < HEAD_BYTES
-    dialect = sniff_dialect(head + b"\n" if whole else head)
+    dialect = sniff_dialect(head, whole=whole)
     if dialect is None and whole and head.strip():
         msg = f"{path}: no header line, only # comments and blank lines"
         raise InputError(msg)
@@ -331,6 +417,7 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         msg = f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})"
         raise InputError(msg) from exc
+    frame.columns = [str(c).removeprefix("\ufeff") for c in frame.columns]  # UTF-16's byte-order mark
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
     return frame.drop(columns=unnamed), dialect
 

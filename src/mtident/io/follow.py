@@ -200,7 +200,7 @@ class LogFollower:
         probe = replace(self, dialect=sniff_dialect(head, wait_for_row=True), header=None)
         if probe.dialect is None:
             return None
-        complete = head[: head.rfind(b"\n") + 1].decode(probe.dialect.encoding, errors="replace")
+        complete = probe.dialect.decode(head[: probe.dialect.complete_length(head)])
         probe._data_lines(complete.splitlines(), [])
         return probe.sensors
 
@@ -280,14 +280,13 @@ class LogFollower:
                     return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
             handle.seek(self.offset)
             chunk = handle.read()
-        end = chunk.rfind(b"\n")
-        if end < 0:
-            return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
-        complete = chunk[: end + 1]
-        start_offset = self.offset
-        self.offset += end + 1
         dialect = self.dialect
-        text = complete.decode(dialect.encoding, errors="replace")
+        end = dialect.complete_length(chunk)
+        if end == 0:
+            return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
+        start_offset = self.offset
+        self.offset += end
+        text = dialect.decode(chunk[:end])
         lines = text.splitlines()
         if start_offset == 0:
             lines = self._data_lines(lines, notes)
