@@ -184,7 +184,7 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     crlf=st.booleans(),
     trailing=st.booleans(),
     quoted=st.booleans(),
-    stamps=st.sampled_from(["minutes", "iso", "dotted", "time of day", "date, clock", "iso date, clock", "us slashed", "day-first slashed"]),
+    stamps=st.sampled_from(["minutes", "iso", "dotted", "dashed", "month name", "time of day", "date, clock", "iso date, clock", "us slashed", "day-first slashed"]),
     units=st.sampled_from(["none", "min", "s"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
@@ -212,7 +212,8 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
             return [f"{60 * minutes:g}"]
         if stamps.endswith("date, clock"):  # a stamp in two columns
             return [when.strftime("%Y-%m-%d" if stamps.startswith("iso") else "%d.%m.%Y"), when.strftime("%H:%M:%S")]
-        return [{"minutes": f"{minutes:g}", "iso": when.isoformat(), "dotted": when.strftime("%d.%m.%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]]
+        return [{"minutes": f"{minutes:g}", "iso": when.isoformat(), "dotted": when.strftime("%d.%m.%Y %H:%M:%S"),
+                "dashed": when.strftime("%d-%m-%Y %H:%M:%S"), "month name": when.strftime("%d-%b-%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]]
 
     def number(value: float) -> str:
         return f"{value:.2f}".replace(".", ",") if decimal_comma else f"{value:.2f}"
@@ -459,3 +460,14 @@ def test_settings_before_the_header_with_as_many_cells_are_no_header(write_csv):
     log = read_temperature_log(write_csv("Logger: GL240\nInterval,60,s\nChannels,2,K\ntime_min,A,B\n" + rows))
     assert log.sensors == ("A", "B")
     np.testing.assert_allclose(log.temperature_C[:, 0], 20 + np.arange(10) / 10)
+
+
+@pytest.mark.parametrize("fmt", ["%d-%m-%Y %H:%M:%S", "%d-%b-%Y %H:%M:%S"])
+def test_dashed_day_first_stamps(write_csv, fmt):
+    """22-11-2026 08:00:00 and 22-Nov-2026 08:00:00 (spreadsheets, LabVIEW) were refused as no time stamp."""
+    import datetime as dt
+
+    start = dt.datetime(2026, 11, 30, 23, 58, 0)  # across the end of the month
+    rows = "".join(f"{(start + dt.timedelta(minutes=k)).strftime(fmt)},{20 + k / 10:.2f}\n" for k in range(6))
+    log = read_temperature_log(write_csv("stamp,A\n" + rows))
+    np.testing.assert_allclose(log.time_min, np.arange(6.0))

@@ -5,7 +5,7 @@ Loggers differ. European ones write ``;`` between cells and a decimal comma
 as plain lines, before the header; Windows programs write cp1252, where ``°`` is
 the single byte 0xB0 that UTF-8 refuses, or UTF-16 (Excel's "Unicode text"); a trailing delimiter leaves an empty last column; time
 stamps come as ISO 8601, as ``22.11.2026 08:00:00`` (day first, as everywhere
-dots separate the date), as ``11/22/2026 3:05:00 PM`` (month first, as US loggers
+dots separate the date; so ``22-11-2026`` and ``22-Nov-2026``), as ``11/22/2026 3:05:00 PM`` (month first, as US loggers
 write it, unless the log shows day first), as the time of day alone, or as a date
 and a time of day in two columns; many write a row of units
 under the header (``min;°C;°C``, ``[s],[K]``), which states the time unit and the
@@ -61,15 +61,17 @@ TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M", "%I:%M:%S %p", "%I:%M
 # unless the first stamp says day first (22/11/2026); where the first stamp cannot tell (01/02),
 # the order whose steps are plausible at the first change of date is taken (:func:`other_date_order`).
 _DOTTED = tuple(f"%d.%m.{year} {clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
+# day first with dashes too (22-11-2026, and 22-Nov-2026 as spreadsheets and LabVIEW write it)
+_DASHED = tuple(f"%d-{month}-%Y {clock}" for month in ("%m", "%b") for clock in TIME_OF_DAY_FORMATS)
 _SLASHED = tuple(f"{date} {clock}" for date in ("%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y") for clock in TIME_OF_DAY_FORMATS)
-_STAMP_FORMATS = (*_DOTTED, *_SLASHED, "%Y-%m-%d %I:%M:%S %p", "%Y-%m-%d %I:%M %p", *TIME_OF_DAY_FORMATS)
+_STAMP_FORMATS = (*_DOTTED, *_DASHED, *_SLASHED, "%Y-%m-%d %I:%M:%S %p", "%Y-%m-%d %I:%M %p", *TIME_OF_DAY_FORMATS)
 MINUTES_PER_DAY = 1440.0
 # a step that long between two rows of a warm-up log is a date read in the wrong order
 IMPLAUSIBLE_STEP_MIN = 20 * MINUTES_PER_DAY
 # a unit at the end of a column's name: "Time [s]", "T1 (°C)"
 _UNIT_IN_NAME = re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*$")
 # a date without a time: the first of two time-stamp columns
-_DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%Y-%m-%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y")
+_DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%Y-%m-%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y")
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
 # as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
 # gives (scale, offset) to °C.
