@@ -66,6 +66,10 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
         "time of day, UTF-8 byte-order mark": ("\ufeff" + table("clock," + ",".join(names), [stamp(m, "%H:%M:%S") + "," + ",".join(c) for m, c in zip(t, cells, strict=True)])).encode(),
         # a logger's settings before its table, without '#' (as Graphtec, Yokogawa and Hioki write them)
         "settings written before the header": ("Logger: GL240\nStart: 22.11.2026 08:00:00\nInterval,60,s\n\n" + plain).encode(),
+        # Graphtec: settings as "key,value" lines, a row counter before the time, Y/M/D stamps, a millisecond column
+        "row counter, Y/M/D stamps, milliseconds": (
+            "Model,GL240\nTitle,spindle\n\n" + table("NO.,Time,ms," + ",".join(names), [f"{k + 1},{stamp(m, '%Y/%m/%d %H:%M:%S')},0," + ",".join(c) for k, (m, c) in enumerate(zip(t, cells, strict=True))])
+        ).encode(),
         # Excel's "Unicode text": UTF-16 with a byte-order mark, tabs, CRLF
         "UTF-16, tabs (Excel's Unicode text)": table("time_min\t" + "\t".join(f"{n} °C" for n in names), [f"{m:g}\t" + "\t".join(c) for m, c in zip(t, cells, strict=True)], "\r\n").encode("utf-16"),
     }

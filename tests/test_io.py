@@ -455,9 +455,9 @@ def test_a_short_first_row_keeps_the_header(write_csv):
 
 def test_settings_before_the_header_with_as_many_cells_are_no_header(write_csv):
     """'Interval,60,s' splits into as many cells as the table 'time_min,A,B', but no data row
-    follows it: the header is the line that a data row follows."""
+    follows it: the header is the line after the blank one, which a data row follows."""
     rows = "".join(f"{k},{20 + k / 10:.2f},{19 + k / 10:.2f}\n" for k in range(10))
-    log = read_temperature_log(write_csv("Logger: GL240\nInterval,60,s\nChannels,2,K\ntime_min,A,B\n" + rows))
+    log = read_temperature_log(write_csv("Logger: GL240\nInterval,60,s\nChannels,2,K\n\ntime_min,A,B\n" + rows))
     assert log.sensors == ("A", "B")
     np.testing.assert_allclose(log.temperature_C[:, 0], 20 + np.arange(10) / 10)
 

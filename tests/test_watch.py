@@ -939,3 +939,25 @@ def test_a_log_with_a_units_row_and_a_speed_channel(tmp_path):
     assert result["sensor"] == "spindle" and abs(result["steady_state_C"] - 26.7) < 0.3
     refused = mtident("thermal", "identify", str(log), "--sensor", "speed", cwd=tmp_path)
     assert refused.returncode == 2 and "not a temperature" in refused.stderr and "Traceback" not in refused.stderr
+
+
+def test_a_row_counter_and_a_millisecond_column_are_read_as_the_file_reader_reads_them(tmp_path):
+    """Graphtec writes 'NO.,Time,ms,CH1,...': the counter was taken for the time (in minutes: a
+    500-ms log read 60x too slow per row), and the millisecond column for a sensor. The time is
+    the stamp plus its milliseconds (two rows per second), the same live and whole."""
+    import datetime as dt
+
+    from mtident.io import read_temperature_log
+
+    start = dt.datetime(2026, 11, 22, 8, 0, 0)
+    rows = [f"{k + 1},{start + dt.timedelta(seconds=k // 2):%Y/%m/%d %H:%M:%S},{500 * (k % 2)},{20 + 0.01 * k:+.2f}" for k in range(40)]
+    path = tmp_path / "gl240.csv"
+    path.write_text("Model,GL240\n\nNO.,Time,ms,CH1\n" + "\n".join(rows) + "\n")
+    whole = read_temperature_log(path)
+    assert whole.sensors == ("CH1",) and whole.notes == ("left out, a row counter: NO.; the time is 'Time'",)
+    np.testing.assert_allclose(whole.time_min * 60, 0.5 * np.arange(40), atol=1e-9)
+    follower = LogFollower(path)
+    rows_read = follower.poll()
+    assert rows_read.notes == whole.notes and not rows_read.warnings
+    np.testing.assert_allclose(rows_read.time_min, whole.time_min, atol=1e-6)
+    np.testing.assert_array_equal(rows_read.temperature_C, whole.temperature_C)

@@ -42,6 +42,8 @@ __all__ = [
     "celsius_conversion",
     "temperature_columns",
     "text_only_cells",
+    "counter_before_time",
+    "millisecond_column",
     "HEAD_BYTES",
     "TIME_OF_DAY_FORMATS",
     "MINUTES_PER_DAY",
@@ -170,6 +172,30 @@ def text_only_cells(cells: list[str]) -> bool:
     return bool(written) and not any(number(c) for c in written)
 
 
+# A first column that counts the rows (Graphtec's "NO.", "Nr.", "Index"), before the time column.
+_COUNTER_NAMES = {"no", "nr", "number", "index", "#", "n", "sample", "samples", "count", "lfdnr"}
+# A column after the time stamp that holds its milliseconds (Graphtec: "NO.,Time,ms,CH1,...").
+_MILLISECOND_NAMES = {"ms", "msec", "millisecond", "milliseconds"}
+
+
+def counter_before_time(header: list[str], first_row: list[str]) -> bool:
+    """Whether the first column counts rows and the second holds the time stamps (its first cell
+    no plain number): a logger's sample counter, which read as minutes would be a wrong time."""
+    if len(header) < 3 or len(first_row) < 2 or _unit_key(header[0]) not in _COUNTER_NAMES:
+        return False
+    try:
+        float(first_row[1].replace(",", "."))
+    except ValueError:
+        return bool(first_row[1].strip())
+    return False
+
+
+def millisecond_column(header: list[str], last_time_column: int) -> int | None:
+    """The column after the time stamp (or its clock column) if it is named as its milliseconds."""
+    following = last_time_column + 1
+    return following if following < len(header) and _unit_key(header[following]) in _MILLISECOND_NAMES else None
+
+
 def celsius_conversion(unit: str) -> tuple[float, float] | None:
     """(scale, offset) taking a reading in ``unit`` to °C (°C = scale·reading + offset): (1, 0) for
     °C and for no unit, (1, −273.15) for K, (5/9, −160/9) for °F; None for a unit that is no
@@ -287,41 +313,48 @@ def _utf16(head: bytes) -> str | None:
 
 
 def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row: bool) -> int | None:
-    """The header's line among the complete ``lines``: ``first`` (the first that is no comment),
-    unless the lines after it do not continue its table and a later line heads one: a logger's
-    settings ("Logger: GL240", "Interval,60,s") written before the header without ``#``.
+    """The header's line among the complete ``lines``: ``first`` (the first line that is no
+    comment), unless the lines after it do not continue its table and a later line heads one: a
+    logger's settings ("Model,GL240", "Interval: 60 s") before the header, without ``#``.
 
-    A later line heads a table when it begins like no data row, the lines after it (up to 20)
-    have as many cells, and the first of them (or the one after a units row) begins like a data
-    row, with its time. A live log (``wait_for_row``) whose first line heads nothing waits (None)
-    until a data row follows the header; a log whose rows do not match its header in number (a
-    delimiter at the end of each row) keeps ``first``.
+    ``first`` heads a table when the lines after it (up to 20) have as many cells. A later line
+    heads one when, besides, it begins a block (after a blank line, or a line with another number
+    of cells), begins like no data row, and the first row after it (or after a units row) begins
+    like a data row, with its time: a bad first data row is not taken for a header. Where no line
+    does, ``first`` (a log whose rows do not match its header in number: a delimiter at the end of
+    each row). A live log (``wait_for_row``) needs a data row below ``first`` too, and waits for
+    more lines (None) while none is found.
     """
-    following = [line for line in lines[first + 1 : first + 21] if line.strip()]
-    if first >= len(lines) or not following or _same_cells(lines[first], following, stated) is not None:
+    if first >= len(lines) or _heads_table(lines, first, stated, need_data_row=wait_for_row):
         return first
     for k in range(first + 1, len(lines)):
-        following = [line for line in lines[k + 1 : k + 21] if line.strip()]
-        delimiter = _same_cells(lines[k], following, stated) if following and not _data_like(lines[k]) else None
-        if delimiter is None:
-            continue
-        below = next(csv.reader(following[:1], delimiter=delimiter))
-        first_row = following[1:2] if _is_units_row([c.strip() for c in below], CsvDialect(delimiter)) else following[:1]
-        if first_row and _data_like(first_row[0]):
+        if lines[k].strip() and not _data_like(lines[k]) and _heads_table(lines, k, stated, need_data_row=True):
             return k
-    written = [line for line in lines if line.strip()]
-    if wait_for_row and not _data_like(written[-1]):
+    written = [line for line in lines[first:] if line.strip()]
+    if wait_for_row and len(written) <= _TABLE_LOOKAHEAD + 1:
         return None
     return first
 
 
-def _same_cells(header: str, rows: list[str], stated: str | None) -> str | None:
-    """A delimiter that splits ``header`` into two cells or more and every row into as many."""
+# rows after a header that must match it in number of cells
+_TABLE_LOOKAHEAD = 20
+
+
+def _heads_table(lines: list[str], k: int, stated: str | None, need_data_row: bool) -> bool:
+    following = [line for line in lines[k + 1 : k + 1 + _TABLE_LOOKAHEAD] if line.strip()]
     for delimiter in (stated,) if stated else _DELIMITERS:
-        count = len(next(csv.reader([header], delimiter=delimiter), []))
-        if count >= 2 and all(len(row) == count for row in csv.reader(rows, delimiter=delimiter)):
-            return delimiter
-    return None
+        count = len(next(csv.reader([lines[k]], delimiter=delimiter), []))
+        if count < 2 or not following or not all(len(row) == count for row in csv.reader(following, delimiter=delimiter)):
+            continue
+        if not need_data_row:
+            return True
+        before = lines[k - 1] if k > 0 else ""
+        if before.strip() and len(next(csv.reader([before], delimiter=delimiter), [])) == count:
+            return False  # inside a table: a bad first row after its header, not a header
+        below = next(csv.reader(following[:1], delimiter=delimiter))
+        first_row = following[1:2] if _is_units_row([c.strip() for c in below], CsvDialect(delimiter)) else following[:1]
+        return bool(first_row) and _data_like(first_row[0])
+    return False
 
 
 def _data_like(line: str) -> bool:

@@ -41,7 +41,9 @@ from mtident.io.dialect import (
     after_midnight,
     celsius_conversion,
     check_unique_names,
+    counter_before_time,
     date_and_clock,
+    millisecond_column,
     other_date_order,
     sniff_dialect,
     stamp_format,
@@ -81,6 +83,7 @@ class LogFollower:
     dialect: CsvDialect | None = None  # from the file's head, once its header line is complete
     time_format: str | None = None  # pandas format of the time stamps, from the first one
     clock_column: int | None = None  # the time of day's column where the date is in the time column
+    millisecond_column: int | None = None  # a column with the time stamps' milliseconds (Graphtec's "ms")
     room: str | None = None  # a room sensor's column, read last, after all the sensors (none named)
     first_stamp: str | None = None  # the first time stamp as written: a slashed date may be read again the other way
 
@@ -97,6 +100,7 @@ class LogFollower:
             "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units]],
             "time_format": self.time_format,
             "clock_column": self.clock_column,
+            "millisecond_column": self.millisecond_column,
             "room": self.room,
             "first_stamp": self.first_stamp,
         }
@@ -121,6 +125,7 @@ class LogFollower:
             dialect=None if dialect is None else CsvDialect(str(dialect[0]), str(dialect[1]), int(dialect[2]), str(dialect[3]), tuple((str(n), str(u)) for n, u in (dialect[4] if len(dialect) > 4 else []))),
             time_format=position.get("time_format"),
             clock_column=position.get("clock_column"),
+            millisecond_column=position.get("millisecond_column"),
             room=position.get("room"),
             first_stamp=position.get("first_stamp"),
         )
@@ -139,19 +144,23 @@ class LogFollower:
             msg = f"{self.path}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found: {', '.join(header)}"
             raise InputError(msg)
         check_unique_names(header, self.path)
-        time_name = self.time_col or header[0]
+        first_row = rows[0] if rows else []
+        counter = self.time_col is None and counter_before_time(header, first_row)
+        time_name = self.time_col or header[1 if counter else 0]
         if time_name not in header:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"
             raise InputError(msg)
-        first_row = rows[0] if rows else []
         following = header.index(time_name) + 1
         if following < min(len(header), len(first_row)) and date_and_clock(first_row[header.index(time_name)], first_row[following]):
             self.clock_column = following
         clock_name = header[self.clock_column] if self.clock_column is not None else None
-        names = [h for h in header if h not in (time_name, clock_name, "")]  # "": a delimiter at the end of the line
+        self.millisecond_column = millisecond_column(header, header.index(clock_name or time_name))
+        milliseconds = header[self.millisecond_column] if self.millisecond_column is not None else None
+        # "": a delimiter at the end of the line
+        names = [h for h in header if h not in (time_name, clock_name, milliseconds, header[0] if counter else None, "")]
         asked = bool(self.sensors) and self.sensors != ["all"]
         chosen = self.sensors if asked and self.sensors is not None else names
-        notes = []
+        notes = [f"left out, a row counter: {header[0]}; the time is {time_name!r}"] if counter else []
         if not asked:
             text_only = [n for n in chosen if n != self.room and text_only_cells([row[header.index(n)] for row in rows if header.index(n) < len(row)])]
             if text_only and len(text_only) < len([n for n in chosen if n != self.room]):
@@ -298,6 +307,8 @@ class LogFollower:
                 continue
             try:
                 t = self._parse_time(line[self.columns[0]] if self.clock_column is None else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}")
+                if self.millisecond_column is not None:
+                    t += dialect.number(line[self.millisecond_column]) / 60_000.0
             except (ValueError, IndexError):
                 warnings.append(f"{self.path}: refused a row with an unreadable time {line[:1]!r}")
                 continue

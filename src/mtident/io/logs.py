@@ -34,7 +34,9 @@ from mtident.io.dialect import (
     after_midnight,
     celsius_conversion,
     check_unique_names,
+    counter_before_time,
     date_and_clock,
+    millisecond_column,
     other_date_order,
     read_csv,
     stamp_format,
@@ -153,8 +155,11 @@ def _cell(value: object) -> str:
     return repr(str(value))
 
 
-def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: str, first_row: int = 2, stated_unit: str | None = None) -> FloatArray:
-    """Minutes from the first sample; ``first_row`` numbers the rows in messages (2: a CSV file's first data line)."""
+def _parse_time(
+    column: pd.Series, header: str, time_unit: str | None, source: str, first_row: int = 2, stated_unit: str | None = None, sub_second_min: FloatArray | None = None
+) -> FloatArray:
+    """Minutes from the first sample; ``first_row`` numbers the rows in messages (2: a CSV file's
+    first data line); ``sub_second_min``: a millisecond column's part of each time (minutes)."""
     import pandas as pd
 
     def minutes_since_first(stamps: pd.Series) -> FloatArray:
@@ -193,6 +198,8 @@ def _parse_time(column: pd.Series, header: str, time_unit: str | None, source: s
             previous: float | None = None
             for k, t in enumerate(values):  # row by row, as the live follower reads them
                 values[k] = previous = after_midnight(previous, float(t))
+    if sub_second_min is not None:
+        values = values + sub_second_min
     steps = np.diff(values)
     if np.any(steps == 0):
         row = int(np.argmax(steps == 0)) + 1
@@ -303,7 +310,11 @@ def read_temperature_log(
     if frame.shape[1] < 2:
         msg = f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found columns: {', '.join(frame.columns)}"
         raise InputError(msg)
-    header = time_col if time_col is not None else frame.columns[0]
+    notes: list[str] = []
+    counter = time_col is None and len(frame) > 0 and counter_before_time(list(frame.columns), [str(v) for v in frame.iloc[0]])
+    header = time_col if time_col is not None else frame.columns[1] if counter else frame.columns[0]
+    if counter:
+        notes.append(f"left out, a row counter: {frame.columns[0]}; the time is {header!r}")
     if header not in frame.columns:
         msg = f"{source}: no time column {header!r}; the columns are: {', '.join(frame.columns)}"
         raise InputError(msg)
@@ -311,17 +322,27 @@ def read_temperature_log(
         msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
         raise InputError(msg)
     clock = _clock_column(frame, header)
-    notes: list[str] = []
+    at = millisecond_column(list(frame.columns), list(frame.columns).index(clock or header))
+    milliseconds = None if at is None else str(frame.columns[at])
+    sub_second = None
+    if milliseconds is not None:
+        sub_second = pd.to_numeric(frame[milliseconds], errors="coerce").to_numpy(dtype=float)
+        if np.isnan(sub_second).any():
+            row = int(np.isnan(sub_second).argmax())
+            msg = f"{source}: millisecond column {milliseconds!r}, row {row + first_row}: {_cell(frame[milliseconds].iloc[row])} is not a number"
+            raise InputError(msg)
+        sub_second = sub_second / 60_000.0
     if clock is None:
-        time_min = _parse_time(frame[header], header, time_unit, source, first_row, dialect.time_unit(header))
+        time_min = _parse_time(frame[header], header, time_unit, source, first_row, dialect.time_unit(header), sub_second)
         numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
         if numeric and time_unit_assumed(header, time_unit, dialect.time_unit(header)) and time_min[-1] > UNLIKELY_MINUTES:
             notes.append(seconds_hint(header, float(time_min[-1])))
     else:  # the date in one column, the time of day in the next: one stamp
         stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
-        time_min = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row)
+        time_min = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row, sub_second_min=sub_second)
 
-    available = [c for c in frame.columns if c not in (header, clock)]
+    left_out = (header, clock, milliseconds, frame.columns[0] if counter else None)
+    available = [c for c in frame.columns if c not in left_out]
     missing_names = [n for n in sensors or [] if n not in available]
     if missing_names:
         msg = f"{source}: no sensor column {missing_names[0]!r}; the log has: {', '.join(available)}"
