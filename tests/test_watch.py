@@ -714,7 +714,7 @@ def test_watch_run_again_after_its_decision_gives_the_same_answer(tmp_path):
     assert "The test can stop at t = 305 min" in table.stdout
     other = mtident("thermal", "watch", "@sample", "--replay", "--json", "--tolerance", "0.3", cwd=tmp_path)
     assert "resuming" not in other.stderr
-    assert "was written for other settings (--tolerance, --hold, --room-coupling or --room-wander); starting afresh" in other.stderr
+    assert "was written for other settings (--tolerance, --hold, --room-coupling, --room-wander or --bin); starting afresh" in other.stderr
 
 
 def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path):
@@ -961,3 +961,25 @@ def test_a_row_counter_and_a_millisecond_column_are_read_as_the_file_reader_read
     assert rows_read.notes == whole.notes and not rows_read.warnings
     np.testing.assert_allclose(rows_read.time_min, whole.time_min, atol=1e-6)
     np.testing.assert_array_equal(rows_read.temperature_C, whole.temperature_C)
+
+
+def test_watch_bin_option_sets_the_bin_length(tmp_path):
+    """--bin SECONDS gives the library's bin_min (the 10-s bin had no option); a state file
+    written with another bin starts afresh, and one written with the default resumes."""
+    t = np.arange(0.0, 90.0 * 60.0, 2.0) / 60.0  # 0.5 Hz for 90 min
+    y = first_order(t) + 0.02 * np.random.default_rng(4).standard_normal(len(t))
+    log = tmp_path / "fast.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:.6f},{b:.3f}\n" for a, b in zip(t, y, strict=True)))
+    results = {}
+    for bin_s in (0.0, 30.0):
+        out = mtident("thermal", "watch", str(log), "--replay", "--json", "--bin", f"{bin_s:g}", cwd=tmp_path)
+        assert out.returncode == 0, out.stderr
+        monitor = Monitor(("S",), MonitorSettings(bin_min=bin_s / 60.0))
+        monitor.feed(np.round(t, 6), np.round(y, 3)[:, None])
+        results[bin_s] = json.loads(out.stdout)
+        assert results[bin_s]["steady_state_C"] == pytest.approx(monitor.result()["steady_state_C"], abs=1e-9)
+    assert results[0.0]["steady_state_C"] != results[30.0]["steady_state_C"]
+    again = mtident("thermal", "watch", str(log), "--replay", "--json", cwd=tmp_path)
+    assert "starting afresh" in again.stderr and "--bin" in again.stderr
+    default = mtident("thermal", "watch", str(log), "--replay", "--json", "--bin", "10", cwd=tmp_path)
+    assert "resuming from" in default.stderr

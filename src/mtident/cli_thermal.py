@@ -227,6 +227,14 @@ def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monito
 @click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes the input of each sensor's heat balance (robust to a drifting room).")
 @click.option("--room-coupling", type=click.Choice(["lagged", "direct"]), help="With --ambient: how the sensors feel the room. lagged (default): through the machine's own time constant (a sensor in the structure); direct: at once (a sensor in the air stream or on a thin cover).")
 @click.option("--room-wander", "room_wander", type=FiniteFloatRange(min=0.0), default=0.05, show_default=True, help="Without --ambient: how far the unmeasured room may wander in one hour (°C, 1σ of a random walk). It enters each sensor's heat balance as a random input, so the T∞ band allows for it; 0 takes the room as steady.")
+@click.option(
+    "--bin",
+    "bin_s",
+    type=FiniteFloatRange(min=0),
+    default=10.0,
+    show_default=True,
+    help="Rows of a faster log are fed in bins of about this many seconds (their mean time and readings): a display's rounding holds for many rows at 1 Hz and is no independent noise. 0 feeds every row.",
+)
 @click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible.")
 @click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: <log name>.watch-state.json in the current directory).")
 @click.option("--poll", "poll_s", type=FiniteFloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
@@ -234,11 +242,11 @@ def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monito
 @click.option("--plot", "plot_path", type=PicturePath(), help="Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.")
 @click.option("--json", "as_json", is_flag=True, help="Print the contract's JSON object when the decision is reached (or the log ends).")
 @user_errors
-def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, room_coupling: str | None, room_wander: float, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
+def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, tolerance_C: float, hold_min: float, ambient_col: str | None, room_coupling: str | None, room_wander: float, bin_s: float, replay: bool, state_path: str | None, poll_s: float, timeout_s: float | None, plot_path: str | None, as_json: bool) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
     Every new row updates each sensor's filter (rows faster than one in 10 s, as
-    10-s bins); a sensor may stop when its T∞ interval is within the tolerance,
+    10-s bins: --bin); a sensor may stop when its T∞ interval is within the tolerance,
     the estimate has held still, and its residuals fit the model. The state file
     lets a killed monitor resume.
     """
@@ -269,7 +277,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         )
     if ambient_col is None and room_wander > 0:
         # Without a room sensor the room is an assumption (bench_watch: a room cycling by 0.15 °C,
-        # five times the default wander, stopped 2 of 100 replays just beyond a 0.2 °C tolerance).
+        # five times the default wander, stopped 1 of 100 replays just beyond a 0.2 °C tolerance).
         stderr.print(
             f"mtident: note: no room sensor; the room is taken to wander by about {room_wander:g} °C in an hour (--room-wander). "
             "A room that drifts more (an air-conditioning cycle) can bias T∞ by a tenth of a degree or more: give --ambient ROOM_COLUMN if the log has one",
@@ -285,7 +293,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         if names is not None:
             names = [n for n in names if n != ambient_col] + [ambient_col]
     state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
-    settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling, room_wander_C_per_h=room_wander)
+    settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling, room_wander_C_per_h=room_wander, bin_min=bin_s / 60.0)
+    # as state files have held them (the bin only where it is not the default, so older ones resume)
+    settings_key = [tolerance_C, hold_min, room_coupling, room_wander, *([bin_s] if bin_s != 10.0 else [])]
     follower: LogFollower | None = None
     monitor: Monitor | None = None
     saved_text: str | None = None  # the last state written or resumed from: what a Ctrl-C falls back to
@@ -297,7 +307,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
                 what
                 for what, now, then in (
                     ("another log", str(path.resolve()), saved.get("log")),
-                    ("other settings (--tolerance, --hold, --room-coupling or --room-wander)", [tolerance_C, hold_min, room_coupling, room_wander], saved.get("settings")),
+                    ("other settings (--tolerance, --hold, --room-coupling, --room-wander or --bin)", settings_key, saved.get("settings")),
                     ("other sensors", names, saved.get("requested")),
                 )
                 if now != then
@@ -322,7 +332,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         # the sensors as resolved from the header (also for a log that was not there at the start):
         # a resumed run compares them with its own
         requested = names if names is not None or ambient_col is None else follower.sensors
-        text = json.dumps({"log": str(path.resolve()), "settings": [tolerance_C, hold_min, room_coupling, room_wander], "requested": requested, "position": follower.position(), "monitor": monitor.to_dict()})
+        text = json.dumps({"log": str(path.resolve()), "settings": settings_key, "requested": requested, "position": follower.position(), "monitor": monitor.to_dict()})
         _save_state(state_file, text)
         saved_text = text
 
