@@ -131,12 +131,12 @@ class LogFollower:
         )
 
     def _set_header(self, line: str, rows: list[list[str]]) -> list[str]:
-        """Take the header line: the time column and the sensors' columns; returns notes (units).
+        """Take the header line: the time column and the sensors' columns; returns notes (units,
+        columns left out).
 
-        ``rows`` (the data rows' cells written so far, one at least) tell whether
-        the time stamp is written in two columns, a date and a time of day, and
-        which columns hold text alone (a status channel: no sensor, as the file
-        reader has it).
+        ``rows`` (the data rows' cells written so far, one at least) tell how the
+        time is written (:meth:`_take_time_columns`) and which columns hold text
+        alone (a status channel: no sensor, as the file reader has it).
         """
         assert self.dialect is not None
         header = self.dialect.cells(line)
@@ -144,7 +144,18 @@ class LogFollower:
             msg = f"{self.path}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found: {', '.join(header)}"
             raise InputError(msg)
         check_unique_names(header, self.path)
-        first_row = rows[0] if rows else []
+        time_name, no_sensors, notes = self._take_time_columns(header, rows[0] if rows else [])
+        names = [h for h in header if h not in (*no_sensors, "")]  # "": a delimiter at the end of the line
+        chosen, sensor_notes = self._choose_sensors(header, names, rows)
+        self.header = header
+        self.sensors = chosen
+        self.columns = [header.index(time_name)] + [header.index(s) for s in chosen]
+        return [*notes, *sensor_notes]
+
+    def _take_time_columns(self, header: list[str], first_row: list[str]) -> tuple[str, list[str], list[str]]:
+        """The time column's name, the columns that belong to the time (no sensors: a row counter
+        before it, a time of day after a date, milliseconds after the stamp), and notes; sets
+        ``clock_column`` and ``millisecond_column``."""
         counter = self.time_col is None and counter_before_time(header, first_row)
         time_name = self.time_col or header[1 if counter else 0]
         if time_name not in header:
@@ -156,11 +167,16 @@ class LogFollower:
         clock_name = header[self.clock_column] if self.clock_column is not None else None
         self.millisecond_column = millisecond_column(header, header.index(clock_name or time_name))
         milliseconds = header[self.millisecond_column] if self.millisecond_column is not None else None
-        # "": a delimiter at the end of the line
-        names = [h for h in header if h not in (time_name, clock_name, milliseconds, header[0] if counter else None, "")]
+        notes = [f"left out, a row counter: {header[0]}; the time is {time_name!r}"] if counter else []
+        return time_name, [n for n in (time_name, clock_name, milliseconds, header[0] if counter else None) if n is not None], notes
+
+    def _choose_sensors(self, header: list[str], names: list[str], rows: list[list[str]]) -> tuple[list[str], list[str]]:
+        """The sensor columns to read, the room sensor last, and notes: those asked for, or every
+        column of ``names`` but text-only and non-temperature ones (left out with a note)."""
+        assert self.dialect is not None
         asked = bool(self.sensors) and self.sensors != ["all"]
         chosen = self.sensors if asked and self.sensors is not None else names
-        notes = [f"left out, a row counter: {header[0]}; the time is {time_name!r}"] if counter else []
+        notes = []
         if not asked:
             text_only = [n for n in chosen if n != self.room and text_only_cells([row[header.index(n)] for row in rows if header.index(n) < len(row)])]
             if text_only and len(text_only) < len([n for n in chosen if n != self.room]):
@@ -181,11 +197,7 @@ class LogFollower:
             chosen = [*sensors, *temperature_columns(chosen[-1:], True, self.dialect, self.path)[0]]
         else:
             chosen, unit_notes = temperature_columns(list(chosen), asked, self.dialect, self.path)
-        notes.extend(unit_notes)
-        self.header = header
-        self.sensors = list(chosen)
-        self.columns = [header.index(time_name)] + [header.index(s) for s in chosen]
-        return notes
+        return list(chosen), [*notes, *unit_notes]
 
     def _data_lines(self, lines: list[str], notes: list[str]) -> list[str]:
         """The data lines among the log's first lines (preamble, header and units row taken off);
