@@ -714,7 +714,7 @@ def test_watch_run_again_after_its_decision_gives_the_same_answer(tmp_path):
     assert "The test can stop at t = 305 min" in table.stdout
     other = mtident("thermal", "watch", "@sample", "--replay", "--json", "--tolerance", "0.3", cwd=tmp_path)
     assert "resuming" not in other.stderr
-    assert "was written for other settings (--tolerance, --hold, --room-coupling, --room-wander or --bin); starting afresh" in other.stderr
+    assert "was written for other settings (--tolerance, --hold, --room-coupling, --room-wander, --bin, --time-col or --time-unit); starting afresh" in other.stderr
 
 
 def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path):
@@ -983,3 +983,22 @@ def test_watch_bin_option_sets_the_bin_length(tmp_path):
     assert "starting afresh" in again.stderr and "--bin" in again.stderr
     default = mtident("thermal", "watch", str(log), "--replay", "--json", "--bin", "10", cwd=tmp_path)
     assert "resuming from" in default.stderr
+
+
+def test_watch_names_spreadsheet_serial_dates_and_restarts_in_days(tmp_path):
+    """The follower tells serial dates at the second row (it read them as 0.0007-min steps and
+    stayed 'collecting'); a state saved after the first row is not resumed with another
+    --time-unit, whose origin would be in other units."""
+    log = tmp_path / "serial.csv"
+    log.write_text("Date,T1\n46348.33333300,17.90\n")
+    state = tmp_path / "s.json"
+    first = mtident("thermal", "watch", str(log), "--timeout", "0", "--state", str(state), cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    log.write_text("Date,T1\n" + "".join(f"{46348.333333 + k / 1440:.8f},{26.7 - 8.8 * np.exp(-0.016 * k):.2f}\n" for k in range(120)))
+    refused = mtident("thermal", "watch", str(log), "--replay", "--state", str(state), cwd=tmp_path)
+    assert refused.returncode == 2 and "looks like spreadsheet serial dates" in refused.stderr and "Traceback" not in refused.stderr
+    days = mtident("thermal", "watch", str(log), "--replay", "--json", "--time-unit", "d", "--state", str(state), cwd=tmp_path)
+    assert days.returncode == 0, days.stderr
+    assert "starting afresh" in days.stderr
+    result = json.loads(days.stdout)
+    assert 30 <= result["stop_time_min"] <= 119 and result["steady_state_C"] == pytest.approx(26.7, abs=0.2)

@@ -60,7 +60,7 @@ def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None
 
 
 def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
-    func = click.option("--time-unit", type=click.Choice(list(TIME_UNITS)), help="Unit of a numeric time column (default: from its name, Time_s or Time [s], or a units row; else min).")(func)
+    func = click.option("--time-unit", type=click.Choice(list(TIME_UNITS)), help="Unit of a numeric time column (default: from its name, Time_s or Time [s], or a units row; else min). d: days, as spreadsheet serial dates (46348.33 = 22.11.2026 08:00).")(func)
     func = click.option("--time-col", metavar="NAME", help="Time column (default: the first column).")(func)
     func = click.option("--sensor", "sensors", multiple=True, metavar="NAME", help="Sensor column(s) to use; repeat or comma-separate (default: all).")(func)
     func = click.argument("file", metavar="FILE")(func)
@@ -294,8 +294,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             names = [n for n in names if n != ambient_col] + [ambient_col]
     state_file = Path(state_path) if state_path else Path.cwd() / f"{path.stem}.watch-state.json"
     settings = MonitorSettings(tolerance_C=tolerance_C, hold_min=hold_min, room_coupling=room_coupling, room_wander_C_per_h=room_wander, bin_min=bin_s / 60.0)
-    # as state files have held them (the bin only where it is not the default, so older ones resume)
-    settings_key = [tolerance_C, hold_min, room_coupling, room_wander, *([bin_s] if bin_s != 10.0 else [])]
+    # As state files have held them; the later ones only where given, so that older files resume.
+    # The follower's saved origin is in the time unit it was read in: another unit needs a fresh start.
+    settings_key = [tolerance_C, hold_min, room_coupling, room_wander, *([bin_s] if bin_s != 10.0 else []), *([f"time: {time_col} in {time_unit}"] if time_col or time_unit else [])]
     follower: LogFollower | None = None
     monitor: Monitor | None = None
     saved_text: str | None = None  # the last state written or resumed from: what a Ctrl-C falls back to
@@ -307,7 +308,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
                 what
                 for what, now, then in (
                     ("another log", str(path.resolve()), saved.get("log")),
-                    ("other settings (--tolerance, --hold, --room-coupling, --room-wander or --bin)", settings_key, saved.get("settings")),
+                    ("other settings (--tolerance, --hold, --room-coupling, --room-wander, --bin, --time-col or --time-unit)", settings_key, saved.get("settings")),
                     ("other sensors", names, saved.get("requested")),
                 )
                 if now != then

@@ -50,7 +50,7 @@ from mtident.io.dialect import (
     temperature_columns,
     text_only_cells,
 )
-from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, time_unit_assumed, time_unit_factor
+from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, serial_date_hint, time_unit_assumed, time_unit_factor
 
 __all__ = ["LogFollower", "Rows"]
 
@@ -233,6 +233,7 @@ class LogFollower:
             time_name = self.header[self.columns[0]]
             scale = time_unit_factor(time_name, self.time_unit, self.dialect.time_unit(time_name))
             stamp = raw * scale
+            assumed = time_unit_assumed(time_name, self.time_unit, self.dialect.time_unit(time_name))
         except ValueError:
             if self.time_format is None:
                 self.time_format = stamp_format(text)
@@ -240,6 +241,11 @@ class LogFollower:
             if self.time_format is None:
                 raise
             stamp = self._stamp_minutes(text.strip())
+        else:
+            serial = serial_date_hint(time_name, self.origin, stamp - self.origin) if self.origin is not None and self.last_time == 0.0 and assumed else None
+            if serial is not None:  # told at the second row
+                msg = f"{self.path}: {serial}"
+                raise InputError(msg)
         if self.origin is None:
             self.origin = stamp
         t = stamp - self.origin
@@ -321,6 +327,8 @@ class LogFollower:
                 t = self._parse_time(line[self.columns[0]] if self.clock_column is None else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}")
                 if self.millisecond_column is not None:
                     t += dialect.number(line[self.millisecond_column]) / 60_000.0
+            except InputError:  # a ValueError too, but about the whole log, not this row
+                raise
             except (ValueError, IndexError):
                 warnings.append(f"{self.path}: refused a row with an unreadable time {line[:1]!r}")
                 continue

@@ -19,6 +19,8 @@ replaced by NaN — the filters treat NaN as a missing measurement — and liste
 
 from __future__ import annotations
 
+import datetime as dt
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -47,14 +49,14 @@ from mtident.io.dialect import (
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES", "time_unit_assumed", "seconds_hint", "UNLIKELY_MINUTES", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
+__all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES", "time_unit_assumed", "seconds_hint", "serial_date_hint", "UNLIKELY_MINUTES", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
 
 # A PT100 channel with a broken wire reads far outside any machine-tool temperature.
 OPEN_CIRCUIT_HIGH_C = 400.0
 OPEN_CIRCUIT_LOW_C = -60.0
 # Above this share of bad samples a sensor is refused rather than bridged.
 MAX_BAD_FRACTION = 0.1
-TIME_UNITS = {"s": 1.0 / 60.0, "min": 1.0, "h": 60.0}
+TIME_UNITS = {"s": 1.0 / 60.0, "min": 1.0, "h": 60.0, "d": 1440.0}
 
 
 @dataclass(frozen=True)
@@ -144,6 +146,16 @@ def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) ->
     return time_unit is None and stated is None and _suffix_unit(header) is None
 
 
+def serial_date_hint(header: str, first: float, step: float) -> str | None:
+    """A message if a time column read as minutes holds spreadsheet serial dates (days since
+    30.12.1899: 46348.33 is 22.11.2026 08:00, as a spreadsheet saves a date cell formatted as a
+    number): read as minutes, a 2-h test lasted 0.08 min and was identified as nonsense."""
+    if not (20_000.0 <= first <= 80_000.0 and 0.0 < step <= 0.05 and first != math.floor(first)):  # 1954-2119, steps under 72 min
+        return None
+    when = dt.datetime(1899, 12, 30) + dt.timedelta(seconds=round(first * 86_400.0))
+    return f"time column {header!r} looks like spreadsheet serial dates (days since 30.12.1899: {first:.5f} is {when:%d.%m.%Y %H:%M:%S}), not minutes: give --time-unit d (or --time-unit min if it is minutes)"
+
+
 def seconds_hint(header: str, span_min: float) -> str:
     return f"time column {header!r} is read as minutes (no unit in its name, a units row or --time-unit) and runs to {span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give --time-unit s"
 
@@ -171,6 +183,10 @@ def _parse_time(
         values = minutes_since_first(column)
     elif numeric.notna().all():
         values = numeric.to_numpy(dtype=float) * time_unit_factor(header, time_unit, stated_unit)
+        serial = serial_date_hint(header, values[0], float(np.median(np.diff(values)))) if len(values) > 1 and time_unit_assumed(header, time_unit, stated_unit) else None
+        if serial is not None:
+            msg = f"{source}: {serial}"
+            raise InputError(msg)
     else:
         text = column.astype(str).str.strip()
         empty = column.isna().to_numpy() | (text == "").to_numpy()
