@@ -483,3 +483,10 @@ def test_spreadsheet_serial_dates_are_named_not_read_as_minutes(write_csv):
         read_temperature_log(path)
     np.testing.assert_allclose(read_temperature_log(path, time_unit="d").time_min, np.arange(60.0), atol=1e-4)
     assert read_temperature_log(path, time_unit="min").time_min[-1] == pytest.approx(59 / 1440, abs=1e-6)
+
+
+@pytest.mark.parametrize("head", ["Time_ms,A\n", "Time [ms],A\n", "time,A\nms,°C\n"])
+def test_a_time_column_in_milliseconds(write_csv, head):
+    """Time_ms was read as minutes (a 10-min log as 417 days, with a hint that it might be seconds)."""
+    rows = "".join(f"{60_000 * k},{20 + k / 10:.2f}\n" for k in range(10))
+    np.testing.assert_allclose(read_temperature_log(write_csv(head + rows)).time_min, np.arange(10.0))

@@ -77,7 +77,7 @@ _DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%Y-%m-%d", "%m
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
 # as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
 # gives (scale, offset) to °C.
-_TIME_UNIT_NAMES = {"s": "s", "sec": "s", "secs": "s", "second": "s", "seconds": "s", "min": "min", "mins": "min", "minute": "min", "minutes": "min", "h": "h", "hr": "h", "hrs": "h", "hour": "h", "hours": "h", "d": "d", "day": "d", "days": "d"}
+_TIME_UNIT_NAMES = {"ms": "ms", "msec": "ms", "milliseconds": "ms", "s": "s", "sec": "s", "secs": "s", "second": "s", "seconds": "s", "min": "min", "mins": "min", "minute": "min", "minutes": "min", "h": "h", "hr": "h", "hrs": "h", "hour": "h", "hours": "h", "d": "d", "day": "d", "days": "d"}
 _TEMPERATURE_UNITS = {
     **dict.fromkeys(("c", "degc", "celsius", "gradc", "degreesc", "degreec"), (1.0, 0.0)),
     **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),

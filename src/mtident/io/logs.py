@@ -56,7 +56,7 @@ OPEN_CIRCUIT_HIGH_C = 400.0
 OPEN_CIRCUIT_LOW_C = -60.0
 # Above this share of bad samples a sensor is refused rather than bridged.
 MAX_BAD_FRACTION = 0.1
-TIME_UNITS = {"s": 1.0 / 60.0, "min": 1.0, "h": 60.0, "d": 1440.0}
+TIME_UNITS = {"ms": 1.0 / 60_000.0, "s": 1.0 / 60.0, "min": 1.0, "h": 60.0, "d": 1440.0}
 
 
 @dataclass(frozen=True)
