@@ -45,7 +45,7 @@ def test_isolated_bad_samples_are_skipped_with_a_note(write_csv):
         ("time_min,A\n0,20\n1,20\n", {}, r"2 samples; at least 5 are needed"),
         ("time_min\n0\n1\n2\n3\n4\n", {}, r"need a time column and at least one sensor column"),
         ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_col": "clock"}, r"no time column 'clock'; the columns are: time_min, A"),
-        ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_unit": "days"}, r"time unit 'days' is not one of: s, min, h"),
+        ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_unit": "days"}, r"time unit 'days' is not one of: ms, s, min, h, d"),
         ("time_min,A\nyesterday,20\n1,20\n2,21\n3,21\n4,21\n", {}, r"row 2: 'yesterday' is neither a number nor a time stamp \(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:00:00\)"),
         ("stamp,A\n22.11.2026 08:00,20\n22.11.2026 08:01,20\n01/02/2026 08:02,21\n22.11.2026 08:03,21\n22.11.2026 08:04,21\n", {}, r"row 4: '01/02/2026 08:02' is neither a number nor a time stamp like the first one"),
         ("stamp,A\nFeb 1 2026 08:00,20\nFeb 1 2026 08:01,20\nFeb 1 2026 08:02,21\nFeb 1 2026 08:03,21\nFeb 1 2026 08:04,21\n", {}, r"row 2: .* \(ISO 8601"),
