@@ -1002,3 +1002,15 @@ def test_watch_names_spreadsheet_serial_dates_and_restarts_in_days(tmp_path):
     assert "starting afresh" in days.stderr
     result = json.loads(days.stdout)
     assert 30 <= result["stop_time_min"] <= 119 and result["steady_state_C"] == pytest.approx(26.7, abs=0.2)
+
+
+def test_a_comment_with_as_many_cells_as_the_header_does_not_delay_a_live_log():
+    """The header after '#' lines is read at the first data row, also where a comment splits into
+    as many cells as the header ('# channels: A, B' above 'time,A')."""
+    from mtident.io.dialect import sniff_dialect
+
+    dialect = sniff_dialect(b"# channels: A, B\ntime,A\n0,20\n", wait_for_row=True)
+    assert dialect is not None and dialect.preamble_lines == 1
+    assert sniff_dialect(b"Model,GL240\nTitle,x\n\nNO.,Time,ms,A\n", wait_for_row=True) is None  # no data row yet
+    dialect = sniff_dialect(b"Model,GL240\nTitle,x\n\nNO.,Time,ms,A\n1,2026/11/22 08:00:00,0,20\n", wait_for_row=True)
+    assert dialect is not None and dialect.preamble_lines == 3

@@ -325,10 +325,18 @@ def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row:
     each row). A live log (``wait_for_row``) needs a data row below ``first`` too, and waits for
     more lines (None) while none is found.
     """
-    if first >= len(lines) or _heads_table(lines, first, stated, need_data_row=wait_for_row):
+    if first >= len(lines):
+        return first
+    delimiter = _table_delimiter(lines, first, stated)
+    if delimiter is not None and (not wait_for_row or _data_row_below(lines, first, delimiter)):
         return first
     for k in range(first + 1, len(lines)):
-        if lines[k].strip() and not _data_like(lines[k]) and _heads_table(lines, k, stated, need_data_row=True):
+        if not lines[k].strip() or _data_like(lines[k]):
+            continue
+        delimiter = _table_delimiter(lines, k, stated)
+        # a line inside a table (a bad first row below its header) heads none
+        inside = delimiter is not None and lines[k - 1].strip() and len(next(csv.reader([lines[k - 1]], delimiter=delimiter))) == len(next(csv.reader([lines[k]], delimiter=delimiter)))
+        if delimiter is not None and not inside and _data_row_below(lines, k, delimiter):
             return k
     written = [line for line in lines[first:] if line.strip()]
     if wait_for_row and len(written) <= _TABLE_LOOKAHEAD + 1:
@@ -340,21 +348,26 @@ def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row:
 _TABLE_LOOKAHEAD = 20
 
 
-def _heads_table(lines: list[str], k: int, stated: str | None, need_data_row: bool) -> bool:
-    following = [line for line in lines[k + 1 : k + 1 + _TABLE_LOOKAHEAD] if line.strip()]
+def _following(lines: list[str], k: int) -> list[str]:
+    return [line for line in lines[k + 1 : k + 1 + _TABLE_LOOKAHEAD] if line.strip()]
+
+
+def _table_delimiter(lines: list[str], k: int, stated: str | None) -> str | None:
+    """A delimiter that splits line ``k`` into two cells or more and the lines after it into as many."""
+    following = _following(lines, k)
     for delimiter in (stated,) if stated else _DELIMITERS:
         count = len(next(csv.reader([lines[k]], delimiter=delimiter), []))
-        if count < 2 or not following or not all(len(row) == count for row in csv.reader(following, delimiter=delimiter)):
-            continue
-        if not need_data_row:
-            return True
-        before = lines[k - 1] if k > 0 else ""
-        if before.strip() and len(next(csv.reader([before], delimiter=delimiter), [])) == count:
-            return False  # inside a table: a bad first row after its header, not a header
-        below = next(csv.reader(following[:1], delimiter=delimiter))
-        first_row = following[1:2] if _is_units_row([c.strip() for c in below], CsvDialect(delimiter)) else following[:1]
-        return bool(first_row) and _data_like(first_row[0])
-    return False
+        if count >= 2 and following and all(len(row) == count for row in csv.reader(following, delimiter=delimiter)):
+            return delimiter
+    return None
+
+
+def _data_row_below(lines: list[str], k: int, delimiter: str) -> bool:
+    """Whether the first line after ``k`` (or after a units row there) begins like a data row."""
+    following = _following(lines, k)
+    below = next(csv.reader(following[:1], delimiter=delimiter))
+    first_row = following[1:2] if _is_units_row([c.strip() for c in below], CsvDialect(delimiter)) else following[:1]
+    return bool(first_row) and _data_like(first_row[0])
 
 
 def _data_like(line: str) -> bool:
