@@ -70,6 +70,11 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
         "row counter, Y/M/D stamps, milliseconds": (
             "Model,GL240\nTitle,spindle\n\n" + table("NO.,Time,ms," + ",".join(names), [f"{k + 1},{stamp(m, '%Y/%m/%d %H:%M:%S')},0," + ",".join(c) for k, (m, c) in enumerate(zip(t, cells, strict=True))])
         ).encode(),
+        # Yokogawa: quoted settings, the date (year first, slashed) and the time of day in two columns, a units row
+        "quoted settings, Y/M/D date and clock in two columns, units row": (
+            '"Yokogawa","GP10"\n"Model","GP10-1E"\n\n'
+            + table('"Date","Time",' + ",".join(f'"{n}"' for n in names) + '\n"","",' + ",".join('"degC"' for _ in names), [stamp(m, "%Y/%m/%d,%H:%M:%S") + "," + ",".join(c) for m, c in zip(t, cells, strict=True)])
+        ).encode(),
         # Excel's "Unicode text": UTF-16 with a byte-order mark, tabs, CRLF
         "UTF-16, tabs (Excel's Unicode text)": table("time_min\t" + "\t".join(f"{n} °C" for n in names), [f"{m:g}\t" + "\t".join(c) for m, c in zip(t, cells, strict=True)], "\r\n").encode("utf-16"),
     }

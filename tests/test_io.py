@@ -184,7 +184,7 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     crlf=st.booleans(),
     trailing=st.booleans(),
     quoted=st.booleans(),
-    stamps=st.sampled_from(["minutes", "iso", "dotted", "dashed", "month name", "time of day", "date, clock", "iso date, clock", "us slashed", "day-first slashed"]),
+    stamps=st.sampled_from(["minutes", "iso", "dotted", "dashed", "month name", "time of day", "date, clock", "iso date, clock", "ymd date, clock", "us slashed", "day-first slashed"]),
     units=st.sampled_from(["none", "min", "s"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
@@ -211,7 +211,7 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
         if stamps == "minutes" and units == "s":
             return [f"{60 * minutes:g}"]
         if stamps.endswith("date, clock"):  # a stamp in two columns
-            return [when.strftime("%Y-%m-%d" if stamps.startswith("iso") else "%d.%m.%Y"), when.strftime("%H:%M:%S")]
+            return [when.strftime({"iso": "%Y-%m-%d", "ymd": "%Y/%m/%d"}.get(stamps.split()[0], "%d.%m.%Y")), when.strftime("%H:%M:%S")]
         return [{"minutes": f"{minutes:g}", "iso": when.isoformat(), "dotted": when.strftime("%d.%m.%Y %H:%M:%S"),
                 "dashed": when.strftime("%d-%m-%Y %H:%M:%S"), "month name": when.strftime("%d-%b-%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]]
 
