@@ -75,6 +75,8 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
             '"Yokogawa","GP10"\n"Model","GP10-1E"\n\n'
             + table('"Date","Time",' + ",".join(f'"{n}"' for n in names) + '\n"","",' + ",".join('"degC"' for _ in names), [stamp(m, "%Y/%m/%d,%H:%M:%S") + "," + ",".join(c) for m, c in zip(t, cells, strict=True)])
         ).encode(),
+        # Keysight BenchLink: a scan counter, month-first stamps with the milliseconds after a colon, units in the names
+        "scan counter, colon milliseconds": table("Scan,Time," + ",".join(f"{n} (C)" for n in names), [f"{k + 1},{stamp(m, '%m/%d/%Y %H:%M:%S')}:000," + ",".join(c) for k, (m, c) in enumerate(zip(t, cells, strict=True))]).encode(),
         # Excel's "Unicode text": UTF-16 with a byte-order mark, tabs, CRLF
         "UTF-16, tabs (Excel's Unicode text)": table("time_min\t" + "\t".join(f"{n} °C" for n in names), [f"{m:g}\t" + "\t".join(c) for m, c in zip(t, cells, strict=True)], "\r\n").encode("utf-16"),
     }

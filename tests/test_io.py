@@ -72,7 +72,7 @@ def test_logs_as_loggers_write_them_read_like_the_plain_csv(tmp_path, dialect):
     plain, other = read_temperature_log(tmp_path / "plain.csv"), read_temperature_log(tmp_path / "other.csv")
     np.testing.assert_allclose(other.time_min, plain.time_min, atol=1e-9)
     np.testing.assert_array_equal(other.temperature_C, plain.temperature_C)
-    assert [s.removesuffix(" °C") for s in other.sensors] == ["A", "B"]
+    assert [s.removesuffix(" °C").removesuffix(" (C)") for s in other.sensors] == ["A", "B"]
 
 
 def test_a_time_of_day_passes_midnight_in_an_overnight_test(write_csv, tmp_path):
@@ -490,3 +490,15 @@ def test_a_time_column_in_milliseconds(write_csv, head):
     """Time_ms was read as minutes (a 10-min log as 417 days, with a hint that it might be seconds)."""
     rows = "".join(f"{60_000 * k},{20 + k / 10:.2f}\n" for k in range(10))
     np.testing.assert_allclose(read_temperature_log(write_csv(head + rows)).time_min, np.arange(10.0))
+
+
+def test_a_scan_counter_and_milliseconds_after_a_colon(write_csv):
+    """Keysight BenchLink's 'Scan,Time,101 (C)' with 11/22/2026 08:00:10:500: the scan counter was
+    read as the time in minutes (a 10-s scan as 1 min, silently) and the stamp was text."""
+    import datetime as dt
+
+    start = dt.datetime(2026, 11, 22, 8, 0, 0)
+    rows = "".join(f"{k + 1},{start + dt.timedelta(seconds=10 * k):%m/%d/%Y %H:%M:%S}:{500 * (k % 2):03d},{20 + k / 100:.3f}\n" for k in range(30))
+    log = read_temperature_log(write_csv("Scan,Time,101 (C)\n" + rows))
+    assert log.sensors == ("101 (C)",) and log.notes == ("left out, a row counter: Scan; the time is 'Time'",)
+    np.testing.assert_allclose(log.time_min * 60, 10 * np.arange(30) + 0.5 * (np.arange(30) % 2), atol=1e-6)

@@ -57,7 +57,8 @@ _DELIMITERS = (",", ";", "\t")
 _SEP_DIRECTIVE = re.compile(r"^sep=(.)\r?$")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
 # A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
-TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M", "%I:%M:%S %p", "%I:%M %p")
+# (Keysight BenchLink writes the milliseconds after a colon: 08:00:00:123)
+TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M:%S:%f", "%H:%M", "%I:%M:%S %p", "%I:%M %p")
 # Time stamps other than ISO 8601, tried in this order (pandas/strptime formats). A dotted date is
 # day first wherever it is written. A slashed one is month first (US loggers, 11/22/2026 3:05:00 PM)
 # unless the first stamp says day first (22/11/2026); where the first stamp cannot tell (01/02),
@@ -172,8 +173,8 @@ def text_only_cells(cells: list[str]) -> bool:
     return bool(written) and not any(number(c) for c in written)
 
 
-# A first column that counts the rows (Graphtec's "NO.", "Nr.", "Index"), before the time column.
-_COUNTER_NAMES = {"no", "nr", "number", "index", "#", "n", "sample", "samples", "count", "lfdnr"}
+# A first column that counts the rows (Graphtec's "NO.", Keysight's "Scan", "Nr.", "Index"), before the time column.
+_COUNTER_NAMES = {"no", "nr", "number", "index", "#", "n", "sample", "samples", "count", "lfdnr", "scan", "record"}
 # A column after the time stamp that holds its milliseconds (Graphtec: "NO.,Time,ms,CH1,...").
 _MILLISECOND_NAMES = {"ms", "msec", "millisecond", "milliseconds"}
 
