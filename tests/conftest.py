@@ -70,6 +70,12 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
         "row counter, Y/M/D stamps, milliseconds": (
             "Model,GL240\nTitle,spindle\n\n" + table("NO.,Time,ms," + ",".join(names), [f"{k + 1},{stamp(m, '%Y/%m/%d %H:%M:%S')},0," + ",".join(c) for k, (m, c) in enumerate(zip(t, cells, strict=True))])
         ).encode(),
+        # Graphtec as Japanese Windows writes it: Shift-JIS, a Japanese header with the English names and
+        # units under it ("NO.,Time,ms,ﾟC": ﾟ is Shift-JIS's half-width degree sign), stamps without padding or seconds
+        "Shift-JIS, Japanese header, counter named in the row under it": table(
+            "番号,日付 時間,ms," + ",".join(names) + "\nNO.,Time,ms," + ",".join("ﾟC" for _ in names),
+            [f"{k + 1}, {stamp(m, '%Y/%m/%d')} {(start + dt.timedelta(minutes=float(m))).hour}:{stamp(m, '%M')}, 0, " + ", ".join(c) for k, (m, c) in enumerate(zip(t, cells, strict=True))],
+        ).encode("cp932"),
         # Yokogawa: quoted settings, the date (year first, slashed) and the time of day in two columns, a units row
         "quoted settings, Y/M/D date and clock in two columns, units row": (
             '"Yokogawa","GP10"\n"Model","GP10-1E"\n\n'

@@ -80,7 +80,8 @@ _DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%Y-%m-%d", "%Y
 # gives (scale, offset) to °C.
 _TIME_UNIT_NAMES = {"ms": "ms", "msec": "ms", "milliseconds": "ms", "s": "s", "sec": "s", "secs": "s", "second": "s", "seconds": "s", "min": "min", "mins": "min", "minute": "min", "minutes": "min", "h": "h", "hr": "h", "hrs": "h", "hour": "h", "hours": "h", "d": "d", "day": "d", "days": "d"}
 _TEMPERATURE_UNITS = {
-    **dict.fromkeys(("c", "degc", "celsius", "gradc", "degreesc", "degreec"), (1.0, 0.0)),
+    # "ﾟC": Japanese loggers (Graphtec) write the half-width ﾟ of Shift-JIS for the degree sign
+    **dict.fromkeys(("c", "degc", "celsius", "gradc", "degreesc", "degreec", "ﾟc"), (1.0, 0.0)),
     **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),
     **dict.fromkeys(("f", "degf", "fahrenheit", "degreesf", "degreef"), (5.0 / 9.0, -160.0 / 9.0)),
 }
@@ -97,9 +98,10 @@ class CsvDialect:
     preamble_lines : int
         Lines before the header: ``#`` comments, blank lines, Excel's ``sep=;``, a
         logger's settings written before its table.
-    encoding : {"utf-8-sig", "cp1252", "utf-16-le", "utf-16-be"}
-        UTF-8 (a byte-order mark is skipped), Windows' cp1252 where UTF-8 fails, or
-        UTF-16 (Excel's "Unicode text"), told by its byte-order mark.
+    encoding : {"utf-8-sig", "cp1252", "cp932", "utf-16-le", "utf-16-be"}
+        UTF-8 (a byte-order mark is skipped), Windows' cp1252 where UTF-8 fails,
+        Shift-JIS (cp932) where both fail, or UTF-16 (Excel's "Unicode text"),
+        told by its byte-order mark.
     units : tuple of (str, str)
         Each column's unit from a units row under the header (``min;°C;°C``);
         empty if there is none. The data rows begin after it.
@@ -179,10 +181,12 @@ _COUNTER_NAMES = {"no", "nr", "number", "index", "#", "n", "sample", "samples", 
 _MILLISECOND_NAMES = {"ms", "msec", "millisecond", "milliseconds"}
 
 
-def counter_before_time(header: list[str], first_row: list[str]) -> bool:
+def counter_before_time(header: list[str], first_row: list[str], dialect: CsvDialect) -> bool:
     """Whether the first column counts rows and the second holds the time stamps (its first cell
-    no plain number): a logger's sample counter, which read as minutes would be a wrong time."""
-    if len(header) < 3 or len(first_row) < 2 or _unit_key(header[0]) not in _COUNTER_NAMES:
+    no plain number): a logger's sample counter, which read as minutes would be a wrong time. The
+    counter is told by its name, or by its cell in the row under the header (Graphtec writes a
+    Japanese header and "NO.,Time,ms,ﾟC" under it)."""
+    if len(header) < 3 or len(first_row) < 2 or not {_unit_key(header[0]), _unit_key(dialect.unit_of(header[0]))} & _COUNTER_NAMES:
         return False
     try:
         float(first_row[1].replace(",", "."))
@@ -289,17 +293,20 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
 
 def _decoded_head(head: bytes) -> tuple[str, str]:
     """The head as text, and its encoding: UTF-16 by its byte-order mark (Excel's "Unicode
-    text", Windows programs) or by a zero byte in every other place, else UTF-8, else cp1252."""
+    text", Windows programs) or by a zero byte in every other place, else UTF-8, else cp1252
+    (Windows in Europe and America), else Shift-JIS (cp932: Japanese loggers; it uses bytes that
+    cp1252 leaves undefined), else cp1252 with the undefined bytes replaced."""
     utf16 = _utf16(head)
     if utf16 is not None:
         return head[: len(head) // 2 * 2].decode(utf16, errors="replace").removeprefix("\ufeff"), utf16
-    try:
-        return head.decode("utf-8-sig"), "utf-8-sig"
-    except UnicodeDecodeError as exc:
-        # a multi-byte character cut off at the end of the head is not a decoding failure
-        if exc.start >= len(head) - 3 and _decodes(head[: exc.start]):
-            return head[: exc.start].decode("utf-8-sig"), "utf-8-sig"
-        return head.decode("cp1252", errors="replace"), "cp1252"
+    for encoding in ("utf-8-sig", "cp1252", "cp932"):
+        try:
+            return head.decode(encoding), encoding
+        except UnicodeDecodeError as exc:
+            # a multi-byte character cut off at the end of the head is not a decoding failure
+            if exc.start >= len(head) - 3 and _decodes(head[: exc.start], encoding):
+                return head[: exc.start].decode(encoding), encoding
+    return head.decode("cp1252", errors="replace"), "cp1252"
 
 
 def _utf16(head: bytes) -> str | None:
@@ -471,9 +478,9 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
     return frame.drop(columns=unnamed), dialect
 
 
-def _decodes(data: bytes) -> bool:
+def _decodes(data: bytes, encoding: str = "utf-8-sig") -> bool:
     try:
-        data.decode("utf-8-sig")
+        data.decode(encoding)
     except UnicodeDecodeError:
         return False
     return True

@@ -156,7 +156,8 @@ class LogFollower:
         """The time column's name, the columns that belong to the time (no sensors: a row counter
         before it, a time of day after a date, milliseconds after the stamp), and notes; sets
         ``clock_column`` and ``millisecond_column``."""
-        counter = self.time_col is None and counter_before_time(header, first_row)
+        assert self.dialect is not None
+        counter = self.time_col is None and counter_before_time(header, first_row, self.dialect)
         time_name = self.time_col or header[1 if counter else 0]
         if time_name not in header:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"

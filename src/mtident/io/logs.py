@@ -327,7 +327,7 @@ def read_temperature_log(
         msg = f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found columns: {', '.join(frame.columns)}"
         raise InputError(msg)
     notes: list[str] = []
-    counter = time_col is None and len(frame) > 0 and counter_before_time(list(frame.columns), [str(v) for v in frame.iloc[0]])
+    counter = time_col is None and len(frame) > 0 and counter_before_time(list(frame.columns), [str(v) for v in frame.iloc[0]], dialect)
     header = time_col if time_col is not None else frame.columns[1] if counter else frame.columns[0]
     if counter:
         notes.append(f"left out, a row counter: {frame.columns[0]}; the time is {header!r}")
