@@ -502,3 +502,12 @@ def test_a_scan_counter_and_milliseconds_after_a_colon(write_csv):
     log = read_temperature_log(write_csv("Scan,Time,101 (C)\n" + rows))
     assert log.sensors == ("101 (C)",) and log.notes == ("left out, a row counter: Scan; the time is 'Time'",)
     np.testing.assert_allclose(log.time_min * 60, 10 * np.arange(30) + 0.5 * (np.arange(30) % 2), atol=1e-6)
+
+
+def test_a_burnout_marker_is_an_open_circuit_sample(write_csv):
+    """Graphtec writes BURNOUT for a broken thermocouple's reading: it stopped the file reader
+    ("'BURNOUT' is not a number") where the live follower bridged it."""
+    rows = "".join(f"{k},{'BURNOUT' if k in (7, 9) else f'{20 + k / 10:.2f}'}\n" for k in range(30))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows))
+    assert log.notes == ("sensor 'A': skipped 2 open-circuit sample(s) (rows 9, 11)",)
+    assert np.isnan(log.temperature_C[[7, 9], 0]).all() and log.temperature_C[8, 0] == 20.8

@@ -54,6 +54,9 @@ __all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES
 # A PT100 channel with a broken wire reads far outside any machine-tool temperature.
 OPEN_CIRCUIT_HIGH_C = 400.0
 OPEN_CIRCUIT_LOW_C = -60.0
+# What loggers write in place of a reading for a broken thermocouple or an overrange (Graphtec
+# "BURNOUT"); the live follower reads any text as a missing reading.
+OPEN_CIRCUIT_TEXT = ("burnout", "burn out", "open", "ol", "over", "+over", "-over", "overrange", "under", "+++++", "-----")
 # Above this share of bad samples a sensor is refused rather than bridged.
 MAX_BAD_FRACTION = 0.1
 TIME_UNITS = {"ms": 1.0 / 60_000.0, "s": 1.0 / 60.0, "min": 1.0, "h": 60.0, "d": 1440.0}
@@ -381,13 +384,14 @@ def read_temperature_log(
         cells = raw.astype(str).str.replace(",", ".", regex=False).where(raw.notna()) if dialect.decimal == "," and not pd.api.types.is_numeric_dtype(raw) else raw
         values = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
         text = raw.astype(str).str.strip()
-        non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.str.lower().isin(["nan", ""]).to_numpy()
+        marked_open = text.str.lower().isin(OPEN_CIRCUIT_TEXT).to_numpy()
+        non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.str.lower().isin(["nan", ""]).to_numpy() & ~marked_open
         if np.any(non_numeric):
             row = int(np.argmax(non_numeric))
             msg = f"{source}: sensor {name!r}, row {row + first_row}: {_cell(raw.iloc[row])} is not a number"
             raise InputError(msg)
-        missing = np.isnan(values)
-        open_circuit = (values > OPEN_CIRCUIT_HIGH_C) | (values < OPEN_CIRCUIT_LOW_C)
+        missing = np.isnan(values) & ~marked_open
+        open_circuit = (values > OPEN_CIRCUIT_HIGH_C) | (values < OPEN_CIRCUIT_LOW_C) | marked_open
         bad = missing | open_circuit
         if np.mean(bad) > MAX_BAD_FRACTION:
             msg = (
