@@ -232,9 +232,8 @@ class LogFollower:
         try:
             raw = self.dialect.number(text)
             time_name = self.header[self.columns[0]]
-            scale = time_unit_factor(time_name, self.time_unit, self.dialect.time_unit(time_name))
-            stamp = raw * scale
-            assumed = time_unit_assumed(time_name, self.time_unit, self.dialect.time_unit(time_name))
+            stated = self.dialect.time_unit(time_name)
+            stamp = raw * time_unit_factor(time_name, self.time_unit, stated)
         except ValueError:
             if self.time_format is None:
                 self.time_format = stamp_format(text)
@@ -243,8 +242,11 @@ class LogFollower:
                 raise
             stamp = self._stamp_minutes(text.strip())
         else:
-            serial = serial_date_hint(time_name, self.origin, stamp - self.origin) if self.origin is not None and self.last_time == 0.0 and assumed else None
-            if serial is not None:  # told at the second row
+            # spreadsheet serial dates are told at the second row
+            serial = None
+            if self.origin is not None and self.last_time == 0.0 and time_unit_assumed(time_name, self.time_unit, stated):
+                serial = serial_date_hint(time_name, self.origin, stamp - self.origin)
+            if serial is not None:
                 msg = f"{self.path}: {serial}"
                 raise InputError(msg)
         if self.origin is None:

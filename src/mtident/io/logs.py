@@ -352,9 +352,10 @@ def read_temperature_log(
             raise InputError(msg)
         sub_second = sub_second / 60_000.0
     if clock is None:
-        time_min = _parse_time(frame[header], header, time_unit, source, first_row, dialect.time_unit(header), sub_second)
+        stated = dialect.time_unit(header)
+        time_min = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
         numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
-        if numeric and time_unit_assumed(header, time_unit, dialect.time_unit(header)) and time_min[-1] > UNLIKELY_MINUTES:
+        if numeric and time_unit_assumed(header, time_unit, stated) and time_min[-1] > UNLIKELY_MINUTES:
             notes.append(seconds_hint(header, float(time_min[-1])))
     else:  # the date in one column, the time of day in the next: one stamp
         stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
@@ -383,9 +384,9 @@ def read_temperature_log(
         # (the message named the first good cell, '20,00', instead of the bad one).
         cells = raw.astype(str).str.replace(",", ".", regex=False).where(raw.notna()) if dialect.decimal == "," and not pd.api.types.is_numeric_dtype(raw) else raw
         values = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
-        text = raw.astype(str).str.strip()
-        marked_open = text.str.lower().isin(OPEN_CIRCUIT_TEXT).to_numpy()
-        non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.str.lower().isin(["nan", ""]).to_numpy() & ~marked_open
+        text = raw.astype(str).str.strip().str.lower()
+        marked_open = text.isin(OPEN_CIRCUIT_TEXT).to_numpy()
+        non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.isin(["nan", ""]).to_numpy() & ~marked_open
         if np.any(non_numeric):
             row = int(np.argmax(non_numeric))
             msg = f"{source}: sensor {name!r}, row {row + first_row}: {_cell(raw.iloc[row])} is not a number"
