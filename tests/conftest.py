@@ -42,10 +42,10 @@ def write_csv(tmp_path: Path):
 
 def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, bytes]:
     """The same log as different data-acquisition programs write it (time in minutes from
-    08:00 on 22.11.2026, temperatures with two decimals), keyed by what differs."""
+    13:00 on 22.11.2026, temperatures with two decimals), keyed by what differs."""
     import datetime as dt
 
-    start = dt.datetime(2026, 11, 22, 8, 0, 0)
+    start = dt.datetime(2026, 11, 22, 13, 0, 0)  # an afternoon: 12-hour clocks say pm
     names = list(columns)
     cells = [[f"{v:.2f}" for v in row] for row in np.column_stack(list(columns.values()))]
 
@@ -85,4 +85,28 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
         "scan counter, colon milliseconds": table("Scan,Time," + ",".join(f"{n} (C)" for n in names), [f"{k + 1},{stamp(m, '%m/%d/%Y %H:%M:%S')}:000," + ",".join(c) for k, (m, c) in enumerate(zip(t, cells, strict=True))]).encode(),
         # Excel's "Unicode text": UTF-16 with a byte-order mark, tabs, CRLF
         "UTF-16, tabs (Excel's Unicode text)": table("time_min\t" + "\t".join(f"{n} °C" for n in names), [f"{m:g}\t" + "\t".join(c) for m, c in zip(t, cells, strict=True)], "\r\n").encode("utf-16"),
+        # The layouts below follow real exports kept as test files in a public logger-graphing project
+        # (abazemore/dataloggergraphs), filled with these readings; a humidity channel is left out.
+        # Hanwell: settings with blank lines, the time of day before a month-name date, a delimiter at the end
+        "settings, time before a month-name date, humidity (Hanwell)": (
+            "\nDatabase Valid\n  Sensor:,Thermistor/RH\n  Serial No:,0000-00000\n\n\n  No. of Readings:,40\n\n\n"
+            + table("Time," + ",".join(f" {n} (C)" for n in names) + ",Humidity (RH(%)),", [stamp(m, "%H:%M:%S %d/%b/%Y") + "," + ",".join(c) + ",50.1," for m, c in zip(t, cells, strict=True)])
+        ).encode(),
+        # a building-management export: a two-digit year after a month name, a 12-hour clock, the unit in the name
+        "two-digit year, month name, am/pm (Trend)": table(
+            "Timestamp," + ",".join(f"{n}(°C)" for n in names), [f"{stamp(m, '%d-%b-%y')} {int(stamp(m, '%I'))}:{stamp(m, '%M:%S %p').lower()}," + ",".join(c) for m, c in zip(t, cells, strict=True)]
+        ).encode(),
+        # a climate controller: date and time in one ';'-cell joined by a comma, two-digit years, units after
+        # a slash, set points in %, a ';' at the end of the data rows but not of the header
+        "date,time in one cell, units after a slash, set point in % (miniClima)": table(
+            "date,time;" + ";".join(f"{n}/°C" for n in names) + ";RH/%;set/%", [stamp(m, "%d.%m.%y,%H:%M:%S") + ";" + ";".join(c) + ";50;56;" for m, c in zip(t, cells, strict=True)]
+        ).encode("cp1252"),
+        # a wireless logger's receiver and transmitter names before the date (Meaco)
+        "text columns before the time (Meaco)": table(
+            "RECEIVER,TRANSMITTER,DATE," + ",".join(names) + ",HUMIDITY", [f'"Workshop","Spindle","{stamp(m, "%Y-%m-%d %H:%M")}",' + ",".join(c) + ",54.91" for m, c in zip(t, cells, strict=True)]
+        ).encode(),
+        # a quoted title line, names with a space before them, day-first stamps without seconds (Meaco)
+        "quoted title, spaced names, day-first stamps without seconds (Meaco)": (
+            '"Workshop - Spindle - ID: 00"\n' + table("Timestamp," + ",".join(f'" {n}"' for n in names) + '," Humidity"', [f'"{stamp(m, "%d/%m/%Y %H:%M")}",' + ",".join(c) + ",45.59" for m, c in zip(t, cells, strict=True)])
+        ).encode(),
     }

@@ -41,8 +41,10 @@ __all__ = [
     "date_and_clock",
     "celsius_conversion",
     "temperature_columns",
+    "is_humidity",
     "text_only_cells",
     "counter_before_time",
+    "text_before_stamps",
     "millisecond_column",
     "HEAD_BYTES",
     "TIME_OF_DAY_FORMATS",
@@ -64,17 +66,22 @@ TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M:%S:%f", "%H:%M", "%I:%M
 # unless the first stamp says day first (22/11/2026); where the first stamp cannot tell (01/02),
 # the order whose steps are plausible at the first change of date is taken (:func:`other_date_order`).
 _DOTTED = tuple(f"%d.%m.{year} {clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
-# day first with dashes too (22-11-2026, and 22-Nov-2026 as spreadsheets and LabVIEW write it)
-_DASHED = tuple(f"%d-{month}-%Y {clock}" for month in ("%m", "%b") for clock in TIME_OF_DAY_FORMATS)
-_SLASHED = tuple(f"{date} {clock}" for date in ("%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y") for clock in TIME_OF_DAY_FORMATS)
-_STAMP_FORMATS = (*_DOTTED, *_DASHED, *_SLASHED, "%Y-%m-%d %I:%M:%S %p", "%Y-%m-%d %I:%M %p", *TIME_OF_DAY_FORMATS)
+# day first with dashes too (22-11-2026, and 22-Nov-2026 as spreadsheets and LabVIEW write it; a
+# building-management export, 22-Nov-26 8:00:00 am)
+_DASHED = tuple(f"%d-{month}-{year} {clock}" for month in ("%m", "%b") for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
+_SLASHED = tuple(f"{date} {clock}" for date in ("%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y", "%d/%b/%y") for clock in TIME_OF_DAY_FORMATS)
+# The time of day before the date (Hanwell: 08:00:00 22/Nov/2026), and a comma between a dotted
+# date and the time inside one ';'-separated cell (a climate controller's "date,time" column).
+_TIME_FIRST = tuple(f"{clock} {date}" for date in ("%d/%b/%Y", "%d/%b/%y", "%d-%b-%Y", "%d.%m.%Y", "%d.%m.%y", "%Y-%m-%d") for clock in TIME_OF_DAY_FORMATS)
+_DOTTED_COMMA = tuple(f"%d.%m.{year},{clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
+_STAMP_FORMATS = (*_DOTTED, *_DASHED, *_SLASHED, *_TIME_FIRST, *_DOTTED_COMMA, "%Y-%m-%d %I:%M:%S %p", "%Y-%m-%d %I:%M %p", *TIME_OF_DAY_FORMATS)
 MINUTES_PER_DAY = 1440.0
 # a step that long between two rows of a warm-up log is a date read in the wrong order
 IMPLAUSIBLE_STEP_MIN = 20 * MINUTES_PER_DAY
-# a unit at the end of a column's name: "Time [s]", "T1 (°C)"
-_UNIT_IN_NAME = re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*$")
+# a unit at the end of a column's name: "Time [s]", "T1 (°C)", "T/°C" (a unit this module knows)
+_UNIT_IN_NAME = re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*$|\S/\s*([^/\[\]()]+?)\s*$")
 # a date without a time: the first of two time-stamp columns
-_DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%Y-%m-%d", "%Y/%m/%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y")
+_DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%d-%m-%y", "%d-%b-%y", "%Y-%m-%d", "%Y/%m/%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y")
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
 # as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
 # gives (scale, offset) to °C.
@@ -85,6 +92,14 @@ _TEMPERATURE_UNITS = {
     **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),
     **dict.fromkeys(("f", "degf", "fahrenheit", "degreesf", "degreef"), (5.0 / 9.0, -160.0 / 9.0)),
 }
+# Units of a logger's other channels, named at the end of a column's name ("Speed (rpm)", "RH/%"):
+# such a column is no temperature. (A units row may name any unit; a name must name a known one.)
+_OTHER_UNITS = frozenset(
+    ("%", "%rh", "rh", "%rf", "v", "mv", "µv", "uv", "a", "ma", "rpm", "1/min", "u/min", "hz", "khz", "bar", "mbar", "pa", "kpa", "hpa", "mpa", "psi",
+     "w", "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "n", "kn", "ppm", "g", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h")
+)
+# A column named as a humidity ("Humidity", "RH", "Feuchte", "湿度"; the name alone, without a unit)
+_HUMIDITY_WORDS = ("humidity", "feuchte", "湿度", "%rh")
 
 
 @dataclass(frozen=True, slots=True)
@@ -147,9 +162,10 @@ class CsvDialect:
         if self.units:
             return dict(self.units).get(column, "")
         named = _UNIT_IN_NAME.search(column)
-        if named is None or _unit_key(named.group(1)) not in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS):
-            return ""  # "T (spindle)" names a place, not a unit
-        return named.group(1)
+        unit = "" if named is None else named.group(1) or named.group(2)
+        if _unit_key(unit) not in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
+            return ""  # "T (spindle)" names a place, not a unit; "Date/Time" no unit either
+        return unit
 
     def time_unit(self, column: str) -> str | None:
         """"s", "min" or "h" if the units row or the column's name states its unit, else None."""
@@ -163,16 +179,8 @@ def _unit_key(cell: str) -> str:
 def text_only_cells(cells: list[str]) -> bool:
     """Whether a column's cells hold text and not one number (empty and NaN cells aside; a decimal
     comma counts as a number): a logger's status channel, no sensor. Both readers of a log use it."""
-
-    def number(cell: str) -> bool:
-        try:
-            float(cell.replace(",", "."))
-        except ValueError:
-            return False
-        return True
-
     written = [c.strip() for c in cells if c.strip() and c.strip().lower() != "nan"]
-    return bool(written) and not any(number(c) for c in written)
+    return bool(written) and not any(_is_number(c) for c in written)
 
 
 # A first column that counts the rows (Graphtec's "NO.", Keysight's "Scan", "Nr.", "Index"), before the time column.
@@ -195,6 +203,28 @@ def counter_before_time(header: list[str], first_row: list[str], dialect: CsvDia
     return False
 
 
+def text_before_stamps(first_row: list[str]) -> int:
+    """How many columns of text come before the first column of time stamps (a wireless logger's
+    receiver and transmitter names before its DATE), by the first data row; 0 where the first
+    column holds the time, or where the first time stamp is not clear (a number is no stamp here:
+    a bad first time cell must not make a sensor the time)."""
+    for k, cell in enumerate(first_row[:4]):
+        text = cell.strip()
+        if not text or _is_number(text) or _parses(text, _DATE_FORMATS):  # a date: its time of day follows
+            return 0
+        if stamp_format(text) is not None:
+            return k
+    return 0
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell.replace(",", "."))
+    except ValueError:
+        return False
+    return True
+
+
 def millisecond_column(header: list[str], last_time_column: int) -> int | None:
     """The column after the time stamp (or its clock column) if it is named as its milliseconds."""
     following = last_time_column + 1
@@ -210,18 +240,32 @@ def celsius_conversion(unit: str) -> tuple[float, float] | None:
     return _TEMPERATURE_UNITS.get(_unit_key(unit))
 
 
+def is_humidity(name: str) -> bool:
+    """Whether a column's name (or a description row's cell) names a humidity, not a temperature."""
+    key = _unit_key(name)
+    return key == "rh" or any(word in key for word in _HUMIDITY_WORDS)
+
+
 def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, source: str | Path) -> tuple[list[str], list[str]]:
     """The sensor columns to read, and notes, by their units (a units row, or a unit in the name).
 
-    A column whose unit is no temperature (a logger's speed or voltage channel)
-    is left out of the default selection with a note, and refused when ``asked``
-    for by name; one in K or °F is converted, with a note.
+    A column whose unit is no temperature (a logger's speed or voltage channel),
+    or that is named as a humidity, is left out of the default selection with a
+    note, and refused when ``asked`` for by name; one in K or °F is converted,
+    with a note.
     """
     by = "the units row" if dialect.units else "its name"
     kept, notes, other = [], [], []
     for name in names:
-        conversion = celsius_conversion(dialect.unit_of(name))
-        unit = dialect.unit_of(name).strip().strip("[]()").strip()  # as written, without brackets
+        written = dialect.unit_of(name)
+        unit = written.strip().strip("[]()").strip()  # as written, without brackets
+        if not unit and is_humidity(name):
+            if asked:
+                msg = f"{source}: sensor {name!r} is a humidity by its name, not a temperature (°C, K or °F)"
+                raise InputError(msg)
+            other.append(f"{name} (humidity)")
+            continue
+        conversion = celsius_conversion(written)
         if conversion is None:
             if asked:
                 msg = f"{source}: sensor {name!r} is in {unit!r} by {by}, not a temperature (°C, K or °F)"
@@ -365,9 +409,15 @@ def _table_delimiter(lines: list[str], k: int, stated: str | None) -> str | None
     following = _following(lines, k)
     for delimiter in (stated,) if stated else _DELIMITERS:
         count = len(next(csv.reader([lines[k]], delimiter=delimiter), []))
-        if count >= 2 and following and all(len(row) == count for row in csv.reader(following, delimiter=delimiter)):
+        if count >= 2 and following and all(_continues(row, count) for row in csv.reader(following, delimiter=delimiter)):
             return delimiter
     return None
+
+
+def _continues(row: list[str], count: int) -> bool:
+    """Whether a row has ``count`` cells, or one more that is empty (a delimiter at the end of each
+    data row but not of the header, as a climate controller writes it)."""
+    return len(row) == count or (len(row) == count + 1 and not row[-1].strip())
 
 
 def _data_row_below(lines: list[str], k: int, delimiter: str) -> bool:
@@ -406,7 +456,7 @@ def _delimiter(header: str, rows: list[str]) -> str:
     # on a full tie ';' and tab come first: decimal commas in the rows can match commas in the names
     ranked = sorted((d for d in (";", "\t", ",") if counts[d] > 1), key=lambda d: -counts[d])
     for d in ranked:
-        if all(len(row) == counts[d] for row in csv.reader([r for r in rows if r.strip()], delimiter=d)):
+        if all(_continues(row, counts[d]) for row in csv.reader([r for r in rows if r.strip()], delimiter=d)):
             return d
     return ranked[0] if ranked else ","
 
@@ -469,6 +519,8 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
             skiprows=[*range(dialect.preamble_lines), *([dialect.preamble_lines + 1] if dialect.units else [])],
             encoding=dialect.encoding,
             skipinitialspace=True,
+            # a delimiter at the end of the data rows alone: the first column stays the time, not an index
+            index_col=False,
         )
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         msg = f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})"
@@ -491,18 +543,19 @@ def date_and_clock(date_cell: str, clock_cell: str) -> bool:
     in two columns (``Datum;Uhrzeit``, ``Date\tTime``), read as one stamp, date first."""
     if ":" not in clock_cell or not any(mark in date_cell for mark in "./-"):
         return False  # not worth importing pandas (0.5 s that a numeric live log does not need)
+    return _parses(date_cell, _DATE_FORMATS) and _parses(clock_cell, TIME_OF_DAY_FORMATS)
+
+
+def _parses(cell: str, formats: tuple[str, ...]) -> bool:
     import pandas as pd
 
-    def parses(cell: str, formats: tuple[str, ...]) -> bool:
-        for fmt in formats:
-            try:
-                pd.to_datetime(cell.strip(), format=fmt)
-            except (ValueError, TypeError):
-                continue
-            return True
-        return False
-
-    return parses(date_cell, _DATE_FORMATS) and parses(clock_cell, TIME_OF_DAY_FORMATS)
+    for fmt in formats:
+        try:
+            pd.to_datetime(cell.strip(), format=fmt)
+        except (ValueError, TypeError):
+            continue
+        return True
+    return False
 
 
 def after_midnight(previous_min: float | None, t_min: float) -> float:

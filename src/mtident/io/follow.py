@@ -48,6 +48,7 @@ from mtident.io.dialect import (
     sniff_dialect,
     stamp_format,
     temperature_columns,
+    text_before_stamps,
     text_only_cells,
 )
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, serial_date_hint, time_unit_assumed, time_unit_factor
@@ -158,7 +159,8 @@ class LogFollower:
         ``clock_column`` and ``millisecond_column``."""
         assert self.dialect is not None
         counter = self.time_col is None and counter_before_time(header, first_row, self.dialect)
-        time_name = self.time_col or header[1 if counter else 0]
+        text_before = 0 if self.time_col is not None or counter else text_before_stamps(first_row)
+        time_name = self.time_col or header[1 if counter else text_before]
         if time_name not in header:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"
             raise InputError(msg)
@@ -169,6 +171,8 @@ class LogFollower:
         self.millisecond_column = millisecond_column(header, header.index(clock_name or time_name))
         milliseconds = header[self.millisecond_column] if self.millisecond_column is not None else None
         notes = [f"left out, a row counter: {header[0]}; the time is {time_name!r}"] if counter else []
+        if text_before:
+            notes.append(f"the time is {time_name!r}, the first column of time stamps")
         return time_name, [n for n in (time_name, clock_name, milliseconds, header[0] if counter else None) if n is not None], notes
 
     def _choose_sensors(self, header: list[str], names: list[str], rows: list[list[str]]) -> tuple[list[str], list[str]]:

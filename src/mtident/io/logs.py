@@ -43,6 +43,7 @@ from mtident.io.dialect import (
     read_csv,
     stamp_format,
     temperature_columns,
+    text_before_stamps,
     text_only_cells,
 )
 
@@ -330,10 +331,14 @@ def read_temperature_log(
         msg = f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found columns: {', '.join(frame.columns)}"
         raise InputError(msg)
     notes: list[str] = []
-    counter = time_col is None and len(frame) > 0 and counter_before_time(list(frame.columns), [str(v) for v in frame.iloc[0]], dialect)
-    header = time_col if time_col is not None else frame.columns[1] if counter else frame.columns[0]
+    first_cells = [str(v) for v in frame.iloc[0]] if len(frame) else []
+    counter = time_col is None and len(frame) > 0 and counter_before_time(list(frame.columns), first_cells, dialect)
+    text_before = 0 if time_col is not None or counter else text_before_stamps(first_cells)
+    header = time_col if time_col is not None else frame.columns[1] if counter else frame.columns[text_before]
     if counter:
         notes.append(f"left out, a row counter: {frame.columns[0]}; the time is {header!r}")
+    if text_before:
+        notes.append(f"the time is {header!r}, the first column of time stamps")
     if header not in frame.columns:
         msg = f"{source}: no time column {header!r}; the columns are: {', '.join(frame.columns)}"
         raise InputError(msg)
