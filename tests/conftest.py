@@ -105,6 +105,31 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
         "text columns before the time (Meaco)": table(
             "RECEIVER,TRANSMITTER,DATE," + ",".join(names) + ",HUMIDITY", [f'"Workshop","Spindle","{stamp(m, "%Y-%m-%d %H:%M")}",' + ",".join(c) + ",54.91" for m, c in zip(t, cells, strict=True)]
         ).encode(),
+        # Tinytag Explorer: an unnamed row counter, four rows that describe the channels, units in the cells
+        "unnamed counter, description rows, units in the cells (Tinytag)": table(
+            ",Time," + ",".join(names) + ",H\n" + "\n".join(f"{key},," + ",".join(value for _ in [*names, "H"]) for key, value in (("S/N", "227659"), ("Type", "Tinytag Ultra H°C/%RH"), ("Description", "Spindle")))
+            + "\nProperty,," + ",".join("Temperature" for _ in names) + ",Humidity",
+            [f"{k + 1},{stamp(m, '%Y-%m-%d %H:%M:%S')}," + ",".join(f"{x} °C" for x in c) + ",50.1 %RH" for k, (m, c) in enumerate(zip(t, cells, strict=True))],
+            "\r\n",
+        ).encode("cp1252"),
+        # T&D: the stamp in an unnamed first column, its spreadsheet serial date in "Date/Time", a second row
+        # of names and a units row, a humidity channel in %, a delimiter at the end of every line
+        "unnamed stamp column, serial dates beside it, two name rows and units (T&D)": table(
+            ",Date/Time," + ",".join(names) + ",No.9,\n,Date/Time," + ",".join(f"ch{i}" for i in range(len(names))) + ",ch9,\n,," + ",".join("°C" for _ in names) + ",%,",
+            [f"{stamp(m, '%Y-%m-%d %H:%M:%S')},{46348.541667 + m / 1440:.5f}," + ",".join(c) + ",51," for m, c in zip(t, cells, strict=True)],
+        ).encode(),
+        # T&D's other export: every cell quoted, "Date/Time" twice, cp1252's degree sign
+        "quoted, a time column's name twice, cp1252 units row (T&D)": table(
+            '"Date/Time","Date/Time",' + ",".join(f'"{n}"' for n in names) + ',"No.9"\n"Date/Time","Date/Time",' + ",".join(f'"ch{i}"' for i in range(len(names))) + ',"ch9"\n"","",' + ",".join('"°C"' for _ in names) + ',"%"',
+            [f'"{stamp(m, "%Y-%m-%d %H:%M:%S")}","{46348.541667 + m / 1440:.10f}",' + ",".join(f'"{x}"' for x in c) + ',"53.0"' for m, c in zip(t, cells, strict=True)],
+        ).encode("cp1252"),
+        # Rotronic: the file's parts under section tags, every line padded with commas, an empty row and a
+        # tag between the header and the data, the date and the time of day in two columns
+        "section tags, padded lines, rows between header and data (Rotronic)": table(
+            "\n".join(line + "," * (len(names) + 2) for line in ("[#I]Device Description", "Spindle  ", "", "[#S]Device Information", "Version = V2.2-2", "Log Interval = 00:01:00", "", "[#1]", "Humidity = %rh", "", "[#H]"))
+            + "\nDate,Time,Humidity," + ",".join(names) + "\n" + "," * (len(names) + 2) + "\n[#D]" + "," * (len(names) + 2),
+            [f"{stamp(m, '%d/%m/%Y,%H:%M:%S')},37.9," + ",".join(c) for m, c in zip(t, cells, strict=True)],
+        ).encode(),
         # a quoted title line, names with a space before them, day-first stamps without seconds (Meaco)
         "quoted title, spaced names, day-first stamps without seconds (Meaco)": (
             '"Workshop - Spindle - ID: 00"\n' + table("Timestamp," + ",".join(f'" {n}"' for n in names) + '," Humidity"', [f'"{stamp(m, "%d/%m/%Y %H:%M")}",' + ",".join(c) + ",45.59" for m, c in zip(t, cells, strict=True)])

@@ -324,12 +324,23 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
     follower = LogFollower(live)
     follower.poll()
     position = follower.position()
-    assert position["dialect"] == [";", ",", 0, "utf-8-sig", []]
-    position["dialect"] = position["dialect"][:4]  # as a state file of the last version wrote it
+    assert position["dialect"] == [";", ",", 0, "utf-8-sig", [], 0, "the units row", False]
+    position["dialect"] = position["dialect"][:4]  # as a state file of an older version wrote it
     with open(live, "a") as out:
         out.write("1;20,6\n")
     rows = LogFollower.resume(live, position, None, None).poll()
     np.testing.assert_array_equal(rows.temperature_C, [[20.6]])
+    # one written before the rows under the header were counted: five entries, a units row if any
+    live.write_text("time;T1\nmin;K\n0;293,5\n")
+    follower = LogFollower(live)
+    follower.poll()
+    position = follower.position()
+    assert position["dialect"][4:] == [[["time", "min"], ["T1", "K"]], 1, "the units row", False]
+    position["dialect"] = position["dialect"][:5]
+    with open(live, "a") as out:
+        out.write("1;293,6\n")
+    rows = LogFollower.resume(live, position, None, None).poll()
+    np.testing.assert_allclose(rows.temperature_C, [[293.6 - 273.15]])
 
 
 def test_a_date_and_a_time_of_day_in_two_columns_are_one_stamp(write_csv):
@@ -513,3 +524,34 @@ def test_a_burnout_marker_is_an_open_circuit_sample(write_csv):
     log = read_temperature_log(write_csv("time_min,A\n" + rows))
     assert log.notes == ("sensor 'A': skipped 2 open-circuit sample(s) (rows 9, 11)",)
     assert np.isnan(log.temperature_C[[7, 9], 0]).all() and log.temperature_C[8, 0] == 20.8
+
+
+def test_real_logger_exports_name_their_channels_and_leave_out_the_rest(write_csv):
+    """Layouts of real exports (public test files of a logger-graphing project), each refused
+    before: Tinytag's unnamed counter, numbered channels, description rows and units in the cells
+    ("'S/N' is neither a number nor a time stamp"); T&D's unnamed stamp column with serial dates
+    beside it ("row 2 is empty"). The humidity and light channels are left out, and named."""
+    tinytag = ",Time,1,2,3\nS/N,,227659,227659,227659\nType,,Tinytag Ultra H°C/%RH,Tinytag Ultra H°C/%RH,csv file\nDescription,,Spindle,Spindle,Spindle\nProperty,,Temperature,Humidity,Dew Point\n"
+    tinytag += "".join(f"{k + 1},2026-11-22 08:{k:02d}:00,{20 + k / 10:.1f} °C,{56 + k / 100:.1f} %RH,{8 + k / 10:.1f} °C\n" for k in range(8))
+    log = read_temperature_log(write_csv(tinytag))
+    assert log.sensors == ("1", "3")
+    np.testing.assert_allclose(log.temperature_C[:, 0], 20 + np.arange(8) / 10)
+    np.testing.assert_allclose(log.time_min, np.arange(8.0))
+    assert "left out, a row counter: Unnamed: 0; the time is 'Time'" in log.notes
+    assert "left out, not temperatures by its cells: 2 (%RH)" in log.notes
+    # the older export writes no units in the cells: the Property row names the humidity
+    plain = re.sub(r" (°C|%RH)", "", tinytag)
+    assert read_temperature_log(write_csv(plain)).sensors == ("1", "3")
+    tandd = ",Date/Time,No.1,No.2,No.3,No.4,\n,Date/Time,ch1,ch2,ch3,ch4,\n,,lx,mW/cm2,°C,%,\n"
+    tandd += "".join(f"2026-11-22 08:{k:02d}:00,{46348.333333 + k / 1440:.5f},6.27,0,{20 + k / 10:.1f},51,\n" for k in range(8))
+    log = read_temperature_log(write_csv(tandd))
+    assert log.sensors == ("No.3",)
+    assert "left out, named as times: Date/Time" in log.notes and "left out, not temperatures by the units row: No.1 (lx), No.2 (mW/cm2), No.4 (%)" in log.notes
+    meaco = 'RECEIVER,TRANSMITTER,DATE,TEMPERATURE,HUMIDITY\n' + "".join(f'"Shop","Spindle","2026-11-22 08:{k:02d}",{20 + k / 10:.2f},55.1\n' for k in range(8))
+    log = read_temperature_log(write_csv(meaco))
+    assert log.sensors == ("TEMPERATURE",) and "the time is 'DATE', the first column of time stamps" in log.notes
+    with pytest.raises(InputError, match="sensor 'HUMIDITY' is a humidity by its name, not a temperature"):
+        read_temperature_log(write_csv(meaco), sensors=["HUMIDITY"])
+    # a bad first data row is still refused, not taken for a row that describes the channels
+    with pytest.raises(InputError, match="row 2: 'yesterday' is neither a number nor a time stamp"):
+        read_temperature_log(write_csv("time,A\nyesterday,20\n" + "".join(f"{k},20\n" for k in range(1, 6))))

@@ -42,6 +42,9 @@ __all__ = [
     "celsius_conversion",
     "temperature_columns",
     "is_humidity",
+    "time_named",
+    "number_without_unit",
+    "carried_unit",
     "text_only_cells",
     "counter_before_time",
     "text_before_stamps",
@@ -99,7 +102,7 @@ _OTHER_UNITS = frozenset(
      "w", "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "n", "kn", "ppm", "g", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h")
 )
 # A column named as a humidity ("Humidity", "RH", "Feuchte", "湿度"; the name alone, without a unit)
-_HUMIDITY_WORDS = ("humidity", "feuchte", "湿度", "%rh")
+_HUMIDITY_WORDS = ("humidity", "feuchte", "湿度")
 
 
 @dataclass(frozen=True, slots=True)
@@ -118,23 +121,39 @@ class CsvDialect:
         Shift-JIS (cp932) where both fail, or UTF-16 (Excel's "Unicode text"),
         told by its byte-order mark.
     units : tuple of (str, str)
-        Each column's unit from a units row under the header (``min;°C;°C``);
-        empty if there is none. The data rows begin after it.
+        Each column's unit as the log states it under the header: in a units row
+        (``min;°C;°C``), in the readings' cells (``13.1 °C``), or as a humidity in a
+        logger's description rows; empty if it states none.
+    extra_rows : int
+        Lines between the header and the first data row: a units row, a second
+        row of names, a logger's description of each channel (serial number,
+        type, property), an empty row or a section tag (``[#D]``).
+    units_source : str
+        Where ``units`` come from, for messages: "the units row", "its cells",
+        "the rows under the header".
+    units_in_cells : bool
+        The readings carry their unit (``13.1 °C``, ``56.3 %RH``), taken off when read.
     """
 
     delimiter: str = ","
     decimal: str = "."
     preamble_lines: int = 0
     encoding: str = "utf-8-sig"
-    # (column name, unit) from a units row under the header; () if the log has none
+    # (column name, unit) from under the header; () if the log states none there
     units: tuple[tuple[str, str], ...] = ()
+    extra_rows: int = 0
+    units_source: str = "the units row"
+    units_in_cells: bool = False
 
     def cells(self, line: str) -> list[str]:
         """The cells of one line (a header), stripped; quotes removed."""
         return [cell.strip() for cell in next(csv.reader([line], delimiter=self.delimiter), [])]
 
     def number(self, cell: str) -> float:
-        """A cell as a float under this decimal mark; ValueError if it is none."""
+        """A cell as a float under this decimal mark (a unit after it taken off where the log
+        writes one there); ValueError if it is none."""
+        if self.units_in_cells:
+            cell = number_without_unit(cell)
         return float(cell.replace(",", ".") if self.decimal == "," else cell)
 
     def decode(self, data: bytes) -> str:
@@ -153,14 +172,15 @@ class CsvDialect:
 
     @property
     def head_lines(self) -> int:
-        """Lines before the first data row: the preamble, the header and a units row."""
-        return self.preamble_lines + 1 + bool(self.units)
+        """Lines before the first data row: the preamble, the header and the rows under it."""
+        return self.preamble_lines + 1 + self.extra_rows
 
     def unit_of(self, column: str) -> str:
-        """The column's unit as the units row writes it, else as its name ends ("Time [s]",
-        "T1 (°F)": a unit this module knows only); "" without one."""
-        if self.units:
-            return dict(self.units).get(column, "")
+        """The column's unit as the log states it under the header, else as its name ends
+        ("Time [s]", "T1 (°F)": a unit this module knows only); "" without one."""
+        stated = dict(self.units).get(column, "")
+        if stated.strip():
+            return stated
         named = _UNIT_IN_NAME.search(column)
         unit = "" if named is None else named.group(1) or named.group(2)
         if _unit_key(unit) not in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
@@ -170,6 +190,22 @@ class CsvDialect:
     def time_unit(self, column: str) -> str | None:
         """"s", "min" or "h" if the units row or the column's name states its unit, else None."""
         return _TIME_UNIT_NAMES.get(_unit_key(self.unit_of(column)))
+
+
+# a reading with its unit after it: "13.1 °C", "56.3 %RH" (Tinytag Explorer writes them so)
+_NUMBER_THEN_UNIT = re.compile(r"^\s*([+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*(\S.*?)\s*$")
+
+
+def carried_unit(cell: str) -> str | None:
+    """The unit a reading carries after its number ("13.1 °C": "°C"), if it is one this module knows."""
+    match = _NUMBER_THEN_UNIT.match(cell)
+    return match.group(2) if match and _unit_key(match.group(2)) in (*_TEMPERATURE_UNITS, *_OTHER_UNITS) else None
+
+
+def number_without_unit(cell: str) -> str:
+    """A reading's number with a known unit after it taken off ("13.1 °C": "13.1"); other cells as they are."""
+    match = _NUMBER_THEN_UNIT.match(cell)
+    return match.group(1) if match and carried_unit(cell) else cell
 
 
 def _unit_key(cell: str) -> str:
@@ -194,7 +230,11 @@ def counter_before_time(header: list[str], first_row: list[str], dialect: CsvDia
     no plain number): a logger's sample counter, which read as minutes would be a wrong time. The
     counter is told by its name, or by its cell in the row under the header (Graphtec writes a
     Japanese header and "NO.,Time,ms,ﾟC" under it)."""
-    if len(header) < 3 or len(first_row) < 2 or not {_unit_key(header[0]), _unit_key(dialect.unit_of(header[0]))} & _COUNTER_NAMES:
+    if len(header) < 3 or len(first_row) < 2:
+        return False
+    # Tinytag leaves the counter's name empty (pandas calls it "Unnamed: 0")
+    unnamed = not header[0].strip() or re.fullmatch(r"Unnamed: \d+", header[0]) is not None
+    if not ({_unit_key(header[0]), _unit_key(dialect.unit_of(header[0]))} & _COUNTER_NAMES or (unnamed and first_row[0].strip().isdigit())):
         return False
     try:
         float(first_row[1].replace(",", "."))
@@ -240,10 +280,21 @@ def celsius_conversion(unit: str) -> tuple[float, float] | None:
     return _TEMPERATURE_UNITS.get(_unit_key(unit))
 
 
+def time_named(name: str) -> bool:
+    """Whether a column's name says it holds a time (a second time column, as T&D writes its
+    stamps' spreadsheet serial dates beside them, or a controller's time difference): no sensor."""
+    key = _unit_key(re.sub(r"\.\d+$", "", name))  # pandas' ".1" after a repeated name
+    return key.startswith(_TIME_NAME_STARTS)
+
+
+# what the names of time columns begin with
+_TIME_NAME_STARTS = ("time", "date", "zeit", "datum", "uhrzeit", "timestamp", "日付", "時間", "時刻")
+
+
 def is_humidity(name: str) -> bool:
     """Whether a column's name (or a description row's cell) names a humidity, not a temperature."""
     key = _unit_key(name)
-    return key == "rh" or any(word in key for word in _HUMIDITY_WORDS)
+    return key in ("rh", "%rh", "rh%") or any(word in key for word in _HUMIDITY_WORDS)
 
 
 def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, source: str | Path) -> tuple[list[str], list[str]]:
@@ -254,9 +305,12 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
     note, and refused when ``asked`` for by name; one in K or °F is converted,
     with a note.
     """
-    by = "the units row" if dialect.units else "its name"
-    kept, notes, other = [], [], []
+    kept, notes, other, times = [], [], [], []
     for name in names:
+        if not asked and time_named(name):
+            times.append(name)
+            continue
+        by = dialect.units_source if dict(dialect.units).get(name, "").strip() else "its name"
         written = dialect.unit_of(name)
         unit = written.strip().strip("[]()").strip()  # as written, without brackets
         if not unit and is_humidity(name):
@@ -275,6 +329,9 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
         if conversion != (1.0, 0.0):
             notes.append(f"sensor {name!r}: read in {unit} ({by}), converted to °C")
         kept.append(name)
+    by = dialect.units_source if dialect.units else "its name"
+    if times:
+        notes.append(f"left out, named as times: {', '.join(times)}")
     if other:
         notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
     if not kept:
@@ -322,17 +379,38 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
         rows = csv.reader(complete[preamble + 1 : preamble + 21], delimiter=delimiter)  # "17,90" quoted, as spreadsheets write it
         if any(_DECIMAL_COMMA.match(cell) for row in rows for cell in row):
             decimal = ","
-    dialect = CsvDialect(delimiter, decimal, preamble, encoding)
-    if preamble + 1 < len(complete):
-        below = [cell.strip() for cell in next(csv.reader([complete[preamble + 1]], delimiter=delimiter), [])]
-        if _is_units_row(below, dialect):
-            dialect = replace(dialect, units=tuple(zip(dialect.cells(header), below, strict=False)))
-    if wait_for_row and preamble + 1 + bool(dialect.units) >= len(complete):
+    dialect = _stated_units(CsvDialect(delimiter, decimal, preamble, encoding), complete)
+    if wait_for_row and preamble + 1 + dialect.extra_rows >= len(complete):
         # A live log's header comes before its rows; the delimiter (a tie in the header) and the
         # decimal mark are told by a data row: sniffed from the header alone, a decimal-comma log
         # read every reading as NaN.
         return None
     return dialect
+
+
+def _stated_units(dialect: CsvDialect, lines: list[str]) -> CsvDialect:
+    """The dialect with the rows between its header and its first data row, and the units they
+    state: a units row's, a humidity named in a description row ("Property: Humidity"), or the
+    units the first data row's readings carry (``13.1 °C``)."""
+    k = dialect.preamble_lines
+    extra = _extra_rows(lines, k, dialect.delimiter) or 0
+    header = dialect.cells(lines[k])
+    units: dict[str, str] = {}
+    source = "the units row"
+    for line in lines[k + 1 : k + 1 + extra]:
+        cells = dialect.cells(line)
+        if not units and _is_units_row(cells, dialect):
+            units, source = {name: unit for name, unit in zip(header, cells, strict=False) if unit}, "the units row"
+        elif not units:
+            named = {name: "%RH" for name, cell in zip(header, cells, strict=False) if is_humidity(cell)}
+            units, source = named, "the rows under the header"
+    in_cells = False
+    if k + 1 + extra < len(lines):
+        carried = {name: unit for name, cell in zip(header, dialect.cells(lines[k + 1 + extra]), strict=False) if (unit := carried_unit(cell))}
+        in_cells = bool(carried)
+        if carried:  # the readings' own units say most
+            units, source = {**units, **carried}, "its cells"
+    return replace(dialect, units=tuple(units.items()), extra_rows=extra, units_source=source, units_in_cells=in_cells)
 
 
 def _decoded_head(head: bytes) -> tuple[str, str]:
@@ -383,14 +461,14 @@ def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row:
     if delimiter is not None and (not wait_for_row or _data_row_below(lines, first, delimiter)):
         return first
     for k in range(first + 1, len(lines)):
-        if not lines[k].strip() or _data_like(lines[k]):
+        if _blank_like(lines[k]) or _data_like(lines[k]):
             continue
         delimiter = _table_delimiter(lines, k, stated)
         # a line inside a table (a bad first row below its header) heads none
-        inside = delimiter is not None and lines[k - 1].strip() and len(next(csv.reader([lines[k - 1]], delimiter=delimiter))) == len(next(csv.reader([lines[k]], delimiter=delimiter)))
+        inside = delimiter is not None and not _blank_like(lines[k - 1]) and len(next(csv.reader([lines[k - 1]], delimiter=delimiter))) == len(next(csv.reader([lines[k]], delimiter=delimiter)))
         if delimiter is not None and not inside and _data_row_below(lines, k, delimiter):
             return k
-    written = [line for line in lines[first:] if line.strip()]
+    written = [line for line in lines[first:] if not _blank_like(line)]
     if wait_for_row and len(written) <= _TABLE_LOOKAHEAD + 1:
         return None
     return first
@@ -398,18 +476,32 @@ def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row:
 
 # rows after a header that must match it in number of cells
 _TABLE_LOOKAHEAD = 20
+# rows between a header and its first data row: a units row, a second row of names, a logger's
+# description of its channels (Tinytag: S/N, Type, Description, Property), empty rows, section tags
+_MAX_EXTRA_ROWS = 6
+# a date or a time of day somewhere in a cell
+_STAMP_LIKE = re.compile(r"\d{1,4}[./-]\d{1,2}[./-]\d{1,4}|\d{1,2}:\d{2}")
 
 
 def _following(lines: list[str], k: int) -> list[str]:
-    return [line for line in lines[k + 1 : k + 1 + _TABLE_LOOKAHEAD] if line.strip()]
+    return [line for line in lines[k + 1 : k + 1 + _TABLE_LOOKAHEAD] if not _blank_like(line)]
+
+
+def _blank_like(line: str) -> bool:
+    """A line that belongs to no table: empty, empty cells alone (",,,"), or a section tag
+    alone ("[#D],,,", "[Data]", as Rotronic writes its file's parts)."""
+    core = line.strip().strip(",;\t").strip()
+    if not core.strip('",;\t '):
+        return True
+    return core.startswith("[") and "]" in core and not any(d in core for d in _DELIMITERS)
 
 
 def _table_delimiter(lines: list[str], k: int, stated: str | None) -> str | None:
-    """A delimiter that splits line ``k`` into two cells or more and the lines after it into as many."""
+    """A delimiter that splits line ``k`` into two written cells or more and the lines after it into as many."""
     following = _following(lines, k)
     for delimiter in (stated,) if stated else _DELIMITERS:
-        count = len(next(csv.reader([lines[k]], delimiter=delimiter), []))
-        if count >= 2 and following and all(_continues(row, count) for row in csv.reader(following, delimiter=delimiter)):
+        cells = next(csv.reader([lines[k]], delimiter=delimiter), [])
+        if sum(bool(c.strip()) for c in cells) >= 2 and following and all(_continues(row, len(cells)) for row in csv.reader(following, delimiter=delimiter)):
             return delimiter
     return None
 
@@ -421,11 +513,40 @@ def _continues(row: list[str], count: int) -> bool:
 
 
 def _data_row_below(lines: list[str], k: int, delimiter: str) -> bool:
-    """Whether the first line after ``k`` (or after a units row there) begins like a data row."""
-    following = _following(lines, k)
-    below = next(csv.reader(following[:1], delimiter=delimiter))
-    first_row = following[1:2] if _is_units_row([c.strip() for c in below], CsvDialect(delimiter)) else following[:1]
-    return bool(first_row) and _data_like(first_row[0])
+    """Whether a data row follows line ``k``, directly or after rows that describe its columns."""
+    return _extra_rows(lines, k, delimiter) is not None
+
+
+def _extra_rows(lines: list[str], k: int, delimiter: str) -> int | None:
+    """How many lines come between the header at line ``k`` and its first data row (a units
+    row, rows that describe the columns, empty rows, section tags); None if no data row follows
+    within ``_MAX_EXTRA_ROWS`` of them. Rows that describe the columns come straight under the
+    header: after an empty row, a row of names heads a table of its own (a logger's settings
+    line "Interval,60,s" above a blank line and the real header is no header)."""
+    blank_seen = False
+    for j, line in enumerate(lines[k + 1 : k + 2 + _MAX_EXTRA_ROWS]):
+        cells = [c.strip() for c in next(csv.reader([line], delimiter=delimiter), [])]
+        if _data_row(cells):
+            return j
+        blank_seen = blank_seen or _blank_like(line)
+        if not (_blank_like(line) or (_describes(cells) and not blank_seen)):
+            return None
+    return None
+
+
+def _data_row(cells: list[str]) -> bool:
+    """Cells that begin like a data row: with a number or a date, or with text before a time
+    stamp (a wireless logger's receiver and transmitter names before the date)."""
+    if cells and _data_like(cells[0]):
+        return True
+    return len(cells) >= 3 and bool(cells[0]) and any(_STAMP_LIKE.search(c) for c in cells[1:4])
+
+
+def _describes(cells: list[str]) -> bool:
+    """A row under the header that describes the columns and holds no readings: no number in
+    it (units, names, types), or its first or second cell empty where a data row has its time
+    (Tinytag's "S/N,,227659"): a row whose time is text ("yesterday,20") is a bad data row."""
+    return not any(_is_number(c) for c in cells if c) or not all(cells[:2])
 
 
 def _data_like(line: str) -> bool:
@@ -481,7 +602,7 @@ def check_unique_names(header: list[str], source: str | Path) -> None:
     (pandas would call the second 'T1.1', a reader by name would read the first twice)."""
     seen: dict[str, int] = {}
     for position, name in enumerate(header, start=1):
-        if name and name in seen:
+        if name and name in seen and not time_named(name):  # a repeated time column's name: no sensor is meant
             msg = f"{source}: the column name {name!r} appears twice (columns {seen[name]} and {position}); give each column its own name"
             raise InputError(msg)
         seen[name] = position
@@ -516,7 +637,7 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
             sep=dialect.delimiter,
             decimal=dialect.decimal,
             # the preamble, and a units row under the header
-            skiprows=[*range(dialect.preamble_lines), *([dialect.preamble_lines + 1] if dialect.units else [])],
+            skiprows=[*range(dialect.preamble_lines), *range(dialect.preamble_lines + 1, dialect.head_lines)],
             encoding=dialect.encoding,
             skipinitialspace=True,
             # a delimiter at the end of the data rows alone: the first column stays the time, not an index

@@ -67,6 +67,15 @@ class Rows:
     notes: tuple[str, ...] = ()
 
 
+def _saved_dialect(saved: list[Any]) -> CsvDialect:
+    """The dialect as a state file keeps it. One written before units rows were read has four
+    entries; one written before the rows under the header were counted, five (a units row, if any)."""
+    units = tuple((str(n), str(u)) for n, u in (saved[4] if len(saved) > 4 else []))
+    if len(saved) > 5:
+        return CsvDialect(str(saved[0]), str(saved[1]), int(saved[2]), str(saved[3]), units, int(saved[5]), str(saved[6]), bool(saved[7]))
+    return CsvDialect(str(saved[0]), str(saved[1]), int(saved[2]), str(saved[3]), units, int(bool(units)))
+
+
 @dataclass
 class LogFollower:
     """Tail a CSV temperature log (DESIGN.md contract: time column, one column per sensor)."""
@@ -98,7 +107,7 @@ class LogFollower:
             "last_time": self.last_time,
             "columns": self.columns,
             "sensors": self.sensors,
-            "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units]],
+            "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units], self.dialect.extra_rows, self.dialect.units_source, self.dialect.units_in_cells],
             "time_format": self.time_format,
             "clock_column": self.clock_column,
             "millisecond_column": self.millisecond_column,
@@ -122,8 +131,7 @@ class LogFollower:
             origin=position.get("origin"),
             last_time=position.get("last_time"),
             columns=list(position.get("columns") or []),
-            # a state file written before units rows were read has four entries
-            dialect=None if dialect is None else CsvDialect(str(dialect[0]), str(dialect[1]), int(dialect[2]), str(dialect[3]), tuple((str(n), str(u)) for n, u in (dialect[4] if len(dialect) > 4 else []))),
+            dialect=None if dialect is None else _saved_dialect(dialect),
             time_format=position.get("time_format"),
             clock_column=position.get("clock_column"),
             millisecond_column=position.get("millisecond_column"),
@@ -211,7 +219,7 @@ class LogFollower:
         lines = lines[self.dialect.preamble_lines :]
         if not lines:
             return []
-        header_line, lines = lines[0], lines[1 + bool(self.dialect.units) :]
+        header_line, lines = lines[0], lines[1 + self.dialect.extra_rows :]
         if self.header is None:
             rows_so_far = [cells for cells in csv.reader(lines, delimiter=self.dialect.delimiter) if any(c.strip() for c in cells)]
             notes.extend(self._set_header(header_line, rows_so_far))

@@ -39,6 +39,7 @@ from mtident.io.dialect import (
     counter_before_time,
     date_and_clock,
     millisecond_column,
+    number_without_unit,
     other_date_order,
     read_csv,
     stamp_format,
@@ -387,7 +388,11 @@ def read_temperature_log(
         scale, offset = celsius_conversion(dialect.unit_of(name)) or (1.0, 0.0)
         # One bad cell leaves a decimal-comma column as text: its good cells must still read as numbers
         # (the message named the first good cell, '20,00', instead of the bad one).
-        cells = raw.astype(str).str.replace(",", ".", regex=False).where(raw.notna()) if dialect.decimal == "," and not pd.api.types.is_numeric_dtype(raw) else raw
+        cells = raw
+        if dialect.units_in_cells and not pd.api.types.is_numeric_dtype(raw):  # "13.1 °C"
+            cells = raw.astype(str).map(number_without_unit).where(raw.notna())
+        if dialect.decimal == "," and not pd.api.types.is_numeric_dtype(cells):
+            cells = cells.astype(str).str.replace(",", ".", regex=False).where(cells.notna())
         values = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
         text = raw.astype(str).str.strip().str.lower()
         marked_open = text.isin(OPEN_CIRCUIT_TEXT).to_numpy()
