@@ -130,6 +130,12 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
             + "\nDate,Time,Humidity," + ",".join(names) + "\n" + "," * (len(names) + 2) + "\n[#D]" + "," * (len(names) + 2),
             [f"{stamp(m, '%d/%m/%Y,%H:%M:%S')},37.9," + ",".join(c) for m, c in zip(t, cells, strict=True)],
         ).encode(),
+        # HOBOware: a title padded with delimiters, a row counter named "#", the GMT offset in the time's
+        # name, each unit after a comma before the logger's serial numbers, event channels, US stamps
+        "HOBOware: '#' counter, units after a comma, event channels": table(
+            "Plot Title: 20827226" + "," * (len(names) + 3) + '\n#,"Date Time, GMT+01:00",' + ",".join(f'"{n}, °C (LGR S/N: 20827226, SEN S/N: 20827226)"' for n in names) + ",Coupler Detached (LGR S/N: 20827226),End Of File (LGR S/N: 20827226)",
+            [f"{k + 1},{stamp(m, '%m/%d/%y %I:%M:%S %p')}," + ",".join(c) + (",Logged," if k == 0 else ",,") for k, (m, c) in enumerate(zip(t, cells, strict=True))],
+        ).encode(),
         # a quoted title line, names with a space before them, day-first stamps without seconds (Meaco)
         "quoted title, spaced names, day-first stamps without seconds (Meaco)": (
             '"Workshop - Spindle - ID: 00"\n' + table("Timestamp," + ",".join(f'" {n}"' for n in names) + '," Humidity"', [f'"{stamp(m, "%d/%m/%Y %H:%M")}",' + ",".join(c) + ",45.59" for m, c in zip(t, cells, strict=True)])

@@ -158,9 +158,15 @@ def test_a_dead_column_can_be_left_out_as_the_error_says(tmp_path):
 
     t = np.arange(0.0, 61.0)
     path = tmp_path / "dead.csv"
-    path.write_text("time_min,dead,A,room\n" + "".join(f"{tk:g},,{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t))
+    # a few readings, then none: refused, with the advice
+    path.write_text("time_min,dead,A,room\n" + "".join(f"{tk:g},{'20.0' if tk < 3 else ''},{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t))
     out = mtident("thermal", "identify", str(path), "--window", "30")
     assert out.returncode == 2 and "leave this sensor out with --sensor" in out.stderr
+    # never a reading (an unplugged channel, an event channel that logged nothing): left out with a note
+    path.write_text("time_min,dead,A,room\n" + "".join(f"{tk:g},,{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t))
+    out = mtident("thermal", "identify", str(path), "--window", "30", "--json")
+    assert out.returncode == 0 and "left out, no readings in them: dead" in out.stderr
+    assert [d["sensor"] for d in json.loads(out.stdout)["sensors"]] == ["A", "room"]
     for extra in ((), ("--ambient", "room")):
         out = mtident("thermal", "identify", str(path), "--sensor", "A", "--window", "30", "--json", *extra)
         assert out.returncode == 0, out.stderr

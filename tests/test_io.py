@@ -74,7 +74,7 @@ def test_logs_as_loggers_write_them_read_like_the_plain_csv(tmp_path, dialect):
     plain, other = read_temperature_log(tmp_path / "plain.csv"), read_temperature_log(tmp_path / "other.csv")
     np.testing.assert_allclose(other.time_min, plain.time_min, atol=1e-9)
     np.testing.assert_array_equal(other.temperature_C, plain.temperature_C)
-    assert [re.sub(r"\s*[(/ ].*$", "", s) for s in other.sensors] == ["A", "B"]  # without a unit
+    assert [re.sub(r"\s*[(/ ,].*$", "", s) for s in other.sensors] == ["A", "B"]  # without a unit
 
 
 def test_a_time_of_day_passes_midnight_in_an_overnight_test(write_csv, tmp_path):
@@ -132,9 +132,12 @@ def test_missing_file_and_unknown_sensor(tmp_path, write_csv):
 def test_a_dead_sensor_that_is_not_asked_for_does_not_stop_the_others(write_csv):
     """The error for a dead sensor says "leave this sensor out with --sensor"; that used to fail
     the same way, because every column was checked before the selection."""
-    path = write_csv("time_min,dead,B,A\n" + "".join(f"{k},,{30 + k},{20 + k}\n" for k in range(6)))
-    with pytest.raises(InputError, match="sensor 'dead': 6 of 6 samples are empty"):
+    path = write_csv("time_min,dead,B,A\n" + "".join(f"{k},{'20' if k == 0 else ''},{30 + k},{20 + k}\n" for k in range(6)))
+    with pytest.raises(InputError, match="sensor 'dead': 5 of 6 samples are empty"):
         read_temperature_log(path)
+    # one that never gave a reading is left out of the default selection, with a note
+    never = read_temperature_log(write_csv("time_min,dead,B,A\n" + "".join(f"{k},,{30 + k},{20 + k}\n" for k in range(6))))
+    assert never.sensors == ("B", "A") and "left out, no readings in them: dead" in never.notes
     log = read_temperature_log(path, sensors=["A", "B"])
     assert log.sensors == ("A", "B") and log.temperature_C[2].tolist() == [22.0, 32.0]
     with pytest.raises(InputError, match="no sensor column 'C'; the log has: dead, B, A"):
@@ -555,3 +558,26 @@ def test_real_logger_exports_name_their_channels_and_leave_out_the_rest(write_cs
     # a bad first data row is still refused, not taken for a row that describes the channels
     with pytest.raises(InputError, match="row 2: 'yesterday' is neither a number nor a time stamp"):
         read_temperature_log(write_csv("time,A\nyesterday,20\n" + "".join(f"{k},20\n" for k in range(1, 6))))
+
+
+def test_hobo_exports_in_fahrenheit_with_event_rows_at_the_end(write_csv):
+    """HOBOware's export: the header began with '#' and was skipped as a comment (the first data
+    row became the header), the unit after a comma ('Temp, °F (LGR S/N: ...)') was not seen, so
+    °F would have been read as °C, and the event rows of the read-out, several at one time and
+    without a reading, were refused as duplicate times."""
+    rows = "".join(f"{k + 1},11/22/26 {8 + k // 60:02d}:{k % 60:02d}:00 AM,{68 + 0.18 * k:.3f},50.1,{'Logged' if k == 0 else ''},,\n" for k in range(8))
+    rows += "9,11/22/26 08:10:00 AM,,,,Logged,\n10,11/22/26 08:10:00 AM,,,,,Logged\n"
+    text = 'Plot Title: 20827226,,,,,,\n#,"Date Time, GMT+01:00","Temp, °F (LGR S/N: 20827226, SEN S/N: 20827226)","RH, % (LGR S/N: 20827226)",Coupler Detached (LGR S/N: 20827226),Host Connected (LGR S/N: 20827226),End Of File (LGR S/N: 20827226)\n' + rows
+    log = read_temperature_log(write_csv(text))
+    assert log.sensors == ("Temp, °F (LGR S/N: 20827226, SEN S/N: 20827226)",)
+    np.testing.assert_allclose(log.temperature_C[:, 0], 20 + 0.1 * np.arange(8), atol=1e-9)
+    np.testing.assert_allclose(log.time_min, np.arange(8.0))
+    assert any("left out 2 row(s) without a reading" in n for n in log.notes)
+    # the classic export: tabs, the unit in brackets with the serial number after it, empty event channels
+    classic = "Date Time\tTemp (°F)  #9724974\tCoupler Detached\tEnd Of File\n" + "".join(f"11/22/26 08:{k:02d}:00\t{68 + 0.18 * k:.3f}\t\t\n" for k in range(8))
+    log = read_temperature_log(write_csv(classic))
+    assert log.sensors == ("Temp (°F)  #9724974",)
+    np.testing.assert_allclose(log.temperature_C[:, 0], 20 + 0.1 * np.arange(8), atol=1e-9)
+    # a row without a reading inside the log stays (a dropout, bridged), and a time repeated with a reading is refused
+    with pytest.raises(InputError, match="duplicate time"):
+        read_temperature_log(write_csv(text.replace("8,11/22/26 08:07:00 AM", "8,11/22/26 08:06:00 AM")))

@@ -97,7 +97,7 @@ def test_follower_reads_logs_as_loggers_write_them_like_the_file_reader(tmp_path
         values.extend(rows.temperature_C)
     np.testing.assert_allclose(times, expected.time_min, atol=1e-9)
     np.testing.assert_array_equal(np.array(values), expected.temperature_C)
-    assert [re.sub(r"\s*[(/ ].*$", "", s) for s in follower.sensors or []] == ["A", "B"]  # without a unit
+    assert [re.sub(r"\s*[(/ ,].*$", "", s) for s in follower.sensors or []] == ["A", "B"]  # without a unit
 
 
 def test_follower_refuses_repeated_and_backward_times(tmp_path):

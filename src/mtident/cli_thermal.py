@@ -108,7 +108,8 @@ def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
         return
     table = Table(title=f"{log.source}: identified from the first {result.window_min:g} min ({method}, preset {preset})")
     for column in ("sensor", "T∞ ± 95 % (°C)", "λ (1/min)", "t_eq (min)", "RMSE (°C)", "model", "measured T / t_eq"):
-        table.add_column(column, justify="right" if column != "sensor" else "left", **_column_wrap(column))
+        # numbers on one line; a long sensor name (a building-management point's) folded over several
+        table.add_column(column, justify="right" if column != "sensor" else "left", no_wrap=column != "sensor", overflow="fold" if column == "sensor" else "ellipsis", max_width=32 if column == "sensor" else None)
     for d in summaries:
         interval = d["steady_state_ci95_C"]
         assert isinstance(interval, list)
@@ -210,16 +211,10 @@ def _when(monitor) -> str:  # noqa: ANN001 - thermal.monitor.Monitor
     return "before the first sample" if monitor.latest_time is None else f"at t = {minutes(monitor.latest_time)} min"
 
 
-def _column_wrap(column: str) -> dict[str, object]:
-    """Numbers on one line; a long sensor name (a building-management point's, 80 characters)
-    folded over several, so that it does not squeeze the numbers to "…"."""
-    return {"overflow": "fold", "max_width": 32} if column == "sensor" else {"no_wrap": True}
-
-
 def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monitor.Monitor
     table = Table(title=f"{log.name}: {_when(monitor)}")
     for column in ("sensor", "latest (°C)", "T∞ ± 95 % (°C)", "t_eq (min)", "status"):
-        table.add_column(column, justify="left" if column in ("sensor", "status") else "right", **_column_wrap(column))
+        table.add_column(column, justify="left" if column in ("sensor", "status") else "right", no_wrap=column != "sensor", overflow="fold" if column == "sensor" else "ellipsis", max_width=32 if column == "sensor" else None)
     for st in monitor.status():
         colour = "green" if st.may_stop else "yellow"
         table.add_row(st.sensor, _fmt(st.latest_C), f"{_fmt(st.steady_state_C)} ± {_fmt(st.half_width_C)}", _fmt(st.equilibrium_time_min, 0), f"[{colour}]{st.status}[/]")

@@ -60,6 +60,8 @@ HEAD_BYTES = 65536
 _DELIMITERS = (",", ";", "\t")
 # Excel's first line "sep=;" states the delimiter
 _SEP_DIRECTIVE = re.compile(r"^sep=(.)\r?$")
+# a header whose first column, the row counter, is named "#" (HOBOware: #,"Date Time, GMT+01:00",...): no comment
+_HASH_HEADER = re.compile(r'^\s*"?#"?\s*[,;\t]')
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
 # A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
 # (Keysight BenchLink writes the milliseconds after a colon: 08:00:00:123)
@@ -81,8 +83,14 @@ _STAMP_FORMATS = (*_DOTTED, *_DASHED, *_SLASHED, *_TIME_FIRST, *_DOTTED_COMMA, "
 MINUTES_PER_DAY = 1440.0
 # a step that long between two rows of a warm-up log is a date read in the wrong order
 IMPLAUSIBLE_STEP_MIN = 20 * MINUTES_PER_DAY
-# a unit at the end of a column's name: "Time [s]", "T1 (°C)", "T/°C" (a unit this module knows)
-_UNIT_IN_NAME = re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*$|\S/\s*([^/\[\]()]+?)\s*$")
+# A unit at the end of a column's name (a unit this module knows): "Time [s]", "T1 (°C)", "Temp (°C)
+# #9724974" (a serial number after it), "T/°C", and after a comma before the logger's details,
+# "Temp, °F (LGR S/N: 10679014, SEN S/N: 10679014)" (HOBOware).
+_UNITS_IN_NAME = (
+    re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*(?:#\s*\d+)?\s*$"),
+    re.compile(r"\S/\s*([^/\[\]()]+?)\s*$"),
+    re.compile(r",\s*([^,\[\]()]+?)\s*(?:\([^()]*\))?\s*$"),
+)
 # a date without a time: the first of two time-stamp columns
 _DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%d-%m-%y", "%d-%b-%y", "%Y-%m-%d", "%Y/%m/%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y")
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
@@ -99,7 +107,8 @@ _TEMPERATURE_UNITS = {
 # such a column is no temperature. (A units row may name any unit; a name must name a known one.)
 _OTHER_UNITS = frozenset(
     ("%", "%rh", "rh", "%rf", "v", "mv", "µv", "uv", "a", "ma", "rpm", "1/min", "u/min", "hz", "khz", "bar", "mbar", "pa", "kpa", "hpa", "mpa", "psi",
-     "w", "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "n", "kn", "ppm", "g", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h")
+     "w", "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "n", "kn", "ppm", "g", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h",
+     "mg/l", "µs/cm", "us/cm", "ms/cm", "lum/ft²", "lum/ft2", "m/s", "mph", "kwh", "wh", "va")
 )
 # A column named as a humidity ("Humidity", "RH", "Feuchte", "湿度"; the name alone, without a unit)
 _HUMIDITY_WORDS = ("humidity", "feuchte", "湿度")
@@ -181,11 +190,12 @@ class CsvDialect:
         stated = dict(self.units).get(column, "")
         if stated.strip():
             return stated
-        named = _UNIT_IN_NAME.search(column)
-        unit = "" if named is None else named.group(1) or named.group(2)
-        if _unit_key(unit) not in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
-            return ""  # "T (spindle)" names a place, not a unit; "Date/Time" no unit either
-        return unit
+        # "T (spindle)" names a place, not a unit; "Date/Time" no unit either
+        for pattern in _UNITS_IN_NAME:
+            named = pattern.search(column)
+            if named is not None and _unit_key(named.group(1)) in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
+                return named.group(1)
+        return ""
 
     def time_unit(self, column: str) -> str | None:
         """"s", "min" or "h" if the units row or the column's name states its unit, else None."""
@@ -289,6 +299,13 @@ def time_named(name: str) -> bool:
 
 # what the names of time columns begin with
 _TIME_NAME_STARTS = ("time", "date", "zeit", "datum", "uhrzeit", "timestamp", "日付", "時間", "時刻")
+# a logger's event channels (HOBOware writes "Logged" in them when the event happens, else nothing)
+_EVENT_NAME_STARTS = ("couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started")
+
+
+def event_named(name: str) -> bool:
+    """Whether a column's name says it records a logger's events (HOBO's "Host Connected"): no sensor."""
+    return _unit_key(name).startswith(_EVENT_NAME_STARTS)
 
 
 def is_humidity(name: str) -> bool:
@@ -305,10 +322,13 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
     note, and refused when ``asked`` for by name; one in K or °F is converted,
     with a note.
     """
-    kept, notes, other, times = [], [], [], []
+    kept, notes, other, times, events = [], [], [], [], []
     for name in names:
         if not asked and time_named(name):
             times.append(name)
+            continue
+        if not asked and event_named(name):
+            events.append(name)
             continue
         by = dialect.units_source if dict(dialect.units).get(name, "").strip() else "its name"
         written = dialect.unit_of(name)
@@ -332,6 +352,8 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
     by = dialect.units_source if dialect.units else "its name"
     if times:
         notes.append(f"left out, named as times: {', '.join(times)}")
+    if events:
+        notes.append(f"left out, a logger's events: {', '.join(events)}")
     if other:
         notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
     if not kept:
@@ -363,7 +385,7 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
         directive = _SEP_DIRECTIVE.match(line)
         if directive and directive.group(1) in _DELIMITERS:
             stated = directive.group(1)
-        elif line.strip() and not line.lstrip().startswith("#"):
+        elif line.strip() and (not line.lstrip().startswith("#") or _HASH_HEADER.match(line)):
             break
         preamble += 1
     table_start = _table_start(complete, preamble, stated, wait_for_row)
@@ -465,8 +487,12 @@ def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row:
             continue
         delimiter = _table_delimiter(lines, k, stated)
         # a line inside a table (a bad first row below its header) heads none
-        inside = delimiter is not None and not _blank_like(lines[k - 1]) and len(next(csv.reader([lines[k - 1]], delimiter=delimiter))) == len(next(csv.reader([lines[k]], delimiter=delimiter)))
-        if delimiter is not None and not inside and _data_row_below(lines, k, delimiter):
+        if delimiter is None:
+            continue
+        above = next(csv.reader([lines[k - 1]], delimiter=delimiter), [])
+        # (a title padded with delimiters, "Plot Title: 20827226,,,,", is no row of a table)
+        inside = sum(bool(c.strip()) for c in above) >= 2 and len(above) == len(next(csv.reader([lines[k]], delimiter=delimiter)))
+        if not inside and _data_row_below(lines, k, delimiter):
             return k
     written = [line for line in lines[first:] if not _blank_like(line)]
     if wait_for_row and len(written) <= _TABLE_LOOKAHEAD + 1:

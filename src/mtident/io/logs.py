@@ -233,6 +233,22 @@ def _parse_time(
     return values - values[0]
 
 
+def _rows_with_readings(frame: pd.DataFrame, header: str, sensors: list[str]) -> np.ndarray:
+    """Rows to read: all but those without a reading in any sensor that come at the end of the
+    log or repeat a neighbour's time (HOBO writes its events, "Host Connected", "End Of File", as
+    rows of their own, at the time of the read-out, several at one time)."""
+    cells = frame[sensors]
+    empty = (cells.isna() | (cells.astype(str).apply(lambda column: column.str.strip()) == "")).all(axis=1).to_numpy()
+    if empty.all():
+        return np.ones(len(frame), dtype=bool)
+    times = frame[header].astype(str).to_numpy()
+    repeated = np.zeros(len(frame), dtype=bool)
+    repeated[1:] |= times[1:] == times[:-1]
+    repeated[:-1] |= times[:-1] == times[1:]
+    trailing = np.flip(np.cumprod(np.flip(empty)).astype(bool))
+    return ~(empty & (repeated | trailing))
+
+
 def _longest_step(stamps: pd.Series) -> float:
     """The largest step between neighbouring valid stamps, back or forth (min)."""
     valid = stamps.dropna()
@@ -357,16 +373,6 @@ def read_temperature_log(
             msg = f"{source}: millisecond column {milliseconds!r}, row {row + first_row}: {_cell(frame[milliseconds].iloc[row])} is not a number"
             raise InputError(msg)
         sub_second = sub_second / 60_000.0
-    if clock is None:
-        stated = dialect.time_unit(header)
-        time_min = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
-        numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
-        if numeric and time_unit_assumed(header, time_unit, stated) and time_min[-1] > UNLIKELY_MINUTES:
-            notes.append(seconds_hint(header, float(time_min[-1])))
-    else:  # the date in one column, the time of day in the next: one stamp
-        stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
-        time_min = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row, sub_second_min=sub_second)
-
     left_out = (header, clock, milliseconds, frame.columns[0] if counter else None)
     available = [c for c in frame.columns if c not in left_out]
     missing_names = [n for n in sensors or [] if n not in available]
@@ -380,8 +386,28 @@ def read_temperature_log(
         if text_only and len(text_only) < len(available):
             notes.append(f"left out, no numbers in them: {', '.join(text_only)}")
             available = [name for name in available if name not in text_only]
+        # an event channel that logged nothing (HOBO's "Coupler Detached") is no dead sensor
+        empty = [name for name in available if frame[name].isna().all()]
+        if empty and len(empty) < len(available):
+            notes.append(f"left out, no readings in them: {', '.join(empty)}")
+            available = [name for name in available if name not in empty]
     sensors, unit_notes = temperature_columns(list(sensors) if sensors else available, bool(sensors), dialect, source)
     notes.extend(unit_notes)
+    keep = _rows_with_readings(frame, header, sensors)
+    if not keep.all():
+        notes.append(f"left out {int((~keep).sum())} row(s) without a reading at the end or at a repeated time (a logger's events: coupler, host connected, end of file)")
+        frame = frame[keep]
+        sub_second = None if sub_second is None else sub_second[keep]
+    if clock is None:
+        stated = dialect.time_unit(header)
+        time_min = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
+        numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
+        if numeric and time_unit_assumed(header, time_unit, stated) and time_min[-1] > UNLIKELY_MINUTES:
+            notes.append(seconds_hint(header, float(time_min[-1])))
+    else:  # the date in one column, the time of day in the next: one stamp
+        stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
+        time_min = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row, sub_second_min=sub_second)
+
     columns = []
     for name in sensors:
         raw = frame[name]
