@@ -136,6 +136,17 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
             "Plot Title: 20827226" + "," * (len(names) + 3) + '\n#,"Date Time, GMT+01:00",' + ",".join(f'"{n}, °C (LGR S/N: 20827226, SEN S/N: 20827226)"' for n in names) + ",Coupler Detached (LGR S/N: 20827226),End Of File (LGR S/N: 20827226)",
             [f"{k + 1},{stamp(m, '%m/%d/%y %I:%M:%S %p')}," + ",".join(c) + (",Logged," if k == 0 else ",,") for k, (m, c) in enumerate(zip(t, cells, strict=True))],
         ).encode(),
+        # Lascar EasyLog: the logger's name over its row counter, the serial number in the first row alone
+        "logger's name over the counter, serial number in the first row (EasyLog)": table(
+            "Spindle,Time," + ",".join(f"{n}(°C)" for n in names) + ",Serial Number",
+            [f"{k + 1},{stamp(m, '%d/%m/%Y %H:%M:%S')}," + ",".join(c) + (",10543212" if k == 0 else "") for k, (m, c) in enumerate(zip(t, cells, strict=True))],
+            "\r\n",
+        ).encode("cp1252"),
+        # MadgeTech: the device before the table, "Reading #", the date and a 12-hour clock in two columns
+        "device block, 'Reading #', date and 12-hour clock (MadgeTech)": (
+            "Device Name,Model,Serial Number\nSpindle,OctTemp2000,S12345\n\n"
+            + table("Reading #,Date,Time," + ",".join(f"{n} (°C)" for n in names), [f"{k + 1},{stamp(m, '%m/%d/%Y')},{int(stamp(m, '%I'))}:{stamp(m, '%M:%S %p')}," + ",".join(c) for k, (m, c) in enumerate(zip(t, cells, strict=True))])
+        ).encode("cp1252"),
         # a quoted title line, names with a space before them, day-first stamps without seconds (Meaco)
         "quoted title, spaced names, day-first stamps without seconds (Meaco)": (
             '"Workshop - Spindle - ID: 00"\n' + table("Timestamp," + ",".join(f'" {n}"' for n in names) + '," Humidity"', [f'"{stamp(m, "%d/%m/%Y %H:%M")}",' + ",".join(c) + ",45.59" for m, c in zip(t, cells, strict=True)])

@@ -239,12 +239,14 @@ def counter_before_time(header: list[str], first_row: list[str], dialect: CsvDia
     """Whether the first column counts rows and the second holds the time stamps (its first cell
     no plain number): a logger's sample counter, which read as minutes would be a wrong time. The
     counter is told by its name, or by its cell in the row under the header (Graphtec writes a
-    Japanese header and "NO.,Time,ms,ﾟC" under it)."""
+    Japanese header and "NO.,Time,ms,ﾟC" under it), or, whatever its name, as a whole number
+    before a time stamp or a date (Tinytag leaves the name empty, Lascar's EasyLog puts the
+    logger's name there, MadgeTech calls it "Reading #")."""
     if len(header) < 3 or len(first_row) < 2:
         return False
-    # Tinytag leaves the counter's name empty (pandas calls it "Unnamed: 0")
-    unnamed = not header[0].strip() or re.fullmatch(r"Unnamed: \d+", header[0]) is not None
-    if not ({_unit_key(header[0]), _unit_key(dialect.unit_of(header[0]))} & _COUNTER_NAMES or (unnamed and first_row[0].strip().isdigit())):
+    if first_row[0].strip().isdigit() and not _is_number(first_row[1]) and first_row[1].strip() and (stamp_format(first_row[1]) or _parses(first_row[1], _DATE_FORMATS)):
+        return True
+    if not {_unit_key(header[0]), _unit_key(dialect.unit_of(header[0]))} & _COUNTER_NAMES:
         return False
     try:
         float(first_row[1].replace(",", "."))
@@ -299,12 +301,13 @@ def time_named(name: str) -> bool:
 
 # what the names of time columns begin with
 _TIME_NAME_STARTS = ("time", "date", "zeit", "datum", "uhrzeit", "timestamp", "日付", "時間", "時刻")
-# a logger's event channels (HOBOware writes "Logged" in them when the event happens, else nothing)
-_EVENT_NAME_STARTS = ("couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started")
+# A logger's records of itself: event channels (HOBOware writes "Logged" in them when the event
+# happens, else nothing) and its serial number (Lascar's EasyLog writes it in the first row alone).
+_EVENT_NAME_STARTS = ("couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started", "serialnumber", "serialno")
 
 
 def event_named(name: str) -> bool:
-    """Whether a column's name says it records a logger's events (HOBO's "Host Connected"): no sensor."""
+    """Whether a column's name says it records the logger itself (HOBO's "Host Connected", a serial number): no sensor."""
     return _unit_key(name).startswith(_EVENT_NAME_STARTS)
 
 
@@ -353,7 +356,7 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
     if times:
         notes.append(f"left out, named as times: {', '.join(times)}")
     if events:
-        notes.append(f"left out, a logger's events: {', '.join(events)}")
+        notes.append(f"left out, the logger's own records: {', '.join(events)}")
     if other:
         notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
     if not kept:
