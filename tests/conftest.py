@@ -147,6 +147,13 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
             "Device Name,Model,Serial Number\nSpindle,OctTemp2000,S12345\n\n"
             + table("Reading #,Date,Time," + ",".join(f"{n} (°C)" for n in names), [f"{k + 1},{stamp(m, '%m/%d/%Y')},{int(stamp(m, '%I'))}:{stamp(m, '%M:%S %p')}," + ",".join(c) for k, (m, c) in enumerate(zip(t, cells, strict=True))])
         ).encode("cp1252"),
+        # LabVIEW's measurement file (.lvm): a file header and a segment header, each ended by
+        # ***End_of_Header***, tabs, the x axis in seconds, a "Comment" column the rows leave out
+        "LabVIEW measurement file (.lvm)": (
+            "LabVIEW Measurement\t\nWriter_Version\t2\nReader_Version\t2\nSeparator\tTab\nDecimal_Separator\t.\nMulti_Headings\tNo\nX_Columns\tOne\nTime_Pref\tRelative\n"
+            "Date\t2026/11/22\nTime\t13:00:00.1234\n***End_of_Header***\t\n\t\nChannels\t" + str(len(names)) + "\t\t\n" + "\n".join(key + "\t" + "\t".join(value for _ in names) + "\t" for key, value in (("Samples", "1"), ("Y_Unit_Label", "Deg C"), ("X_Dimension", "Time"), ("X0", "0.0000000000000000E+0"), ("Delta_X", "60.000000")))
+            + "\n***End_of_Header***" + "\t" * (len(names) + 1) + "\n" + table("X_Value\t" + "\t".join(names) + "\tComment", [f"{60 * m:.6f}\t" + "\t".join(c) for m, c in zip(t, cells, strict=True)])
+        ).encode(),
         # a quoted title line, names with a space before them, day-first stamps without seconds (Meaco)
         "quoted title, spaced names, day-first stamps without seconds (Meaco)": (
             '"Workshop - Spindle - ID: 00"\n' + table("Timestamp," + ",".join(f'" {n}"' for n in names) + '," Humidity"', [f'"{stamp(m, "%d/%m/%Y %H:%M")}",' + ",".join(c) + ",45.59" for m, c in zip(t, cells, strict=True)])

@@ -190,6 +190,8 @@ class CsvDialect:
         stated = dict(self.units).get(column, "")
         if stated.strip():
             return stated
+        if column == "X_Value":  # LabVIEW's measurement files (.lvm) give their x axis in seconds
+            return "s"
         # "T (spindle)" names a place, not a unit; "Date/Time" no unit either
         for pattern in _UNITS_IN_NAME:
             named = pattern.search(column)
@@ -302,8 +304,9 @@ def time_named(name: str) -> bool:
 # what the names of time columns begin with
 _TIME_NAME_STARTS = ("time", "date", "zeit", "datum", "uhrzeit", "timestamp", "日付", "時間", "時刻")
 # A logger's records of itself: event channels (HOBOware writes "Logged" in them when the event
-# happens, else nothing) and its serial number (Lascar's EasyLog writes it in the first row alone).
-_EVENT_NAME_STARTS = ("couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started", "serialnumber", "serialno")
+# happens, else nothing), its serial number (Lascar's EasyLog writes it in the first row alone),
+# a comment column (LabVIEW's).
+_EVENT_NAME_STARTS = ("couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started", "serialnumber", "serialno", "comment")
 
 
 def event_named(name: str) -> bool:
@@ -522,6 +525,8 @@ def _blank_like(line: str) -> bool:
     core = line.strip().strip(",;\t").strip()
     if not core.strip('",;\t '):
         return True
+    if core.startswith("***") and core.endswith("***"):  # LabVIEW's ***End_of_Header***
+        return True
     return core.startswith("[") and "]" in core and not any(d in core for d in _DELIMITERS)
 
 
@@ -530,15 +535,17 @@ def _table_delimiter(lines: list[str], k: int, stated: str | None) -> str | None
     following = _following(lines, k)
     for delimiter in (stated,) if stated else _DELIMITERS:
         cells = next(csv.reader([lines[k]], delimiter=delimiter), [])
-        if sum(bool(c.strip()) for c in cells) >= 2 and following and all(_continues(row, len(cells)) for row in csv.reader(following, delimiter=delimiter)):
+        if sum(bool(c.strip()) for c in cells) >= 2 and following and all(_continues(row, cells) for row in csv.reader(following, delimiter=delimiter)):
             return delimiter
     return None
 
 
-def _continues(row: list[str], count: int) -> bool:
-    """Whether a row has ``count`` cells, or one more that is empty (a delimiter at the end of each
-    data row but not of the header, as a climate controller writes it)."""
-    return len(row) == count or (len(row) == count + 1 and not row[-1].strip())
+def _continues(row: list[str], header: list[str]) -> bool:
+    """Whether a row has as many cells as the ``header``, or one more that is empty (a delimiter
+    at the end of each data row but not of the header, as a climate controller writes it), or one
+    fewer where the header ends in LabVIEW's "Comment" column, which its rows leave out."""
+    count = len(header)
+    return len(row) == count or (len(row) == count + 1 and not row[-1].strip()) or (len(row) == count - 1 and header[-1].strip() == "Comment")
 
 
 def _data_row_below(lines: list[str], k: int, delimiter: str) -> bool:
@@ -602,11 +609,12 @@ def _is_units_row(cells: list[str], dialect: CsvDialect) -> bool:
 def _delimiter(header: str, rows: list[str]) -> str:
     """The candidate that splits the header most often and the data rows into as many cells
     (a tie in the header, "Zeit;Temp, Spindel;Temp, Motor", is settled by the rows)."""
-    counts = {d: len(next(csv.reader([header], delimiter=d))) for d in _DELIMITERS}
+    cells = {d: next(csv.reader([header], delimiter=d)) for d in _DELIMITERS}
+    counts = {d: len(cells[d]) for d in _DELIMITERS}
     # on a full tie ';' and tab come first: decimal commas in the rows can match commas in the names
     ranked = sorted((d for d in (";", "\t", ",") if counts[d] > 1), key=lambda d: -counts[d])
     for d in ranked:
-        if all(_continues(row, counts[d]) for row in csv.reader([r for r in rows if r.strip()], delimiter=d)):
+        if all(_continues(row, cells[d]) for row in csv.reader([r for r in rows if not _blank_like(r)], delimiter=d)):
             return d
     return ranked[0] if ranked else ","
 
