@@ -581,3 +581,18 @@ def test_hobo_exports_in_fahrenheit_with_event_rows_at_the_end(write_csv):
     # a row without a reading inside the log stays (a dropout, bridged), and a time repeated with a reading is refused
     with pytest.raises(InputError, match="duplicate time"):
         read_temperature_log(write_csv(text.replace("8,11/22/26 08:07:00 AM", "8,11/22/26 08:06:00 AM")))
+
+
+def test_alarm_and_status_channels_are_no_sensors(write_csv, tmp_path):
+    """Keysight BenchLink writes each channel's alarm as 0 or 1 ('Alarm 101'): read as a sensor, flat,
+    it was "no rise" in watch and an identification of nothing in identify. Left out by name in
+    both readers; asked for with --sensor, it is read."""
+    from mtident.io.follow import LogFollower
+
+    text = "Scan,Time,101 (C),Alarm 101,Status\n" + "".join(f"{k + 1},11/22/2026 08:{k:02d}:00:000,{20 + k / 10:.1f},0,0\n" for k in range(8))
+    path = write_csv(text)
+    log = read_temperature_log(path)
+    assert log.sensors == ("101 (C)",) and "left out, the logger's own records: Alarm 101, Status" in log.notes
+    rows = LogFollower(path).poll()
+    assert rows.temperature_C.shape == (8, 1) and any("Alarm 101, Status" in n for n in rows.notes)
+    assert read_temperature_log(path, sensors=["Alarm 101"]).sensors == ("Alarm 101",)
