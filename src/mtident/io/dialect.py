@@ -1,30 +1,32 @@
-"""How a data-acquisition program wrote its CSV: delimiter, decimal mark, preamble, encoding, time stamps.
+"""How a data-acquisition program wrote its CSV: delimiter, decimal mark, preamble, encoding, the rows under its header.
 
 Loggers differ. European ones write ``;`` between cells and a decimal comma
 (``17,90``); many write a preamble (device, channel setup), as ``#`` lines or
 as plain lines, before the header; Windows programs write cp1252, where ``°`` is
-the single byte 0xB0 that UTF-8 refuses, or UTF-16 (Excel's "Unicode text"); a trailing delimiter leaves an empty last column; time
-stamps come as ISO 8601, as ``22.11.2026 08:00:00`` (day first, as everywhere
-dots separate the date; so ``22-11-2026`` and ``22-Nov-2026``), as ``11/22/2026 3:05:00 PM`` (month first, as US loggers
-write it, unless the log shows day first), as the time of day alone, or as a date
-and a time of day in two columns; many write a row of units
-under the header (``min;°C;°C``, ``[s],[K]``), which states the time unit and the
-temperature scale (:func:`celsius_conversion`). Both readers of a log (the
-whole file, :func:`~mtident.io.logs.read_temperature_log`, and the live
-follower, :class:`~mtident.io.follow.LogFollower`) take the dialect from the
-file's head here, so they read a log the same way.
+the single byte 0xB0 that UTF-8 refuses, Japanese ones Shift-JIS, Excel's
+"Unicode text" UTF-16; a trailing delimiter leaves an empty last column; many
+write rows between the header and the data: a row of units (``min;°C;°C``,
+``[s],[K]``), which states the time unit and the temperature scale
+(:mod:`mtident.io.units`), a second row of names, a description of each channel,
+section tags. Both readers of a log (the whole file,
+:func:`~mtident.io.logs.read_temperature_log`, and the live follower,
+:class:`~mtident.io.follow.LogFollower`) take the dialect from the file's head
+here, so they read a log the same way; the time stamps are read in
+:mod:`mtident.io.stamps`, and what each column is, is decided in
+:mod:`mtident.io.columns`.
 """
 
 from __future__ import annotations
 
 import csv
-import math
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mtident.exceptions import InputError
+from mtident.io.columns import check_unique_names
+from mtident.io.units import carried_unit, is_humidity, is_number, is_time_or_temperature_unit, number_without_unit, time_unit_name, unit_in_name
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -33,26 +35,8 @@ __all__ = [
     "CsvDialect",
     "sniff_dialect",
     "header_names",
-    "check_unique_names",
     "read_csv",
-    "stamp_format",
-    "other_date_order",
-    "after_midnight",
-    "date_and_clock",
-    "celsius_conversion",
-    "temperature_columns",
-    "is_humidity",
-    "time_named",
-    "number_without_unit",
-    "carried_unit",
-    "text_only_cells",
-    "counter_before_time",
-    "text_before_stamps",
-    "millisecond_column",
     "HEAD_BYTES",
-    "TIME_OF_DAY_FORMATS",
-    "MINUTES_PER_DAY",
-    "IMPLAUSIBLE_STEP_MIN",
 ]
 
 # enough for a preamble, the header and a few rows
@@ -63,55 +47,6 @@ _SEP_DIRECTIVE = re.compile(r"^sep=(.)\r?$")
 # a header whose first column, the row counter, is named "#" (HOBOware: #,"Date Time, GMT+01:00",...): no comment
 _HASH_HEADER = re.compile(r'^\s*"?#"?\s*[,;\t]')
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
-# A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
-# (Keysight BenchLink writes the milliseconds after a colon: 08:00:00:123)
-TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M:%S:%f", "%H:%M", "%I:%M:%S %p", "%I:%M %p")
-# Time stamps other than ISO 8601, tried in this order (pandas/strptime formats). A dotted date is
-# day first wherever it is written. A slashed one is month first (US loggers, 11/22/2026 3:05:00 PM)
-# unless the first stamp says day first (22/11/2026); where the first stamp cannot tell (01/02),
-# the order whose steps are plausible at the first change of date is taken (:func:`other_date_order`).
-_DOTTED = tuple(f"%d.%m.{year} {clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
-# day first with dashes too (22-11-2026, and 22-Nov-2026 as spreadsheets and LabVIEW write it; a
-# building-management export, 22-Nov-26 8:00:00 am)
-_DASHED = tuple(f"%d-{month}-{year} {clock}" for month in ("%m", "%b") for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
-_SLASHED = tuple(f"{date} {clock}" for date in ("%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y", "%d/%b/%y") for clock in TIME_OF_DAY_FORMATS)
-# The time of day before the date (Hanwell: 08:00:00 22/Nov/2026), and a comma between a dotted
-# date and the time inside one ';'-separated cell (a climate controller's "date,time" column).
-_TIME_FIRST = tuple(f"{clock} {date}" for date in ("%d/%b/%Y", "%d/%b/%y", "%d-%b-%Y", "%d.%m.%Y", "%d.%m.%y", "%Y-%m-%d") for clock in TIME_OF_DAY_FORMATS)
-_DOTTED_COMMA = tuple(f"%d.%m.{year},{clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
-_STAMP_FORMATS = (*_DOTTED, *_DASHED, *_SLASHED, *_TIME_FIRST, *_DOTTED_COMMA, "%Y-%m-%d %I:%M:%S %p", "%Y-%m-%d %I:%M %p", *TIME_OF_DAY_FORMATS)
-MINUTES_PER_DAY = 1440.0
-# a step that long between two rows of a warm-up log is a date read in the wrong order
-IMPLAUSIBLE_STEP_MIN = 20 * MINUTES_PER_DAY
-# A unit at the end of a column's name (a unit this module knows): "Time [s]", "T1 (°C)", "Temp (°C)
-# #9724974" (a serial number after it), "T/°C", and after a comma before the logger's details,
-# "Temp, °F (LGR S/N: 10679014, SEN S/N: 10679014)" (HOBOware).
-_UNITS_IN_NAME = (
-    re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*(?:#\s*\d+)?\s*$"),
-    re.compile(r"\S/\s*([^/\[\]()]+?)\s*$"),
-    re.compile(r",\s*([^,\[\]()]+?)\s*(?:\([^()]*\))?\s*$"),
-)
-# a date without a time: the first of two time-stamp columns
-_DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%d-%m-%y", "%d-%b-%y", "%Y-%m-%d", "%Y/%m/%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y")
-# A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
-# as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
-# gives (scale, offset) to °C.
-_TIME_UNIT_NAMES = {"ms": "ms", "msec": "ms", "milliseconds": "ms", "s": "s", "sec": "s", "secs": "s", "second": "s", "seconds": "s", "min": "min", "mins": "min", "minute": "min", "minutes": "min", "h": "h", "hr": "h", "hrs": "h", "hour": "h", "hours": "h", "d": "d", "day": "d", "days": "d"}
-_TEMPERATURE_UNITS = {
-    # "ﾟC": Japanese loggers (Graphtec) write the half-width ﾟ of Shift-JIS for the degree sign
-    **dict.fromkeys(("c", "degc", "celsius", "gradc", "degreesc", "degreec", "ﾟc"), (1.0, 0.0)),
-    **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),
-    **dict.fromkeys(("f", "degf", "fahrenheit", "degreesf", "degreef"), (5.0 / 9.0, -160.0 / 9.0)),
-}
-# Units of a logger's other channels, named at the end of a column's name ("Speed (rpm)", "RH/%"):
-# such a column is no temperature. (A units row may name any unit; a name must name a known one.)
-_OTHER_UNITS = frozenset(
-    ("%", "%rh", "rh", "%rf", "v", "mv", "µv", "uv", "a", "ma", "rpm", "1/min", "u/min", "hz", "khz", "bar", "mbar", "pa", "kpa", "hpa", "mpa", "psi",
-     "w", "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "n", "kn", "ppm", "g", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h",
-     "mg/l", "µs/cm", "us/cm", "ms/cm", "lum/ft²", "lum/ft2", "m/s", "mph", "kwh", "wh", "va")
-)
-# A column named as a humidity ("Humidity", "RH", "Feuchte", "湿度"; the name alone, without a unit)
-_HUMIDITY_WORDS = ("humidity", "feuchte", "湿度")
 
 
 @dataclass(frozen=True, slots=True)
@@ -192,184 +127,11 @@ class CsvDialect:
             return stated
         if column == "X_Value":  # LabVIEW's measurement files (.lvm) give their x axis in seconds
             return "s"
-        # "T (spindle)" names a place, not a unit; "Date/Time" no unit either
-        for pattern in _UNITS_IN_NAME:
-            named = pattern.search(column)
-            if named is not None and _unit_key(named.group(1)) in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
-                return named.group(1)
-        return ""
+        return unit_in_name(column)
 
     def time_unit(self, column: str) -> str | None:
         """"s", "min" or "h" if the units row or the column's name states its unit, else None."""
-        return _TIME_UNIT_NAMES.get(_unit_key(self.unit_of(column)))
-
-
-# a reading with its unit after it: "13.1 °C", "56.3 %RH" (Tinytag Explorer writes them so)
-_NUMBER_THEN_UNIT = re.compile(r"^\s*([+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*(\S.*?)\s*$")
-
-
-def carried_unit(cell: str) -> str | None:
-    """The unit a reading carries after its number ("13.1 °C": "°C"), if it is one this module knows."""
-    match = _NUMBER_THEN_UNIT.match(cell)
-    return match.group(2) if match and _unit_key(match.group(2)) in (*_TEMPERATURE_UNITS, *_OTHER_UNITS) else None
-
-
-def number_without_unit(cell: str) -> str:
-    """A reading's number with a known unit after it taken off ("13.1 °C": "13.1"); other cells as they are."""
-    match = _NUMBER_THEN_UNIT.match(cell)
-    return match.group(1) if match and carried_unit(cell) else cell
-
-
-def _unit_key(cell: str) -> str:
-    return re.sub(r"[\s\[\]()°º.Â_]", "", cell).lower()
-
-
-def text_only_cells(cells: list[str]) -> bool:
-    """Whether a column's cells hold text and not one number (empty and NaN cells aside; a decimal
-    comma counts as a number): a logger's status channel, no sensor. Both readers of a log use it."""
-    written = [c.strip() for c in cells if c.strip() and c.strip().lower() != "nan"]
-    return bool(written) and not any(_is_number(c) for c in written)
-
-
-# A first column that counts the rows (Graphtec's "NO.", Keysight's "Scan", "Nr.", "Index"), before the time column.
-_COUNTER_NAMES = {"no", "nr", "number", "index", "#", "n", "sample", "samples", "count", "lfdnr", "scan", "record"}
-# A column after the time stamp that holds its milliseconds (Graphtec: "NO.,Time,ms,CH1,...").
-_MILLISECOND_NAMES = {"ms", "msec", "millisecond", "milliseconds"}
-
-
-def counter_before_time(header: list[str], first_row: list[str], dialect: CsvDialect) -> bool:
-    """Whether the first column counts rows and the second holds the time stamps (its first cell
-    no plain number): a logger's sample counter, which read as minutes would be a wrong time. The
-    counter is told by its name, or by its cell in the row under the header (Graphtec writes a
-    Japanese header and "NO.,Time,ms,ﾟC" under it), or, whatever its name, as a whole number
-    before a time stamp or a date (Tinytag leaves the name empty, Lascar's EasyLog puts the
-    logger's name there, MadgeTech calls it "Reading #")."""
-    if len(header) < 3 or len(first_row) < 2:
-        return False
-    if first_row[0].strip().isdigit() and not _is_number(first_row[1]) and first_row[1].strip() and (stamp_format(first_row[1]) or _parses(first_row[1], _DATE_FORMATS)):
-        return True
-    if not {_unit_key(header[0]), _unit_key(dialect.unit_of(header[0]))} & _COUNTER_NAMES:
-        return False
-    try:
-        float(first_row[1].replace(",", "."))
-    except ValueError:
-        return bool(first_row[1].strip())
-    return False
-
-
-def text_before_stamps(first_row: list[str]) -> int:
-    """How many columns of text come before the first column of time stamps (a wireless logger's
-    receiver and transmitter names before its DATE), by the first data row; 0 where the first
-    column holds the time, or where the first time stamp is not clear (a number is no stamp here:
-    a bad first time cell must not make a sensor the time)."""
-    for k, cell in enumerate(first_row[:4]):
-        text = cell.strip()
-        if not text or _is_number(text) or _parses(text, _DATE_FORMATS):  # a date: its time of day follows
-            return 0
-        if stamp_format(text) is not None:
-            return k
-    return 0
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell.replace(",", "."))
-    except ValueError:
-        return False
-    return True
-
-
-def millisecond_column(header: list[str], last_time_column: int) -> int | None:
-    """The column after the time stamp (or its clock column) if it is named as its milliseconds."""
-    following = last_time_column + 1
-    return following if following < len(header) and _unit_key(header[following]) in _MILLISECOND_NAMES else None
-
-
-def celsius_conversion(unit: str) -> tuple[float, float] | None:
-    """(scale, offset) taking a reading in ``unit`` to °C (°C = scale·reading + offset): (1, 0) for
-    °C and for no unit, (1, −273.15) for K, (5/9, −160/9) for °F; None for a unit that is no
-    temperature (V, %, rpm)."""
-    if not unit.strip():
-        return 1.0, 0.0
-    return _TEMPERATURE_UNITS.get(_unit_key(unit))
-
-
-def time_named(name: str) -> bool:
-    """Whether a column's name says it holds a time (a second time column, as T&D writes its
-    stamps' spreadsheet serial dates beside them, or a controller's time difference): no sensor."""
-    key = _unit_key(re.sub(r"\.\d+$", "", name))  # pandas' ".1" after a repeated name
-    return key.startswith(_TIME_NAME_STARTS)
-
-
-# what the names of time columns begin with
-_TIME_NAME_STARTS = ("time", "date", "zeit", "datum", "uhrzeit", "timestamp", "日付", "時間", "時刻")
-# A logger's records of itself: event channels (HOBOware writes "Logged" in them when the event
-# happens, else nothing), its serial number (Lascar's EasyLog writes it in the first row alone),
-# a comment column (LabVIEW's), alarm and status channels (Keysight BenchLink's "Alarm 101" holds
-# 0 or 1: as a sensor it was flat, "no rise", and held the test's decision up).
-_EVENT_NAME_STARTS = (
-    "couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started",
-    "serialnumber", "serialno", "comment", "alarm", "status", "flag", "event", "trigger", "logic", "pulse",
-)
-
-
-def event_named(name: str) -> bool:
-    """Whether a column's name says it records the logger itself (HOBO's "Host Connected", a serial number): no sensor."""
-    return _unit_key(name).startswith(_EVENT_NAME_STARTS)
-
-
-def is_humidity(name: str) -> bool:
-    """Whether a column's name (or a description row's cell) names a humidity, not a temperature."""
-    key = _unit_key(name)
-    return key in ("rh", "%rh", "rh%") or any(word in key for word in _HUMIDITY_WORDS)
-
-
-def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, source: str | Path) -> tuple[list[str], list[str]]:
-    """The sensor columns to read, and notes, by their units (a units row, or a unit in the name).
-
-    A column whose unit is no temperature (a logger's speed or voltage channel),
-    or that is named as a humidity, is left out of the default selection with a
-    note, and refused when ``asked`` for by name; one in K or °F is converted,
-    with a note.
-    """
-    kept, notes, other, times, events = [], [], [], [], []
-    for name in names:
-        if not asked and time_named(name):
-            times.append(name)
-            continue
-        if not asked and event_named(name):
-            events.append(name)
-            continue
-        by = dialect.units_source if dict(dialect.units).get(name, "").strip() else "its name"
-        written = dialect.unit_of(name)
-        unit = written.strip().strip("[]()").strip()  # as written, without brackets
-        if not unit and is_humidity(name):
-            if asked:
-                msg = f"{source}: sensor {name!r} is a humidity by its name, not a temperature (°C, K or °F)"
-                raise InputError(msg)
-            other.append(f"{name} (humidity)")
-            continue
-        conversion = celsius_conversion(written)
-        if conversion is None:
-            if asked:
-                msg = f"{source}: sensor {name!r} is in {unit!r} by {by}, not a temperature (°C, K or °F)"
-                raise InputError(msg)
-            other.append(f"{name} ({unit})")
-            continue
-        if conversion != (1.0, 0.0):
-            notes.append(f"sensor {name!r}: read in {unit} ({by}), converted to °C")
-        kept.append(name)
-    by = dialect.units_source if dialect.units else "its name"
-    if times:
-        notes.append(f"left out, named as times: {', '.join(times)}")
-    if events:
-        notes.append(f"left out, the logger's own records: {', '.join(events)}")
-    if other:
-        notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
-    if not kept:
-        msg = f"{source}: no temperature column: {by} gives {', '.join(other)}"
-        raise InputError(msg)
-    return kept, notes
+        return time_unit_name(self.unit_of(column))
 
 
 def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) -> CsvDialect | None:
@@ -586,7 +348,7 @@ def _describes(cells: list[str]) -> bool:
     """A row under the header that describes the columns and holds no readings: no number in
     it (units, names, types), or its first or second cell empty where a data row has its time
     (Tinytag's "S/N,,227659"): a row whose time is text ("yesterday,20") is a bad data row."""
-    return not any(_is_number(c) for c in cells if c) or not all(cells[:2])
+    return not any(is_number(c) for c in cells if c) or not all(cells[:2])
 
 
 def _data_like(line: str) -> bool:
@@ -606,7 +368,7 @@ def _is_units_row(cells: list[str], dialect: CsvDialect) -> bool:
             return False
         return True
 
-    known = [c for c in cells if _unit_key(c) in _TIME_UNIT_NAMES or _unit_key(c) in _TEMPERATURE_UNITS]
+    known = [c for c in cells if is_time_or_temperature_unit(c)]
     return bool(known) and not any(number(c) for c in cells if c)
 
 
@@ -636,17 +398,6 @@ def header_names(file: Path) -> list[str]:
 
 def _header_line(head: bytes, dialect: CsvDialect) -> str:
     return dialect.decode(head).split("\n")[dialect.preamble_lines]
-
-
-def check_unique_names(header: list[str], source: str | Path) -> None:
-    """InputError if two columns share a name: which one a sensor name meant could not be told
-    (pandas would call the second 'T1.1', a reader by name would read the first twice)."""
-    seen: dict[str, int] = {}
-    for position, name in enumerate(header, start=1):
-        if name and name in seen and not time_named(name):  # a repeated time column's name: no sensor is meant
-            msg = f"{source}: the column name {name!r} appears twice (columns {seen[name]} and {position}); give each column its own name"
-            raise InputError(msg)
-        seen[name] = position
 
 
 def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
@@ -700,52 +451,3 @@ def _decodes(data: bytes, encoding: str = "utf-8-sig") -> bool:
     return True
 
 
-def date_and_clock(date_cell: str, clock_cell: str) -> bool:
-    """Whether two cells are a date alone and a time of day: a logger that writes its time stamp
-    in two columns (``Datum;Uhrzeit``, ``Date\tTime``), read as one stamp, date first."""
-    if ":" not in clock_cell or not any(mark in date_cell for mark in "./-"):
-        return False  # not worth importing pandas (0.5 s that a numeric live log does not need)
-    return _parses(date_cell, _DATE_FORMATS) and _parses(clock_cell, TIME_OF_DAY_FORMATS)
-
-
-def _parses(cell: str, formats: tuple[str, ...]) -> bool:
-    import pandas as pd
-
-    for fmt in formats:
-        try:
-            pd.to_datetime(cell.strip(), format=fmt)
-        except (ValueError, TypeError):
-            continue
-        return True
-    return False
-
-
-def after_midnight(previous_min: float | None, t_min: float) -> float:
-    """A time of day (minutes from the first one) on the day of the row before, or a later one: an
-    overnight test passes midnight, and a step back of more than 12 h is the next day. Both readers
-    of a log use it, row by row."""
-    if previous_min is None:
-        return t_min
-    return t_min + MINUTES_PER_DAY * max(math.ceil((previous_min - t_min - MINUTES_PER_DAY / 2) / MINUTES_PER_DAY), 0)
-
-
-def other_date_order(fmt: str | None) -> str | None:
-    """The same format with day and month swapped, for a slashed date; None for any other."""
-    if fmt is not None and fmt.startswith(("%m/%d/", "%d/%m/")):
-        return ("%d/%m/" if fmt.startswith("%m/%d/") else "%m/%d/") + fmt[6:]
-    return None
-
-
-def stamp_format(cell: str) -> str | None:
-    """The pandas format of a time-stamp cell: "ISO8601", one of the dotted day-first or
-    time-of-day formats, or None if it is no time stamp."""
-    import pandas as pd
-
-    text = cell.strip()
-    for fmt in ("ISO8601", *_STAMP_FORMATS):
-        try:
-            pd.to_datetime(text, format=fmt, utc=True)
-        except (ValueError, TypeError):
-            continue
-        return fmt
-    return None

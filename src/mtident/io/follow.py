@@ -33,25 +33,11 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import (
-    HEAD_BYTES,
-    IMPLAUSIBLE_STEP_MIN,
-    TIME_OF_DAY_FORMATS,
-    CsvDialect,
-    after_midnight,
-    celsius_conversion,
-    check_unique_names,
-    counter_before_time,
-    date_and_clock,
-    millisecond_column,
-    other_date_order,
-    sniff_dialect,
-    stamp_format,
-    temperature_columns,
-    text_before_stamps,
-    text_only_cells,
-)
+from mtident.io.columns import check_unique_names, counter_before_time, millisecond_column, temperature_columns, text_before_stamps, text_only_cells
+from mtident.io.dialect import HEAD_BYTES, CsvDialect, sniff_dialect
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, serial_date_hint, time_unit_assumed, time_unit_factor
+from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, date_and_clock, other_date_order, stamp_format
+from mtident.io.units import celsius_conversion
 
 __all__ = ["LogFollower", "Rows"]
 

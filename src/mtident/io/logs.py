@@ -29,24 +29,10 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import (
-    IMPLAUSIBLE_STEP_MIN,
-    TIME_OF_DAY_FORMATS,
-    CsvDialect,
-    after_midnight,
-    celsius_conversion,
-    check_unique_names,
-    counter_before_time,
-    date_and_clock,
-    millisecond_column,
-    number_without_unit,
-    other_date_order,
-    read_csv,
-    stamp_format,
-    temperature_columns,
-    text_before_stamps,
-    text_only_cells,
-)
+from mtident.io.columns import check_unique_names, counter_before_time, millisecond_column, temperature_columns, text_before_stamps, text_only_cells
+from mtident.io.dialect import CsvDialect, read_csv
+from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, date_and_clock, other_date_order, stamp_format
+from mtident.io.units import celsius_conversion, number_without_unit
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -1,0 +1,169 @@
+"""What each column of a log is: the time, a part of it, a sensor, or something to leave out.
+
+A logger writes more than temperatures: a row counter before the time
+(:func:`counter_before_time`), text columns before it (:func:`text_before_stamps`),
+its milliseconds after it, more time columns (:func:`time_named`), its own
+records (events, alarms, a serial number: :func:`event_named`), humidities and
+other quantities (:func:`temperature_columns`). Both readers of a log decide
+here, so that a live log and the finished file have the same sensors.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from mtident.exceptions import InputError
+from mtident.io.stamps import DATE_FORMATS, parses_as, stamp_format
+from mtident.io.units import celsius_conversion, is_humidity, is_number, unit_key
+
+if TYPE_CHECKING:
+    from mtident.io.dialect import CsvDialect
+
+__all__ = [
+    "text_only_cells",
+    "counter_before_time",
+    "text_before_stamps",
+    "millisecond_column",
+    "time_named",
+    "event_named",
+    "temperature_columns",
+    "check_unique_names",
+]
+
+
+def text_only_cells(cells: list[str]) -> bool:
+    """Whether a column's cells hold text and not one number (empty and NaN cells aside; a decimal
+    comma counts as a number): a logger's status channel, no sensor. Both readers of a log use it."""
+    written = [c.strip() for c in cells if c.strip() and c.strip().lower() != "nan"]
+    return bool(written) and not any(is_number(c) for c in written)
+
+
+# A first column that counts the rows (Graphtec's "NO.", Keysight's "Scan", "Nr.", "Index"), before the time column.
+_COUNTER_NAMES = {"no", "nr", "number", "index", "#", "n", "sample", "samples", "count", "lfdnr", "scan", "record"}
+# A column after the time stamp that holds its milliseconds (Graphtec: "NO.,Time,ms,CH1,...").
+_MILLISECOND_NAMES = {"ms", "msec", "millisecond", "milliseconds"}
+
+
+def counter_before_time(header: list[str], first_row: list[str], dialect: CsvDialect) -> bool:
+    """Whether the first column counts rows and the second holds the time stamps (its first cell
+    no plain number): a logger's sample counter, which read as minutes would be a wrong time. The
+    counter is told by its name, or by its cell in the row under the header (Graphtec writes a
+    Japanese header and "NO.,Time,ms,ﾟC" under it), or, whatever its name, as a whole number
+    before a time stamp or a date (Tinytag leaves the name empty, Lascar's EasyLog puts the
+    logger's name there, MadgeTech calls it "Reading #")."""
+    if len(header) < 3 or len(first_row) < 2:
+        return False
+    if first_row[0].strip().isdigit() and not is_number(first_row[1]) and first_row[1].strip() and (stamp_format(first_row[1]) or parses_as(first_row[1], DATE_FORMATS)):
+        return True
+    if not {unit_key(header[0]), unit_key(dialect.unit_of(header[0]))} & _COUNTER_NAMES:
+        return False
+    try:
+        float(first_row[1].replace(",", "."))
+    except ValueError:
+        return bool(first_row[1].strip())
+    return False
+
+
+def text_before_stamps(first_row: list[str]) -> int:
+    """How many columns of text come before the first column of time stamps (a wireless logger's
+    receiver and transmitter names before its DATE), by the first data row; 0 where the first
+    column holds the time, or where the first time stamp is not clear (a number is no stamp here:
+    a bad first time cell must not make a sensor the time)."""
+    for k, cell in enumerate(first_row[:4]):
+        text = cell.strip()
+        if not text or is_number(text) or parses_as(text, DATE_FORMATS):  # a date: its time of day follows
+            return 0
+        if stamp_format(text) is not None:
+            return k
+    return 0
+
+
+def millisecond_column(header: list[str], last_time_column: int) -> int | None:
+    """The column after the time stamp (or its clock column) if it is named as its milliseconds."""
+    following = last_time_column + 1
+    return following if following < len(header) and unit_key(header[following]) in _MILLISECOND_NAMES else None
+
+
+def time_named(name: str) -> bool:
+    """Whether a column's name says it holds a time (a second time column, as T&D writes its
+    stamps' spreadsheet serial dates beside them, or a controller's time difference): no sensor."""
+    key = unit_key(re.sub(r"\.\d+$", "", name))  # pandas' ".1" after a repeated name
+    return key.startswith(_TIME_NAME_STARTS)
+
+
+# what the names of time columns begin with
+_TIME_NAME_STARTS = ("time", "date", "zeit", "datum", "uhrzeit", "timestamp", "日付", "時間", "時刻")
+# A logger's records of itself: event channels (HOBOware writes "Logged" in them when the event
+# happens, else nothing), its serial number (Lascar's EasyLog writes it in the first row alone),
+# a comment column (LabVIEW's), alarm and status channels (Keysight BenchLink's "Alarm 101" holds
+# 0 or 1: as a sensor it was flat, "no rise", and held the test's decision up).
+_EVENT_NAME_STARTS = (
+    "couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started",
+    "serialnumber", "serialno", "comment", "alarm", "status", "flag", "event", "trigger", "logic", "pulse",
+)
+
+
+def event_named(name: str) -> bool:
+    """Whether a column's name says it records the logger itself (HOBO's "Host Connected", a serial number): no sensor."""
+    return unit_key(name).startswith(_EVENT_NAME_STARTS)
+
+
+def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, source: str | Path) -> tuple[list[str], list[str]]:
+    """The sensor columns to read, and notes, by their units (a units row, or a unit in the name).
+
+    A column whose unit is no temperature (a logger's speed or voltage channel),
+    or that is named as a humidity, is left out of the default selection with a
+    note, and refused when ``asked`` for by name; one in K or °F is converted,
+    with a note.
+    """
+    kept, notes, other, times, events = [], [], [], [], []
+    for name in names:
+        if not asked and time_named(name):
+            times.append(name)
+            continue
+        if not asked and event_named(name):
+            events.append(name)
+            continue
+        by = dialect.units_source if dict(dialect.units).get(name, "").strip() else "its name"
+        written = dialect.unit_of(name)
+        unit = written.strip().strip("[]()").strip()  # as written, without brackets
+        if not unit and is_humidity(name):
+            if asked:
+                msg = f"{source}: sensor {name!r} is a humidity by its name, not a temperature (°C, K or °F)"
+                raise InputError(msg)
+            other.append(f"{name} (humidity)")
+            continue
+        conversion = celsius_conversion(written)
+        if conversion is None:
+            if asked:
+                msg = f"{source}: sensor {name!r} is in {unit!r} by {by}, not a temperature (°C, K or °F)"
+                raise InputError(msg)
+            other.append(f"{name} ({unit})")
+            continue
+        if conversion != (1.0, 0.0):
+            notes.append(f"sensor {name!r}: read in {unit} ({by}), converted to °C")
+        kept.append(name)
+    by = dialect.units_source if dialect.units else "its name"
+    if times:
+        notes.append(f"left out, named as times: {', '.join(times)}")
+    if events:
+        notes.append(f"left out, the logger's own records: {', '.join(events)}")
+    if other:
+        notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
+    if not kept:
+        msg = f"{source}: no temperature column: {by} gives {', '.join(other)}"
+        raise InputError(msg)
+    return kept, notes
+
+
+def check_unique_names(header: list[str], source: str | Path) -> None:
+    """InputError if two columns share a name: which one a sensor name meant could not be told
+    (pandas would call the second 'T1.1', a reader by name would read the first twice)."""
+    seen: dict[str, int] = {}
+    for position, name in enumerate(header, start=1):
+        if name and name in seen and not time_named(name):  # a repeated time column's name: no sensor is meant
+            msg = f"{source}: the column name {name!r} appears twice (columns {seen[name]} and {position}); give each column its own name"
+            raise InputError(msg)
+        seen[name] = position

@@ -1,0 +1,101 @@
+"""Time stamps as loggers write them, read into minutes.
+
+ISO 8601; ``22.11.2026 08:00:00`` (day first, as everywhere dots separate the
+date; so ``22-11-2026``, ``22-Nov-2026`` and ``22-Nov-26 8:00:00 am``);
+``11/22/2026 3:05:00 PM`` (month first, as US loggers write it, unless the log
+shows day first: :func:`other_date_order`); the time of day before the date
+(``08:00:00 22/Nov/2026``); the time of day alone (:func:`after_midnight`); a
+date and a time of day in two columns (:func:`date_and_clock`). The format is
+taken from the first stamp (:func:`stamp_format`) and kept for the log.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = [
+    "stamp_format",
+    "other_date_order",
+    "after_midnight",
+    "date_and_clock",
+    "parses_as",
+    "TIME_OF_DAY_FORMATS",
+    "DATE_FORMATS",
+    "MINUTES_PER_DAY",
+    "IMPLAUSIBLE_STEP_MIN",
+]
+
+# A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
+# (Keysight BenchLink writes the milliseconds after a colon: 08:00:00:123)
+TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M:%S:%f", "%H:%M", "%I:%M:%S %p", "%I:%M %p")
+# Time stamps other than ISO 8601, tried in this order (pandas/strptime formats). A dotted date is
+# day first wherever it is written. A slashed one is month first (US loggers, 11/22/2026 3:05:00 PM)
+# unless the first stamp says day first (22/11/2026); where the first stamp cannot tell (01/02),
+# the order whose steps are plausible at the first change of date is taken (:func:`other_date_order`).
+_DOTTED = tuple(f"%d.%m.{year} {clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
+# day first with dashes too (22-11-2026, and 22-Nov-2026 as spreadsheets and LabVIEW write it; a
+# building-management export, 22-Nov-26 8:00:00 am)
+_DASHED = tuple(f"%d-{month}-{year} {clock}" for month in ("%m", "%b") for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
+_SLASHED = tuple(f"{date} {clock}" for date in ("%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y", "%d/%b/%y") for clock in TIME_OF_DAY_FORMATS)
+# The time of day before the date (Hanwell: 08:00:00 22/Nov/2026), and a comma between a dotted
+# date and the time inside one ';'-separated cell (a climate controller's "date,time" column).
+_TIME_FIRST = tuple(f"{clock} {date}" for date in ("%d/%b/%Y", "%d/%b/%y", "%d-%b-%Y", "%d.%m.%Y", "%d.%m.%y", "%Y-%m-%d") for clock in TIME_OF_DAY_FORMATS)
+_DOTTED_COMMA = tuple(f"%d.%m.{year},{clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
+_STAMP_FORMATS = (*_DOTTED, *_DASHED, *_SLASHED, *_TIME_FIRST, *_DOTTED_COMMA, "%Y-%m-%d %I:%M:%S %p", "%Y-%m-%d %I:%M %p", *TIME_OF_DAY_FORMATS)
+MINUTES_PER_DAY = 1440.0
+# a step that long between two rows of a warm-up log is a date read in the wrong order
+IMPLAUSIBLE_STEP_MIN = 20 * MINUTES_PER_DAY
+# a date without a time: the first of two time-stamp columns
+DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%d-%m-%y", "%d-%b-%y", "%Y-%m-%d", "%Y/%m/%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y")
+
+
+def date_and_clock(date_cell: str, clock_cell: str) -> bool:
+    """Whether two cells are a date alone and a time of day: a logger that writes its time stamp
+    in two columns (``Datum;Uhrzeit``, ``Date\tTime``), read as one stamp, date first."""
+    if ":" not in clock_cell or not any(mark in date_cell for mark in "./-"):
+        return False  # not worth importing pandas (0.5 s that a numeric live log does not need)
+    return parses_as(date_cell, DATE_FORMATS) and parses_as(clock_cell, TIME_OF_DAY_FORMATS)
+
+
+def parses_as(cell: str, formats: tuple[str, ...]) -> bool:
+    """Whether a cell reads in one of the (pandas/strptime) formats."""
+    import pandas as pd
+
+    for fmt in formats:
+        try:
+            pd.to_datetime(cell.strip(), format=fmt)
+        except (ValueError, TypeError):
+            continue
+        return True
+    return False
+
+
+def after_midnight(previous_min: float | None, t_min: float) -> float:
+    """A time of day (minutes from the first one) on the day of the row before, or a later one: an
+    overnight test passes midnight, and a step back of more than 12 h is the next day. Both readers
+    of a log use it, row by row."""
+    if previous_min is None:
+        return t_min
+    return t_min + MINUTES_PER_DAY * max(math.ceil((previous_min - t_min - MINUTES_PER_DAY / 2) / MINUTES_PER_DAY), 0)
+
+
+def other_date_order(fmt: str | None) -> str | None:
+    """The same format with day and month swapped, for a slashed date; None for any other."""
+    if fmt is not None and fmt.startswith(("%m/%d/", "%d/%m/")):
+        return ("%d/%m/" if fmt.startswith("%m/%d/") else "%m/%d/") + fmt[6:]
+    return None
+
+
+def stamp_format(cell: str) -> str | None:
+    """The pandas format of a time-stamp cell: "ISO8601", one of the dotted day-first or
+    time-of-day formats, or None if it is no time stamp."""
+    import pandas as pd
+
+    text = cell.strip()
+    for fmt in ("ISO8601", *_STAMP_FORMATS):
+        try:
+            pd.to_datetime(text, format=fmt, utc=True)
+        except (ValueError, TypeError):
+            continue
+        return fmt
+    return None

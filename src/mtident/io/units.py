@@ -1,0 +1,116 @@
+"""What a log's cells and names say about units: of time, of temperature, of other quantities.
+
+A unit is stated in a units row under the header (``min;°C;°C``), at the end of
+a column's name (``Time [s]``, ``T1 (°F)``, ``T/°C``, HOBOware's ``Temp, °F (LGR
+S/N: ...)``), or in the readings' own cells (``13.1 °C``). Time units set the
+time column's scale, temperature units the conversion to °C
+(:func:`celsius_conversion`), and any other unit (%, rpm, V, lx) marks a channel
+that is no temperature.
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = [
+    "unit_key",
+    "unit_in_name",
+    "time_unit_name",
+    "is_time_or_temperature_unit",
+    "celsius_conversion",
+    "carried_unit",
+    "number_without_unit",
+    "is_number",
+    "is_humidity",
+]
+
+# A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
+# as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
+# gives (scale, offset) to °C.
+_TIME_UNIT_NAMES = {"ms": "ms", "msec": "ms", "milliseconds": "ms", "s": "s", "sec": "s", "secs": "s", "second": "s", "seconds": "s", "min": "min", "mins": "min", "minute": "min", "minutes": "min", "h": "h", "hr": "h", "hrs": "h", "hour": "h", "hours": "h", "d": "d", "day": "d", "days": "d"}
+_TEMPERATURE_UNITS = {
+    # "ﾟC": Japanese loggers (Graphtec) write the half-width ﾟ of Shift-JIS for the degree sign
+    **dict.fromkeys(("c", "degc", "celsius", "gradc", "degreesc", "degreec", "ﾟc"), (1.0, 0.0)),
+    **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),
+    **dict.fromkeys(("f", "degf", "fahrenheit", "degreesf", "degreef"), (5.0 / 9.0, -160.0 / 9.0)),
+}
+# Units of a logger's other channels, named at the end of a column's name ("Speed (rpm)", "RH/%"):
+# such a column is no temperature. (A units row may name any unit; a name must name a known one.)
+_OTHER_UNITS = frozenset(
+    ("%", "%rh", "rh", "%rf", "v", "mv", "µv", "uv", "a", "ma", "rpm", "1/min", "u/min", "hz", "khz", "bar", "mbar", "pa", "kpa", "hpa", "mpa", "psi",
+     "w", "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "n", "kn", "ppm", "g", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h",
+     "mg/l", "µs/cm", "us/cm", "ms/cm", "lum/ft²", "lum/ft2", "m/s", "mph", "kwh", "wh", "va")
+)
+# A column named as a humidity ("Humidity", "RH", "Feuchte", "湿度"; the name alone, without a unit)
+_HUMIDITY_WORDS = ("humidity", "feuchte", "湿度")
+# A unit at the end of a column's name (a unit this module knows): "Time [s]", "T1 (°C)", "Temp (°C)
+# #9724974" (a serial number after it), "T/°C", and after a comma before the logger's details,
+# "Temp, °F (LGR S/N: 10679014, SEN S/N: 10679014)" (HOBOware).
+_UNITS_IN_NAME = (
+    re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*(?:#\s*\d+)?\s*$"),
+    re.compile(r"\S/\s*([^/\[\]()]+?)\s*$"),
+    re.compile(r",\s*([^,\[\]()]+?)\s*(?:\([^()]*\))?\s*$"),
+)
+# a reading with its unit after it: "13.1 °C", "56.3 %RH" (Tinytag Explorer writes them so)
+_NUMBER_THEN_UNIT = re.compile(r"^\s*([+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*(\S.*?)\s*$")
+
+
+def carried_unit(cell: str) -> str | None:
+    """The unit a reading carries after its number ("13.1 °C": "°C"), if it is one this module knows."""
+    match = _NUMBER_THEN_UNIT.match(cell)
+    return match.group(2) if match and unit_key(match.group(2)) in (*_TEMPERATURE_UNITS, *_OTHER_UNITS) else None
+
+
+def number_without_unit(cell: str) -> str:
+    """A reading's number with a known unit after it taken off ("13.1 °C": "13.1"); other cells as they are."""
+    match = _NUMBER_THEN_UNIT.match(cell)
+    return match.group(1) if match and carried_unit(cell) else cell
+
+
+def unit_key(cell: str) -> str:
+    """A unit or name as compared here: brackets, spaces, points and degree signs taken away, lower case."""
+    return re.sub(r"[\s\[\]()°º.Â_]", "", cell).lower()
+
+
+def is_number(cell: str) -> bool:
+    """Whether a cell is a number (a decimal comma counts)."""
+    try:
+        float(cell.replace(",", "."))
+    except ValueError:
+        return False
+    return True
+
+
+def celsius_conversion(unit: str) -> tuple[float, float] | None:
+    """(scale, offset) taking a reading in ``unit`` to °C (°C = scale·reading + offset): (1, 0) for
+    °C and for no unit, (1, −273.15) for K, (5/9, −160/9) for °F; None for a unit that is no
+    temperature (V, %, rpm)."""
+    if not unit.strip():
+        return 1.0, 0.0
+    return _TEMPERATURE_UNITS.get(unit_key(unit))
+
+
+def is_humidity(name: str) -> bool:
+    """Whether a column's name (or a description row's cell) names a humidity, not a temperature."""
+    key = unit_key(name)
+    return key in ("rh", "%rh", "rh%") or any(word in key for word in _HUMIDITY_WORDS)
+
+
+def unit_in_name(column: str) -> str:
+    """The unit at the end of a column's name, as written ("Time [s]": "s"), if it is one this
+    module knows; "" without one ("T (spindle)" names a place, not a unit; "Date/Time" no unit either)."""
+    for pattern in _UNITS_IN_NAME:
+        named = pattern.search(column)
+        if named is not None and unit_key(named.group(1)) in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
+            return named.group(1)
+    return ""
+
+
+def time_unit_name(unit: str) -> str | None:
+    """"ms", "s", "min", "h" or "d" for a unit of time as written ("[sec]", "Minutes"), else None."""
+    return _TIME_UNIT_NAMES.get(unit_key(unit))
+
+
+def is_time_or_temperature_unit(cell: str) -> bool:
+    """Whether a cell names a unit of time or of temperature (a units row has one at least)."""
+    return unit_key(cell) in _TIME_UNIT_NAMES or unit_key(cell) in _TEMPERATURE_UNITS
