@@ -596,3 +596,17 @@ def test_alarm_and_status_channels_are_no_sensors(write_csv, tmp_path):
     rows = LogFollower(path).poll()
     assert rows.temperature_C.shape == (8, 1) and any("Alarm 101, Status" in n for n in rows.notes)
     assert read_temperature_log(path, sensors=["Alarm 101"]).sensors == ("Alarm 101",)
+
+
+def test_a_live_log_is_read_from_its_first_rows_whatever_its_layout(write_csv):
+    """The follower waited for 21 rows before it fixed the header of a log whose rows do not match
+    it cell for cell (EasyLog's serial number in the first row alone) or begin with text (a
+    receiver's name before the date): 21 minutes without an answer on a 1-min log."""
+    from mtident.io.follow import LogFollower
+
+    easylog = write_csv("Spindle,Time,Celsius(°C),Serial Number\n1,22/11/2026 08:00:00,20.5,10543212\n2,22/11/2026 08:01:00,20.6\n", "easylog.csv")
+    rows = LogFollower(easylog).poll()
+    np.testing.assert_array_equal(rows.temperature_C[:, 0], [20.5, 20.6])
+    wireless = write_csv('RECEIVER,TRANSMITTER,DATE,TEMPERATURE,HUMIDITY\n"Shop","Spindle","2026-11-22 08:00",20.5,55\n', "meaco.csv")
+    follower = LogFollower(wireless)
+    assert follower.poll().temperature_C.tolist() == [[20.5]] and follower.sensors == ["TEMPERATURE"]

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mtident.exceptions import InputError
-from mtident.io.columns import check_unique_names
+from mtident.io.columns import check_unique_names, event_named
 from mtident.io.units import carried_unit, is_humidity, is_number, is_time_or_temperature_unit, number_without_unit, time_unit_name, unit_in_name
 
 if TYPE_CHECKING:
@@ -309,9 +309,10 @@ def _table_delimiter(lines: list[str], k: int, stated: str | None) -> str | None
 def _continues(row: list[str], header: list[str]) -> bool:
     """Whether a row has as many cells as the ``header``, or one more that is empty (a delimiter
     at the end of each data row but not of the header, as a climate controller writes it), or one
-    fewer where the header ends in LabVIEW's "Comment" column, which its rows leave out."""
+    fewer where the header ends in a column of the logger's own records, which rows leave out
+    (LabVIEW's "Comment", the "Serial Number" EasyLog writes in the first row alone)."""
     count = len(header)
-    return len(row) == count or (len(row) == count + 1 and not row[-1].strip()) or (len(row) == count - 1 and header[-1].strip() == "Comment")
+    return len(row) == count or (len(row) == count + 1 and not row[-1].strip()) or (len(row) == count - 1 and event_named(header[-1]))
 
 
 def _data_row_below(lines: list[str], k: int, delimiter: str) -> bool:
