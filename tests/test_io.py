@@ -610,3 +610,53 @@ def test_a_live_log_is_read_from_its_first_rows_whatever_its_layout(write_csv):
     wireless = write_csv('RECEIVER,TRANSMITTER,DATE,TEMPERATURE,HUMIDITY\n"Shop","Spindle","2026-11-22 08:00",20.5,55\n', "meaco.csv")
     follower = LogFollower(wireless)
     assert follower.poll().temperature_C.tolist() == [[20.5]] and follower.sensors == ["TEMPERATURE"]
+
+
+def test_an_excel_workbook_reads_like_the_csv_it_holds(tmp_path):
+    """Loggers' software exports .xlsx as readily as CSV; a workbook ended in a traceback
+    (the csv module's "new-line character seen in unquoted field")."""
+    import datetime as dt
+
+    import pandas as pd
+
+    from mtident.io.follow import LogFollower
+
+    t = np.arange(12.0)
+    values = 20 + t / 10
+    stamps = [dt.datetime(2026, 11, 22, 8, 0) + dt.timedelta(minutes=float(m)) for m in t]
+    book = tmp_path / "log.xlsx"
+    with pd.ExcelWriter(book) as writer:
+        pd.DataFrame([["Logger", "HOBO UX120"]]).to_excel(writer, index=False, header=False)
+        pd.DataFrame({"Date Time": stamps, "Temp, °F (LGR S/N: 1)": values * 9 / 5 + 32, "RH, %": 50.0}).to_excel(writer, index=False, startrow=2)
+    log = read_temperature_log(book)
+    assert log.sensors == ("Temp, °F (LGR S/N: 1)",)
+    np.testing.assert_allclose(log.time_min, t, atol=1e-9)
+    np.testing.assert_allclose(log.temperature_C[:, 0], values, atol=1e-9)
+    with pytest.raises(InputError, match="an Excel workbook is not written row by row"):
+        LogFollower(book).poll()
+    (tmp_path / "old.xls").write_bytes(b"\xd0\xcf\x11\xe0" + bytes(600))
+    with pytest.raises(InputError, match=r"an Excel 97-2003 workbook \(.xls\); save it as .xlsx or as CSV"):
+        read_temperature_log(tmp_path / "old.xls")
+    (tmp_path / "broken.xlsx").write_bytes(b"PK\x03\x04" + b"x" * 100)
+    with pytest.raises(InputError, match="not a readable Excel workbook"):
+        read_temperature_log(tmp_path / "broken.xlsx")
+
+
+def test_other_files_and_line_ends(write_csv, tmp_path):
+    """A lone CR at the end of each line (old Macs, some serial loggers) ended in a traceback;
+    a binary file is refused by both readers; a settings line with as many cells as a two-column
+    table, above a blank line, is no header."""
+    from mtident.io.follow import LogFollower
+
+    rows = "".join(f"{k},{20 + k / 10:.1f}\n" for k in range(8))
+    cr = tmp_path / "cr.csv"
+    cr.write_bytes(("time,A\n" + rows).replace("\n", "\r").encode())
+    np.testing.assert_allclose(read_temperature_log(cr).temperature_C[:, 0], 20 + np.arange(8) / 10)
+    binary = tmp_path / "data.csv"
+    binary.write_bytes(b"time,A\n0,20\x00\x01\x02\n" + bytes(range(256)))
+    with pytest.raises(InputError, match="not a text file"):
+        read_temperature_log(binary)
+    with pytest.raises(InputError, match="not a text file"):
+        LogFollower(binary).poll()
+    log = read_temperature_log(write_csv("Model,GL240\n\ntime,A\n" + rows))
+    assert log.sensors == ("A",) and len(log.time_min) == 8

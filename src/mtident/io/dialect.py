@@ -19,6 +19,9 @@ here, so they read a log the same way; the time stamps are read in
 from __future__ import annotations
 
 import csv
+import datetime
+import io
+import math
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -36,6 +39,7 @@ __all__ = [
     "sniff_dialect",
     "header_names",
     "read_csv",
+    "binary_kind",
     "HEAD_BYTES",
 ]
 
@@ -46,6 +50,9 @@ _DELIMITERS = (",", ";", "\t")
 _SEP_DIRECTIVE = re.compile(r"^sep=(.)\r?$")
 # a header whose first column, the row counter, is named "#" (HOBOware: #,"Date Time, GMT+01:00",...): no comment
 _HASH_HEADER = re.compile(r'^\s*"?#"?\s*[,;\t]')
+# Line ends as pandas reads them: CRLF (Windows), LF, and a lone CR (old Macs, some instruments'
+# serial loggers), which inside a line made the csv module fail with a traceback.
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
 
 
@@ -149,7 +156,7 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
     the line that heads the table below (:func:`_table_start`).
     """
     text, encoding = _decoded_head(head)
-    lines = text.split("\n")
+    lines = _LINE_BREAK.split(text)
     complete = lines if whole else lines[:-1]  # the last piece has no newline yet
     preamble, stated = 0, None
     while preamble < len(complete):
@@ -241,18 +248,19 @@ def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row:
     comment), unless the lines after it do not continue its table and a later line heads one: a
     logger's settings ("Model,GL240", "Interval: 60 s") before the header, without ``#``.
 
-    ``first`` heads a table when the lines after it (up to 20) have as many cells. A later line
-    heads one when, besides, it begins a block (after a blank line, or a line with another number
-    of cells), begins like no data row, and the first row after it (or after a units row) begins
-    like a data row, with its time: a bad first data row is not taken for a header. Where no line
-    does, ``first`` (a log whose rows do not match its header in number: a delimiter at the end of
-    each row). A live log (``wait_for_row``) needs a data row below ``first`` too, and waits for
-    more lines (None) while none is found.
+    A line heads a table when the lines after it (up to 20) have as many cells and a data row
+    follows it, directly or after rows that describe its columns (:func:`_extra_rows`; a
+    settings line "Model,GL240" above a blank line and a two-column table heads none). A later
+    line must besides begin a block (after a blank line, or a line with another number of
+    cells) and begin like no data row: a bad first data row is not taken for a header. Where
+    no line does, ``first`` (a log whose first data row is bad, or whose rows do not match its
+    header in number). A live log (``wait_for_row``) waits for more lines (None) while none
+    is found.
     """
     if first >= len(lines):
         return first
     delimiter = _table_delimiter(lines, first, stated)
-    if delimiter is not None and (not wait_for_row or _data_row_below(lines, first, delimiter)):
+    if delimiter is not None and _data_row_below(lines, first, delimiter):
         return first
     for k in range(first + 1, len(lines)):
         if _blank_like(lines[k]) or _data_like(lines[k]):
@@ -391,6 +399,8 @@ def header_names(file: Path) -> list[str]:
     its header line is incomplete."""
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
+    if binary_kind(head) in ("xlsx", "xls"):
+        head = workbook_as_csv(file, file)[:HEAD_BYTES]
     dialect = sniff_dialect(head)
     if dialect is None:
         return []
@@ -398,7 +408,7 @@ def header_names(file: Path) -> list[str]:
 
 
 def _header_line(head: bytes, dialect: CsvDialect) -> str:
-    return dialect.decode(head).split("\n")[dialect.preamble_lines]
+    return _LINE_BREAK.split(dialect.decode(head))[dialect.preamble_lines]
 
 
 def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
@@ -415,9 +425,21 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         raise InputError(msg)
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
+    source: Path | io.BytesIO = file
+    kind = binary_kind(head)
+    if kind in ("xlsx", "xls"):
+        data = workbook_as_csv(file, path)
+        head, source = data[:HEAD_BYTES], io.BytesIO(data)
+    elif kind is not None:
+        msg = f"{path}: not a text file; a log is read as CSV text (or as an Excel .xlsx workbook)"
+        raise InputError(msg)
     # the whole file fits in the head: its last line is complete even without a newline
     whole = len(head) < HEAD_BYTES
-    dialect = sniff_dialect(head, whole=whole)
+    try:
+        dialect = sniff_dialect(head, whole=whole)
+    except csv.Error as exc:
+        msg = f"{path}: not a readable CSV file ({exc})"
+        raise InputError(msg) from exc
     if dialect is None and whole and head.strip():
         msg = f"{path}: no header line, only # comments and blank lines"
         raise InputError(msg)
@@ -426,7 +448,7 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         check_unique_names(dialect.cells(_header_line(head, dialect)), path)
     try:
         frame = pd.read_csv(
-            file,
+            source,
             sep=dialect.delimiter,
             decimal=dialect.decimal,
             # the preamble, and a units row under the header
@@ -442,6 +464,50 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
     frame.columns = [str(c).removeprefix("\ufeff") for c in frame.columns]  # UTF-16's byte-order mark
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
     return frame.drop(columns=unnamed), dialect
+
+
+def binary_kind(head: bytes) -> str | None:
+    """What a file is if it is no text: "xlsx" for an Excel workbook (a zip archive), "xls" for
+    an Excel 97-2003 one, "binary" for other data with zero bytes (not UTF-16 text); else None."""
+    if head.startswith(b"PK\x03\x04"):
+        return "xlsx"
+    if head.startswith(b"\xd0\xcf\x11\xe0"):
+        return "xls"
+    if b"\x00" in head and _utf16(head) is None:
+        return "binary"
+    return None
+
+
+def workbook_as_csv(file: Path, path: str | Path) -> bytes:
+    """The first sheet of an Excel workbook as the CSV text a logger would have written (UTF-8),
+    so that it is read like one: preamble, header, units row, time stamps and all. Dates and
+    times of day become ISO 8601 text, empty cells empty. InputError for an old .xls workbook or
+    one that does not open."""
+    import pandas as pd
+
+    with file.open("rb") as handle:
+        old_format = binary_kind(handle.read(8)) == "xls"
+    if old_format:
+        msg = f"{path}: an Excel 97-2003 workbook (.xls); save it as .xlsx or as CSV"
+        raise InputError(msg)
+    try:
+        sheet = pd.read_excel(file, sheet_name=0, header=None, dtype=object)
+    except Exception as exc:  # openpyxl raises many kinds for a damaged or foreign zip
+        msg = f"{path}: not a readable Excel workbook ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+        raise InputError(msg) from exc
+
+    def cell(value: object) -> str:
+        if value is None or (isinstance(value, float) and math.isnan(value)) or value is pd.NaT:
+            return ""
+        if isinstance(value, (datetime.datetime, datetime.time)):
+            return value.isoformat(sep=" ") if isinstance(value, datetime.datetime) else value.isoformat()
+        return repr(value) if isinstance(value, float) else str(value)
+
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    for row in sheet.itertuples(index=False):
+        writer.writerow([cell(v) for v in row])
+    return out.getvalue().encode()
 
 
 def _decodes(data: bytes, encoding: str = "utf-8-sig") -> bool:

@@ -34,7 +34,7 @@ import numpy as np
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.columns import check_unique_names, counter_before_time, millisecond_column, temperature_columns, text_before_stamps, text_only_cells
-from mtident.io.dialect import HEAD_BYTES, CsvDialect, sniff_dialect
+from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, serial_date_hint, time_unit_assumed, time_unit_factor
 from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, date_and_clock, other_date_order, stamp_format
 from mtident.io.units import celsius_conversion
@@ -303,7 +303,19 @@ class LogFollower:
         self.identity = identity
         with open(self.path, "rb") as handle:
             if self.dialect is None:
-                self.dialect = sniff_dialect(handle.read(HEAD_BYTES), wait_for_row=True)
+                head = handle.read(HEAD_BYTES)
+                kind = binary_kind(head)
+                if kind in ("xlsx", "xls"):
+                    msg = f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger writes (identify and min-time read the workbook; save it as CSV to replay it)"
+                    raise InputError(msg)
+                if kind is not None:
+                    msg = f"{self.path}: not a text file; watch follows the CSV text a logger writes"
+                    raise InputError(msg)
+                try:
+                    self.dialect = sniff_dialect(head, wait_for_row=True)
+                except csv.Error as exc:
+                    msg = f"{self.path}: not a readable CSV file ({exc})"
+                    raise InputError(msg) from exc
                 if self.dialect is None:  # no complete data row yet
                     return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
             handle.seek(self.offset)
