@@ -264,3 +264,31 @@ def test_min_time_table_gives_l_to_a_tenth_of_a_minute_for_a_fast_log(tmp_path):
     cells = [c.strip() for c in row.strip("│ ").split("│")][1:-1]
     assert len(cells) == 5 and all(re.fullmatch(r"\d+(\.\d)?", c) for c in cells), row
 
+
+
+def test_inspect_shows_how_a_logger_export_is_read(tmp_path):
+    """`thermal inspect`: the header line, the rows under it, how the time is read, each sensor's
+    unit and readings, and every column left out with the reason, as a summary or one JSON object."""
+    path = tmp_path / "tinytag.csv"
+    rows = "".join(f"{k + 1},2026-11-22 08:{k:02d}:00,{68 + 0.18 * k:.2f} °F,{56 + k / 100:.1f} %RH\n" for k in range(8))
+    path.write_text(",Time,1,2\nS/N,,227659,227659\nType,,Tinytag,Tinytag\nDescription,,Spindle,Spindle\nProperty,,Temperature,Humidity\n" + rows, encoding="cp1252")
+    out = mtident("thermal", "inspect", str(path), "--json")
+    assert out.returncode == 0, out.stderr
+    info = json.loads(out.stdout)
+    assert info["format"] == {
+        "kind": "CSV text", "encoding": "cp1252", "delimiter": "comma", "decimal": ".", "lines_before_header": 0, "header_line": 1,
+        "rows_under_header": 4, "units_from": "its cells", "units_in_cells": True,
+    }  # fmt: skip
+    assert info["time"] == {"column": "Time", "first_cell": "2026-11-22 08:00:00", "read_as": "time stamps", "samples": 8, "span_min": 7.0, "step_min": 1.0}
+    [sensor] = info["sensors"]
+    assert sensor["sensor"] == "1" and sensor["unit"] == "°F" and sensor["missing"] == 0
+    assert sensor["first_C"] == pytest.approx(20.0) and sensor["max_C"] == pytest.approx(20.7)
+    assert "left out, a row counter: Unnamed: 0; the time is 'Time'" in info["notes"] and "left out, not temperatures by its cells: 2 (%RH)" in info["notes"]
+    text = mtident("thermal", "inspect", str(path)).stdout
+    assert "header on line 1, 4 row(s) under it before the data" in text and "read as time stamps" in text and "note: left out, a row counter" in text
+    seconds = tmp_path / "seconds.csv"
+    seconds.write_text("t,A\n" + "".join(f"{60 * k},{20 + k / 10:.1f}\n" for k in range(8)))
+    assert json.loads(mtident("thermal", "inspect", str(seconds), "--time-unit", "s", "--json").stdout)["time"]["read_as"] == "numbers in s (--time-unit)"
+    assert "assumed" in json.loads(mtident("thermal", "inspect", str(seconds), "--json").stdout)["time"]["read_as"]
+    missing = mtident("thermal", "inspect", str(tmp_path / "nope.csv"))
+    assert missing.returncode == 2 and "no such file" in missing.stderr and "Traceback" not in missing.stderr

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Literal, TypedDict
 
 import click
 import numpy as np
@@ -67,6 +68,22 @@ def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
     return func
 
 
+class _ColumnLayout(TypedDict, total=False):
+    no_wrap: bool
+    overflow: Literal["fold", "crop", "ellipsis", "ignore"]
+    min_width: int
+    max_width: int
+
+
+def _column_layout(column: str) -> _ColumnLayout:
+    """Numbers on one line; a long sensor name (a building-management point's, HOBOware's with
+    its serial numbers) folded over several lines of 14 to 32 characters, so that it neither
+    squeezes the numbers to "…" nor is squeezed to two letters in an 80-column terminal."""
+    if column == "sensor":
+        return {"overflow": "fold", "min_width": 14, "max_width": 32}
+    return {"no_wrap": True}
+
+
 def _fmt(value: object, digits: int = 2) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "—"  # no estimate yet (still collecting, or no steady state)
@@ -108,8 +125,7 @@ def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
         return
     table = Table(title=f"{log.source}: identified from the first {result.window_min:g} min ({method}, preset {preset})")
     for column in ("sensor", "T∞ ± 95 % (°C)", "λ (1/min)", "t_eq (min)", "RMSE (°C)", "model", "measured T / t_eq"):
-        # numbers on one line; a long sensor name (a building-management point's) folded over several
-        table.add_column(column, justify="right" if column != "sensor" else "left", no_wrap=column != "sensor", overflow="fold" if column == "sensor" else "ellipsis", max_width=32 if column == "sensor" else None)
+        table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     for d in summaries:
         interval = d["steady_state_ci95_C"]
         assert isinstance(interval, list)
@@ -186,6 +202,51 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
     Console(width=max(Console().width, 100)).print(table)
 
 
+@thermal.command("inspect")
+@log_options
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the summary.")
+@user_errors
+def inspect_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, as_json: bool) -> None:
+    """Show how FILE is read: its format, the header line, the time column and step, each
+    sensor's unit and readings, and every column left out with the reason.
+
+    For a logger's own export, before trusting what identify or watch make of it.
+    """
+    from mtident.io.describe import describe_log
+
+    path = log_path(file)
+    info = describe_log(path, time_col, time_unit, asked_sensors(sensors, path) or None)
+    if as_json:
+        print_json(info)
+        return
+    fmt, time = info["format"], info["time"]
+    assert isinstance(fmt, dict) and isinstance(time, dict)
+    console = Console(soft_wrap=True)  # a line per fact, as a terminal or a file shows it
+    rows_under = fmt["rows_under_header"]
+    text = "" if str(fmt["kind"]).startswith("Excel") else f", {fmt['encoding']}, {fmt['delimiter']}-separated, decimal {fmt['decimal']!r}"
+    console.print(
+        f"[bold]{file}[/]: {fmt['kind']}{text}; header on line {fmt['header_line']}" + (f", {rows_under} row(s) under it before the data" if rows_under else "") + f"; units from {fmt['units_from']}",
+        highlight=False,
+    )
+    step = time["step_min"]
+    console.print(
+        f"time: {time['column']!r}, read as {time['read_as']} (first cell {time['first_cell']!r}); {time['samples']} samples over {_fmt(time['span_min'], 1)} min" + (f", a step of {step * 60:g} s" if step is not None and step < 1 else f", a step of {_fmt(step, 2)} min"),
+        highlight=False,
+    )
+    table = Table()
+    for column in ("sensor", "unit", "missing", "first °C", "last °C", "min °C", "max °C"):
+        table.add_column(column, justify="left" if column in ("sensor", "unit") else "right", **_column_layout(column))
+    sensor_rows = info["sensors"]
+    assert isinstance(sensor_rows, list)
+    for d in sensor_rows:
+        table.add_row(d["sensor"], d["unit"], str(d["missing"]), _fmt(d["first_C"]), _fmt(d["last_C"]), _fmt(d["min_C"]), _fmt(d["max_C"]))
+    console.print(table)
+    notes = info["notes"]
+    assert isinstance(notes, list)
+    for note in notes:
+        console.print(f"note: {note}", highlight=False)
+
+
 def _save_state(path: Path, text: str) -> None:
     """Write the monitor's state atomically: a killed monitor leaves the old or the new file, never half of one."""
     import os
@@ -214,7 +275,7 @@ def _when(monitor) -> str:  # noqa: ANN001 - thermal.monitor.Monitor
 def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monitor.Monitor
     table = Table(title=f"{log.name}: {_when(monitor)}")
     for column in ("sensor", "latest (°C)", "T∞ ± 95 % (°C)", "t_eq (min)", "status"):
-        table.add_column(column, justify="left" if column in ("sensor", "status") else "right", no_wrap=column != "sensor", overflow="fold" if column == "sensor" else "ellipsis", max_width=32 if column == "sensor" else None)
+        table.add_column(column, justify="left" if column in ("sensor", "status") else "right", **_column_layout(column))
     for st in monitor.status():
         colour = "green" if st.may_stop else "yellow"
         table.add_row(st.sensor, _fmt(st.latest_C), f"{_fmt(st.steady_state_C)} ± {_fmt(st.half_width_C)}", _fmt(st.equilibrium_time_min, 0), f"[{colour}]{st.status}[/]")

@@ -66,6 +66,9 @@ class TemperatureLog:
         What was skipped and why (for stderr).
     source : str
         Where the log came from.
+    time_column : str
+        The column the time was read from ("Date + Time" for a date and a time of day
+        in two columns); "" where not known.
     """
 
     time_min: FloatArray
@@ -73,6 +76,7 @@ class TemperatureLog:
     temperature_C: FloatArray
     notes: tuple[str, ...] = field(default=())
     source: str = ""
+    time_column: str = ""
 
     def __repr__(self) -> str:
         names = ", ".join(self.sensors if len(self.sensors) <= 6 else [*self.sensors[:5], "...", self.sensors[-1]])
@@ -88,7 +92,7 @@ class TemperatureLog:
             msg = f"{self.source}: no sensor column {missing[0]!r}; the log has: {', '.join(self.sensors)}"
             raise InputError(msg)
         idx = [self.sensors.index(n) for n in names]
-        return TemperatureLog(self.time_min, tuple(names), self.temperature_C[:, idx], self.notes, self.source)
+        return TemperatureLog(self.time_min, tuple(names), self.temperature_C[:, idx], self.notes, self.source, self.time_column)
 
     def window(self, minutes: float) -> int:
         """Number of samples with time ≤ ``minutes``."""
@@ -433,4 +437,4 @@ def read_temperature_log(
             notes.append(f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows {rows}{', ...' if bad.sum() > 5 else ''})")
             values = np.where(bad, np.nan, values)
         columns.append(values)
-    return TemperatureLog(time_min, tuple(sensors), np.column_stack(columns), tuple(notes), source)
+    return TemperatureLog(time_min, tuple(sensors), np.column_stack(columns), tuple(notes), source, header if clock is None else f"{header} + {clock}")

@@ -1,0 +1,104 @@
+"""How mtident reads a log file: its dialect, its time, its sensors, and what it left out.
+
+A test engineer's log rarely looks like the contract's plain CSV; before trusting
+an identification from it, one wants to see how it was read (``mtident thermal
+inspect``): which line was taken for the header, what the time column is and
+how long a step is, each sensor's unit and readings, and every column left out
+with the reason.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from mtident.io.dialect import CsvDialect, binary_kind, read_csv
+from mtident.io.logs import TIME_UNITS, read_temperature_log, time_unit_assumed, time_unit_factor
+from mtident.io.units import is_number
+
+__all__ = ["describe_log"]
+
+_DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab"}
+
+
+def describe_log(path: str | Path, time_col: str | None = None, time_unit: str | None = None, sensors: list[str] | None = None) -> dict[str, object]:
+    """How the log at ``path`` is read, as plain JSON types.
+
+    Keys: ``file``; ``format`` (what the file is, its encoding, delimiter, decimal
+    mark, the lines before the header, the header line's number, the rows between
+    the header and the data); ``time`` (its column, the first cell as written, how it
+    is read: stamps, or numbers in a unit and whence the unit; the samples, the span
+    and the median step in minutes); ``sensors`` (per sensor:
+    its unit as the log states it, valid and missing samples, first, last, lowest
+    and highest reading in °C); ``notes`` (columns left out, conversions, rows
+    skipped). Raises :class:`~mtident.exceptions.InputError` as the readers do.
+    """
+    file = Path(path)
+    frame, dialect = read_csv(file)
+    log = read_temperature_log(file, time_col=time_col, time_unit=time_unit, sensors=sensors)
+    with file.open("rb") as handle:
+        kind = binary_kind(handle.read(8))
+    steps = np.diff(log.time_min)
+    time_name = log.time_column.split(" + ")[0]
+    first_cell = frame[time_name].iloc[0] if time_name in frame.columns and len(frame) else None
+    per_sensor = []
+    for k, name in enumerate(log.sensors):
+        values = log.temperature_C[:, k]
+        valid = values[np.isfinite(values)]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            low, high = (float(np.min(valid)), float(np.max(valid))) if len(valid) else (None, None)
+        per_sensor.append(
+            {
+                "sensor": name,
+                "unit": dialect.unit_of(name).strip() or "°C (assumed)",
+                "samples": int(len(valid)),
+                "missing": int(len(values) - len(valid)),
+                "first_C": float(valid[0]) if len(valid) else None,
+                "last_C": float(valid[-1]) if len(valid) else None,
+                "min_C": low,
+                "max_C": high,
+            }
+        )
+    return {
+        "file": str(path),
+        "format": _format(dialect, kind),
+        "time": {
+            "column": log.time_column,
+            "first_cell": None if first_cell is None else str(first_cell),
+            "read_as": _time_read_as(time_name, first_cell, time_unit, dialect),
+            "samples": int(len(log.time_min)),
+            "span_min": float(log.time_min[-1] - log.time_min[0]),
+            "step_min": float(np.median(steps)) if len(steps) else None,
+        },
+        "sensors": per_sensor,
+        "notes": list(log.notes),
+    }
+
+
+def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect: CsvDialect) -> str:
+    """How the time column's cells are read: as time stamps, or as numbers in a unit, and whence the unit."""
+    if first_cell is None or not is_number(str(first_cell)):
+        return "time stamps"
+    stated = dialect.time_unit(name)
+    factor = time_unit_factor(name, time_unit, stated)
+    unit = next(unit for unit, minutes in TIME_UNITS.items() if minutes == factor)
+    if time_unit is not None:
+        return f"numbers in {unit} (--time-unit)"
+    return f"numbers in {unit} (assumed: no unit in its name, a units row or --time-unit)" if time_unit_assumed(name, time_unit, stated) else f"numbers in {unit} (as the log states)"
+
+
+def _format(dialect: CsvDialect, kind: str | None) -> dict[str, object]:
+    return {
+        "kind": "Excel workbook (its first sheet)" if kind in ("xlsx", "xls") else "CSV text",
+        "encoding": dialect.encoding.removesuffix("-sig"),
+        "delimiter": _DELIMITER_NAMES.get(dialect.delimiter, dialect.delimiter),
+        "decimal": dialect.decimal,
+        "lines_before_header": dialect.preamble_lines,
+        "header_line": dialect.preamble_lines + 1,
+        "rows_under_header": dialect.extra_rows,
+        "units_from": dialect.units_source if dialect.units else "the column names",
+        "units_in_cells": dialect.units_in_cells,
+    }
