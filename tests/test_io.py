@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 from conftest import logger_dialects
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from mtident.exceptions import InputError
@@ -180,7 +180,13 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
         read_temperature_log(back)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=60, deadline=None)
+# found by the search: a decimal comma with the unit in the cell ("20,00 °C" was not a number), a live
+# UTF-16 log's first byte (taken for a binary file), a CRLF cut between CR and LF (the first row was
+# taken as complete, the date and clock columns were not told apart, every row refused)
+@example(delimiter=";", decimal_comma=True, preamble=[], encoding="utf-8", crlf=False, trailing=False, quoted=False, stamps="minutes", units="none", under="nothing", units_in_cells=True, cuts=[])
+@example(delimiter=",", decimal_comma=False, preamble=[], encoding="utf-16-be", crlf=False, trailing=False, quoted=False, stamps="minutes", units="none", under="nothing", units_in_cells=False, cuts=[1])
+@example(delimiter=",", decimal_comma=False, preamble=[], encoding="utf-16", crlf=True, trailing=True, quoted=False, stamps="date, clock", units="min", under="nothing", units_in_cells=True, cuts=[144])
 @given(
     delimiter=st.sampled_from([",", ";", "\t"]),
     decimal_comma=st.booleans(),
@@ -191,13 +197,17 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     quoted=st.booleans(),
     stamps=st.sampled_from(["minutes", "iso", "dotted", "dashed", "month name", "time of day", "date, clock", "iso date, clock", "ymd date, clock", "us slashed", "day-first slashed"]),
     units=st.sampled_from(["none", "min", "s"]),
+    under=st.sampled_from(["nothing", "a second row of names", "rows describing the channels", "an empty row and a section tag"]),
+    units_in_cells=st.booleans(),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
-def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, encoding, crlf, trailing, quoted, stamps, units, cuts):
+def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, encoding, crlf, trailing, quoted, stamps, units, under, units_in_cells, cuts):
     """Every combination of delimiter, decimal mark, preamble (also a logger's settings without
     '#'), encoding (also UTF-16 with and without a byte-order mark), line end, trailing
-    delimiter, quoted cells (as spreadsheets write them), time format (also a date and a time of day in two columns) and a units row under the header, read whole and followed live in random pieces, gives the
-    plain file's times and temperatures."""
+    delimiter, quoted cells (as spreadsheets write them), time format (also a date and a time of day in two columns), a units row
+    and other rows under the header (a second row of names, rows describing the channels, an empty row and
+    a section tag), readings with their unit in the cell, read whole and followed live in random pieces,
+    gives the plain file's times and temperatures."""
     import datetime as dt
 
     from mtident.io.follow import LogFollower
@@ -221,7 +231,8 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
                 "dashed": when.strftime("%d-%m-%Y %H:%M:%S"), "month name": when.strftime("%d-%b-%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]]
 
     def number(value: float) -> str:
-        return f"{value:.2f}".replace(".", ",") if decimal_comma else f"{value:.2f}"
+        text = f"{value:.2f}".replace(".", ",") if decimal_comma else f"{value:.2f}"
+        return f"{text} °C" if units_in_cells else text
 
     end = "\r\n" if crlf else "\n"
     tail = delimiter if trailing else ""
@@ -229,9 +240,17 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
         return delimiter.join(f'"{c}"' if quoted else c for c in cells) + tail
 
     clock = ["clock"] if stamps.endswith("date, clock") else []
+    no_time = ["", *["" for _ in clock]]
+    described = {
+        "nothing": [],
+        "a second row of names": [row(["Date/Time", *clock, "ch1", "ch2"])],  # T&D
+        "rows describing the channels": [row([*no_time, "227659", "227659"]), row([*no_time, "Temperature", "Temperature"])],  # Tinytag
+        "an empty row and a section tag": [row([*no_time, "", ""]), "[#D]" + delimiter * (len(no_time) + 1)],  # Rotronic
+    }[under]
     lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", *clock, "A °C", "B"])]
-    if units != "none":  # the time's unit only where the time is a number
-        lines.append(row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]"]))
+    units_row = [row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]"])] if units != "none" else []  # the time's unit only where the time is a number
+    # rows that describe the channels come straight under the header; empty rows and tags after them
+    lines += [*units_row, *described] if under == "an empty row and a section tag" else [*described, *units_row]
     lines += [row([*time_cells(m), *(number(v) for v in values)]) for m, values in zip(t, temperatures, strict=True)]
     data = (end.join(lines) + end).encode(encoding)
     folder = tmp_path_factory.mktemp("dialect")

@@ -156,6 +156,10 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
     the line that heads the table below (:func:`_table_start`).
     """
     text, encoding = _decoded_head(head)
+    if not whole:
+        # A CRLF cut between its CR and its LF: the line is not complete yet (the follower reads
+        # up to the last LF; a row taken as complete here was not there to tell the time's columns).
+        text = text.removesuffix("\r")
     lines = _LINE_BREAK.split(text)
     complete = lines if whole else lines[:-1]  # the last piece has no newline yet
     preamble, stated = 0, None
@@ -178,7 +182,7 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
     decimal = "."
     if delimiter != ",":
         rows = csv.reader(complete[preamble + 1 : preamble + 21], delimiter=delimiter)  # "17,90" quoted, as spreadsheets write it
-        if any(_DECIMAL_COMMA.match(cell) for row in rows for cell in row):
+        if any(_DECIMAL_COMMA.match(number_without_unit(cell)) for row in rows for cell in row):  # also "20,5 °C"
             decimal = ","
     dialect = _stated_units(CsvDialect(delimiter, decimal, preamble, encoding), complete)
     if wait_for_row and preamble + 1 + dialect.extra_rows >= len(complete):
@@ -473,7 +477,8 @@ def binary_kind(head: bytes) -> str | None:
         return "xlsx"
     if head.startswith(b"\xd0\xcf\x11\xe0"):
         return "xls"
-    if b"\x00" in head and _utf16(head) is None:
+    # (a live UTF-16 log's first few bytes cannot tell yet: it is told from eight on)
+    if len(head) >= 8 and b"\x00" in head and _utf16(head) is None:
         return "binary"
     return None
 
