@@ -184,9 +184,9 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
 # found by the search: a decimal comma with the unit in the cell ("20,00 °C" was not a number), a live
 # UTF-16 log's first byte (taken for a binary file), a CRLF cut between CR and LF (the first row was
 # taken as complete, the date and clock columns were not told apart, every row refused)
-@example(delimiter=";", decimal_comma=True, preamble=[], encoding="utf-8", crlf=False, trailing=False, quoted=False, stamps="minutes", units="none", under="nothing", units_in_cells=True, cuts=[])
-@example(delimiter=",", decimal_comma=False, preamble=[], encoding="utf-16-be", crlf=False, trailing=False, quoted=False, stamps="minutes", units="none", under="nothing", units_in_cells=False, cuts=[1])
-@example(delimiter=",", decimal_comma=False, preamble=[], encoding="utf-16", crlf=True, trailing=True, quoted=False, stamps="date, clock", units="min", under="nothing", units_in_cells=True, cuts=[144])
+@example(delimiter=";", decimal_comma=True, preamble=[], encoding="utf-8", crlf=False, trailing=False, quoted=False, stamps="minutes", units="none", under="nothing", units_in_cells=True, counter="none", cuts=[])
+@example(delimiter=",", decimal_comma=False, preamble=[], encoding="utf-16-be", crlf=False, trailing=False, quoted=False, stamps="minutes", units="none", under="nothing", units_in_cells=False, counter="none", cuts=[1])
+@example(delimiter=",", decimal_comma=False, preamble=[], encoding="utf-16", crlf=True, trailing=True, quoted=False, stamps="date, clock", units="min", under="nothing", units_in_cells=True, counter="none", cuts=[144])
 @given(
     delimiter=st.sampled_from([",", ";", "\t"]),
     decimal_comma=st.booleans(),
@@ -199,15 +199,17 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     units=st.sampled_from(["none", "min", "s"]),
     under=st.sampled_from(["nothing", "a second row of names", "rows describing the channels", "an empty row and a section tag"]),
     units_in_cells=st.booleans(),
+    counter=st.sampled_from(["none", "NO.", "", "Reading #"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
-def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, encoding, crlf, trailing, quoted, stamps, units, under, units_in_cells, cuts):
+def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, encoding, crlf, trailing, quoted, stamps, units, under, units_in_cells, counter, cuts):
     """Every combination of delimiter, decimal mark, preamble (also a logger's settings without
     '#'), encoding (also UTF-16 with and without a byte-order mark), line end, trailing
     delimiter, quoted cells (as spreadsheets write them), time format (also a date and a time of day in two columns), a units row
     and other rows under the header (a second row of names, rows describing the channels, an empty row and
-    a section tag), readings with their unit in the cell, read whole and followed live in random pieces,
-    gives the plain file's times and temperatures."""
+    a section tag), readings with their unit in the cell, a row counter before time stamps (named,
+    unnamed or under any name), read whole and followed live in random pieces, gives the plain
+    file's times and temperatures."""
     import datetime as dt
 
     from mtident.io.follow import LogFollower
@@ -236,8 +238,11 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
 
     end = "\r\n" if crlf else "\n"
     tail = delimiter if trailing else ""
-    def row(cells: list[str]) -> str:
-        return delimiter.join(f'"{c}"' if quoted else c for c in cells) + tail
+    # a counter before numbers in minutes would be the time: only before time stamps
+    counted = counter != "none" and stamps != "minutes"
+
+    def row(cells: list[str], lead: str = "") -> str:
+        return delimiter.join(f'"{c}"' if quoted else c for c in ([lead] if counted else []) + cells) + tail
 
     clock = ["clock"] if stamps.endswith("date, clock") else []
     no_time = ["", *["" for _ in clock]]
@@ -245,13 +250,13 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
         "nothing": [],
         "a second row of names": [row(["Date/Time", *clock, "ch1", "ch2"])],  # T&D
         "rows describing the channels": [row([*no_time, "227659", "227659"]), row([*no_time, "Temperature", "Temperature"])],  # Tinytag
-        "an empty row and a section tag": [row([*no_time, "", ""]), "[#D]" + delimiter * (len(no_time) + 1)],  # Rotronic
+        "an empty row and a section tag": [row([*no_time, "", ""]), "[#D]" + delimiter * (len(no_time) + 1 + counted)],  # Rotronic
     }[under]
-    lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", *clock, "A °C", "B"])]
+    lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", *clock, "A °C", "B"], counter)]
     units_row = [row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]"])] if units != "none" else []  # the time's unit only where the time is a number
     # rows that describe the channels come straight under the header; empty rows and tags after them
     lines += [*units_row, *described] if under == "an empty row and a section tag" else [*described, *units_row]
-    lines += [row([*time_cells(m), *(number(v) for v in values)]) for m, values in zip(t, temperatures, strict=True)]
+    lines += [row([*time_cells(m), *(number(v) for v in values)], str(k + 1)) for k, (m, values) in enumerate(zip(t, temperatures, strict=True))]
     data = (end.join(lines) + end).encode(encoding)
     folder = tmp_path_factory.mktemp("dialect")
     whole = folder / "whole.csv"
