@@ -684,3 +684,9 @@ def test_other_files_and_line_ends(write_csv, tmp_path):
         LogFollower(binary).poll()
     log = read_temperature_log(write_csv("Model,GL240\n\ntime,A\n" + rows))
     assert log.sensors == ("A",) and len(log.time_min) == 8
+
+
+def test_a_log_of_nothing_but_left_out_columns_says_what_it_left_out(write_csv):
+    """With every column left out, the message listed nothing: 'no temperature column: its name gives '."""
+    with pytest.raises(InputError, match=r"no temperature column; left out: Status \(the logger's own record\); by its name: RH/% \(%\) \(--sensor NAME"):
+        read_temperature_log(write_csv("time,Status,RH/%\n" + "".join(f"{k},1,50\n" for k in range(6))))

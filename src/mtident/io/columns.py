@@ -153,7 +153,10 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
     if other:
         notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
     if not kept:
-        msg = f"{source}: no temperature column: {by} gives {', '.join(other)}"
+        left_out = [*(f"{n} (named as a time)" for n in times), *(f"{n} (the logger's own record)" for n in events)]
+        if other:
+            left_out.append(f"by {by}: {', '.join(other)}")
+        msg = f"{source}: no temperature column; left out: {'; '.join(left_out)} (--sensor NAME reads a column all the same, if it is a temperature)"
         raise InputError(msg)
     return kept, notes
 
