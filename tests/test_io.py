@@ -649,9 +649,10 @@ def test_an_excel_workbook_reads_like_the_csv_it_holds(tmp_path):
     values = 20 + t / 10
     stamps = [dt.datetime(2026, 11, 22, 8, 0) + dt.timedelta(minutes=float(m)) for m in t]
     book = tmp_path / "log.xlsx"
-    with pd.ExcelWriter(book) as writer:
-        pd.DataFrame([["Logger", "HOBO UX120"]]).to_excel(writer, index=False, header=False)
-        pd.DataFrame({"Date Time": stamps, "Temp, °F (LGR S/N: 1)": values * 9 / 5 + 32, "RH, %": 50.0}).to_excel(writer, index=False, startrow=2)
+    with pd.ExcelWriter(book) as writer:  # a sheet of details before the data's sheet is passed over
+        pd.DataFrame([["Device", "UX120-006M"], ["Serial", "20827226"]]).to_excel(writer, sheet_name="Details", index=False, header=False)
+        pd.DataFrame([["Logger", "HOBO UX120"]]).to_excel(writer, sheet_name="Data", index=False, header=False)
+        pd.DataFrame({"Date Time": stamps, "Temp, °F (LGR S/N: 1)": values * 9 / 5 + 32, "RH, %": 50.0}).to_excel(writer, sheet_name="Data", index=False, startrow=2)
     log = read_temperature_log(book)
     assert log.sensors == ("Temp, °F (LGR S/N: 1)",)
     np.testing.assert_allclose(log.time_min, t, atol=1e-9)

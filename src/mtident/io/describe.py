@@ -92,7 +92,7 @@ def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect:
 
 def _format(dialect: CsvDialect, kind: str | None) -> dict[str, object]:
     return {
-        "kind": "Excel workbook (its first sheet)" if kind in ("xlsx", "xls") else "CSV text",
+        "kind": "Excel workbook (its first sheet with a table)" if kind in ("xlsx", "xls") else "CSV text",
         "encoding": dialect.encoding.removesuffix("-sig"),
         "delimiter": _DELIMITER_NAMES.get(dialect.delimiter, dialect.delimiter),
         "decimal": dialect.decimal,

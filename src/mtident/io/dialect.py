@@ -484,10 +484,11 @@ def binary_kind(head: bytes) -> str | None:
 
 
 def workbook_as_csv(file: Path, path: str | Path) -> bytes:
-    """The first sheet of an Excel workbook as the CSV text a logger would have written (UTF-8),
-    so that it is read like one: preamble, header, units row, time stamps and all. Dates and
-    times of day become ISO 8601 text, empty cells empty. InputError for an old .xls workbook or
-    one that does not open."""
+    """The first sheet of an Excel workbook that holds a table (rows that begin like data rows;
+    a logger's "Details" sheet before its data is passed over) as the CSV text a logger would have
+    written (UTF-8), so that it is read like one: preamble, header, units row, time stamps and
+    all. Dates and times of day become ISO 8601 text, empty cells empty. InputError for an old
+    .xls workbook or one that does not open."""
     import pandas as pd
 
     with file.open("rb") as handle:
@@ -496,7 +497,7 @@ def workbook_as_csv(file: Path, path: str | Path) -> bytes:
         msg = f"{path}: an Excel 97-2003 workbook (.xls); save it as .xlsx or as CSV"
         raise InputError(msg)
     try:
-        sheet = pd.read_excel(file, sheet_name=0, header=None, dtype=object)
+        sheets = pd.read_excel(file, sheet_name=None, header=None, dtype=object)
     except Exception as exc:  # openpyxl raises many kinds for a damaged or foreign zip
         msg = f"{path}: not a readable Excel workbook ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
         raise InputError(msg) from exc
@@ -508,11 +509,16 @@ def workbook_as_csv(file: Path, path: str | Path) -> bytes:
             return value.isoformat(sep=" ") if isinstance(value, datetime.datetime) else value.isoformat()
         return repr(value) if isinstance(value, float) else str(value)
 
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    for row in sheet.itertuples(index=False):
-        writer.writerow([cell(v) for v in row])
-    return out.getvalue().encode()
+    def text(sheet: pd.DataFrame) -> str:
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        for row in sheet.itertuples(index=False):
+            writer.writerow([cell(v) for v in row])
+        return out.getvalue()
+
+    texts = [text(sheet) for sheet in sheets.values()]
+    tables = [t for t in texts if sum(_data_like(line) for line in t.splitlines()[:200]) >= 2]
+    return (tables or texts or [""])[0].encode()
 
 
 def _decodes(data: bytes, encoding: str = "utf-8-sig") -> bool:
