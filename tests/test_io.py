@@ -691,3 +691,14 @@ def test_a_log_of_nothing_but_left_out_columns_says_what_it_left_out(write_csv):
     """With every column left out, the message listed nothing: 'no temperature column: its name gives '."""
     with pytest.raises(InputError, match=r"no temperature column; left out: Status \(the logger's own record\); by its name: RH/% \(%\) \(--sensor NAME"):
         read_temperature_log(write_csv("time,Status,RH/%\n" + "".join(f"{k},1,50\n" for k in range(6))))
+
+
+def test_a_degree_marked_unit_after_a_space_converts(write_csv):
+    """'T1 °F' and 'T2_degF' (no brackets) were read as °C: a Fahrenheit log 1.8 times too warm, silently."""
+    from mtident.io.follow import LogFollower
+
+    path = write_csv("time,T1 °F,T2_degF,T3 °C\n" + "".join(f"{k},{68 + 0.18 * k:.2f},{68 + 0.18 * k:.2f},{20 + k / 10:.1f}\n" for k in range(8)))
+    log = read_temperature_log(path)
+    np.testing.assert_allclose(log.temperature_C, np.repeat((20 + np.arange(8) / 10)[:, None], 3, axis=1), atol=1e-9)
+    assert "sensor 'T1 °F': read in °F (its name), converted to °C" in log.notes
+    np.testing.assert_allclose(LogFollower(path).poll().temperature_C, log.temperature_C, atol=1e-9)

@@ -50,6 +50,9 @@ _UNITS_IN_NAME = (
     re.compile(r"[\[(]\s*([^\[\]()]+?)\s*[\])]\s*(?:#\s*\d+)?\s*$"),
     re.compile(r"\S/\s*([^/\[\]()]+?)\s*$"),
     re.compile(r",\s*([^,\[\]()]+?)\s*(?:\([^()]*\))?\s*$"),
+    # a degree-marked unit after a space or an underscore, without brackets: "T1 °F", "T1 in °F",
+    # "Temp degF", "T1_degC" (read as °C before: a °F log was 1.8 times too warm, silently)
+    re.compile(r"[\s_]((?:°|º|deg\s*)[CFK])\s*$", re.IGNORECASE),
 )
 # a reading with its unit after it: "13.1 °C", "56.3 %RH" (Tinytag Explorer writes them so)
 _NUMBER_THEN_UNIT = re.compile(r"^\s*([+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*(\S.*?)\s*$")
