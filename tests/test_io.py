@@ -702,3 +702,12 @@ def test_a_degree_marked_unit_after_a_space_converts(write_csv):
     np.testing.assert_allclose(log.temperature_C, np.repeat((20 + np.arange(8) / 10)[:, None], 3, axis=1), atol=1e-9)
     assert "sensor 'T1 °F': read in °F (its name), converted to °C" in log.notes
     np.testing.assert_allclose(LogFollower(path).poll().temperature_C, log.temperature_C, atol=1e-9)
+
+
+def test_a_time_column_named_by_its_unit_in_words(write_csv):
+    """'Elapsed hours' or 'Seconds' was read as minutes: a 40-min test at 1 min lasted 0.67 min. A
+    sensor named 'T min' is still a temperature."""
+    for name, per_minute in (("Elapsed hours", 1 / 60), ("Seconds", 60.0), ("Time in minutes", 1.0)):
+        log = read_temperature_log(write_csv(f"{name},T min\n" + "".join(f"{k * per_minute:.6f},{20 + k / 10:.1f}\n" for k in range(8))))
+        np.testing.assert_allclose(log.time_min, np.arange(8.0), atol=1e-3)
+        assert log.sensors == ("T min",)

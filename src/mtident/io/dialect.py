@@ -50,6 +50,8 @@ _DELIMITERS = (",", ";", "\t")
 _SEP_DIRECTIVE = re.compile(r"^sep=(.)\r?$")
 # a header whose first column, the row counter, is named "#" (HOBOware: #,"Date Time, GMT+01:00",...): no comment
 _HASH_HEADER = re.compile(r'^\s*"?#"?\s*[,;\t]')
+# a time column's unit in words at the end of its name
+_TIME_WORDS = frozenset(("milliseconds", "seconds", "second", "secs", "sec", "minutes", "minute", "mins", "hours", "hour", "hrs", "days"))
 # Line ends as pandas reads them: CRLF (Windows), LF, and a lone CR (old Macs, some instruments'
 # serial loggers), which inside a line made the csv module fail with a traceback.
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
@@ -137,8 +139,15 @@ class CsvDialect:
         return unit_in_name(column)
 
     def time_unit(self, column: str) -> str | None:
-        """"s", "min" or "h" if the units row or the column's name states its unit, else None."""
-        return time_unit_name(self.unit_of(column))
+        """"ms", "s", "min", "h" or "d" if the units row or the time column's name states its
+        unit, else None. A time column's name may be its unit in words ("Seconds", "Elapsed
+        hours", "Time in minutes": read as minutes before, a 6-h test lasted 6 min); a sensor's
+        may not ("T min" is a lowest temperature)."""
+        stated = time_unit_name(self.unit_of(column))
+        words = column.split()
+        if stated is None and words and words[-1].lower() in _TIME_WORDS:
+            return time_unit_name(words[-1])
+        return stated
 
 
 def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) -> CsvDialect | None:
