@@ -711,3 +711,10 @@ def test_a_time_column_named_by_its_unit_in_words(write_csv):
         log = read_temperature_log(write_csv(f"{name},T min\n" + "".join(f"{k * per_minute:.6f},{20 + k / 10:.1f}\n" for k in range(8))))
         np.testing.assert_allclose(log.time_min, np.arange(8.0), atol=1e-3)
         assert log.sensors == ("T min",)
+
+
+def test_a_machines_labels_are_no_units(write_csv):
+    """'Bearing (RH)' (right-hand), '(A)', '(N)' label places on a machine: read as sensors, not
+    left out as a humidity, an ampere or a newton."""
+    log = read_temperature_log(write_csv("time,Bearing (RH),Bearing (LH),Motor (A),Column (N),RH\n" + "".join(f"{k},{20 + k / 10:.1f},20,20,20,20\n" for k in range(8))))
+    assert log.sensors == ("Bearing (RH)", "Bearing (LH)", "Motor (A)", "Column (N)", "RH")

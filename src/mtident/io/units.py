@@ -36,9 +36,11 @@ _TEMPERATURE_UNITS = {
 }
 # Units of a logger's other channels, named at the end of a column's name ("Speed (rpm)", "RH/%"):
 # such a column is no temperature. (A units row may name any unit; a name must name a known one.)
+# Not the letters a machine's sensors are labelled with: "Bearing (A)", "(N)" for north, and "(RH)"
+# for the right-hand side would have left a temperature out.
 _OTHER_UNITS = frozenset(
-    ("%", "%rh", "rh", "%rf", "v", "mv", "µv", "uv", "a", "ma", "rpm", "1/min", "u/min", "hz", "khz", "bar", "mbar", "pa", "kpa", "hpa", "mpa", "psi",
-     "w", "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "n", "kn", "ppm", "g", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h",
+    ("%", "%rh", "%rf", "v", "mv", "µv", "uv", "ma", "rpm", "1/min", "u/min", "hz", "khz", "bar", "mbar", "pa", "kpa", "hpa", "mpa", "psi",
+     "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "kn", "ppm", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h",
      "mg/l", "µs/cm", "us/cm", "ms/cm", "lum/ft²", "lum/ft2", "m/s", "mph", "kwh", "wh", "va")
 )
 # A column named as a humidity ("Humidity", "RH", "Feuchte", "湿度"; the name alone, without a unit)
@@ -96,7 +98,7 @@ def celsius_conversion(unit: str) -> tuple[float, float] | None:
 def is_humidity(name: str) -> bool:
     """Whether a column's name (or a description row's cell) names a humidity, not a temperature."""
     key = unit_key(name)
-    return key in ("rh", "%rh", "rh%") or any(word in key for word in _HUMIDITY_WORDS)
+    return key in ("%rh", "rh%") or any(word in key for word in _HUMIDITY_WORDS)  # not "RH": a right-hand sensor
 
 
 def unit_in_name(column: str) -> str:
