@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 
 import numpy as np
@@ -351,7 +352,7 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
     follower = LogFollower(live)
     follower.poll()
     position = follower.position()
-    assert position["dialect"] == [";", ",", 0, "utf-8-sig", [], 0, "the units row", False]
+    assert position["dialect"] == [";", ",", 0, "utf-8-sig", [], 0, "the units row", False, [], []]
     position["dialect"] = position["dialect"][:4]  # as a state file of an older version wrote it
     with open(live, "a") as out:
         out.write("1;20,6\n")
@@ -362,7 +363,7 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
     follower = LogFollower(live)
     follower.poll()
     position = follower.position()
-    assert position["dialect"][4:] == [[["time", "min"], ["T1", "K"]], 1, "the units row", False]
+    assert position["dialect"][4:] == [[["time", "min"], ["T1", "K"]], 1, "the units row", False, [], []]
     position["dialect"] = position["dialect"][:5]
     with open(live, "a") as out:
         out.write("1;293,6\n")
@@ -718,3 +719,26 @@ def test_a_machines_labels_are_no_units(write_csv):
     left out as a humidity, an ampere or a newton."""
     log = read_temperature_log(write_csv("time,Bearing (RH),Bearing (LH),Motor (A),Column (N),RH\n" + "".join(f"{k},{20 + k / 10:.1f},20,20,20,20\n" for k in range(8))))
     assert log.sensors == ("Bearing (RH)", "Bearing (LH)", "Motor (A)", "Column (N)", "RH")
+
+
+def test_channels_named_under_a_numbering_header(write_csv):
+    """T&D numbers its channels in the header (No.1, No.2) and writes the names a user gave them
+    in the row under it; they were read as 'No.2' and 'No.3'. Both readers take the names, say so,
+    and a state file resumes with them."""
+    from mtident.io.follow import LogFollower
+
+    text = ",Date/Time,No.1,No.2,No.3,\n,Date/Time,ch1,Spindle,Motor,\n,,lx,°C,°C,\n" + "".join(f"2026-11-22 08:{k:02d}:00,{46348.333333 + k / 1440:.5f},6.27,{20 + k / 10:.1f},{21 + k / 10:.1f},\n" for k in range(8))
+    path = write_csv(text)
+    log = read_temperature_log(path)
+    assert log.sensors == ("Spindle", "Motor")
+    assert "channels named by the row under the header: No.2 is 'Spindle', No.3 is 'Motor'" in log.notes
+    follower = LogFollower(path)
+    rows = follower.poll()
+    assert follower.sensors == ["Spindle", "Motor"] and any("No.2 is 'Spindle'" in n for n in rows.notes)
+    np.testing.assert_array_equal(rows.temperature_C, log.temperature_C)
+    resumed = LogFollower.resume(path, json.loads(json.dumps(follower.position())), None, None)
+    assert resumed.dialect == follower.dialect
+    assert read_temperature_log(path, sensors=["Motor"]).sensors == ("Motor",)
+    # a row of default names ("ch1") renames nothing; a row that would repeat a name is no row of names
+    assert read_temperature_log(write_csv(text.replace("Spindle,Motor", "ch2,ch3"))).sensors == ("No.2", "No.3")
+    assert read_temperature_log(write_csv(text.replace("Spindle,Motor", "Spindle,Spindle"))).sensors == ("No.2", "No.3")

@@ -86,6 +86,10 @@ class CsvDialect:
         "the rows under the header".
     units_in_cells : bool
         The readings carry their unit (``13.1 °C``, ``56.3 %RH``), taken off when read.
+    names : tuple of str
+        The columns' names where the header numbers the channels (``No.3``) and the row
+        under it names them (``Spindle``), as a T&D logger writes the names a user gave;
+        empty where the header's own names stand.
     """
 
     delimiter: str = ","
@@ -97,10 +101,25 @@ class CsvDialect:
     extra_rows: int = 0
     units_source: str = "the units row"
     units_in_cells: bool = False
+    # the columns' names where a second row of names under the header names the channels (T&D:
+    # "No.3" in the header, "Spindle" under it); () where the header's names stand
+    names: tuple[str, ...] = ()
+    written_names: tuple[str, ...] = ()  # the header's own names, where ``names`` replace them
 
     def cells(self, line: str) -> list[str]:
         """The cells of one line (a header), stripped; quotes removed."""
         return [cell.strip() for cell in next(csv.reader([line], delimiter=self.delimiter), [])]
+
+    def header(self, line: str) -> list[str]:
+        """The columns' names: the header line's cells, or the channels' names under it (``names``)."""
+        return list(self.names) or self.cells(line)
+
+    def renaming(self) -> str | None:
+        """A note on the channels named by the row under the header, if any."""
+        if not self.names:
+            return None
+        pairs = [f"{old} is {new!r}" for old, new in zip(self.written_names, self.names, strict=False) if old != new]
+        return f"channels named by the row under the header: {', '.join(pairs)}"
 
     def number(self, cell: str) -> float:
         """A cell as a float under this decimal mark (a unit after it taken off where the log
@@ -208,7 +227,9 @@ def _stated_units(dialect: CsvDialect, lines: list[str]) -> CsvDialect:
     units the first data row's readings carry (``13.1 °C``)."""
     k = dialect.preamble_lines
     extra = _extra_rows(lines, k, dialect.delimiter) or 0
-    header = dialect.cells(lines[k])
+    written = header = dialect.cells(lines[k])
+    names = _channel_names(header, dialect.cells(lines[k + 1])) if extra else None
+    header = names or header
     units: dict[str, str] = {}
     source = "the units row"
     for line in lines[k + 1 : k + 1 + extra]:
@@ -224,7 +245,22 @@ def _stated_units(dialect: CsvDialect, lines: list[str]) -> CsvDialect:
         in_cells = bool(carried)
         if carried:  # the readings' own units say most
             units, source = {**units, **carried}, "its cells"
-    return replace(dialect, units=tuple(units.items()), extra_rows=extra, units_source=source, units_in_cells=in_cells)
+    return replace(dialect, units=tuple(units.items()), extra_rows=extra, units_source=source, units_in_cells=in_cells, names=tuple(names or ()), written_names=tuple(written) if names else ())
+
+
+# a channel's number as a header gives it: "No.3", "CH3", "Channel 3", "3"
+_NUMBERED = re.compile(r"(?:no\.?|ch\.?|channel|kanal)?\s*\d+", re.IGNORECASE)
+
+
+def _channel_names(header: list[str], below: list[str]) -> list[str] | None:
+    """The header's names with each numbered channel ("No.3") named as the row under it names it
+    ("Spindle"), where that row is a row of names (no number, no unit) that names one at least
+    and leaves every name distinct; None otherwise."""
+    if any(is_number(c) for c in below if c) or any(is_time_or_temperature_unit(c) for c in below if c):
+        return None
+    names = [b if _NUMBERED.fullmatch(h) and b and not _NUMBERED.fullmatch(b) else h for h, b in zip(header, [*below, *[""] * len(header)], strict=False)]
+    written = [n for n in names if n]
+    return names if names != header and len(set(written)) == len(written) else None
 
 
 def _decoded_head(head: bytes) -> tuple[str, str]:
@@ -417,7 +453,7 @@ def header_names(file: Path) -> list[str]:
     dialect = sniff_dialect(head)
     if dialect is None:
         return []
-    return [name for name in dialect.cells(_header_line(head, dialect)) if name]
+    return [name for name in dialect.header(_header_line(head, dialect)) if name]
 
 
 def _header_line(head: bytes, dialect: CsvDialect) -> str:
@@ -458,7 +494,7 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         raise InputError(msg)
     dialect = dialect or CsvDialect()
     if head.strip():
-        check_unique_names(dialect.cells(_header_line(head, dialect)), path)
+        check_unique_names(dialect.header(_header_line(head, dialect)), path)
     try:
         frame = pd.read_csv(
             source,
@@ -475,6 +511,9 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         msg = f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})"
         raise InputError(msg) from exc
     frame.columns = [str(c).removeprefix("\ufeff") for c in frame.columns]  # UTF-16's byte-order mark
+    if dialect.names:  # by position: pandas has renamed a repeated name ("Date/Time.1"), left as it is
+        new = dict(enumerate(dialect.names))
+        frame.columns = [new[i] if i in new and new[i] != dialect.written_names[i] else c for i, c in enumerate(frame.columns)]
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
     return frame.drop(columns=unnamed), dialect
 

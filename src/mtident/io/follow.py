@@ -57,8 +57,9 @@ def _saved_dialect(saved: list[Any]) -> CsvDialect:
     """The dialect as a state file keeps it. One written before units rows were read has four
     entries; one written before the rows under the header were counted, five (a units row, if any)."""
     units = tuple((str(n), str(u)) for n, u in (saved[4] if len(saved) > 4 else []))
-    if len(saved) > 5:
-        return CsvDialect(str(saved[0]), str(saved[1]), int(saved[2]), str(saved[3]), units, int(saved[5]), str(saved[6]), bool(saved[7]))
+    if len(saved) > 5:  # (the channels' names from the row under the header since the 9th and 10th)
+        names = (tuple(str(n) for n in saved[8]), tuple(str(n) for n in saved[9])) if len(saved) > 9 else ((), ())
+        return CsvDialect(str(saved[0]), str(saved[1]), int(saved[2]), str(saved[3]), units, int(saved[5]), str(saved[6]), bool(saved[7]), *names)
     return CsvDialect(str(saved[0]), str(saved[1]), int(saved[2]), str(saved[3]), units, int(bool(units)))
 
 
@@ -93,7 +94,7 @@ class LogFollower:
             "last_time": self.last_time,
             "columns": self.columns,
             "sensors": self.sensors,
-            "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units], self.dialect.extra_rows, self.dialect.units_source, self.dialect.units_in_cells],
+            "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units], self.dialect.extra_rows, self.dialect.units_source, self.dialect.units_in_cells, list(self.dialect.names), list(self.dialect.written_names)],
             "time_format": self.time_format,
             "clock_column": self.clock_column,
             "millisecond_column": self.millisecond_column,
@@ -134,7 +135,7 @@ class LogFollower:
         alone (a status channel: no sensor, as the file reader has it).
         """
         assert self.dialect is not None
-        header = self.dialect.cells(line)
+        header = self.dialect.header(line)
         if len(header) < 2:
             msg = f"{self.path}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found: {', '.join(header)}"
             raise InputError(msg)
@@ -145,7 +146,8 @@ class LogFollower:
         self.header = header
         self.sensors = chosen
         self.columns = [header.index(time_name)] + [header.index(s) for s in chosen]
-        return [*notes, *sensor_notes]
+        renamed = self.dialect.renaming()
+        return [*([renamed] if renamed else []), *notes, *sensor_notes]
 
     def _take_time_columns(self, header: list[str], first_row: list[str]) -> tuple[str, list[str], list[str]]:
         """The time column's name, the columns that belong to the time (no sensors: a row counter

@@ -337,7 +337,7 @@ def read_temperature_log(
     if frame.shape[1] < 2:
         msg = f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found columns: {', '.join(frame.columns)}"
         raise InputError(msg)
-    notes: list[str] = []
+    notes: list[str] = [renamed] if (renamed := dialect.renaming()) else []
     first_cells = [str(v) for v in frame.iloc[0]] if len(frame) else []
     counter = time_col is None and len(frame) > 0 and counter_before_time(list(frame.columns), first_cells, dialect)
     text_before = 0 if time_col is not None or counter else text_before_stamps(first_cells)
