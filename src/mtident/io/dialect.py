@@ -259,8 +259,11 @@ def _channel_names(header: list[str], below: list[str]) -> list[str] | None:
     if any(is_number(c) for c in below if c) or any(is_time_or_temperature_unit(c) for c in below if c):
         return None
     names = [b if _NUMBERED.fullmatch(h) and b and not _NUMBERED.fullmatch(b) else h for h, b in zip(header, [*below, *[""] * len(header)], strict=False)]
-    written = [n for n in names if n]
-    return names if names != header and len(set(written)) == len(written) else None
+    renamed = [i for i, (n, h) in enumerate(zip(names, header, strict=True)) if n != h]
+    # a new name must name one column only (the header's own repeats, T&D's "Date/Time" twice, stay)
+    if not renamed or any(names.count(names[i]) > 1 for i in renamed):
+        return None
+    return names
 
 
 def _decoded_head(head: bytes) -> tuple[str, str]:
