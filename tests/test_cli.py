@@ -292,3 +292,19 @@ def test_inspect_shows_how_a_logger_export_is_read(tmp_path):
     assert "assumed" in json.loads(mtident("thermal", "inspect", str(seconds), "--json").stdout)["time"]["read_as"]
     missing = mtident("thermal", "inspect", str(tmp_path / "nope.csv"))
     assert missing.returncode == 2 and "no such file" in missing.stderr and "Traceback" not in missing.stderr
+
+
+def test_watch_replays_a_workbook(tmp_path):
+    """A workbook is no live log, but --replay runs it as the CSV it holds (it was refused)."""
+    import numpy as np
+    import pandas as pd
+
+    t = np.arange(0.0, 120.0)
+    book = tmp_path / "warmup.xlsx"
+    pd.DataFrame({"Time": pd.date_range("2026-11-22 08:00", periods=len(t), freq="1min"), "Spindle (°C)": 26.7 - 8.8 * np.exp(-0.016 * t)}).to_excel(book, index=False)
+    out = mtident("thermal", "watch", str(book), "--replay", "--room-wander", "0", "--state", str(tmp_path / "state.json"), "--json")
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result["decision"] == "stop" and abs(result["steady_state_C"] - 26.7) < 0.05
+    live = mtident("thermal", "watch", str(book), "--timeout", "1", "--state", str(tmp_path / "live.json"))
+    assert live.returncode == 2 and "an Excel workbook is not written row by row" in live.stderr and "Traceback" not in live.stderr

@@ -325,6 +325,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     if not path.is_file() and replay:
         msg = f"{path}: no such file"
         raise InputError(msg)
+    # A workbook is not written row by row, so it is no live log; replayed, it is followed as the
+    # CSV it holds (the state file is still the workbook's).
+    followed = _workbook_as_replayed_csv(path) if replay else path
     names = asked_sensors(sensors, path) or None
     if room_coupling is not None and ambient_col is None:
         msg = "--room-coupling needs --ambient ROOM_COLUMN: it says how the sensors feel that room sensor"
@@ -350,7 +353,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         # read the room column with the sensors; it is split off again below
         if names is None and path.is_file():
             # the sensors as the follower will take them (a resumed run compares them with its state)
-            names = LogFollower(path, None, time_col, time_unit, room=ambient_col).header_sensors()
+            names = LogFollower(followed, None, time_col, time_unit, room=ambient_col).header_sensors()
         # a log not created yet: the follower reads every sensor and the room last once its header comes
         if names is not None:
             names = [n for n in names if n != ambient_col] + [ambient_col]
@@ -376,7 +379,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
                 if now != then
             ]
             if not differs:
-                follower = LogFollower.resume(path, saved["position"], time_col, time_unit)
+                follower = LogFollower.resume(followed, saved["position"], time_col, time_unit)
                 monitor = Monitor.from_dict(saved["monitor"])
                 saved_text = text
                 stderr.print(f"mtident: resuming from {state_file} {_when(monitor)}", highlight=False)
@@ -385,7 +388,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         except (ValueError, KeyError, TypeError) as exc:
             stderr.print(f"mtident: warning: ignoring the unreadable state file {state_file} ({exc}); starting afresh", highlight=False)
     if follower is None:
-        follower = LogFollower(path, names, time_col, time_unit, room=ambient_col)
+        follower = LogFollower(followed, names, time_col, time_unit, room=ambient_col)
     if not path.is_file():
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
 
@@ -486,6 +489,25 @@ class _Nothing:
 
     def update(self, *args: object, **kwargs: object) -> None:
         return None
+
+
+def _workbook_as_replayed_csv(path: Path) -> Path:
+    """``path``, or for an Excel workbook the CSV it holds, written to a temporary folder to be
+    replayed (:func:`~mtident.io.dialect.workbook_as_csv`)."""
+    import atexit
+    import shutil
+    import tempfile
+
+    from mtident.io.dialect import binary_kind, workbook_as_csv
+
+    with path.open("rb") as handle:
+        if binary_kind(handle.read(8)) not in ("xlsx", "xls"):
+            return path
+    folder = Path(tempfile.mkdtemp(prefix="mtident-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    copy = folder / f"{path.stem}.csv"
+    copy.write_bytes(workbook_as_csv(path, path))
+    return copy
 
 
 def _plot_watch(path: Path, monitor, plot_path: str, time_col: str | None, time_unit: str | None) -> str | None:  # noqa: ANN001

@@ -308,7 +308,7 @@ class LogFollower:
                 head = handle.read(HEAD_BYTES)
                 kind = binary_kind(head)
                 if kind in ("xlsx", "xls"):
-                    msg = f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger writes (identify and min-time read the workbook; save it as CSV to replay it)"
+                    msg = f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger writes (identify and min-time read the workbook, and watch --replay replays it)"
                     raise InputError(msg)
                 if kind is not None:
                     msg = f"{self.path}: not a text file; watch follows the CSV text a logger writes"
