@@ -742,3 +742,20 @@ def test_channels_named_under_a_numbering_header(write_csv):
     # a row of default names ("ch1") renames nothing; a row that would repeat a name is no row of names
     assert read_temperature_log(write_csv(text.replace("Spindle,Motor", "ch2,ch3"))).sensors == ("No.2", "No.3")
     assert read_temperature_log(write_csv(text.replace("Spindle,Motor", "Spindle,Spindle"))).sensors == ("No.2", "No.3")
+
+
+def test_a_live_log_whose_lines_end_in_a_lone_cr(tmp_path):
+    """The follower found no complete line in a log whose lines end in a lone CR (old Macs, some
+    serial loggers): it waited for ever, where the file reader reads it."""
+    from mtident.io.follow import LogFollower
+
+    path = tmp_path / "cr.csv"
+    data = ("time,A\r" + "".join(f"{k},{20 + k / 10:.1f}\r" for k in range(8))).encode()
+    path.write_bytes(b"")
+    follower = LogFollower(path)
+    values = []
+    for a, b in ((0, 9), (9, 20), (20, len(data))):
+        with open(path, "ab") as out:
+            out.write(data[a:b])
+        values.extend(follower.poll().temperature_C.ravel())
+    np.testing.assert_allclose(values, 20 + np.arange(8) / 10)

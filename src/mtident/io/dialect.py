@@ -133,13 +133,16 @@ class CsvDialect:
         return data.decode(self.encoding, errors="replace").removeprefix("\ufeff")
 
     def complete_length(self, data: bytes) -> int:
-        """How many bytes of ``data`` (read from a line's start) are complete lines."""
-        newline = "\n".encode(self.encoding.removesuffix("-sig"))
-        end = len(data)
-        while (at := data.rfind(newline, 0, end)) >= 0:
-            if at % len(newline) == 0:  # UTF-16: a newline's two bytes, not the halves of two characters
-                return at + len(newline)
-            end = at + len(newline) - 1
+        """How many bytes of ``data`` (read from a line's start) are complete lines: up to the last
+        LF, or where there is none, the last CR (a log whose lines end in a lone CR; a CRLF cut
+        after its CR has its line's cells all the same, and the LF is then an empty line)."""
+        for mark in ("\n", "\r"):
+            newline = mark.encode(self.encoding.removesuffix("-sig"))
+            end = len(data)
+            while (at := data.rfind(newline, 0, end)) >= 0:
+                if at % len(newline) == 0:  # UTF-16: a newline's two bytes, not the halves of two characters
+                    return at + len(newline)
+                end = at + len(newline) - 1
         return 0
 
     @property
