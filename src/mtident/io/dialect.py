@@ -188,8 +188,9 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
     """
     text, encoding = _decoded_head(head)
     if not whole:
-        # A CRLF cut between its CR and its LF: the line is not complete yet (the follower reads
-        # up to the last LF; a row taken as complete here was not there to tell the time's columns).
+        # A CRLF cut between its CR and its LF: the line is not complete yet (the follower reads up
+        # to the last LF where there is one; a row taken as complete here was not there to tell the
+        # time's columns). A log of lone CRs waits a row longer for it.
         text = text.removesuffix("\r")
     lines = _LINE_BREAK.split(text)
     complete = lines if whole else lines[:-1]  # the last piece has no newline yet
