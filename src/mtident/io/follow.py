@@ -55,7 +55,8 @@ class Rows:
 
 def _saved_dialect(saved: list[Any]) -> CsvDialect:
     """The dialect as a state file keeps it. One written before units rows were read has four
-    entries; one written before the rows under the header were counted, five (a units row, if any)."""
+    entries; one written before the rows under the header were counted, five (a units row, if
+    any); one written before the channels' names under the header were read, eight."""
     units = tuple((str(n), str(u)) for n, u in (saved[4] if len(saved) > 4 else []))
     if len(saved) > 5:  # (the channels' names from the row under the header since the 9th and 10th)
         names = (tuple(str(n) for n in saved[8]), tuple(str(n) for n in saved[9])) if len(saved) > 9 else ((), ())
@@ -219,7 +220,12 @@ class LogFollower:
         reading (a resumed monitor compares them with its state file's)."""
         with open(self.path, "rb") as handle:
             head = handle.read(HEAD_BYTES)
-        probe = replace(self, dialect=sniff_dialect(head, wait_for_row=True), header=None)
+        if binary_kind(head) is not None:
+            return None  # no text: the first poll says so
+        try:
+            probe = replace(self, dialect=sniff_dialect(head, wait_for_row=True), header=None)
+        except csv.Error:
+            return None
         if probe.dialect is None:
             return None
         complete = probe.dialect.decode(head[: probe.dialect.complete_length(head)])
