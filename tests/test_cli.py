@@ -290,6 +290,9 @@ def test_inspect_shows_how_a_logger_export_is_read(tmp_path):
     seconds.write_text("t,A\n" + "".join(f"{60 * k},{20 + k / 10:.1f}\n" for k in range(8)))
     assert json.loads(mtident("thermal", "inspect", str(seconds), "--time-unit", "s", "--json").stdout)["time"]["read_as"] == "numbers in s (--time-unit)"
     assert "assumed" in json.loads(mtident("thermal", "inspect", str(seconds), "--json").stdout)["time"]["read_as"]
+    begun = tmp_path / "begun.csv"  # a log just begun: no five samples needed to look at it
+    begun.write_text("time,A\n0,20.5\n")
+    assert json.loads(mtident("thermal", "inspect", str(begun), "--json").stdout)["time"]["samples"] == 1
     missing = mtident("thermal", "inspect", str(tmp_path / "nope.csv"))
     assert missing.returncode == 2 and "no such file" in missing.stderr and "Traceback" not in missing.stderr
 

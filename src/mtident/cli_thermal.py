@@ -230,7 +230,8 @@ def inspect_command(file: str, sensors: tuple[str, ...], time_col: str | None, t
     )
     step = time["step_min"]
     console.print(
-        f"time: {time['column']!r}, read as {time['read_as']} (first cell {time['first_cell']!r}); {time['samples']} samples over {_fmt(time['span_min'], 1)} min" + (f", a step of {step * 60:g} s" if step is not None and step < 1 else f", a step of {_fmt(step, 2)} min"),
+        f"time: {time['column']!r}, read as {time['read_as']} (first cell {time['first_cell']!r}); "
+        + ("1 sample so far" if step is None else f"{time['samples']} samples over {_fmt(time['span_min'], 1)} min, a step of " + (f"{step * 60:g} s" if step < 1 else f"{_fmt(step, 2)} min")),
         highlight=False,
     )
     table = Table()

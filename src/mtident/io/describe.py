@@ -37,7 +37,8 @@ def describe_log(path: str | Path, time_col: str | None = None, time_unit: str |
     """
     file = Path(path)
     frame, dialect = read_csv(file)
-    log = read_temperature_log(file, time_col=time_col, time_unit=time_unit, sensors=sensors)
+    # a log just begun is worth a look too: no five samples needed here
+    log = read_temperature_log(file, time_col=time_col, time_unit=time_unit, sensors=sensors, min_samples=1)
     with file.open("rb") as handle:
         kind = binary_kind(handle.read(8))
     steps = np.diff(log.time_min)
