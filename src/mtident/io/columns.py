@@ -98,7 +98,7 @@ _TIME_NAME_STARTS = ("time", "date", "zeit", "datum", "uhrzeit", "timestamp", "æ
 # A logger's records of itself: event channels (HOBOware writes "Logged" in them when the event
 # happens, else nothing), its serial number (Lascar's EasyLog writes it in the first row alone),
 # a comment column (LabVIEW's), alarm and status channels (Keysight BenchLink's "Alarm 101" holds
-# 0 or 1: as a sensor it was flat, "no rise", and held the test's decision up).
+# 0 or 1: as a sensor it was flat, "no rise", or, once it switched, a 1-degree step taken for a warm-up).
 _EVENT_NAME_STARTS = (
     "couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started",
     "serialnumber", "serialno", "comment", "alarm", "status", "flag", "event", "trigger", "logic", "pulse",
