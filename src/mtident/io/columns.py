@@ -23,6 +23,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "text_only_cells",
+    "choose_time_column",
     "counter_before_time",
     "text_before_stamps",
     "millisecond_column",
@@ -78,6 +79,19 @@ def text_before_stamps(first_row: list[str]) -> int:
         if stamp_format(text) is not None:
             return k
     return 0
+
+
+def choose_time_column(header: list[str], first_row: list[str], dialect: CsvDialect, time_col: str | None) -> tuple[str, bool, list[str]]:
+    """The time column's name (``time_col`` where given), whether the first column is a row
+    counter before it, and notes; both readers of a log take the time column here, by the header
+    and the first data row's cells."""
+    counter = time_col is None and counter_before_time(header, first_row, dialect)
+    text_before = 0 if time_col is not None or counter else text_before_stamps(first_row)
+    name = time_col or header[1 if counter else text_before]
+    notes = [f"left out, a row counter: {header[0]}; the time is {name!r}"] if counter else []
+    if text_before:
+        notes.append(f"the time is {name!r}, the first column of time stamps")
+    return name, counter, notes
 
 
 def millisecond_column(header: list[str], last_time_column: int) -> int | None:

@@ -29,7 +29,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.columns import check_unique_names, counter_before_time, millisecond_column, temperature_columns, text_before_stamps, text_only_cells
+from mtident.io.columns import check_unique_names, choose_time_column, millisecond_column, temperature_columns, text_only_cells
 from mtident.io.dialect import CsvDialect, read_csv
 from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, date_and_clock, other_date_order, stamp_format
 from mtident.io.units import celsius_conversion, number_without_unit
@@ -227,8 +227,14 @@ def _rows_with_readings(frame: pd.DataFrame, header: str, sensors: list[str]) ->
     """Rows to read: all but those without a reading in any sensor that come at the end of the
     log or repeat a neighbour's time (HOBO writes its events, "Host Connected", "End Of File", as
     rows of their own, at the time of the read-out, several at one time)."""
-    cells = frame[sensors]
-    empty = (cells.isna() | (cells.astype(str).apply(lambda column: column.str.strip()) == "")).all(axis=1).to_numpy()
+    import pandas as pd
+
+    # a blank cell is text ("" or spaces) only in a column pandas did not read as numbers
+    empty = np.ones(len(frame), dtype=bool)
+    for name in sensors:
+        column = frame[name]
+        blank = column.isna() if pd.api.types.is_numeric_dtype(column) else column.isna() | (column.astype(str).str.strip() == "")
+        empty &= blank.to_numpy()
     if empty.all():
         return np.ones(len(frame), dtype=bool)
     times = frame[header].astype(str).to_numpy()
@@ -339,13 +345,8 @@ def read_temperature_log(
         raise InputError(msg)
     notes: list[str] = [renamed] if (renamed := dialect.renaming()) else []
     first_cells = [str(v) for v in frame.iloc[0]] if len(frame) else []
-    counter = time_col is None and len(frame) > 0 and counter_before_time(list(frame.columns), first_cells, dialect)
-    text_before = 0 if time_col is not None or counter else text_before_stamps(first_cells)
-    header = time_col if time_col is not None else frame.columns[1] if counter else frame.columns[text_before]
-    if counter:
-        notes.append(f"left out, a row counter: {frame.columns[0]}; the time is {header!r}")
-    if text_before:
-        notes.append(f"the time is {header!r}, the first column of time stamps")
+    header, counter, time_notes = choose_time_column([str(c) for c in frame.columns], first_cells, dialect, time_col)
+    notes.extend(time_notes)
     if header not in frame.columns:
         msg = f"{source}: no time column {header!r}; the columns are: {', '.join(frame.columns)}"
         raise InputError(msg)
