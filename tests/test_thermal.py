@@ -449,7 +449,7 @@ def test_results_show_their_answer_in_a_notebook_not_their_arrays():
     assert repr(minimal_identification_time(log.select(["T1"]))).startswith("MinTimeResult(aukf: minimal L (min) T1 ")
     monitor = Monitor(("T1",))
     monitor.feed(log.time_min[:50], log.temperature_C[:50, :1])
-    assert repr(monitor).splitlines()[0] == "Monitor(1 sensor(s), t = 49 min, decision: continue)"
+    assert repr(monitor).splitlines()[0] == f"Monitor(1 sensor(s), t = 49 min, decision: continue, expected stop at t ≈ {round(monitor.expected_stop_time())} min)"
 
 
 def test_identify_and_min_time_take_a_dataframe_and_refuse_what_they_cannot_use():

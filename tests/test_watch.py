@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import first_order, logger_dialects
+from conftest import first_order, logger_dialects, make_log
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -165,6 +165,46 @@ def test_first_order_stops_well_before_half_the_equilibrium_time():
         assert result["time_saved_min"] > 0
         stops.append(result["stop_time_min"] / equilibrium)
     assert np.median(stops) < 0.5 and max(stops) < 0.75
+
+
+def test_the_expected_stop_on_a_first_order_warm_up_comes_true():
+    """Forecast at 45 min from each filter run on with its own predicted readings, against the
+    stop the rule then makes (bench_watch: over 100 seeds the median error is about 0 and half
+    are within 4 min). Over 10 seeds: median within 6 min, each forecast finite."""
+    errors = []
+    for seed in range(10):
+        y = first_order(T) + 0.02 * np.random.default_rng(seed).standard_normal(len(T))
+        early = replay({"S": y[:46]}, T[:46])
+        expected = early.expected_stop_time()
+        assert expected is not None and expected > 45.0
+        assert early.result()["expected_stop_time_min"] == expected
+        errors.append(expected - replay({"S": y}).result()["stop_time_min"])
+    assert abs(np.median(errors)) <= 6.0, errors
+
+
+def test_the_forecast_changes_nothing_in_the_monitor():
+    """It runs copies of the filters on: feeding on after it gives the same state as without it."""
+    y = first_order(T) + 0.02 * np.random.default_rng(5).standard_normal(len(T))
+    asked, plain = Monitor(("S",)), Monitor(("S",))
+    for part in (slice(0, 40), slice(40, 70), slice(70, 401)):
+        asked.feed(T[part], y[part, None])
+        asked.expected_stop_times()
+        plain.feed(T[part], y[part, None])
+    assert json.dumps(asked.to_dict()) == json.dumps(plain.to_dict())
+
+
+def test_the_expected_stop_before_a_course_after_the_decision_and_for_a_cold_sensor():
+    rng = np.random.default_rng(8)
+    heating, cold = first_order(T) + 0.02 * rng.standard_normal(len(T)), 20.0 + 0.02 * rng.standard_normal(len(T))
+    start = replay({"S": heating[:5]}, T[:5])
+    assert start.expected_stop_time() is None and start.result()["expected_stop_time_min"] is None
+    # a sensor that never heats is left out of the decision, and of the expected stop
+    monitor = replay({"heating": heating[:60], "cold": cold[:60]}, T[:60])
+    times = monitor.expected_stop_times()
+    assert np.isnan(times[1]) and times[0] > 59 and monitor.expected_stop_time() == times[0]
+    assert [d["expected_stop_time_min"] for d in monitor.result()["sensors"]] == [times[0], None]
+    done = replay({"heating": heating, "cold": cold})
+    assert done.stop_time is not None and done.expected_stop_time() == done.stop_time == done.result()["expected_stop_time_min"]
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -661,6 +701,24 @@ def test_live_table_shows_every_sensor_with_its_band_and_status():
     assert "log.csv: at t = 49 min" in text and "T∞ ± 95 % (°C)" in text
     for status in monitor.status():
         assert status.sensor in text and status.status in text and f"{status.steady_state_C:.2f}" in text
+    for when in monitor.expected_stop_times():  # each sensor's expected stop, in its own column
+        assert f"{when:.0f}" in text
+    console = Console(record=True, width=120)
+    console.print(_status_table(monitor, Path("logs/log.csv"), live=True))  # the live view adds the test's
+    assert f"expected stop: t ≈ {round(monitor.expected_stop_time())} min, in {round(monitor.expected_stop_time()) - 49} min" in " ".join(console.export_text().split())
+
+
+def test_the_live_picture_marks_each_sensors_expected_stop():
+    from mtident.report import plot_monitor
+
+    rng = np.random.default_rng(4)
+    monitor = Monitor(("spindle", "motor"))
+    y = np.column_stack([first_order(T[:50]), first_order(T[:50], steady=30.0)]) + 0.02 * rng.standard_normal((50, 2))
+    monitor.feed(T[:50], y)
+    figure = plot_monitor(make_log(T[:50], {"spindle": y[:, 0], "motor": y[:, 1]}), monitor)
+    for ax, when in zip(figure.axes, monitor.expected_stop_times(), strict=True):
+        lines = [line for line in ax.get_lines() if line.get_label() == "expected stop"]
+        assert len(lines) == 1 and lines[0].get_xdata()[0] == when
 
 
 def in_a_terminal(args: list[str], cwd: Path) -> tuple[int, str]:
@@ -699,6 +757,22 @@ def test_watch_in_a_terminal_at_the_start_of_a_test(tmp_path):
     assert code == 0
     assert "start.csv: at t = 4 min" in screen and "collecting" in screen and "nan" not in screen
     assert "Not yet: keep the test running." in screen
+
+
+def test_watch_of_a_test_under_way_says_when_it_expects_to_stop(tmp_path):
+    """The log so far (60 min) does not decide; the table gives each sensor's expected stop and
+    the last line the test's, with the assumption it rests on; --json gives the same time."""
+    rng = np.random.default_rng(2)
+    log = tmp_path / "under_way.csv"
+    log.write_text(csv_text(T[:61], {"A": first_order(T[:61]) + 0.02 * rng.standard_normal(61), "B": first_order(T[:61], steady=30.0) + 0.02 * rng.standard_normal(61)}))
+    out = mtident("thermal", "watch", str(log), "--replay", "--json", "--state", "a.json", cwd=tmp_path)
+    data = json.loads(out.stdout)
+    assert data["decision"] == "continue" and data["expected_stop_time_min"] > 60
+    assert data["expected_stop_time_min"] == max(d["expected_stop_time_min"] for d in data["sensors"])
+    out = mtident("thermal", "watch", str(log), "--replay", "--state", "b.json", cwd=tmp_path)
+    assert "stop ≈ (min)" in out.stdout
+    expected = round(data["expected_stop_time_min"])
+    assert f"Expected stop: t ≈ {expected} min, in {expected - 60} min, if the warm-ups keep their present first-order" in " ".join(out.stdout.split())
 
 
 def test_watch_run_again_after_its_decision_gives_the_same_answer(tmp_path):

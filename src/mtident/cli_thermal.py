@@ -81,6 +81,8 @@ def _column_layout(column: str) -> _ColumnLayout:
     squeezes the numbers to "…" nor is squeezed to two letters in an 80-column terminal."""
     if column == "sensor":
         return {"overflow": "fold", "min_width": 14, "max_width": 32}
+    if column == "status":  # words: wrapped at a space when the table is too wide
+        return {"min_width": 9}
     return {"no_wrap": True}
 
 
@@ -273,14 +275,38 @@ def _when(monitor) -> str:  # noqa: ANN001 - thermal.monitor.Monitor
     return "before the first sample" if monitor.latest_time is None else f"at t = {minutes(monitor.latest_time)} min"
 
 
-def _status_table(monitor, log: Path) -> Table:  # noqa: ANN001 - thermal.monitor.Monitor
-    table = Table(title=f"{log.name}: {_when(monitor)}")
-    for column in ("sensor", "latest (°C)", "T∞ ± 95 % (°C)", "t_eq (min)", "status"):
+def _status_table(monitor, log: Path, live: bool = False) -> Table:  # noqa: ANN001 - thermal.monitor.Monitor
+    """Per sensor: the latest reading, T∞ with its band, t_eq, when it is expected to stop, and its status.
+
+    ``live``: the caption says when the whole test is expected to stop, on the warm-ups'
+    present courses (:meth:`~mtident.thermal.monitor.Monitor.expected_stop_times`).
+    """
+    status = monitor.status()
+    expected = monitor.expected_stop_times()
+    caption = _expected_stop(monitor, expected) if live and monitor.stop_time is None else None
+    table = Table(title=f"{log.name}: {_when(monitor)}", caption=caption)
+    for column in ("sensor", "latest (°C)", "T∞ ± 95 % (°C)", "t_eq (min)", "stop ≈ (min)", "status"):
         table.add_column(column, justify="left" if column in ("sensor", "status") else "right", **_column_layout(column))
-    for st in monitor.status():
+    for st, when in zip(status, expected, strict=True):
         colour = "green" if st.may_stop else "yellow"
-        table.add_row(st.sensor, _fmt(st.latest_C), f"{_fmt(st.steady_state_C)} ± {_fmt(st.half_width_C)}", _fmt(st.equilibrium_time_min, 0), f"[{colour}]{st.status}[/]")
+        stop = "now" if st.may_stop and st.status == "may stop" else _fmt(when, 0)
+        table.add_row(st.sensor, _fmt(st.latest_C), f"{_fmt(st.steady_state_C)} ± {_fmt(st.half_width_C)}", _fmt(st.equilibrium_time_min, 0), stop, f"[{colour}]{st.status}[/]")
     return table
+
+
+def _expected_stop(monitor, times: np.ndarray | None = None) -> str | None:  # noqa: ANN001 - thermal.monitor.Monitor
+    """When the test is expected to stop, for the engineer (None before the filters start);
+    ``times``: the sensors' expected stops, if already at hand."""
+    from mtident.thermal.monitor import minutes
+
+    if monitor.carry is None or monitor.latest_time is None:
+        return None
+    times = monitor.expected_stop_times() if times is None else times
+    whole = monitor.expected_stop_time(times)
+    if whole is None:
+        open_ = [st.sensor for st, t in zip(monitor.status(), times, strict=True) if not math.isfinite(t) and not st.left_out]
+        return f"expected stop: not foreseeable yet ({', '.join(open_)}: no first-order course yet, or an interval that does not narrow enough on it)"
+    return f"expected stop: t ≈ {minutes(round(whole))} min, in {minutes(round(whole - monitor.latest_time))} min, if the warm-ups keep their present first-order courses"
 
 
 @thermal.command("watch")
@@ -430,7 +456,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
                         for message in monitor.feed(rows.time_min[part], values[part], None if room is None else room[part]):
                             stderr.print(f"mtident: {message}", highlight=False)
                         if live_view:
-                            live.update(_status_table(monitor, path), refresh=True)
+                            live.update(_status_table(monitor, path, live=True), refresh=True)
                     # saved with the follower's position, which is at the end of these rows
                     save()
                     if plot_path and (time.monotonic() - last_plot > 5.0 or monitor.stop_time is not None):
@@ -471,6 +497,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             Console().print(f"[bold green]The test can stop at t = {minutes(monitor.stop_time or 0.0)} min{gain}.[/]")
         else:
             Console().print("[bold yellow]Not yet: keep the test running.[/]")
+            forecast = _expected_stop(monitor)
+            if forecast:
+                Console().print(forecast[0].upper() + forecast[1:] + ".")
     if interrupted:
         sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
 

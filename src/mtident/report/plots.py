@@ -170,6 +170,7 @@ def plot_monitor(log, monitor, path: str | Path | None = None) -> Path | Figure:
     fig, axes = grid(len(log.sensors))
     status = monitor.status()
     now = monitor.last_t or 0.0
+    expected = monitor.expected_stop_times() if monitor.stop_time is None else np.full(len(status), np.nan)
     for s, ax in enumerate(axes):
         ax.plot(log.time_min, log.temperature_C[:, s], ".", ms=2.5, color="0.45", label="measured")
         st = status[s]
@@ -180,6 +181,8 @@ def plot_monitor(log, monitor, path: str | Path | None = None) -> Path | Figure:
             ax.axhspan(st.steady_state_C - st.half_width_C, st.steady_state_C + st.half_width_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
         if monitor.stop_time is not None:
             ax.axvline(monitor.stop_time, color="k", ls="--", lw=1, label=f"stop at {minutes(monitor.stop_time)} min")
+        elif np.isfinite(expected[s]) and expected[s] > now:
+            ax.axvline(expected[s], color="0.4", ls=":", lw=1, label="expected stop")
         ax.set_title(f"{st.sensor}: {st.status}", fontsize=10)
         ax.set_xlabel("time (min)")
         ax.set_ylabel("temperature (°C)")

@@ -56,6 +56,11 @@ setting: earlier stops), higher for an unconditioned workshop.
 The test may stop when every sensor may, except sensors that show no rise
 (they are reported and left out of the decision).
 
+Before the decision, :meth:`Monitor.expected_stop_times` says when each sensor
+is expected to stop if its warm-up keeps its present first-order course (each
+filter run on, on a copy, with its own predicted readings), and
+:meth:`Monitor.expected_stop_time` when the whole test is.
+
 Bad samples: a spike (|ν|/√S > ``spike_sigma``) is rejected and the step redone
 without it; NaN, empty and open-circuit cells are treated as missing (the
 filter bridges them); a gap in time is bridged by the model and reported; a
@@ -88,7 +93,7 @@ import numpy as np
 from scipy.special import fdtri, stdtrit
 
 from mtident._typing import FloatArray
-from mtident.exceptions import InputError
+from mtident.exceptions import CovarianceError, InputError
 from mtident.thermal.lsq import flat_lead, rise_threshold
 from mtident.thermal.model import equilibrium_time, observe_temperature, slope_transition, to_physical
 from mtident.thermal.settings import DISPLAY_STEPS_C, ThermalTuning, filter_config, noise_sigma, on_display_steps, step_from_grid, tuning_from_data
@@ -106,6 +111,9 @@ _MATURE_NOISE_ESTIMATE = 30
 # Neighbouring fourth differences of white noise overlap (correlations -0.8, 0.4, -0.11, 0.014): a
 # mean of k of their squares varies like a mean of k / 2.63 independent ones.
 _D4_OVERLAP = 1.0 + 2.0 * (0.8**2 + 0.4**2 + (8 / 70) ** 2 + (1 / 70) ** 2)
+# The forecast of the stop runs each filter on for at most this long, in at most this many steps.
+_FORECAST_HORIZON_MIN = 600.0
+_FORECAST_STEPS = 300
 # the room sensor's name in the message log (sensor names are the log's column names)
 _ROOM = "(room sensor)"
 # what a missing reading can be, in the messages
@@ -158,6 +166,11 @@ class SensorStatus:
     may_stop: bool
     status: str
 
+    @property
+    def left_out(self) -> bool:
+        """Whether the sensor gives no warm-up to wait for ("no rise", "no data"): left out of the decision."""
+        return self.status in _LEFT_OUT
+
 
 def minutes(value: float) -> str:
     """A time for the engineer, to a tenth of a minute (a 1-Hz log's bins end at times like 62.5917)."""
@@ -188,6 +201,17 @@ def _bin_wants_more(span: float, interval: float, bin_min: float) -> bool:
     and span + 2·interval with another row.
     """
     return span + 1.5 * interval < bin_min * (1.0 - 1e-9)
+
+
+def _number_or_none(value: float) -> float | None:
+    """A number for JSON: None where there is none (NaN, infinite)."""
+    return float(value) if np.isfinite(value) else None
+
+
+def _test_expected(status: list[SensorStatus], times: FloatArray) -> float | None:
+    """The test's expected stop: the latest of the sensors in the decision, None if one is not foreseeable."""
+    needed = [float(t) for t, st in zip(times, status, strict=True) if not st.left_out]
+    return max(needed) if needed and all(np.isfinite(needed)) else None
 
 
 def _floats(value: Any) -> FloatArray:
@@ -294,7 +318,11 @@ class Monitor:
         # the whole state is for to_dict; a notebook wants the answer so far
         if self.carry is None:
             return f"Monitor({len(self.sensors)} sensor(s), collecting the first {self.settings.init_min:g} min)"
-        decision = f"stop at t = {minutes(self.stop_time)} min" if self.stop_time is not None else "continue"
+        if self.stop_time is not None:
+            decision = f"stop at t = {minutes(self.stop_time)} min"
+        else:
+            expected = self.expected_stop_time()
+            decision = "continue" + ("" if expected is None else f", expected stop at t ≈ {minutes(round(expected))} min")
         lines = [f"Monitor({len(self.sensors)} sensor(s), t = {minutes(self.latest_time or 0.0)} min, decision: {decision})"]
         for st in self.status():
             lines.append(f"  {st.sensor}: T∞ {st.steady_state_C:.2f} ± {st.half_width_C:.2f} °C, t_eq {st.equilibrium_time_min:.0f} min, {st.status}")
@@ -909,10 +937,91 @@ class Monitor:
             no_creep = np.abs(trend) * remaining <= half_band
         return stable & ((count <= 2) | no_creep)
 
-    def _summary(self, st: SensorStatus) -> dict[str, object]:
-        def num(x: float) -> float | None:
-            return float(x) if np.isfinite(x) else None
+    # ---- the forecast -------------------------------------------------------------------
+    def expected_stop_times(self, horizon_min: float = _FORECAST_HORIZON_MIN) -> FloatArray:
+        """Per sensor, when the rule expects it may stop if its warm-up keeps its present course.
 
+        Each filter is run on from now on its own predicted readings. A UKF's
+        covariance update does not depend on the reading, only on where the
+        filter is, so its T∞ interval narrows as real readings on that course
+        would narrow it (with the room's wander and the noise as estimated so
+        far). The expected time is the first at which the interval fits
+        (rule 1), no earlier than the hold (rule 2, from the last T∞ outside the
+        hold's band, or the start of the hold after a restart) and the minimum
+        duration allow. It assumes the first-order course holds: a slow mode not
+        yet seen, a drifting room or a failed model check move the real stop
+        later (``benchmarks/bench_watch.py`` measures how far).
+
+        Returns the time in minutes: the current time for a sensor that may stop
+        now, NaN for one left out of the decision ("no rise", "no data"), one
+        without a course yet (collecting, no steady state yet), or one whose
+        interval does not fit within ``horizon_min`` from now.
+        """
+        S = len(self.sensors)
+        expected = np.full(S, np.nan)
+        if self.carry is None or self.last_t is None or self.stop_time is not None:
+            if self.stop_time is not None:
+                expected[:] = self.stop_time
+            return expected
+        assert self.observed is not None and self.nis_sum is not None
+        status = self.status()
+        now = self.last_t
+        physical = to_physical(self.carry.mean, self.carry.covariance(), "slope")[0]
+        waiting = np.array(self.waiting_rise if self.waiting_rise is not None else [False] * S) | np.array(self.unread if self.unread is not None else [False] * S)
+        with np.errstate(invalid="ignore"):
+            course = (physical[:, 1] > 0) & np.isfinite(physical[:, 2]) & ~waiting & ~np.array([st.left_out for st in status])
+        may = np.array([st.may_stop and not st.left_out for st in status])
+        expected[may] = now
+        todo = course & ~may
+        if not np.any(todo):
+            return expected
+        half_band = self.settings.tolerance_C / 2
+        # rule 2: the hold runs from the last T∞ outside the band around the current one (or from
+        # the start of the history, if that is younger than a hold: after a restart or a widening)
+        history = self.steady_history
+        steady_now = physical[:, 2]  # as the history holds it (over the room with a direct coupling)
+        with np.errstate(invalid="ignore"):
+            outside = np.abs(history[:, 1:] - steady_now[None, :]) > half_band
+        last_outside = history[::-1, 0][np.argmax(outside[::-1], axis=0)]
+        held = now - history[0, 0] >= self._hold(now) - 1e-9
+        anchor = np.where(outside.any(axis=0), last_outside, -np.inf if held else history[0, 0])
+        # Coarse steps keep the forecast cheap: m samples in one step carry their mean, whose noise
+        # variance is R/m, and the room's wander grows with the time, not with the steps.
+        dt_data = self.median_dt or 1.0
+        step = max(dt_data, horizon_min / _FORECAST_STEPS)
+        per_step = step / dt_data
+        config, weights = self._filter()
+        carry = replace(self.carry, emission_cov=self.carry.emission_cov / per_step)
+        threshold = self.settings.interval_fraction * self.settings.tolerance_C
+        observed, nis_sum = self.observed.copy(), self.nis_sum.copy()
+        t = now
+        while np.any(todo & np.isnan(expected)) and t < now + horizon_min:
+            t += step
+            predicted = slope_transition(carry.mean, step)[:, :1]
+            carry = replace(carry, process_cov=self._process_cov(carry.mean[:, 2], step))
+            try:
+                carry, _ = filter_step(carry, predicted, transition_with_room(step, 0.0), observe_temperature, config, weights)
+            except CovarianceError:  # a filter far off course: its stop is not foreseeable
+                break
+            # readings on the course fit it: each adds 1 to the sum of normalised innovations squared
+            observed, nis_sum = observed + per_step, nis_sum + per_step
+            factor = np.maximum(1.0, nis_sum / np.maximum(observed - 3, 1))
+            _, cov = to_physical(carry.mean, carry.covariance(), "slope")
+            half = stdtrit(np.maximum(observed - 3, 1), 0.975) * np.sqrt(np.maximum(cov[:, 2, 2], 0.0) * factor)
+            ready = (half <= threshold) & (t - anchor >= self._hold(t) - 1e-9) & (t >= self.settings.min_duration_min) & (observed >= self.settings.min_samples)
+            expected[todo & ready & np.isnan(expected)] = t
+        return expected
+
+    def expected_stop_time(self, times: FloatArray | None = None) -> float | None:
+        """When the rule expects the test may stop (every sensor in the decision), if the warm-ups keep
+        their present courses; None where one sensor's is not foreseeable. ``times``: the sensors'
+        from :meth:`expected_stop_times`, if already at hand."""
+        if self.stop_time is not None:
+            return self.stop_time
+        return _test_expected(self.status(), self.expected_stop_times() if times is None else times)
+
+    def _summary(self, st: SensorStatus) -> dict[str, object]:
+        num = _number_or_none
         return {
             "sensor": st.sensor,
             "steady_state_C": num(st.steady_state_C),
@@ -923,7 +1032,13 @@ class Monitor:
 
     def result(self) -> dict[str, object]:
         """The contract's JSON object: the decision if reached, else the current estimates."""
-        sensors = self.decision if self.decision is not None else [self._summary(st) for st in self.status()]
+        if self.decision is not None:
+            sensors, expected = self.decision, self.stop_time
+        else:
+            status = self.status()
+            times = self.expected_stop_times()
+            sensors = [{**self._summary(st), "expected_stop_time_min": _number_or_none(t)} for st, t in zip(status, times, strict=True)]
+            expected = _test_expected(status, times)
         payload: dict[str, object] = {"stop_time_min": self.stop_time, "decision": "stop" if self.stop_time is not None else "continue", "last_time_min": self.latest_time}
         eq = [d["equilibrium_time_min"] for d in sensors if d["equilibrium_time_min"] is not None and d["status"] not in _LEFT_OUT]
         if self.stop_time is not None and eq:
@@ -938,6 +1053,7 @@ class Monitor:
             slowest = max(ranked, key=lambda d: d["equilibrium_time_min"] or 0.0)  # type: ignore[arg-type,return-value]
             payload.update({k: v for k, v in slowest.items() if k != "status"})
             payload["sensors"] = sensors
+        payload["expected_stop_time_min"] = expected
         return payload
 
     # ---- persistence --------------------------------------------------------------------
