@@ -352,8 +352,9 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
     follower = LogFollower(live)
     follower.poll()
     position = follower.position()
-    assert position["dialect"] == [";", ",", 0, "utf-8-sig", [], 0, "the units row", False, [], []]
-    position["dialect"] = position["dialect"][:4]  # as a state file of an older version wrote it
+    assert position["dialect"] == {"delimiter": ";", "decimal": ",", "preamble_lines": 0, "encoding": "utf-8-sig", "units": [], "extra_rows": 0, "units_source": "the units row", "units_in_cells": False, "names": [], "written_names": []}
+    json.loads(json.dumps(position))  # plain JSON
+    position["dialect"] = [";", ",", 0, "utf-8-sig"]  # as a state file of an older version wrote it: a list of the first four
     with open(live, "a") as out:
         out.write("1;20,6\n")
     rows = LogFollower.resume(live, position, None, None).poll()
@@ -363,8 +364,8 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
     follower = LogFollower(live)
     follower.poll()
     position = follower.position()
-    assert position["dialect"][4:] == [[["time", "min"], ["T1", "K"]], 1, "the units row", False, [], []]
-    position["dialect"] = position["dialect"][:5]
+    assert (position["dialect"]["units"], position["dialect"]["extra_rows"]) == ([["time", "min"], ["T1", "K"]], 1)
+    position["dialect"] = [";", ",", 0, "utf-8-sig", [["time", "min"], ["T1", "K"]]]  # five entries
     with open(live, "a") as out:
         out.write("1;293,6\n")
     rows = LogFollower.resume(live, position, None, None).poll()

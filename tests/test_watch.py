@@ -772,7 +772,7 @@ def test_watch_of_a_test_under_way_says_when_it_expects_to_stop(tmp_path):
     out = mtident("thermal", "watch", str(log), "--replay", "--state", "b.json", cwd=tmp_path)
     assert "stop ≈ (min)" in out.stdout
     expected = round(data["expected_stop_time_min"])
-    assert f"Expected stop: t ≈ {expected} min, in {expected - 60} min, if the warm-ups keep their present first-order" in " ".join(out.stdout.split())
+    assert f"Expected stop: t ≈ {expected} min, in {expected - 60} min, at the earliest: on the present first-order courses" in " ".join(out.stdout.split())
 
 
 def test_watch_run_again_after_its_decision_gives_the_same_answer(tmp_path):

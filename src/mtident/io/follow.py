@@ -25,7 +25,7 @@ from __future__ import annotations
 import csv
 import io
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -53,10 +53,22 @@ class Rows:
     notes: tuple[str, ...] = ()
 
 
-def _saved_dialect(saved: list[Any]) -> CsvDialect:
-    """The dialect as a state file keeps it. One written before units rows were read has four
-    entries; one written before the rows under the header were counted, five (a units row, if
-    any); one written before the channels' names under the header were read, eight."""
+def _dialect_to_save(dialect: CsvDialect) -> dict[str, object]:
+    """The dialect for the state file, by its fields' names (JSON: tuples as lists)."""
+    saved = asdict(dialect)
+    saved["units"] = [list(pair) for pair in dialect.units]
+    saved["names"], saved["written_names"] = list(dialect.names), list(dialect.written_names)
+    return saved
+
+
+def _saved_dialect(saved: dict[str, Any] | list[Any]) -> CsvDialect:
+    """The dialect as a state file keeps it: by its fields' names, or, in state files of
+    earlier versions, as a list of its first fields. One written before units rows were read
+    has four entries; one written before the rows under the header were counted, five (a units
+    row, if any); one written before the channels' names under the header were read, eight."""
+    if isinstance(saved, dict):
+        units = tuple((str(n), str(u)) for n, u in saved.get("units", ()))
+        return CsvDialect(**{**saved, "units": units, "names": tuple(saved.get("names", ())), "written_names": tuple(saved.get("written_names", ()))})
     units = tuple((str(n), str(u)) for n, u in (saved[4] if len(saved) > 4 else []))
     if len(saved) > 5:  # (the channels' names from the row under the header since the 9th and 10th)
         names = (tuple(str(n) for n in saved[8]), tuple(str(n) for n in saved[9])) if len(saved) > 9 else ((), ())
@@ -98,7 +110,7 @@ class LogFollower:
             "last_time": self.last_time,
             "columns": self.columns,
             "sensors": self.sensors,
-            "dialect": None if self.dialect is None else [self.dialect.delimiter, self.dialect.decimal, self.dialect.preamble_lines, self.dialect.encoding, [list(u) for u in self.dialect.units], self.dialect.extra_rows, self.dialect.units_source, self.dialect.units_in_cells, list(self.dialect.names), list(self.dialect.written_names)],
+            "dialect": None if self.dialect is None else _dialect_to_save(self.dialect),
             "time_format": self.time_format,
             "clock_column": self.clock_column,
             "millisecond_column": self.millisecond_column,
