@@ -873,10 +873,14 @@ def test_a_damaged_log_never_crashes_warns_or_loses_the_decision(seed, dropout_f
         cut = min(cut, len(t) - 1)
         first = Monitor(("a", "b", "c"))
         first.feed(t[:cut], columns[:cut], None if room_C is None else room_C[:cut])
+        expected = first.expected_stop_times()  # the forecast on a damaged log: no error, no warning
+        json.dumps(first.result())
         resumed = Monitor.from_dict(json.loads(json.dumps(first.to_dict())))
         resumed.feed(t[cut:], columns[cut:], None if room_C is None else room_C[cut:])
     assert resumed.result() == result
     assert {d["status"] for d in result["sensors"]} <= STATUSES
+    if first.stop_time is None and first.last_t is not None:
+        assert np.all(np.isnan(expected) | (expected >= first.last_t))
     json.dumps(result)
 
 
