@@ -102,6 +102,76 @@ def test_stamps_whose_offset_changes_when_summer_time_ends_stay_in_order(write_c
     np.testing.assert_allclose(LogFollower(path).poll().time_min, [0, 10, 20, 30, 40, 50])
 
 
+def _local_clock_log(start: str, change_at: int, shift_h: int, rows: int = 240, step_s: int = 60, fmt: str = "%d.%m.%Y %H:%M:%S") -> str:
+    """A 1-min warm-up log whose local clock (no offset written) is put back (shift_h = -1) or
+    forward (+1) by an hour before row ``change_at``."""
+    import datetime as dt
+
+    first = dt.datetime.fromisoformat(start)
+    clock = [first + dt.timedelta(seconds=step_s * k) + (dt.timedelta(hours=shift_h) if k >= change_at else dt.timedelta()) for k in range(rows)]
+    return "time;T1\n" + "".join(f"{c.strftime(fmt)};{26.7 - 8.8 * np.exp(-0.016 * k * step_s / 60):.3f}\n".replace(".", ",", 1 if fmt.startswith("%Y") else 0) for k, c in enumerate(clock))
+
+
+@pytest.mark.parametrize(
+    ("start", "change_at", "shift_h", "step_s", "said"),
+    [
+        ("2026-10-25 00:00:00", 180, -1, 60, "go back an hour at row 182 ('25.10.2026 02:59:00' then '25.10.2026 02:00:00'): read as the end of summer time"),
+        ("2026-11-01 01:40:00", 120, -1, 10, "go back an hour at row 122 ('01.11.2026 01:59:50' then '01.11.2026 01:00:00')"),  # US, 10-s rows
+        ("2026-03-29 00:00:00", 120, 1, 60, "jump an hour at row 122 ('29.03.2026 01:59:00' then '29.03.2026 03:00:00'): read as the start of summer time"),
+    ],
+)
+def test_a_local_clock_changed_for_summer_time_is_read_across_the_change(write_csv, start, change_at, shift_h, step_s, said):
+    """Stamps without an offset go back an hour when summer time ends (the file was refused:
+    "time goes back"; the follower refused the repeated hour row by row) and jump an hour when it
+    begins (read as an hour's gap: the warm-up seemed to stand still for an hour). Both readers
+    now read the true elapsed time, with a note, also followed in pieces across the change."""
+    from mtident.io.follow import LogFollower
+
+    path = write_csv(_local_clock_log(start, change_at, shift_h, step_s=step_s))
+    log = read_temperature_log(path)
+    np.testing.assert_allclose(log.time_min, np.arange(240) * step_s / 60, atol=1e-9)
+    assert [n for n in log.notes if said in n] and len(log.notes) == 1
+    text = path.read_bytes()
+    live = path.with_name("live.csv")
+    cut = text.index(b"\n", len(text) * change_at // 240 - 40) + 1  # a few rows before the change
+    live.write_bytes(text[:cut])
+    follower = LogFollower(live)
+    first = follower.poll()
+    live.write_bytes(text)
+    resumed = LogFollower.resume(live, json.loads(json.dumps(follower.position())), None, None)
+    second = resumed.poll()
+    np.testing.assert_allclose(np.concatenate([first.time_min, second.time_min]), log.time_min, atol=1e-9)
+    assert not second.warnings and [n for n in second.notes if said.split(" at row")[0] in n and "after t = " in n]
+
+
+def test_an_hour_back_that_is_no_summer_time_change_is_still_refused(write_csv):
+    """At noon, on a Saturday, or in July the clock is not changed for summer time, and an hour
+    back that is no change of the clock (a half-hour step back) is refused as before."""
+    for start, change_at, shift in (("2026-10-25 10:00:00", 120, -1), ("2026-10-24 00:00:00", 180, -1), ("2026-07-26 00:00:00", 180, -1)):
+        with pytest.raises(InputError, match="time goes back"):
+            read_temperature_log(write_csv(_local_clock_log(start, change_at, shift)))
+    with pytest.raises(InputError, match="time goes back"):
+        read_temperature_log(write_csv(_local_clock_log("2026-10-25 02:00:00", 30, 0).replace("25.10.2026 02:31:00", "25.10.2026 02:01:30")))
+    # a jump forward at noon stays a gap of an hour
+    log = read_temperature_log(write_csv(_local_clock_log("2026-03-29 10:00:00", 120, 1)))
+    assert log.time_min[120] - log.time_min[119] == 61 and not log.notes
+
+
+def test_a_follower_restarted_after_a_summer_time_change_does_not_count_rows_twice(write_csv):
+    """The logger restarts and writes its log again from the start: the rows before and after the
+    change come again, and none is taken twice (the hour's shift is found again)."""
+    from mtident.io.follow import LogFollower
+
+    text = _local_clock_log("2026-10-25 00:00:00", 180, -1)
+    path = write_csv(text)
+    follower = LogFollower(path)
+    first = follower.poll()
+    path.unlink()
+    path.write_text(text + "25.10.2026 03:00:00;26,500\n")  # replaced, one row more
+    again = follower.poll()
+    assert len(first.time_min) == 240 and again.time_min.tolist() == [240.0]
+
+
 def test_excel_sep_line_states_the_delimiter(write_csv):
     """Header names with commas in them: as many ',' as ';' in the header. Excel's "sep=;"
     decides, or else the data rows agree with both and the tie goes to ';'."""

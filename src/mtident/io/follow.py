@@ -36,7 +36,7 @@ from mtident.exceptions import InputError
 from mtident.io.columns import check_unique_names, choose_time_column, millisecond_column, temperature_columns, text_only_cells
 from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, serial_date_hint, time_unit_assumed, time_unit_factor
-from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, date_and_clock, other_date_order, stamp_format
+from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, clock_change, clock_change_note, date_and_clock, has_utc_offset, other_date_order, stamp_format
 from mtident.io.units import celsius_conversion
 
 __all__ = ["LogFollower", "Rows"]
@@ -96,9 +96,13 @@ class LogFollower:
     millisecond_column: int | None = None  # a column with the time stamps' milliseconds (Graphtec's "ms")
     room: str | None = None  # a room sensor's column, read last, after all the sensors (none named)
     first_stamp: str | None = None  # the first time stamp as written: a slashed date may be read again the other way
+    # minutes added to the local stamps since summer time ended (+60) or began (−60) during the log
+    clock_shift: float = 0.0
+    last_step: float | None = None  # minutes between the last two rows taken (a clock change is told by it)
     # derived once from the header and the options, not saved: (minutes per unit, unit assumed) of a
     # numeric time column (looked up on every row, it cost an eighth of a 28,800-row replay)
     _time_scale: tuple[float, bool] | None = field(default=None, repr=False, compare=False)
+    _last_stamp: str | None = field(default=None, repr=False, compare=False)  # the last row's time cell, for a note
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -116,6 +120,8 @@ class LogFollower:
             "millisecond_column": self.millisecond_column,
             "room": self.room,
             "first_stamp": self.first_stamp,
+            "clock_shift": self.clock_shift,
+            "last_step": self.last_step,
         }
 
     @classmethod
@@ -140,6 +146,8 @@ class LogFollower:
             millisecond_column=position.get("millisecond_column"),
             room=position.get("room"),
             first_stamp=position.get("first_stamp"),
+            clock_shift=float(position.get("clock_shift", 0.0)),
+            last_step=position.get("last_step"),
         )
 
     def _set_header(self, line: str, rows: list[list[str]]) -> list[str]:
@@ -275,6 +283,11 @@ class LogFollower:
             t = after_midnight(self.last_time, t)
         return t
 
+    def _local_dated_stamps(self) -> bool:
+        """Whether the log's times are dated stamps of a local clock, written without their offset
+        from UTC: the clock may change for summer time during the log."""
+        return self.time_format is not None and self.time_format not in TIME_OF_DAY_FORMATS and not has_utc_offset(self.first_stamp or "")
+
     def _stamp_minutes(self, text: str) -> float:
         """A time stamp in minutes since 1970 in the log's format; ValueError if it is none.
 
@@ -354,11 +367,19 @@ class LogFollower:
         assert self.header is not None
         conversions = np.array([celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]).reshape(-1, 2)
         times, rows = [], []
+        # the previous row's time as the clock wrote it (minutes from the first row) and its cell: a
+        # summer-time change is a step between two rows; a log read again from its start after a
+        # restart finds its changes again
+        if restarted:
+            self.clock_shift = 0.0
+        previous_raw = None if restarted or self.last_time is None else self.last_time - self.clock_shift
+        previous_cell = None if restarted else self._last_stamp
         for line in csv.reader(io.StringIO("\n".join(lines)), delimiter=dialect.delimiter):
             if not line or all(not c.strip() for c in line):
                 continue
             try:
-                t = self._parse_time(line[self.columns[0]] if self.clock_column is None else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}")
+                cell = line[self.columns[0]].strip() if self.clock_column is None else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}"
+                t = self._parse_time(cell)
                 if self.millisecond_column is not None:
                     t += dialect.number(line[self.millisecond_column]) / 60_000.0
             except InputError:  # a ValueError too, but about the whole log, not this row
@@ -366,11 +387,22 @@ class LogFollower:
             except (ValueError, IndexError):
                 warnings.append(f"{self.path}: refused a row with an unreadable time {line[:1]!r}")
                 continue
+            raw = t
+            if previous_raw is not None and not 0.0 < raw - previous_raw <= 59.0 and self._local_dated_stamps():
+                assert self.origin is not None
+                shift = clock_change(self.origin + previous_raw, self.origin + raw, self.last_step or 1.0)
+                if shift:
+                    self.clock_shift += shift
+                    if self.last_time is None or raw + self.clock_shift > self.last_time:  # not said again on a re-read
+                        notes.append(clock_change_note(shift, f"after t = {previous_raw + self.clock_shift - shift:g} min", repr(previous_cell or "the row before"), repr(cell)))
+            t = raw + self.clock_shift
             if t > UNLIKELY_MINUTES >= (self.last_time or 0.0) and self.time_format is None and self._time_scale is not None and self._time_scale[1]:
                 warnings.append(f"{self.path}: {seconds_hint(self.header[self.columns[0]], t)}")
             if self.last_time is not None and t <= self.last_time:
                 if not restarted:  # after a restart the old rows come again: expected, not an error
                     warnings.append(f"{self.path}: refused the row at t = {t:g} min: it repeats or goes back from t = {self.last_time:g} min")
+                else:
+                    previous_raw, previous_cell = raw, cell
                 continue
             values: list[float] = []
             for index in self.columns[1:]:
@@ -383,7 +415,10 @@ class LogFollower:
                 if not (OPEN_CIRCUIT_LOW_C <= value <= OPEN_CIRCUIT_HIGH_C):
                     value = np.nan
                 values.append(value)
+            self.last_step = None if self.last_time is None else t - self.last_time
             self.last_time = t
+            self._last_stamp = previous_cell = cell
+            previous_raw = raw
             times.append(t)
             rows.append(values)
         return Rows(np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings), tuple(notes))

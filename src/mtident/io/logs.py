@@ -31,7 +31,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.columns import check_unique_names, choose_time_column, millisecond_column, temperature_columns, text_only_cells
 from mtident.io.dialect import CsvDialect, read_csv
-from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, date_and_clock, other_date_order, stamp_format
+from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, clock_change, clock_change_note, date_and_clock, has_utc_offset, other_date_order, stamp_format
 from mtident.io.units import celsius_conversion, number_without_unit
 
 if TYPE_CHECKING:
@@ -164,10 +164,13 @@ def _cell(value: object) -> str:
 
 def _parse_time(
     column: pd.Series, header: str, time_unit: str | None, source: str, first_row: int = 2, stated_unit: str | None = None, sub_second_min: FloatArray | None = None
-) -> FloatArray:
-    """Minutes from the first sample; ``first_row`` numbers the rows in messages (2: a CSV file's
-    first data line); ``sub_second_min``: a millisecond column's part of each time (minutes)."""
+) -> tuple[FloatArray, list[str]]:
+    """Minutes from the first sample, and notes (a summer-time change read); ``first_row``
+    numbers the rows in messages (2: a CSV file's first data line); ``sub_second_min``: a
+    millisecond column's part of each time (minutes)."""
     import pandas as pd
+
+    notes: list[str] = []
 
     def minutes_since_first(stamps: pd.Series) -> FloatArray:
         return (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
@@ -209,6 +212,8 @@ def _parse_time(
             previous: float | None = None
             for k, t in enumerate(values):  # row by row, as the live follower reads them
                 values[k] = previous = after_midnight(previous, float(t))
+        elif not has_utc_offset(str(text.iloc[0])) and len(values) > 2:
+            values = _across_clock_changes(values, stamps.iloc[0].timestamp() / 60.0, column, first_row, notes)
     if sub_second_min is not None:
         values = values + sub_second_min
     steps = np.diff(values)
@@ -220,7 +225,23 @@ def _parse_time(
         row = int(np.argmax(steps < 0)) + 1
         msg = f"{source}: time column {header!r}, row {row + first_row}: time goes back ({_cell(column.iloc[row - 1])} then {_cell(column.iloc[row])}); time must increase"
         raise InputError(msg)
-    return values - values[0]
+    return values - values[0], notes
+
+
+def _across_clock_changes(values: FloatArray, first_min: float, column: pd.Series, first_row: int, notes: list[str]) -> FloatArray:
+    """Minutes from the first local stamp (written without an offset) with the clock's summer-time
+    changes taken out (:func:`~mtident.io.stamps.clock_change`); a note for each, naming the row
+    and its cells. ``first_min``: the first stamp in minutes since 1970 as written."""
+    steps = np.diff(values)
+    forward = steps[steps > 0]
+    interval = float(np.median(forward)) if len(forward) else 1.0
+    shifted = values.copy()
+    for k in np.flatnonzero((steps <= 0) | (steps > 59.0)) + 1:
+        shift = clock_change(first_min + values[k - 1], first_min + values[k], interval)
+        if shift:
+            shifted[k:] += shift
+            notes.append(clock_change_note(shift, f"at row {k + first_row}", _cell(column.iloc[k - 1]), _cell(column.iloc[k])))
+    return shifted
 
 
 def _rows_with_readings(frame: pd.DataFrame, header: str, sensors: list[str]) -> np.ndarray:
@@ -391,13 +412,15 @@ def read_temperature_log(
         sub_second = None if sub_second is None else sub_second[keep]
     if clock is None:
         stated = dialect.time_unit(header)
-        time_min = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
+        time_min, time_notes = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
+        notes.extend(time_notes)
         numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
         if numeric and time_unit_assumed(header, time_unit, stated) and time_min[-1] > UNLIKELY_MINUTES:
             notes.append(seconds_hint(header, float(time_min[-1])))
     else:  # the date in one column, the time of day in the next: one stamp
         stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
-        time_min = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row, sub_second_min=sub_second)
+        time_min, time_notes = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row, sub_second_min=sub_second)
+        notes.extend(time_notes)
 
     columns = []
     for name in sensors:

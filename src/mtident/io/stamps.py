@@ -11,7 +11,9 @@ taken from the first stamp (:func:`stamp_format`) and kept for the log.
 
 from __future__ import annotations
 
+import datetime as dt
 import math
+import re
 
 __all__ = [
     "stamp_format",
@@ -23,6 +25,9 @@ __all__ = [
     "DATE_FORMATS",
     "MINUTES_PER_DAY",
     "IMPLAUSIBLE_STEP_MIN",
+    "clock_change",
+    "clock_change_note",
+    "has_utc_offset",
 ]
 
 # A time of day alone passes midnight in an overnight test: a step back of more than 12 h is the next day.
@@ -99,3 +104,47 @@ def stamp_format(cell: str) -> str | None:
             continue
         return fmt
     return None
+
+
+# Summer time begins and ends on a Sunday between 01:00 and 04:00 of the local clock, in these
+# months: Europe March and October, North America March and November, Australia and New Zealand
+# April, September and October.
+_CLOCK_CHANGE_MONTHS = (3, 4, 9, 10, 11)
+_EPOCH = dt.datetime(1970, 1, 1)
+_UTC_OFFSET = re.compile(r"(Z|[+-]\d\d:?\d\d)$")
+
+
+def has_utc_offset(stamp: str) -> bool:
+    """Whether a time stamp carries its offset from UTC (``2026-10-25T02:30:00+01:00``, ``...Z``):
+    such stamps stay in order when summer time ends, and no clock change is looked for."""
+    return bool(_UTC_OFFSET.search(stamp.strip()))
+
+
+def clock_change(before_min: float, after_min: float, interval_min: float) -> float:
+    """Minutes the local clock was put back between two stamps written without an offset:
+    +60 where summer time ended (02:59 then 02:00), −60 where it began (01:59 then 03:00), else 0.
+
+    The stamps are minutes since 1970 as the clock wrote them. Told by the step: an hour back
+    or forward more than the log's steps make it (corrected, it moves on by at most two
+    ``interval_min``), from a stamp between 01:00 and 04:00 of the clock to another, on a
+    Sunday of a month in which summer time begins or ends somewhere. A step back cannot be a
+    real pause; a step forward could be one of an hour to the minute at that hour of that
+    Sunday, which the readers' notes name.
+    """
+    step = after_min - before_min
+    shift = 60.0 if step < 0 else -60.0
+    if not 0.0 < step + shift <= 2.0 * interval_min + 1e-9:
+        return 0.0
+    before, after = (_EPOCH + dt.timedelta(minutes=m) for m in (before_min, after_min))
+    on_a_change_day = after.weekday() == 6 and after.month in _CLOCK_CHANGE_MONTHS and after.date() == before.date()
+    return shift if on_a_change_day and 1 <= before.hour < 4 and 1 <= after.hour < 4 else 0.0
+
+
+def clock_change_note(shift: float, where: str, before: str, after: str) -> str:
+    """What a reader did at a clock change (:func:`clock_change`), for the engineer."""
+    if shift > 0:
+        return f"the time stamps go back an hour {where} ({before} then {after}): read as the end of summer time; the rows from there on are taken an hour later"
+    return (
+        f"the time stamps jump an hour {where} ({before} then {after}): read as the start of summer time; the rows from there on are taken an hour earlier "
+        "(if the logger's clock does not change for summer time, the log paused for an hour here)"
+    )
