@@ -283,7 +283,7 @@ def test_inspect_shows_how_a_logger_export_is_read(tmp_path):
     [sensor] = info["sensors"]
     assert sensor["sensor"] == "1" and sensor["unit"] == "°F" and sensor["missing"] == 0
     assert sensor["first_C"] == pytest.approx(20.0) and sensor["max_C"] == pytest.approx(20.7)
-    assert "left out, a row counter: Unnamed: 0; the time is 'Time'" in info["notes"] and "left out, not temperatures by its cells: 2 (%RH)" in info["notes"]
+    assert "left out, a row counter: the unnamed first column; the time is 'Time'" in info["notes"] and "left out, not temperatures by its cells: 2 (%RH)" in info["notes"]
     text = mtident("thermal", "inspect", str(path)).stdout
     assert "header on line 1, 4 row(s) under it before the data" in text and "read as time stamps" in text and "note: left out, a row counter" in text
     seconds = tmp_path / "seconds.csv"

@@ -422,7 +422,7 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
     follower = LogFollower(live)
     follower.poll()
     position = follower.position()
-    assert position["dialect"] == {"delimiter": ";", "decimal": ",", "preamble_lines": 0, "encoding": "utf-8-sig", "units": [], "extra_rows": 0, "units_source": "the units row", "units_in_cells": False, "names": [], "written_names": []}
+    assert position["dialect"] == {"delimiter": ";", "decimal": ",", "preamble_lines": 0, "encoding": "utf-8-sig", "units": [], "extra_rows": 0, "units_source": "the units row", "units_in_cells": False, "names": [], "written_names": [], "from_humidity": []}
     json.loads(json.dumps(position))  # plain JSON
     position["dialect"] = [";", ",", 0, "utf-8-sig"]  # as a state file of an older version wrote it: a list of the first four
     with open(live, "a") as out:
@@ -629,18 +629,29 @@ def test_real_logger_exports_name_their_channels_and_leave_out_the_rest(write_cs
     """Layouts of real exports (public test files of a logger-graphing project), each refused
     before: Tinytag's unnamed counter, numbered channels, description rows and units in the cells
     ("'S/N' is neither a number nor a time stamp"); T&D's unnamed stamp column with serial dates
-    beside it ("row 2 is empty"). The humidity and light channels are left out, and named."""
+    beside it ("row 2 is empty"). The humidity and light channels are left out, and named; so is
+    the dew point (in °C, read as a sensor before), by the Property row or by its name (EasyLog)."""
     tinytag = ",Time,1,2,3\nS/N,,227659,227659,227659\nType,,Tinytag Ultra H°C/%RH,Tinytag Ultra H°C/%RH,csv file\nDescription,,Spindle,Spindle,Spindle\nProperty,,Temperature,Humidity,Dew Point\n"
     tinytag += "".join(f"{k + 1},2026-11-22 08:{k:02d}:00,{20 + k / 10:.1f} °C,{56 + k / 100:.1f} %RH,{8 + k / 10:.1f} °C\n" for k in range(8))
     log = read_temperature_log(write_csv(tinytag))
-    assert log.sensors == ("1", "3")
+    assert log.sensors == ("1",)
+    assert "left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; --sensor reads one all the same): 3" in log.notes
+    assert read_temperature_log(write_csv(tinytag), sensors=["3"]).temperature_C[0, 0] == 8.0
     np.testing.assert_allclose(log.temperature_C[:, 0], 20 + np.arange(8) / 10)
     np.testing.assert_allclose(log.time_min, np.arange(8.0))
-    assert "left out, a row counter: Unnamed: 0; the time is 'Time'" in log.notes
+    assert "left out, a row counter: the unnamed first column; the time is 'Time'" in log.notes
+    from mtident.io.follow import LogFollower
+
+    followed = LogFollower(write_csv(tinytag, "live.csv"))
+    assert followed.poll().notes[0] == "left out, a row counter: the unnamed first column; the time is 'Time'" and followed.sensors == ["1"]
     assert "left out, not temperatures by its cells: 2 (%RH)" in log.notes
     # the older export writes no units in the cells: the Property row names the humidity
     plain = re.sub(r" (°C|%RH)", "", tinytag)
-    assert read_temperature_log(write_csv(plain)).sensors == ("1", "3")
+    assert read_temperature_log(write_csv(plain)).sensors == ("1",)
+    easylog = "Comedor,Time,Celsius(°C),Humidity(%rh),Dew Point(°C),Serial Number\n"
+    easylog += "".join(f"{k + 1},2026-11-22 08:{k:02d}:00,{20 + k / 10:.1f},{56 + k / 100:.1f},{8 + k / 10:.1f}{',10543212' if k == 0 else ''}\n" for k in range(8))
+    log = read_temperature_log(write_csv(easylog))
+    assert log.sensors == ("Celsius(°C)",) and any(n.endswith("heat index; --sensor reads one all the same): Dew Point(°C)") for n in log.notes)
     tandd = ",Date/Time,No.1,No.2,No.3,No.4,\n,Date/Time,ch1,ch2,ch3,ch4,\n,,lx,mW/cm2,°C,%,\n"
     tandd += "".join(f"2026-11-22 08:{k:02d}:00,{46348.333333 + k / 1440:.5f},6.27,0,{20 + k / 10:.1f},51,\n" for k in range(8))
     log = read_temperature_log(write_csv(tandd))

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from mtident.exceptions import InputError
 from mtident.io.stamps import DATE_FORMATS, parses_as, stamp_format
-from mtident.io.units import celsius_conversion, is_humidity, is_number, unit_key
+from mtident.io.units import celsius_conversion, is_from_humidity, is_humidity, is_number, unit_key
 
 if TYPE_CHECKING:
     from mtident.io.dialect import CsvDialect
@@ -88,7 +88,9 @@ def choose_time_column(header: list[str], first_row: list[str], dialect: CsvDial
     counter = time_col is None and counter_before_time(header, first_row, dialect)
     text_before = 0 if time_col is not None or counter else text_before_stamps(first_row)
     name = time_col or header[1 if counter else text_before]
-    notes = [f"left out, a row counter: {header[0]}; the time is {name!r}"] if counter else []
+    # pandas names an unnamed column "Unnamed: 0", the follower ""
+    first = header[0] if header[0].strip() and not header[0].startswith("Unnamed: ") else "the unnamed first column"
+    notes = [f"left out, a row counter: {first}; the time is {name!r}"] if counter else []
     if text_before:
         notes.append(f"the time is {name!r}, the first column of time stamps")
     return name, counter, notes
@@ -132,13 +134,16 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
     note, and refused when ``asked`` for by name; one in K or °F is converted,
     with a note.
     """
-    kept, notes, other, times, events = [], [], [], [], []
+    kept, notes, other, times, events, computed = [], [], [], [], [], []
     for name in names:
         if not asked and time_named(name):
             times.append(name)
             continue
         if not asked and event_named(name):
             events.append(name)
+            continue
+        if not asked and (is_from_humidity(name) or name in dialect.from_humidity):
+            computed.append(name)
             continue
         by = dialect.units_source if dict(dialect.units).get(name, "").strip() else "its name"
         written = dialect.unit_of(name)
@@ -164,10 +169,12 @@ def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, sour
         notes.append(f"left out, named as times: {', '.join(times)}")
     if events:
         notes.append(f"left out, the logger's own records: {', '.join(events)}")
+    if computed:
+        notes.append(f"left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; --sensor reads one all the same): {', '.join(computed)}")
     if other:
         notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
     if not kept:
-        left_out = [*(f"{n} (named as a time)" for n in times), *(f"{n} (the logger's own record)" for n in events)]
+        left_out = [*(f"{n} (named as a time)" for n in times), *(f"{n} (the logger's own record)" for n in events), *(f"{n} (computed from the humidity)" for n in computed)]
         if other:
             left_out.append(f"by {by}: {', '.join(other)}")
         msg = f"{source}: no temperature column; left out: {'; '.join(left_out)} (--sensor NAME reads a column all the same, if it is a temperature)"

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 from mtident.exceptions import InputError
 from mtident.io.columns import check_unique_names, event_named
-from mtident.io.units import carried_unit, is_humidity, is_number, is_time_or_temperature_unit, number_without_unit, time_unit_name, unit_in_name
+from mtident.io.units import carried_unit, is_from_humidity, is_humidity, is_number, is_time_or_temperature_unit, number_without_unit, time_unit_name, unit_in_name
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -105,6 +105,8 @@ class CsvDialect:
     # "No.3" in the header, "Spindle" under it); () where the header's names stand
     names: tuple[str, ...] = ()
     written_names: tuple[str, ...] = ()  # the header's own names, where ``names`` replace them
+    # columns the rows under the header describe as computed from the humidity ("Property: Dew Point")
+    from_humidity: tuple[str, ...] = ()
 
     def cells(self, line: str) -> list[str]:
         """The cells of one line (a header), stripped; quotes removed."""
@@ -236,8 +238,10 @@ def _stated_units(dialect: CsvDialect, lines: list[str]) -> CsvDialect:
     header = names or header
     units: dict[str, str] = {}
     source = "the units row"
+    from_humidity: list[str] = []
     for line in lines[k + 1 : k + 1 + extra]:
         cells = dialect.cells(line)
+        from_humidity += [name for name, cell in zip(header, cells, strict=False) if is_from_humidity(cell) and name not in from_humidity]
         if not units and _is_units_row(cells, dialect):
             units, source = {name: unit for name, unit in zip(header, cells, strict=False) if unit}, "the units row"
         elif not units:
@@ -249,7 +253,16 @@ def _stated_units(dialect: CsvDialect, lines: list[str]) -> CsvDialect:
         in_cells = bool(carried)
         if carried:  # the readings' own units say most
             units, source = {**units, **carried}, "its cells"
-    return replace(dialect, units=tuple(units.items()), extra_rows=extra, units_source=source, units_in_cells=in_cells, names=tuple(names or ()), written_names=tuple(written) if names else ())
+    return replace(
+        dialect,
+        units=tuple(units.items()),
+        extra_rows=extra,
+        units_source=source,
+        units_in_cells=in_cells,
+        names=tuple(names or ()),
+        written_names=tuple(written) if names else (),
+        from_humidity=tuple(from_humidity),
+    )
 
 
 # a channel's number as a header gives it: "No.3", "CH3", "Channel 3", "3"

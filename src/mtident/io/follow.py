@@ -54,11 +54,8 @@ class Rows:
 
 
 def _dialect_to_save(dialect: CsvDialect) -> dict[str, object]:
-    """The dialect for the state file, by its fields' names (JSON: tuples as lists)."""
-    saved = asdict(dialect)
-    saved["units"] = [list(pair) for pair in dialect.units]
-    saved["names"], saved["written_names"] = list(dialect.names), list(dialect.written_names)
-    return saved
+    """The dialect for the state file, by its fields' names (JSON: its tuples as lists)."""
+    return {name: [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, tuple) else value for name, value in asdict(dialect).items()}
 
 
 def _saved_dialect(saved: dict[str, Any] | list[Any]) -> CsvDialect:
@@ -66,9 +63,9 @@ def _saved_dialect(saved: dict[str, Any] | list[Any]) -> CsvDialect:
     earlier versions, as a list of its first fields. One written before units rows were read
     has four entries; one written before the rows under the header were counted, five (a units
     row, if any); one written before the channels' names under the header were read, eight."""
-    if isinstance(saved, dict):
-        units = tuple((str(n), str(u)) for n, u in saved.get("units", ()))
-        return CsvDialect(**{**saved, "units": units, "names": tuple(saved.get("names", ())), "written_names": tuple(saved.get("written_names", ()))})
+    if isinstance(saved, dict):  # its lists are the dialect's tuples (units: of pairs)
+        fields: dict[str, Any] = {name: tuple(tuple(v) if isinstance(v, list) else v for v in value) if isinstance(value, list) else value for name, value in saved.items()}
+        return CsvDialect(**fields)
     units = tuple((str(n), str(u)) for n, u in (saved[4] if len(saved) > 4 else []))
     if len(saved) > 5:  # (the channels' names from the row under the header since the 9th and 10th)
         names = (tuple(str(n) for n in saved[8]), tuple(str(n) for n in saved[9])) if len(saved) > 9 else ((), ())

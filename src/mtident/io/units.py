@@ -22,6 +22,7 @@ __all__ = [
     "number_without_unit",
     "is_number",
     "is_humidity",
+    "is_from_humidity",
 ]
 
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
@@ -45,6 +46,9 @@ _OTHER_UNITS = frozenset(
 )
 # A column named as a humidity ("Humidity", "RH", "Feuchte", "湿度"; the name alone, without a unit)
 _HUMIDITY_WORDS = ("humidity", "feuchte", "湿度")
+# Temperatures a logger computes from the air's humidity: in °C, but no temperature of the machine
+# (Tinytag's and EasyLog's dew point channel beside their temperature and humidity).
+_FROM_HUMIDITY_WORDS = ("dewpoint", "dewpt", "taupunkt", "pointderosée", "pointderosee", "puntoderocío", "puntoderocio", "露点", "wetbulb", "feuchtkugel", "heatindex", "hitzeindex")
 # A unit at the end of a column's name (a unit this module knows): "Time [s]", "T1 (°C)", "Temp (°C)
 # #9724974" (a serial number after it), "T/°C", and after a comma before the logger's details,
 # "Temp, °F (LGR S/N: 10679014, SEN S/N: 10679014)" (HOBOware).
@@ -99,6 +103,13 @@ def is_humidity(name: str) -> bool:
     """Whether a column's name (or a description row's cell) names a humidity, not a temperature."""
     key = unit_key(name)
     return key in ("%rh", "rh%") or any(word in key for word in _HUMIDITY_WORDS)  # not "RH": a right-hand sensor
+
+
+def is_from_humidity(name: str) -> bool:
+    """Whether a column's name (or a description row's cell) names a temperature computed from the
+    air's humidity (a dew point, a wet-bulb temperature, a heat index), not one of the machine."""
+    key = re.sub(r"[-\s\[\]()°º._]", "", name).lower()
+    return any(word in key for word in _FROM_HUMIDITY_WORDS)
 
 
 def unit_in_name(column: str) -> str:
