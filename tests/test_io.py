@@ -280,14 +280,14 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     and other rows under the header (a second row of names, rows describing the channels, an empty row and
     a section tag), readings with their unit in the cell, a row counter before time stamps (named,
     unnamed or under any name), read whole and followed live in random pieces, gives the plain
-    file's times and temperatures."""
+    file's times and temperatures (a channel the description rows call a dew point left out)."""
     import datetime as dt
 
     from mtident.io.follow import LogFollower
 
     decimal_comma = decimal_comma and delimiter != ","
     t = np.arange(0.0, 25.0) * 1.5
-    temperatures = np.column_stack([20.0 + 0.37 * t, 19.5 + 0.21 * t])
+    temperatures = np.column_stack([20.0 + 0.37 * t, 19.5 + 0.21 * t, 8.0 + 0.01 * t])
     start = dt.datetime(2026, 11, 22, 23, 50, 0)  # time-of-day stamps pass midnight
 
     def time_cells(minutes: float) -> list[str]:
@@ -319,12 +319,12 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     no_time = ["", *["" for _ in clock]]
     described = {
         "nothing": [],
-        "a second row of names": [row(["Date/Time", *clock, "ch1", "ch2"])],  # T&D
-        "rows describing the channels": [row([*no_time, "227659", "227659"]), row([*no_time, "Temperature", "Temperature"])],  # Tinytag
-        "an empty row and a section tag": [row([*no_time, "", ""]), "[#D]" + delimiter * (len(no_time) + 1 + counted)],  # Rotronic
+        "a second row of names": [row(["Date/Time", *clock, "ch1", "ch2", "ch3"])],  # T&D
+        "rows describing the channels": [row([*no_time, "227659", "227659", "227659"]), row([*no_time, "Temperature", "Temperature", "Dew Point"])],  # Tinytag
+        "an empty row and a section tag": [row([*no_time, "", "", ""]), "[#D]" + delimiter * (len(no_time) + 2 + counted)],  # Rotronic
     }[under]
-    lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", *clock, "A °C", "B"], counter)]
-    units_row = [row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]"])] if units != "none" else []  # the time's unit only where the time is a number
+    lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", *clock, "A °C", "B", "C"], counter)]
+    units_row = [row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]", "°C"])] if units != "none" else []  # the time's unit only where the time is a number
     # rows that describe the channels come straight under the header; empty rows and tags after them
     lines += [*units_row, *described] if under == "an empty row and a section tag" else [*described, *units_row]
     lines += [row([*time_cells(m), *(number(v) for v in values)], str(k + 1)) for k, (m, values) in enumerate(zip(t, temperatures, strict=True))]
@@ -333,9 +333,10 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     whole = folder / "whole.csv"
     whole.write_bytes(data)
     log = read_temperature_log(whole)
-    assert log.sensors == ("A °C", "B")
+    dew_point = under == "rows describing the channels"
+    assert log.sensors == (("A °C", "B") if dew_point else ("A °C", "B", "C"))
     np.testing.assert_allclose(log.time_min, t, atol=1e-9)
-    np.testing.assert_array_equal(log.temperature_C, [[float(f"{v:.2f}") for v in row] for row in temperatures])
+    np.testing.assert_array_equal(log.temperature_C, [[float(f"{v:.2f}") for v in row[: len(log.sensors)]] for row in temperatures])
     live = folder / "live.csv"
     live.write_bytes(b"")
     follower = LogFollower(live)
@@ -347,6 +348,7 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
         assert not rows.warnings
         times.extend(rows.time_min)
     np.testing.assert_allclose(times, t, atol=1e-9)
+    assert tuple(follower.sensors or ()) == log.sensors
 
 
 UNITS_LOG = "time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n" + "".join(
