@@ -341,8 +341,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 
     Every new row updates each sensor's filter (rows faster than one in 10 s, as
     10-s bins: --bin); a sensor may stop when its T∞ interval is within the tolerance,
-    the estimate has held still, and its residuals fit the model. The state file
-    lets a killed monitor resume.
+    the estimate has held still, and its residuals fit the model. Until then the
+    table says when each sensor, and the test, is expected to stop at the earliest
+    (on its present first-order course). The state file lets a killed monitor resume.
     """
     import json
     import sys
