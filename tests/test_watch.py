@@ -747,6 +747,18 @@ def test_watch_in_a_terminal_draws_the_live_table(tmp_path):
     assert "T∞ ± 95 %" in screen and "T10" in screen and "The test can stop at t = 305 min" in screen
 
 
+def test_watch_in_a_terminal_rings_the_bell_at_a_live_decision(tmp_path):
+    """At the machine the decision is heard as well as seen (not in a replay)."""
+    from mtident.io import sample_log_path
+
+    log = tmp_path / "warmup.csv"
+    log.write_bytes(sample_log_path().read_bytes())
+    code, screen = in_a_terminal(["thermal", "watch", str(log), "--timeout", "1"], tmp_path)
+    assert code == 0 and "The test can stop at t = 305 min" in screen and "\a" in screen
+    code, screen = in_a_terminal(["thermal", "watch", str(log), "--replay", "--state", "r.json"], tmp_path)
+    assert code == 0 and "The test can stop" in screen and "\a" not in screen
+
+
 def test_watch_in_a_terminal_at_the_start_of_a_test(tmp_path):
     """Started on a log shorter than the start window (the usual case at the machine), the table
     shows the sensors collecting; this was a TypeError in the live view and the final table."""

@@ -501,6 +501,8 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         if result["stop_time_min"] is not None:
             gain = f"; {result['time_saved_min']:.0f} min before the predicted equilibrium" if result.get("time_saved_min") is not None else ""
             Console().print(f"[bold green]The test can stop at t = {minutes(monitor.stop_time or 0.0)} min{gain}.[/]")
+            if live_view and not replay:
+                Console().bell()  # the engineer may be at the other end of the machine
         else:
             Console().print("[bold yellow]Not yet: keep the test running.[/]")
             forecast = _expected_stop(monitor)
