@@ -489,6 +489,10 @@ def test_fast_plus_slow_in_a_measured_room_is_identified_again_from_the_slow_par
         resumed = Monitor.from_dict(json.loads(json.dumps(first.to_dict())))
         resumed.feed(T[cut:], sensor[cut:, None], ambient[cut:])
         assert resumed.result() == result
+        # while a re-identification waits, the sensor is not expected to stop before it and a hold
+        pending = first.restart_from[0]
+        if np.isfinite(pending):
+            assert first.expected_stop_times()[0] >= pending + 30 + 12
 
 
 @pytest.mark.parametrize("coupling", ["lagged", "direct"])

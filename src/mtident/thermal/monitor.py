@@ -948,7 +948,8 @@ class Monitor:
         far). The expected time is the first at which the interval fits
         (rule 1), no earlier than the hold (rule 2, from the last T∞ outside the
         hold's band, or the start of the hold after a restart) and the minimum
-        duration allow. It assumes the first-order course holds: a slow mode not
+        duration allow (and, for a sensor to be identified again, its restart).
+        It assumes the first-order course holds: a slow mode not
         yet seen, a drifting room or a failed model check move the real stop
         later (``benchmarks/bench_watch.py`` measures how far).
 
@@ -985,6 +986,9 @@ class Monitor:
         last_outside = history[::-1, 0][np.argmax(outside[::-1], axis=0)]
         held = now - history[0, 0] >= self._hold(now) - 1e-9
         anchor = np.where(outside.any(axis=0), last_outside, -np.inf if held else history[0, 0])
+        # a sensor to be identified again (a failed model check with a room sensor) starts its hold then
+        if self.restart_from is not None:
+            anchor = np.fmax(anchor, np.array(self.restart_from) + self.settings.restart_delay_min)
         # Coarse steps keep the forecast cheap: m samples in one step carry their mean, whose noise
         # variance is R/m, and the room's wander grows with the time, not with the steps.
         dt_data = self.median_dt or 1.0
