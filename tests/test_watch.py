@@ -205,6 +205,7 @@ def test_the_expected_stop_before_a_course_after_the_decision_and_for_a_cold_sen
     assert [d["expected_stop_time_min"] for d in monitor.result()["sensors"]] == [times[0], None]
     done = replay({"heating": heating, "cold": cold})
     assert done.stop_time is not None and done.expected_stop_time() == done.stop_time == done.result()["expected_stop_time_min"]
+    assert done.expected_stop_times()[0] == done.stop_time and np.isnan(done.expected_stop_times()[1])  # the cold sensor is left out
 
 
 @pytest.mark.parametrize("seed", range(3))

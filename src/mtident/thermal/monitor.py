@@ -960,9 +960,9 @@ class Monitor:
         """
         S = len(self.sensors)
         expected = np.full(S, np.nan)
-        if self.carry is None or self.last_t is None or self.stop_time is not None:
-            if self.stop_time is not None:
-                expected[:] = self.stop_time
+        if self.stop_time is not None:  # decided: the sensors in the decision stopped then
+            return np.where([st.left_out for st in self.status()], np.nan, self.stop_time)
+        if self.carry is None or self.last_t is None:
             return expected
         assert self.observed is not None and self.nis_sum is not None
         status = self.status()
