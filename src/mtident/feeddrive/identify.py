@@ -25,7 +25,7 @@ from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import CovarianceError, InputError, NegativeWeightWarning
 from mtident.feeddrive.model import exact_step, input_matrix, rk4_linear_step, system_matrix
 from mtident.feeddrive.params import IDENTIFIED, FeedDriveParameters, validate
-from mtident.feeddrive.simulate import RESPONSE_COLUMNS, Response, run_responses, simulate, substeps_for
+from mtident.feeddrive.simulate import FORCE_COLUMNS, RESPONSE_COLUMNS, Response, run_responses, simulate, substeps_for
 from mtident.ukf import FilterConfig, GaussianState, MerweScaledSigmaPoints, filter_step, initial_carry
 
 __all__ = ["FeedDriveIdentification", "identify_feed_drive", "MEASUREMENT_SETS", "PRESENT", "default_guess"]
@@ -174,6 +174,41 @@ def _open_loop_check(estimate: FeedDriveParameters, response: Response, states: 
     ]
 
 
+# A force this close to one sine (the share of its variance a sine at its strongest frequency explains)
+# excites one frequency only.
+_ONE_FREQUENCY_SHARE = 0.95
+
+
+def _one_frequency_note(forces: FloatArray, h: float) -> list[str]:
+    """A note where every force that acts is one sine: the record then shows the drive's response at
+    that frequency alone (an amplitude and a phase per response), too little to tell eight stiffness
+    and damping parameters apart; the filter may settle on a wrong set that fits it."""
+    acting = [k for k in range(forces.shape[1]) if np.ptp(forces[:, k]) > 0]
+    if not acting:
+        return []
+    t = np.arange(len(forces)) * h
+    found = []
+    for k in acting:
+        f = forces[:, k] - forces[:, k].mean()
+        spectrum = np.abs(np.fft.rfft(f))
+        peak = int(np.argmax(spectrum[1:])) + 1
+        # the strongest line, between two bins: the sine through it by least squares, at a few
+        # frequencies around the bin (a sine between bins leaks into its neighbours)
+        best, best_frequency = 0.0, 0.0
+        for frequency in (peak + np.linspace(-0.5, 0.5, 11)) / (len(f) * h):
+            basis = np.column_stack([np.sin(2 * np.pi * frequency * t), np.cos(2 * np.pi * frequency * t), np.ones_like(t)])
+            fitted = basis @ np.linalg.lstsq(basis, f, rcond=None)[0]
+            share = 1.0 - float(np.sum((f - fitted) ** 2) / np.sum(f**2))
+            best, best_frequency = max((best, best_frequency), (share, frequency))
+        if best < _ONE_FREQUENCY_SHARE:
+            return []
+        found.append(f"{FORCE_COLUMNS[k]} at {best_frequency:.3g} Hz")
+    return [
+        f"the excitation is one frequency ({', '.join(found)}): the record shows the drive's response at that frequency alone, "
+        "too little to tell its stiffness and damping parameters apart; an impulse, a step or a sweep excites every mode"
+    ]
+
+
 def identify_feed_drive(
     response: Response,
     guess: FeedDriveParameters | None = None,
@@ -238,7 +273,7 @@ def identify_feed_drive(
     basis = _parameter_basis(guess)
     m_inv = 1.0 / np.array([guess.Mt, guess.Mb, guess.Jb, guess.Jm])
     reference = guess.identified()
-    notes: list[str] = []
+    notes = _one_frequency_note(forces, h)
 
     # Scales: the RMS of each measured response; for the others, of a simulation of the
     # guess with the same input (only run when some response is not in the file).
