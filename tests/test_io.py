@@ -172,6 +172,29 @@ def test_a_follower_restarted_after_a_summer_time_change_does_not_count_rows_twi
     assert len(first.time_min) == 240 and again.time_min.tolist() == [240.0]
 
 
+def test_an_elapsed_clock_past_24_hours_is_read_as_elapsed_time(write_csv):
+    """A data-acquisition program's elapsed time as hh:mm:ss (a test of more than a day: 23:50:00,
+    24:00:00, 26:10:00) was refused at 24:00:00 as "neither a number nor a time stamp"; both
+    readers read it as minutes from the start, the file reader with a note."""
+    from mtident.io.follow import LogFollower
+
+    minutes = np.arange(0, 26 * 60 + 1, 10)
+    text = "Time,Channel 1 (°C)\n" + "".join(f"{m // 60:02d}:{m % 60:02d}:00,{20 + m / 1000:.3f}\n" for m in minutes)
+    log = read_temperature_log(write_csv(text))
+    np.testing.assert_allclose(log.time_min, minutes)
+    assert log.notes == ("time column 'Time' read as hours:minutes:seconds elapsed (it runs past 24:00:00)",)
+    live = write_csv(text[: text.index("23:50:00")], "live.csv")
+    follower = LogFollower(live)
+    first = follower.poll()
+    live.write_text(text)
+    second = follower.poll()
+    np.testing.assert_allclose(np.concatenate([first.time_min, second.time_min]), minutes)
+    assert not second.warnings
+    # a cell past 24:00:00 that is no clock is still refused
+    with pytest.raises(InputError, match="row 5: '24:75:00' is neither a number nor a time stamp like the first one"):
+        read_temperature_log(write_csv("Time,T1\n23:30:00,20\n23:40:00,20\n23:50:00,20\n24:75:00,20\n25:00:00,20\n25:10:00,20\n"))
+
+
 def test_excel_sep_line_states_the_delimiter(write_csv):
     """Header names with commas in them: as many ',' as ';' in the header. Excel's "sep=;"
     decides, or else the data rows agree with both and the tie goes to ';'."""

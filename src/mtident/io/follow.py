@@ -36,7 +36,19 @@ from mtident.exceptions import InputError
 from mtident.io.columns import check_unique_names, choose_time_column, millisecond_column, temperature_columns, text_only_cells
 from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, serial_date_hint, time_unit_assumed, time_unit_factor
-from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, clock_change, clock_change_note, date_and_clock, has_utc_offset, other_date_order, stamp_format
+from mtident.io.stamps import (
+    CLOCK_DAY_ZERO_MIN,
+    IMPLAUSIBLE_STEP_MIN,
+    TIME_OF_DAY_FORMATS,
+    after_midnight,
+    clock_change,
+    clock_change_note,
+    date_and_clock,
+    elapsed_minutes,
+    has_utc_offset,
+    other_date_order,
+    stamp_format,
+)
 from mtident.io.units import celsius_conversion
 
 __all__ = ["LogFollower", "Rows"]
@@ -300,7 +312,14 @@ class LogFollower:
 
         swapped = other_date_order(self.time_format)
         if swapped is None or self.first_stamp is None or self.origin is None or self.last_time is None:
-            return minutes(text, self.time_format)
+            try:
+                return minutes(text, self.time_format)
+            except ValueError:
+                elapsed = elapsed_minutes(text) if self.time_format in TIME_OF_DAY_FORMATS else None
+                if elapsed is None:
+                    raise
+                # a clock past 24:00:00 is elapsed time: on from the day a time of day is read on
+                return CLOCK_DAY_ZERO_MIN + elapsed
         try:
             stamp = minutes(text, self.time_format)
             if stamp - self.origin - self.last_time < IMPLAUSIBLE_STEP_MIN:

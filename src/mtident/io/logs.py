@@ -31,7 +31,18 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.columns import check_unique_names, choose_time_column, millisecond_column, temperature_columns, text_only_cells
 from mtident.io.dialect import CsvDialect, read_csv
-from mtident.io.stamps import IMPLAUSIBLE_STEP_MIN, TIME_OF_DAY_FORMATS, after_midnight, clock_change, clock_change_note, date_and_clock, has_utc_offset, other_date_order, stamp_format
+from mtident.io.stamps import (
+    IMPLAUSIBLE_STEP_MIN,
+    TIME_OF_DAY_FORMATS,
+    after_midnight,
+    clock_change,
+    clock_change_note,
+    date_and_clock,
+    elapsed_minutes,
+    has_utc_offset,
+    other_date_order,
+    stamp_format,
+)
 from mtident.io.units import celsius_conversion, number_without_unit
 
 if TYPE_CHECKING:
@@ -200,6 +211,12 @@ def _parse_time(
             other = pd.to_datetime(text, format=swapped, errors="coerce", utc=True)
             if other.notna().all() and (stamps.isna().any() or _longest_step(other) < min(_longest_step(stamps), IMPLAUSIBLE_STEP_MIN)):
                 stamps = other
+        elapsed = [elapsed_minutes(str(cell)) for cell in text] if fmt in TIME_OF_DAY_FORMATS and stamps.isna().any() else []
+        if elapsed and None not in elapsed:
+            # a clock that runs past 24:00:00 is elapsed time since the start of the test
+            notes.append(f"time column {header!r} read as hours:minutes:seconds elapsed (it runs past 24:00:00)")
+            stamps = pd.Series(pd.Timestamp(0, tz="UTC") + pd.to_timedelta(np.array(elapsed, dtype=float), unit="min"), index=text.index)
+            fmt = None  # not a time of day: no step back over midnight
         if stamps.isna().any():
             row = int(stamps.isna().to_numpy().argmax())
             msg = (
@@ -212,7 +229,7 @@ def _parse_time(
             previous: float | None = None
             for k, t in enumerate(values):  # row by row, as the live follower reads them
                 values[k] = previous = after_midnight(previous, float(t))
-        elif not has_utc_offset(str(text.iloc[0])) and len(values) > 2:
+        elif fmt is not None and not has_utc_offset(str(text.iloc[0])) and len(values) > 2:
             values = _across_clock_changes(values, stamps.iloc[0].timestamp() / 60.0, column, first_row, notes)
     if sub_second_min is not None:
         values = values + sub_second_min

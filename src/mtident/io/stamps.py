@@ -26,6 +26,8 @@ __all__ = [
     "MINUTES_PER_DAY",
     "IMPLAUSIBLE_STEP_MIN",
     "clock_change",
+    "elapsed_minutes",
+    "CLOCK_DAY_ZERO_MIN",
     "clock_change_note",
     "has_utc_offset",
 ]
@@ -148,3 +150,20 @@ def clock_change_note(shift: float, where: str, before: str, after: str) -> str:
         f"the time stamps jump an hour {where} ({before} then {after}): read as the start of summer time; the rows from there on are taken an hour earlier "
         "(if the logger's clock does not change for summer time, the log paused for an hour here)"
     )
+
+
+# Elapsed time written as a clock that runs past 24:00:00 ("26:15:00"): hours, minutes, seconds.
+_ELAPSED = re.compile(r"(\d+):([0-5]\d):([0-5]\d(?:\.\d+)?)")
+# the day a time of day alone is read on (strptime's 1 January 1900), in minutes since 1970
+CLOCK_DAY_ZERO_MIN = (dt.datetime(1900, 1, 1) - _EPOCH).total_seconds() / 60.0
+
+
+def elapsed_minutes(cell: str) -> float | None:
+    """An elapsed time written as hours:minutes:seconds, in minutes (``26:15:30`` is 1575.5), or
+    None: a log's time column that looks like a time of day but runs past 24:00:00 (a test of
+    more than a day, timed from its start)."""
+    matched = _ELAPSED.fullmatch(cell.strip())
+    if matched is None:
+        return None
+    hours, mins, secs = matched.groups()
+    return 60.0 * int(hours) + int(mins) + float(secs) / 60.0
