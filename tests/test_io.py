@@ -144,6 +144,47 @@ def test_a_local_clock_changed_for_summer_time_is_read_across_the_change(write_c
     assert not second.warnings and [n for n in second.notes if said.split(" at row")[0] in n and "after t = " in n]
 
 
+@settings(max_examples=40, deadline=None)
+@given(
+    day=st.sampled_from(["2026-10-25", "2026-11-01", "2026-03-29", "2026-03-08", "2026-04-05", "2026-09-27"]),
+    start_min=st.integers(0, 170),
+    step_s=st.sampled_from([1, 10, 60, 300]),
+    back=st.booleans(),
+    fmt=st.sampled_from(["%d.%m.%Y %H:%M:%S", "%Y-%m-%dT%H:%M:%S", "%m/%d/%Y %I:%M:%S %p"]),
+    cuts=st.lists(st.floats(0.0, 1.0), max_size=3),
+)
+def test_any_summer_time_change_reads_alike_whole_and_live(tmp_path_factory, day, start_min, step_s, back, fmt, cuts):
+    """A local clock put back or forward an hour at 02:00 or 03:00 (as Europe, North America and
+    Australia do) under any sampling interval and stamp format: the file reader and the follower,
+    fed in random pieces, both read the true elapsed time."""
+    import datetime as dt
+
+    from mtident.io.follow import LogFollower
+
+    rows = max(int(7200 / step_s), 8) if step_s < 60 else int(14400 / step_s) + 1
+    first = dt.datetime.fromisoformat(day) + dt.timedelta(minutes=start_min)
+    change = dt.datetime.fromisoformat(day) + dt.timedelta(hours=3 if back and day.startswith("2026-10") else 2)
+    real = [first + dt.timedelta(seconds=step_s * k) for k in range(rows)]
+    clock = [r - dt.timedelta(hours=1) if back and r >= change else r + dt.timedelta(hours=1) if not back and r >= change else r for r in real]
+    text = "time,T1\n" + "".join(f"{c.strftime(fmt)},{20 + k / rows:.4f}\n" for k, c in enumerate(clock))
+    folder = tmp_path_factory.mktemp("summer")
+    whole = folder / "whole.csv"
+    whole.write_text(text)
+    expected = np.arange(rows) * step_s / 60.0
+    np.testing.assert_allclose(read_temperature_log(whole).time_min, expected, atol=1e-6)
+    data = text.encode()
+    live = folder / "live.csv"
+    live.write_bytes(b"")
+    follower, times = LogFollower(live), []
+    for a, b in zip([0, *sorted(int(c * len(data)) for c in cuts)], [*sorted(int(c * len(data)) for c in cuts), len(data)], strict=True):
+        with open(live, "ab") as out:
+            out.write(data[a:b])
+        polled = follower.poll()
+        assert not polled.warnings
+        times.extend(polled.time_min)
+    np.testing.assert_allclose(times, expected, atol=1e-6)
+
+
 def test_an_hour_back_that_is_no_summer_time_change_is_still_refused(write_csv):
     """At noon, on a Saturday, or in July the clock is not changed for summer time, and an hour
     back that is no change of the clock (a half-hour step back) is refused as before."""

@@ -406,7 +406,7 @@ class LogFollower:
             raw = t
             if previous_raw is not None and not 0.0 < raw - previous_raw <= 59.0 and self._local_dated_stamps():
                 assert self.origin is not None
-                shift = clock_change(self.origin + previous_raw, self.origin + raw, self.last_step or 1.0)
+                shift = clock_change(self.origin + previous_raw, self.origin + raw, self.last_step)
                 if shift:
                     self.clock_shift += shift
                     if self.last_time is None or raw + self.clock_shift > self.last_time:  # not said again on a re-read

@@ -250,10 +250,10 @@ def _across_clock_changes(values: FloatArray, first_min: float, column: pd.Serie
     changes taken out (:func:`~mtident.io.stamps.clock_change`); a note for each, naming the row
     and its cells. ``first_min``: the first stamp in minutes since 1970 as written."""
     steps = np.diff(values)
-    forward = steps[steps > 0]
-    interval = float(np.median(forward)) if len(forward) else 1.0
     shifted = values.copy()
     for k in np.flatnonzero((steps <= 0) | (steps > 59.0)) + 1:
+        # the step before, as read (the follower knows no other when the row comes)
+        interval = float(shifted[k - 1] - shifted[k - 2]) if k >= 2 else None
         shift = clock_change(first_min + values[k - 1], first_min + values[k], interval)
         if shift:
             shifted[k:] += shift

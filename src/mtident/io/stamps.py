@@ -122,20 +122,21 @@ def has_utc_offset(stamp: str) -> bool:
     return bool(_UTC_OFFSET.search(stamp.strip()))
 
 
-def clock_change(before_min: float, after_min: float, interval_min: float) -> float:
+def clock_change(before_min: float, after_min: float, interval_min: float | None) -> float:
     """Minutes the local clock was put back between two stamps written without an offset:
     +60 where summer time ended (02:59 then 02:00), −60 where it began (01:59 then 03:00), else 0.
 
     The stamps are minutes since 1970 as the clock wrote them. Told by the step: an hour back
     or forward more than the log's steps make it (corrected, it moves on by at most two
-    ``interval_min``), from a stamp between 01:00 and 04:00 of the clock to another, on a
+    ``interval_min``, the step before; None between a log's first two rows, where only the
+    hour and the day tell), from a stamp between 01:00 and 04:00 of the clock to another, on a
     Sunday of a month in which summer time begins or ends somewhere. A step back cannot be a
     real pause; a step forward could be one of an hour to the minute at that hour of that
     Sunday, which the readers' notes name.
     """
     step = after_min - before_min
     shift = 60.0 if step < 0 else -60.0
-    if not 0.0 < step + shift <= 2.0 * interval_min + 1e-9:
+    if not 0.0 < step + shift <= (60.0 if interval_min is None else 2.0 * interval_min + 1e-9):
         return 0.0
     before, after = (_EPOCH + dt.timedelta(minutes=m) for m in (before_min, after_min))
     on_a_change_day = after.weekday() == 6 and after.month in _CLOCK_CHANGE_MONTHS and after.date() == before.date()
