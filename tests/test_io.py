@@ -653,14 +653,29 @@ def test_dashed_day_first_stamps(write_csv, fmt):
 
 def test_spreadsheet_serial_dates_are_named_not_read_as_minutes(write_csv):
     """A date cell saved as a number (46348.33333 is 22.11.2026 08:00): read as minutes, a 2-h
-    test lasted 0.08 min and was identified as λ = 23/min, "fits". It is refused with the unit to
-    give; --time-unit d reads it."""
+    test lasted 0.08 min and was identified as λ = 23/min, "fits". In a column named as dates it
+    is read in days, with a note (both readers, also resumed); in any other it is refused with the
+    unit to give; --time-unit d reads it, --time-unit min as minutes."""
+    from mtident.io.follow import LogFollower
+
     rows = "".join(f"{46348.333333 + k / 1440:.8f},{26.7 - 8.8 * np.exp(-0.016 * k):.2f}\n" for k in range(60))
-    path = write_csv("Date,T1\n" + rows)
-    with pytest.raises(InputError, match=r"'Date' looks like spreadsheet serial dates \(days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00\), not minutes: give --time-unit d"):
+    path = write_csv("Time,T1\n" + rows)
+    with pytest.raises(InputError, match=r"'Time' looks like spreadsheet serial dates \(days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00\), not minutes: give --time-unit d"):
         read_temperature_log(path)
     np.testing.assert_allclose(read_temperature_log(path, time_unit="d").time_min, np.arange(60.0), atol=1e-4)
     assert read_temperature_log(path, time_unit="min").time_min[-1] == pytest.approx(59 / 1440, abs=1e-6)
+    dated = write_csv("Date,T1\n" + rows, "dated.csv")
+    log = read_temperature_log(dated)
+    np.testing.assert_allclose(log.time_min, np.arange(60.0), atol=1e-4)
+    said = "time column 'Date' read as spreadsheet serial dates (days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00); give --time-unit min if it is minutes"
+    assert log.notes == (said,)
+    live = write_csv("Date,T1\n" + "".join(rows.splitlines(True)[:30]), "live.csv")
+    follower = LogFollower(live)
+    first = follower.poll()
+    assert first.notes == (said,)
+    live.write_text("Date,T1\n" + rows)
+    second = LogFollower.resume(live, json.loads(json.dumps(follower.position())), None, None).poll()
+    np.testing.assert_allclose(np.concatenate([first.time_min, second.time_min]), np.arange(60.0), atol=1e-4)
 
 
 @pytest.mark.parametrize("head", ["Time_ms,A\n", "Time [ms],A\n", "time,A\nms,°C\n"])

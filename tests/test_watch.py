@@ -1083,13 +1083,14 @@ def test_watch_bin_option_sets_the_bin_length(tmp_path):
 def test_watch_names_spreadsheet_serial_dates_and_restarts_in_days(tmp_path):
     """The follower tells serial dates at the second row (it read them as 0.0007-min steps and
     stayed 'collecting'); a state saved after the first row is not resumed with another
-    --time-unit, whose origin would be in other units."""
+    --time-unit, whose origin would be in other units. (A column named as dates is read in days:
+    test_io; this one is named as a time.)"""
     log = tmp_path / "serial.csv"
-    log.write_text("Date,T1\n46348.33333300,17.90\n")
+    log.write_text("Time,T1\n46348.33333300,17.90\n")
     state = tmp_path / "s.json"
     first = mtident("thermal", "watch", str(log), "--timeout", "0", "--state", str(state), cwd=tmp_path)
     assert first.returncode == 0, first.stderr
-    log.write_text("Date,T1\n" + "".join(f"{46348.333333 + k / 1440:.8f},{26.7 - 8.8 * np.exp(-0.016 * k):.2f}\n" for k in range(120)))
+    log.write_text("Time,T1\n" + "".join(f"{46348.333333 + k / 1440:.8f},{26.7 - 8.8 * np.exp(-0.016 * k):.2f}\n" for k in range(120)))
     refused = mtident("thermal", "watch", str(log), "--replay", "--state", str(state), cwd=tmp_path)
     assert refused.returncode == 2 and "looks like spreadsheet serial dates" in refused.stderr and "Traceback" not in refused.stderr
     days = mtident("thermal", "watch", str(log), "--replay", "--json", "--time-unit", "d", "--state", str(state), cwd=tmp_path)

@@ -35,10 +35,11 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.columns import check_unique_names, choose_time_column, millisecond_column, temperature_columns, text_only_cells
 from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
-from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, seconds_hint, serial_date_hint, time_unit_assumed, time_unit_factor
+from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, names_a_date, seconds_hint, serial_date_hint, serial_date_note, time_unit_assumed, time_unit_factor
 from mtident.io.stamps import (
     CLOCK_DAY_ZERO_MIN,
     IMPLAUSIBLE_STEP_MIN,
+    MINUTES_PER_DAY,
     TIME_OF_DAY_FORMATS,
     after_midnight,
     clock_change,
@@ -108,10 +109,12 @@ class LogFollower:
     # minutes added to the local stamps since summer time ended (+60) or began (−60) during the log
     clock_shift: float = 0.0
     last_step: float | None = None  # minutes between the last two rows taken (a clock change is told by it)
+    serial_days: bool = False  # a column named as dates holds spreadsheet serial dates: read in days
     # derived once from the header and the options, not saved: (minutes per unit, unit assumed) of a
     # numeric time column (looked up on every row, it cost an eighth of a 28,800-row replay)
     _time_scale: tuple[float, bool] | None = field(default=None, repr=False, compare=False)
     _last_stamp: str | None = field(default=None, repr=False, compare=False)  # the last row's time cell, for a note
+    _notes: list[str] = field(default_factory=list, repr=False, compare=False)  # said while reading a time, for the poll's notes
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -131,6 +134,7 @@ class LogFollower:
             "first_stamp": self.first_stamp,
             "clock_shift": self.clock_shift,
             "last_step": self.last_step,
+            "serial_days": self.serial_days,
         }
 
     @classmethod
@@ -157,6 +161,7 @@ class LogFollower:
             first_stamp=position.get("first_stamp"),
             clock_shift=float(position.get("clock_shift", 0.0)),
             last_step=position.get("last_step"),
+            serial_days=bool(position.get("serial_days", False)),
         )
 
     def _set_header(self, line: str, rows: list[list[str]]) -> list[str]:
@@ -267,7 +272,7 @@ class LogFollower:
             time_name = self.header[self.columns[0]]
             if self._time_scale is None:
                 stated = self.dialect.time_unit(time_name)
-                self._time_scale = (time_unit_factor(time_name, self.time_unit, stated), time_unit_assumed(time_name, self.time_unit, stated))
+                self._time_scale = (MINUTES_PER_DAY, False) if self.serial_days else (time_unit_factor(time_name, self.time_unit, stated), time_unit_assumed(time_name, self.time_unit, stated))
             scale, assumed = self._time_scale
             stamp = raw * scale
         except ValueError:
@@ -282,7 +287,13 @@ class LogFollower:
             serial = None
             if self.origin is not None and self.last_time == 0.0 and assumed:
                 serial = serial_date_hint(time_name, self.origin, stamp - self.origin)
-            if serial is not None:
+            if serial is not None and names_a_date(time_name):
+                # read in days from here on, the first row's too (it is t = 0 whatever its unit)
+                assert self.origin is not None
+                self._notes.append(serial_date_note(time_name, self.origin))
+                self.serial_days, self._time_scale = True, (MINUTES_PER_DAY, False)
+                self.origin, stamp = self.origin * MINUTES_PER_DAY, raw * MINUTES_PER_DAY
+            elif serial is not None:
                 msg = f"{self.path}: {serial}"
                 raise InputError(msg)
         if self.origin is None:
@@ -437,4 +448,6 @@ class LogFollower:
             previous_raw = raw
             times.append(t)
             rows.append(values)
+        notes += self._notes
+        self._notes.clear()
         return Rows(np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings), tuple(notes))

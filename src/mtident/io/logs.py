@@ -33,6 +33,7 @@ from mtident.io.columns import check_unique_names, choose_time_column, milliseco
 from mtident.io.dialect import CsvDialect, read_csv
 from mtident.io.stamps import (
     IMPLAUSIBLE_STEP_MIN,
+    MINUTES_PER_DAY,
     TIME_OF_DAY_FORMATS,
     after_midnight,
     clock_change,
@@ -48,7 +49,7 @@ from mtident.io.units import celsius_conversion, number_without_unit
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES", "time_unit_assumed", "seconds_hint", "serial_date_hint", "UNLIKELY_MINUTES", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
+__all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES", "time_unit_assumed", "seconds_hint", "serial_date_hint", "serial_date_note", "names_a_date", "UNLIKELY_MINUTES", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
 
 # A PT100 channel with a broken wire reads far outside any machine-tool temperature.
 OPEN_CIRCUIT_HIGH_C = 400.0
@@ -152,6 +153,19 @@ def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) ->
     return time_unit is None and stated is None and _suffix_unit(header) is None
 
 
+def names_a_date(header: str) -> bool:
+    """Whether a time column's name says it holds dates (``Date``, ``Date/Time``, ``Datum``):
+    spreadsheet serial dates in it are read as days, not refused."""
+    key = header.lower()
+    return any(word in key for word in ("date", "datum", "fecha", "日付", "日時"))
+
+
+def serial_date_note(header: str, first: float) -> str:
+    """What a reader says when it reads a time column's spreadsheet serial dates as days."""
+    when = dt.datetime(1899, 12, 30) + dt.timedelta(seconds=round(first * 86_400.0))
+    return f"time column {header!r} read as spreadsheet serial dates (days since 30.12.1899: {first:.5f} is {when:%d.%m.%Y %H:%M:%S}); give --time-unit min if it is minutes"
+
+
 def serial_date_hint(header: str, first: float, step: float) -> str | None:
     """A message if a time column read as minutes holds spreadsheet serial dates (days since
     30.12.1899: 46348.33 is 22.11.2026 08:00, as a spreadsheet saves a date cell formatted as a
@@ -193,7 +207,10 @@ def _parse_time(
     elif numeric.notna().all():
         values = numeric.to_numpy(dtype=float) * time_unit_factor(header, time_unit, stated_unit)
         serial = serial_date_hint(header, values[0], float(np.median(np.diff(values)))) if len(values) > 1 and time_unit_assumed(header, time_unit, stated_unit) else None
-        if serial is not None:
+        if serial is not None and names_a_date(header):
+            notes.append(serial_date_note(header, float(values[0])))
+            values = values * MINUTES_PER_DAY
+        elif serial is not None:
             msg = f"{source}: {serial}"
             raise InputError(msg)
     else:
