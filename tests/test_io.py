@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -144,6 +145,22 @@ def test_a_local_clock_changed_for_summer_time_is_read_across_the_change(write_c
     assert not second.warnings and [n for n in second.notes if said.split(" at row")[0] in n and "after t = " in n]
 
 
+def followed_in_pieces(live: Path, data: bytes, cuts: list[int]):  # noqa: ANN201 - (LogFollower, times)
+    """A log written to ``live`` in pieces cut at ``cuts`` (bytes), the follower polling after each:
+    the follower, and the times it read (no warning on the way)."""
+    from mtident.io.follow import LogFollower
+
+    live.write_bytes(b"")
+    follower, times = LogFollower(live), []
+    for a, b in zip([0, *sorted(set(cuts))], [*sorted(set(cuts)), len(data)], strict=True):
+        with open(live, "ab") as out:
+            out.write(data[a:b])
+        polled = follower.poll()
+        assert not polled.warnings
+        times.extend(polled.time_min)
+    return follower, times
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     day=st.sampled_from(["2026-10-25", "2026-11-01", "2026-03-29", "2026-03-08", "2026-04-05", "2026-09-27"]),
@@ -159,7 +176,6 @@ def test_any_summer_time_change_reads_alike_whole_and_live(tmp_path_factory, day
     fed in random pieces, both read the true elapsed time."""
     import datetime as dt
 
-    from mtident.io.follow import LogFollower
 
     rows = max(int(7200 / step_s), 8) if step_s < 60 else int(14400 / step_s) + 1
     first = dt.datetime.fromisoformat(day) + dt.timedelta(minutes=start_min)
@@ -173,15 +189,7 @@ def test_any_summer_time_change_reads_alike_whole_and_live(tmp_path_factory, day
     expected = np.arange(rows) * step_s / 60.0
     np.testing.assert_allclose(read_temperature_log(whole).time_min, expected, atol=1e-6)
     data = text.encode()
-    live = folder / "live.csv"
-    live.write_bytes(b"")
-    follower, times = LogFollower(live), []
-    for a, b in zip([0, *sorted(int(c * len(data)) for c in cuts)], [*sorted(int(c * len(data)) for c in cuts), len(data)], strict=True):
-        with open(live, "ab") as out:
-            out.write(data[a:b])
-        polled = follower.poll()
-        assert not polled.warnings
-        times.extend(polled.time_min)
+    _, times = followed_in_pieces(folder / "live.csv", data, [int(c * len(data)) for c in cuts])
     np.testing.assert_allclose(times, expected, atol=1e-6)
 
 
@@ -347,7 +355,6 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     file's times and temperatures (a channel the description rows call a dew point left out)."""
     import datetime as dt
 
-    from mtident.io.follow import LogFollower
 
     decimal_comma = decimal_comma and delimiter != ","
     t = np.arange(0.0, 25.0) * 1.5
@@ -401,16 +408,7 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     assert log.sensors == (("A °C", "B") if dew_point else ("A °C", "B", "C"))
     np.testing.assert_allclose(log.time_min, t, atol=1e-9)
     np.testing.assert_array_equal(log.temperature_C, [[float(f"{v:.2f}") for v in row[: len(log.sensors)]] for row in temperatures])
-    live = folder / "live.csv"
-    live.write_bytes(b"")
-    follower = LogFollower(live)
-    times: list[float] = []
-    for a, b in zip([0, *sorted(set(cuts))], [*sorted(set(cuts)), len(data)], strict=True):
-        with open(live, "ab") as out:
-            out.write(data[a:b])
-        rows = follower.poll()
-        assert not rows.warnings
-        times.extend(rows.time_min)
+    follower, times = followed_in_pieces(folder / "live.csv", data, cuts)
     np.testing.assert_allclose(times, t, atol=1e-9)
     assert tuple(follower.sensors or ()) == log.sensors
 
