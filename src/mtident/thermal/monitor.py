@@ -280,6 +280,9 @@ class Monitor:
     # derived from the tuning once per process (not saved): the step needs them every sample
     _config: FilterConfig | None = field(default=None, repr=False, compare=False)
     _weights: SigmaWeights | None = field(default=None, repr=False, compare=False)
+    # the last forecast of the stop and what it was made at (samples, time, horizon): result(),
+    # the table and the picture ask for it several times between two samples
+    _forecast: tuple[tuple[int, float | None, float], FloatArray] | None = field(default=None, repr=False, compare=False)
     d4_sum: FloatArray | None = None
     d4_count: FloatArray | None = None
     # The raw readings, per sensor: for each display step whether every one was a whole multiple of
@@ -958,6 +961,14 @@ class Monitor:
         without a course yet (collecting, no steady state yet), or one whose
         interval does not fit within ``horizon_min`` from now.
         """
+        key = (self.samples, self.last_t, horizon_min)
+        if self._forecast is not None and self._forecast[0] == key:
+            return self._forecast[1].copy()
+        expected = self._expected_stop_times(horizon_min)
+        self._forecast = (key, expected.copy())
+        return expected
+
+    def _expected_stop_times(self, horizon_min: float) -> FloatArray:
         S = len(self.sensors)
         expected = np.full(S, np.nan)
         if self.stop_time is not None:  # decided: the sensors in the decision stopped then
