@@ -789,7 +789,12 @@ def test_watch_of_a_test_under_way_says_when_it_expects_to_stop(tmp_path):
     out = mtident("thermal", "watch", str(log), "--replay", "--state", "b.json", cwd=tmp_path)
     assert "stop ≈ (min)" in out.stdout
     expected = round(data["expected_stop_time_min"])
-    assert f"Expected stop: t ≈ {expected} min, in {expected - 60} min, at the earliest: on the present first-order courses" in " ".join(out.stdout.split())
+    assert f"Expected stop: t ≈ {expected} min, in {expected - 60} min, at the earliest: on the present first-order courses (a slower mode or a drifting room moves it later)" in " ".join(out.stdout.split())
+    # with a room sensor the room is in the model: only a slower mode can move it
+    room = tmp_path / "with_room.csv"
+    room.write_text(csv_text(T[:61], {"A": first_order(T[:61]) + 0.02 * rng.standard_normal(61), "room": 17.9 + 0.02 * rng.standard_normal(61)}))
+    out = mtident("thermal", "watch", str(room), "--ambient", "room", "--replay", "--state", "c.json", cwd=tmp_path)
+    assert "on the present first-order courses (a slower mode moves it later)" in " ".join(out.stdout.split())
 
 
 def test_watch_run_again_after_its_decision_gives_the_same_answer(tmp_path):

@@ -308,9 +308,10 @@ def _expected_stop(monitor, times: np.ndarray | None = None) -> str | None:  # n
         return f"expected stop: not foreseeable yet ({', '.join(open_)}: no first-order course yet, or an interval that does not narrow enough on it)"
     # the forecast follows the present first-order courses: a slower mode or a drifting room only
     # delays the rule (bench_watch: at 45 min, first order within a median 4 min, fast + slow 245 min early)
+    later = "a slower mode" if monitor.room_measured else "a slower mode or a drifting room"  # a measured room is in the model
     return (
         f"expected stop: t ≈ {minutes(round(whole))} min, in {minutes(round(whole - monitor.latest_time))} min, at the earliest: "
-        "on the present first-order courses (a slower mode or a drifting room moves it later)"
+        f"on the present first-order courses ({later} moves it later)"
     )
 
 
