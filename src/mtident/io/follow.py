@@ -114,7 +114,6 @@ class LogFollower:
     # numeric time column (looked up on every row, it cost an eighth of a 28,800-row replay)
     _time_scale: tuple[float, bool] | None = field(default=None, repr=False, compare=False)
     _last_stamp: str | None = field(default=None, repr=False, compare=False)  # the last row's time cell, for a note
-    _notes: list[str] = field(default_factory=list, repr=False, compare=False)  # said while reading a time, for the poll's notes
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -264,8 +263,9 @@ class LogFollower:
         probe._data_lines(complete.splitlines(), [])
         return probe.sensors
 
-    def _parse_time(self, text: str) -> float:
-        """Minutes relative to the first sample; raises ValueError for an unreadable cell."""
+    def _parse_time(self, text: str, notes: list[str]) -> float:
+        """Minutes relative to the first sample; raises ValueError for an unreadable cell; what it
+        finds out about the time column (serial dates read as days) goes to ``notes``."""
         assert self.header is not None and self.dialect is not None
         try:
             raw = self.dialect.number(text)
@@ -290,7 +290,7 @@ class LogFollower:
             if serial is not None and names_a_date(time_name):
                 # read in days from here on, the first row's too (it is t = 0 whatever its unit)
                 assert self.origin is not None
-                self._notes.append(serial_date_note(time_name, self.origin))
+                notes.append(serial_date_note(time_name, self.origin))
                 self.serial_days, self._time_scale = True, (MINUTES_PER_DAY, False)
                 self.origin, stamp = self.origin * MINUTES_PER_DAY, raw * MINUTES_PER_DAY
             elif serial is not None:
@@ -406,7 +406,7 @@ class LogFollower:
                 continue
             try:
                 cell = line[self.columns[0]].strip() if self.clock_column is None else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}"
-                t = self._parse_time(cell)
+                t = self._parse_time(cell, notes)
                 if self.millisecond_column is not None:
                     t += dialect.number(line[self.millisecond_column]) / 60_000.0
             except InputError:  # a ValueError too, but about the whole log, not this row
@@ -448,6 +448,4 @@ class LogFollower:
             previous_raw = raw
             times.append(t)
             rows.append(values)
-        notes += self._notes
-        self._notes.clear()
         return Rows(np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings), tuple(notes))

@@ -160,10 +160,15 @@ def names_a_date(header: str) -> bool:
     return any(word in key for word in ("date", "datum", "fecha", "日付", "日時"))
 
 
+def _serial_date(first: float) -> str:
+    """A spreadsheet serial date (days since 30.12.1899) and the date it is, for a message."""
+    when = dt.datetime(1899, 12, 30) + dt.timedelta(seconds=round(first * 86_400.0))
+    return f"days since 30.12.1899: {first:.5f} is {when:%d.%m.%Y %H:%M:%S}"
+
+
 def serial_date_note(header: str, first: float) -> str:
     """What a reader says when it reads a time column's spreadsheet serial dates as days."""
-    when = dt.datetime(1899, 12, 30) + dt.timedelta(seconds=round(first * 86_400.0))
-    return f"time column {header!r} read as spreadsheet serial dates (days since 30.12.1899: {first:.5f} is {when:%d.%m.%Y %H:%M:%S}); give --time-unit min if it is minutes"
+    return f"time column {header!r} read as spreadsheet serial dates ({_serial_date(first)}); give --time-unit min if it is minutes"
 
 
 def serial_date_hint(header: str, first: float, step: float) -> str | None:
@@ -172,8 +177,7 @@ def serial_date_hint(header: str, first: float, step: float) -> str | None:
     number): read as minutes, a 2-h test lasted 0.08 min and was identified as nonsense."""
     if not (20_000.0 <= first <= 80_000.0 and 0.0 < step <= 0.05 and first != math.floor(first)):  # 1954-2119, steps under 72 min
         return None
-    when = dt.datetime(1899, 12, 30) + dt.timedelta(seconds=round(first * 86_400.0))
-    return f"time column {header!r} looks like spreadsheet serial dates (days since 30.12.1899: {first:.5f} is {when:%d.%m.%Y %H:%M:%S}), not minutes: give --time-unit d (or --time-unit min if it is minutes)"
+    return f"time column {header!r} looks like spreadsheet serial dates ({_serial_date(first)}), not minutes: give --time-unit d (or --time-unit min if it is minutes)"
 
 
 def seconds_hint(header: str, span_min: float) -> str:
@@ -232,22 +236,22 @@ def _parse_time(
         if elapsed and None not in elapsed:
             # a clock that runs past 24:00:00 is elapsed time since the start of the test
             notes.append(f"time column {header!r} read as hours:minutes:seconds elapsed (it runs past 24:00:00)")
-            stamps = pd.Series(pd.Timestamp(0, tz="UTC") + pd.to_timedelta(np.array(elapsed, dtype=float), unit="min"), index=text.index)
-            fmt = None  # not a time of day: no step back over midnight
-        if stamps.isna().any():
+            values = np.array(elapsed, dtype=float)
+        elif stamps.isna().any():
             row = int(stamps.isna().to_numpy().argmax())
             msg = (
                 f"{source}: time column {header!r}, row {row + first_row}: {_cell(column.iloc[row])} is neither a number "
                 f"nor a time stamp {'like the first one' if fmt is not None and row > 0 else '(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:00:00)'}"
             )
             raise InputError(msg)
-        values = minutes_since_first(stamps)
-        if fmt in TIME_OF_DAY_FORMATS:
-            previous: float | None = None
-            for k, t in enumerate(values):  # row by row, as the live follower reads them
-                values[k] = previous = after_midnight(previous, float(t))
-        elif fmt is not None and not has_utc_offset(str(text.iloc[0])) and len(values) > 2:
-            values = _across_clock_changes(values, stamps.iloc[0].timestamp() / 60.0, column, first_row, notes)
+        else:
+            values = minutes_since_first(stamps)
+            if fmt in TIME_OF_DAY_FORMATS:
+                previous: float | None = None
+                for k, t in enumerate(values):  # row by row, as the live follower reads them
+                    values[k] = previous = after_midnight(previous, float(t))
+            elif not has_utc_offset(str(text.iloc[0])) and len(values) > 2:
+                values = _across_clock_changes(values, stamps.iloc[0].timestamp() / 60.0, column, first_row, notes)
     if sub_second_min is not None:
         values = values + sub_second_min
     steps = np.diff(values)

@@ -170,7 +170,7 @@ def plot_monitor(log, monitor, path: str | Path | None = None) -> Path | Figure:
     fig, axes = grid(len(log.sensors))
     status = monitor.status()
     now = monitor.last_t or 0.0
-    expected = monitor.expected_stop_times() if monitor.stop_time is None else np.full(len(status), np.nan)
+    expected = monitor.expected_stop_times()  # drawn only before the decision
     for s, ax in enumerate(axes):
         ax.plot(log.time_min, log.temperature_C[:, s], ".", ms=2.5, color="0.45", label="measured")
         st = status[s]
