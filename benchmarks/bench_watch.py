@@ -82,6 +82,22 @@ def machine_in_drifting_room(rate_per_min: float = 0.016, rise_C: float = 8.8) -
     return solution.y[0]
 
 
+def machine_in_wandering_room(rng: np.random.Generator, sigma_C_per_h: float, rate_per_min: float = 0.016, rise_C: float = 8.8):  # noqa: ANN201
+    """The papers' heat balance in a room that is a random walk of ``sigma_C_per_h`` (1σ in an hour).
+
+    The room the monitor assumes without a room sensor (``--room-wander``);
+    returns the machine's curve on ``T_LONG`` and the room's offset as a
+    function of time. Exact for a room held over each minute.
+    """
+    room_C = np.concatenate([[0.0], np.cumsum(sigma_C_per_h * np.sqrt(1.0 / 60.0) * rng.standard_normal(len(T_LONG) - 1))])
+    decay = np.exp(-rate_per_min)
+    curve = np.empty(len(T_LONG))
+    curve[0] = 17.9
+    for k in range(1, len(T_LONG)):
+        curve[k] = decay * curve[k - 1] + (1 - decay) * (17.9 + rise_C + room_C[k - 1])
+    return curve, lambda t: room_C[int(round(float(t)))]
+
+
 def fast_slow_in_drifting_room() -> np.ndarray:
     """A fast part (4 °C, τ 8 min) on a slow part (6 °C, τ 150 min) that feels the room, on ``T_LONG``."""
     def rhs(t: float, T: np.ndarray) -> np.ndarray:
@@ -110,6 +126,9 @@ KINDS = (
     "drift at once, no sensor",
     "drift at once, --ambient",
     "at once, --room-coupling direct",
+    "room wanders 0.05/h, no sensor",
+    "room wanders 0.1/h, no sensor",
+    "room wanders 0.1/h, --room-wander 0.1",
 )
 
 
@@ -119,7 +138,10 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
     "drift": the room cycles 0.15 °C every 4 h on a 0.1 °C rise and the machine
     follows it through its heat balance (:func:`machine_in_drifting_room`);
     "drift at once": a sensor that follows the room air without lag (the room's
-    cycle added to the curve), a stress case beyond the first-order model.
+    cycle added to the curve), a stress case beyond the first-order model;
+    "room wanders": the room is the random walk the monitor assumes without a
+    room sensor (:func:`machine_in_wandering_room`), at the default's pace, at
+    twice it, and at twice it with ``--room-wander`` saying so.
     """
     out: dict[str, list[tuple[str, float | None, float, float]]] = {kind: [] for kind in KINDS}
     first_order = 26.7 - 8.8 * np.exp(-0.016 * T_LONG)
@@ -156,6 +178,12 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
                 out["drift, no sensor, wander 0"].append(run_case(f"drift, steady room #{seed}", drifting, noisy, room, wander=0.0))
         noisy = at_once[:401] + noise[2]
         out["at once, --room-coupling direct"].append(run_case(f"at once, direct #{seed}", at_once, noisy, room, room_sensor, "direct"))
+        # a room that wanders as the monitor assumes (a random walk), at the default's pace and twice it;
+        # each row draws the same steps and noise, so the 0.1/h rooms are the 0.05/h one doubled
+        for sigma, wander, kind in ((0.05, 0.05, "room wanders 0.05/h, no sensor"), (0.1, 0.05, "room wanders 0.1/h, no sensor"), (0.1, 0.1, "room wanders 0.1/h, --room-wander 0.1")):
+            walk_rng = np.random.default_rng(10_000 + seed)
+            wandering, room_at = machine_in_wandering_room(walk_rng, sigma)
+            out[kind].append(run_case(f"{kind} #{seed}", wandering, wandering[:401] + 0.02 * walk_rng.standard_normal(401), room_at, wander=wander))
     return out
 
 
