@@ -196,6 +196,12 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert data["sensor"] == "spindle"  # the room column is the input, not a sensor
+    assert "named as a room sensor" not in out.stderr
+    # without --ambient the column named as the room is a sensor, and the user is told of the option
+    out = mtident("thermal", "identify", str(path), "--window", "60", "--json")
+    assert out.returncode == 0, out.stderr
+    assert [d["sensor"] for d in json.loads(out.stdout)["sensors"]] == ["spindle", "room"]
+    assert "'room' is named as a room sensor and identified as a machine sensor; if it measures the room, --ambient room makes it" in out.stderr
     out = mtident("thermal", "identify", str(path), "--ambient", "hall", "--window", "60")
     assert out.returncode == 2 and "no sensor column 'hall'" in out.stderr and "Traceback" not in out.stderr
     out = mtident("thermal", "identify", str(path), "--ambient", "room", "--method", "lsq")

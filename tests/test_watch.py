@@ -884,6 +884,11 @@ def test_the_sample_with_its_room_sensor(tmp_path):
     # measured: 197 min with the room sensor, 305 min without; every T∞ within 0.07 °C of the network's steady state
     assert data["stop_time_min"] is not None and data["stop_time_min"] < 250
     assert [d["sensor"] for d in data["sensors"]] == list(plain.sensors)
+    assert "named as a room sensor" not in out.stderr
+    out = mtident("thermal", "watch", "@sample-room", "--replay", "--json", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "'room' is named as a room sensor and watched as a machine sensor; if it measures the room, --ambient room makes it" in out.stderr
+    assert {"sensor": "room", "status": "no rise"}.items() <= json.loads(out.stdout)["sensors"][-1].items()
 
 
 # ---- damaged logs: any mix of the bad data above ----------------------------------------------

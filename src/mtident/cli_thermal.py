@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import shlex
 from pathlib import Path
 from typing import Literal, TypedDict
 
@@ -13,6 +14,7 @@ from rich.table import Table
 
 from mtident.cli import FiniteFloatRange, PicturePath, print_json, thermal, user_errors
 from mtident.exceptions import InputError
+from mtident.io.columns import room_named
 from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 
@@ -48,7 +50,9 @@ def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_uni
 def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, room_col: str | None) -> tuple[TemperatureLog, np.ndarray | None]:
     """The log's sensors, and the room column split off from them when one is named."""
     if room_col is None:
-        return load_log(file, sensors, time_col, time_unit), None
+        log = load_log(file, sensors, time_col, time_unit)
+        _say_room_candidates(log.sensors, "identified as a machine sensor")
+        return log, None
     asked = asked_sensors(sensors, log_path(file))
     # only the asked-for columns and the room are read: a dead column elsewhere does not matter
     every = load_log(file, tuple(dict.fromkeys([*asked, room_col])) if asked else (), time_col, time_unit)
@@ -58,6 +62,18 @@ def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None
         msg = f"{every.source}: no sensor column left besides the room column {room_col!r}"
         raise InputError(msg)
     return every.select(names), room
+
+
+def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str) -> None:
+    """A note on columns named as a room sensor when no --ambient was given: the room is then an
+    assumption (steady, or wandering by --room-wander), and a drifting one biases T∞."""
+    rooms = [name for name in sensors if room_named(name)]
+    if rooms and len(rooms) < len(sensors):
+        stderr.print(
+            f"mtident: note: {', '.join(repr(r) for r in rooms)} {'is' if len(rooms) == 1 else 'are'} named as a room sensor and {taken_as}; "
+            f"if it measures the room, --ambient {shlex.quote(rooms[0])} makes it the input of each sensor's heat balance (a drifting room then stays out of T∞)",
+            highlight=False,
+        )
 
 
 def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
@@ -454,6 +470,8 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
                         msg = f"{path}: no sensor column besides the room sensor {ambient_col!r}"
                         raise InputError(msg)
                     monitor = Monitor(tuple(monitored), settings)
+                    if ambient_col is None:
+                        _say_room_candidates(monitored, "watched as a machine sensor")
                 if len(rows.time_min) and monitor is not None:
                     last_data = time.monotonic()
                     values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if ambient_col else (rows.temperature_C, None)

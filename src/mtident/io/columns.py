@@ -31,6 +31,7 @@ __all__ = [
     "event_named",
     "temperature_columns",
     "check_unique_names",
+    "room_named",
 ]
 
 
@@ -124,6 +125,23 @@ _EVENT_NAME_STARTS = (
 def event_named(name: str) -> bool:
     """Whether a column's name says it records the logger itself (HOBO's "Host Connected", a serial number): no sensor."""
     return unit_key(name).startswith(_EVENT_NAME_STARTS)
+
+
+# Names of a room sensor: inside a name ("T_room", "Raumtemperatur", "AmbientTemp") and as a word
+# of its own (camelCase split), where a shorter one would hide in other words ("Chair", "Shall").
+_ROOM_NAME_PARTS = ("room", "ambient", "ambiant", "umgebung", "raumtemp", "hallentemp", "lufttemp", "environment", "室温", "周囲")
+_ROOM_NAME_WORDS = frozenset({"amb", "tamb", "air", "env", "raum", "halle", "hall", "luft", "umg"})
+
+
+def room_named(name: str) -> bool:
+    """Whether a column's name says it measures the room ("room", "T_amb", "Umgebung", "Air temp"):
+    a candidate for ``--ambient``, which a user who did not give it is told of."""
+    lower = name.lower()
+    if any(part in lower for part in _ROOM_NAME_PARTS):
+        return True
+    split = re.sub(r"([a-z])([A-Z])|([A-Z])([A-Z][a-z])", r"\1\3 \2\4", name)  # "AirTemp", "TAmb"
+    words = re.findall(r"[a-z]+", split.lower())
+    return any(word in _ROOM_NAME_WORDS for word in words)
 
 
 def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, source: str | Path) -> tuple[list[str], list[str]]:
