@@ -3,6 +3,7 @@ misfit detection, presets, minimal identification time."""
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -292,6 +293,26 @@ def sample_log():
     from mtident.io import sample_log_path
 
     return read_temperature_log(sample_log_path())
+
+
+def test_a_window_that_does_not_determine_the_steady_state_is_said():
+    """The sample's slow sensors rise nearly straight in the first 30 min: the UKF's T∞ interval is
+    wider than their rise (T9: ± 57 °C on a 1.4 °C rise), and the user is told; by 60 min none is."""
+    log = sample_log()
+    early = identify(log, 30.0)
+    said = [n for n in early.notes if n.startswith("T∞ is barely determined by the first 30 min for ")]
+    assert len(said) == 1
+    named = re.findall(r"'(T\d+)' \(± ([\d.]+) °C, rose ([\d.]+) °C\)", said[0])
+    assert [name for name, _, _ in named] == ["T6", "T7", "T9", "T10"]
+    halves = early.steady_state_ci95() @ np.array([-0.5, 0.5])
+    for name, half, rose in named:
+        i = log.sensors.index(name)
+        assert float(half) == pytest.approx(halves[i], rel=0.05) and float(half) > float(rose)
+    assert not any("barely determined" in n for n in identify(log, 60.0).notes)
+    # a first-order curve whose bend shows in the window is determined
+    t = np.arange(0.0, 31.0)
+    clean = first_order(t) + 0.02 * np.random.default_rng(3).standard_normal(len(t))
+    assert not any("barely determined" in n for n in identify(make_log(t, {"S": clean}), 30.0).notes)
 
 
 def test_sample_log_is_ten_sensors_four_hundred_minutes():

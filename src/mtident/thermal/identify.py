@@ -532,6 +532,17 @@ def _identify(
     for s in np.flatnonzero(no_rise).tolist():
         notes.append(f"sensor {log.sensors[s]!r}: no rise in the first {tw[-1]:g} min ({rise[s]:.2f} °C from lowest to highest): no warm-up to identify; it has no equilibrium time")
     eq_time = np.where(no_rise, np.nan, eq_time)
+    # An interval wider than the whole rise so far: the window's course is still nearly straight and
+    # does not tell where it bends (the sample's T6, T7, T9, T10 at 30 min; all within 45-60 min).
+    half = float(stdtrit(max(n_window - 3, 1), 0.975)) * steady_sd
+    with np.errstate(invalid="ignore"):
+        undetermined = ~no_rise & (half > rise)
+    if np.any(undetermined):
+        names = ", ".join(f"{log.sensors[s]!r} (± {half[s]:.2g} °C, rose {rise[s]:.2g} °C)" for s in np.flatnonzero(undetermined).tolist())
+        notes.append(
+            f"T∞ is barely determined by the first {tw[-1]:g} min for {names}: the 95 % interval is wider than the rise "
+            "seen so far (the course is still nearly straight); a longer --window narrows it (thermal watch says when it is narrow enough)"
+        )
     n_log = len(t)
     measured_part = np.full((len(times), S), np.nan)
     measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]
