@@ -381,6 +381,62 @@ def test_watch_replay_json_contract(tmp_path):
     assert data["stop_time_min"] is not None and (tmp_path / "w.png").stat().st_size > 1000
     assert (tmp_path / "spindle_warmup.watch-state.json").is_file()
     assert "no room sensor; the room is taken to wander by about 0.05 °C in an hour" in out.stderr  # the assumption is said
+    # the sample runs on to 400 min, past the stop: the decision is checked against where it settled
+    hindsight = data["hindsight"]
+    assert hindsight["stop_time_min"] == data["stop_time_min"] and hindsight["log_end_min"] == 400.0 and hindsight["room_shift_C"] == 0.0
+    assert [d["sensor"] for d in hindsight["sensors"]] == [f"T{i}" for i in range(1, 11)]
+    for d, decided in zip(hindsight["sensors"], data["sensors"], strict=True):
+        assert d["steady_state_C"] == decided["steady_state_C"] and d["within_tolerance"] is True
+        assert d["error_C"] == pytest.approx(d["steady_state_C"] - d["settled_C"], abs=1e-12)
+    # measured: T∞ at the stop 0.02-0.10 °C above the last 10 readings' median
+    assert max(abs(d["error_C"]) for d in hindsight["sensors"]) < 0.12
+    assert "the log runs on to t = 400 min: checking the decision against where it settled" in out.stderr
+
+
+def test_a_replay_checks_its_decision_against_the_rest_of_the_log(tmp_path):
+    """The table and the verdict; a log that ends at the stop has nothing to check, and a log still
+    rising at its end is said to end before its sensor settled."""
+    from mtident.thermal.hindsight import check_decision
+
+    t = np.arange(0.0, 401.0)
+    y = first_order(t) + 0.02 * np.random.default_rng(4).standard_normal(len(t))
+    out = mtident("thermal", "watch", "@sample", "--replay", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "Against the rest of the log (to t = 400 min)" in out.stdout
+    assert "Every sensor that settled (10) is within the tolerance (0.2 °C) of T∞ at the stop; the log reached 95 % of its rise by t = 294 min, 11 min before the stop: the rule saved no time on this log." in " ".join(out.stdout.split())
+    # a log that ends at the decision
+    monitor = Monitor(("S",))
+    monitor.feed(t, y[:, None])
+    assert monitor.stop_time is not None
+    stop = int(monitor.stop_time)
+    (tmp_path / "short.csv").write_text(csv_text(t[: stop + 1], {"S": y[: stop + 1]}))
+    out = mtident("thermal", "watch", "short.csv", "--replay", "--json", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["stop_time_min"] == stop and "hindsight" not in json.loads(out.stdout)
+    # a log that runs on past the stop but ends still rising (the curve's last quarter rises by 10 %)
+    rising = 17.9 + 8.8 * t / 400.0
+    check = check_decision(("S",), np.array([30.0]), 100.0, t, rising[:, None], 0.2)
+    assert np.isnan(check.settled_C[0]) and not check.within[0] and check.to_dict()["sensors"][0]["within_tolerance"] is None
+    (tmp_path / "long.csv").write_text(csv_text(t, {"S": np.where(t <= stop, y, y[stop] + 0.05 * (t - stop))}))
+    out = mtident("thermal", "watch", "long.csv", "--replay", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "The log ends before its sensors settled: nothing to check the decision against." in out.stdout
+
+
+def test_the_room_move_after_the_stop_is_added_to_t_inf():
+    from mtident.thermal.hindsight import check_decision
+
+    t = np.arange(0.0, 401.0)
+    room = np.where(t < 200.0, 17.9, 18.0)  # 0.1 °C up after the stop, for good
+    settled = 26.8 + np.zeros_like(t)  # the machine followed it
+    values = np.column_stack([first_order(t) + np.where(t < 200.0, 0.0, 0.1 * (1 - np.exp(-0.016 * (t - 200.0)))), settled])
+    check = check_decision(("A", "B"), np.array([26.7, np.nan]), 150.0, t, values, 0.2, room)
+    assert check.room_shift_C == pytest.approx(0.1)
+    # the machine's last 10 readings: 26.7 + 0.1 room − the warm-up and the room move still to come
+    expected_A = float(np.median(values[-10:, 0]))
+    np.testing.assert_allclose(check.error_C, [26.7 + 0.1 - expected_A, np.nan])
+    assert abs(check.error_C[0]) < 0.05 and check.within.tolist() == [True, False]  # a sensor left out is no check
+    assert [d["within_tolerance"] for d in check.to_dict()["sensors"]] == [True, None]  # type: ignore[index]
 
 
 def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):

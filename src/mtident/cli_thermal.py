@@ -513,8 +513,9 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         if problem:
             stderr.print(f"mtident: warning: no plot drawn: {problem}", highlight=False)
     result = monitor.result()
+    hindsight = _hindsight(path, monitor, time_col, time_unit, ambient_col) if replay and monitor.stop_time is not None else None
     if as_json:
-        print_json(result)
+        print_json(result if hindsight is None else {**result, "hindsight": hindsight.to_dict()})
     else:
         Console(width=max(Console().width, 100)).print(_status_table(monitor, path))
         if result["stop_time_min"] is not None:
@@ -522,6 +523,8 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
             Console().print(f"[bold green]The test can stop at t = {minutes(monitor.stop_time or 0.0)} min{gain}.[/]")
             if live_view and not replay:
                 Console().bell()  # the engineer may be at the other end of the machine
+            if hindsight is not None:
+                _print_hindsight(hindsight)
         else:
             Console().print("[bold yellow]Not yet: keep the test running.[/]")
             forecast = _expected_stop(monitor)
@@ -533,6 +536,60 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 
 # rows fed between two redraws of the live table
 _FEED_ROWS = 250
+
+
+def _hindsight(path: Path, monitor, time_col: str | None, time_unit: str | None, ambient_col: str | None):  # noqa: ANN001,ANN202
+    """The decision against where the whole log settled, for a replayed log that runs on past the stop
+    (None if it ends there, or cannot be read as a whole: a replay reads it row by row)."""
+    from mtident.thermal.hindsight import check_decision
+    from mtident.thermal.monitor import minutes
+
+    try:
+        log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=[*monitor.sensors, *([ambient_col] if ambient_col else [])])
+    except (InputError, OSError) as exc:
+        stderr.print(f"mtident: note: the decision is not checked against the rest of the log: {exc}", highlight=False)
+        return None
+    if log.time_min[-1] <= monitor.stop_time:
+        return None
+    decided = {d["sensor"]: d for d in monitor.decision or []}
+    steady = np.array([np.nan if decided[name]["status"] in ("no rise", "no data") or decided[name]["steady_state_C"] is None else decided[name]["steady_state_C"] for name in monitor.sensors], dtype=float)
+    values = log.select(list(monitor.sensors)).temperature_C
+    room = log.select([ambient_col]).temperature_C[:, 0] if ambient_col else None
+    stderr.print(f"mtident: the log runs on to t = {minutes(log.time_min[-1])} min: checking the decision against where it settled", highlight=False)
+    return check_decision(monitor.sensors, steady, monitor.stop_time, log.time_min, values, monitor.settings.tolerance_C, room)
+
+
+def _print_hindsight(hindsight) -> None:  # noqa: ANN001
+    """The table of the decision against the rest of the log, and what it comes to."""
+    from mtident.thermal.monitor import minutes
+
+    room = f"; the room moved {hindsight.room_shift_C:+.2f} °C after the stop, added to T∞" if hindsight.room_shift_C else ""
+    table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)} min){room}")
+    for column in ("sensor", "T∞ at stop (°C)", "settled (°C)", "difference (°C)", "95 % rise at (min)"):
+        table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
+    settled = np.isfinite(hindsight.settled_C) & np.isfinite(hindsight.steady_state_C)
+    for i, name in enumerate(hindsight.sensors):
+        error = hindsight.error_C[i]
+        shown = _fmt(float(error)) if settled[i] else "—"
+        if settled[i] and not hindsight.within[i]:
+            shown = f"[yellow]{shown}[/]"
+        table.add_row(name, _fmt(float(hindsight.steady_state_C[i])), _fmt(float(hindsight.settled_C[i])), shown, _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0))
+    Console(width=max(Console().width, 100)).print(table)
+    if not settled.any():
+        Console().print("The log ends before its sensors settled: nothing to check the decision against.")
+        return
+    beyond = [name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok]
+    unsettled = [name for name, known, decided in zip(hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), strict=True) if decided and not known]
+    verdict = (
+        f"{len(beyond)} of {int(settled.sum())} sensors settled beyond the tolerance ({hindsight.tolerance_C:g} °C) of T∞ at the stop: {', '.join(beyond)}"
+        if beyond
+        else f"every sensor that settled ({int(settled.sum())}) is within the tolerance ({hindsight.tolerance_C:g} °C) of T∞ at the stop"
+    )
+    reached = float(np.nanmax(hindsight.measured_equilibrium_time_min[settled]))
+    saved = reached - hindsight.stop_time_min
+    timing = f"the log reached 95 % of its rise by t = {minutes(reached)} min, " + (f"{minutes(saved)} min after the stop" if saved > 0 else f"{minutes(-saved)} min before the stop: the rule saved no time on this log")
+    not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
+    Console().print(f"{verdict[0].upper()}{verdict[1:]}; {timing}{not_settled}.", highlight=False)
 
 
 class _Nothing:

@@ -1,0 +1,104 @@
+"""The monitor's decision against where a finished log settled.
+
+A replay of a log that ran on past the stop (an old warm-up that ran to
+equilibrium) can check the rule on the engineer's own machine: each sensor's
+T∞ at the stop against the temperature the log settled to
+(:func:`~mtident.thermal.identify.measured_equilibrium`: the median of its last
+10 samples, where its last quarter rose by less than 5 % of the whole rise).
+With a room sensor the room may have moved between the stop and the log's end;
+T∞ follows the room one to one, so the room's move is added to the T∞ of the
+stop (the sensors lag a room move by their time constant, so a move in the last
+hour is only partly in the log's end).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mtident._typing import FloatArray
+from mtident.thermal.identify import measured_equilibrium
+
+__all__ = ["Hindsight", "check_decision"]
+
+# the room at the stop: the median of its readings this close to it (min)
+_ROOM_AROUND_STOP_MIN = 5.0
+
+
+@dataclass(frozen=True, slots=True)
+class Hindsight:
+    """Per sensor: T∞ at the stop (NaN: left out of the decision), where the log settled (NaN: not at
+    equilibrium by its end), and the difference."""
+
+    sensors: tuple[str, ...]
+    stop_time_min: float
+    log_end_min: float
+    steady_state_C: FloatArray
+    settled_C: FloatArray
+    measured_equilibrium_time_min: FloatArray
+    room_shift_C: float
+    tolerance_C: float
+
+    @property
+    def error_C(self) -> FloatArray:
+        """T∞ at the stop, moved with the room, minus where the log settled."""
+        return self.steady_state_C + self.room_shift_C - self.settled_C
+
+    @property
+    def within(self) -> np.ndarray:
+        """Whether each sensor's T∞ was within the tolerance of where it settled (False where it did not settle)."""
+        with np.errstate(invalid="ignore"):
+            return np.abs(self.error_C) <= self.tolerance_C
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain JSON types (None where not known)."""
+
+        def number(value: float) -> float | None:
+            return float(value) if np.isfinite(value) else None
+
+        return {
+            "stop_time_min": self.stop_time_min,
+            "log_end_min": self.log_end_min,
+            "room_shift_C": self.room_shift_C,
+            "sensors": [
+                {
+                    "sensor": name,
+                    "steady_state_C": number(self.steady_state_C[i]),
+                    "settled_C": number(self.settled_C[i]),
+                    "error_C": number(self.error_C[i]),
+                    "measured_equilibrium_time_min": number(self.measured_equilibrium_time_min[i]),
+                    "within_tolerance": bool(self.within[i]) if np.isfinite(self.error_C[i]) else None,
+                }
+                for i, name in enumerate(self.sensors)
+            ],
+        }
+
+
+def check_decision(
+    sensors: tuple[str, ...],
+    steady_state_C: FloatArray,
+    stop_time_min: float,
+    time_min: FloatArray,
+    values: FloatArray,
+    tolerance_C: float,
+    room_C: FloatArray | None = None,
+) -> Hindsight:
+    """Compare T∞ at the stop (one per sensor, NaN for one left out) with where the whole log settled."""
+    settled, equilibrium = measured_equilibrium(time_min, values)
+    shift = 0.0
+    if room_C is not None:
+        valid = np.isfinite(room_C)
+        near = valid & (np.abs(time_min - stop_time_min) <= _ROOM_AROUND_STOP_MIN)
+        if near.any() and valid.sum() >= 10:
+            shift = float(np.median(room_C[valid][-10:]) - np.median(room_C[near]))
+    return Hindsight(
+        sensors=tuple(sensors),
+        stop_time_min=float(stop_time_min),
+        log_end_min=float(time_min[-1]),
+        steady_state_C=np.asarray(steady_state_C, dtype=float),
+        settled_C=settled,
+        measured_equilibrium_time_min=equilibrium,
+        room_shift_C=shift,
+        tolerance_C=float(tolerance_C),
+    )
