@@ -941,6 +941,10 @@ def test_the_sample_with_its_room_sensor(tmp_path):
     assert data["stop_time_min"] is not None and data["stop_time_min"] < 250
     assert [d["sensor"] for d in data["sensors"]] == list(plain.sensors)
     assert "named as a room sensor" not in out.stderr
+    # checked against the rest of the log, T∞ moved with the room (measured: −0.10 °C after the stop)
+    hindsight = data["hindsight"]
+    assert hindsight["room_shift_C"] == pytest.approx(-0.10, abs=0.02)
+    assert all(d["within_tolerance"] for d in hindsight["sensors"])
     out = mtident("thermal", "watch", "@sample-room", "--replay", "--json", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert "'room' is named as a room sensor and watched as a machine sensor; if it measures the room, --ambient room makes it" in out.stderr

@@ -513,7 +513,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
         if problem:
             stderr.print(f"mtident: warning: no plot drawn: {problem}", highlight=False)
     result = monitor.result()
-    hindsight = _hindsight(path, monitor, time_col, time_unit, ambient_col) if replay and monitor.stop_time is not None else None
+    hindsight = _hindsight(followed, monitor, time_col, time_unit, ambient_col) if replay and monitor.stop_time is not None else None
     if as_json:
         print_json(result if hindsight is None else {**result, "hindsight": hindsight.to_dict()})
     else:
@@ -538,25 +538,21 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 _FEED_ROWS = 250
 
 
-def _hindsight(path: Path, monitor, time_col: str | None, time_unit: str | None, ambient_col: str | None):  # noqa: ANN001,ANN202
+def _hindsight(followed: Path, monitor, time_col: str | None, time_unit: str | None, ambient_col: str | None):  # noqa: ANN001,ANN202
     """The decision against where the whole log settled, for a replayed log that runs on past the stop
-    (None if it ends there, or cannot be read as a whole: a replay reads it row by row)."""
+    (None if it ends there). Read again whole by the replay's own reader."""
+    from mtident.io.follow import LogFollower
     from mtident.thermal.hindsight import check_decision
     from mtident.thermal.monitor import minutes
 
-    try:
-        log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=[*monitor.sensors, *([ambient_col] if ambient_col else [])])
-    except (InputError, OSError) as exc:
-        stderr.print(f"mtident: note: the decision is not checked against the rest of the log: {exc}", highlight=False)
-        return None
-    if log.time_min[-1] <= monitor.stop_time:
+    rows = LogFollower(followed, [*monitor.sensors, *([ambient_col] if ambient_col else [])], time_col, time_unit, room=ambient_col).poll()
+    if not len(rows.time_min) or rows.time_min[-1] <= monitor.stop_time:
         return None
     decided = {d["sensor"]: d for d in monitor.decision or []}
     steady = np.array([np.nan if decided[name]["status"] in ("no rise", "no data") or decided[name]["steady_state_C"] is None else decided[name]["steady_state_C"] for name in monitor.sensors], dtype=float)
-    values = log.select(list(monitor.sensors)).temperature_C
-    room = log.select([ambient_col]).temperature_C[:, 0] if ambient_col else None
-    stderr.print(f"mtident: the log runs on to t = {minutes(log.time_min[-1])} min: checking the decision against where it settled", highlight=False)
-    return check_decision(monitor.sensors, steady, monitor.stop_time, log.time_min, values, monitor.settings.tolerance_C, room)
+    values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if ambient_col else (rows.temperature_C, None)
+    stderr.print(f"mtident: the log runs on to t = {minutes(rows.time_min[-1])} min: checking the decision against where it settled", highlight=False)
+    return check_decision(monitor.sensors, steady, monitor.stop_time, rows.time_min, values, monitor.settings.tolerance_C, room)
 
 
 def _print_hindsight(hindsight) -> None:  # noqa: ANN001
