@@ -406,8 +406,11 @@ def test_a_replay_checks_its_decision_against_the_rest_of_the_log(tmp_path):
     assert "Every sensor that settled (10) is within the tolerance (0.2 °C) of T∞ at the stop; the log reached 95 % of its rise by t = 294 min, 11 min before the stop: the rule saved no time on this log." in " ".join(out.stdout.split())
     # a log that ends at the decision
     monitor = Monitor(("S",))
-    monitor.feed(t, y[:, None])
+    monitor.feed(t[:40], y[:40, None])
+    assert np.isnan(monitor.decided_steady_states()).all()  # no decision yet
+    monitor.feed(t[40:], y[40:, None])
     assert monitor.stop_time is not None
+    assert monitor.decided_steady_states().tolist() == [monitor.result()["steady_state_C"]]
     stop = int(monitor.stop_time)
     (tmp_path / "short.csv").write_text(csv_text(t[: stop + 1], {"S": y[: stop + 1]}))
     out = mtident("thermal", "watch", "short.csv", "--replay", "--json", cwd=tmp_path)

@@ -548,11 +548,9 @@ def _hindsight(followed: Path, monitor, time_col: str | None, time_unit: str | N
     rows = LogFollower(followed, [*monitor.sensors, *([ambient_col] if ambient_col else [])], time_col, time_unit, room=ambient_col).poll()
     if not len(rows.time_min) or rows.time_min[-1] <= monitor.stop_time:
         return None
-    decided = {d["sensor"]: d for d in monitor.decision or []}
-    steady = np.array([np.nan if decided[name]["status"] in ("no rise", "no data") or decided[name]["steady_state_C"] is None else decided[name]["steady_state_C"] for name in monitor.sensors], dtype=float)
     values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if ambient_col else (rows.temperature_C, None)
     stderr.print(f"mtident: the log runs on to t = {minutes(rows.time_min[-1])} min: checking the decision against where it settled", highlight=False)
-    return check_decision(monitor.sensors, steady, monitor.stop_time, rows.time_min, values, monitor.settings.tolerance_C, room)
+    return check_decision(monitor.sensors, monitor.decided_steady_states(), monitor.stop_time, rows.time_min, values, monitor.settings.tolerance_C, room)
 
 
 def _print_hindsight(hindsight) -> None:  # noqa: ANN001

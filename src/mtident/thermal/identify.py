@@ -533,8 +533,9 @@ def _identify(
         notes.append(f"sensor {log.sensors[s]!r}: no rise in the first {tw[-1]:g} min ({rise[s]:.2f} °C from lowest to highest): no warm-up to identify; it has no equilibrium time")
     eq_time = np.where(no_rise, np.nan, eq_time)
     # An interval wider than the whole rise so far: the window's course is still nearly straight and
-    # does not tell where it bends (the sample's T6, T7, T9, T10 at 30 min; all within 45-60 min).
-    half = float(stdtrit(max(n_window - 3, 1), 0.975)) * steady_sd
+    # does not tell where it bends (the sample's T6, T7, T9, T10 at 30 min; T7 still at 45; none at 60).
+    quantile = float(stdtrit(max(n_window - 3, 1), 0.975))
+    half = quantile * steady_sd
     with np.errstate(invalid="ignore"):
         undetermined = ~no_rise & (half > rise)
     if np.any(undetermined):
@@ -574,7 +575,7 @@ def _identify(
         measured_final_C=final_measured,
         measured_equilibrium_time_min=eq_measured,
         notes=tuple(notes),
-        quantile=float(stdtrit(max(n_window - 3, 1), 0.975)),
+        quantile=quantile,
     )
 
 

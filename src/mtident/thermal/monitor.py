@@ -1027,6 +1027,16 @@ class Monitor:
             expected[todo & ready & np.isnan(expected)] = t
         return expected
 
+    def decided_steady_states(self) -> FloatArray:
+        """T∞ per sensor at the decision (NaN for a sensor left out of it); all NaN before the decision."""
+        decided = {d["sensor"]: d for d in self.decision or []}
+        return np.array(
+            [
+                np.nan if name not in decided or decided[name]["status"] in _LEFT_OUT or decided[name]["steady_state_C"] is None else float(decided[name]["steady_state_C"])  # type: ignore[arg-type]
+                for name in self.sensors
+            ]
+        )
+
     def expected_stop_time(self, times: FloatArray | None = None) -> float | None:
         """When the rule expects the test may stop (every sensor in the decision), if the warm-ups keep
         their present courses; None where one sensor's is not foreseeable. ``times``: the sensors'
