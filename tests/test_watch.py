@@ -448,6 +448,7 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     full = tmp_path / "full.csv"
     full.write_text(csv_text(T, columns))
     reference = json.loads(mtident("thermal", "watch", str(full), "--replay", "--json", "--state", str(tmp_path / "ref.json"), cwd=tmp_path).stdout)
+    assert reference.pop("hindsight")["log_end_min"] == 400.0  # a replay that runs on past the stop checks it; a live run ends there
 
     live = tmp_path / "live.csv"
     lines = full.read_text().splitlines(keepends=True)
