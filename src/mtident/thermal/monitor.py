@@ -108,6 +108,8 @@ ROOM_COUPLINGS = ("lagged", "direct")
 _LEFT_OUT = ("no rise", "no data")
 # fourth differences of the noise before its estimate is called settled, in the model-check message
 _MATURE_NOISE_ESTIMATE = 30
+# minutes of innovations before a failed trend check is no longer put down to the filter's own start
+_SETTLING_MIN = 30.0
 # Neighbouring fourth differences of white noise overlap (correlations -0.8, 0.4, -0.11, 0.014): a
 # mean of k of their squares varies like a mean of k / 2.63 independent ones.
 _D4_OVERLAP = 1.0 + 2.0 * (0.8**2 + 0.4**2 + (8 / 70) ** 2 + (1 / 70) ** 2)
@@ -578,7 +580,12 @@ class Monitor:
                     # (and 11 of 100 fast + slow ones first did). 5 readings per fourth difference.
                     why = f"are larger than the noise estimated so far from {int(self.d4_count[s]) + 4} readings (more noise than those showed, or a slower mode)"
                 elif one_sided[s]:
-                    why = "no longer fit the first-order model: a trend it misses (a slower mode?)"
+                    # A filter started on the first minutes still settles for a while: 8 of the 11
+                    # first-order replays (of 100) that failed this way did so before 30 min, none
+                    # of them once started on 20 min of data (stop 17).
+                    age = max(float(self.observed[s]) - 1.0, 0.0) * (self.median_dt or 1.0)
+                    young = f", or its filter, {minutes(age)} min old, still settling" if age < _SETTLING_MIN else ""
+                    why = f"no longer fit the first-order model: a trend it misses (a slower mode{young}?)"
                 else:
                     why = "no longer fit the first-order model (a slower mode?)"
                 messages.append(f"sensor {self.sensors[s]!r}: residuals at t = {minutes(t)} min {why}; {what}{self._quiet_note()}")
