@@ -136,6 +136,41 @@ def test_a_bad_plot_path_is_refused_before_the_work(tmp_path, command, plot, mes
     assert not list(tmp_path.iterdir())  # nothing was computed or written
 
 
+@pytest.mark.parametrize(
+    ("path", "message"),
+    [
+        ("no-such-folder/out.csv", "the folder 'no-such-folder' of 'no-such-folder/out.csv' does not exist"),
+        (".", "'.' is a folder; give a file name such as 'out.csv'"),
+    ],
+)
+@pytest.mark.parametrize("command", [["thermal", "identify", "@sample", "--curve"], ["feeddrive", "simulate", "--duration", "0.01", "--out"]])
+def test_a_bad_output_path_is_refused_before_the_work(tmp_path, command, path, message):
+    """The simulation's --out used to be checked only when written, after the work (pandas' "Cannot
+    save file into a non-existent directory")."""
+    out = subprocess.run([sys.executable, "-m", "mtident", *command, path], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert message in out.stderr
+    assert not list(tmp_path.iterdir())
+
+
+def test_identify_writes_its_curves_for_a_spreadsheet(tmp_path):
+    import pandas as pd
+
+    from mtident.io import read_temperature_log, sample_log_path
+    from mtident.thermal import identify
+
+    out = subprocess.run([sys.executable, "-m", "mtident", "thermal", "identify", "@sample", "--sensor", "T1,T9", "--window", "30", "--curve", "c.csv"], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "curves written to c.csv (401 rows to t = 400 min)" in out.stderr
+    table = pd.read_csv(tmp_path / "c.csv")
+    assert list(table.columns) == ["time_min", "part", *[f"{s}_{what}_C" for s in ("T1", "T9") for what in ("measured", "model", "low95", "high95")]]
+    assert (table["part"] == "window").sum() == 31 and (table["part"] == "prediction").sum() == 370
+    result = identify(read_temperature_log(sample_log_path()).select(["T1", "T9"]), 30.0)
+    np.testing.assert_allclose(table["T9_model_C"], result.curve_C[:, 1], atol=1e-6)
+    np.testing.assert_allclose(table["T1_high95_C"] - table["T1_model_C"], result.quantile * result.curve_sd_C[:, 0], atol=2e-6)
+    np.testing.assert_allclose(table["T1_measured_C"], result.measured_C[:, 0], atol=1e-6)
+
+
 @pytest.mark.parametrize(("name", "magic"), [("fit.svg", b"<?xml"), ("fit.pdf", b"%PDF"), ("fit.PNG", b"\x89PNG"), ("fit", b"\x89PNG")])
 def test_the_plot_suffix_chooses_the_picture_format(tmp_path, name, magic):
     """'fit.svg' used to be written as a PNG (the temporary file's suffix chose the format)."""

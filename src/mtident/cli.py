@@ -43,32 +43,47 @@ class FiniteFloatRange(click.FloatRange):
         return number
 
 
-class PicturePath(click.ParamType):
-    """A --plot file: its folder exists and is writable, its suffix a format matplotlib writes
-    (checked before the work: a mistyped folder used to end a long replay in an errno message
-    about a temporary file, and 'fit.svg' was written as a PNG)."""
+class OutputPath(click.ParamType):
+    """A file to write: its folder exists and is writable, and it is no folder (checked before
+    the work, so that a mistyped folder does not end a long run in an error)."""
 
-    name = "picture"
+    name = "file"
+    example = "out.csv"  # a file name in the message for a folder given
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
         import os
         from pathlib import Path
 
-        from mtident.report.plots import picture_format
-
         path = Path(value)
         folder = path.parent
         if path.is_dir():
-            self.fail(f"{value!r} is a folder; give a file name such as {str(path / 'plot.png')!r}", param, ctx)
+            self.fail(f"{value!r} is a folder; give a file name such as {str(path / self.example)!r}", param, ctx)
         if not folder.is_dir():
             self.fail(f"the folder {str(folder)!r} of {value!r} does not exist", param, ctx)
         if not os.access(folder, os.W_OK):
             self.fail(f"the folder {str(folder)!r} of {value!r} is not writable", param, ctx)
+        return str(path)
+
+
+class PicturePath(OutputPath):
+    """A --plot file: an :class:`OutputPath` whose suffix is a format matplotlib writes (a mistyped
+    folder used to end a long replay in an errno message about a temporary file, and 'fit.svg'
+    was written as a PNG)."""
+
+    name = "picture"
+    example = "plot.png"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        from pathlib import Path
+
+        from mtident.report.plots import picture_format
+
+        path = super().convert(value, param, ctx)
         try:
-            picture_format(path)
+            picture_format(Path(path))
         except ValueError as exc:
             self.fail(str(exc), param, ctx)
-        return str(path)
+        return path
 
 
 def user_errors(func: F) -> F:

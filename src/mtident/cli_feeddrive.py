@@ -9,7 +9,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, PicturePath, feeddrive, print_json, user_errors
+from mtident.cli import FiniteFloatRange, OutputPath, PicturePath, feeddrive, print_json, user_errors
 from mtident.exceptions import InputError
 from mtident.feeddrive import (
     IDENTIFIED,
@@ -68,7 +68,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
 @click.option("--frequency-end", "frequency_end_Hz", type=FiniteFloatRange(min=0), default=2000.0, show_default=True, help="Sweep end (Hz).")
 @click.option("--noise", "noise_fraction", type=FiniteFloatRange(min=0), default=0.0, show_default=True, help="Measurement noise, fraction of each response's RMS.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
-@click.option("--out", "out_path", type=click.Path(dir_okay=False, writable=True), required=True, help="CSV to write.")
+@click.option("--out", "out_path", type=OutputPath(), required=True, help="CSV to write.")
 @click.option("--plot", "plot_path", type=PicturePath(), help="Draw the responses to this picture (PNG; .svg or .pdf by the suffix).")
 @user_errors
 def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz: float, amplitude: float, kind: str, coordinate: str, frequency_Hz: float, frequency_end_Hz: float, noise_fraction: float, seed: int, out_path: str, plot_path: str | None) -> None:

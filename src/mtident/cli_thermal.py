@@ -12,7 +12,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, PicturePath, print_json, thermal, user_errors
+from mtident.cli import FiniteFloatRange, OutputPath, PicturePath, print_json, thermal, user_errors
 from mtident.exceptions import InputError
 from mtident.io.columns import room_named
 from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
@@ -119,9 +119,10 @@ def _fmt(value: object, digits: int = 2) -> str:
 @click.option("--pseudo-seed", type=int, help="Predict with seed 000's noisy pseudo-measurements (Eqs 21-22) from this seed.")
 @click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes the input of each sensor's heat balance; T∞ at the room's level at the window's end.")
 @click.option("--plot", "plot_path", type=PicturePath(), help="Draw measured and predicted curves to this picture (PNG; .svg or .pdf by the suffix).")
+@click.option("--curve", "curve_path", type=OutputPath(), help="Write the measured and predicted curves with their 95 % band to this CSV (a row per time; for a report or a spreadsheet).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, window_min: float, method: str, preset: str, horizon_min: float | None, pseudo_seed: int | None, ambient_col: str | None, plot_path: str | None, as_json: bool) -> None:
+def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, window_min: float, method: str, preset: str, horizon_min: float | None, pseudo_seed: int | None, ambient_col: str | None, plot_path: str | None, curve_path: str | None, as_json: bool) -> None:
     """Identify the temperature rise from the first WINDOW minutes of FILE and predict the rest.
 
     FILE is a CSV log (time column, one column per sensor), or @sample for the
@@ -137,6 +138,9 @@ def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
 
         plot_identification(result, plot_path)
         stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
+    if curve_path:
+        result.curve_frame().to_csv(curve_path, index=False, float_format="%.6f")
+        stderr.print(f"mtident: curves written to {curve_path} ({len(result.time_min)} rows to t = {result.time_min[-1]:g} min)", highlight=False)
     summaries = [result.summary(i) for i in range(len(result.sensors))]
     if as_json:
         print_json(summaries[0] if len(summaries) == 1 else {"sensors": summaries, "method": method, "window_min": result.window_min})

@@ -7,6 +7,7 @@ of the record (or a horizon). All sensors of a log are filtered as one batch.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.special import fdtri, stdtrit
@@ -18,6 +19,9 @@ from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_o
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, reading_range, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["Identification", "identify", "room_input", "room_rates", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
 
@@ -96,6 +100,22 @@ class Identification:
                 f"t_eq {self.equilibrium_time_min[i]:.0f} min, RMSE {self.rmse_C[i]:.3f} °C{'' if self.fits[i] else ', model check failed'}"
             )
         return "\n".join(lines)
+
+    def curve_frame(self) -> pd.DataFrame:
+        """The measured and modelled curve of every sensor with its 95 % band, a row per time: for
+        a report or a spreadsheet. ``part`` says whether the row is in the identification window
+        (the filtered curve) or after it (the prediction); a time past the log's end has no
+        measured value."""
+        import pandas as pd
+
+        half = self.quantile * self.curve_sd_C
+        columns: dict[str, object] = {"time_min": self.time_min, "part": np.where(self.time_min <= self.window_min + 1e-9, "window", "prediction")}
+        for s, name in enumerate(self.sensors):
+            columns[f"{name}_measured_C"] = self.measured_C[:, s]
+            columns[f"{name}_model_C"] = self.curve_C[:, s]
+            columns[f"{name}_low95_C"] = self.curve_C[:, s] - half[:, s]
+            columns[f"{name}_high95_C"] = self.curve_C[:, s] + half[:, s]
+        return pd.DataFrame(columns)
 
     def steady_state_ci95(self) -> FloatArray:
         """(S, 2) 95 % interval of T∞."""
