@@ -315,6 +315,14 @@ def test_a_window_that_does_not_determine_the_steady_state_is_said():
     assert not any("barely determined" in n for n in identify(make_log(t, {"S": clean}), 30.0).notes)
 
 
+def test_sensors_with_the_same_slow_start_are_named_in_one_note():
+    notes = [n for n in identify(sample_log(), 30.0).notes if "rise slower than a first-order curve starts" in n]
+    assert notes == [
+        "sensors 'T1' (3 min), 'T2' (2 min), 'T4' (3 min), 'T5' (2 min), 'T9' (3 min): the first minutes rise slower than a "
+        "first-order curve starts (a sensor lag, or heat still on its way); each model is fitted from the end of them"
+    ]
+
+
 def test_sample_log_is_ten_sensors_four_hundred_minutes():
     log = sample_log()
     assert log.sensors == tuple(f"T{i}" for i in range(1, 11))

@@ -457,10 +457,17 @@ def _identify(
         # cannot follow.
         onsets = first_order_onset(tw, yw)
         yw = yw.copy()
-        for i in np.flatnonzero(onsets):
-            yw[: onsets[i], i] = np.nan
-            why = "stay at their first level (the warm-up began after the log)" if late_start[i] else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
-            notes.append(f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min {why}; the model is fitted from t = {tw[onsets[i]]:g} min")
+        for late in (True, False):
+            which = [i for i in np.flatnonzero(onsets).tolist() if late_start[i] == late]
+            for i in which:
+                yw[: onsets[i], i] = np.nan
+            why = "stay at their first level (the warm-up began after the log)" if late else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
+            if len(which) == 1:
+                i = which[0]
+                notes.append(f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min {why}; the model is fitted from t = {tw[onsets[i]]:g} min")
+            elif which:  # one note for all: the sample's five lagging sensors made five lines
+                lead = ", ".join(f"{log.sensors[i]!r} ({tw[onsets[i]] - tw[0]:g} min)" for i in which)
+                notes.append(f"sensors {lead}: the first minutes {why}; each model is fitted from the end of them")
     tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, S)
     # the data tuning has the noise level already (its R); the papers' R is a setting, not the noise
     sigma = np.sqrt(tuning.emission_cov[:, 0, 0]) if preset == "data" else noise_sigma(yw)
