@@ -82,6 +82,37 @@ def test_quick_estimate_and_noise_level():
     np.testing.assert_allclose(noise_sigma(noisy), [0.02], rtol=0.1)  # MAD of 396 fourth differences: ~5 % spread
 
 
+@pytest.mark.parametrize("missing", [[1, 2, 3], [10, 11], [20, 21, 22], [25, 26]])
+def test_quick_estimate_bridges_missing_readings(missing):
+    """Left out of their third's mean, three missing readings of the noiseless papers' curve gave
+    λ = 0.107/min and T∞ = 21.0 °C; the filter started there scattered by 0.66 °C instead of 0.49
+    with 12.5 % dropouts (stop 17)."""
+    t = np.arange(0.0, 29.0)
+    y = first_order(t)
+    y[missing] = np.nan
+    start, rate, steady = quick_estimate(t, y[:, None])
+    assert start[0] == PAPER_START
+    assert rate[0] == pytest.approx(PAPER_RATE, rel=0.02) and steady[0] == pytest.approx(PAPER_STEADY, abs=0.1)
+
+
+def test_dropouts_cost_the_filter_only_the_missing_readings():
+    """With 12.5 % of the readings missing, the default UKF's T∞ scatters as the Cramér-Rao bound of
+    the readings left (measured on 100 seeds: 1.03x; 1.09x before the quick estimate bridged them,
+    1.30x on 300 seeds)."""
+    from mtident.thermal.lsq import cramer_rao_bound
+
+    t = np.arange(0.0, 29.0)
+    errors, bounds = [], []
+    for seed in range(100):
+        rng = np.random.default_rng(seed)
+        y = first_order(t) + 0.02 * rng.standard_normal(len(t))
+        kept = rng.random(len(t)) >= 0.125
+        y[~kept] = np.nan
+        errors.append(identify(make_log(t, {"S": y}), 28.0).steady_state_C[0] - PAPER_STEADY)
+        bounds.append(cramer_rao_bound(t[kept], PAPER_START, PAPER_RATE, PAPER_STEADY, 0.02)[2, 2])
+    assert np.std(errors) / np.sqrt(np.mean(bounds)) < 1.06
+
+
 @pytest.mark.parametrize(("step", "expected"), [(0.1, 0.1), (0.01, 0.01), (1 / 16, 0.0625), (0.5, 0.5), (None, 0.0)])
 def test_display_resolution_is_the_step_the_readings_are_rounded_to(step, expected):
     t = np.arange(0.0, 31.0)

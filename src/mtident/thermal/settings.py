@@ -181,7 +181,15 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     start_C, rate_per_min, steady_C : ndarray, shape (S,)
     """
     t = np.asarray(time_min, dtype=float)
-    y = np.asarray(values, dtype=float)
+    y = np.array(values, dtype=float)
+    # A missing reading inside the window is bridged along its neighbours for the thirds' means: left
+    # out, it tilted its third's mean against the third's mean time, and the filter started from that
+    # guess inherited the tilt (T∞ scattered by 0.66 °C instead of 0.49 with 12.5 % dropouts at 28 min).
+    for column in y.T:
+        valid = np.isfinite(column)
+        if valid.sum() >= 2:
+            inside = ~valid & (t > t[valid][0]) & (t < t[valid][-1])
+            column[inside] = np.interp(t[inside], t[valid], column[valid])
     size = len(t) // 3
     thirds = [np.arange(len(t) - 3 * size + j * size, len(t) - 3 * size + (j + 1) * size) for j in range(3)]
     seg_t = np.array([t[i].mean() for i in thirds])
