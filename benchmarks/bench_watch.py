@@ -115,6 +115,7 @@ KINDS = (
     "first-order, 0.1 °C display",
     "first-order, 1/16 °C, σ 0.005",
     "first-order, 1 Hz, 0.1 °C display",
+    "first-order, 12.5 % dropouts",
     "fast+slow",
     "fast+slow, --room-wander 0",
     "fast+slow, drift, --ambient",
@@ -163,6 +164,9 @@ def families(count: int) -> dict[str, list[tuple[str, float | None, float, float
         # a 1-Hz logger with a 0.1 °C display: the rounding holds for many rows (the monitor bins them)
         fast = np.round((26.7 - 8.8 * np.exp(-0.016 * T_1HZ) + 0.02 * rng.standard_normal(len(T_1HZ))) / 0.1) * 0.1
         out["first-order, 1 Hz, 0.1 °C display"].append(run_case(f"first-order, 1 Hz #{seed}", first_order, fast, times=T_1HZ))
+        dropped = first_order[:401] + noise[0]
+        dropped[np.random.default_rng(30_000 + seed).random(401) < 0.125] = np.nan  # empty cells, open circuits
+        out["first-order, 12.5 % dropouts"].append(run_case(f"first-order, dropouts #{seed}", first_order, dropped))
         out["first-order, --room-wander 0"].append(run_case(f"first-order, steady room #{seed}", first_order, first_order[:401] + noise[0], wander=0.0))
         out["fast+slow"].append(run_case(f"fast+slow #{seed}", fast_slow, fast_slow[:401] + noise[1]))
         out["fast+slow, --room-wander 0"].append(run_case(f"fast+slow, steady room #{seed}", fast_slow, fast_slow[:401] + noise[1], wander=0.0))
