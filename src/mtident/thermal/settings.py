@@ -181,33 +181,41 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     start_C, rate_per_min, steady_C : ndarray, shape (S,)
     """
     t = np.asarray(time_min, dtype=float)
-    y = np.array(values, dtype=float)
-    # A missing reading inside the window is bridged along its neighbours for the thirds' means: left
-    # out, it tilted its third's mean against the third's mean time, and the filter started from that
-    # guess inherited the tilt (T∞ scattered by 0.66 °C instead of 0.49 with 12.5 % dropouts at 28 min).
-    for column in y.T:
-        valid = np.isfinite(column)
+    y = np.asarray(values, dtype=float)
+    # Each sensor on a uniform grid over its own valid span, its readings interpolated onto it: the
+    # thirds' formula needs equally spaced thirds of equal weight. A missing reading left out of its
+    # third's mean tilted the mean against the third's mean time (three of them on the noiseless
+    # papers' curve gave λ = 0.107/min, T∞ = 21.0 °C), and a gap of rows made the thirds unequal
+    # (a 6-min gap: T∞ 20.9 °C); a filter started from that guess inherited it.
+    n, S = y.shape
+    grid_t = np.tile(t[:, None], (1, S))
+    grid_y = np.full((n, S), np.nan)
+    first = np.full(S, np.nan)
+    for s in range(S):
+        valid = np.isfinite(y[:, s])
         if valid.sum() >= 2:
-            inside = ~valid & (t > t[valid][0]) & (t < t[valid][-1])
-            column[inside] = np.interp(t[inside], t[valid], column[valid])
-    size = len(t) // 3
-    thirds = [np.arange(len(t) - 3 * size + j * size, len(t) - 3 * size + (j + 1) * size) for j in range(3)]
-    seg_t = np.array([t[i].mean() for i in thirds])
-    with warnings.catch_warnings():
-        # a third without a valid sample (a sensor back from a long gap) is NaN: the fallbacks below take over
-        warnings.simplefilter("ignore", RuntimeWarning)
-        seg_y = np.stack([np.nanmean(y[i], axis=0) for i in thirds])  # (3, S)
-    start = np.array([col[np.isfinite(col)][0] for col in y.T])
+            grid_t[:, s] = np.linspace(t[valid][0], t[valid][-1], n)
+            grid_y[:, s] = np.interp(grid_t[:, s], t[valid], y[valid, s])
+        elif valid.any():
+            grid_y[:, s] = y[valid, s][0]
+        if valid.any():
+            first[s] = y[valid, s][0]
+    size = n // 3
+    thirds = [np.arange(n - 3 * size + j * size, n - 3 * size + (j + 1) * size) for j in range(3)]
+    seg_t = np.stack([grid_t[i].mean(axis=0) for i in thirds])  # (3, S)
+    seg_y = np.stack([grid_y[i].mean(axis=0) for i in thirds])
+    start = first
     tau = (seg_t[2] - seg_t[0]) / 2.0
     d1, d2 = seg_y[1] - seg_y[0], seg_y[2] - seg_y[1]
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = d2 / d1
-    span = max(t[-1] - t[0], 1e-9)
+    span = np.maximum(grid_t[-1] - grid_t[0], 1e-9)
     fallback = 3.0 / span
-    ok = (ratio > 0.05) & (ratio < 0.98) & np.isfinite(ratio)
-    rate = np.where(ok, -np.log(np.where(ok, ratio, 0.5)) / tau, fallback)
+    ok = (ratio > 0.05) & (ratio < 0.98) & np.isfinite(ratio) & (tau > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rate = np.where(ok, -np.log(np.where(ok, ratio, 0.5)) / np.where(ok, tau, 1.0), fallback)
     # Segment means are A_j = T∞ + D·m_j with m_j the segment mean of e^(−λt).
-    m = np.stack([np.exp(-rate[None, :] * (t[i, None] - t[0])).mean(axis=0) for i in thirds])
+    m = np.stack([np.exp(-rate[None, :] * (grid_t[i] - grid_t[0][None, :])).mean(axis=0) for i in thirds])
     with np.errstate(divide="ignore", invalid="ignore"):
         amplitude = (seg_y[2] - seg_y[0]) / (m[2] - m[0])
         steady = seg_y[0] - amplitude * m[0]
