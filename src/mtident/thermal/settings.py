@@ -174,7 +174,9 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     For T = T∞ + D e^(−λt), segment means A₁, A₂, A₃ spaced τ apart satisfy
     (A₃ − A₂)/(A₂ − A₁) = e^(−λτ), independent of D. Where the ratio is not in
     (0, 1) (no curvature yet, or noise), λ falls back to 3/window — a curve
-    still rising steeply at the end of the window.
+    still rising steeply at the end of the window. Each sensor is taken on a
+    uniform grid over its own span from its first to its last valid reading
+    (missing readings and gaps interpolated), so T₀ is its first valid reading.
 
     Returns
     -------
@@ -190,7 +192,7 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     n, S = y.shape
     grid_t = np.tile(t[:, None], (1, S))
     grid_y = np.full((n, S), np.nan)
-    first = np.full(S, np.nan)
+    start = np.full(S, np.nan)  # each sensor's first valid reading
     for s in range(S):
         valid = np.isfinite(y[:, s])
         if valid.sum() >= 2:
@@ -199,12 +201,11 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
         elif valid.any():
             grid_y[:, s] = y[valid, s][0]
         if valid.any():
-            first[s] = y[valid, s][0]
+            start[s] = y[valid, s][0]
     size = n // 3
     thirds = [np.arange(n - 3 * size + j * size, n - 3 * size + (j + 1) * size) for j in range(3)]
     seg_t = np.stack([grid_t[i].mean(axis=0) for i in thirds])  # (3, S)
     seg_y = np.stack([grid_y[i].mean(axis=0) for i in thirds])
-    start = first
     tau = (seg_t[2] - seg_t[0]) / 2.0
     d1, d2 = seg_y[1] - seg_y[0], seg_y[2] - seg_y[1]
     with np.errstate(divide="ignore", invalid="ignore"):
