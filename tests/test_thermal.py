@@ -120,22 +120,61 @@ def test_the_samples_lagging_sensor_is_identified_from_its_own_start():
     assert low <= nine.measured_final_C[0] <= high and high - low < 7.0 and nine.rmse_C[0] < 0.3
 
 
-def test_dropouts_cost_the_filter_only_the_missing_readings():
-    """With 12.5 % of the readings missing, the default UKF's T∞ scatters as the Cramér-Rao bound of
-    the readings left (measured on 100 seeds: 1.03x; 1.09x before the quick estimate bridged them,
-    1.30x on 300 seeds)."""
+def test_dropouts_cost_the_filter_little_more_than_the_missing_readings():
+    """With 12.5 % of the readings missing, the default UKF's T∞ scatters near the Cramér-Rao bound
+    of the readings left (200 seeds: 1.09x; without dropouts 1.05x on the Monte Carlo). Before the
+    quick estimate bridged them it was 1.30x; in between, with the noise overestimated from fourth
+    differences across the missing readings (0.025 °C for 0.02), 1.00x on 100 seeds."""
     from mtident.thermal.lsq import cramer_rao_bound
 
     t = np.arange(0.0, 29.0)
     errors, bounds = [], []
-    for seed in range(100):
+    for seed in range(200):
         rng = np.random.default_rng(seed)
         y = first_order(t) + 0.02 * rng.standard_normal(len(t))
         kept = rng.random(len(t)) >= 0.125
         y[~kept] = np.nan
         errors.append(identify(make_log(t, {"S": y}), 28.0).steady_state_C[0] - PAPER_STEADY)
         bounds.append(cramer_rao_bound(t[kept], PAPER_START, PAPER_RATE, PAPER_STEADY, 0.02)[2, 2])
-    assert np.std(errors) / np.sqrt(np.mean(bounds)) < 1.06
+    assert np.std(errors) / np.sqrt(np.mean(bounds)) < 1.15
+
+
+def test_noise_level_across_gaps_and_missing_readings():
+    """Fourth differences across a gap of rows, or across missing readings, took the curve's own
+    slope for noise: σ 0.22 °C for 0.02 from the papers' first 12 min with minutes 4-8 missing;
+    0.025 for 0.02 with 12.5 % of the readings missing. Taken by their fourth divided difference at
+    the readings' times, they cancel the curve as on an even grid."""
+    rng = np.random.default_rng(0)
+    t = np.arange(400.0)
+    y = first_order(t) + 0.02 * rng.standard_normal(len(t))
+    even = noise_sigma(y[:, None])
+    np.testing.assert_allclose(noise_sigma(y[:, None], t), even, rtol=1e-12)  # an even grid: Δ⁴y/√70 as before
+    keep = np.ones(len(t), dtype=bool)
+    for start in range(5, 400, 40):  # ten 6-min gaps in the steep first part and after
+        keep[start : start + 6] = False
+    np.testing.assert_allclose(noise_sigma(y[keep, None], t[keep]), [0.02], rtol=0.15)
+    missing = y.copy()
+    missing[rng.random(len(t)) < 0.125] = np.nan
+    np.testing.assert_allclose(noise_sigma(missing[:, None]), [0.02], rtol=0.15)
+
+
+def test_a_gap_in_the_first_minutes_is_no_flat_start():
+    """A warm-up from the first sample with minutes 4-8 missing: its first reading after the gap is
+    the first one off its first level, but it was seen flat for 3 min, not 9 (before, 20 of 20
+    replays said "flat until t = 9 min" and 16 never stopped within 300 min)."""
+    from mtident.thermal.lsq import flat_lead
+    from mtident.thermal.monitor import Monitor
+
+    t = np.arange(0.0, 300.0)
+    keep = (t < 4) | (t >= 9)
+    for seed in (9, 14):
+        y = first_order(t) + 0.02 * np.random.default_rng(seed).standard_normal(len(t))
+        assert flat_lead(t[keep][:8], y[keep][:8, None], np.array([0.05]), 0.1, 5.0)[0] == 0
+        monitor = Monitor(("S",))
+        messages = monitor.feed(t[keep], y[keep][:, None])
+        assert not [m for m in messages if "flat until" in m or "no rise" in m]
+        result = monitor.result()
+        assert result["stop_time_min"] is not None and abs(result["steady_state_C"] - PAPER_STEADY) <= 0.2  # type: ignore[operator]
 
 
 @pytest.mark.parametrize(("step", "expected"), [(0.1, 0.1), (0.01, 0.01), (1 / 16, 0.0625), (0.5, 0.5), (None, 0.0)])

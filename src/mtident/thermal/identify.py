@@ -448,7 +448,7 @@ def _identify(
     late_start = np.zeros(S, dtype=bool)
     begins = np.full(S, tw[0])
     if preset == "data":
-        onset = late_onset(tw, yw, noise_sigma(yw))
+        onset = late_onset(tw, yw, noise_sigma(yw, tw))
         level = first_level(yw)
         late_start = onset > 0
         begins = tw[onset]
@@ -470,7 +470,7 @@ def _identify(
                 notes.append(f"sensors {lead}: the first minutes {why}; each model is fitted from the end of them")
     tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, S)
     # the data tuning has the noise level already (its R); the papers' R is a setting, not the noise
-    sigma = np.sqrt(tuning.emission_cov[:, 0, 0]) if preset == "data" else noise_sigma(yw)
+    sigma = np.sqrt(tuning.emission_cov[:, 0, 0]) if preset == "data" else noise_sigma(yw, tw)
 
     # Future sample times: the log's, then a uniform extension to the horizon.
     if method == "lsq":

@@ -107,7 +107,11 @@ def flat_lead(time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_r
     with np.errstate(invalid="ignore"):
         departed = np.abs(y - level) > rise_threshold(sigma, min_rise_C)
     first = np.argmax(departed, axis=0)
-    late = t[first] - t[0] >= min_flat_min
+    # Flat for as long as it was seen flat: to its last flat reading and one sampling step on. Judged
+    # by its first departed reading instead, a gap in the log counted as flat minutes (5 missing
+    # minutes in the papers' first 10 made a warm-up from the first sample a late one).
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    late = t[np.maximum(first - 1, 0)] + step - t[0] >= min_flat_min
     return np.where(~departed.any(axis=0), len(t), np.where(late, first - 1, 0))
 
 
@@ -160,7 +164,7 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     lead = max(3, int(lead_fraction * len(t)))
     if len(t) < lead + 6:
         return onsets
-    sigma = np.maximum(noise_sigma(y), 1e-6)
+    sigma = np.maximum(noise_sigma(y, t), 1e-6)
     # a warm-up that begins after the log: its flat minutes go first
     onsets = late_onset(t, y, sigma)
     lead = lead + int(onsets.max())

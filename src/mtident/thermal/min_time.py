@@ -169,7 +169,7 @@ def _search(
     W = len(candidates)
     onsets = np.zeros(S, dtype=int)
     if preset == "data":
-        onsets = late_onset(t[:n_total], y[:n_total], noise_sigma(y[:n_total]))
+        onsets = late_onset(t[:n_total], y[:n_total], noise_sigma(y[:n_total], t[:n_total]))
     fitted = y.copy()
     for s in np.flatnonzero(onsets):
         fitted[: onsets[s], s] = np.nan

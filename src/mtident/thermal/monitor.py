@@ -493,7 +493,7 @@ class Monitor:
         # A sensor that has not begun to rise (the logger started before the spindle) gives no
         # first-order curve to start from: its filter is started again once it rises.
         # One that rose only after a few flat minutes is started again from the start of its rise.
-        last_flat = np.where(unread, len(t), flat_lead(t, y, noise_sigma(filled), self.settings.min_rise_C, self.settings.late_rise_min))
+        last_flat = np.where(unread, len(t), flat_lead(t, y, noise_sigma(filled, t), self.settings.min_rise_C, self.settings.late_rise_min))
         late = last_flat > 0
         never = last_flat >= len(t)
         self.restart_from = [float(t[0]) if nv else float(t[k]) if lt else float("nan") for k, lt, nv in zip(last_flat, late, never, strict=True)]

@@ -138,12 +138,19 @@ def reading_range(values: FloatArray) -> FloatArray:
         return np.nanmax(y, axis=0) - np.nanmin(y, axis=0)
 
 
-def noise_sigma(values: FloatArray) -> FloatArray:
+def noise_sigma(values: FloatArray, time_min: FloatArray | None = None) -> FloatArray:
     """Measurement noise per sensor from fourth differences, robust to spikes (MAD).
 
     For white noise of standard deviation σ, Δ⁴y has standard deviation σ√70; a
     smooth warm-up curve contributes only D·(λΔt)⁴ to it (about 1e-6 °C for the
     papers' curves), so a noise-free curve gives σ ≈ 0 and is fitted exactly.
+
+    With ``time_min``, five readings in a row that are not evenly spaced (a gap
+    of rows, a missing reading) are combined with the weights of their fourth
+    divided difference, normalised: the combination that cancels any cubic at
+    those times, σ times a unit vector for white noise (Δ⁴y/√70 on an even grid).
+    Taken as if even, a 5-min gap in the papers' first 12 min put the curve's own
+    slope into σ (0.22 °C for 0.02), and the live monitor read the rise as flat.
 
     A rounded reading (a logger's 0.01 or 0.1 °C display) is never better than
     its rounding, q/√12 for a display step q (:func:`display_resolution`). The
@@ -155,17 +162,35 @@ def noise_sigma(values: FloatArray) -> FloatArray:
     Parameters
     ----------
     values : ndarray, shape (N, S)
+    time_min : ndarray, shape (N,), optional
+        The readings' times; without them the readings are taken as evenly spaced.
     """
     out = []
-    for column in np.asarray(values, dtype=float).T:
-        finite = column[np.isfinite(column)]
-        d4 = np.diff(finite, 4)
+    y_all = np.asarray(values, dtype=float)
+    t_all = np.arange(len(y_all), dtype=float) if time_min is None else np.asarray(time_min, dtype=float)
+    for column in y_all.T:
+        finite = np.isfinite(column)
+        d4 = _unit_fourth_differences(t_all[finite], column[finite])
         if d4.size < 3:
             out.append(0.05)
             continue
         mad = np.median(np.abs(d4 - np.median(d4))) * 1.4826
-        out.append(max(mad / np.sqrt(70.0), 1e-9))
+        out.append(max(mad, 1e-9))
     return np.maximum(np.array(out), display_resolution(values) / np.sqrt(12.0))
+
+
+def _unit_fourth_differences(t: FloatArray, y: FloatArray) -> FloatArray:
+    """Each five readings in a row combined by their normalised fourth divided difference: zero for
+    any cubic through them, σ times a unit vector for white noise (Δ⁴y/√70 on an even grid)."""
+    if len(y) < 5:
+        return np.empty(0)
+    windows = np.lib.stride_tricks.sliding_window_view(np.arange(len(y)), 5)
+    times, readings = t[windows], y[windows]
+    apart = times[:, :, None] - times[:, None, :]
+    apart[:, np.arange(5), np.arange(5)] = 1.0
+    weights = 1.0 / np.prod(apart, axis=2)
+    weights /= np.linalg.norm(weights, axis=1, keepdims=True)
+    return np.sum(weights * readings, axis=1)
 
 
 def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -240,7 +265,7 @@ def tuning_from_data(time_min: FloatArray, values: FloatArray, start_min: float 
     adapt Q and R from there, with the adaptive law's threshold C = 2σ.
     """
     start, rate, steady = quick_estimate(time_min, values)
-    sigma = noise_sigma(values)
+    sigma = noise_sigma(values, time_min)
     # A sensor whose first samples are left out (NaN: a flat start, see thermal.lsq.first_order_onset)
     # starts at t₀ on its first-order curve carried back from its first sample.
     first = np.array([time_min[np.flatnonzero(np.isfinite(col))[0]] for col in np.asarray(values, dtype=float).T])
