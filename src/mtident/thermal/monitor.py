@@ -110,6 +110,9 @@ _LEFT_OUT = ("no rise", "no data")
 _MATURE_NOISE_ESTIMATE = 30
 # minutes of innovations before a failed trend check is no longer put down to the filter's own start
 _SETTLING_MIN = 30.0
+# this many spikes within about this many minutes are more noise than estimated, not spikes
+_SPIKES_FOR_NOISE = 3
+_SPIKE_MEMORY_MIN = 20.0
 # Neighbouring fourth differences of white noise overlap (correlations -0.8, 0.4, -0.11, 0.014): a
 # mean of k of their squares varies like a mean of k / 2.63 independent ones.
 _D4_OVERLAP = 1.0 + 2.0 * (0.8**2 + 0.4**2 + (8 / 70) ** 2 + (1 / 70) ** 2)
@@ -270,6 +273,7 @@ class Monitor:
     samples: int = 0
     recent_y: FloatArray = field(default_factory=_no_rows)  # last 5 raw samples, for the noise estimate
     rejected_run: FloatArray | None = None
+    recent_spikes: FloatArray | None = None  # spikes rejected lately, fading over ``_SPIKE_MEMORY_MIN``
     room_measured: bool = False  # fed with ``ambient``: the room is an input, not an unknown that wanders
     ambient_level: float | None = None  # the room's last valid reading, with ``ambient``
     ambient_time: float | None = None
@@ -489,6 +493,7 @@ class Monitor:
         self.d4_count = np.zeros(S)
         self.recent_y = self.recent_y[:0]
         self.rejected_run = np.zeros(S)
+        self.recent_spikes = np.zeros(S)
         messages = []
         # A sensor that has not begun to rise (the logger started before the spindle) gives no
         # first-order curve to start from: its filter is started again once it rises.
@@ -531,7 +536,21 @@ class Monitor:
         # model missed: accept them and widen the filter (else it would freeze on old data).
         spikes = wild & (self.rejected_run == 0)
         broken = wild & (self.rejected_run > 0)
-        self.rejected_run = np.where(wild, self.rejected_run + 1, 0.0)
+        # Spikes are rare. Many in a short while are more noise than estimated (a loose contact, a
+        # drive's interference): rejected one by one, every other reading was thrown away for good
+        # and the noise estimate, which leaves out wild differences, never learnt it.
+        recent = (self.recent_spikes if self.recent_spikes is not None else np.zeros(len(y))) * np.exp(-dt / _SPIKE_MEMORY_MIN)
+        noisier = spikes & (recent >= _SPIKES_FOR_NOISE - 1)
+        spikes &= ~noisier
+        self.recent_spikes = recent + spikes
+        if np.any(noisier):
+            for s in np.flatnonzero(noisier):
+                messages.append(f"sensor {self.sensors[s]!r}: {_SPIKES_FOR_NOISE} wild readings within about {_SPIKE_MEMORY_MIN:g} min at t = {minutes(t)} min: more noise than estimated, not spikes; taking them in and estimating the noise again")
+            self._relearn_noise(noisier)
+            self.recent_spikes = np.where(noisier, 0.0, self.recent_spikes)
+            new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
+            z = _normalised_innovation(info)
+        self.rejected_run = np.where(wild & ~noisier, self.rejected_run + 1, 0.0)
         if np.any(broken):
             for s in np.flatnonzero(broken):
                 messages.append(f"sensor {self.sensors[s]!r}: a second wild sample in a row at t = {minutes(t)} min; not a spike: the warm-up changed course, widening its parameter uncertainty")
@@ -719,6 +738,21 @@ class Monitor:
             rounding = self._display_step() ** 2 / 12.0
             variance = np.where(ready, np.maximum(self.d4_sum / np.maximum(self.d4_count, 1) / 70.0, np.maximum(rounding, 1e-12)), self.carry.emission_cov[:, 0, 0])
             self.carry = replace(self.carry, emission_cov=variance[:, None, None])
+
+    def _relearn_noise(self, mask: np.ndarray) -> None:
+        """Estimate the noise of the ``mask`` sensors afresh from their next readings (their wild ones
+        included), starting from four times the present variance (twice the σ). Their residuals'
+        statistics start again too: measured against the old noise they were large, and the
+        consistency factor they left kept the T∞ interval wide to the log's end."""
+        assert self.d4_sum is not None and self.d4_count is not None and self.carry is not None
+        assert self.observed is not None and self.nis_sum is not None
+        self.d4_sum = np.where(mask, 0.0, self.d4_sum)
+        self.d4_count = np.where(mask, 0.0, self.d4_count)
+        self.observed = np.where(mask, 0.0, self.observed)
+        self.nis_sum = np.where(mask, 0.0, self.nis_sum)
+        self.z_history[:, mask] = np.nan
+        variance = np.where(mask, 4.0 * self.carry.emission_cov[:, 0, 0], self.carry.emission_cov[:, 0, 0])
+        self.carry = replace(self.carry, emission_cov=variance[:, None, None])
 
     def _hold(self, t: float) -> float:
         """How long T∞ must hold still: ``hold_min``, or ``hold_fraction`` of the test so far if
@@ -1123,6 +1157,7 @@ class Monitor:
             "samples": self.samples,
             "recent_y": _tolist(self.recent_y),
             "rejected_run": _tolist(self.rejected_run),
+            "recent_spikes": _tolist(self.recent_spikes),
             "room_measured": self.room_measured,
             "ambient_level": self.ambient_level,
             "ambient_time": self.ambient_time,
@@ -1174,6 +1209,7 @@ class Monitor:
             samples=int(data["samples"]),
             recent_y=_rows(data["recent_y"]),
             rejected_run=_optional_floats(data["rejected_run"]),
+            recent_spikes=_optional_floats(data.get("recent_spikes")),
             room_measured=bool(data.get("room_measured", data["ambient_level"] is not None)),
             ambient_level=data["ambient_level"],
             ambient_time=data.get("ambient_time"),
