@@ -156,6 +156,11 @@ def test_noise_level_across_gaps_and_missing_readings():
     missing = y.copy()
     missing[rng.random(len(t)) < 0.125] = np.nan
     np.testing.assert_allclose(noise_sigma(missing[:, None]), [0.02], rtol=0.15)
+    repeated = t.copy()
+    repeated[101] = repeated[100]  # two readings at one time (a merged log) give no difference there
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_allclose(noise_sigma(y[:, None], repeated), [0.02], rtol=0.15)
 
 
 def test_a_gap_in_the_first_minutes_is_no_flat_start():

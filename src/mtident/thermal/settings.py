@@ -211,9 +211,11 @@ def _unit_fourth_differences(t: FloatArray, y: FloatArray) -> FloatArray:
     times, readings = t[windows], y[windows]
     apart = times[:, :, None] - times[:, None, :]
     apart[:, np.arange(5), np.arange(5)] = 1.0
-    weights = 1.0 / np.prod(apart, axis=2)
-    weights /= np.linalg.norm(weights, axis=1, keepdims=True)
-    return np.sum(weights * readings, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):  # two readings at one time: no difference there
+        weights = 1.0 / np.prod(apart, axis=2)
+        weights /= np.linalg.norm(weights, axis=1, keepdims=True)
+        combined = np.sum(weights * readings, axis=1)
+    return combined[np.isfinite(combined)]
 
 
 def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
