@@ -110,9 +110,12 @@ _LEFT_OUT = ("no rise", "no data")
 _MATURE_NOISE_ESTIMATE = 30
 # minutes of innovations before a failed trend check is no longer put down to the filter's own start
 _SETTLING_MIN = 30.0
-# this many spikes within about this many minutes are more noise than estimated, not spikes
+# a wild reading after this many spikes within about this many minutes (their count fading with
+# that time) is more noise than estimated, not a spike
 _SPIKES_FOR_NOISE = 3
 _SPIKE_MEMORY_MIN = 20.0
+# ... unless they are this far off: no noise a logger's readings grow into (a loose contact's were 6-12σ)
+_NOISE_SIGMA_MAX = 25.0
 # Neighbouring fourth differences of white noise overlap (correlations -0.8, 0.4, -0.11, 0.014): a
 # mean of k of their squares varies like a mean of k / 2.63 independent ones.
 _D4_OVERLAP = 1.0 + 2.0 * (0.8**2 + 0.4**2 + (8 / 70) ** 2 + (1 / 70) ** 2)
@@ -540,12 +543,13 @@ class Monitor:
         # drive's interference): rejected one by one, every other reading was thrown away for good
         # and the noise estimate, which leaves out wild differences, never learnt it.
         recent = (self.recent_spikes if self.recent_spikes is not None else np.zeros(len(y))) * np.exp(-dt / _SPIKE_MEMORY_MIN)
-        noisier = spikes & (recent >= _SPIKES_FOR_NOISE - 1)
+        # (a reading far beyond any noise, a +15 °C glitch, stays a spike however many came before)
+        noisier = spikes & (recent >= _SPIKES_FOR_NOISE - 1) & (np.abs(z) < _NOISE_SIGMA_MAX)
         spikes &= ~noisier
         self.recent_spikes = recent + spikes
         if np.any(noisier):
             for s in np.flatnonzero(noisier):
-                messages.append(f"sensor {self.sensors[s]!r}: {_SPIKES_FOR_NOISE} wild readings within about {_SPIKE_MEMORY_MIN:g} min at t = {minutes(t)} min: more noise than estimated, not spikes; taking them in and estimating the noise again")
+                messages.append(f"sensor {self.sensors[s]!r}: one more wild reading at t = {minutes(t)} min after {_SPIKES_FOR_NOISE} spikes in the last {_SPIKE_MEMORY_MIN:g} min or so: more noise than estimated, not spikes; taking them in and estimating the noise again")
             self._relearn_noise(noisier)
             self.recent_spikes = np.where(noisier, 0.0, self.recent_spikes)
             new, info = filter_step(self.carry, y[:, None], step, observe_temperature, config, weights)
