@@ -478,7 +478,7 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
                         _say_room_candidates(monitored, "watched as a machine sensor")
                 if len(rows.time_min) and monitor is not None:
                     last_data = time.monotonic()
-                    values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if ambient_col else (rows.temperature_C, None)
+                    values, room = _split_room(rows.temperature_C, ambient_col)
                     # in pieces, so that the table moves on through a long replay (300 min at 1 Hz: 42 s)
                     for start in range(0, len(rows.time_min), _FEED_ROWS):
                         part = slice(start, start + _FEED_ROWS)
@@ -542,9 +542,15 @@ def watch_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
 _FEED_ROWS = 250
 
 
+def _split_room(readings: np.ndarray, ambient_col: str | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """The sensors' readings and the room's: the follower reads the room sensor last."""
+    return (readings[:, :-1], readings[:, -1]) if ambient_col else (readings, None)
+
+
 def _hindsight(followed: Path, monitor, time_col: str | None, time_unit: str | None, ambient_col: str | None):  # noqa: ANN001,ANN202
     """The decision against where the whole log settled, for a replayed log that runs on past the stop
-    (None if it ends there). Read again whole by the replay's own reader."""
+    (None if it ends there). Read again whole by the replay's own reader: a resumed replay polled
+    only the rows after its saved position, and the settled level is judged against the start."""
     from mtident.io.follow import LogFollower
     from mtident.thermal.hindsight import check_decision
     from mtident.thermal.monitor import minutes
@@ -552,7 +558,7 @@ def _hindsight(followed: Path, monitor, time_col: str | None, time_unit: str | N
     rows = LogFollower(followed, [*monitor.sensors, *([ambient_col] if ambient_col else [])], time_col, time_unit, room=ambient_col).poll()
     if not len(rows.time_min) or rows.time_min[-1] <= monitor.stop_time:
         return None
-    values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if ambient_col else (rows.temperature_C, None)
+    values, room = _split_room(rows.temperature_C, ambient_col)
     stderr.print(f"mtident: the log runs on to t = {minutes(rows.time_min[-1])} min: checking the decision against where it settled", highlight=False)
     return check_decision(monitor.sensors, monitor.decided_steady_states(), monitor.stop_time, rows.time_min, values, monitor.settings.tolerance_C, room)
 
@@ -565,7 +571,7 @@ def _print_hindsight(hindsight) -> None:  # noqa: ANN001
     table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)} min){room}")
     for column in ("sensor", "T∞ at stop (°C)", "settled (°C)", "difference (°C)", "95 % rise at (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
-    settled = np.isfinite(hindsight.settled_C) & np.isfinite(hindsight.steady_state_C)
+    settled = hindsight.checked
     for i, name in enumerate(hindsight.sensors):
         error = hindsight.error_C[i]
         shown = _fmt(float(error)) if settled[i] else "—"

@@ -45,7 +45,7 @@ class Hindsight:
         room = f", room moved {self.room_shift_C:+.2f} °C" if self.room_shift_C else ""
         lines = [f"Hindsight(stop at {self.stop_time_min:g} min, log to {self.log_end_min:g} min{room}, tolerance {self.tolerance_C:g} °C)"]
         for i, name in enumerate(self.sensors):
-            if not np.isfinite(self.error_C[i]):
+            if not self.checked[i]:
                 why = "left out of the decision" if not np.isfinite(self.steady_state_C[i]) else "not settled by the log's end"
                 lines.append(f"  {name}: {why}")
                 continue
@@ -57,6 +57,11 @@ class Hindsight:
     def error_C(self) -> FloatArray:
         """T∞ at the stop, moved with the room, minus where the log settled."""
         return self.steady_state_C + self.room_shift_C - self.settled_C
+
+    @property
+    def checked(self) -> np.ndarray:
+        """The sensors with something to check: in the decision, and settled by the log's end."""
+        return np.isfinite(self.error_C)
 
     @property
     def within(self) -> np.ndarray:
@@ -81,7 +86,7 @@ class Hindsight:
                     "settled_C": number(self.settled_C[i]),
                     "error_C": number(self.error_C[i]),
                     "measured_equilibrium_time_min": number(self.measured_equilibrium_time_min[i]),
-                    "within_tolerance": bool(self.within[i]) if np.isfinite(self.error_C[i]) else None,
+                    "within_tolerance": bool(self.within[i]) if self.checked[i] else None,
                 }
                 for i, name in enumerate(self.sensors)
             ],

@@ -86,7 +86,7 @@ same result.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -1053,9 +1053,8 @@ class Monitor:
         # Only the sensors on a course run on: one far off course (thrown off, to be identified
         # again) overflowed in the batch, and a failure of its factor stopped the others' forecast.
         which = np.flatnonzero(todo)
-        parts = {name: getattr(self.carry, name)[which] for name in ("mean", "cov", "chol", "process_cov", "emission_cov", "residual_memory", "updates_seen") if getattr(self.carry, name) is not None}
-        carry = replace(self.carry, **parts)
-        carry = replace(carry, emission_cov=carry.emission_cov / per_step)
+        parts = {f.name: value[which] for f in fields(self.carry) if (value := getattr(self.carry, f.name)) is not None}
+        carry = replace(self.carry, **{**parts, "emission_cov": parts["emission_cov"] / per_step})
         threshold = self.settings.interval_fraction * self.settings.tolerance_C
         observed, nis_sum, anchor = self.observed[which], self.nis_sum[which], anchor[which]
         found = np.full(len(which), np.nan)

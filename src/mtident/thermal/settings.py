@@ -245,13 +245,14 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     start = np.full(S, np.nan)  # each sensor's first valid reading
     for s in range(S):
         valid = np.isfinite(y[:, s])
+        if not valid.any():
+            continue
+        start[s] = y[valid, s][0]
         if valid.sum() >= 2:
             grid_t[:, s] = np.linspace(t[valid][0], t[valid][-1], n)
             grid_y[:, s] = np.interp(grid_t[:, s], t[valid], y[valid, s])
-        elif valid.any():
-            grid_y[:, s] = y[valid, s][0]
-        if valid.any():
-            start[s] = y[valid, s][0]
+        else:
+            grid_y[:, s] = start[s]
     size = n // 3
     thirds = [np.arange(n - 3 * size + j * size, n - 3 * size + (j + 1) * size) for j in range(3)]
     seg_t = np.stack([grid_t[i].mean(axis=0) for i in thirds])  # (3, S)
@@ -263,8 +264,7 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     span = np.maximum(grid_t[-1] - grid_t[0], 1e-9)
     fallback = 3.0 / span
     ok = (ratio > 0.05) & (ratio < 0.98) & np.isfinite(ratio) & (tau > 0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rate = np.where(ok, -np.log(np.where(ok, ratio, 0.5)) / np.where(ok, tau, 1.0), fallback)
+    rate = np.where(ok, -np.log(np.where(ok, ratio, 0.5)) / np.where(ok, tau, 1.0), fallback)
     # Segment means are A_j = T∞ + D·m_j with m_j the segment mean of e^(−λt).
     m = np.stack([np.exp(-rate[None, :] * (grid_t[i] - grid_t[0][None, :])).mean(axis=0) for i in thirds])
     with np.errstate(divide="ignore", invalid="ignore"):
