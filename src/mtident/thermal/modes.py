@@ -1,0 +1,737 @@
+"""Model-robust steady state: a warm-up as a sum of exponential modes.
+
+A sensor on a machine heated by a constant power in a room is a linear system: its
+temperature is T(t) = T∞ + Σₖ aₖ·e^(−t/τₖ), one term per thermal mode (heat
+capacity) of the structure, with a lagged sensor or a distant part giving modes of
+either sign. The papers' first-order model keeps one mode; a machine has several, and
+a slow one not yet visible in the data moves T∞ far from what one mode predicts.
+
+This module fits up to three modes, their time constants at least a factor
+``MIN_MODE_RATIO`` apart, to all the data so far, by variable projection: for given time constants the
+model is linear in T∞ and the amplitudes, so only the time constants are searched,
+first on a log grid from the sampling interval to the largest time constant the
+machine may have, then locally. The interval for T∞ is the profile-likelihood hull:
+every model of the family, with every time constant up to ``max_time_constant_min``,
+whose fit is within the chosen χ² quantile of the best, contributes the T∞ values it
+allows. A slow mode that the data cannot yet exclude therefore widens the interval
+until they can. With a reference run (:mod:`mtident.thermal.reference`) the time
+constants are searched only within boxes around the reference's, which is what lets a
+test stop early.
+
+With a room sensor the room is an input of every mode's heat balance: the sensor less
+the room follows T∞ − T_room + Σ aₖe^(−t/τₖ) + Σ gₖ(Fₖ[room] − room), where Fₖ is the
+first-order lag of mode k (a steady room gives the sensor the room's level, whatever
+the gains gₖ, which are free).
+
+References
+----------
+Golub, G. and Pereyra, V. (2003). Separable nonlinear least squares: the variable
+projection method and its applications. Inverse Problems 19(2), R1-R26.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import lru_cache
+from itertools import combinations
+
+import numpy as np
+from scipy.special import stdtrit
+
+from mtident._typing import FloatArray, IntArray
+from mtident.thermal.model import EQUILIBRIUM_FRACTION
+
+__all__ = [
+    "DEFAULT_MAX_TIME_CONSTANT_MIN",
+    "Binned",
+    "ModeFamily",
+    "Mode",
+    "IntervalEnd",
+    "SteadyState",
+    "bin_index",
+    "bin_samples",
+    "equilibrium_time",
+    "fit_steady_state",
+    "model_curve",
+]
+
+# The slowest thermal mode a machine tool is taken to have, unless told: a machine's
+# structure (bed, column, the spindle head's casting) warms with time constants of one to
+# five hours; ISO 230-3 warm-ups run 4-6 h for that reason. A mode slower than this is
+# taken as absent; said in every answer.
+DEFAULT_MAX_TIME_CONSTANT_MIN = 300.0
+MAX_MODES = 3
+# A bin spans about this fraction of the time since the log began: fast modes are resolved
+# early, and a record of any length keeps a few hundred bins.
+BIN_FRACTION = 0.02
+BIN_ORIGIN_MIN = 1.0
+# Two modes closer than this are one to the fit: nearly alike columns with large amplitudes of
+# opposite sign fit anything, and the hull then grows with the search grid's resolution.
+MIN_MODE_RATIO = 1.5
+# prior standard deviation of a room gain gₖ (the sum of the gains of a passive structure is 1)
+ROOM_GAIN_SD = 2.0
+# a tiny ridge on every normalised column, so that a degenerate set of modes (three slow ones
+# on a short record) gives a huge interval instead of a singular matrix
+_JITTER = 1e-11
+# Each amplitude has a weak prior of this many times the readings' spread: three slow modes of
+# ±1000 °C cancelling one another fit any short record and are no machine.
+AMPLITUDE_SD_FACTOR = 4.0
+_FASTEST_MIN = 0.05
+_GRID_POINTS = 40
+_MAX_GRID_RATIO = 1.25
+_CANDIDATES = 3
+_MAX_CORRELATION_FACTOR = 25.0
+
+
+@dataclass(frozen=True)
+class ModeFamily:
+    """The models an interval covers.
+
+    Parameters
+    ----------
+    max_time_constant_min : float
+        The largest time constant a mode may have (minutes).
+    max_modes : int
+        At most this many modes.
+    reference_min : tuple of float, optional
+        Time constants of a reference run of the same machine (minutes). Given, each mode's
+        time constant is searched only within ``reference_box`` (relative half-widths) of the
+        reference's, and no other mode is allowed.
+    reference_box : tuple of float
+        Relative half-width of each reference time constant's box (0.1: ±10 %).
+    """
+
+    max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
+    max_modes: int = MAX_MODES
+    reference_min: tuple[float, ...] | None = None
+    reference_box: tuple[float, ...] = ()
+
+    def without_reference(self) -> ModeFamily:
+        """The same family without the reference's boxes."""
+        return ModeFamily(self.max_time_constant_min, self.max_modes)
+
+
+@dataclass(frozen=True)
+class Binned:
+    """One sensor's readings in bins, the form every fit here works on.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (B,)
+        Mean time of each bin's readings (minutes since the log began).
+    value_C : ndarray, shape (B,)
+        Mean reading of each bin.
+    count : ndarray, shape (B,)
+        Readings in each bin (the bin's weight).
+    room_C : ndarray, shape (B,), optional
+        Mean room reading of each bin, where a room sensor is used.
+    """
+
+    time_min: FloatArray
+    value_C: FloatArray
+    count: FloatArray
+    room_C: FloatArray | None = None
+
+    def __len__(self) -> int:
+        return len(self.time_min)
+
+    def since(self, start_min: float) -> Binned:
+        """The bins from ``start_min`` on."""
+        keep = self.time_min >= start_min - 1e-9
+        room = None if self.room_C is None else self.room_C[keep]
+        return Binned(self.time_min[keep], self.value_C[keep], self.count[keep], room)
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One exponential mode: ``amplitude_C·e^(−t/time_constant_min)``."""
+
+    time_constant_min: float
+    amplitude_C: float
+
+
+@dataclass(frozen=True)
+class IntervalEnd:
+    """The model that sets one end of an interval: its modes, with the amplitudes they take
+    at that end."""
+
+    steady_C: float
+    modes: tuple[Mode, ...]
+
+    def slowest(self) -> Mode | None:
+        """The slowest mode of this model (None for a model without a mode)."""
+        return max(self.modes, key=lambda m: (m.time_constant_min, abs(m.amplitude_C)), default=None)
+
+
+@dataclass(frozen=True)
+class SteadyState:
+    """The model-robust estimate of one sensor's steady state.
+
+    Attributes
+    ----------
+    steady_C : float
+        T∞ of the best-fitting model (at the room's last level, with a room sensor).
+    interval_C : dict of float to (float, float)
+        Per confidence level, the hull of T∞ over every model the data do not exclude.
+    ends : dict of float to (IntervalEnd, IntervalEnd)
+        Per level, the models that set the low and the high end.
+    modes : tuple of Mode
+        The best-fitting model's modes (with the number chosen by BIC).
+    start_C : float
+        The best model's value at the fit's first bin.
+    origin_min : float
+        Where the fit begins (a warm-up that begins after the log starts at its last flat bin).
+    equilibrium_time_min : float
+        When the best model stays within 5 % of its total rise from T∞ (from the log's start).
+    noise_C : float
+        The readings' noise as the fit sees it (per reading, with the residuals' correlation).
+    correlation_factor : float
+        How much the residuals' correlation widens the interval's variance (1: none).
+    rss, dof : float
+        Weighted residual sum of squares and degrees of freedom of the best three-mode fit.
+    n_bins : int
+    room_level_C : float or None
+        The room's last level, where a room sensor is used.
+    family : ModeFamily
+    determined : bool
+        Enough data for an interval (False: the interval is infinite).
+    """
+
+    steady_C: float
+    interval_C: dict[float, tuple[float, float]]
+    ends: dict[float, tuple[IntervalEnd, IntervalEnd]]
+    modes: tuple[Mode, ...]
+    start_C: float
+    origin_min: float
+    equilibrium_time_min: float
+    noise_C: float
+    correlation_factor: float
+    rss: float
+    dof: float
+    n_bins: int
+    room_level_C: float | None
+    family: ModeFamily
+    determined: bool = True
+    fits: dict[int, float] = field(default_factory=dict)
+
+    def half_width(self, level: float) -> float:
+        """The larger distance from T∞ to an end of the interval at ``level``."""
+        lo, hi = self.interval_C[level]
+        return max(self.steady_C - lo, hi - self.steady_C)
+
+    def slowest_time_constant_min(self) -> float:
+        """The best model's slowest time constant (NaN for a model without a mode)."""
+        return max((m.time_constant_min for m in self.modes), default=float("nan"))
+
+
+def bin_index(time_min: FloatArray, fraction: float = BIN_FRACTION, origin_min: float = BIN_ORIGIN_MIN) -> FloatArray:
+    """The bin each time falls into (minutes since the log began): bins a fixed fraction of the
+    elapsed time wide, so that the same reading always falls into the same bin, live or not.
+
+    Examples
+    --------
+    >>> bin_index(np.array([0.0, 0.5, 1.0, 100.0, 1000.0])).astype(int).tolist()
+    [0, 20, 35, 233, 349]
+    """
+    return np.floor(np.log1p(np.maximum(np.asarray(time_min, dtype=float), 0.0) / origin_min) / np.log1p(fraction))
+
+
+def bin_samples(time_min: FloatArray, values: FloatArray, room_C: FloatArray | None = None) -> Binned:
+    """Bin one sensor's readings (missing ones left out) by :func:`bin_index`.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Minutes since the log began.
+    values : ndarray, shape (N,)
+    room_C : ndarray, shape (N,), optional
+        The room sensor's readings; a bin takes the readings where both are valid.
+
+    Returns
+    -------
+    Binned
+    """
+    t = np.asarray(time_min, dtype=float)
+    y = np.asarray(values, dtype=float)
+    valid = np.isfinite(y) & np.isfinite(t)
+    if room_C is not None:
+        valid &= np.isfinite(room_C)
+    _, which = np.unique(bin_index(t[valid]), return_inverse=True)
+    count = np.bincount(which).astype(float)
+
+    def mean(x: FloatArray) -> FloatArray:
+        return np.bincount(which, weights=x) / count
+
+    room = None if room_C is None else mean(np.asarray(room_C, dtype=float)[valid])
+    return Binned(mean(t[valid]), mean(y[valid]), count, room)
+
+
+# ---------------------------------------------------------------------------------------------
+# One sensor's least-squares problem
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """What every fit of one sensor shares: the bins, where the modes begin, the centring of the
+    readings, the priors (as penalties in units of the noise) and the search's bounds."""
+
+    binned: Binned
+    origin: float
+    centre: float
+    sigma2: float  # the noise variance the penalties are counted in
+    amplitude_sd: float
+    tau_bounds: tuple[float, float]
+    family: ModeFamily
+
+    @property
+    def with_room(self) -> bool:
+        return self.binned.room_C is not None
+
+    def target(self) -> FloatArray:
+        b = self.binned
+        return (b.value_C if b.room_C is None else b.value_C - b.room_C) - self.centre
+
+    def penalty(self, k: int) -> FloatArray:
+        """Per column, the prior's weight: nothing on T∞, a weak bound on each amplitude and on
+        each room gain."""
+        room = [self.sigma2 / ROOM_GAIN_SD**2] * k if self.with_room else []
+        return np.array([0.0] + [self.sigma2 / self.amplitude_sd**2] * k + room)
+
+    def step(self) -> float:
+        return 0.5 * np.log(_MAX_GRID_RATIO) if self.family.reference_min is None else 0.05
+
+    def bounds(self, k: int) -> FloatArray:
+        if self.family.reference_min is not None:
+            return _reference_grid(self.family)[1]
+        return np.tile(self.tau_bounds, (k, 1))
+
+
+def _columns(problem: _Problem, tau: FloatArray) -> FloatArray:
+    """Design matrices (T, B, p) of a batch of models (T, k): the constant, each mode's
+    e^(−t/τ), then with a room each mode's lag of the room less the room."""
+    b = problem.binned
+    u = b.time_min - problem.origin
+    cols = [np.ones(tau.shape[:1] + u.shape)]
+    cols.extend(np.exp(-u / tau[:, k, None]) for k in range(tau.shape[1]))
+    if b.room_C is not None:
+        room = np.broadcast_to(b.room_C, cols[0].shape)
+        cols.extend(_lag(room, b.time_min, tau[:, k]) - b.room_C for k in range(tau.shape[1]))
+    return np.stack(cols, axis=-1)
+
+
+def _lag(rows: FloatArray, time_min: FloatArray, tau: FloatArray) -> FloatArray:
+    """A first-order lag of time constant ``tau[t]`` applied to each row of ``rows`` (T, B): a
+    room taken as piecewise linear between the bins, from a machine at the room's first level."""
+    out = np.empty(rows.shape)
+    x = np.array(rows[:, 0], dtype=float)
+    out[:, 0] = x
+    for i in range(1, rows.shape[1]):
+        dt = time_min[i] - time_min[i - 1]
+        slope = (rows[:, i] - rows[:, i - 1]) / dt
+        x = rows[:, i] - slope * tau + (x - rows[:, i - 1] + slope * tau) * np.exp(-dt / tau)
+        out[:, i] = x
+    return out
+
+
+@dataclass(frozen=True)
+class _Fits:
+    """Penalised least-squares fits of a batch of T models with k modes each."""
+
+    tau: FloatArray  # (T, k) time constants
+    rss: FloatArray  # (T,) weighted residuals' sum of squares plus the priors' penalty
+    steady: FloatArray  # (T,) T∞ (less the problem's centring)
+    var_steady: FloatArray  # (T,) [(XᵀWX + P)⁻¹]₀₀
+    direction: FloatArray  # (T, p) (XᵀWX + P)⁻¹e₀: how the parameters follow T∞ along the profile
+    theta: FloatArray  # (T, p)
+
+    def take(self, i: int) -> _Fits:
+        """The i-th model alone."""
+        s = slice(i, i + 1)
+        return _Fits(self.tau[s], self.rss[s], self.steady[s], self.var_steady[s], self.direction[s], self.theta[s])
+
+    @property
+    def n_params(self) -> int:
+        return self.theta.shape[1] + self.tau.shape[1]
+
+
+def _solve(gram: FloatArray, rhs: FloatArray, yy: float, penalty: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Batched penalised normal equations, solved in normalised form: rss, θ, [G⁻¹]₀₀, G⁻¹e₀."""
+    gram = gram + np.diag(penalty)
+    scale = np.sqrt(np.maximum(np.diagonal(gram, axis1=-2, axis2=-1), 1e-300))
+    outer = scale[..., :, None] * scale[..., None, :]
+    inverse = np.linalg.inv(gram / outer + _JITTER * np.eye(gram.shape[-1])) / outer
+    theta = (inverse @ rhs[..., None])[..., 0]
+    rss = yy - np.sum(rhs * theta, axis=-1)
+    return rss, theta, inverse[..., 0, 0], inverse[..., :, 0]
+
+
+def _fit(problem: _Problem, tau: FloatArray) -> _Fits:
+    """Fits of a batch of models (T, k) from their design matrices, the residuals summed
+    directly (the normal equations lose digits where modes are nearly alike)."""
+    X = _columns(problem, tau)
+    w = problem.binned.count
+    y = problem.target()
+    penalty = problem.penalty(tau.shape[1])
+    Xw = X * w[:, None]
+    gram = np.swapaxes(Xw, 1, 2) @ X
+    rhs = np.swapaxes(Xw, 1, 2) @ y
+    _, theta, var0, direction = _solve(gram, rhs, float(np.sum(w * y * y)), penalty)
+    resid = y - (X @ theta[:, :, None])[..., 0]
+    rss = (resid**2) @ w + (theta**2) @ penalty
+    return _Fits(tau, rss, theta[:, 0], var0, direction, theta)
+
+
+# ---------------------------------------------------------------------------------------------
+# The global search: every set of grid time constants at once, from one Gram matrix
+
+
+@lru_cache(maxsize=64)
+def _grid_tuples(m: int, k: int, apart: int) -> IntArray:
+    """Indices (T, k) of k grid time constants, increasing, at least ``apart`` steps apart."""
+    combos = [c for c in combinations(range(m), k) if all(b - a >= apart for a, b in zip(c, c[1:], strict=False))]
+    return np.array(combos, dtype=int).reshape(-1, k)
+
+
+def _grid_taus(problem: _Problem) -> FloatArray:
+    lo, hi = problem.tau_bounds
+    n = max(_GRID_POINTS, int(np.ceil(np.log(hi / lo) / np.log(_MAX_GRID_RATIO))) + 1)
+    return np.geomspace(lo, hi, n)
+
+
+def _grid_fits(problem: _Problem) -> list[_Fits]:
+    """Every model with time constants on the search grid, fitted from one Gram matrix of every
+    column any of them uses."""
+    tau = _grid_taus(problem)
+    m, b = len(tau), problem.binned
+    basis = [np.ones((len(b), 1)), np.exp(-(b.time_min - problem.origin)[:, None] / tau[None, :])]
+    if b.room_C is not None:
+        basis.append((_lag(np.broadcast_to(b.room_C, (m, len(b))), b.time_min, tau) - b.room_C).T)
+    X = np.concatenate(basis, axis=1)
+    w, y = b.count, problem.target()
+    gram, rhs, yy = (X * w[:, None]).T @ X, X.T @ (w * y), float(np.sum(w * y * y))
+    apart = int(np.ceil(np.log(MIN_MODE_RATIO) / np.log(tau[1] / tau[0]) - 1e-9))
+    out = []
+    for k in range(1, problem.family.max_modes + 1):
+        idx = _grid_tuples(m, k, apart)
+        room = [1 + m + idx] if b.room_C is not None else []
+        sel = np.concatenate([np.zeros((len(idx), 1), dtype=int), 1 + idx, *room], axis=1)
+        rss, theta, var0, direction = _solve(gram[sel[:, :, None], sel[:, None, :]], rhs[sel], yy, problem.penalty(k))
+        out.append(_Fits(tau[idx], rss, theta[:, 0], var0, direction, theta))
+    return out
+
+
+def _reference_grid(family: ModeFamily, points: int = 7) -> tuple[FloatArray, FloatArray]:
+    """A grid over the reference's boxes: (T, k) time constants and the bounds (k, 2)."""
+    ref = np.asarray(family.reference_min, dtype=float)
+    box = np.asarray(family.reference_box, dtype=float)
+    bounds = np.column_stack([ref * (1 - box), ref * (1 + box)])
+    axes = [np.geomspace(lo, hi, points) for lo, hi in bounds]
+    grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(ref), -1).T
+    return grid, bounds
+
+
+def _candidates(problem: _Problem) -> list[_Fits]:
+    """Every model of the family's search grid, fitted."""
+    if problem.family.reference_min is not None:
+        return [_fit(problem, _reference_grid(problem.family)[0])]
+    return _grid_fits(problem)
+
+
+# ---------------------------------------------------------------------------------------------
+# Local refinement: a shrinking pattern search in log τ
+
+Objective = Callable[[_Fits], FloatArray]
+
+
+def _refine(problem: _Problem, fits: _Fits, i: int, objective: Objective) -> _Fits:
+    """Improve the i-th model's time constants by a pattern search in log τ within the family's
+    bounds, minimising ``objective``; the best model found, alone."""
+    k = fits.tau.shape[1]
+    moves = np.array(np.meshgrid(*[[-1.0, 0.0, 1.0]] * k, indexing="ij")).reshape(k, -1).T
+    bounds = np.log(problem.bounds(k))
+    current = np.log(fits.tau[i])
+    best = _fit(problem, fits.tau[i : i + 1])
+    best_value = float(objective(best)[0])
+    h = problem.step()
+    while h >= problem.step() / 16:
+        trial = np.clip(current + h * moves, bounds[:, 0], bounds[:, 1])
+        trial_fits = _fit(problem, np.exp(trial))
+        values = np.where(_apart(trial), np.nan_to_num(objective(trial_fits), nan=np.inf), np.inf)
+        j = int(np.argmin(values))
+        if values[j] < best_value - 1e-12:
+            best, best_value, current = trial_fits.take(j), float(values[j]), trial[j]
+        else:
+            h /= 2.0
+    return best
+
+
+def _apart(log_tau: FloatArray) -> np.ndarray:
+    """Which rows of time constants (log, T × k) keep every two modes ``MIN_MODE_RATIO`` apart."""
+    ordered = np.sort(log_tau, axis=1)
+    return np.all(np.diff(ordered, axis=1) >= np.log(MIN_MODE_RATIO) - 1e-9, axis=1)
+
+
+def _best_per_count(problem: _Problem, candidates: list[_Fits]) -> dict[int, _Fits]:
+    """Per number of modes, the best-fitting model, refined off the grid."""
+    best: dict[int, _Fits] = {}
+    for k in sorted({f.tau.shape[1] for f in candidates}):
+        same = [f for f in candidates if f.tau.shape[1] == k]
+        for fits, i in _leading(same, lambda f: f.rss, _CANDIDATES):
+            refined = _refine(problem, fits, i, lambda f: f.rss)
+            if k not in best or refined.rss[0] < best[k].rss[0]:
+                best[k] = refined
+    return best
+
+
+def _leading(candidates: list[_Fits], objective: Objective, count: int) -> list[tuple[_Fits, int]]:
+    """The ``count`` models with the lowest finite ``objective`` among all the batches."""
+    scored = [(float(v), n, int(i)) for n, fits in enumerate(candidates) for i, v in enumerate(objective(fits)) if np.isfinite(v)]
+    return [(candidates[n], i) for _, n, i in sorted(scored)[:count]]
+
+
+# ---------------------------------------------------------------------------------------------
+# The profile hull
+
+
+def _profile_bounds(fits: _Fits, threshold: float) -> tuple[FloatArray, FloatArray]:
+    """Per model, the lowest and highest T∞ with a fit within ``threshold`` (NaN where the
+    model's best fit is not)."""
+    slack = threshold - fits.rss
+    half = np.sqrt(np.where(slack >= 0, slack, np.nan) * np.maximum(fits.var_steady, 0.0))
+    return fits.steady - half, fits.steady + half
+
+
+def _end_objective(threshold: float, sign: float) -> Objective:
+    """Minimised by the model that reaches furthest in T∞ towards ``sign``."""
+
+    def objective(fits: _Fits) -> FloatArray:
+        lo, hi = _profile_bounds(fits, threshold)
+        return -hi if sign > 0 else lo
+
+    return objective
+
+
+def _hull_end(problem: _Problem, candidates: list[_Fits], threshold: float, sign: float) -> _Fits:
+    """The model that sets one end of the hull, refined off the grid from the leading few."""
+    objective = _end_objective(threshold, sign)
+    best, best_value = None, np.inf
+    for fits, i in _leading(candidates, objective, _CANDIDATES):
+        refined = _refine(problem, fits, i, objective)
+        value = float(objective(refined)[0])
+        if value < best_value:
+            best, best_value = refined, value
+    if best is None:
+        msg = "no model within the profile threshold (the best fit should always be)"
+        raise ArithmeticError(msg)
+    return best
+
+
+def _end(fits: _Fits, threshold: float, sign: float, shift: float) -> IntervalEnd:
+    """The model at its furthest T∞ towards ``sign``, with the amplitudes it takes there."""
+    slack = max(threshold - float(fits.rss[0]), 0.0)
+    theta = fits.theta[0] + sign * np.sqrt(slack / max(float(fits.var_steady[0]), 1e-300)) * fits.direction[0]
+    return IntervalEnd(float(theta[0]) + shift, _modes_of(fits, theta))
+
+
+def _correlation_factor(resid: FloatArray) -> float:
+    """The residuals' long-run variance over their variance (Bartlett window of the usual
+    Newey-West width): how much their correlation (a misfit, a wandering room, rounding held
+    for many readings) widens the variance of anything that varies slowly. At least 1."""
+    n = len(resid)
+    r = resid - resid.mean()
+    var = float(np.dot(r, r))
+    if n < 8 or var <= 0:
+        return 1.0
+    lags = max(1, int(np.ceil(4.0 * (n / 100.0) ** (2.0 / 9.0))))
+    acf = np.array([np.dot(r[:-lag], r[lag:]) / var for lag in range(1, lags + 1)])
+    weights = 1.0 - np.arange(1, lags + 1) / (lags + 1.0)
+    return float(np.clip(1.0 + 2.0 * np.sum(weights * acf), 1.0, _MAX_CORRELATION_FACTOR))
+
+
+def _choose(best_per_count: dict[int, _Fits], n: int) -> _Fits:
+    """The point estimate's model: the number of modes by BIC."""
+
+    def bic(f: _Fits) -> float:
+        return n * np.log(max(float(f.rss[0]), 1e-300) / n) + f.n_params * np.log(n)
+
+    return min(best_per_count.values(), key=bic)
+
+
+def _modes_of(fits: _Fits, theta: FloatArray | None = None) -> tuple[Mode, ...]:
+    th = fits.theta[0] if theta is None else theta
+    return tuple(Mode(float(tau), float(a)) for tau, a in zip(fits.tau[0], th[1 : 1 + fits.tau.shape[1]], strict=True))
+
+
+def _weighted_residuals(problem: _Problem, fits: _Fits) -> FloatArray:
+    X = _columns(problem, fits.tau)[0]
+    return (problem.target() - X @ fits.theta[0]) * np.sqrt(problem.binned.count)
+
+
+# ---------------------------------------------------------------------------------------------
+# The estimate
+
+
+def fit_steady_state(
+    binned: Binned,
+    *,
+    noise_C: float,
+    interval_min: float,
+    family: ModeFamily = ModeFamily(),
+    levels: tuple[float, ...] = (0.95, 0.99),
+) -> SteadyState:
+    """The model-robust T∞ of one sensor: the best-fitting sum of modes and the profile hull
+    over every model of ``family`` the data do not exclude.
+
+    Parameters
+    ----------
+    binned : Binned
+        The sensor's readings from where its warm-up begins (:func:`bin_samples`); the modes
+        are counted from the first bin.
+    noise_C : float
+        The readings' noise (°C, per reading), a floor under the residuals' own estimate.
+    interval_min : float
+        The sampling interval: modes much faster than it are not searched.
+    family : ModeFamily
+    levels : tuple of float
+        Confidence levels of the intervals.
+
+    Returns
+    -------
+    SteadyState
+
+    Examples
+    --------
+    >>> t = np.arange(0.0, 241.0)
+    >>> warm = 26.7 - 8.8 * np.exp(-t / 62.5) + 0.02 * np.random.default_rng(0).standard_normal(t.size)
+    >>> fit = fit_steady_state(bin_samples(t, warm), noise_C=0.02, interval_min=1.0)
+    >>> round(fit.steady_C, 1), len(fit.modes)
+    (26.7, 1)
+    """
+    problem = _problem(binned, noise_C, interval_min, family)
+    candidates = _candidates(problem)
+    best = _best_per_count(problem, candidates)
+    full = min(best.values(), key=lambda f: float(f.rss[0]))
+    chosen = _choose(best, len(binned))
+    candidates = [*candidates, *best.values()]
+    shift = problem.centre + (0.0 if binned.room_C is None else float(binned.room_C[-1]))
+    modes = _modes_of(chosen)
+    start = float(_columns(problem, chosen.tau)[0, 0] @ chosen.theta[0]) + problem.centre
+    steady = float(chosen.steady[0]) + shift
+    dof = float(len(binned) - full.n_params)
+    common = dict(
+        steady_C=steady,
+        modes=modes,
+        start_C=start,
+        origin_min=problem.origin,
+        rss=float(full.rss[0]),
+        dof=dof,
+        n_bins=len(binned),
+        room_level_C=None if binned.room_C is None else float(binned.room_C[-1]),
+        family=family,
+        fits={k: float(f.rss[0]) for k, f in best.items()},
+    )
+    if dof < 2:
+        wide = (-np.inf, np.inf)
+        return SteadyState(interval_C={q: wide for q in levels}, ends={}, equilibrium_time_min=float("nan"), noise_C=noise_C, correlation_factor=1.0, determined=False, **common)
+    factor = _correlation_factor(_weighted_residuals(problem, full))
+    sigma2 = max(float(full.rss[0]) / dof, problem.sigma2) * factor
+    intervals, ends = {}, {}
+    for q in levels:
+        threshold = float(full.rss[0]) + sigma2 * float(stdtrit(dof, 0.5 + q / 2.0)) ** 2
+        low = _hull_end(problem, candidates, threshold, -1.0)
+        high = _hull_end(problem, candidates, threshold, +1.0)
+        lo = min(float(_profile_bounds(low, threshold)[0][0]) + shift, steady)
+        hi = max(float(_profile_bounds(high, threshold)[1][0]) + shift, steady)
+        intervals[q] = (lo, hi)
+        ends[q] = (_end(low, threshold, -1.0, shift), _end(high, threshold, +1.0, shift))
+    t_eq = equilibrium_time(modes, steady, start, problem.origin)
+    return SteadyState(interval_C=intervals, ends=ends, equilibrium_time_min=t_eq, noise_C=float(np.sqrt(sigma2)), correlation_factor=factor, **common)
+
+
+def _problem(binned: Binned, noise_C: float, interval_min: float, family: ModeFamily) -> _Problem:
+    y = binned.value_C if binned.room_C is None else binned.value_C - binned.room_C
+    spread = max(float(np.ptp(binned.value_C)), 10.0 * noise_C)
+    lo = max(0.5 * interval_min, _FASTEST_MIN)
+    return _Problem(
+        binned=binned,
+        origin=float(binned.time_min[0]),
+        centre=float(np.average(y, weights=binned.count)),
+        sigma2=max(noise_C, 1e-6) ** 2,
+        amplitude_sd=AMPLITUDE_SD_FACTOR * spread,
+        tau_bounds=(min(lo, family.max_time_constant_min), family.max_time_constant_min),
+        family=family,
+    )
+
+
+def model_curve(modes: tuple[Mode, ...], steady_C: float, origin_min: float, time_min: FloatArray) -> FloatArray:
+    """The curve of a sum of modes (no room term) at ``time_min`` (from the log's start); before
+    ``origin_min`` it holds its value there.
+
+    Parameters
+    ----------
+    modes : tuple of Mode
+    steady_C : float
+    origin_min : float
+    time_min : ndarray
+
+    Returns
+    -------
+    ndarray, the shape of ``time_min``
+    """
+    u = np.maximum(np.asarray(time_min, dtype=float) - origin_min, 0.0)
+    out = np.full(u.shape, float(steady_C))
+    for m in modes:
+        out = out + m.amplitude_C * np.exp(-u / m.time_constant_min)
+    return out
+
+
+def equilibrium_time(modes: tuple[Mode, ...], steady_C: float, start_C: float, origin_min: float) -> float:
+    """When a sum of modes last leaves the band of 5 % of its total rise around T∞ (minutes
+    from the log's start; the papers' thermal-equilibrium time for any number of modes).
+
+    Parameters
+    ----------
+    modes : tuple of Mode
+    steady_C, start_C : float
+    origin_min : float
+
+    Returns
+    -------
+    float
+    """
+    if not modes:
+        return origin_min
+    slowest = max(m.time_constant_min for m in modes)
+    u = np.concatenate([[0.0], np.geomspace(1e-3, 40.0 * slowest, 4000)])
+    curve = model_curve(modes, steady_C, 0.0, u)
+    outside = np.flatnonzero(np.abs(curve - steady_C) > (1.0 - EQUILIBRIUM_FRACTION) * abs(steady_C - start_C))
+    return origin_min + (float(u[min(outside[-1] + 1, len(u) - 1)]) if outside.size else 0.0)
+
+
+def log_time_constant_sd(binned: Binned, fit: SteadyState) -> tuple[float, ...]:
+    """The standard deviation of the log of each of the best model's time constants (its relative
+    uncertainty), from the Gauss-Newton curvature of the fit at the noise the fit saw.
+
+    Parameters
+    ----------
+    binned : Binned
+        The readings the fit was made from.
+    fit : SteadyState
+
+    Returns
+    -------
+    tuple of float, one per mode of ``fit.modes``
+    """
+    if not fit.modes:
+        return ()
+    problem = _problem(binned, fit.noise_C, 1.0, fit.family)
+    tau = np.array([[m.time_constant_min for m in fit.modes]])
+    amplitude = np.array([m.amplitude_C for m in fit.modes])
+    X = _columns(problem, tau)[0]
+    u = (binned.time_min - problem.origin)[:, None]
+    slopes = amplitude * (u / tau) * np.exp(-u / tau)  # ∂model/∂log τ
+    J = np.concatenate([X, slopes], axis=1)
+    info = (J * binned.count[:, None]).T @ J + np.diag(np.concatenate([problem.penalty(len(fit.modes)), np.zeros(len(fit.modes))]))
+    cov = fit.noise_C**2 * np.linalg.pinv(info)
+    return tuple(float(np.sqrt(max(v, 0.0))) for v in np.diagonal(cov)[-len(fit.modes) :])

@@ -1,0 +1,196 @@
+"""Reference runs: learn a machine's thermal modes once, from a warm-up that ran to equilibrium.
+
+A machine's time constants belong to its structure (masses, conductances, the coolant), not to
+the load: a later test at another speed, from another start, has other amplitudes but the same
+time constants. :func:`learn_reference` identifies each sensor's modes with their uncertainty
+from one complete run; a later ``identify`` or ``watch`` searches the time constants only
+within those boxes (never as exact), which is what lets a test stop early and safely.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mtident._typing import FloatArray
+from mtident.exceptions import InputError
+from mtident.io.logs import TemperatureLog
+from mtident.thermal.modes import bin_samples, log_time_constant_sd
+from mtident.thermal.robust import MIN_REFERENCE_BOX, RobustSettings, SensorEstimate, SensorModes, estimate_sensor
+
+__all__ = ["MachineReference", "learn_reference", "save_reference", "load_reference"]
+
+# A reference's box is three standard deviations of its time constant (at least ±10 %, at most
+# ±60 %: wider than that the reference no longer shortens a test).
+BOX_SDS = 3.0
+MAX_BOX = 0.6
+MAX_MODE_SD = 0.15
+_HEADER = """# mtident reference run: each sensor's thermal modes, learnt from a warm-up that ran to
+# equilibrium. `mtident thermal identify|watch LOG --reference THIS_FILE` searches each sensor's
+# time constants only within ±box of these (relative), with free amplitudes, and says so when a
+# new test does not follow them (a changed machine).
+"""
+
+
+@dataclass(frozen=True)
+class MachineReference:
+    """A machine's modes per sensor, learnt from one complete warm-up.
+
+    Parameters
+    ----------
+    source : str
+        The log it was learnt from.
+    learnt_on : str
+        ISO date.
+    max_time_constant_min : float
+        The largest time constant searched when learning.
+    room : str
+        How the room was taken when learning.
+    sensors : dict of str to SensorModes
+    """
+
+    source: str
+    learnt_on: str
+    max_time_constant_min: float
+    room: str
+    sensors: dict[str, SensorModes]
+
+    def modes(self, sensor: str) -> SensorModes | None:
+        """The modes of ``sensor`` (None if the reference does not know it)."""
+        return self.sensors.get(sensor)
+
+    def describe(self, sensor: str) -> str:
+        """One line for the answer's assumptions."""
+        modes = self.sensors.get(sensor)
+        if modes is None:
+            return f"{self.source}: no modes for this sensor"
+        parts = ", ".join(f"{t:.3g} min ±{b:.0%}" for t, b in zip(modes.time_constants_min, modes.box, strict=True))
+        return f"{self.source} ({self.learnt_on}): τ {parts}"
+
+
+def learn_reference(log: TemperatureLog, room_C: FloatArray | None = None, settings: RobustSettings = RobustSettings()) -> tuple[MachineReference, list[str]]:
+    """Each sensor's modes from a warm-up that ran to equilibrium.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    room_C : ndarray, shape (N,), optional
+        A room sensor (an input of every mode).
+    settings : RobustSettings
+        The largest time constant searched.
+
+    Returns
+    -------
+    MachineReference
+    list of str
+        Warnings: sensors left out (no fit), a log that did not reach equilibrium (its slowest
+        mode is then uncertain and its box wide).
+    """
+    sensors: dict[str, SensorModes] = {}
+    warnings: list[str] = []
+    for s, name in enumerate(log.sensors):
+        learnt = _learn_sensor(name, log.time_min, log.temperature_C[:, s], room_C, settings)
+        if learnt is None:
+            warnings.append(f"{name}: left out of the reference (no model fits its readings)")
+            continue
+        estimate, box = learnt
+        fit = estimate.fit
+        assert fit is not None
+        sensors[name] = SensorModes(tuple(m.time_constant_min for m in fit.modes), box, tuple(m.amplitude_C for m in fit.modes))
+        lo, hi = estimate.interval_C[min(estimate.interval_C)]
+        if not estimate.model_ok or (hi - lo) / 2 > 0.1:
+            warnings.append(f"{name}: the log does not pin its steady state down (95 % interval {lo:.2f} to {hi:.2f} °C): did it run to equilibrium? Its slowest mode is uncertain (±{box[int(np.argmax([m.time_constant_min for m in fit.modes]))]:.0%})")
+        if max(m.time_constant_min for m in fit.modes) >= 0.98 * settings.max_time_constant_min:
+            warnings.append(f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the machine may have a slower one (--max-time-constant)")
+    room = "a room sensor, an input of every mode" if room_C is not None else "not measured"
+    return MachineReference(log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors), warnings
+
+
+def _learn_sensor(name: str, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: RobustSettings) -> tuple[SensorEstimate, tuple[float, ...]] | None:
+    """The sensor's modes and their boxes: the most modes whose time constants the run determines
+    (each within ±``MAX_MODE_SD`` at one standard deviation). A mode the run cannot pin down is
+    no property of the machine to carry into later tests; without it a later test's residuals
+    show the misfit and its interval widens."""
+    for count in range(3, 0, -1):
+        estimate = estimate_sensor(name, time_min, values, room_C, RobustSettings(settings.max_time_constant_min, settings.room_wander_C_per_h, settings.levels, max_modes=count))
+        fit = estimate.fit
+        if fit is None or not fit.modes:
+            return None
+        if len(fit.modes) < count:
+            continue
+        first = int(np.searchsorted(time_min, fit.origin_min))
+        binned = bin_samples(time_min[first:], values[first:], None if room_C is None else room_C[first:])
+        sds = log_time_constant_sd(binned, fit)
+        if max(sds) <= MAX_MODE_SD or count == 1:
+            return estimate, tuple(float(min(max(BOX_SDS * sd, MIN_REFERENCE_BOX), MAX_BOX)) for sd in sds)
+    return None
+
+
+def save_reference(reference: MachineReference, path: str | Path) -> None:
+    """Write a reference as a commented TOML file.
+
+    Parameters
+    ----------
+    reference : MachineReference
+    path : str or Path
+    """
+    import tomli_w
+
+    doc = {
+        "source": reference.source,
+        "learnt_on": reference.learnt_on,
+        "max_time_constant_min": reference.max_time_constant_min,
+        "room": reference.room,
+        "sensors": {
+            name: {"time_constants_min": list(m.time_constants_min), "box": list(m.box), "amplitudes_C": list(m.amplitudes_C)}
+            for name, m in reference.sensors.items()
+        },
+    }
+    Path(path).write_text(_HEADER + tomli_w.dumps(doc), encoding="utf-8")
+
+
+def load_reference(path: str | Path) -> MachineReference:
+    """Read a reference written by :func:`save_reference` (or by hand).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    MachineReference
+
+    Raises
+    ------
+    InputError
+        Not a readable TOML file, or a sensor without positive time constants and boxes.
+    """
+    p = Path(path)
+    try:
+        doc = tomllib.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        msg = f"{p}: not a reference file mtident can read ({exc})"
+        raise InputError(msg) from exc
+    table = doc.get("sensors")
+    if not isinstance(table, dict) or not table:
+        msg = f"{p}: no [sensors.NAME] tables; learn one with `mtident thermal learn FULL_LOG -o {p.name}`"
+        raise InputError(msg)
+    sensors = {str(name): _sensor_modes(p, str(name), entry) for name, entry in table.items()}
+    return MachineReference(str(doc.get("source", p.name)), str(doc.get("learnt_on", "")), float(doc.get("max_time_constant_min", math.nan)), str(doc.get("room", "")), sensors)
+
+
+def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
+    taus = entry.get("time_constants_min") if isinstance(entry, dict) else None
+    boxes = entry.get("box", [MIN_REFERENCE_BOX] * len(taus)) if isinstance(entry, dict) and isinstance(taus, list) else None
+    ok = isinstance(taus, list) and isinstance(boxes, list) and 0 < len(taus) <= 3 and len(boxes) == len(taus)
+    ok = ok and all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in [*taus, *boxes])  # type: ignore[misc]
+    if not ok:
+        msg = f"{path}: sensor {name!r}: expected time_constants_min = [1 to 3 positive minutes] and box = [as many positive fractions]; found {entry!r}"
+        raise InputError(msg)
+    assert isinstance(taus, list) and isinstance(boxes, list) and isinstance(entry, dict)
+    return SensorModes(tuple(float(v) for v in taus), tuple(float(v) for v in boxes), tuple(float(v) for v in entry.get("amplitudes_C", [])))

@@ -1,0 +1,265 @@
+"""One sensor's model-robust answer: where its warm-up begins, its noise, the modal fit and its
+interval, what that interval assumes, and whether to trust it.
+
+The interval of :func:`mtident.thermal.modes.fit_steady_state` covers every sum of modes the
+data do not exclude. Here it gets what the readings alone cannot give: the room's unmeasured
+wander (without a room sensor), a reference run's time constants (and a check that the test
+agrees with them), and the verdict a script reads (``model_ok`` and the warnings).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import ndtri
+
+from mtident._typing import FloatArray
+from mtident.thermal.lsq import flat_lead
+from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, ModeFamily, SteadyState, bin_samples, fit_steady_state
+from mtident.thermal.settings import display_resolution, noise_sigma
+
+__all__ = [
+    "Assumptions",
+    "RobustSettings",
+    "SensorEstimate",
+    "SensorModes",
+    "estimate_sensor",
+    "rise_threshold_C",
+    "sampling_interval_min",
+]
+
+# A reference's time constant is never taken as known better than ±10 %: the study of stopping
+# rules found boxes of this size safe, and exact time constants not.
+MIN_REFERENCE_BOX = 0.10
+# Residuals this much more correlated than noise mean the model does not describe the data.
+MISFIT_FACTOR = 4.0
+MIN_BINS = 8
+
+
+@dataclass(frozen=True)
+class RobustSettings:
+    """What the model-robust answer assumes and how sure it must be.
+
+    Parameters
+    ----------
+    max_time_constant_min : float
+        The slowest mode the machine may have (minutes).
+    room_wander_C_per_h : float
+        Without a room sensor: how far the unmeasured room may wander, as a random walk of this
+        many °C in an hour (0: a room known to be steady).
+    levels : tuple of float
+        Confidence levels of the intervals computed (the report's and the decision's).
+    max_modes : int
+        At most this many modes.
+    """
+
+    max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
+    room_wander_C_per_h: float = 0.05
+    levels: tuple[float, ...] = (0.95, 0.99)
+    max_modes: int = 3
+
+
+@dataclass(frozen=True)
+class SensorModes:
+    """A sensor's modes learnt from a reference run.
+
+    Parameters
+    ----------
+    time_constants_min : tuple of float
+    box : tuple of float
+        Relative half-width of each time constant's uncertainty (0.1: ±10 %).
+    amplitudes_C : tuple of float
+        The amplitudes in the reference run (for information; a new test's are free).
+    """
+
+    time_constants_min: tuple[float, ...]
+    box: tuple[float, ...]
+    amplitudes_C: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class Assumptions:
+    """What an interval rests on, said with every answer."""
+
+    max_time_constant_min: float
+    room: str
+    reference: str | None = None
+    model: str = "a sum of up to three exponential modes"
+
+    def to_dict(self) -> dict[str, object]:
+        """The JSON object of the contract's ``assumptions``."""
+        return {"model": self.model, "max_time_constant_min": self.max_time_constant_min, "room": self.room, "reference": self.reference}
+
+
+@dataclass(frozen=True)
+class SensorEstimate:
+    """One sensor's model-robust answer.
+
+    Attributes
+    ----------
+    sensor : str
+    status : str
+        "estimated", "no data" or "too few readings".
+    fit : SteadyState or None
+    onset_min : float
+        Where its warm-up begins (after a flat start, the last flat reading).
+    rise_C : float
+        How far it has moved from its first level.
+    noise_C : float
+        The readings' noise (per reading).
+    interval_C : dict of float to (float, float)
+        T∞'s interval per level, the room's unmeasured wander included.
+    model_ok : bool
+        False where the data contradict the model or T∞ is not determined.
+    warnings : tuple of str
+    reference_used : bool
+        The reference's time constants were used (the test agrees with them).
+    """
+
+    sensor: str
+    status: str
+    fit: SteadyState | None
+    onset_min: float
+    rise_C: float
+    noise_C: float
+    interval_C: dict[float, tuple[float, float]]
+    model_ok: bool
+    warnings: tuple[str, ...]
+    reference_used: bool = False
+
+    @property
+    def steady_C(self) -> float:
+        """T∞ of the best-fitting model (NaN without a fit)."""
+        return float("nan") if self.fit is None else self.fit.steady_C
+
+    def half_width(self, level: float) -> float:
+        """The larger distance from T∞ to an end of the interval at ``level`` (inf without one)."""
+        if self.fit is None:
+            return float("inf")
+        lo, hi = self.interval_C[level]
+        return max(self.steady_C - lo, hi - self.steady_C)
+
+    def what_sets_the_ends(self, level: float) -> str:
+        """In words, the models that set the interval's ends: "a mode of about 280 min with
+        −0.8 °C still fits"."""
+        if self.fit is None or level not in self.fit.ends:
+            return "too few readings for a model"
+        words = []
+        for end, label in zip(self.fit.ends[level], ("low", "high"), strict=True):
+            slowest = end.slowest()
+            if slowest is not None:
+                words.append(f"{label} end {end.steady_C:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min with {slowest.amplitude_C:+.2f} °C still fits")
+        return "; ".join(words)
+
+
+def sampling_interval_min(time_min: FloatArray) -> float:
+    """The log's usual sampling interval (the median step; 1 min for fewer than two readings)."""
+    t = np.asarray(time_min, dtype=float)
+    return float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+
+
+def rise_threshold_C(noise_C: float, rounding_C: float) -> float:
+    """A move from the first level that is a rise, not noise: 6σ, or three rounding steps."""
+    return max(6.0 * noise_C, 3.0 * rounding_C, 1e-6)
+
+
+def estimate_sensor(
+    sensor: str,
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None = None,
+    settings: RobustSettings = RobustSettings(),
+    reference: SensorModes | None = None,
+) -> SensorEstimate:
+    """The model-robust T∞ of one sensor from all its readings so far.
+
+    Parameters
+    ----------
+    sensor : str
+        The sensor's name (for the messages).
+    time_min : ndarray, shape (N,)
+        Minutes since the log began.
+    values : ndarray, shape (N,)
+        Readings (NaN: missing).
+    room_C : ndarray, shape (N,), optional
+        A room sensor: the room becomes an input of every mode's heat balance.
+    settings : RobustSettings
+    reference : SensorModes, optional
+        The sensor's modes from a reference run of the same machine.
+
+    Returns
+    -------
+    SensorEstimate
+    """
+    t = np.asarray(time_min, dtype=float)
+    y = np.asarray(values, dtype=float)
+    valid = np.isfinite(y) if room_C is None else np.isfinite(y) & np.isfinite(room_C)
+    if not valid.any():
+        return _without_fit(sensor, "no data", 0.0, 0.0, float(t[0]) if len(t) else 0.0, settings, "no valid reading yet")
+    noise = float(noise_sigma(y[:, None], t)[0])
+    rounding = float(display_resolution(y[:, None])[0])
+    first = float(np.nanmedian(y[valid][:3]))
+    rise = float(np.nanmax(np.abs(y[valid] - first)))
+    lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
+    onset = int(lead) if lead < len(t) else 0
+    room = None if room_C is None else np.asarray(room_C, dtype=float)[onset:]
+    binned = bin_samples(t[onset:], y[onset:], room)
+    if len(binned) < MIN_BINS:
+        return _without_fit(sensor, "too few readings", rise, noise, float(t[onset]), settings, f"{len(binned)} readings since its warm-up began: too few for a model")
+    interval = sampling_interval_min(t)
+    family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
+    warnings: list[str] = []
+    reference_used = False
+    if reference is not None:
+        boxed = ModeFamily(settings.max_time_constant_min, len(reference.time_constants_min), tuple(reference.time_constants_min), tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box))
+        fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=boxed, levels=settings.levels)
+        if fit.correlation_factor <= MISFIT_FACTOR:
+            reference_used = True
+        else:
+            warnings.append(f"{sensor}: this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; residuals {fit.correlation_factor:.1f}x as correlated as noise): has the machine changed? The answer does not use the reference")
+    if not reference_used:
+        fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels)
+    intervals = _with_room_wander(fit, room_C is not None, settings)
+    ok, said = _verdict(sensor, fit, intervals, rise, rise_threshold_C(noise, rounding), float(t[onset]) if onset else None, warnings)
+    return SensorEstimate(sensor, "estimated", fit, float(t[onset]), rise, noise, intervals, ok, said, reference_used)
+
+
+def _taus(taus: tuple[float, ...]) -> str:
+    return "τ " + ", ".join(f"{x:.3g}" for x in taus) + " min"
+
+
+def _with_room_wander(fit: SteadyState, room_measured: bool, settings: RobustSettings) -> dict[float, tuple[float, float]]:
+    """The intervals widened by the unmeasured room's wander: the room's random walk over the last
+    slowest-mode time constant (since the warm-up began) is not yet in the readings, and moves the
+    steady state at the room's level with it."""
+    if room_measured or settings.room_wander_C_per_h <= 0 or not fit.determined:
+        return dict(fit.interval_C)
+    memory = min(fit.slowest_time_constant_min(), settings.max_time_constant_min)
+    sd = settings.room_wander_C_per_h * np.sqrt(max(memory, 0.0) / 60.0)
+    out = {}
+    for q, (lo, hi) in fit.interval_C.items():
+        extra = float(ndtri(0.5 + q / 2.0)) * sd
+        out[q] = (fit.steady_C - float(np.hypot(fit.steady_C - lo, extra)), fit.steady_C + float(np.hypot(hi - fit.steady_C, extra)))
+    return out
+
+
+def _verdict(sensor: str, fit: SteadyState, intervals: dict[float, tuple[float, float]], rise: float, threshold: float, onset_min: float | None, warnings: list[str]) -> tuple[bool, tuple[str, ...]]:
+    """``model_ok`` and the warnings of one fitted sensor."""
+    ok = fit.determined
+    if onset_min is not None:
+        warnings.append(f"{sensor}: flat until t = {onset_min:g} min (the warm-up began after the log); the modes are counted from there")
+    if fit.correlation_factor > MISFIT_FACTOR:
+        ok = False
+        warnings.append(f"{sensor}: the residuals are {fit.correlation_factor:.1f}x as correlated as noise: no sum of up to {fit.family.max_modes} modes describes these readings well (the interval is widened by that factor's square root)")
+    level = min(intervals)
+    lo, hi = intervals[level]
+    if not np.isfinite(hi - lo) or (hi - lo) / 2 > max(rise, threshold):
+        ok = False
+        warnings.append(f"{sensor}: T∞ not determined yet ({level:.0%} interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)")
+    return ok, tuple(warnings)
+
+
+def _without_fit(sensor: str, status: str, rise: float, noise: float, onset: float, settings: RobustSettings, why: str) -> SensorEstimate:
+    wide = {q: (-np.inf, np.inf) for q in settings.levels}
+    return SensorEstimate(sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",))
