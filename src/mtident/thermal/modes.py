@@ -232,7 +232,7 @@ def bin_index(time_min: FloatArray, fraction: float = BIN_FRACTION, origin_min: 
     Examples
     --------
     >>> bin_index(np.array([0.0, 0.5, 1.0, 100.0, 1000.0])).astype(int).tolist()
-    [0, 20, 35, 233, 349]
+    [0, 20, 35, 233, 348]
     """
     return np.floor(np.log1p(np.maximum(np.asarray(time_min, dtype=float), 0.0) / origin_min) / np.log1p(fraction))
 
