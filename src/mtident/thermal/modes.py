@@ -37,6 +37,7 @@ from functools import lru_cache
 from itertools import combinations
 
 import numpy as np
+from scipy.optimize import minimize
 from scipy.special import stdtrit
 
 from mtident._typing import FloatArray, IntArray
@@ -81,6 +82,10 @@ _FASTEST_MIN = 0.05
 _GRID_POINTS = 40
 _MAX_GRID_RATIO = 1.25
 _CANDIDATES = 3
+_APART_PENALTY = 1e4
+# beyond the threshold, a profile's end search is pushed back this many times more steeply than
+# T∞'s own reach at the best fit: a search crossing the edge returns
+_EDGE_PENALTY = 1e3
 _MAX_CORRELATION_FACTOR = 25.0
 
 
@@ -298,8 +303,10 @@ class _Problem:
         room = [self.sigma2 / ROOM_GAIN_SD**2] * k if self.with_room else []
         return np.array([0.0] + [self.sigma2 / self.amplitude_sd**2] * k + room)
 
-    def step(self) -> float:
-        return 0.5 * np.log(_MAX_GRID_RATIO) if self.family.reference_min is None else 0.05
+    def starts(self) -> int:
+        """How many of the grid's leading models each refinement starts from: a reference's small
+        boxes hold one optimum, the whole range of time constants several."""
+        return _CANDIDATES if self.family.reference_min is None else 1
 
     def bounds(self, k: int) -> FloatArray:
         if self.family.reference_min is not None:
@@ -439,37 +446,41 @@ def _candidates(problem: _Problem) -> list[_Fits]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Local refinement: a shrinking pattern search in log τ
+# Local refinement: quasi-Newton in log τ from the grid's leading models
 
 Objective = Callable[[_Fits], FloatArray]
+# forward-difference step in log τ for the refinement's gradient
+_DIFF_STEP = 1e-6
 
 
 def _refine(problem: _Problem, fits: _Fits, i: int, objective: Objective) -> _Fits:
-    """Improve the i-th model's time constants by a pattern search in log τ within the family's
-    bounds, minimising ``objective``; the best model found, alone."""
+    """Improve the i-th model's time constants by L-BFGS-B in log τ within the family's bounds,
+    minimising ``objective`` (finite everywhere); the best model found, alone. A profile's end
+    lies on a thin ridge of the time constants where the data pin them down, which a search on a
+    grid or along the axes misses (it found half the width of a reference's hull)."""
     k = fits.tau.shape[1]
-    moves = np.array(np.meshgrid(*[[-1.0, 0.0, 1.0]] * k, indexing="ij")).reshape(k, -1).T
     bounds = np.log(problem.bounds(k))
-    current = np.log(fits.tau[i])
-    best = _fit(problem, fits.tau[i : i + 1])
-    best_value = float(objective(best)[0])
-    h = problem.step()
-    while h >= problem.step() / 16:
-        trial = np.clip(current + h * moves, bounds[:, 0], bounds[:, 1])
-        trial_fits = _fit(problem, np.exp(trial))
-        values = np.where(_apart(trial), np.nan_to_num(objective(trial_fits), nan=np.inf), np.inf)
-        j = int(np.argmin(values))
-        if values[j] < best_value - 1e-12:
-            best, best_value, current = trial_fits.take(j), float(values[j]), trial[j]
-        else:
-            h /= 2.0
-    return best
+    apart = problem.family.reference_min is None and k > 1
+    probe = np.vstack([np.zeros(k), _DIFF_STEP * np.eye(k)])
+
+    def value_and_gradient(phi: FloatArray) -> tuple[float, FloatArray]:
+        points = phi + probe
+        values = objective(_fit(problem, np.exp(points)))
+        if apart:
+            values = values + _APART_PENALTY * _closeness(points) ** 2
+        return float(values[0]), (values[1:] - values[0]) / _DIFF_STEP
+
+    start = np.clip(np.log(fits.tau[i]), bounds[:, 0], bounds[:, 1])
+    found = minimize(value_and_gradient, start, jac=True, method="L-BFGS-B", bounds=bounds, options={"maxiter": 200})
+    best = _fit(problem, np.exp(np.vstack([start, found.x])))
+    values = objective(best) + (_APART_PENALTY * _closeness(np.log(best.tau)) ** 2 if apart else 0.0)
+    return best.take(int(np.argmin(values)))
 
 
-def _apart(log_tau: FloatArray) -> np.ndarray:
-    """Which rows of time constants (log, T × k) keep every two modes ``MIN_MODE_RATIO`` apart."""
-    ordered = np.sort(log_tau, axis=1)
-    return np.all(np.diff(ordered, axis=1) >= np.log(MIN_MODE_RATIO) - 1e-9, axis=1)
+def _closeness(log_tau: FloatArray) -> FloatArray:
+    """How far (log) each row's closest two modes are inside ``MIN_MODE_RATIO`` of each other."""
+    gaps = np.diff(np.sort(log_tau, axis=1), axis=1)
+    return np.maximum(np.log(MIN_MODE_RATIO) - gaps.min(axis=1, initial=np.inf), 0.0) if gaps.size else np.zeros(len(log_tau))
 
 
 def _best_per_count(problem: _Problem, candidates: list[_Fits]) -> dict[int, _Fits]:
@@ -477,7 +488,7 @@ def _best_per_count(problem: _Problem, candidates: list[_Fits]) -> dict[int, _Fi
     best: dict[int, _Fits] = {}
     for k in sorted({f.tau.shape[1] for f in candidates}):
         same = [f for f in candidates if f.tau.shape[1] == k]
-        for fits, i in _leading(same, lambda f: f.rss, _CANDIDATES):
+        for fits, i in _leading(same, lambda f: f.rss, problem.starts()):
             refined = _refine(problem, fits, i, lambda f: f.rss)
             if k not in best or refined.rss[0] < best[k].rss[0]:
                 best[k] = refined
@@ -502,29 +513,33 @@ def _profile_bounds(fits: _Fits, threshold: float) -> tuple[FloatArray, FloatArr
     return fits.steady - half, fits.steady + half
 
 
-def _end_objective(threshold: float, sign: float) -> Objective:
-    """Minimised by the model that reaches furthest in T∞ towards ``sign``."""
+def _end_objective(threshold: float, sign: float, gap: float) -> Objective:
+    """Minimised by the model that reaches furthest in T∞ towards ``sign`` within ``threshold``;
+    beyond it, rising with the excess (``gap``: the threshold over the best fit), so that a
+    search crossing the edge is led back."""
 
     def objective(fits: _Fits) -> FloatArray:
-        lo, hi = _profile_bounds(fits, threshold)
-        return -hi if sign > 0 else lo
+        slack = threshold - fits.rss
+        reach = np.sqrt(np.maximum(fits.var_steady, 0.0) * gap)
+        inside = -sign * fits.steady - np.sqrt(np.maximum(slack, 0.0) * np.maximum(fits.var_steady, 0.0))
+        return np.where(slack >= 0, inside, -sign * fits.steady - _EDGE_PENALTY * reach * slack / gap)
 
     return objective
 
 
-def _hull_end(problem: _Problem, candidates: list[_Fits], threshold: float, sign: float) -> _Fits:
-    """The model that sets one end of the hull, refined off the grid from the leading few."""
-    objective = _end_objective(threshold, sign)
+def _hull_end(problem: _Problem, candidates: list[_Fits], threshold: float, sign: float, gap: float, fallback: _Fits) -> _Fits:
+    """The model that sets one end of the hull, refined off the grid from the leading few
+    (``fallback``, the best fit, if none stays within the threshold)."""
+    objective = _end_objective(threshold, sign, gap)
     best, best_value = None, np.inf
-    for fits, i in _leading(candidates, objective, _CANDIDATES):
+    for fits, i in _leading(candidates, objective, problem.starts()):
         refined = _refine(problem, fits, i, objective)
+        if refined.rss[0] > threshold:
+            continue
         value = float(objective(refined)[0])
         if value < best_value:
             best, best_value = refined, value
-    if best is None:
-        msg = "no model within the profile threshold (the best fit should always be)"
-        raise ArithmeticError(msg)
-    return best
+    return fallback if best is None else best
 
 
 def _end(fits: _Fits, threshold: float, sign: float, shift: float) -> IntervalEnd:
@@ -639,8 +654,9 @@ def fit_steady_state(
     intervals, ends = {}, {}
     for q in levels:
         threshold = float(full.rss[0]) + sigma2 * float(stdtrit(dof, 0.5 + q / 2.0)) ** 2
-        low = _hull_end(problem, candidates, threshold, -1.0)
-        high = _hull_end(problem, candidates, threshold, +1.0)
+        gap = threshold - float(full.rss[0])
+        low = _hull_end(problem, candidates, threshold, -1.0, gap, full)
+        high = _hull_end(problem, candidates, threshold, +1.0, gap, full)
         lo = min(float(_profile_bounds(low, threshold)[0][0]) + shift, steady)
         hi = max(float(_profile_bounds(high, threshold)[1][0]) + shift, steady)
         intervals[q] = (lo, hi)

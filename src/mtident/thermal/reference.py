@@ -73,7 +73,7 @@ class MachineReference:
         return f"{self.source} ({self.learnt_on}): τ {parts}"
 
 
-def learn_reference(log: TemperatureLog, room_C: FloatArray | None = None, settings: RobustSettings = RobustSettings()) -> tuple[MachineReference, list[str]]:
+def learn_reference(log: TemperatureLog, room_C: FloatArray | None = None, settings: RobustSettings | None = None) -> tuple[MachineReference, list[str]]:
     """Each sensor's modes from a warm-up that ran to equilibrium.
 
     Parameters
@@ -81,8 +81,8 @@ def learn_reference(log: TemperatureLog, room_C: FloatArray | None = None, setti
     log : TemperatureLog
     room_C : ndarray, shape (N,), optional
         A room sensor (an input of every mode).
-    settings : RobustSettings
-        The largest time constant searched.
+    settings : RobustSettings, optional
+        The largest time constant searched (default: 300 min).
 
     Returns
     -------
@@ -91,6 +91,7 @@ def learn_reference(log: TemperatureLog, room_C: FloatArray | None = None, setti
         Warnings: sensors left out (no fit), a log that did not reach equilibrium (its slowest
         mode is then uncertain and its box wide).
     """
+    settings = settings or RobustSettings()
     sensors: dict[str, SensorModes] = {}
     warnings: list[str] = []
     for s, name in enumerate(log.sensors):

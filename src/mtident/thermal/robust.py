@@ -16,7 +16,7 @@ from scipy.special import ndtri
 
 from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
-from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, ModeFamily, SteadyState, bin_samples, fit_steady_state
+from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, Binned, ModeFamily, SteadyState, bin_samples, fit_steady_state
 from mtident.thermal.settings import display_resolution, noise_sigma
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "estimate_sensor",
     "rise_threshold_C",
     "sampling_interval_min",
+    "spikes",
 ]
 
 # A reference's time constant is never taken as known better than ±10 %: the study of stopping
@@ -113,8 +114,13 @@ class SensorEstimate:
     model_ok : bool
         False where the data contradict the model or T∞ is not determined.
     warnings : tuple of str
+    warning_codes : tuple of str
+        What each warning is about, one word each ("late-start", "spikes", "misfit",
+        "undetermined", "reference-disagrees", "too-few", "no-data"): to say each once.
     reference_used : bool
         The reference's time constants were used (the test agrees with them).
+    spikes : int
+        Readings left out as spikes.
     """
 
     sensor: str
@@ -126,7 +132,9 @@ class SensorEstimate:
     interval_C: dict[float, tuple[float, float]]
     model_ok: bool
     warnings: tuple[str, ...]
+    warning_codes: tuple[str, ...] = ()
     reference_used: bool = False
+    spikes: int = 0
 
     @property
     def steady_C(self) -> float:
@@ -171,6 +179,7 @@ def estimate_sensor(
     room_C: FloatArray | None = None,
     settings: RobustSettings = RobustSettings(),
     reference: SensorModes | None = None,
+    noise_C: float | None = None,
 ) -> SensorEstimate:
     """The model-robust T∞ of one sensor from all its readings so far.
 
@@ -187,6 +196,9 @@ def estimate_sensor(
     settings : RobustSettings
     reference : SensorModes, optional
         The sensor's modes from a reference run of the same machine.
+    noise_C : float, optional
+        The readings' noise, if known (default: from their fourth differences, at least their
+        rounding's).
 
     Returns
     -------
@@ -197,32 +209,42 @@ def estimate_sensor(
     valid = np.isfinite(y) if room_C is None else np.isfinite(y) & np.isfinite(room_C)
     if not valid.any():
         return _without_fit(sensor, "no data", 0.0, 0.0, float(t[0]) if len(t) else 0.0, settings, "no valid reading yet")
-    noise = float(noise_sigma(y[:, None], t)[0])
+    noise = float(noise_sigma(y[:, None], t)[0]) if noise_C is None else noise_C
     rounding = float(display_resolution(y[:, None])[0])
-    first = float(np.nanmedian(y[valid][:3]))
-    rise = float(np.nanmax(np.abs(y[valid] - first)))
+    notes = _Notes(sensor)
+    wild = spikes(y, noise, rounding)
+    if wild.any():
+        y = np.where(wild, np.nan, y)
+        notes.add("spikes", f"{int(wild.sum())} reading(s) left out as spikes (further from their neighbours than 8σ)")
+    first = float(np.nanmedian(y[valid & ~wild][:3]))
+    rise = float(np.nanmax(np.abs(y - first)))
     lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
-    onset = int(lead) if lead < len(t) else 0
-    room = None if room_C is None else np.asarray(room_C, dtype=float)[onset:]
-    binned = bin_samples(t[onset:], y[onset:], room)
+    onset = lead if lead < len(t) else 0
+    binned = bin_samples(t[onset:], y[onset:], None if room_C is None else np.asarray(room_C, dtype=float)[onset:])
     if len(binned) < MIN_BINS:
         return _without_fit(sensor, "too few readings", rise, noise, float(t[onset]), settings, f"{len(binned)} readings since its warm-up began: too few for a model")
-    interval = sampling_interval_min(t)
-    family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
-    warnings: list[str] = []
-    reference_used = False
+    fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes)
+    intervals = _with_room_wander(fit, room_C is not None, settings)
+    ok = _verdict(fit, intervals, rise, rise_threshold_C(noise, rounding), float(t[onset]) if onset else None, notes)
+    return SensorEstimate(sensor, "estimated", fit, float(t[onset]), rise, noise, intervals, ok, *notes.said(), reference_used, int(wild.sum()))
+
+
+def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSettings, reference: SensorModes | None, notes: _Notes) -> tuple[SteadyState, bool]:
+    """The fit within the reference's boxes where the test follows them, else over every model up
+    to the largest time constant; and whether the reference was used."""
     if reference is not None:
-        boxed = ModeFamily(settings.max_time_constant_min, len(reference.time_constants_min), tuple(reference.time_constants_min), tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box))
+        boxes = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box)
+        boxed = ModeFamily(settings.max_time_constant_min, len(reference.time_constants_min), tuple(reference.time_constants_min), boxes)
         fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=boxed, levels=settings.levels)
         if fit.correlation_factor <= MISFIT_FACTOR:
-            reference_used = True
-        else:
-            warnings.append(f"{sensor}: this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; residuals {fit.correlation_factor:.1f}x as correlated as noise): has the machine changed? The answer does not use the reference")
-    if not reference_used:
-        fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels)
-    intervals = _with_room_wander(fit, room_C is not None, settings)
-    ok, said = _verdict(sensor, fit, intervals, rise, rise_threshold_C(noise, rounding), float(t[onset]) if onset else None, warnings)
-    return SensorEstimate(sensor, "estimated", fit, float(t[onset]), rise, noise, intervals, ok, said, reference_used)
+            return fit, True
+        notes.add(
+            "reference-disagrees",
+            f"this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; residuals {fit.correlation_factor:.1f}x as correlated as noise): "
+            "has the machine changed? The answer does not use the reference",
+        )
+    family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
+    return fit_steady_state(binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels), False
 
 
 def _taus(taus: tuple[float, ...]) -> str:
@@ -244,22 +266,60 @@ def _with_room_wander(fit: SteadyState, room_measured: bool, settings: RobustSet
     return out
 
 
-def _verdict(sensor: str, fit: SteadyState, intervals: dict[float, tuple[float, float]], rise: float, threshold: float, onset_min: float | None, warnings: list[str]) -> tuple[bool, tuple[str, ...]]:
-    """``model_ok`` and the warnings of one fitted sensor."""
+class _Notes:
+    """A sensor's warnings as they are found, each with its code."""
+
+    def __init__(self, sensor: str) -> None:
+        self.sensor = sensor
+        self.codes: list[str] = []
+        self.texts: list[str] = []
+
+    def add(self, code: str, text: str) -> None:
+        self.codes.append(code)
+        self.texts.append(f"{self.sensor}: {text}")
+
+    def said(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        return tuple(self.texts), tuple(self.codes)
+
+
+def _verdict(fit: SteadyState, intervals: dict[float, tuple[float, float]], rise: float, threshold: float, onset_min: float | None, notes: _Notes) -> bool:
+    """``model_ok`` of one fitted sensor; its warnings go to ``notes``."""
     ok = fit.determined
     if onset_min is not None:
-        warnings.append(f"{sensor}: flat until t = {onset_min:g} min (the warm-up began after the log); the modes are counted from there")
+        notes.add("late-start", f"flat until t = {onset_min:g} min (the warm-up began after the log); the modes are counted from there")
     if fit.correlation_factor > MISFIT_FACTOR:
         ok = False
-        warnings.append(f"{sensor}: the residuals are {fit.correlation_factor:.1f}x as correlated as noise: no sum of up to {fit.family.max_modes} modes describes these readings well (the interval is widened by that factor's square root)")
+        notes.add("misfit", f"the residuals are {fit.correlation_factor:.1f}x as correlated as noise: no sum of up to {fit.family.max_modes} modes describes these readings well (the interval is widened by that factor's square root)")
     level = min(intervals)
     lo, hi = intervals[level]
     if not np.isfinite(hi - lo) or (hi - lo) / 2 > max(rise, threshold):
         ok = False
-        warnings.append(f"{sensor}: T∞ not determined yet ({level:.0%} interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)")
-    return ok, tuple(warnings)
+        notes.add("undetermined", f"T∞ not determined yet ({level:.0%} interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)")
+    return ok
 
 
 def _without_fit(sensor: str, status: str, rise: float, noise: float, onset: float, settings: RobustSettings, why: str) -> SensorEstimate:
     wide = {q: (-np.inf, np.inf) for q in settings.levels}
-    return SensorEstimate(sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",))
+    return SensorEstimate(sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",), (status.replace(" ", "-"),))
+
+
+def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: int = 3) -> np.ndarray:
+    """Which readings are spikes: further from the median of their neighbours (``half_window``
+    each side) than 8σ and five rounding steps (a Hampel filter). A rise, however steep, moves
+    the median with it; a glitch does not.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+    noise_C, rounding_C : float
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+    """
+    import pandas as pd
+
+    y = pd.Series(np.asarray(values, dtype=float))
+    median = y.rolling(2 * half_window + 1, center=True, min_periods=half_window + 1).median()
+    limit = max(8.0 * noise_C, 5.0 * rounding_C)
+    return np.asarray((y - median).abs() > limit)
