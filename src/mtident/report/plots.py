@@ -162,31 +162,44 @@ def plot_feed_drive_identification(result, response, path: str | Path | None = N
     return _save(fig, path, 90)
 
 
-def plot_monitor(log, monitor, path: str | Path | None = None) -> Path | Figure:  # noqa: ANN001 - TemperatureLog, thermal.monitor.Monitor
-    """Measured curves so far, the monitor's predicted curve with its T∞ band, and the stop time."""
-    from mtident.thermal.model import rise_curve
+def plot_monitor(state, settings, path: str | Path | None = None, expected: dict[str, float] | None = None) -> Path | Figure:  # noqa: ANN001 - MonitorState, MonitorSettings
+    """Each sensor's readings so far, its best model's course on from there, the T∞ intervals
+    (95 % and the decision's), and the stop or the expected stop."""
+    from mtident.thermal.modes import Mode, model_curve
     from mtident.thermal.monitor import minutes
 
-    fig, axes = grid(len(log.sensors))
-    status = monitor.status()
-    now = monitor.last_t or 0.0
-    expected = monitor.expected_stop_times()  # drawn only before the decision
+    readings = state.readings
+    fig, axes = grid(len(state.sensors))
+    now = readings.latest_min
     for s, ax in enumerate(axes):
-        ax.plot(log.time_min, log.temperature_C[:, s], ".", ms=2.5, color="0.45", label="measured")
-        st = status[s]
-        if np.isfinite(st.steady_state_C) and np.isfinite(st.equilibrium_time_min):
-            rate = np.log(20.0) / st.equilibrium_time_min
-            future = np.linspace(now, now + max(3.0 / rate, 60.0), 200)
-            ax.plot(future, rise_curve(future - now, st.latest_C, rate, st.steady_state_C), color="tab:red", lw=1.5, label="predicted")
-            ax.axhspan(st.steady_state_C - st.half_width_C, st.steady_state_C + st.half_width_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
-        if monitor.stop_time is not None:
-            ax.axvline(monitor.stop_time, color="k", ls="--", lw=1, label=f"stop at {minutes(monitor.stop_time)} min")
-        elif np.isfinite(expected[s]) and expected[s] > now:
-            ax.axvline(expected[s], color="0.4", ls=":", lw=1, label="expected stop")
-        ax.set_title(f"{st.sensor}: {st.status}", fontsize=10)
+        check = state.checks[s]
+        ax.plot(readings.time_min, readings.values_C[:, s], ".", ms=2.5, color="0.45", label="measured")
+        if check.modes and np.isfinite(check.steady_C):
+            slowest = max(tau for tau, _ in check.modes)
+            future = np.linspace(check.origin_min, now + max(3.0 * slowest, 0.5 * now, 30.0), 300)
+            room = 0.0 if np.isnan(check.room_level_C) else check.room_level_C
+            curve = model_curve(tuple(Mode(t, a) for t, a in check.modes), check.steady_C - room, check.origin_min, future) + room
+            ax.plot(future, curve, color="tab:red", lw=1.5, label="best model")
+        if np.isfinite(check.low95_C) and np.isfinite(check.high95_C):
+            ax.axhspan(check.low95_C, check.high95_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
+        if np.isfinite(check.low_C) and np.isfinite(check.high_C):
+            for edge in (check.low_C, check.high_C):
+                ax.axhline(edge, color="tab:green", lw=0.8, ls="--")
+        if state.stopped:
+            ax.axvline(state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)} min")
+        elif expected and np.isfinite(expected.get(check.sensor, np.nan)):
+            ax.axvline(expected[check.sensor], color="0.4", ls=":", lw=1, label="expected stop")
+        ax.set_title(f"{check.sensor}: {check.status}", fontsize=10)
         ax.set_xlabel("time (min)")
         ax.set_ylabel("temperature (°C)")
         ax.grid(alpha=0.3)
+        measured = readings.values_C[:, s]
+        if np.isfinite(measured).any():
+            # the interval shown where it is of the rise's size; a far wider one would flatten the curve
+            low, high = float(np.nanmin(measured)), float(np.nanmax(measured))
+            span = max(high - low, 0.5)
+            low, high = max(min(low, check.low95_C), low - span), min(max(high, check.high95_C), high + span)
+            ax.set_ylim(low - 0.05 * span, high + 0.05 * span)
         if s == 0:
             ax.legend(fontsize=7, loc="lower right")
     return _save(fig, path, 100)

@@ -82,6 +82,14 @@ _FASTEST_MIN = 0.05
 _GRID_POINTS = 40
 _MAX_GRID_RATIO = 1.25
 _CANDIDATES = 3
+# The hull's ends: the grid's leading models of this many basins, each moved by a lattice search,
+# then the best few polished by L-BFGS-B (a thin ridge of slow modes with large amplitudes of
+# opposite sign sets an end, and the grid's few leading models all lie in one basin)
+_END_STARTS = 30
+_POLISHED = 3
+_LATTICE_ROUNDS = 6
+# with a tolerance to meet, the grid's hull alone answers where it is this many times wider
+_ROUGH_MARGIN = 2.0
 _APART_PENALTY = 1e4
 # beyond the threshold, a profile's end search is pushed back this many times more steeply than
 # T∞'s own reach at the best fit: a search crossing the edge returns
@@ -201,6 +209,11 @@ class SteadyState:
     family : ModeFamily
     determined : bool
         Enough data for an interval (False: the interval is infinite).
+    fits : dict of int to float
+        The best fit's residual sum of squares per number of modes.
+    refined : dict of float to bool
+        Per level, whether the hull was refined off the search grid (else it is the grid's,
+        at most as wide as the true hull).
     """
 
     steady_C: float
@@ -219,6 +232,7 @@ class SteadyState:
     family: ModeFamily
     determined: bool = True
     fits: dict[int, float] = field(default_factory=dict)
+    refined: dict[float, bool] = field(default_factory=dict)
 
     def half_width(self, level: float) -> float:
         """The larger distance from T∞ to an end of the interval at ``level``."""
@@ -307,6 +321,20 @@ class _Problem:
         """How many of the grid's leading models each refinement starts from: a reference's small
         boxes hold one optimum, the whole range of time constants several."""
         return _CANDIDATES if self.family.reference_min is None else 1
+
+    def end_starts(self) -> int:
+        """How many models of different basins each end of the hull starts from: an end often lies
+        on a thin ridge of slow modes with large amplitudes of opposite sign, which the grid's
+        leading few models, all in one basin, miss."""
+        return _END_STARTS if self.family.reference_min is None else 1
+
+    def polished(self) -> int:
+        """How many of the lattice search's best models each end polishes by L-BFGS-B."""
+        return _POLISHED if self.family.reference_min is None else 1
+
+    def basin_log(self) -> float:
+        """Models closer than this in every log time constant are taken as of one basin."""
+        return 2.0 * np.log(_MAX_GRID_RATIO)
 
     def bounds(self, k: int) -> FloatArray:
         if self.family.reference_min is not None:
@@ -449,32 +477,127 @@ def _candidates(problem: _Problem) -> list[_Fits]:
 # Local refinement: quasi-Newton in log τ from the grid's leading models
 
 Objective = Callable[[_Fits], FloatArray]
-# forward-difference step in log τ for the refinement's gradient
+# step in log τ of the room columns' forward difference (the lag has no closed-form slope)
 _DIFF_STEP = 1e-6
 
 
-def _refine(problem: _Problem, fits: _Fits, i: int, objective: Objective) -> _Fits:
+@dataclass(frozen=True)
+class _Slopes:
+    """How one model's fit moves with the log of each time constant (each of shape (k,))."""
+
+    rss: FloatArray
+    steady: FloatArray
+    var_steady: FloatArray
+
+
+def _fit_with_slopes(problem: _Problem, log_tau: FloatArray) -> tuple[_Fits, _Slopes]:
+    """One model's fit and its exact slopes in log τ (variable projection: the amplitudes follow
+    the time constants, so the residuals' slope needs no term of theirs)."""
+    tau = np.exp(log_tau)[None, :]
+    k = tau.shape[1]
+    fits = _fit(problem, tau)
+    X = _columns(problem, tau)[0]
+    b = problem.binned
+    u = b.time_min - problem.origin
+    w = b.count
+    theta, g0 = fits.theta[0], fits.direction[0]
+    resid = problem.target() - X @ theta
+    d_rss, d_steady, d_var = np.empty(k), np.empty(k), np.empty(k)
+    if b.room_C is not None:
+        nudged = tau[0] * np.exp(_DIFF_STEP)
+        room = np.broadcast_to(b.room_C, (k, len(b)))
+        room_slope = (_lag(room, b.time_min, nudged) - _lag(room, b.time_min, tau[0])) / _DIFF_STEP
+    gram = (X * w[:, None]).T @ X + np.diag(problem.penalty(k))
+    for j in range(k):
+        D = np.zeros_like(X)
+        D[:, 1 + j] = X[:, 1 + j] * u / tau[0, j]
+        if b.room_C is not None:
+            D[:, 1 + k + j] = room_slope[j]
+        d_gram = (D * w[:, None]).T @ X
+        d_gram = d_gram + d_gram.T
+        d_theta = np.linalg.solve(gram, (D * w[:, None]).T @ problem.target() - d_gram @ theta)
+        d_rss[j] = -2.0 * float((resid * w) @ (D @ theta))
+        d_steady[j] = d_theta[0]
+        d_var[j] = -float(g0 @ d_gram @ g0)
+    return fits, _Slopes(d_rss, d_steady, d_var)
+
+
+class _RssObjective:
+    """The fit's residual sum of squares (with the priors' penalty)."""
+
+    def __call__(self, fits: _Fits) -> FloatArray:
+        return fits.rss
+
+    def gradient(self, fits: _Fits, slopes: _Slopes) -> FloatArray:
+        return slopes.rss
+
+
+class _EndObjective:
+    """Minimised by the model that reaches furthest in T∞ towards ``sign`` within ``threshold``;
+    beyond it, rising with the excess (``gap``: the threshold over the best fit), so that a
+    search crossing the edge is led back."""
+
+    def __init__(self, threshold: float, sign: float, gap: float) -> None:
+        self.threshold, self.sign, self.gap = threshold, sign, gap
+
+    def __call__(self, fits: _Fits) -> FloatArray:
+        slack = self.threshold - fits.rss
+        var = np.maximum(fits.var_steady, 0.0)
+        reach = np.sqrt(var * self.gap)
+        inside = -self.sign * fits.steady - np.sqrt(np.maximum(slack, 0.0) * var)
+        return np.where(slack >= 0, inside, -self.sign * fits.steady - _EDGE_PENALTY * reach * slack / self.gap)
+
+    def gradient(self, fits: _Fits, slopes: _Slopes) -> FloatArray:
+        slack = self.threshold - float(fits.rss[0])
+        var = max(float(fits.var_steady[0]), 1e-300)
+        d_slack = -slopes.rss
+        if slack >= 0:
+            root = max(np.sqrt(slack * var), 1e-300)
+            return -self.sign * slopes.steady - (d_slack * var + slack * slopes.var_steady) / (2.0 * root)
+        reach = np.sqrt(var * self.gap)
+        d_reach = slopes.var_steady * self.gap / (2.0 * reach)
+        return -self.sign * slopes.steady - _EDGE_PENALTY * (d_reach * slack + reach * d_slack) / self.gap
+
+
+def _refine(problem: _Problem, fits: _Fits, i: int, objective: _RssObjective | _EndObjective) -> _Fits:
     """Improve the i-th model's time constants by L-BFGS-B in log τ within the family's bounds,
-    minimising ``objective`` (finite everywhere); the best model found, alone. A profile's end
-    lies on a thin ridge of the time constants where the data pin them down, which a search on a
-    grid or along the axes misses (it found half the width of a reference's hull)."""
+    minimising ``objective`` (finite everywhere) with its exact gradient; the best model found,
+    alone. A profile's end lies on a thin ridge of the time constants where the data pin them
+    down, which a search on a grid or along the axes misses."""
     k = fits.tau.shape[1]
     bounds = np.log(problem.bounds(k))
     apart = problem.family.reference_min is None and k > 1
-    probe = np.vstack([np.zeros(k), _DIFF_STEP * np.eye(k)])
 
     def value_and_gradient(phi: FloatArray) -> tuple[float, FloatArray]:
-        points = phi + probe
-        values = objective(_fit(problem, np.exp(points)))
+        fit, slopes = _fit_with_slopes(problem, phi)
+        value = float(objective(fit)[0])
+        gradient = objective.gradient(fit, slopes)
         if apart:
-            values = values + _APART_PENALTY * _closeness(points) ** 2
-        return float(values[0]), (values[1:] - values[0]) / _DIFF_STEP
+            value, gradient = value + _apart_penalty(phi), gradient + _apart_penalty_gradient(phi)
+        return value, np.nan_to_num(gradient)
 
     start = np.clip(np.log(fits.tau[i]), bounds[:, 0], bounds[:, 1])
     found = minimize(value_and_gradient, start, jac=True, method="L-BFGS-B", bounds=bounds, options={"maxiter": 200})
     best = _fit(problem, np.exp(np.vstack([start, found.x])))
-    values = objective(best) + (_APART_PENALTY * _closeness(np.log(best.tau)) ** 2 if apart else 0.0)
+    values = objective(best) + (np.array([_apart_penalty(row) for row in np.log(best.tau)]) if apart else 0.0)
     return best.take(int(np.argmin(values)))
+
+
+def _apart_penalty(log_tau: FloatArray) -> float:
+    return float(_APART_PENALTY * _closeness(log_tau[None, :])[0] ** 2)
+
+
+def _apart_penalty_gradient(log_tau: FloatArray) -> FloatArray:
+    """The slope of :func:`_apart_penalty`: it pushes the closest two modes apart."""
+    order = np.argsort(log_tau)
+    gaps = np.diff(log_tau[order])
+    j = int(np.argmin(gaps))
+    excess = np.log(MIN_MODE_RATIO) - gaps[j]
+    out = np.zeros_like(log_tau)
+    if excess > 0:
+        out[order[j + 1]] -= 2.0 * _APART_PENALTY * excess
+        out[order[j]] += 2.0 * _APART_PENALTY * excess
+    return out
 
 
 def _closeness(log_tau: FloatArray) -> FloatArray:
@@ -488,17 +611,35 @@ def _best_per_count(problem: _Problem, candidates: list[_Fits]) -> dict[int, _Fi
     best: dict[int, _Fits] = {}
     for k in sorted({f.tau.shape[1] for f in candidates}):
         same = [f for f in candidates if f.tau.shape[1] == k]
-        for fits, i in _leading(same, lambda f: f.rss, problem.starts()):
-            refined = _refine(problem, fits, i, lambda f: f.rss)
+        for fits, i in _leading(same, _RssObjective(), problem.starts()):
+            refined = _refine(problem, fits, i, _RssObjective())
             if k not in best or refined.rss[0] < best[k].rss[0]:
                 best[k] = refined
     return best
 
 
-def _leading(candidates: list[_Fits], objective: Objective, count: int) -> list[tuple[_Fits, int]]:
-    """The ``count`` models with the lowest finite ``objective`` among all the batches."""
-    scored = [(float(v), n, int(i)) for n, fits in enumerate(candidates) for i, v in enumerate(objective(fits)) if np.isfinite(v)]
-    return [(candidates[n], i) for _, n, i in sorted(scored)[:count]]
+def _leading(candidates: list[_Fits], objective: Objective, count: int, apart_log: float = 0.0) -> list[tuple[_Fits, int]]:
+    """The ``count`` models with the lowest finite ``objective`` among all the batches; with
+    ``apart_log``, each of a different basin: one whose log time constants all lie within
+    ``apart_log`` of a model already taken (of as many modes) is passed over."""
+    values = [np.asarray(objective(fits), dtype=float) for fits in candidates]
+    flat = np.concatenate(values) if values else np.empty(0)
+    batch = np.repeat(np.arange(len(values)), [len(v) for v in values])
+    index = np.concatenate([np.arange(len(v)) for v in values]) if values else np.empty(0, dtype=int)
+    finite = np.flatnonzero(np.isfinite(flat))
+    order = finite[np.argsort(flat[finite], kind="stable")]
+    taken: list[tuple[_Fits, int]] = []
+    for j in order:
+        fits, i = candidates[int(batch[j])], int(index[j])
+        near = (
+            apart_log > 0
+            and any(f.tau.shape[1] == fits.tau.shape[1] and np.all(np.abs(np.log(f.tau[n] / fits.tau[i])) <= apart_log) for f, n in taken)
+        )
+        if not near:
+            taken.append((fits, i))
+        if len(taken) == count:
+            break
+    return taken
 
 
 # ---------------------------------------------------------------------------------------------
@@ -513,26 +654,28 @@ def _profile_bounds(fits: _Fits, threshold: float) -> tuple[FloatArray, FloatArr
     return fits.steady - half, fits.steady + half
 
 
-def _end_objective(threshold: float, sign: float, gap: float) -> Objective:
-    """Minimised by the model that reaches furthest in T∞ towards ``sign`` within ``threshold``;
-    beyond it, rising with the excess (``gap``: the threshold over the best fit), so that a
-    search crossing the edge is led back."""
-
-    def objective(fits: _Fits) -> FloatArray:
-        slack = threshold - fits.rss
-        reach = np.sqrt(np.maximum(fits.var_steady, 0.0) * gap)
-        inside = -sign * fits.steady - np.sqrt(np.maximum(slack, 0.0) * np.maximum(fits.var_steady, 0.0))
-        return np.where(slack >= 0, inside, -sign * fits.steady - _EDGE_PENALTY * reach * slack / gap)
-
-    return objective
+def _grid_half_width(candidates: list[_Fits], threshold: float, steady: float) -> float:
+    """The hull's half-width over the models searched so far (the grid's and the best fits):
+    never wider than the refined hull's."""
+    ends = [_profile_bounds(f, threshold) for f in candidates]
+    lo = min((float(np.nanmin(lo, initial=np.inf)) for lo, _ in ends), default=steady)
+    hi = max((float(np.nanmax(hi, initial=-np.inf)) for _, hi in ends), default=steady)
+    return max(steady - lo, hi - steady)
 
 
-def _hull_end(problem: _Problem, candidates: list[_Fits], threshold: float, sign: float, gap: float, fallback: _Fits) -> _Fits:
-    """The model that sets one end of the hull, refined off the grid from the leading few
-    (``fallback``, the best fit, if none stays within the threshold)."""
-    objective = _end_objective(threshold, sign, gap)
+def _hull_end(problem: _Problem, candidates: list[_Fits], threshold: float, sign: float, gap: float, fallback: _Fits, refine: bool = True) -> _Fits:
+    """The model that sets one end of the hull (``fallback``, the best fit, if none stays within
+    the threshold): the grid's leading models of different basins, each improved by a local
+    search on a shrinking lattice around it (all at once), then the best few refined by
+    L-BFGS-B; unrefined, the grid's leading model."""
+    objective = _EndObjective(threshold, sign, gap)
+    if not refine:
+        leading = _leading(candidates, objective, 1)
+        return fallback if not leading else leading[0][0].take(leading[0][1])
+    starts = _leading(candidates, objective, problem.end_starts(), problem.basin_log())
+    improved = [_lattice_search(problem, [f.take(i) for f, i in starts if f.tau.shape[1] == k], objective) for k in {f.tau.shape[1] for f, _ in starts}]
     best, best_value = None, np.inf
-    for fits, i in _leading(candidates, objective, problem.starts()):
+    for fits, i in _leading(improved, objective, problem.polished(), problem.basin_log()):
         refined = _refine(problem, fits, i, objective)
         if refined.rss[0] > threshold:
             continue
@@ -540,6 +683,27 @@ def _hull_end(problem: _Problem, candidates: list[_Fits], threshold: float, sign
         if value < best_value:
             best, best_value = refined, value
     return fallback if best is None else best
+
+
+def _lattice_search(problem: _Problem, starts: list[_Fits], objective: _EndObjective, rounds: int = _LATTICE_ROUNDS) -> _Fits:
+    """Each start (k modes each) moved to the best of the 3ᵏ points of a lattice around it in
+    log τ, the lattice halved each round: a search with no gradient that crosses a thin ridge
+    diagonally, run for every start in one batch of fits."""
+    k = starts[0].tau.shape[1]
+    bounds = np.log(problem.bounds(k))
+    phi = np.log(np.concatenate([f.tau for f in starts]))
+    offsets = np.array(np.meshgrid(*[[-1.0, 0.0, 1.0]] * k, indexing="ij")).reshape(k, -1).T
+    step = np.log(_MAX_GRID_RATIO)
+    apart = problem.family.reference_min is None and k > 1
+    for _ in range(rounds):
+        lattice = np.clip(phi[:, None, :] + step * offsets[None], bounds[:, 0], bounds[:, 1])
+        flat = lattice.reshape(-1, k)
+        values = objective(_fit(problem, np.exp(flat)))
+        if apart:
+            values = values + _APART_PENALTY * _closeness(flat) ** 2
+        phi = lattice[np.arange(len(phi)), np.argmin(values.reshape(len(phi), -1), axis=1)]
+        step /= 2.0
+    return _fit(problem, np.exp(phi))
 
 
 def _end(fits: _Fits, threshold: float, sign: float, shift: float) -> IntervalEnd:
@@ -594,6 +758,7 @@ def fit_steady_state(
     interval_min: float,
     family: ModeFamily = ModeFamily(),
     levels: tuple[float, ...] = (0.95, 0.99),
+    refine_within: float | None = None,
 ) -> SteadyState:
     """The model-robust T∞ of one sensor: the best-fitting sum of modes and the profile hull
     over every model of ``family`` the data do not exclude.
@@ -610,6 +775,10 @@ def fit_steady_state(
     family : ModeFamily
     levels : tuple of float
         Confidence levels of the intervals.
+    refine_within : float, optional
+        Refine a level's hull off the search grid only where the grid's own half-width is
+        within this (°C): a monitor asking "within the tolerance?" needs no more where the
+        grid already says no. Default: always refine.
 
     Returns
     -------
@@ -625,7 +794,25 @@ def fit_steady_state(
     """
     problem = _problem(binned, noise_C, interval_min, family)
     candidates = _candidates(problem)
-    best = _best_per_count(problem, candidates)
+    if refine_within is not None:
+        # the grid alone, where its hull is far wider than asked: no refinement (most of the
+        # cost) would bring it within, so the answer to "is it within?" is already no
+        rough = _steady_state(problem, candidates, _grid_best(candidates), levels, refine=False)
+        if not rough.determined or rough.half_width(max(levels)) > _ROUGH_MARGIN * refine_within:
+            return rough
+    return _steady_state(problem, candidates, _best_per_count(problem, candidates), levels, refine_within)
+
+
+def _grid_best(candidates: list[_Fits]) -> dict[int, _Fits]:
+    """Per number of modes, the best-fitting model of the grid."""
+    return {f.tau.shape[1]: f.take(int(np.argmin(f.rss))) for f in candidates if len(f.rss)}
+
+
+def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _Fits], levels: tuple[float, ...], refine_within: float | None = None, refine: bool = True) -> SteadyState:
+    """The estimate from the best fits per number of modes, and its hull over ``candidates``
+    (refined off the grid where ``refine`` and, with ``refine_within``, where the grid's hull is
+    within that)."""
+    binned, family = problem.binned, problem.family
     full = min(best.values(), key=lambda f: float(f.rss[0]))
     chosen = _choose(best, len(binned))
     candidates = [*candidates, *best.values()]
@@ -648,21 +835,28 @@ def fit_steady_state(
     )
     if dof < 2:
         wide = (-np.inf, np.inf)
-        return SteadyState(interval_C={q: wide for q in levels}, ends={}, equilibrium_time_min=float("nan"), noise_C=noise_C, correlation_factor=1.0, determined=False, **common)
+        return SteadyState(interval_C={q: wide for q in levels}, ends={}, equilibrium_time_min=float("nan"), noise_C=float(np.sqrt(problem.sigma2)), correlation_factor=1.0, determined=False, **common)
     factor = _correlation_factor(_weighted_residuals(problem, full))
     sigma2 = max(float(full.rss[0]) / dof, problem.sigma2) * factor
     intervals, ends = {}, {}
+    refined: dict[float, bool] = {}
     for q in levels:
         threshold = float(full.rss[0]) + sigma2 * float(stdtrit(dof, 0.5 + q / 2.0)) ** 2
         gap = threshold - float(full.rss[0])
-        low = _hull_end(problem, candidates, threshold, -1.0, gap, full)
-        high = _hull_end(problem, candidates, threshold, +1.0, gap, full)
+        # the grid's hull is within the true one: where it is already wider than asked, the
+        # refinement (most of the cost) cannot change the answer to "is it within?"
+        refine_level = refine and (refine_within is None or _grid_half_width(candidates, threshold, float(chosen.steady[0])) <= refine_within)
+        low = _hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level)
+        high = _hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level)
         lo = min(float(_profile_bounds(low, threshold)[0][0]) + shift, steady)
         hi = max(float(_profile_bounds(high, threshold)[1][0]) + shift, steady)
         intervals[q] = (lo, hi)
         ends[q] = (_end(low, threshold, -1.0, shift), _end(high, threshold, +1.0, shift))
+        refined[q] = refine_level
     t_eq = equilibrium_time(modes, steady, start, problem.origin)
-    return SteadyState(interval_C=intervals, ends=ends, equilibrium_time_min=t_eq, noise_C=float(np.sqrt(sigma2)), correlation_factor=factor, **common)
+    return SteadyState(interval_C=intervals, ends=ends, equilibrium_time_min=t_eq, noise_C=float(np.sqrt(sigma2)), correlation_factor=factor, refined=refined, **common)
+
+
 
 
 def _problem(binned: Binned, noise_C: float, interval_min: float, family: ModeFamily) -> _Problem:

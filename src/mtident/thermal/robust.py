@@ -180,6 +180,7 @@ def estimate_sensor(
     settings: RobustSettings = RobustSettings(),
     reference: SensorModes | None = None,
     noise_C: float | None = None,
+    refine_within: float | None = None,
 ) -> SensorEstimate:
     """The model-robust T∞ of one sensor from all its readings so far.
 
@@ -199,6 +200,9 @@ def estimate_sensor(
     noise_C : float, optional
         The readings' noise, if known (default: from their fourth differences, at least their
         rounding's).
+    refine_within : float, optional
+        Refine the intervals off the search grid only where already within this (°C)
+        (:func:`~mtident.thermal.modes.fit_steady_state`).
 
     Returns
     -------
@@ -223,19 +227,19 @@ def estimate_sensor(
     binned = bin_samples(t[onset:], y[onset:], None if room_C is None else np.asarray(room_C, dtype=float)[onset:])
     if len(binned) < MIN_BINS:
         return _without_fit(sensor, "too few readings", rise, noise, float(t[onset]), settings, f"{len(binned)} readings since its warm-up began: too few for a model")
-    fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes)
+    fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes, refine_within)
     intervals = _with_room_wander(fit, room_C is not None, settings)
     ok = _verdict(fit, intervals, rise, rise_threshold_C(noise, rounding), float(t[onset]) if onset else None, notes)
     return SensorEstimate(sensor, "estimated", fit, float(t[onset]), rise, noise, intervals, ok, *notes.said(), reference_used, int(wild.sum()))
 
 
-def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSettings, reference: SensorModes | None, notes: _Notes) -> tuple[SteadyState, bool]:
+def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSettings, reference: SensorModes | None, notes: _Notes, refine_within: float | None) -> tuple[SteadyState, bool]:
     """The fit within the reference's boxes where the test follows them, else over every model up
     to the largest time constant; and whether the reference was used."""
     if reference is not None:
         boxes = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box)
         boxed = ModeFamily(settings.max_time_constant_min, len(reference.time_constants_min), tuple(reference.time_constants_min), boxes)
-        fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=boxed, levels=settings.levels)
+        fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=boxed, levels=settings.levels, refine_within=refine_within)
         if fit.correlation_factor <= MISFIT_FACTOR:
             return fit, True
         notes.add(
@@ -244,7 +248,7 @@ def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSe
             "has the machine changed? The answer does not use the reference",
         )
     family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
-    return fit_steady_state(binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels), False
+    return fit_steady_state(binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels, refine_within=refine_within), False
 
 
 def _taus(taus: tuple[float, ...]) -> str:
@@ -305,8 +309,9 @@ def _without_fit(sensor: str, status: str, rise: float, noise: float, onset: flo
 
 def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: int = 3) -> np.ndarray:
     """Which readings are spikes: further from the median of their neighbours (``half_window``
-    each side) than 8σ and five rounding steps (a Hampel filter). A rise, however steep, moves
-    the median with it; a glitch does not.
+    each side, none missing) than 8σ and five rounding steps (a Hampel filter). A smooth
+    rise, however steep, keeps its readings at the median of their neighbours; a glitch does not.
+    The last ``half_window`` readings of a live log are judged when their neighbours come.
 
     Parameters
     ----------
@@ -320,6 +325,8 @@ def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: i
     import pandas as pd
 
     y = pd.Series(np.asarray(values, dtype=float))
-    median = y.rolling(2 * half_window + 1, center=True, min_periods=half_window + 1).median()
+    # only readings with every neighbour: at a live log's end, or where a rise begins, a one-sided
+    # median trails the curve, and on a steep rise the median of an even count lies half a step off
+    median = y.rolling(2 * half_window + 1, center=True, min_periods=2 * half_window + 1).median()
     limit = max(8.0 * noise_C, 5.0 * rounding_C)
     return np.asarray((y - median).abs() > limit)

@@ -1,0 +1,331 @@
+"""``mtident thermal watch``: follow a warm-up log and say when the test can stop.
+
+A renderer over :class:`~mtident.thermal.session.WatchSession`: the session follows the log,
+feeds the monitor and keeps the state file; this module turns its events and answers into lines,
+tables, a picture and the contract's JSON.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from pathlib import Path
+
+import click
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from mtident.cli import FiniteFloatRange, PicturePath, print_json, user_errors
+from mtident.cli_thermal import _column_layout, _fmt, _say_room_candidates, asked_sensors, log_options, log_path, stderr, thermal
+from mtident.exceptions import InputError
+from mtident.thermal.hindsight import Hindsight
+from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
+from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
+from mtident.thermal.robust import RobustSettings
+from mtident.thermal.session import WatchSession, default_state_path
+
+# events said on stderr as they come (a status change while narrowing is shown in the table)
+_SAID = ("note", "warning", "ready", "not ready", "stop")
+
+
+def reference_option(func):  # noqa: ANN001,ANN201 - click decorator
+    return click.option(
+        "--reference",
+        "reference_path",
+        type=click.Path(dir_okay=False),
+        help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are searched only near those it learnt, "
+        "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
+    )(func)
+
+
+def max_time_constant_option(func):  # noqa: ANN001,ANN201 - click decorator
+    return click.option(
+        "--max-time-constant",
+        "max_tau_min",
+        type=FiniteFloatRange(min=1.0),
+        default=DEFAULT_MAX_TIME_CONSTANT_MIN,
+        show_default=True,
+        help="The slowest thermal mode the machine may have (min). The interval covers every mode up to this that the data cannot exclude: "
+        "a machine's bed or column warms with 1-5 h time constants.",
+    )(func)
+
+
+def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineReference or None
+    """The reference run named by --reference, read (None where none is given)."""
+    if reference_path is None:
+        return None
+    from mtident.thermal.reference import load_reference
+
+    if not Path(reference_path).is_file():
+        msg = f"--reference {reference_path}: no such file (learn one with `mtident thermal learn FULL_LOG -o {Path(reference_path).name}`)"
+        raise InputError(msg)
+    return load_reference(reference_path)
+
+
+@thermal.command("watch")
+@log_options
+@click.option("--tolerance", "tolerance_C", type=FiniteFloatRange(min=0, min_open=True), default=0.2, show_default=True, help="A sensor may stop when every model the data allow puts T∞ within this of the estimate (°C).")
+@click.option("--confidence", "decision_level", type=FiniteFloatRange(min=0.5, max=0.999), default=0.99, show_default=True, help="Confidence level of the interval the decision uses.")
+@max_time_constant_option
+@reference_option
+@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes an input of every mode's heat balance, so a drifting room does not fool the rule.")
+@click.option("--room-wander", "room_wander", type=FiniteFloatRange(min=0.0), default=0.05, show_default=True, help="Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 takes the room as steady.")
+@click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible (afresh, unless --resume).")
+@click.option("--resume", is_flag=True, help="With --replay: resume from the state file instead of starting afresh.")
+@click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: beside the log, LOG.watch-state.npz).")
+@click.option("--poll", "poll_s", type=FiniteFloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
+@click.option("--timeout", "timeout_s", type=FiniteFloatRange(min=0), help="Give up after this many seconds without a new row.")
+@click.option("--plot", "plot_path", type=PicturePath(), help="Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.")
+@click.option("--json", "as_json", is_flag=True, help="Print the contract's JSON object when the decision is reached (or the log ends).")
+@click.option("--hold", hidden=True, type=float)
+@click.option("--bin", "bin_s", hidden=True, type=float)
+@click.option("--room-coupling", hidden=True)
+@user_errors
+def watch_command(
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    tolerance_C: float,
+    decision_level: float,
+    max_tau_min: float,
+    reference_path: str | None,
+    ambient_col: str | None,
+    room_wander: float,
+    replay: bool,
+    resume: bool,
+    state_path: str | None,
+    poll_s: float,
+    timeout_s: float | None,
+    plot_path: str | None,
+    as_json: bool,
+    hold: float | None,
+    bin_s: float | None,
+    room_coupling: str | None,
+) -> None:
+    """Follow a warm-up log as it grows and say when the test can stop.
+
+    Each sensor's readings so far are fitted with sums of up to three exponential modes; a
+    sensor may stop when every model the data cannot exclude (modes up to --max-time-constant,
+    or near a reference run's) puts its steady-state temperature T∞ within the tolerance, at
+    two checks in a row. The test may stop when every sensor may. Until then the answer says
+    the interval, what sets its ends, and when the stop is expected. A killed monitor resumes
+    from its state file.
+    """
+    for name, given in (("--hold", hold), ("--bin", bin_s), ("--room-coupling", room_coupling)):
+        if given is not None:
+            stderr.print(f"mtident: note: {name} is no longer used (the decision rests on the modal fit of all readings so far) and was ignored", highlight=False)
+    if resume and not replay:
+        stderr.print("mtident: note: --resume is the default for a live log; it matters only with --replay", highlight=False)
+    path = log_path(file)
+    if replay and not path.is_file():
+        msg = f"{path}: no such file"
+        raise InputError(msg)
+    settings = MonitorSettings(
+        tolerance_C=tolerance_C,
+        decision_level=decision_level,
+        robust=RobustSettings(max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander),
+        reference=load_reference_file(reference_path),
+        room_sensor=ambient_col,
+    )
+    followed = _workbook_as_replayed_csv(path) if replay else path
+    session = WatchSession(
+        followed,
+        settings,
+        sensors=asked_sensors(sensors, path) or None,
+        time_col=time_col,
+        time_unit=time_unit,
+        state_path=Path(state_path) if state_path else default_state_path(path),
+        resume=resume or not replay,
+    )
+    for note in session.notes:
+        stderr.print(f"mtident: {note}", highlight=False)
+    if not path.is_file():
+        stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
+    interrupted = _follow(session, path, replay, poll_s, timeout_s, plot_path, live=sys.stdout.isatty() and not as_json)
+    if session.state is None:
+        if interrupted:
+            sys.exit(130)
+        msg = f"{path}: no data rows" if path.is_file() else f"{path}: no such file (not created within the --timeout of {timeout_s:g} s)"
+        raise InputError(msg)
+    if plot_path:
+        _plot(session, plot_path)
+    _answer(session, path, replay, as_json, live=sys.stdout.isatty() and not as_json and not replay)
+    if interrupted:
+        sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
+
+
+def _follow(session: WatchSession, path: Path, replay: bool, poll_s: float, timeout_s: float | None, plot_path: str | None, live: bool) -> bool:
+    """Poll the log until the decision, the log's end (a replay) or a timeout; True if Ctrl-C
+    ended it (the state file then holds the last rows fed)."""
+    from rich.live import Live
+
+    last_data = time.monotonic()
+    last_plot = 0.0
+    said_room = False
+    try:
+        with Live(console=Console(), auto_refresh=False, transient=False) if live else _Nothing() as view:
+
+            def redraw(s: WatchSession) -> None:
+                view.update(_status_table(s, path), refresh=True)
+
+            while True:
+                events = session.poll(redraw if live else None)
+                _say(events)
+                if session.state is not None and not said_room and session.settings.room_sensor is None:
+                    _say_room_candidates(session.sensors, "watched as a machine sensor")
+                    said_room = True
+                if session.last_rows:
+                    last_data = time.monotonic()
+                if plot_path and session.state is not None and (time.monotonic() - last_plot > 5.0 or session.stopped):
+                    _plot(session, plot_path)
+                    last_plot = time.monotonic()
+                if session.stopped or replay:
+                    return False
+                if timeout_s is not None and time.monotonic() - last_data > timeout_s:
+                    stderr.print(f"mtident: no new row for {timeout_s:g} s; stopping", highlight=False)
+                    return False
+                time.sleep(poll_s)
+    except KeyboardInterrupt:
+        where = "before the first sample" if session.state is None else f"at t = {minutes(session.state.readings.latest_min)} min"
+        kept = f"the state is in {session.state_path}; the same command resumes from there" if session.state_path.is_file() else "nothing was saved"
+        stderr.print(f"mtident: interrupted (Ctrl-C) {where}; {kept}", highlight=False)
+        return True
+
+
+def _say(events: list[Event]) -> None:
+    for event in events:
+        if event.kind in _SAID:
+            prefix = "warning: " if event.kind == "warning" else "note: " if event.kind == "note" else ""
+            stderr.print(f"mtident: {prefix}{event.text}", highlight=False)
+
+
+def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live: bool) -> None:
+    """The decision: the JSON object, or the table, the verdict and what it rests on."""
+    outcome = session.result()
+    hindsight = session.hindsight() if replay else None
+    if hindsight is not None:
+        stderr.print(f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)} min: checking the decision against where it settled", highlight=False)
+    if as_json:
+        print_json(outcome if hindsight is None else {**outcome, "hindsight": hindsight.to_dict()})
+        return
+    console = Console(width=max(Console().width, 100))
+    console.print(_status_table(session, path))
+    state = session.state
+    assert state is not None
+    said = assumptions(session.settings, state.sensors[0])
+    console.print(f"Assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}" + (f"; reference {said.reference}" if said.reference else ""), highlight=False)
+    if state.stopped:
+        saved = outcome.get("time_saved_min")
+        gain = f"; {saved:.0f} min before the predicted equilibrium" if isinstance(saved, float) and saved > 0 else ""
+        console.print(f"[bold green]The test can stop at t = {minutes(state.stop_time_min)} min{gain}.[/]")
+        if live:
+            console.bell()  # the engineer may be at the other end of the machine
+        if hindsight is not None:
+            _print_hindsight(hindsight)
+        return
+    console.print("[bold yellow]Not yet: keep the test running.[/]")
+    console.print(str(outcome["reason"]), highlight=False)
+    expected = outcome.get("expected_stop_time_min")
+    if isinstance(expected, float):
+        console.print(f"Expected stop: t ≈ {minutes(round(expected))} min on the best model's course (a slower mode that still fits moves it later).", highlight=False)
+
+
+def _status_table(session: WatchSession, path: Path) -> Table:
+    """Per sensor: the latest reading, T∞ with its 95 % interval and the decision's, t_eq, status."""
+    state = session.state
+    where = "before the first sample" if state is None else f"at t = {minutes(state.readings.latest_min)} min"
+    table = Table(title=f"{path.name}: {where}")
+    level = f"{session.settings.decision_level:.0%}"
+    for column in ("sensor", "latest (°C)", "T∞ (°C)", "95 % interval", f"{level} interval", "t_eq (min)", "status"):
+        table.add_column(column, justify="left" if column in ("sensor", "status") else "right", **_column_layout(column))
+    if state is None:
+        return table
+    values = state.readings.values_C
+    for s, check in enumerate(state.checks):
+        column = values[:, s]
+        finite = column[np.isfinite(column)]
+        latest = float(finite[-1]) if finite.size else math.nan
+        colour = "green" if check.may_stop else "yellow" if check.status in ("confirming", "narrowing") else "red" if check.status == "misfit" else "white"
+        table.add_row(
+            check.sensor,
+            _fmt(latest),
+            _fmt(check.steady_C),
+            f"{_fmt(check.low95_C)} to {_fmt(check.high95_C)}",
+            f"{_fmt(check.low_C)} to {_fmt(check.high_C)}",
+            _fmt(check.equilibrium_time_min, 0),
+            f"[{colour}]{check.status}[/]",
+        )
+    return table
+
+
+def _plot(session: WatchSession, plot_path: str) -> None:
+    from mtident.report.plots import plot_monitor
+
+    assert session.state is not None
+    plot_monitor(session.state, session.settings, plot_path)
+
+
+def _print_hindsight(hindsight: Hindsight) -> None:
+    """The table of the decision against the rest of the log, and what it comes to."""
+    room = f"; the room moved {hindsight.room_shift_C:+.2f} °C after the stop, added to T∞" if hindsight.room_shift_C else ""
+    table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)} min){room}")
+    for column in ("sensor", "T∞ at stop (°C)", "settled (°C)", "difference (°C)", "95 % rise at (min)"):
+        table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
+    settled = hindsight.checked
+    for i, name in enumerate(hindsight.sensors):
+        error = hindsight.error_C[i]
+        shown = _fmt(float(error)) if settled[i] else "—"
+        if settled[i] and not hindsight.within[i]:
+            shown = f"[yellow]{shown}[/]"
+        table.add_row(name, _fmt(float(hindsight.steady_state_C[i])), _fmt(float(hindsight.settled_C[i])), shown, _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0))
+    Console(width=max(Console().width, 100)).print(table)
+    if not settled.any():
+        Console().print("The log ends before its sensors settled: nothing to check the decision against.")
+        return
+    beyond = [name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok]
+    unsettled = [name for name, known, decided in zip(hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), strict=True) if decided and not known]
+    verdict = (
+        f"{len(beyond)} of {int(settled.sum())} sensors settled beyond the tolerance ({hindsight.tolerance_C:g} °C) of T∞ at the stop: {', '.join(beyond)}"
+        if beyond
+        else f"every sensor that settled ({int(settled.sum())}) is within the tolerance ({hindsight.tolerance_C:g} °C) of T∞ at the stop"
+    )
+    reached = float(np.nanmax(hindsight.measured_equilibrium_time_min[settled]))
+    saved = reached - hindsight.stop_time_min
+    timing = f"the log reached 95 % of its rise by t = {minutes(reached)} min, " + (f"{minutes(saved)} min after the stop" if saved > 0 else f"{minutes(-saved)} min before the stop: the rule saved no time on this log")
+    not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
+    Console().print(f"{verdict[0].upper()}{verdict[1:]}; {timing}{not_settled}.", highlight=False)
+
+
+class _Nothing:
+    """A stand-in for rich.live.Live when there is no terminal to draw in."""
+
+    def __enter__(self) -> _Nothing:
+        return self
+
+    def __exit__(self, *args: object) -> None:
+        return None
+
+    def update(self, *args: object, **kwargs: object) -> None:
+        return None
+
+
+def _workbook_as_replayed_csv(path: Path) -> Path:
+    """``path``, or for an Excel workbook the CSV it holds, written to a temporary folder to be
+    replayed (:func:`~mtident.io.dialect.workbook_as_csv`)."""
+    import atexit
+    import shutil
+    import tempfile
+
+    from mtident.io.dialect import binary_kind, workbook_as_csv
+
+    with path.open("rb") as handle:
+        if binary_kind(handle.read(8)) not in ("xlsx", "xls"):
+            return path
+    folder = Path(tempfile.mkdtemp(prefix="mtident-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    copy = folder / f"{path.stem}.csv"
+    copy.write_bytes(workbook_as_csv(path, path))
+    return copy

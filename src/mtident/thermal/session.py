@@ -1,0 +1,240 @@
+"""A live warm-up test: a log followed as it grows, the monitor fed, its state kept for resuming.
+
+:class:`WatchSession` is what a terminal, a notebook or a web page drives: it owns the
+:class:`~mtident.io.follow.LogFollower`, the :class:`~mtident.thermal.monitor.MonitorState` and the
+state file, and each :meth:`WatchSession.poll` returns the monitor's events to be shown. The
+state file lives beside the log unless told otherwise; it records which log it belongs to (its
+path and a fingerprint of its first bytes), so that a different log copied over the same path
+starts afresh instead of resuming the old test's answer.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mtident.exceptions import InputError
+from mtident.io.follow import LogFollower
+from mtident.persist import StateFileError, load_dataclass, save_dataclass
+from mtident.thermal.hindsight import Hindsight, check_decision
+from mtident.thermal.monitor import Event, MonitorSettings, MonitorState, expected_stop, minutes, monitor_step, new_state, result
+
+__all__ = ["SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
+
+STATE_SUFFIX = ".watch-state.npz"
+# the log's head that identifies it: its header and first rows
+FINGERPRINT_BYTES = 4096
+# rows fed to the monitor between two progress calls (a long replay's table moves on)
+FEED_ROWS = 250
+
+
+@dataclass(frozen=True)
+class SavedWatch:
+    """What the state file holds: which log and settings it belongs to, where the follower is,
+    and the monitor's state."""
+
+    log: str
+    fingerprint: str
+    fingerprint_bytes: int
+    settings_key: str
+    position: str
+    monitor: MonitorState
+
+
+def default_state_path(log: Path) -> Path:
+    """Beside the log (``LOG.watch-state.npz``), or in the current folder where the log's folder
+    cannot be written (a logger's share mounted read-only)."""
+    beside = log.with_name(log.name + STATE_SUFFIX)
+    folder = log.parent if str(log.parent) else Path(".")
+    return beside if os.access(folder, os.W_OK) else Path.cwd() / beside.name
+
+
+def log_fingerprint(path: Path, length: int = FINGERPRINT_BYTES) -> tuple[str, int]:
+    """The SHA-256 of the log's first ``length`` bytes (fewer if it is shorter), and how many."""
+    try:
+        with path.open("rb") as handle:
+            head = handle.read(length)
+    except OSError:
+        return "", 0
+    return hashlib.sha256(head).hexdigest(), len(head)
+
+
+def _settings_key(settings: MonitorSettings, sensors: list[str] | None, time_col: str | None, time_unit: str | None) -> str:
+    """Everything that changes the answer, as text: a state saved with another key is not resumed."""
+    fields = dataclasses.asdict(settings)
+    fields["reference"] = None if settings.reference is None else {name: dataclasses.asdict(m) for name, m in settings.reference.sensors.items()}
+    return json.dumps({"settings": fields, "sensors": sensors, "time_col": time_col, "time_unit": time_unit}, sort_keys=True, default=str)
+
+
+class WatchSession:
+    """A warm-up test followed live (or replayed) and decided by the monitor.
+
+    Parameters
+    ----------
+    log : Path
+        The CSV log a logger writes (it need not exist yet).
+    settings : MonitorSettings
+        The decision's settings; ``settings.room_sensor`` names the room's column, if any.
+    sensors : list of str, optional
+        The sensors to watch (default: every temperature column but the room's).
+    time_col, time_unit : str, optional
+        How to read the time column.
+    state_path : Path, optional
+        The state file (default: beside the log, :func:`default_state_path`).
+    resume : bool
+        Resume from the state file where it belongs to this log and these settings.
+
+    Attributes
+    ----------
+    notes : list of str
+        What the session found on opening (a state resumed, or one not resumed and why).
+    last_rows : int
+        Rows read by the last poll.
+    """
+
+    def __init__(
+        self,
+        log: Path,
+        settings: MonitorSettings,
+        *,
+        sensors: list[str] | None = None,
+        time_col: str | None = None,
+        time_unit: str | None = None,
+        state_path: Path | None = None,
+        resume: bool = True,
+    ) -> None:
+        self.path = Path(log)
+        self.settings = settings
+        self.state_path = Path(state_path) if state_path is not None else default_state_path(self.path)
+        self.notes: list[str] = []
+        self.last_rows = 0
+        room = settings.room_sensor
+        self._asked = None if sensors is None else [*[n for n in sensors if n != room], *([room] if room else [])]
+        self._key = _settings_key(settings, sensors, time_col, time_unit)
+        self._fingerprint: tuple[str, int] = ("", 0)
+        self.state: MonitorState | None = None
+        self.follower = LogFollower(self.path, self._asked, time_col, time_unit, room=room)
+        if resume and self.state_path.is_file():
+            self._resume(time_col, time_unit)
+
+    # -- the state file --------------------------------------------------------------------
+
+    def _resume(self, time_col: str | None, time_unit: str | None) -> None:
+        try:
+            saved = load_dataclass(self.state_path, SavedWatch)
+        except StateFileError as exc:
+            self.notes.append(f"the state file {self.state_path} cannot be resumed ({exc}); starting afresh")
+            return
+        differs = []
+        if saved.log != str(self.path.resolve()):
+            differs.append(f"another log ({saved.log})")
+        elif log_fingerprint(self.path, saved.fingerprint_bytes)[0] != saved.fingerprint:
+            differs.append("another log at the same path (its first lines differ)")
+        if saved.settings_key != self._key:
+            differs.append("other settings or sensors")
+        if differs:
+            self.notes.append(f"the state file {self.state_path} was written for {' and '.join(differs)}; starting afresh (it will be overwritten)")
+            return
+        self.follower = LogFollower.resume(self.path, json.loads(saved.position), time_col, time_unit)
+        self.state = saved.monitor
+        self._fingerprint = (saved.fingerprint, saved.fingerprint_bytes)
+        self.notes.append(f"resuming from {self.state_path} at t = {minutes(saved.monitor.readings.latest_min)} min")
+
+    def save(self) -> None:
+        """Write the state file (atomically: a killed process leaves the old or the new one)."""
+        if self.state is None:
+            return
+        if self._fingerprint[1] < FINGERPRINT_BYTES:
+            # taken again while the log is short: a live log's head grows to its full length
+            self._fingerprint = log_fingerprint(self.path)
+        position = json.dumps(self.follower.position())
+        save_dataclass(self.state_path, SavedWatch(str(self.path.resolve()), *self._fingerprint, self._key, position, self.state))
+
+    # -- following ---------------------------------------------------------------------------
+
+    @property
+    def sensors(self) -> tuple[str, ...]:
+        """The sensors watched (empty before the log's header is read)."""
+        return () if self.state is None else self.state.sensors
+
+    @property
+    def stopped(self) -> bool:
+        return self.state is not None and self.state.stopped
+
+    def poll(self, progress: Callable[[WatchSession], None] | None = None) -> list[Event]:
+        """Read the rows added to the log since the last poll, feed them to the monitor and save.
+
+        Parameters
+        ----------
+        progress : callable, optional
+            Called with the session after every ``FEED_ROWS`` rows fed (to redraw a table).
+
+        Returns
+        -------
+        list of Event
+            The follower's notes and warnings, then the monitor's events.
+        """
+        rows = self.follower.poll()
+        self.last_rows = len(rows.time_min)
+        events = [Event("note", rows.time_min[0] if len(rows.time_min) else np.nan, text) for text in rows.notes]
+        events += [Event("warning", np.nan, text) for text in rows.warnings]
+        if self.state is None and self.follower.sensors:
+            self.state = self._new_state(self.follower.sensors)
+        if self.state is None or not len(rows.time_min):
+            return events
+        values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if self.settings.room_sensor else (rows.temperature_C, None)
+        for start in range(0, len(rows.time_min), FEED_ROWS):
+            part = slice(start, start + FEED_ROWS)
+            self.state, said = monitor_step(self.state, rows.time_min[part], values[part], None if room is None else room[part], self.settings)
+            events.extend(said)
+            if progress is not None:
+                progress(self)
+        self.save()
+        return events
+
+    def _new_state(self, columns: list[str]) -> MonitorState:
+        room = self.settings.room_sensor
+        watched = [name for name in columns if name != room]
+        if not watched:
+            msg = f"{self.path}: no sensor column besides the room sensor {room!r}"
+            raise InputError(msg)
+        return new_state(watched, with_room=room is not None)
+
+    # -- answers -----------------------------------------------------------------------------
+
+    def expected_stops(self) -> dict[str, float]:
+        """Each sensor's expected stop on its best model's course (NaN: not foreseeable)."""
+        if self.state is None:
+            return {}
+        return {name: expected_stop(self.state, self.settings, s) for s, name in enumerate(self.state.sensors)}
+
+    def result(self, with_forecast: bool = True) -> dict[str, object]:
+        """The contract's JSON object (:func:`~mtident.thermal.monitor.result`)."""
+        if self.state is None:
+            msg = f"{self.path}: no data rows" if self.path.is_file() else f"{self.path}: no such file"
+            raise InputError(msg)
+        expected = self.expected_stops() if with_forecast and not self.state.stopped else None
+        return result(self.state, self.settings, expected)
+
+    def hindsight(self) -> Hindsight | None:
+        """The decision against where the log settled, for a log that runs on past the stop (read
+        again whole); None before a decision or where the log ends at it."""
+        state = self.state
+        if state is None or not state.stopped:
+            return None
+        room = self.settings.room_sensor
+        columns = [*state.sensors, *([room] if room else [])]
+        reader = LogFollower(self.path, columns, self.follower.time_col, self.follower.time_unit, room=room)
+        rows = reader.poll()
+        if not len(rows.time_min) or rows.time_min[-1] <= state.stop_time_min:
+            return None
+        values, room_C = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if room else (rows.temperature_C, None)
+        steady = np.array([c.steady_C for c in state.checks])
+        return check_decision(state.sensors, steady, state.stop_time_min, rows.time_min, values, self.settings.tolerance_C, room_C)
