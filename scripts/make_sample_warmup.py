@@ -91,7 +91,7 @@ def conductance_matrix(link_scale: float = LINK_SCALE) -> np.ndarray:
     return G + np.diag(CONVECTION_W_PER_K)
 
 
-def simulate(times_min: np.ndarray, link_scale: float = LINK_SCALE) -> dict[str, np.ndarray]:
+def simulate(times_min: np.ndarray, link_scale: float = LINK_SCALE, heat_scale: float = 1.0) -> dict[str, np.ndarray]:
     """Noise-free sensor temperatures at ``times_min``."""
     G = conductance_matrix(link_scale)
     n_nodes, n_sensors = len(NODES), len(SENSORS)
@@ -102,7 +102,7 @@ def simulate(times_min: np.ndarray, link_scale: float = LINK_SCALE) -> dict[str,
     def rhs(t_min: float, state: np.ndarray) -> np.ndarray:
         nodes, surfaces = state[:n_nodes], state[n_nodes:]
         amb = ambient_C(t_min)
-        d_nodes = (HEAT_W - G @ nodes + CONVECTION_W_PER_K * amb) / CAPACITY_J_PER_K * 60.0
+        d_nodes = (heat_scale * HEAT_W - G @ nodes + CONVECTION_W_PER_K * amb) / CAPACITY_J_PER_K * 60.0
         target = amb + seen * (nodes[which] - amb)
         d_surfaces = (target - surfaces) / lags
         return np.concatenate([d_nodes, d_surfaces])
@@ -132,6 +132,30 @@ def main() -> None:
     out = data / "spindle_warmup_room.csv"
     out.write_text("\n".join(with_room) + "\n")
     print(f"wrote {out} (the same log with a room column)")
+    write_reference(data / "spindle_machine.toml")
+
+
+# the reference run: an earlier test of the same machine at a lower speed, run to equilibrium
+REFERENCE_HEAT_SCALE = 0.7
+REFERENCE_DURATION_MIN = 720
+REFERENCE_SEED = 2018
+
+
+def write_reference(out: Path) -> None:
+    """The machine's modes learnt from an earlier, complete warm-up at 70 % of the heat (the
+    ``@sample-machine`` reference), with its room sensor as an input."""
+    from mtident.io.logs import TemperatureLog
+    from mtident.thermal.reference import learn_reference, save_reference
+
+    rng = np.random.default_rng(REFERENCE_SEED)
+    times = np.arange(0.0, REFERENCE_DURATION_MIN + 1.0)
+    clean = simulate(times, heat_scale=REFERENCE_HEAT_SCALE)
+    values = np.column_stack([np.round((clean[name] + NOISE_C * rng.standard_normal(len(times))) / RESOLUTION_C) * RESOLUTION_C for name in SENSORS])
+    room = np.round((ambient_C(times) + NOISE_C * rng.standard_normal(len(times))) / RESOLUTION_C) * RESOLUTION_C
+    log = TemperatureLog(times, tuple(SENSORS), values, (), "earlier warm-up at 3,500 r/min (720 min)")
+    reference, warnings = learn_reference(log, room)
+    save_reference(reference, out)
+    print(f"wrote {out} (modes of {len(reference.sensors)} sensors){'; ' + '; '.join(warnings) if warnings else ''}")
 
 
 if __name__ == "__main__":

@@ -55,7 +55,11 @@ def test_thermal_identify_json_has_the_contract_keys(tmp_path):
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert set(data) >= {"sensor", "method", "window_min", "steady_state_C", "steady_state_ci95_C", "lambda_per_min", "time_constant_min", "equilibrium_time_min", "rmse_C"}
-    assert data["sensor"] == "T3" and data["method"] == "ukf" and data["window_min"] == 30.0
+    assert set(data) >= {"model_ok", "warnings", "assumptions", "model"}
+    assert data["sensor"] == "T3" and data["method"] == "robust" and data["window_min"] == 30.0
+    # 30 min of a warm-up whose slowest mode is 90 min do not exclude one of 300 min: said, not hidden
+    assert data["model_ok"] is False and any("not determined yet" in w for w in data["warnings"])
+    assert data["assumptions"]["max_time_constant_min"] == 300.0 and data["assumptions"]["reference"] is None
     lo, hi = data["steady_state_ci95_C"]
     assert lo < data["steady_state_C"] < hi
     assert lo <= data["measured_final_C"] <= hi  # the sample log ran to equilibrium
@@ -159,13 +163,13 @@ def test_identify_writes_its_curves_for_a_spreadsheet(tmp_path):
     from mtident.io import read_temperature_log, sample_log_path
     from mtident.thermal import identify
 
-    out = subprocess.run([sys.executable, "-m", "mtident", "thermal", "identify", "@sample", "--sensor", "T1,T9", "--window", "30", "--curve", "c.csv"], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    out = subprocess.run([sys.executable, "-m", "mtident", "thermal", "identify", "@sample", "--sensor", "T1,T9", "--window", "30", "--method", "ukf", "--curve", "c.csv"], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert "curves written to c.csv (401 rows to t = 400 min)" in out.stderr
     table = pd.read_csv(tmp_path / "c.csv")
     assert list(table.columns) == ["time_min", "part", *[f"{s}_{what}_C" for s in ("T1", "T9") for what in ("measured", "model", "low95", "high95")]]
     assert (table["part"] == "window").sum() == 31 and (table["part"] == "prediction").sum() == 370
-    result = identify(read_temperature_log(sample_log_path()).select(["T1", "T9"]), 30.0)
+    result = identify(read_temperature_log(sample_log_path()).select(["T1", "T9"]), 30.0, "ukf")
     np.testing.assert_allclose(table["T9_model_C"], result.curve_C[:, 1], atol=1e-6)
     np.testing.assert_allclose(table["T1_high95_C"] - table["T1_model_C"], result.quantile * result.curve_sd_C[:, 0], atol=2e-6)
     np.testing.assert_allclose(table["T1_measured_C"], result.measured_C[:, 0], atol=1e-6)
@@ -252,7 +256,7 @@ def test_plots_leave_the_users_matplotlib_alone_and_return_a_figure_without_a_pa
         "import matplotlib; matplotlib.use('svg'); import mtident.report as r; "
         "from mtident.io import read_temperature_log; from mtident.io import sample_log_path; "
         "from mtident.thermal import identify; "
-        "fig = r.plot_identification(identify(read_temperature_log(sample_log_path()).select(['T1', 'T2']), 30.0)); "
+        "fig = r.plot_identification(identify(read_temperature_log(sample_log_path()).select(['T1', 'T2']), 30.0, 'ukf')); "
         "print(matplotlib.get_backend(), type(fig).__name__, len(fig.axes))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=False)
@@ -282,9 +286,10 @@ def test_watch_of_a_numeric_log_does_not_load_pandas(tmp_path):
     import subprocess
     import sys
 
+    (tmp_path / "log.csv").write_text("time_min,T1\n" + "".join(f"{m},{26.7 - 8.8 * 2.718281828 ** (-m / 62.5):.2f}\n" for m in range(60)))
     code = (
         "import sys; from mtident.cli import main; "
-        "main(['thermal', 'watch', '@sample', '--replay', '--json', '--state', 'state.json'], standalone_mode=False); "
+        "main(['thermal', 'watch', 'log.csv', '--replay', '--json'], standalone_mode=False); "
         "print('pandas' in sys.modules)"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)

@@ -115,7 +115,7 @@ def test_quick_estimate_takes_a_gap_or_a_late_first_reading_on_its_own_span(gap,
 def test_the_samples_lagging_sensor_is_identified_from_its_own_start():
     """T9 lags 3 min, left out of the fit; with its first third tilted, it came out at 39.7 ± 56.9 °C
     from 30 min (RMSE 4.06 °C over the log); now 23.8 ± 3.1 against the measured 23.49."""
-    nine = identify(sample_log().select(["T9"]), 30.0)
+    nine = identify(sample_log().select(["T9"]), 30.0, "ukf")
     low, high = nine.steady_state_ci95()[0]
     assert low <= nine.measured_final_C[0] <= high and high - low < 7.0 and nine.rmse_C[0] < 0.3
 
@@ -134,7 +134,7 @@ def test_dropouts_cost_the_filter_little_more_than_the_missing_readings():
         y = first_order(t) + 0.02 * rng.standard_normal(len(t))
         kept = rng.random(len(t)) >= 0.125
         y[~kept] = np.nan
-        errors.append(identify(make_log(t, {"S": y}), 28.0).steady_state_C[0] - PAPER_STEADY)
+        errors.append(identify(make_log(t, {"S": y}), 28.0, "ukf").steady_state_C[0] - PAPER_STEADY)
         bounds.append(cramer_rao_bound(t[kept], PAPER_START, PAPER_RATE, PAPER_STEADY, 0.02)[2, 2])
     assert np.std(errors) / np.sqrt(np.mean(bounds)) < 1.15
 
@@ -168,18 +168,19 @@ def test_a_gap_in_the_first_minutes_is_no_flat_start():
     the first one off its first level, but it was seen flat for 3 min, not 9 (before, 20 of 20
     replays said "flat until t = 9 min" and 16 never stopped within 300 min)."""
     from mtident.thermal.lsq import flat_lead
-    from mtident.thermal.monitor import Monitor
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
+    from mtident.thermal.reference import MachineReference
+    from mtident.thermal.robust import SensorModes
 
     t = np.arange(0.0, 300.0)
     keep = (t < 4) | (t >= 9)
+    options = MonitorSettings(reference=MachineReference("r", "d", 300.0, "", {"S": SensorModes((62.5,), (0.1,))}))
     for seed in (9, 14):
         y = first_order(t) + 0.02 * np.random.default_rng(seed).standard_normal(len(t))
         assert flat_lead(t[keep][:8], y[keep][:8, None], np.array([0.05]), 0.1, 5.0)[0] == 0
-        monitor = Monitor(("S",))
-        messages = monitor.feed(t[keep], y[keep][:, None])
-        assert not [m for m in messages if "flat until" in m or "no rise" in m]
-        result = monitor.result()
-        assert result["stop_time_min"] is not None and abs(result["steady_state_C"] - PAPER_STEADY) <= 0.2  # type: ignore[operator]
+        state, events = monitor_step(new_state(["S"]), t[keep], y[keep][:, None], None, options)
+        assert not [e for e in events if "flat until" in e.text or "no rise" in e.text]
+        assert state.stopped and state.checks[0].origin_min == 0.0 and abs(state.checks[0].steady_C - PAPER_STEADY) <= 0.2
 
 
 @pytest.mark.parametrize(("step", "expected"), [(0.1, 0.1), (0.01, 0.01), (1 / 16, 0.0625), (0.5, 0.5), (None, 0.0)])
@@ -200,7 +201,7 @@ def test_a_clean_curve_logged_in_rounded_steps_is_identified_within_its_interval
     readings = np.round(first_order(t) / step) * step
     sigma = noise_sigma(readings[:30, None])[0]
     assert step / np.sqrt(12.0) - 1e-12 <= sigma < step
-    result = identify(make_log(t, {"S": readings}), 30.0)
+    result = identify(make_log(t, {"S": readings}), 30.0, "ukf")
     assert abs(result.steady_state_C[0] - PAPER_STEADY) <= result.quantile * result.steady_state_sd_C[0]
     # as wide as noise of q/√12 allows (the Cramér-Rao bound of that noise), not a collapse or a blow-up
     bound = np.sqrt(cramer_rao_bound(t[:31], PAPER_START, PAPER_RATE, PAPER_STEADY, sigma)[2, 2])
@@ -212,7 +213,7 @@ def test_a_sensor_that_does_not_rise_has_no_equilibrium_time():
     rng = np.random.default_rng(5)
     t = np.arange(0.0, 121.0)
     log = make_log(t, {"heating": first_order(t) + 0.02 * rng.standard_normal(len(t)), "cold": 20.0 + 0.02 * rng.standard_normal(len(t))})
-    result = identify(log, 30.0)
+    result = identify(log, 30.0, "ukf")
     assert np.isnan(result.equilibrium_time_min[1]) and result.summary(1)["equilibrium_time_min"] is None
     assert result.equilibrium_time_min[0] == pytest.approx(187.0, abs=25.0)
     assert [n for n in result.notes if "no rise" in n] == ["sensor 'cold': no rise in the first 30 min (0.08 °C from lowest to highest): no warm-up to identify; it has no equilibrium time"]
@@ -238,7 +239,7 @@ def test_monte_carlo_default_method_reaches_the_cramer_rao_bound_with_calibrated
     t = np.arange(0.0, 120.0)
     runs = first_order(t)[:, None] + 0.02 * rng.standard_normal((len(t), 200))
     log = make_log(t, {f"r{i}": runs[:, i] for i in range(200)})
-    result = identify(log, 28.0)
+    result = identify(log, 28.0, "ukf")
     error = result.steady_state_C - PAPER_STEADY
     bound = np.sqrt(cramer_rao_bound(t[:29], PAPER_START, PAPER_RATE, PAPER_STEADY, 0.02)[2, 2])
     assert np.std(error) < 1.25 * bound
@@ -255,7 +256,7 @@ def test_fast_plus_slow_curve_is_not_answered_with_a_narrow_wrong_interval():
     flagged_or_covered = []
     for seed in range(5):
         noisy = truth + 0.02 * np.random.default_rng(seed).standard_normal(len(t))
-        result = identify(make_log(t, {"S": noisy}), 30.0)
+        result = identify(make_log(t, {"S": noisy}), 30.0, "ukf")
         lo, hi = result.steady_state_ci95()[0]
         flagged_or_covered.append((not result.fits[0]) or (lo <= final <= hi))
     assert all(flagged_or_covered)
@@ -267,7 +268,7 @@ def test_the_sample_identified_from_28_min_covers_every_measured_final_value():
     sensors at their last flat sample (within 0.12 °C for 5-6 min) sent four T∞ 15-40 °C off."""
     from mtident.io import sample_log_path
 
-    result = identify(read_temperature_log(sample_log_path()), 28.0)
+    result = identify(read_temperature_log(sample_log_path()), 28.0, "ukf")
     lo, hi = result.steady_state_ci95().T
     assert np.all((lo <= result.measured_final_C) & (result.measured_final_C <= hi))
     assert np.all(hi - lo < 30.0)
@@ -280,7 +281,7 @@ def test_a_warm_up_that_began_after_the_log_is_fitted_from_its_start():
     t = np.arange(0.0, 401.0)
     late = first_order(np.clip(t - 15.0, 0.0, None)) + 0.02 * np.random.default_rng(0).standard_normal(len(t))
     on_time = first_order(t) + 0.02 * np.random.default_rng(1).standard_normal(len(t))
-    result = identify(make_log(t, {"late": late, "on time": on_time}), 60.0)
+    result = identify(make_log(t, {"late": late, "on time": on_time}), 60.0, "ukf")
     assert any("the first 15 min stay at their first level (the warm-up began after the log)" in n for n in result.notes)
     assert not any("'on time'" in n for n in result.notes)
     lo, hi = result.steady_state_ci95()[0]
@@ -318,7 +319,7 @@ def test_a_late_warm_up_with_its_first_sample_missing_keeps_its_first_level():
     late = first_order(np.clip(t - 15.0, 0.0, None)) + noise
     missing = late.copy()
     missing[0] = np.nan
-    result = identify(make_log(t, {"late": missing}), 60.0)
+    result = identify(make_log(t, {"late": missing}), 60.0, "ukf")
     np.testing.assert_array_equal(result.curve_C[:15, 0], 17.9)
     full = minimal_identification_time(make_log(t, {"late": late}), "ukf").rmse_C
     gap = minimal_identification_time(make_log(t, {"late": missing}), "ukf").rmse_C
@@ -358,7 +359,7 @@ def test_prediction_band_and_rmse():
     rng = np.random.default_rng(8)
     t = np.arange(0.0, 300.0)
     y = first_order(t) + 0.02 * rng.standard_normal(len(t))
-    result = identify(make_log(t, {"S": y}), 30.0)
+    result = identify(make_log(t, {"S": y}), 30.0, "ukf")
     assert result.curve_C.shape == result.curve_sd_C.shape
     assert np.all(np.diff(result.curve_sd_C[30:200, 0]) >= -1e-12)  # uncertainty grows with the horizon
     np.testing.assert_allclose(result.rmse_C, rmse(result.curve_C[:300], y[:, None]))
@@ -374,7 +375,7 @@ def test_prediction_band_is_calibrated_at_the_end_of_the_test():
     rng = np.random.default_rng(9)
     t = np.arange(0.0, 301.0)
     runs = first_order(t)[:, None] + 0.02 * rng.standard_normal((len(t), 100))
-    result = identify(make_log(t, {f"r{i}": runs[:, i] for i in range(100)}), 30.0)
+    result = identify(make_log(t, {f"r{i}": runs[:, i] for i in range(100)}), 30.0, "ukf")
     inside = np.abs(result.curve_C[300] - first_order(300.0)) <= result.quantile * result.curve_sd_C[300]
     assert 0.85 <= np.mean(inside) <= 0.99
     assert abs(result.equilibrium_time_min[0] - np.log(20) / PAPER_RATE) < 40
@@ -400,7 +401,7 @@ def test_a_window_that_does_not_determine_the_steady_state_is_said():
     """The sample's slow sensors rise nearly straight in the first 30 min: the UKF's T∞ interval is
     wider than their rise (T9: ± 3.1 °C on a 1.4 °C rise), and the user is told; by 60 min none is."""
     log = sample_log()
-    early = identify(log, 30.0)
+    early = identify(log, 30.0, "ukf")
     said = [n for n in early.notes if n.startswith("T∞ is barely determined by the first 30 min for ")]
     assert len(said) == 1
     named = re.findall(r"'(T\d+)' \(± ([\d.]+) °C, rose ([\d.]+) °C\)", said[0])
@@ -409,15 +410,15 @@ def test_a_window_that_does_not_determine_the_steady_state_is_said():
     for name, half, rose in named:
         i = log.sensors.index(name)
         assert float(half) == pytest.approx(halves[i], rel=0.05) and float(half) > float(rose)
-    assert not any("barely determined" in n for n in identify(log, 60.0).notes)
+    assert not any("barely determined" in n for n in identify(log, 60.0, "ukf").notes)
     # a first-order curve whose bend shows in the window is determined
     t = np.arange(0.0, 31.0)
     clean = first_order(t) + 0.02 * np.random.default_rng(3).standard_normal(len(t))
-    assert not any("barely determined" in n for n in identify(make_log(t, {"S": clean}), 30.0).notes)
+    assert not any("barely determined" in n for n in identify(make_log(t, {"S": clean}), 30.0, "ukf").notes)
 
 
 def test_sensors_with_the_same_slow_start_are_named_in_one_note():
-    notes = [n for n in identify(sample_log(), 30.0).notes if "rise slower than a first-order curve starts" in n]
+    notes = [n for n in identify(sample_log(), 30.0, "ukf").notes if "rise slower than a first-order curve starts" in n]
     assert notes == [
         "sensors 'T1' (3 min), 'T2' (2 min), 'T4' (3 min), 'T5' (2 min), 'T9' (3 min): the first minutes rise slower than a "
         "first-order curve starts (a sensor lag, or heat still on its way); each model is fitted from the end of them"
@@ -469,8 +470,8 @@ def test_min_time_uses_one_filter_run_for_every_window():
 @pytest.mark.parametrize(
     ("call", "message"),
     [
-        (lambda log: identify(log, 3.0), r"only 4 samples in the first 3 min"),
-        (lambda log: identify(log, 30.0, "kalman"), r"method 'kalman' is not one of: ukf, aukf, fukf, afukf, lsq"),
+        (lambda log: identify(log, 3.0, "ukf"), r"only 4 samples in the first 3 min"),
+        (lambda log: identify(log, 30.0, "kalman"), r"method 'kalman' is not one of: robust, ukf, aukf, fukf, afukf, lsq"),
         (lambda log: identify(log, 30.0, "ukf", preset="smith"), r"preset 'smith' is not one of: data, xia2014, yu2019"),
         (lambda log: minimal_identification_time(log, periods_min=[35, 400]), r"covers 59 min; the longest sampling period is 400 min"),
         (lambda log: minimal_identification_time(log, "x"), r"method 'x' is not one of"),
@@ -488,14 +489,14 @@ def test_a_flat_start_is_left_out_so_the_interval_still_covers():
     lagged = 17.9 + 12.0 * (1 - (94 * np.exp(-t / 94) - np.exp(-t)) / 93)
     rng = np.random.default_rng(3)
     runs = {f"r{i}": lagged + 0.02 * rng.standard_normal(len(t)) for i in range(40)}
-    result = identify(make_log(t, runs), 60.0)
+    result = identify(make_log(t, runs), 60.0, "ukf")
     error = result.steady_state_C - 29.9
     # fitted from t₀: mean error +0.19 °C and 16 of 20 covered (measured before this rule)
     assert np.mean(np.abs(error) <= result.quantile * result.steady_state_sd_C) >= 0.85
     assert abs(np.mean(error)) < 0.05
     assert any("rise slower than a first-order curve starts" in note for note in result.notes)
     # the papers' presets keep every sample, as the papers do
-    assert not any("rise slower" in note for note in identify(make_log(t, runs), 60.0, preset="xia2014").notes)
+    assert not any("rise slower" in note for note in identify(make_log(t, runs), 60.0, "ukf", preset="xia2014").notes)
 
 
 def _machine_in_drifting_room(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -521,8 +522,8 @@ def test_a_room_sensor_keeps_a_drifting_room_out_of_the_identified_curve():
     t = np.arange(0.0, 301.0)
     log, room_sensor, room = _noisy_logs_in_drifting_room(t, 40, seed=1)
     truth = 8.8 + room[90]  # the steady state at the room's level at the window's end
-    plain = identify(log, 90.0)
-    with_room = identify(log, 90.0, ambient_C=room_sensor)
+    plain = identify(log, 90.0, "ukf")
+    with_room = identify(log, 90.0, "ukf", ambient_C=room_sensor)
     covered = lambda r: np.mean(np.abs(r.steady_state_C - truth) <= r.quantile * r.steady_state_sd_C)  # noqa: E731
     # measured: without the room 0.11 °C bias and 3/40 covered; with it −0.015 °C and 38/40
     assert np.mean(plain.steady_state_C - truth) > 0.08 and covered(plain) < 0.3
@@ -541,7 +542,7 @@ def test_room_rates_interpolate_missing_readings():
     ("kwargs", "message"),
     [
         ({"method": "lsq"}, "needs a UKF method with the data tuning"),
-        ({"preset": "xia2014"}, "needs a UKF method with the data tuning"),
+        ({"method": "ukf", "preset": "xia2014"}, "needs a UKF method with the data tuning"),
     ],
 )
 def test_room_input_refuses_what_models_a_steady_room(kwargs, message):
@@ -569,17 +570,16 @@ def test_min_time_with_a_room_sensor_predicts_with_the_measured_room():
 
 def test_results_show_their_answer_in_a_notebook_not_their_arrays():
     """The dataclass reprs printed every array: 44 kB for the sample's identification."""
-    from mtident.thermal.monitor import Monitor
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
 
     log = sample_log()
-    result = identify(log.select(["T1", "T2"]), 30.0)
+    result = identify(log.select(["T1", "T2"]), 30.0, "ukf")
     text = repr(result)
     assert len(text) < 400 and text.splitlines()[1].startswith(f"  T1: T∞ {result.steady_state_C[0]:.2f} ± ")
     assert repr(log) == f"TemperatureLog({str(log.source)!r}: 10 sensor(s) (T1, T2, T3, T4, T5, ..., T10), 401 samples over 0-400 min, 0 note(s))"
     assert repr(minimal_identification_time(log.select(["T1"]))).startswith("MinTimeResult(aukf: minimal L (min) T1 ")
-    monitor = Monitor(("T1",))
-    monitor.feed(log.time_min[:50], log.temperature_C[:50, :1])
-    assert repr(monitor).splitlines()[0] == f"Monitor(1 sensor(s), t = 49 min, decision: continue, expected stop at t ≈ {round(monitor.expected_stop_time())} min)"
+    state, _ = monitor_step(new_state(["T1"]), log.time_min[:50], log.temperature_C[:50, :1], None, MonitorSettings())
+    assert repr(state) == "MonitorState(1 sensor(s), t = 49 min, decision: continue; T1 undetermined)"
 
 
 def test_identify_and_min_time_take_a_dataframe_and_refuse_what_they_cannot_use():
@@ -590,17 +590,61 @@ def test_identify_and_min_time_take_a_dataframe_and_refuse_what_they_cannot_use(
     t = np.arange(0.0, 120.0)
     rng = np.random.default_rng(8)
     frame = pd.DataFrame({"time_min": t, "A": 26.7 - 8.8 * np.exp(-0.016 * t) + 0.02 * rng.standard_normal(len(t))})
-    from_frame = identify(frame, window_min=60).summary(0)
-    assert from_frame == identify(read_temperature_log(frame), window_min=60).summary(0)
+    from_frame = identify(frame, window_min=60, method="ukf").summary(0)
+    assert from_frame == identify(read_temperature_log(frame), window_min=60, method="ukf").summary(0)
     low, high = from_frame["steady_state_ci95_C"]
     assert low < 26.7 < high and high - low < 0.5
     assert minimal_identification_time(frame).min_identification_time_min.tolist() == minimal_identification_time(read_temperature_log(frame)).min_identification_time_min.tolist()
     with pytest.raises(InputError, match=r"identify takes a TemperatureLog \(read_temperature_log\(path or DataFrame\)\) or a pandas DataFrame, not ndarray"):
-        identify(frame.to_numpy(), window_min=30)  # type: ignore[arg-type]
+        identify(frame.to_numpy(), window_min=30, method="ukf")  # type: ignore[arg-type]
     for window in (-5.0, 0.0, float("nan")):
         with pytest.raises(InputError, match="window_min must be a positive number of minutes"):
-            identify(frame, window_min=window)
+            identify(frame, window_min=window, method="ukf")
     with pytest.raises(InputError, match=r"periods_min must be positive numbers of minutes, not \[0\]"):
         minimal_identification_time(frame, periods_min=[0])
     with pytest.raises(InputError, match=r"windows_min must be positive numbers of minutes, not \[\]"):
         minimal_identification_time(frame, windows_min=[])
+
+
+@pytest.mark.parametrize("late_at", [45.0, 55.0])
+def test_one_sensors_late_start_does_not_cut_or_crash_another_sensors_fit(late_at):
+    """identify --window 60 on a 30-s log crashed (IndexError in the lag search: it took the longest
+    flat start over all sensors), and cut the other sensors' first hour (46 min of the housing's
+    with a sensor flat until 45 min; an IndexError with one flat until 55)."""
+    from mtident.thermal.lsq import first_order_onset
+
+    t = np.arange(0.0, 60.25, 0.5)
+    rng = np.random.default_rng(31)
+    housing = 24.38 - 1.2 * np.exp(-t / 5.0) - 2.3 * np.exp(-t / 40.0) - 2.98 * np.exp(-t / 200.0)
+    late = np.where(t < late_at, 20.0, 20.0 + 3.0 * (1 - np.exp(-(t - late_at) / 40.0)))
+    columns = {"housing": housing + 0.02 * rng.standard_normal(len(t)), "late": late + 0.02 * rng.standard_normal(len(t))}
+    onsets = first_order_onset(t, np.column_stack(list(columns.values())))
+    alone = first_order_onset(t, columns["housing"][:, None])
+    assert onsets[0] == alone[0] and t[onsets[0]] < 10.0
+    result = identify(make_log(t, columns), 60.0, "ukf")
+    assert np.isfinite(result.steady_state_C).all()
+
+
+@pytest.mark.parametrize(("window", "within"), [(30.0, 0.4), (60.0, 0.1)])
+def test_the_robust_estimate_of_a_first_order_curve_is_as_accurate_as_the_papers(window, within):
+    """The point estimate is the best-fitting model's: on the papers' kind of curve as accurate as
+    the first-order filters; it is the interval that widens where the data allow more."""
+    t = np.arange(0.0, 241.0)
+    errors = []
+    for seed in range(6):
+        y = np.round(first_order(t) + 0.02 * np.random.default_rng(seed).standard_normal(len(t)), 2)
+        errors.append(identify(make_log(t, {"S": y}), window).steady_state_C[0] - PAPER_STEADY)
+    assert np.sqrt(np.mean(np.square(errors))) < within
+
+
+def test_identify_never_calls_a_risen_sensor_flat():
+    """Sensors that rose 0.5-3.5 °C were called "no rise" and left out; the robust answer reports
+    the rise and its interval whatever it is."""
+    t = np.arange(0.0, 121.0)
+    rng = np.random.default_rng(32)
+    columns = {f"r{r}": 20.0 + r * (1 - np.exp(-t / 150.0)) + 0.02 * rng.standard_normal(len(t)) for r in (0.5, 1.5, 3.5)}
+    result = identify(make_log(t, columns), 120.0)
+    for i in range(3):
+        summary = result.summary(i)
+        assert not any("no rise" in w for w in summary["warnings"])  # type: ignore[union-attr]
+        assert summary["model"]["rise_C"] > 0.3  # type: ignore[index]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import shlex
 from pathlib import Path
-from typing import Literal, TypedDict
+from typing import TYPE_CHECKING, Literal, TypedDict
 
 import click
 import numpy as np
@@ -17,6 +17,12 @@ from mtident.exceptions import InputError
 from mtident.io.columns import room_named
 from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
+from mtident.thermal.identify import Identification
+from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
+from mtident.thermal.settings import IDENTIFY_METHODS, ROBUST_METHOD
+
+if TYPE_CHECKING:
+    from mtident.thermal.robust_identify import RobustIdentification
 
 stderr = Console(stderr=True, soft_wrap=True)
 
@@ -110,19 +116,82 @@ def _fmt(value: object, digits: int = 2) -> str:
     return str(value)
 
 
+def reference_option(func):  # noqa: ANN001,ANN201 - click decorator
+    return click.option(
+        "--reference",
+        "reference_path",
+        type=click.Path(dir_okay=False),
+        help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are searched only near those it learnt, "
+        "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
+    )(func)
+
+
+def max_time_constant_option(func):  # noqa: ANN001,ANN201 - click decorator
+    return click.option(
+        "--max-time-constant",
+        "max_tau_min",
+        type=FiniteFloatRange(min=1.0),
+        default=DEFAULT_MAX_TIME_CONSTANT_MIN,
+        show_default=True,
+        help="The slowest thermal mode the machine may have (min). The interval covers every mode up to this that the data cannot exclude: "
+        "a machine's bed or column warms with 1-5 h time constants.",
+    )(func)
+
+
+def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineReference or None
+    """The reference run named by --reference, read (None where none is given)."""
+    if reference_path is None:
+        return None
+    from mtident.thermal.reference import load_reference
+
+    if reference_path in SAMPLES:
+        return load_reference(sample_log_path(reference_path))
+    if not Path(reference_path).is_file():
+        msg = f"--reference {reference_path}: no such file (learn one with `mtident thermal learn FULL_LOG -o {Path(reference_path).name}`)"
+        raise InputError(msg)
+    return load_reference(reference_path)
+
+
 @thermal.command("identify")
 @log_options
 @click.option("--window", "window_min", type=FiniteFloatRange(min=0, min_open=True), default=30.0, show_default=True, help="Identification time L in minutes from the first sample.")
-@click.option("--method", type=click.Choice(METHODS), default=DEFAULT_METHOD, show_default=True, help="ukf, aukf (Xia 2014), fukf, afukf (Yu 2019) or lsq (least squares).")
-@click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True, help="Initial values and tuning: from the data, or a paper's exactly.")
+@click.option(
+    "--method",
+    type=click.Choice(IDENTIFY_METHODS),
+    default=DEFAULT_METHOD,
+    show_default=True,
+    help="robust: sums of up to three exponential modes, with an interval over every model the data cannot exclude. "
+    "The papers' first-order filters (their interval assumes a first-order machine): ukf, aukf (Xia 2014), fukf, afukf (Yu 2019), or lsq (least squares).",
+)
+@click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True, help="First-order filters: initial values and tuning from the data, or a paper's exactly.")
+@max_time_constant_option
+@reference_option
+@click.option("--room-wander", "room_wander", type=FiniteFloatRange(min=0.0), default=0.05, show_default=True, help="robust, without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk).")
 @click.option("--horizon", "horizon_min", type=FiniteFloatRange(min=0, min_open=True), help="Predict to this time (min).")
-@click.option("--pseudo-seed", type=int, help="Predict with seed 000's noisy pseudo-measurements (Eqs 21-22) from this seed.")
-@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes the input of each sensor's heat balance; T∞ at the room's level at the window's end.")
+@click.option("--pseudo-seed", type=int, help="First-order filters: predict with the noisy pseudo-measurements of Xia et al. (2014), Eqs 21-22, from this seed.")
+@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes an input of each sensor's heat balance; T∞ at the room's level at the window's end.")
 @click.option("--plot", "plot_path", type=PicturePath(), help="Draw measured and predicted curves to this picture (PNG; .svg or .pdf by the suffix).")
 @click.option("--curve", "curve_path", type=OutputPath(), help="Write the measured and predicted curves with their 95 % band to this CSV (a row per time; for a report or a spreadsheet).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, window_min: float, method: str, preset: str, horizon_min: float | None, pseudo_seed: int | None, ambient_col: str | None, plot_path: str | None, curve_path: str | None, as_json: bool) -> None:
+def identify_command(
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    window_min: float,
+    method: str,
+    preset: str,
+    max_tau_min: float,
+    reference_path: str | None,
+    room_wander: float,
+    horizon_min: float | None,
+    pseudo_seed: int | None,
+    ambient_col: str | None,
+    plot_path: str | None,
+    curve_path: str | None,
+    as_json: bool,
+) -> None:
     """Identify the temperature rise from the first WINDOW minutes of FILE and predict the rest.
 
     FILE is a CSV log (time column, one column per sensor), or @sample for the
@@ -130,7 +199,22 @@ def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
     sensor column "room", for --ambient room).
     """
     log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
-    result = identify(log, window_min, method, preset, horizon_min, pseudo_seed, room)
+    if method == ROBUST_METHOD:
+        from mtident.thermal.robust import RobustSettings
+        from mtident.thermal.robust_identify import identify_robust
+
+        if preset != "data" or pseudo_seed is not None:
+            msg = f"--{'preset' if preset != 'data' else 'pseudo-seed'} is a setting of the papers' first-order filters: give --method ukf, aukf, fukf, afukf or lsq with it"
+            raise InputError(msg)
+        settings = RobustSettings(max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander)
+        with stderr.status(f"fitting {len(log.sensors)} sensor(s)…"):
+            result: Identification | RobustIdentification = identify_robust(log, window_min, room, settings, load_reference_file(reference_path), horizon_min, ambient_col)
+    else:
+        if reference_path is not None:
+            msg = "--reference needs the model-robust method (--method robust): the first-order filters have one mode and no reference to use"
+            raise InputError(msg)
+        result = identify(log, window_min, method, preset, horizon_min, pseudo_seed, room)
+        stderr.print("mtident: note: the papers' first-order model: the interval assumes a first-order machine (a slower mode not yet seen moves T∞ beyond it); --method robust covers up to three modes", highlight=False)
     for note in result.notes[len(log.notes):]:
         stderr.print(f"mtident: warning: {note}", highlight=False)
     if plot_path:
@@ -145,20 +229,71 @@ def identify_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
     if as_json:
         print_json(summaries[0] if len(summaries) == 1 else {"sensors": summaries, "method": method, "window_min": result.window_min})
         return
-    table = Table(title=f"{log.source}: identified from the first {result.window_min:g} min ({method}, preset {preset})")
-    for column in ("sensor", "T∞ ± 95 % (°C)", "λ (1/min)", "t_eq (min)", "RMSE (°C)", "model", "measured T / t_eq"):
+    _identify_table(log.source, result, summaries, method, preset)
+
+
+def _identify_table(source: str, result: Identification | RobustIdentification, summaries: list[dict[str, object]], method: str, preset: str) -> None:
+    how = "model-robust: up to three modes" if method == ROBUST_METHOD else f"{method}, preset {preset}: first order"
+    table = Table(title=f"{source}: identified from the first {result.window_min:g} min ({how})")
+    for column in ("sensor", "T∞ (°C)", "95 % interval", "t_eq (min)", "RMSE (°C)", "trusted", "measured T / t_eq"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     for d in summaries:
         interval = d["steady_state_ci95_C"]
         assert isinstance(interval, list)
         lo, hi = interval
-        half = None if lo is None or hi is None else (hi - lo) / 2
         measured = "—" if d["measured_final_C"] is None else f"{d['measured_final_C']:.2f} / {_fmt(d['measured_equilibrium_time_min'], 0)}"
         table.add_row(
-            str(d["sensor"]), f"{_fmt(d['steady_state_C'])} ± {_fmt(half)}", _fmt(d["lambda_per_min"], 4),
+            str(d["sensor"]), _fmt(d["steady_state_C"]), f"{_fmt(lo)} to {_fmt(hi)}",
             _fmt(d["equilibrium_time_min"], 0), _fmt(d["rmse_C"], 3),
-            "fits" if d["model_fits"] else "[yellow]misfit[/]", measured,
+            "yes" if d["model_ok"] else "[yellow]no[/]", measured,
         )
+    console = Console(width=max(Console().width, 100))
+    console.print(table)
+    assumed = summaries[0]["assumptions"]
+    assert isinstance(assumed, dict)
+    if method == ROBUST_METHOD:
+        console.print(f"Assumes: {assumed['model']}, time constants up to {assumed['max_time_constant_min']:g} min; room {assumed['room']}" + (f"; reference {assumed['reference']}" if assumed["reference"] else "") + ".", highlight=False)
+    else:
+        console.print(f"Assumes: {assumed['model']}.", highlight=False)
+
+
+@thermal.command("learn")
+@log_options
+@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: an input of every mode's heat balance while learning.")
+@max_time_constant_option
+@click.option("-o", "--output", "output_path", type=OutputPath(), required=True, help="The reference file to write (TOML), for --reference in identify and watch.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@user_errors
+def learn_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, ambient_col: str | None, max_tau_min: float, output_path: str, as_json: bool) -> None:
+    """Learn each sensor's thermal modes from FILE, a warm-up that ran to equilibrium.
+
+    The time constants belong to the machine's structure, not to the load: a later test of the
+    same machine, with --reference, searches them only near these (never as exact), and may
+    stop far earlier. A later test that does not follow them is said to (a changed machine).
+    """
+    from mtident.thermal.reference import learn_reference, save_reference
+    from mtident.thermal.robust import RobustSettings
+
+    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
+    with stderr.status(f"learning the modes of {len(log.sensors)} sensor(s)…"):
+        reference, warnings = learn_reference(log, room, RobustSettings(max_time_constant_min=max_tau_min))
+    for warning in warnings:
+        stderr.print(f"mtident: warning: {warning}", highlight=False)
+    if not reference.sensors:
+        msg = f"{log.source}: no sensor's modes could be learnt; nothing written"
+        raise InputError(msg)
+    save_reference(reference, output_path)
+    stderr.print(f"mtident: reference written to {output_path}", highlight=False)
+    if as_json:
+        sensors_out = {name: {"time_constants_min": list(m.time_constants_min), "box": list(m.box), "amplitudes_C": list(m.amplitudes_C)} for name, m in reference.sensors.items()}
+        print_json({"reference": str(output_path), "source": reference.source, "max_time_constant_min": reference.max_time_constant_min, "room": reference.room, "sensors": sensors_out, "warnings": warnings})
+        return
+    table = Table(title=f"{log.source}: modes learnt (time constants with their box)")
+    for column in ("sensor", "time constants (min)", "amplitudes (°C)"):
+        table.add_column(column, justify="left" if column == "sensor" else "right", **_column_layout(column))
+    for name, m in reference.sensors.items():
+        taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(m.time_constants_min, m.box, strict=True))
+        table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C))
     Console(width=max(Console().width, 100)).print(table)
 
 
@@ -207,6 +342,9 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
         plot_min_time(result, plot_path)
         stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
     summaries = [result.summary(i) for i in range(len(result.sensors))]
+    for d in summaries:
+        for warning in d["warnings"]:  # type: ignore[attr-defined]
+            stderr.print(f"mtident: warning: {warning}", highlight=False)
     if as_json:
         print_json(summaries[0] if len(summaries) == 1 else {"sensors": summaries, "method": method, "sampling_periods_min": periods})
         return

@@ -18,50 +18,15 @@ from rich.console import Console
 from rich.table import Table
 
 from mtident.cli import FiniteFloatRange, PicturePath, print_json, user_errors
-from mtident.cli_thermal import _column_layout, _fmt, _say_room_candidates, asked_sensors, log_options, log_path, stderr, thermal
+from mtident.cli_thermal import _column_layout, _fmt, _say_room_candidates, asked_sensors, load_reference_file, log_options, log_path, max_time_constant_option, reference_option, stderr, thermal
 from mtident.exceptions import InputError
 from mtident.thermal.hindsight import Hindsight
-from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
 from mtident.thermal.robust import RobustSettings
 from mtident.thermal.session import WatchSession, default_state_path
 
 # events said on stderr as they come (a status change while narrowing is shown in the table)
 _SAID = ("note", "warning", "ready", "not ready", "stop")
-
-
-def reference_option(func):  # noqa: ANN001,ANN201 - click decorator
-    return click.option(
-        "--reference",
-        "reference_path",
-        type=click.Path(dir_okay=False),
-        help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are searched only near those it learnt, "
-        "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
-    )(func)
-
-
-def max_time_constant_option(func):  # noqa: ANN001,ANN201 - click decorator
-    return click.option(
-        "--max-time-constant",
-        "max_tau_min",
-        type=FiniteFloatRange(min=1.0),
-        default=DEFAULT_MAX_TIME_CONSTANT_MIN,
-        show_default=True,
-        help="The slowest thermal mode the machine may have (min). The interval covers every mode up to this that the data cannot exclude: "
-        "a machine's bed or column warms with 1-5 h time constants.",
-    )(func)
-
-
-def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineReference or None
-    """The reference run named by --reference, read (None where none is given)."""
-    if reference_path is None:
-        return None
-    from mtident.thermal.reference import load_reference
-
-    if not Path(reference_path).is_file():
-        msg = f"--reference {reference_path}: no such file (learn one with `mtident thermal learn FULL_LOG -o {Path(reference_path).name}`)"
-        raise InputError(msg)
-    return load_reference(reference_path)
 
 
 @thermal.command("watch")

@@ -113,11 +113,12 @@ class TemperatureLog:
 
 # The logs shipped in the package (scripts/make_sample_warmup.py), by the names the CLI and
 # read_temperature_log take: the 10-sensor warm-up, and the same with a room sensor column "room".
-SAMPLES = {"@sample": "spindle_warmup.csv", "@sample-room": "spindle_warmup_room.csv"}
+SAMPLES = {"@sample": "spindle_warmup.csv", "@sample-room": "spindle_warmup_room.csv", "@sample-machine": "spindle_machine.toml"}
 
 
 def sample_log_path(name: str = "@sample") -> Path:
-    """A log shipped in the package, by its @-name (@sample, @sample-room)."""
+    """A file shipped in the package, by its @-name: the logs @sample and @sample-room, and
+    @sample-machine, the reference run of the sample's machine."""
     from importlib import resources
 
     if name not in SAMPLES:

@@ -19,6 +19,7 @@ from matplotlib.figure import Figure
 if TYPE_CHECKING:
     from mtident.thermal.identify import Identification
     from mtident.thermal.min_time import MinTimeResult
+    from mtident.thermal.robust_identify import RobustIdentification
 
 __all__ = ["plot_identification", "plot_min_time", "plot_monitor", "plot_responses", "plot_feed_drive_identification", "grid"]
 
@@ -68,7 +69,7 @@ def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 -
     return fig, flat[:count]
 
 
-def plot_identification(result: Identification, path: str | Path | None = None) -> Path | Figure:
+def plot_identification(result: Identification | RobustIdentification, path: str | Path | None = None) -> Path | Figure:
     """Measured and predicted temperature per sensor, with the 95 % band, the
     identification time, T∞ and the predicted equilibrium time (seed 000 Figs 6-8)."""
     fig, axes = grid(len(result.sensors))
@@ -76,13 +77,13 @@ def plot_identification(result: Identification, path: str | Path | None = None) 
     for s, ax in enumerate(axes):
         measured = result.measured_C[:, s]
         ax.plot(t, measured, ".", ms=2.5, color="0.45", label="measured")
-        mean, sd = result.curve_C[:, s], result.curve_sd_C[:, s]
+        mean = result.curve_C[:, s]
+        low, high = (edge[:, s] for edge in result.band_C())
         inside = t <= result.window_min + 1e-9
-        ax.plot(t[inside], mean[inside], color="tab:blue", lw=1.6, label="filtered")
+        ax.plot(t[inside], mean[inside], color="tab:blue", lw=1.6, label="fitted")
         ax.plot(t[~inside], mean[~inside], color="tab:red", lw=1.6, label="predicted")
-        finite = np.isfinite(sd) & (sd < 50)
-        q = result.quantile
-        ax.fill_between(t[finite], (mean - q * sd)[finite], (mean + q * sd)[finite], color="tab:red", alpha=0.18, lw=0, label="95 % band")
+        finite = np.isfinite(low) & np.isfinite(high) & (high - low < 100)
+        ax.fill_between(t[finite], low[finite], high[finite], color="tab:red", alpha=0.18, lw=0, label="95 % band")
         ax.axvline(result.window_min, color="k", ls="--", lw=1, label=f"L = {result.window_min:g} min")
         steady = result.steady_state_C[s]
         if np.isfinite(steady):

@@ -17,11 +17,13 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
 from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
-from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, reading_range, tuning_from_data
+from mtident.thermal.settings import DEFAULT_METHOD, IDENTIFY_METHODS, METHODS, ROBUST_METHOD, ThermalTuning, filter_config, noise_sigma, preset_tuning, reading_range, tuning_from_data
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
 
 if TYPE_CHECKING:
     import pandas as pd
+
+    from mtident.thermal.robust_identify import RobustIdentification
 
 __all__ = ["Identification", "identify", "room_input", "room_rates", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
 
@@ -117,6 +119,11 @@ class Identification:
             columns[f"{name}_high95_C"] = self.curve_C[:, s] + half[:, s]
         return pd.DataFrame(columns)
 
+    def band_C(self) -> tuple[FloatArray, FloatArray]:
+        """The curve's 95 % band, low and high, each (N, S)."""
+        half = self.quantile * self.curve_sd_C
+        return self.curve_C - half, self.curve_C + half
+
     def steady_state_ci95(self) -> FloatArray:
         """(S, 2) 95 % interval of T∞."""
         half = self.quantile * self.steady_state_sd_C
@@ -126,8 +133,10 @@ class Identification:
         """The contract's JSON object for one sensor (DESIGN.md), plus extras."""
         lo, hi = self.steady_state_ci95()[index]
         rate = float(self.rate_per_min[index])
+        name = self.sensors[index]
+        undetermined = not (np.isfinite(lo) and np.isfinite(hi))
         return {
-            "sensor": self.sensors[index],
+            "sensor": name,
             "method": self.method,
             "preset": self.preset,
             "window_min": float(self.window_min),
@@ -141,10 +150,26 @@ class Identification:
             "equilibrium_time_min": num(self.equilibrium_time_min[index]),
             "rmse_C": num(self.rmse_C[index]),
             "model_fits": bool(self.fits[index]),
+            "model_ok": bool(self.fits[index]) and not undetermined,
+            "warnings": sensor_notes(self.notes, name),
+            "assumptions": FIRST_ORDER_ASSUMPTIONS,
             "residual_chi2": num(self.fit_chi2[index]),
             "measured_final_C": num(self.measured_final_C[index]),
             "measured_equilibrium_time_min": num(self.measured_equilibrium_time_min[index]),
         }
+
+
+FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
+    "model": "first order (one exponential, the papers' model): the interval assumes a first-order machine; a slower mode not yet seen moves T∞ beyond it",
+    "max_time_constant_min": None,
+    "room": "the room at its level in the window (or the room sensor's course, where given)",
+    "reference": None,
+}
+
+
+def sensor_notes(notes: tuple[str, ...], sensor: str) -> list[str]:
+    """The notes that name ``sensor`` (as 'NAME' or NAME:), and those that name no sensor of a list."""
+    return [n for n in notes if repr(sensor) in n or n.startswith(f"{sensor}:")]
 
 
 def num(value: float) -> float | None:
@@ -371,12 +396,12 @@ def room_rates(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
 def identify(
     log: TemperatureLog,
     window_min: float,
-    method: str = "ukf",
+    method: str = DEFAULT_METHOD,
     preset: str = "data",
     horizon_min: float | None = None,
     pseudo_measurement_seed: int | None = None,
     ambient_C: FloatArray | None = None,
-) -> Identification:
+) -> Identification | RobustIdentification:
     """Identify every sensor of ``log`` from its first ``window_min`` minutes, then predict.
 
     Parameters
@@ -384,7 +409,11 @@ def identify(
     log : TemperatureLog
     window_min : float
         Identification time L (minutes from the first sample).
-    method : {"ukf", "aukf", "fukf", "afukf", "lsq"}
+    method : {"robust", "ukf", "aukf", "fukf", "afukf", "lsq"}
+        "robust" (the model-robust estimate: sums of up to three modes, an interval over every
+        model the data cannot exclude; :func:`~mtident.thermal.robust_identify.identify_robust`
+        for its settings), or one of the papers' first-order filters, whose interval assumes a
+        first-order machine.
     preset : {"data", "xia2014", "yu2019"}
         Initial values and tuning: from the data (default) or a paper's exactly.
     horizon_min : float, optional
@@ -410,10 +439,17 @@ def identify(
     InputError
         Unknown method or preset, or too few samples in the window.
     """
-    if method not in METHODS:
-        msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
+    if method not in IDENTIFY_METHODS:
+        msg = f"method {method!r} is not one of: {', '.join(IDENTIFY_METHODS)}"
         raise InputError(msg)
     log = as_temperature_log(log, "identify")
+    if method == ROBUST_METHOD:
+        from mtident.thermal.robust_identify import identify_robust
+
+        if preset != "data":
+            msg = f"preset {preset!r} is a setting of the papers' first-order filters; with it choose one of: {', '.join(METHODS)}"
+            raise InputError(msg)
+        return identify_robust(log, window_min, ambient_C, horizon_min=horizon_min)
     if not (np.isfinite(window_min) and window_min > 0):
         msg = f"window_min must be a positive number of minutes, not {window_min!r}"
         raise InputError(msg)

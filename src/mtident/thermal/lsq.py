@@ -165,9 +165,10 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     if len(t) < lead + 6:
         return onsets
     sigma = np.maximum(noise_sigma(y, t), 1e-6)
-    # a warm-up that begins after the log: its flat minutes go first
+    # a warm-up that begins after the log: its flat minutes go first; each sensor's leading samples
+    # count from its own onset (another sensor's late start is no reason to cut this one)
     onsets = late_onset(t, y, sigma)
-    lead = lead + int(onsets.max())
+    leads = np.minimum(lead + onsets, len(t) // 2)
     # 2.5σ over the 3 leading samples of a 1-min log: one false flag in 27 curves. A 1-Hz log has
     # 180 leading samples, and 2.5σ flagged nearly every true first-order curve as lagged; the
     # threshold keeps that rate whatever the number of samples.
@@ -179,15 +180,15 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
         start, rate, steady = quick_estimate(t, used)
         fit = fit_rise(t, used, np.column_stack([start, rate, steady]))
         curve = rise_curve(t[:, None], fit.params[:, 0], fit.params[:, 1], fit.params[:, 2])
-        z = (y[:lead] - curve[:lead]) / sigma
+        z = (y - curve) / sigma
         for s in range(y.shape[1]):
-            flagged = np.flatnonzero(np.abs(z[:, s]) > threshold)
+            flagged = np.flatnonzero(np.abs(z[: leads[s], s]) > threshold)
             if not flagged.size:
                 continue
             # the lag's decay goes on past the last flagged sample: take the run of same-sign misses beyond σ/2
             end = int(flagged[-1]) + 1
             sign = np.sign(z[flagged[-1], s])
-            while end < lead and sign * z[end, s] > 0.5:
+            while end < leads[s] and sign * z[end, s] > 0.5:
                 end += 1
             onsets[s] = max(onsets[s], end)
     return onsets

@@ -27,12 +27,15 @@ import numpy as np
 from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
-from mtident.thermal.identify import MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
+from mtident.thermal.identify import FIRST_ORDER_ASSUMPTIONS, MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
 from mtident.thermal.lsq import first_level, fit_rise, late_onset
 from mtident.thermal.model import heat_balance_path, rise_curve
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
 
 __all__ = ["MinTimeResult", "minimal_identification_time"]
+
+# an RMSE beyond this (°C) is a filter that left the data, not a prediction error
+_EXPLODED_C = 100.0
 
 
 @dataclass(frozen=True)
@@ -74,8 +77,34 @@ class MinTimeResult:
         periods = "/".join(f"{p:g}" for p in self.periods_min)
         return f"MinTimeResult({self.method}: minimal L (min) {chosen}; sampling periods {periods} min, measured for {self.measuring_time_min:g} min)"
 
+    def warnings(self, index: int) -> list[str]:
+        """What the criterion's answer for one sensor does not say: a best L at the end of every
+        sampling period (more data simply fit better), RMSEs that explode, periods that disagree."""
+        name = self.sensors[index]
+        said = []
+        step = float(np.median(np.diff(self.windows_min))) if len(self.windows_min) > 1 else 1.0
+        last = [float(self.windows_min[self.windows_min < p].max(initial=-np.inf)) for p in self.periods_min]
+        at_end = [np.isfinite(b) and b >= end - 1.5 * step for b, end in zip(self.best_per_period_min[:, index], last, strict=True)]
+        if all(at_end):
+            said.append(
+                f"{name}: the RMSE falls to the end of every sampling period (best L = the longest window each allows): "
+                "the criterion only says that more data fit better, not that a shorter test suffices"
+            )
+        curves = self.rmse_C[:, :, index]
+        rise = max(float(np.nanmax(curves, initial=0.0)), 0.0)
+        exploded = np.isfinite(curves) & (curves > _EXPLODED_C)
+        if exploded.any() or not np.isfinite(rise):
+            windows = self.windows_min[np.any(exploded, axis=0)]
+            said.append(
+                f"{name}: the RMSE explodes (largest {np.nanmax(curves[exploded]):.3g} °C) from L = {windows.min():g} to {windows.max():g} min: "
+                f"the {self.method} filter left the data's course from those windows; they are no candidates"
+            )
+        if not self.agreement[index]:
+            said.append(f"{name}: the sampling periods pick different L; the one with the smallest summed relative RMSE is given")
+        return said
+
     def summary(self, index: int) -> dict[str, object]:
-        """The contract's JSON object for one sensor, plus extras."""
+        """The contract's JSON object for one sensor, with its verdict and what it assumes."""
         table = {}
         for p, period in enumerate(self.periods_min):
             rows = [[float(w), float(self.rmse_C[p, i, index])] for i, w in enumerate(self.windows_min) if np.isfinite(self.rmse_C[p, i, index])]
@@ -89,6 +118,9 @@ class MinTimeResult:
             "best_per_period_min": {f"{p:g}": float(b) for p, b in zip(self.periods_min, self.best_per_period_min[:, index], strict=True)},
             "periods_agree": bool(self.agreement[index]),
             "measuring_time_needed_min": float(self.measuring_time_min),
+            "model_ok": not any(": the RMSE falls to the end" in w for w in self.warnings(index)),
+            "warnings": self.warnings(index),
+            "assumptions": FIRST_ORDER_ASSUMPTIONS,
             **({"rise_begins_min": float(self.rise_begins_min[index])} if self.rise_begins_min is not None and np.isfinite(self.rise_begins_min[index]) else {}),
         }
 

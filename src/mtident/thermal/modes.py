@@ -41,6 +41,7 @@ from scipy.optimize import minimize
 from scipy.special import stdtrit
 
 from mtident._typing import FloatArray, IntArray
+from mtident.thermal.modal_kernel import fit_one, lag_rows
 from mtident.thermal.model import EQUILIBRIUM_FRACTION
 
 __all__ = [
@@ -54,6 +55,7 @@ __all__ = [
     "bin_samples",
     "equilibrium_time",
     "fit_steady_state",
+    "fitted_curve",
     "model_curve",
 ]
 
@@ -70,6 +72,7 @@ BIN_ORIGIN_MIN = 1.0
 # Two modes closer than this are one to the fit: nearly alike columns with large amplitudes of
 # opposite sign fit anything, and the hull then grows with the search grid's resolution.
 MIN_MODE_RATIO = 1.5
+_LOG_MODE_RATIO = float(np.log(MIN_MODE_RATIO))
 # prior standard deviation of a room gain gₖ (the sum of the gains of a passive structure is 1)
 ROOM_GAIN_SD = 2.0
 # a tiny ridge on every normalised column, so that a degenerate set of modes (three slow ones
@@ -87,7 +90,10 @@ _CANDIDATES = 3
 # opposite sign sets an end, and the grid's few leading models all lie in one basin)
 _END_STARTS = 30
 _POLISHED = 3
-_LATTICE_ROUNDS = 6
+# a refinement's iterations and evaluations: the few that wander along a ridge's edge end here
+_MAXITER = 100
+_MAXFUN = 300
+_LATTICE_ROUNDS = 4
 # with a tolerance to meet, the grid's hull alone answers where it is this many times wider
 _ROUGH_MARGIN = 2.0
 _APART_PENALTY = 1e4
@@ -214,6 +220,8 @@ class SteadyState:
     refined : dict of float to bool
         Per level, whether the hull was refined off the search grid (else it is the grid's,
         at most as wide as the true hull).
+    room_gains : tuple of float
+        With a room sensor, each mode's gain on the room (its lag of the room less the room).
     """
 
     steady_C: float
@@ -233,6 +241,7 @@ class SteadyState:
     determined: bool = True
     fits: dict[int, float] = field(default_factory=dict)
     refined: dict[float, bool] = field(default_factory=dict)
+    room_gains: tuple[float, ...] = ()
 
     def half_width(self, level: float) -> float:
         """The larger distance from T∞ to an end of the interval at ``level``."""
@@ -310,6 +319,12 @@ class _Problem:
     def target(self) -> FloatArray:
         b = self.binned
         return (b.value_C if b.room_C is None else b.value_C - b.room_C) - self.centre
+
+    def kernel_inputs(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """The arrays :func:`~mtident.thermal.modal_kernel.fit_one` takes (no room: an empty one)."""
+        b = self.binned
+        room = np.empty(0) if b.room_C is None else np.ascontiguousarray(b.room_C, dtype=float)
+        return b.time_min - self.origin, b.time_min, b.count, self.target(), room
 
     def penalty(self, k: int) -> FloatArray:
         """Per column, the prior's weight: nothing on T∞, a weak bound on each amplitude and on
@@ -492,33 +507,12 @@ class _Slopes:
 
 def _fit_with_slopes(problem: _Problem, log_tau: FloatArray) -> tuple[_Fits, _Slopes]:
     """One model's fit and its exact slopes in log τ (variable projection: the amplitudes follow
-    the time constants, so the residuals' slope needs no term of theirs)."""
-    tau = np.exp(log_tau)[None, :]
-    k = tau.shape[1]
-    fits = _fit(problem, tau)
-    X = _columns(problem, tau)[0]
-    b = problem.binned
-    u = b.time_min - problem.origin
-    w = b.count
-    theta, g0 = fits.theta[0], fits.direction[0]
-    resid = problem.target() - X @ theta
-    d_rss, d_steady, d_var = np.empty(k), np.empty(k), np.empty(k)
-    if b.room_C is not None:
-        nudged = tau[0] * np.exp(_DIFF_STEP)
-        room = np.broadcast_to(b.room_C, (k, len(b)))
-        room_slope = (_lag(room, b.time_min, nudged) - _lag(room, b.time_min, tau[0])) / _DIFF_STEP
-    gram = (X * w[:, None]).T @ X + np.diag(problem.penalty(k))
-    for j in range(k):
-        D = np.zeros_like(X)
-        D[:, 1 + j] = X[:, 1 + j] * u / tau[0, j]
-        if b.room_C is not None:
-            D[:, 1 + k + j] = room_slope[j]
-        d_gram = (D * w[:, None]).T @ X
-        d_gram = d_gram + d_gram.T
-        d_theta = np.linalg.solve(gram, (D * w[:, None]).T @ problem.target() - d_gram @ theta)
-        d_rss[j] = -2.0 * float((resid * w) @ (D @ theta))
-        d_steady[j] = d_theta[0]
-        d_var[j] = -float(g0 @ d_gram @ g0)
+    the time constants, so the residuals' slope needs no term of theirs); compiled
+    (:func:`~mtident.thermal.modal_kernel.fit_one`)."""
+    u, time_min, weight, target, room = problem.kernel_inputs()
+    k = len(log_tau)
+    rss, theta, var0, direction, d_rss, d_steady, d_var = fit_one(u, time_min, weight, target, room, np.asarray(log_tau, dtype=float), problem.penalty(k))
+    fits = _Fits(np.exp(log_tau)[None, :], np.array([rss]), theta[None, 0], np.array([var0]), direction[None, :], theta[None, :])
     return fits, _Slopes(d_rss, d_steady, d_var)
 
 
@@ -530,6 +524,10 @@ class _RssObjective:
 
     def gradient(self, fits: _Fits, slopes: _Slopes) -> FloatArray:
         return slopes.rss
+
+    def scalar(self, rss: float, steady: float, var: float, slopes: _Slopes) -> tuple[float, FloatArray]:
+        """The value and the gradient of one model's fit, given as numbers."""
+        return rss, slopes.rss
 
 
 class _EndObjective:
@@ -548,15 +546,20 @@ class _EndObjective:
         return np.where(slack >= 0, inside, -self.sign * fits.steady - _EDGE_PENALTY * reach * slack / self.gap)
 
     def gradient(self, fits: _Fits, slopes: _Slopes) -> FloatArray:
-        slack = self.threshold - float(fits.rss[0])
-        var = max(float(fits.var_steady[0]), 1e-300)
+        return self.scalar(float(fits.rss[0]), float(fits.steady[0]), float(fits.var_steady[0]), slopes)[1]
+
+    def scalar(self, rss: float, steady: float, var: float, slopes: _Slopes) -> tuple[float, FloatArray]:
+        """The value and the gradient of one model's fit, given as numbers."""
+        slack = self.threshold - rss
+        var = max(var, 1e-300)
         d_slack = -slopes.rss
         if slack >= 0:
             root = max(np.sqrt(slack * var), 1e-300)
-            return -self.sign * slopes.steady - (d_slack * var + slack * slopes.var_steady) / (2.0 * root)
+            return -self.sign * steady - root, -self.sign * slopes.steady - (d_slack * var + slack * slopes.var_steady) / (2.0 * root)
         reach = np.sqrt(var * self.gap)
         d_reach = slopes.var_steady * self.gap / (2.0 * reach)
-        return -self.sign * slopes.steady - _EDGE_PENALTY * (d_reach * slack + reach * d_slack) / self.gap
+        value = -self.sign * steady - _EDGE_PENALTY * reach * slack / self.gap
+        return value, -self.sign * slopes.steady - _EDGE_PENALTY * (d_reach * slack + reach * d_slack) / self.gap
 
 
 def _refine(problem: _Problem, fits: _Fits, i: int, objective: _RssObjective | _EndObjective) -> _Fits:
@@ -568,16 +571,18 @@ def _refine(problem: _Problem, fits: _Fits, i: int, objective: _RssObjective | _
     bounds = np.log(problem.bounds(k))
     apart = problem.family.reference_min is None and k > 1
 
+    inputs = problem.kernel_inputs()
+    penalty = problem.penalty(k)
+
     def value_and_gradient(phi: FloatArray) -> tuple[float, FloatArray]:
-        fit, slopes = _fit_with_slopes(problem, phi)
-        value = float(objective(fit)[0])
-        gradient = objective.gradient(fit, slopes)
+        rss, theta, var0, _, d_rss, d_steady, d_var = fit_one(*inputs, phi, penalty)
+        value, gradient = objective.scalar(rss, float(theta[0]), var0, _Slopes(d_rss, d_steady, d_var))
         if apart:
             value, gradient = value + _apart_penalty(phi), gradient + _apart_penalty_gradient(phi)
         return value, np.nan_to_num(gradient)
 
     start = np.clip(np.log(fits.tau[i]), bounds[:, 0], bounds[:, 1])
-    found = minimize(value_and_gradient, start, jac=True, method="L-BFGS-B", bounds=bounds, options={"maxiter": 200})
+    found = minimize(value_and_gradient, start, jac=True, method="L-BFGS-B", bounds=bounds, options={"maxiter": _MAXITER, "maxfun": _MAXFUN})
     best = _fit(problem, np.exp(np.vstack([start, found.x])))
     values = objective(best) + (np.array([_apart_penalty(row) for row in np.log(best.tau)]) if apart else 0.0)
     return best.take(int(np.argmin(values)))
@@ -589,11 +594,11 @@ def _apart_penalty(log_tau: FloatArray) -> float:
 
 def _apart_penalty_gradient(log_tau: FloatArray) -> FloatArray:
     """The slope of :func:`_apart_penalty`: it pushes the closest two modes apart."""
-    order = np.argsort(log_tau)
-    gaps = np.diff(log_tau[order])
-    j = int(np.argmin(gaps))
-    excess = np.log(MIN_MODE_RATIO) - gaps[j]
-    out = np.zeros_like(log_tau)
+    order = sorted(range(len(log_tau)), key=lambda n: log_tau[n])
+    gaps = [log_tau[order[n + 1]] - log_tau[order[n]] for n in range(len(order) - 1)]
+    j = min(range(len(gaps)), key=gaps.__getitem__)
+    excess = _LOG_MODE_RATIO - gaps[j]
+    out = np.zeros(len(log_tau))
     if excess > 0:
         out[order[j + 1]] -= 2.0 * _APART_PENALTY * excess
         out[order[j]] += 2.0 * _APART_PENALTY * excess
@@ -620,25 +625,25 @@ def _best_per_count(problem: _Problem, candidates: list[_Fits]) -> dict[int, _Fi
 
 def _leading(candidates: list[_Fits], objective: Objective, count: int, apart_log: float = 0.0) -> list[tuple[_Fits, int]]:
     """The ``count`` models with the lowest finite ``objective`` among all the batches; with
-    ``apart_log``, each of a different basin: one whose log time constants all lie within
+    ``apart_log``, each of a different basin: a model whose log time constants all lie within
     ``apart_log`` of a model already taken (of as many modes) is passed over."""
-    values = [np.asarray(objective(fits), dtype=float) for fits in candidates]
-    flat = np.concatenate(values) if values else np.empty(0)
-    batch = np.repeat(np.arange(len(values)), [len(v) for v in values])
-    index = np.concatenate([np.arange(len(v)) for v in values]) if values else np.empty(0, dtype=int)
-    finite = np.flatnonzero(np.isfinite(flat))
-    order = finite[np.argsort(flat[finite], kind="stable")]
     taken: list[tuple[_Fits, int]] = []
-    for j in order:
-        fits, i = candidates[int(batch[j])], int(index[j])
-        near = (
-            apart_log > 0
-            and any(f.tau.shape[1] == fits.tau.shape[1] and np.all(np.abs(np.log(f.tau[n] / fits.tau[i])) <= apart_log) for f, n in taken)
-        )
-        if not near:
-            taken.append((fits, i))
-        if len(taken) == count:
+    scored = [(fits, np.where(np.isfinite(v := np.asarray(objective(fits), dtype=float)), v, np.inf)) for fits in candidates]
+    while len(taken) < count:
+        batch = min(range(len(scored)), key=lambda n: float(scored[n][1].min(initial=np.inf)), default=None)
+        if batch is None or not np.isfinite(scored[batch][1].min(initial=np.inf)):
             break
+        fits, values = scored[batch]
+        i = int(np.argmin(values))
+        taken.append((fits, i))
+        if apart_log > 0:
+            # the whole basin of the model taken is passed over, in every batch of as many modes
+            log_tau = np.log(fits.tau[i])
+            for other, other_values in scored:
+                if other.tau.shape[1] == len(log_tau):
+                    other_values[np.all(np.abs(np.log(other.tau) - log_tau) <= apart_log, axis=1)] = np.inf
+        else:
+            values[i] = np.inf
     return taken
 
 
@@ -824,6 +829,7 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
     common = dict(
         steady_C=steady,
         modes=modes,
+        room_gains=tuple(float(g) for g in chosen.theta[0, 1 + chosen.tau.shape[1] :]) if binned.room_C is not None else (),
         start_C=start,
         origin_min=problem.origin,
         rss=float(full.rss[0]),
@@ -840,12 +846,18 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
     sigma2 = max(float(full.rss[0]) / dof, problem.sigma2) * factor
     intervals, ends = {}, {}
     refined: dict[float, bool] = {}
-    for q in levels:
+    widest_refined: bool | None = None
+    for q in sorted(levels, reverse=True):
         threshold = float(full.rss[0]) + sigma2 * float(stdtrit(dof, 0.5 + q / 2.0)) ** 2
         gap = threshold - float(full.rss[0])
-        # the grid's hull is within the true one: where it is already wider than asked, the
-        # refinement (most of the cost) cannot change the answer to "is it within?"
-        refine_level = refine and (refine_within is None or _grid_half_width(candidates, threshold, float(chosen.steady[0])) <= refine_within)
+        # the grid's hull is within the true one: where the widest level's is already wider than
+        # asked, the refinement (most of the cost) cannot change the answer to "is it within?",
+        # and the narrower levels are refined only along with the widest
+        refine_level = refine
+        if refine and refine_within is not None:
+            if widest_refined is None:
+                widest_refined = _grid_half_width(candidates, threshold, float(chosen.steady[0])) <= refine_within
+            refine_level = widest_refined
         low = _hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level)
         high = _hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level)
         lo = min(float(_profile_bounds(low, threshold)[0][0]) + shift, steady)
@@ -854,6 +866,7 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
         ends[q] = (_end(low, threshold, -1.0, shift), _end(high, threshold, +1.0, shift))
         refined[q] = refine_level
     t_eq = equilibrium_time(modes, steady, start, problem.origin)
+    intervals = {q: intervals[q] for q in levels}
     return SteadyState(interval_C=intervals, ends=ends, equilibrium_time_min=t_eq, noise_C=float(np.sqrt(sigma2)), correlation_factor=factor, refined=refined, **common)
 
 
@@ -894,6 +907,40 @@ def model_curve(modes: tuple[Mode, ...], steady_C: float, origin_min: float, tim
     for m in modes:
         out = out + m.amplitude_C * np.exp(-u / m.time_constant_min)
     return out
+
+
+def fitted_curve(fit: SteadyState, time_min: FloatArray, room_C: FloatArray | None = None, modes: tuple[Mode, ...] | None = None, steady_C: float | None = None) -> FloatArray:
+    """The fitted model's course at ``time_min`` (from the log's start), with the room's own
+    course where the fit had a room sensor (``room_C`` at those times; held at its last level
+    where missing); ``modes`` and ``steady_C`` replace the best model's (an interval's end).
+
+    Parameters
+    ----------
+    fit : SteadyState
+    time_min : ndarray, shape (N,)
+    room_C : ndarray, shape (N,), optional
+    modes : tuple of Mode, optional
+    steady_C : float, optional
+
+    Returns
+    -------
+    ndarray, shape (N,)
+    """
+    t = np.asarray(time_min, dtype=float)
+    modes = fit.modes if modes is None else modes
+    steady = fit.steady_C if steady_C is None else steady_C
+    if fit.room_level_C is None or room_C is None:
+        return model_curve(modes, steady, fit.origin_min, t)
+    room = np.asarray(room_C, dtype=float)
+    valid = np.isfinite(room)
+    room = np.interp(t, t[valid], room[valid]) if valid.any() else np.full(t.shape, fit.room_level_C)
+    curve = model_curve(modes, steady - fit.room_level_C, fit.origin_min, t) + room
+    after = t >= fit.origin_min
+    if fit.room_gains and after.sum() > 1:
+        taus = np.array([m.time_constant_min for m in fit.modes])
+        lagged = _lag(np.broadcast_to(room[after], (len(taus), int(after.sum()))), t[after], taus)
+        curve[after] += np.asarray(fit.room_gains) @ (lagged - room[after])
+    return curve
 
 
 def equilibrium_time(modes: tuple[Mode, ...], steady_C: float, start_C: float, origin_min: float) -> float:

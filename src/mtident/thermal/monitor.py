@@ -124,8 +124,8 @@ class SensorCheck:
     """One sensor's latest check, in plain numbers (what a table or a page shows).
 
     ``passes`` counts the checks in a row that found the interval within the tolerance;
-    ``status`` is one of "collecting", "no data", "undetermined", "narrowing", "confirming",
-    "may stop", "misfit".
+    ``status`` is one of "collecting", "no data", "no rise", "undetermined", "narrowing",
+    "confirming", "may stop", "misfit".
     """
 
     sensor: str
@@ -174,6 +174,12 @@ class MonitorState:
     @property
     def stopped(self) -> bool:
         return math.isfinite(self.stop_time_min)
+
+    def __repr__(self) -> str:
+        # a notebook shows the decision, not the readings' arrays
+        decision = f"stop at t = {minutes(self.stop_time_min)} min" if self.stopped else "continue"
+        statuses = ", ".join(f"{c.sensor} {c.status}" for c in self.checks)
+        return f"MonitorState({len(self.sensors)} sensor(s), t = {minutes(self.readings.latest_min)} min, decision: {decision}; {statuses})"
 
 
 @dataclass(frozen=True)
@@ -356,7 +362,7 @@ def _checked(check: SensorCheck, estimate: SensorEstimate, now: float, readings:
 
 def _status(estimate: SensorEstimate, within: bool, ready: bool) -> str:
     if estimate.fit is None:
-        return "no data" if estimate.status == "no data" else "collecting"
+        return estimate.status if estimate.status in ("no data", "no rise") else "collecting"
     if ready:
         return "may stop"
     if within:
@@ -382,7 +388,7 @@ def _check_events(before: SensorCheck, after: SensorCheck, estimate: SensorEstim
     events = []
     for code, text in zip(estimate.warning_codes, estimate.warnings, strict=True):
         key = f"{after.sensor}:{code}"
-        if key not in said and code not in ("undetermined", "too-few-readings"):
+        if key not in said and code not in ("undetermined", "too-few-readings", "no-rise"):
             said.add(key)
             events.append(Event("warning", now, text, after.sensor))
     if after.status != before.status:
@@ -403,8 +409,8 @@ def expected_stop(state: MonitorState, settings: MonitorSettings, s: int, horizo
     check = state.checks[s]
     if check.may_stop:
         return check.ready_since_min
-    if not check.modes or not math.isfinite(check.steady_C):
-        return math.nan
+    if not check.modes or not math.isfinite(check.steady_C) or check.status not in ("narrowing", "confirming"):
+        return math.nan  # no course to go on: too few readings, T∞ undetermined, or a misfit
     readings = state.readings
     now = readings.latest_min
     step = sampling_interval_min(readings.time_min)
@@ -513,7 +519,9 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
         return "every sensor may stop; confirming at the next check"
     parts = []
     for c in waiting:
-        if not math.isfinite(c.steady_C):
+        if c.status == "no rise":
+            parts.append(f"{c.sensor}: no rise above its noise yet (if the test does not heat it, leave it out of the sensors watched)")
+        elif not math.isfinite(c.steady_C):
             parts.append(f"{c.sensor}: {c.status}")
         else:
             parts.append(f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} interval {c.low_C:.2f} to {c.high_C:.2f} °C, wider than ±{settings.tolerance_C:g} °C ({c.ends})")

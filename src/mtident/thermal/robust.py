@@ -101,7 +101,7 @@ class SensorEstimate:
     ----------
     sensor : str
     status : str
-        "estimated", "no data" or "too few readings".
+        "estimated", "no data", "no rise" (within its noise of its first level) or "too few readings".
     fit : SteadyState or None
     onset_min : float
         Where its warm-up begins (after a flat start, the last flat reading).
@@ -116,7 +116,7 @@ class SensorEstimate:
     warnings : tuple of str
     warning_codes : tuple of str
         What each warning is about, one word each ("late-start", "spikes", "misfit",
-        "undetermined", "reference-disagrees", "too-few", "no-data"): to say each once.
+        "undetermined", "reference-disagrees", "too-few-readings", "no-data", "no-rise"): to say each once.
     reference_used : bool
         The reference's time constants were used (the test agrees with them).
     spikes : int
@@ -222,6 +222,9 @@ def estimate_sensor(
         notes.add("spikes", f"{int(wild.sum())} reading(s) left out as spikes (further from their neighbours than 8σ)")
     first = float(np.nanmedian(y[valid & ~wild][:3]))
     rise = float(np.nanmax(np.abs(y - first)))
+    threshold = rise_threshold_C(noise, rounding)
+    if rise < threshold:
+        return _without_fit(sensor, "no rise", rise, noise, float(t[0]), settings, f"no rise above its noise yet ({rise:.3g} °C from its first level, noise {noise:.2g} °C): no warm-up to identify")
     lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
     onset = lead if lead < len(t) else 0
     binned = bin_samples(t[onset:], y[onset:], None if room_C is None else np.asarray(room_C, dtype=float)[onset:])
@@ -229,7 +232,7 @@ def estimate_sensor(
         return _without_fit(sensor, "too few readings", rise, noise, float(t[onset]), settings, f"{len(binned)} readings since its warm-up began: too few for a model")
     fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes, refine_within)
     intervals = _with_room_wander(fit, room_C is not None, settings)
-    ok = _verdict(fit, intervals, rise, rise_threshold_C(noise, rounding), float(t[onset]) if onset else None, notes)
+    ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, notes)
     return SensorEstimate(sensor, "estimated", fit, float(t[onset]), rise, noise, intervals, ok, *notes.said(), reference_used, int(wild.sum()))
 
 
@@ -322,11 +325,15 @@ def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: i
     -------
     ndarray of bool, shape (N,)
     """
-    import pandas as pd
-
-    y = pd.Series(np.asarray(values, dtype=float))
-    # only readings with every neighbour: at a live log's end, or where a rise begins, a one-sided
-    # median trails the curve, and on a steep rise the median of an even count lies half a step off
-    median = y.rolling(2 * half_window + 1, center=True, min_periods=2 * half_window + 1).median()
+    y = np.asarray(values, dtype=float)
+    width = 2 * half_window + 1
+    wild = np.zeros(len(y), dtype=bool)
+    if len(y) < width:
+        return wild
+    # only readings with every neighbour (a window with a missing one has no median): at a live
+    # log's end, or where a rise begins, a one-sided median trails the curve
+    median = np.median(np.lib.stride_tricks.sliding_window_view(y, width), axis=1)
     limit = max(8.0 * noise_C, 5.0 * rounding_C)
-    return np.asarray((y - median).abs() > limit)
+    with np.errstate(invalid="ignore"):
+        wild[half_window : len(y) - half_window] = np.abs(y[half_window : len(y) - half_window] - median) > limit
+    return wild

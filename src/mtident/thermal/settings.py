@@ -21,6 +21,8 @@ __all__ = [
     "METHODS",
     "PRESETS",
     "DEFAULT_METHOD",
+    "IDENTIFY_METHODS",
+    "ROBUST_METHOD",
     "ThermalTuning",
     "filter_config",
     "tuning_from_data",
@@ -38,7 +40,10 @@ METHODS = ("ukf", "aukf", "fukf", "afukf", "lsq")
 PRESETS = ("data", "xia2014", "yu2019")
 # Chosen by the Monte Carlo study in benchmarks/bench_thermal.py (closest to the
 # Cramér-Rao bound with calibrated intervals); see README.
-DEFAULT_METHOD = "ukf"
+# the model-robust estimate (sums of up to three modes); the others are the papers' first-order filters
+ROBUST_METHOD = "robust"
+IDENTIFY_METHODS = (ROBUST_METHOD, *METHODS)
+DEFAULT_METHOD = ROBUST_METHOD
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,0 +1,276 @@
+"""Identify every sensor of a log with the model-robust estimate: the default of ``identify``.
+
+Each sensor's readings up to the identification time are fitted with sums of up to three
+exponential modes (:mod:`mtident.thermal.robust`); the answer is the best-fitting model's course
+and T∞, with the interval over every model the data cannot exclude. The predicted curve's band
+is the envelope of the best model and the two models that set the interval's ends.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from mtident._typing import FloatArray
+from mtident.exceptions import InputError
+from mtident.io.logs import TemperatureLog, as_temperature_log
+from mtident.thermal.identify import MIN_WINDOW_SAMPLES, measured_equilibrium, num, rmse
+from mtident.thermal.modes import fitted_curve
+from mtident.thermal.reference import MachineReference
+from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, estimate_sensor
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["RobustIdentification", "identify_robust", "robust_assumptions"]
+
+REPORT_LEVEL = 0.95
+# the prediction runs this many of the slowest mode's time constants past the window, at least
+HORIZON_TIME_CONSTANTS = 4.0
+
+
+@dataclass(frozen=True)
+class RobustIdentification:
+    """The model-robust identification of every sensor of a log (arrays with a sensor axis S).
+
+    Attributes
+    ----------
+    sensors : tuple of str
+    window_min : float
+        Identification time actually used (the last reading at or before the asked one).
+    time_min : ndarray, shape (N,)
+        The log's times, then the prediction's beyond it.
+    measured_C, curve_C, band_low_C, band_high_C : ndarray, shape (N, S)
+        Readings (NaN past the log), the best model's course, and the 95 % band: the envelope
+        of the best model and the models that set the ends of T∞'s interval.
+    estimates : tuple of SensorEstimate
+    assumptions : tuple of Assumptions
+    rmse_C : ndarray, shape (S,)
+        Seed 000 Eq. 33 of the best model over every measured reading.
+    measured_final_C, measured_equilibrium_time_min : ndarray, shape (S,)
+        From the log itself where it reached equilibrium, else NaN.
+    notes : tuple of str
+    """
+
+    sensors: tuple[str, ...]
+    window_min: float
+    n_window: int
+    time_min: FloatArray
+    measured_C: FloatArray
+    curve_C: FloatArray
+    band_low_C: FloatArray
+    band_high_C: FloatArray
+    estimates: tuple[SensorEstimate, ...]
+    assumptions: tuple[Assumptions, ...]
+    rmse_C: FloatArray
+    measured_final_C: FloatArray
+    measured_equilibrium_time_min: FloatArray
+    notes: tuple[str, ...]
+    method: str = "robust"
+    preset: str = "data"
+
+    @property
+    def steady_state_C(self) -> FloatArray:
+        return np.array([e.steady_C for e in self.estimates])
+
+    @property
+    def equilibrium_time_min(self) -> FloatArray:
+        return np.array([np.nan if e.fit is None else e.fit.equilibrium_time_min for e in self.estimates])
+
+    @property
+    def model_ok(self) -> np.ndarray:
+        return np.array([e.model_ok for e in self.estimates])
+
+    def steady_state_ci95(self) -> FloatArray:
+        """(S, 2) 95 % interval of T∞ over every model the data cannot exclude."""
+        return np.array([e.interval_C.get(REPORT_LEVEL, (-np.inf, np.inf)) for e in self.estimates], dtype=float)
+
+    def band_C(self) -> tuple[FloatArray, FloatArray]:
+        """The curve's 95 % band, low and high, each (N, S)."""
+        return self.band_low_C, self.band_high_C
+
+    def __repr__(self) -> str:
+        lines = [f"RobustIdentification(L = {self.window_min:g} min, {len(self.sensors)} sensor(s))"]
+        for e, (lo, hi) in zip(self.estimates, self.steady_state_ci95(), strict=True):
+            verdict = "" if e.model_ok else ", not trusted (see warnings)"
+            lines.append(f"  {e.sensor}: T∞ {e.steady_C:.2f} °C, 95 % interval {lo:.2f} to {hi:.2f} °C{verdict}")
+        return "\n".join(lines)
+
+    def curve_frame(self) -> pd.DataFrame:
+        """The measured and modelled curve of every sensor with its 95 % band, a row per time."""
+        import pandas as pd
+
+        columns: dict[str, object] = {"time_min": self.time_min, "part": np.where(self.time_min <= self.window_min + 1e-9, "window", "prediction")}
+        for s, name in enumerate(self.sensors):
+            columns[f"{name}_measured_C"] = self.measured_C[:, s]
+            columns[f"{name}_model_C"] = self.curve_C[:, s]
+            columns[f"{name}_low95_C"] = self.band_low_C[:, s]
+            columns[f"{name}_high95_C"] = self.band_high_C[:, s]
+        return pd.DataFrame(columns)
+
+    def summary(self, index: int) -> dict[str, object]:
+        """The contract's JSON object for one sensor, with its verdict and assumptions."""
+        e = self.estimates[index]
+        fit = e.fit
+        lo, hi = self.steady_state_ci95()[index]
+        slowest = np.nan if fit is None else fit.slowest_time_constant_min()
+        lo99, hi99 = e.interval_C.get(max(e.interval_C), (-np.inf, np.inf))
+        return {
+            "sensor": e.sensor,
+            "method": self.method,
+            "preset": self.preset,
+            "window_min": float(self.window_min),
+            "steady_state_C": num(e.steady_C),
+            "steady_state_ci95_C": [num(lo), num(hi)],
+            f"steady_state_ci{round(100 * max(e.interval_C))}_C": [num(lo99), num(hi99)],
+            "lambda_per_min": num(1.0 / slowest) if np.isfinite(slowest) else None,
+            "time_constant_min": num(slowest),
+            "start_C": None if fit is None else num(fit.start_C),
+            "total_rise_C": None if fit is None else num(e.steady_C - fit.start_C),
+            "equilibrium_time_min": num(self.equilibrium_time_min[index]),
+            "rmse_C": num(self.rmse_C[index]),
+            "model_ok": bool(e.model_ok),
+            "model_fits": bool(e.model_ok),
+            "warnings": list(e.warnings),
+            "assumptions": self.assumptions[index].to_dict(),
+            "model": _model_dict(e),
+            "measured_final_C": num(self.measured_final_C[index]),
+            "measured_equilibrium_time_min": num(self.measured_equilibrium_time_min[index]),
+        }
+
+
+def _model_dict(e: SensorEstimate) -> dict[str, object]:
+    fit = e.fit
+    return {
+        "status": e.status,
+        "modes": [] if fit is None else [{"time_constant_min": m.time_constant_min, "amplitude_C": m.amplitude_C} for m in fit.modes],
+        "onset_min": num(e.onset_min),
+        "rise_C": num(e.rise_C),
+        "noise_C": num(e.noise_C),
+        "interval_ends": e.what_sets_the_ends(REPORT_LEVEL),
+        "reference_used": e.reference_used,
+        "spikes_left_out": e.spikes,
+    }
+
+
+def robust_assumptions(settings: RobustSettings, room_sensor: str | None, reference: MachineReference | None, sensor: str) -> Assumptions:
+    """What a sensor's interval rests on, in words."""
+    if room_sensor is not None:
+        room = f"measured by {room_sensor!r}, an input of every mode; T∞ at the room's last level"
+    elif settings.room_wander_C_per_h > 0:
+        room = f"not measured; taken to wander as a random walk of {settings.room_wander_C_per_h:g} °C in an hour"
+    else:
+        room = "not measured; taken as steady"
+    return Assumptions(settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor))
+
+
+def identify_robust(
+    log: TemperatureLog,
+    window_min: float,
+    room_C: FloatArray | None = None,
+    settings: RobustSettings | None = None,
+    reference: MachineReference | None = None,
+    horizon_min: float | None = None,
+    room_sensor: str | None = None,
+) -> RobustIdentification:
+    """Identify every sensor of ``log`` from its first ``window_min`` minutes with the
+    model-robust estimate, and predict its course.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    window_min : float
+        Identification time (minutes from the first reading).
+    room_C : ndarray, shape (N,), optional
+        A room sensor at the log's times: an input of every mode's heat balance.
+    settings : RobustSettings, optional
+        The largest time constant and the room's wander (default: 300 min, 0.05 °C in an hour).
+    reference : MachineReference, optional
+        A reference run of the same machine.
+    horizon_min : float, optional
+        Predict to this time (default: the log's end, or further to show the approach).
+    room_sensor : str, optional
+        The room sensor's name, for the assumptions.
+
+    Returns
+    -------
+    RobustIdentification
+
+    Raises
+    ------
+    InputError
+        A window with too few readings.
+    """
+    log = as_temperature_log(log, "identify")
+    settings = settings or RobustSettings()
+    if not (np.isfinite(window_min) and window_min > 0):
+        msg = f"window_min must be a positive number of minutes, not {window_min!r}"
+        raise InputError(msg)
+    n = log.window(window_min)
+    if n < MIN_WINDOW_SAMPLES:
+        msg = f"{log.source}: only {n} samples in the first {window_min:g} min; the identification needs at least {MIN_WINDOW_SAMPLES} (a longer window)"
+        raise InputError(msg)
+    t, y = log.time_min, log.temperature_C
+    if room_C is not None and len(room_C) != len(t):
+        msg = f"the room sensor has {len(room_C)} readings for {len(t)} samples"
+        raise InputError(msg)
+    room_window = None if room_C is None else room_C[:n]
+    estimates = tuple(
+        estimate_sensor(name, t[:n], y[:n, s], room_window, settings, None if reference is None else reference.modes(name)) for s, name in enumerate(log.sensors)
+    )
+    times = _prediction_times(t, n, estimates, horizon_min)
+    room_all = None if room_C is None else np.concatenate([room_C, np.full(len(times) - len(t), np.nan)])[: len(times)]
+    curve, low, high = (np.full((len(times), len(estimates)), np.nan) for _ in range(3))
+    for s, e in enumerate(estimates):
+        if e.fit is not None:
+            curve[:, s], low[:, s], high[:, s] = _course(e, times, room_all)
+    measured = np.full((len(times), len(log.sensors)), np.nan)
+    measured[: min(len(t), len(times))] = y[: len(times)]
+    in_log = times <= t[-1] + 1e-9
+    final, equilibrium = measured_equilibrium(t, y)
+    return RobustIdentification(
+        sensors=log.sensors,
+        window_min=float(t[n - 1]),
+        n_window=n,
+        time_min=times,
+        measured_C=measured,
+        curve_C=curve,
+        band_low_C=low,
+        band_high_C=high,
+        estimates=estimates,
+        assumptions=tuple(robust_assumptions(settings, room_sensor, reference, name) for name in log.sensors),
+        rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
+        measured_final_C=final,
+        measured_equilibrium_time_min=equilibrium,
+        notes=tuple(log.notes) + tuple(w for e in estimates for w in e.warnings),
+    )
+
+
+def _prediction_times(t: FloatArray, n: int, estimates: tuple[SensorEstimate, ...], horizon_min: float | None) -> FloatArray:
+    """The log's times, then steps of its sampling interval to the horizon."""
+    slowest = [e.fit.slowest_time_constant_min() for e in estimates if e.fit is not None and e.fit.modes]
+    default = t[n - 1] + HORIZON_TIME_CONSTANTS * max(slowest, default=0.0)
+    horizon = max(t[-1], default) if horizon_min is None else horizon_min
+    if horizon <= t[-1]:
+        return t[t <= horizon + 1e-9] if horizon_min is not None else t
+    step = max(float(np.median(np.diff(t))) if len(t) > 1 else 1.0, (horizon - t[-1]) / 2000.0)
+    return np.concatenate([t, np.arange(t[-1] + step, horizon + step / 2, step)])
+
+
+def _course(e: SensorEstimate, times: FloatArray, room_C: FloatArray | None) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The best model's course and the band of the models at the 95 % interval's ends."""
+    fit = e.fit
+    assert fit is not None
+    curve = fitted_curve(fit, times, room_C)
+    if REPORT_LEVEL not in fit.ends:
+        return curve, np.full(times.shape, -np.inf), np.full(times.shape, np.inf)
+    best_modal = fitted_curve(fit, times)
+    ends = [curve + fitted_curve(fit, times, modes=end.modes, steady_C=end.steady_C) - best_modal for end in fit.ends[REPORT_LEVEL]]
+    # the room's unmeasured wander widens T∞'s interval beyond the ends' models: the band reaches it
+    lo, hi = e.interval_C[REPORT_LEVEL]
+    grow = np.clip((times - fit.origin_min) / max(times[-1] - fit.origin_min, 1e-9), 0.0, 1.0)
+    low = np.minimum.reduce([curve, *ends]) + grow * min(lo - fit.ends[REPORT_LEVEL][0].steady_C, 0.0)
+    high = np.maximum.reduce([curve, *ends]) + grow * max(hi - fit.ends[REPORT_LEVEL][1].steady_C, 0.0)
+    return curve, low, high
