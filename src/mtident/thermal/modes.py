@@ -41,7 +41,7 @@ from scipy.optimize import minimize
 from scipy.special import stdtrit
 
 from mtident._typing import FloatArray, IntArray
-from mtident.thermal.modal_kernel import fit_one, lag_rows
+from mtident.thermal.modal_kernel import fit_one
 from mtident.thermal.model import EQUILIBRIUM_FRACTION
 
 __all__ = [
