@@ -52,6 +52,7 @@ __all__ = [
     "IntervalEnd",
     "SteadyState",
     "bin_index",
+    "best_fit",
     "bin_samples",
     "equilibrium_time",
     "fit_steady_state",
@@ -870,6 +871,28 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
     return SteadyState(interval_C=intervals, ends=ends, equilibrium_time_min=t_eq, noise_C=float(np.sqrt(sigma2)), correlation_factor=factor, refined=refined, **common)
 
 
+
+
+def best_fit(binned: Binned, *, noise_C: float, interval_min: float, family: ModeFamily = ModeFamily()) -> tuple[float, int, float]:
+    """The best fit of ``family`` alone, without an interval: its residual sum of squares, its
+    number of parameters, and how much its residuals' correlation widens a variance (a
+    reference's boxed fit is compared with it).
+
+    Parameters
+    ----------
+    binned : Binned
+    noise_C, interval_min : float
+    family : ModeFamily
+
+    Returns
+    -------
+    rss : float
+    n_params : int
+    correlation_factor : float
+    """
+    problem = _problem(binned, noise_C, interval_min, family)
+    best = min(_best_per_count(problem, _candidates(problem)).values(), key=lambda f: float(f.rss[0]))
+    return float(best.rss[0]), best.n_params, _correlation_factor(_weighted_residuals(problem, best))
 
 
 def _problem(binned: Binned, noise_C: float, interval_min: float, family: ModeFamily) -> _Problem:

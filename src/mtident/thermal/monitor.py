@@ -125,7 +125,7 @@ class SensorCheck:
 
     ``passes`` counts the checks in a row that found the interval within the tolerance;
     ``status`` is one of "collecting", "no data", "no rise", "undetermined", "narrowing",
-    "confirming", "may stop", "misfit".
+    "confirming", "may stop", "misfit", "off reference".
     """
 
     sensor: str
@@ -367,7 +367,9 @@ def _status(estimate: SensorEstimate, within: bool, ready: bool) -> str:
         return "may stop"
     if within:
         return "confirming"
-    if "misfit" in estimate.warning_codes or "reference-disagrees" in estimate.warning_codes:
+    if "reference-disagrees" in estimate.warning_codes:
+        return "off reference"
+    if "misfit" in estimate.warning_codes:
         return "misfit"
     return "undetermined" if "undetermined" in estimate.warning_codes else "narrowing"
 

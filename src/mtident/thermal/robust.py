@@ -13,10 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import ndtri
+from scipy.stats import chi2
 
 from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
-from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, Binned, ModeFamily, SteadyState, bin_samples, fit_steady_state
+from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, Binned, ModeFamily, SteadyState, best_fit, bin_samples, fit_steady_state
 from mtident.thermal.settings import display_resolution, noise_sigma
 
 __all__ = [
@@ -27,6 +28,7 @@ __all__ = [
     "estimate_sensor",
     "rise_threshold_C",
     "sampling_interval_min",
+    "quantisation_step",
     "spikes",
 ]
 
@@ -35,6 +37,13 @@ __all__ = [
 MIN_REFERENCE_BOX = 0.10
 # Residuals this much more correlated than noise mean the model does not describe the data.
 MISFIT_FACTOR = 4.0
+# A test whose readings a fit with free time constants describes better than the reference's
+# boxes at this level does not follow the reference.
+DISAGREEMENT_LEVEL = 0.99
+# a boxed time constant within this share of its box's end is held there by the box, not by the data
+EDGE_SHARE = 0.005
+# the likelihood-ratio test runs where the boxed interval is within this many tolerances
+DECISION_MARGIN = 2.0
 MIN_BINS = 8
 
 
@@ -213,8 +222,8 @@ def estimate_sensor(
     valid = np.isfinite(y) if room_C is None else np.isfinite(y) & np.isfinite(room_C)
     if not valid.any():
         return _without_fit(sensor, "no data", 0.0, 0.0, float(t[0]) if len(t) else 0.0, settings, "no valid reading yet")
-    noise = float(noise_sigma(y[:, None], t)[0]) if noise_C is None else noise_C
-    rounding = float(display_resolution(y[:, None])[0])
+    rounding = max(float(display_resolution(y[:, None])[0]), quantisation_step(y))
+    noise = max(float(noise_sigma(y[:, None], t)[0]), rounding / np.sqrt(12.0)) if noise_C is None else noise_C
     notes = _Notes(sensor)
     wild = spikes(y, noise, rounding)
     if wild.any():
@@ -239,19 +248,50 @@ def estimate_sensor(
 def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSettings, reference: SensorModes | None, notes: _Notes, refine_within: float | None) -> tuple[SteadyState, bool]:
     """The fit within the reference's boxes where the test follows them, else over every model up
     to the largest time constant; and whether the reference was used."""
+    family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
     if reference is not None:
         boxes = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box)
         boxed = ModeFamily(settings.max_time_constant_min, len(reference.time_constants_min), tuple(reference.time_constants_min), boxes)
         fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=boxed, levels=settings.levels, refine_within=refine_within)
-        if fit.correlation_factor <= MISFIT_FACTOR:
+        # the free fit costs most of a check: where the boxed answer is far from any decision, the
+        # cheap tests alone decide whether to use it
+        far = refine_within is not None and fit.determined and fit.half_width(max(settings.levels)) > DECISION_MARGIN * refine_within
+        why = _disagreement(binned, noise, interval, fit, family, likelihood_ratio=not far)
+        if why is None:
             return fit, True
         notes.add(
             "reference-disagrees",
-            f"this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; residuals {fit.correlation_factor:.1f}x as correlated as noise): "
-            "has the machine changed? The answer does not use the reference",
+            f"this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; {why}): has the machine changed, "
+            "or did the reference run miss a mode? The answer does not use the reference",
         )
-    family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
     return fit_steady_state(binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels, refine_within=refine_within), False
+
+
+def _disagreement(binned: Binned, noise: float, interval: float, boxed: SteadyState, family: ModeFamily, likelihood_ratio: bool = True) -> str | None:
+    """Why the readings do not follow the reference's boxed modes, or None where they do: residuals
+    correlated like a misfit, or a fit with free time constants that is better beyond chance (a
+    likelihood-ratio test at ``DISAGREEMENT_LEVEL``; a mode the reference run missed shows here
+    long before the residuals look correlated)."""
+    if boxed.correlation_factor > MISFIT_FACTOR:
+        return f"residuals {boxed.correlation_factor:.1f}x as correlated as noise"
+    if not boxed.determined:
+        return None
+    slowest = max(boxed.modes, key=lambda m: m.time_constant_min)
+    ceiling = max(ref * (1.0 + box) for ref, box in zip(boxed.family.reference_min or (), boxed.family.reference_box, strict=True))
+    if slowest.time_constant_min >= ceiling * (1.0 - EDGE_SHARE):
+        return f"the slowest mode's time constant is at its box's upper end, {ceiling:.3g} min: the readings ask for a slower one"
+    if not likelihood_ratio:
+        return None
+    rss, n_params, factor = best_fit(binned, noise_C=noise, interval_min=interval, family=family)
+    dof = len(binned) - n_params
+    extra = n_params - (1 + 2 * len(boxed.modes))
+    if dof < 2 or extra < 1:
+        return None
+    sigma2 = max(rss / dof, noise**2) * factor
+    statistic = (boxed.rss - rss) / sigma2
+    if statistic > float(chi2.ppf(DISAGREEMENT_LEVEL, extra)):
+        return f"free time constants fit better beyond chance: χ² {statistic:.1f} on {extra} degree(s) of freedom"
+    return None
 
 
 def _taus(taus: tuple[float, ...]) -> str:
@@ -308,6 +348,30 @@ def _verdict(fit: SteadyState, intervals: dict[float, tuple[float, float]], rise
 def _without_fit(sensor: str, status: str, rise: float, noise: float, onset: float, settings: RobustSettings, why: str) -> SensorEstimate:
     wide = {q: (-np.inf, np.inf) for q in settings.levels}
     return SensorEstimate(sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",), (status.replace(" ", "-"),))
+
+
+def quantisation_step(values: FloatArray) -> float:
+    """The step a converter's quantisation puts between readings (0 where none is seen): the
+    smallest common change between successive readings, where nearly all changes are whole
+    multiples of it (a 10-bit converter's 0.32 °C, off any decimal grid a display step would
+    show).
+
+    Examples
+    --------
+    >>> round(quantisation_step(22.84 + 0.3223 * np.array([0, 0, 1, 1, 2, 2, 2, 4, 5, 5, 6, 6])), 4)
+    0.3223
+    >>> quantisation_step(np.array([20.0, 20.013, 20.031, 20.04, 20.052, 20.071, 20.079, 20.102]))
+    0.0
+    """
+    changes = np.abs(np.diff(np.asarray(values, dtype=float)))
+    changes = changes[np.isfinite(changes) & (changes > 1e-9)]
+    if len(changes) < 5:
+        return 0.0
+    step = float(np.percentile(changes, 5))
+    multiples = changes / step
+    if np.mean(np.abs(multiples - np.round(multiples)) < 0.05) < 0.8:
+        return 0.0
+    return float(np.median(changes[np.round(multiples) == 1]))
 
 
 def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: int = 3) -> np.ndarray:
