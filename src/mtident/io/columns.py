@@ -12,14 +12,11 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from mtident.exceptions import InputError
 from mtident.io.stamps import DATE_FORMATS, parses_as, stamp_format
 from mtident.io.units import celsius_conversion, is_from_humidity, is_humidity, is_number, unit_key
-
-if TYPE_CHECKING:
-    from mtident.io.dialect import CsvDialect
 
 __all__ = [
     "text_only_cells",
@@ -35,6 +32,17 @@ __all__ = [
 ]
 
 
+class DialectView(Protocol):
+    """What the column rules read of a log's dialect (:class:`mtident.io.dialect.CsvDialect`), which
+    itself depends on these rules."""
+
+    units: tuple[tuple[str, str], ...]
+    units_source: str
+    from_humidity: tuple[str, ...]
+
+    def unit_of(self, column: str) -> str: ...
+
+
 def text_only_cells(cells: list[str]) -> bool:
     """Whether a column's cells hold text and not one number (empty and NaN cells aside; a decimal
     comma counts as a number): a logger's status channel, no sensor. Both readers of a log use it."""
@@ -48,7 +56,7 @@ _COUNTER_NAMES = {"no", "nr", "number", "index", "#", "n", "sample", "samples", 
 _MILLISECOND_NAMES = {"ms", "msec", "millisecond", "milliseconds"}
 
 
-def counter_before_time(header: list[str], first_row: list[str], dialect: CsvDialect) -> bool:
+def counter_before_time(header: list[str], first_row: list[str], dialect: DialectView) -> bool:
     """Whether the first column counts rows and the second holds the time stamps (its first cell
     no plain number): a logger's sample counter, which read as minutes would be a wrong time. The
     counter is told by its name, or by its cell in the row under the header (Graphtec writes a
@@ -82,7 +90,7 @@ def text_before_stamps(first_row: list[str]) -> int:
     return 0
 
 
-def choose_time_column(header: list[str], first_row: list[str], dialect: CsvDialect, time_col: str | None) -> tuple[str, bool, list[str]]:
+def choose_time_column(header: list[str], first_row: list[str], dialect: DialectView, time_col: str | None) -> tuple[str, bool, list[str]]:
     """The time column's name (``time_col`` where given), whether the first column is a row
     counter before it, and notes; both readers of a log take the time column here, by the header
     and the first data row's cells."""
@@ -144,7 +152,7 @@ def room_named(name: str) -> bool:
     return any(word in _ROOM_NAME_WORDS for word in words)
 
 
-def temperature_columns(names: list[str], asked: bool, dialect: CsvDialect, source: str | Path) -> tuple[list[str], list[str]]:
+def temperature_columns(names: list[str], asked: bool, dialect: DialectView, source: str | Path) -> tuple[list[str], list[str]]:
     """The sensor columns to read, and notes, by their units (a units row, or a unit in the name).
 
     A column whose unit is no temperature (a logger's speed or voltage channel),

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.thermal.identify import measured_equilibrium
 
@@ -72,9 +73,6 @@ class Hindsight:
     def to_dict(self) -> dict[str, object]:
         """Plain JSON types (None where not known)."""
 
-        def number(value: float) -> float | None:
-            return float(value) if np.isfinite(value) else None
-
         return {
             "stop_time_min": self.stop_time_min,
             "log_end_min": self.log_end_min,
@@ -82,10 +80,10 @@ class Hindsight:
             "sensors": [
                 {
                     "sensor": name,
-                    "steady_state_C": number(self.steady_state_C[i]),
-                    "settled_C": number(self.settled_C[i]),
-                    "error_C": number(self.error_C[i]),
-                    "measured_equilibrium_time_min": number(self.measured_equilibrium_time_min[i]),
+                    "steady_state_C": finite_or_none(self.steady_state_C[i]),
+                    "settled_C": finite_or_none(self.settled_C[i]),
+                    "error_C": finite_or_none(self.error_C[i]),
+                    "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[i]),
                     "within_tolerance": bool(self.within[i]) if self.checked[i] else None,
                 }
                 for i, name in enumerate(self.sensors)

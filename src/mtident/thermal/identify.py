@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.special import fdtri, stdtrit
 
+from mtident._json import finite_or_none
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
@@ -25,7 +26,7 @@ if TYPE_CHECKING:
 
     from mtident.thermal.robust_identify import RobustIdentification
 
-__all__ = ["Identification", "identify", "room_input", "room_rates", "rmse", "num", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
+__all__ = ["Identification", "identify", "room_input", "room_rates", "rmse", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
 
 Z95 = 1.959963984540054
 MIN_WINDOW_SAMPLES = 6
@@ -140,22 +141,22 @@ class Identification:
             "method": self.method,
             "preset": self.preset,
             "window_min": float(self.window_min),
-            "steady_state_C": num(self.steady_state_C[index]),
-            "steady_state_ci95_C": [num(lo), num(hi)],
-            "lambda_per_min": num(rate),
-            "lambda_sd_per_min": num(self.rate_sd_per_min[index]),
+            "steady_state_C": finite_or_none(self.steady_state_C[index]),
+            "steady_state_ci95_C": [finite_or_none(lo), finite_or_none(hi)],
+            "lambda_per_min": finite_or_none(rate),
+            "lambda_sd_per_min": finite_or_none(self.rate_sd_per_min[index]),
             "time_constant_min": 1.0 / rate if rate > 0 else None,
-            "start_C": num(self.start_C[index]),
-            "total_rise_C": num(self.steady_state_C[index] - self.start_C[index]),
-            "equilibrium_time_min": num(self.equilibrium_time_min[index]),
-            "rmse_C": num(self.rmse_C[index]),
+            "start_C": finite_or_none(self.start_C[index]),
+            "total_rise_C": finite_or_none(self.steady_state_C[index] - self.start_C[index]),
+            "equilibrium_time_min": finite_or_none(self.equilibrium_time_min[index]),
+            "rmse_C": finite_or_none(self.rmse_C[index]),
             "model_fits": bool(self.fits[index]),
             "model_ok": bool(self.fits[index]) and not undetermined,
             "warnings": sensor_notes(self.notes, name),
             "assumptions": FIRST_ORDER_ASSUMPTIONS,
-            "residual_chi2": num(self.fit_chi2[index]),
-            "measured_final_C": num(self.measured_final_C[index]),
-            "measured_equilibrium_time_min": num(self.measured_equilibrium_time_min[index]),
+            "residual_chi2": finite_or_none(self.fit_chi2[index]),
+            "measured_final_C": finite_or_none(self.measured_final_C[index]),
+            "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[index]),
         }
 
 
@@ -170,11 +171,6 @@ FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
 def sensor_notes(notes: tuple[str, ...], sensor: str) -> list[str]:
     """The notes that name ``sensor`` (as 'NAME' or NAME:), and those that name no sensor of a list."""
     return [n for n in notes if repr(sensor) in n or n.startswith(f"{sensor}:")]
-
-
-def num(value: float) -> float | None:
-    """A float for JSON, or None where it is not finite."""
-    return float(value) if np.isfinite(value) else None
 
 
 def rmse(estimate: FloatArray, measured: FloatArray) -> FloatArray:

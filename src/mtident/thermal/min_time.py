@@ -24,10 +24,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from mtident._json import finite_or_none
 from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
-from mtident.thermal.identify import FIRST_ORDER_ASSUMPTIONS, MIN_WINDOW_SAMPLES, filter_window, num, rmse, room_input
+from mtident.thermal.identify import FIRST_ORDER_ASSUMPTIONS, MIN_WINDOW_SAMPLES, filter_window, rmse, room_input
 from mtident.thermal.lsq import first_level, fit_rise, late_onset
 from mtident.thermal.model import heat_balance_path, rise_curve
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
@@ -112,7 +113,7 @@ class MinTimeResult:
         return {
             "sensor": self.sensors[index],
             "method": self.method,
-            "min_identification_time_min": num(self.min_identification_time_min[index]),
+            "min_identification_time_min": finite_or_none(self.min_identification_time_min[index]),
             "sampling_periods_min": [float(p) for p in self.periods_min],
             "rmse_C": table,
             "best_per_period_min": {f"{p:g}": float(b) for p, b in zip(self.periods_min, self.best_per_period_min[:, index], strict=True)},

@@ -669,19 +669,25 @@ def _grid_half_width(candidates: list[_Fits], threshold: float, steady: float) -
     return max(steady - lo, hi - steady)
 
 
-def _hull_end(problem: _Problem, candidates: list[_Fits], threshold: float, sign: float, gap: float, fallback: _Fits, refine: bool = True) -> _Fits:
+def _hull_end(
+    problem: _Problem, candidates: list[_Fits], threshold: float, sign: float, gap: float, fallback: _Fits, refine: bool = True, seeds: list[_Fits] | None = None
+) -> _Fits:
     """The model that sets one end of the hull (``fallback``, the best fit, if none stays within
     the threshold): the grid's leading models of different basins, each improved by a local
     search on a shrinking lattice around it (all at once), then the best few refined by
-    L-BFGS-B; unrefined, the grid's leading model."""
+    L-BFGS-B; unrefined, the grid's leading model; with ``seeds``, those models alone refined."""
     objective = _EndObjective(threshold, sign, gap)
     if not refine:
         leading = _leading(candidates, objective, 1)
         return fallback if not leading else leading[0][0].take(leading[0][1])
-    starts = _leading(candidates, objective, problem.end_starts(), problem.basin_log())
-    improved = [_lattice_search(problem, [f.take(i) for f, i in starts if f.tau.shape[1] == k], objective) for k in {f.tau.shape[1] for f, _ in starts}]
+    if seeds is not None:
+        polish = [(f, 0) for f in seeds]
+    else:
+        starts = _leading(candidates, objective, problem.end_starts(), problem.basin_log())
+        improved = [_lattice_search(problem, [f.take(i) for f, i in starts if f.tau.shape[1] == k], objective) for k in {f.tau.shape[1] for f, _ in starts}]
+        polish = _leading(improved, objective, problem.polished(), problem.basin_log())
     best, best_value = None, np.inf
-    for fits, i in _leading(improved, objective, problem.polished(), problem.basin_log()):
+    for fits, i in polish:
         refined = _refine(problem, fits, i, objective)
         if refined.rss[0] > threshold:
             continue
@@ -848,6 +854,7 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
     intervals, ends = {}, {}
     refined: dict[float, bool] = {}
     widest_refined: bool | None = None
+    ends_models: tuple[_Fits, _Fits] = (full, full)
     for q in sorted(levels, reverse=True):
         threshold = float(full.rss[0]) + sigma2 * float(stdtrit(dof, 0.5 + q / 2.0)) ** 2
         gap = threshold - float(full.rss[0])
@@ -859,8 +866,12 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
             if widest_refined is None:
                 widest_refined = _grid_half_width(candidates, threshold, float(chosen.steady[0])) <= refine_within
             refine_level = widest_refined
-        low = _hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level)
-        high = _hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level)
+        # with a tolerance to meet, a narrower level is polished from the wider level's end models
+        # alone (the same ridges set both): a report's interval, not the decision's
+        seeds = None if refine_within is None or not ends else list(ends_models)
+        low = _hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level, seeds)
+        high = _hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level, seeds)
+        ends_models = (low, high)
         lo = min(float(_profile_bounds(low, threshold)[0][0]) + shift, steady)
         hi = max(float(_profile_bounds(high, threshold)[1][0]) + shift, steady)
         intervals[q] = (lo, hi)

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.thermal.modes import model_curve
@@ -501,7 +502,7 @@ def result(state: MonitorState, settings: MonitorSettings, expected: dict[str, f
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
         reason=None if stopped else _reason([c for c in state.checks if not c.may_stop], settings),
-        last_time_min=_number(state.readings.latest_min),
+        last_time_min=finite_or_none(state.readings.latest_min),
         tolerance_C=settings.tolerance_C,
         decision_level=settings.decision_level,
         sensors=sensors,
@@ -536,20 +537,18 @@ def _sensor_summary(c: SensorCheck, settings: MonitorSettings, expected: float |
         "sensor": c.sensor,
         "status": c.status,
         "may_stop": c.may_stop,
-        "checked_at_min": _number(c.checked_min),
-        "steady_state_C": _number(c.steady_C),
-        "steady_state_ci95_C": [_number(c.low95_C), _number(c.high95_C)],
-        "decision_interval_C": [_number(c.low_C), _number(c.high_C)],
-        "equilibrium_time_min": _number(c.equilibrium_time_min),
+        "checked_at_min": finite_or_none(c.checked_min),
+        "steady_state_C": finite_or_none(c.steady_C),
+        "steady_state_ci95_C": [finite_or_none(c.low95_C), finite_or_none(c.high95_C)],
+        "decision_interval_C": [finite_or_none(c.low_C), finite_or_none(c.high_C)],
+        "equilibrium_time_min": finite_or_none(c.equilibrium_time_min),
         "modes": [{"time_constant_min": tau, "amplitude_C": a} for tau, a in c.modes],
         "model_ok": c.model_ok,
         "warnings": list(c.warnings),
         "interval_ends": c.ends,
         "assumptions": assumptions(settings, c.sensor).to_dict(),
         "reference_used": c.reference_used,
-        "expected_stop_time_min": None if expected is None else _number(expected),
+        "expected_stop_time_min": None if expected is None else finite_or_none(expected),
     }
 
 
-def _number(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None

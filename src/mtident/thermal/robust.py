@@ -12,8 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ndtri
-from scipy.stats import chi2
+from scipy.special import chdtri, ndtri
 
 from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
@@ -289,7 +288,7 @@ def _disagreement(binned: Binned, noise: float, interval: float, boxed: SteadySt
         return None
     sigma2 = max(rss / dof, noise**2) * factor
     statistic = (boxed.rss - rss) / sigma2
-    if statistic > float(chi2.ppf(DISAGREEMENT_LEVEL, extra)):
+    if statistic > float(chdtri(extra, 1.0 - DISAGREEMENT_LEVEL)):
         return f"free time constants fit better beyond chance: χ² {statistic:.1f} on {extra} degree(s) of freedom"
     return None
 

@@ -13,10 +13,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
-from mtident.thermal.identify import MIN_WINDOW_SAMPLES, measured_equilibrium, num, rmse
+from mtident.thermal.identify import MIN_WINDOW_SAMPLES, measured_equilibrium, rmse
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference
 from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, estimate_sensor
@@ -122,22 +123,22 @@ class RobustIdentification:
             "method": self.method,
             "preset": self.preset,
             "window_min": float(self.window_min),
-            "steady_state_C": num(e.steady_C),
-            "steady_state_ci95_C": [num(lo), num(hi)],
-            f"steady_state_ci{round(100 * max(e.interval_C))}_C": [num(lo99), num(hi99)],
-            "lambda_per_min": num(1.0 / slowest) if np.isfinite(slowest) else None,
-            "time_constant_min": num(slowest),
-            "start_C": None if fit is None else num(fit.start_C),
-            "total_rise_C": None if fit is None else num(e.steady_C - fit.start_C),
-            "equilibrium_time_min": num(self.equilibrium_time_min[index]),
-            "rmse_C": num(self.rmse_C[index]),
+            "steady_state_C": finite_or_none(e.steady_C),
+            "steady_state_ci95_C": [finite_or_none(lo), finite_or_none(hi)],
+            f"steady_state_ci{round(100 * max(e.interval_C))}_C": [finite_or_none(lo99), finite_or_none(hi99)],
+            "lambda_per_min": finite_or_none(1.0 / slowest) if np.isfinite(slowest) else None,
+            "time_constant_min": finite_or_none(slowest),
+            "start_C": None if fit is None else finite_or_none(fit.start_C),
+            "total_rise_C": None if fit is None else finite_or_none(e.steady_C - fit.start_C),
+            "equilibrium_time_min": finite_or_none(self.equilibrium_time_min[index]),
+            "rmse_C": finite_or_none(self.rmse_C[index]),
             "model_ok": bool(e.model_ok),
             "model_fits": bool(e.model_ok),
             "warnings": list(e.warnings),
             "assumptions": self.assumptions[index].to_dict(),
             "model": _model_dict(e),
-            "measured_final_C": num(self.measured_final_C[index]),
-            "measured_equilibrium_time_min": num(self.measured_equilibrium_time_min[index]),
+            "measured_final_C": finite_or_none(self.measured_final_C[index]),
+            "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[index]),
         }
 
 
@@ -146,9 +147,9 @@ def _model_dict(e: SensorEstimate) -> dict[str, object]:
     return {
         "status": e.status,
         "modes": [] if fit is None else [{"time_constant_min": m.time_constant_min, "amplitude_C": m.amplitude_C} for m in fit.modes],
-        "onset_min": num(e.onset_min),
-        "rise_C": num(e.rise_C),
-        "noise_C": num(e.noise_C),
+        "onset_min": finite_or_none(e.onset_min),
+        "rise_C": finite_or_none(e.rise_C),
+        "noise_C": finite_or_none(e.noise_C),
         "interval_ends": e.what_sets_the_ends(REPORT_LEVEL),
         "reference_used": e.reference_used,
         "spikes_left_out": e.spikes,
