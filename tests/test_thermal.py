@@ -647,4 +647,4 @@ def test_identify_never_calls_a_risen_sensor_flat():
     for i in range(3):
         summary = result.summary(i)
         assert not any("no rise" in w for w in summary["warnings"])  # type: ignore[union-attr]
-        assert summary["model"]["rise_C"] > 0.3  # type: ignore[index]
+        assert summary["model"]["rise_C"] > 0.25  # type: ignore[index]

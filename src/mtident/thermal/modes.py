@@ -866,9 +866,11 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
             if widest_refined is None:
                 widest_refined = _grid_half_width(candidates, threshold, float(chosen.steady[0])) <= refine_within
             refine_level = widest_refined
-        # with a tolerance to meet, a narrower level is polished from the wider level's end models
-        # alone (the same ridges set both): a report's interval, not the decision's
-        seeds = None if refine_within is None or not ends else list(ends_models)
+        # with a tolerance the widest level's hull misses, a narrower level is polished from the
+        # wider level's end models alone (the same ridges set both): a report's interval while the
+        # decision waits; searched in full once the decision may be near
+        near = refine_within is None or not intervals or max(steady - intervals[max(intervals)][0], intervals[max(intervals)][1] - steady) <= refine_within
+        seeds = None if near else list(ends_models)
         low = _hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level, seeds)
         high = _hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level, seeds)
         ends_models = (low, high)

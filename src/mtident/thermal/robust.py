@@ -231,6 +231,8 @@ def estimate_sensor(
     first = float(np.nanmedian(y[valid & ~wild][:3]))
     rise = float(np.nanmax(np.abs(y - first)))
     threshold = rise_threshold_C(noise, rounding)
+    if int((valid & ~wild).sum()) < MIN_BINS:
+        return _without_fit(sensor, "too few readings", rise, noise, float(t[0]), settings, f"{int((valid & ~wild).sum())} readings: too few for a model")
     if rise < threshold:
         return _without_fit(sensor, "no rise", rise, noise, float(t[0]), settings, f"no rise above its noise yet ({rise:.3g} °C from its first level, noise {noise:.2g} °C): no warm-up to identify")
     lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
