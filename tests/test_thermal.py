@@ -9,6 +9,8 @@ import warnings
 import numpy as np
 import pytest
 from conftest import PAPER_RATE, PAPER_START, PAPER_STEADY, first_order, make_log
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mtident.exceptions import InputError
 from mtident.io import read_temperature_log
@@ -648,3 +650,23 @@ def test_identify_never_calls_a_risen_sensor_flat():
         summary = result.summary(i)
         assert not any("no rise" in w for w in summary["warnings"])  # type: ignore[union-attr]
         assert summary["model"]["rise_C"] > 0.25  # type: ignore[index]
+
+
+@settings(max_examples=5, deadline=None)
+@given(seed=st.integers(min_value=0, max_value=2**31 - 1), fraction=st.sampled_from([0.25, 0.5, 1.0]))
+def test_robust_answers_over_generated_warm_ups_are_consistent(seed, fraction):
+    """On any warm-up of the benchmark's population: the point estimate lies in its intervals, the
+    99 % interval holds the 95 %, and the summary is plain JSON."""
+    import json
+
+    from mtident.thermal.robust_identify import identify_robust
+    from mtident.thermal.synthetic import random_warmup
+
+    warm = random_warmup(np.random.default_rng(seed))
+    window = max(fraction * warm.t95_min, 10 * warm.interval_min)
+    result = identify_robust(make_log(warm.time_min, {"S": warm.reading_C}), window, warm.room_C)
+    estimate = result.estimates[0]
+    if estimate.fit is not None:
+        (lo95, hi95), (lo99, hi99) = estimate.interval_C[0.95], estimate.interval_C[0.99]
+        assert lo99 <= lo95 <= estimate.steady_C <= hi95 <= hi99
+    json.dumps(result.summary(0), allow_nan=False)
