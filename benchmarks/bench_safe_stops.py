@@ -16,7 +16,9 @@ Cases are split into near-first-order (one mode ≥ 97 % of the rise) and multi-
 a JSON-lines file, one case a line, so a long run can be resumed and several can run at once
 (``--shard K/N``); ``--report`` summarises a file.
 
-The seeds used while the rules were tuned are 0-299; the default seeds (1000 on) were never
+The seeds used while the rules were tuned are 0-299 (the global search checked against brute
+force, the misfit threshold); seeds 1000-1008 were seen once, in a first run that found a
+conduction body's sensor fitted with a false confidence. The default seeds (2000 on) were never
 looked at before this benchmark ran.
 
 Run: python benchmarks/bench_safe_stops.py --cases 500 --out results.jsonl [--shard 1/2]
@@ -46,7 +48,7 @@ from mtident.thermal.synthetic import modal_amplitudes, random_warmup, reference
 TOLERANCE_C = 0.2
 FRACTIONS = (0.25, 0.5)
 NEAR_FIRST_ORDER_SHARE = 0.97
-FIRST_SEED = 1000
+FIRST_SEED = 2000
 
 
 def _log(t: np.ndarray, y: np.ndarray, name: str) -> TemperatureLog:
@@ -166,8 +168,8 @@ def _identify_summary(cases: list[dict], key: str, method: str) -> dict[str, obj
     }
 
 
-def report(path: Path) -> dict[str, object]:
-    cases = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+def report(paths: list[Path]) -> dict[str, object]:
+    cases = [json.loads(line) for path in paths for line in path.read_text().splitlines() if line.strip()]
     out: dict[str, object] = {"cases": len(cases), "seeds": [min(c["seed"] for c in cases), max(c["seed"] for c in cases)] if cases else None}
     for group, chosen in (("near first order", [c for c in cases if c["near_first_order"]]), ("multi-mode", [c for c in cases if not c["near_first_order"]]), ("all", cases)):
         block: dict[str, object] = {"cases": len(chosen)}
@@ -181,16 +183,44 @@ def report(path: Path) -> dict[str, object]:
     return out
 
 
+def markdown(summary: dict[str, object]) -> str:
+    """The report as Markdown tables: the monitor's stops, then identify's intervals."""
+    lines = [f"{summary['cases']} warm-ups, seeds {summary['seeds'][0]}-{summary['seeds'][1]}, tolerance {TOLERANCE_C} °C.", ""]  # type: ignore[index]
+    lines += ["| cases | reference | stopped | beyond tolerance (worst °C) | 95 % covers at stop | stop/t95 median (p90) | stopped within 1.5·t95 |", "|---|---|---|---|---|---|---|"]
+    for group in ("near first order", "multi-mode", "all"):
+        block = summary[group]
+        assert isinstance(block, dict)
+        for key, label in (("without_reference", "none"), ("with_reference", "learnt")):
+            r = block[key]
+            worst = "—" if r["worst_error_C"] is None else f"{r['worst_error_C']:.3f}"
+            median = "—" if r["median_stop_over_t95"] is None else f"{r['median_stop_over_t95']:.2f} ({r['p90_stop_over_t95']:.2f})"
+            covered = "—" if r["covered95_at_stop"] is None else f"{100 * r['covered95_at_stop']:.1f} %"
+            within = "—" if r["stopped_within_1.5_t95"] is None else f"{100 * r['stopped_within_1.5_t95']:.0f} %"
+            lines.append(f"| {group} ({r['cases']}) | {label} | {r['stopped']} | {r['beyond_tolerance']} ({worst}) | {covered} | {median} | {within} |")
+    lines += ["", "| cases | identify at | method | 95 % covers | median half-width °C | model_ok | misses with model_ok |", "|---|---|---|---|---|---|---|"]
+    for group in ("near first order", "multi-mode", "all"):
+        block = summary[group]
+        assert isinstance(block, dict)
+        for fraction in FRACTIONS:
+            for method in ("robust", "first-order UKF", "robust with reference"):
+                r = block[f"identify at {fraction} t95, {method}"]
+                if r:
+                    lines.append(f"| {group} | {fraction}·t95 | {method} | {100 * r['covered95']:.1f} % ({r['cases']}) | {r['median_half_width_C']:.3g} | {r['model_ok']} | {r['missed_with_model_ok']} |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=500)
     parser.add_argument("--first-seed", type=int, default=FIRST_SEED)
     parser.add_argument("--out", type=Path, default=Path("safe_stops.jsonl"))
     parser.add_argument("--shard", default="1/1", help="K/N: run every N-th case from the K-th")
-    parser.add_argument("--report", type=Path, help="summarise a results file and stop")
+    parser.add_argument("--report", type=Path, nargs="+", help="summarise results files and stop")
+    parser.add_argument("--markdown", action="store_true", help="with --report: Markdown tables instead of JSON")
     args = parser.parse_args()
     if args.report:
-        print(json.dumps(report(args.report), indent=2))
+        summary = report(args.report)
+        print(markdown(summary) if args.markdown else json.dumps(summary, indent=2))
         return
     k, n = (int(v) for v in args.shard.split("/"))
     done = {json.loads(line)["seed"] for line in args.out.read_text().splitlines() if line.strip()} if args.out.exists() else set()
