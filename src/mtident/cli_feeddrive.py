@@ -23,7 +23,9 @@ from mtident.feeddrive import (
 )
 from mtident.feeddrive.identify import MEASUREMENT_SETS, PRESENT, default_guess
 from mtident.feeddrive.model import EXCITATION_KINDS
-from mtident.feeddrive.params import COORDINATES
+from mtident.feeddrive.modes import sampling_problem
+from mtident.feeddrive.params import COORDINATES, DESCRIPTIONS, UNITS, parameter_template
+from mtident.feeddrive.plan import PLAN_KINDS, ExcitationPlan, candidate_tests, plan_tests
 
 stderr = Console(stderr=True, soft_wrap=True)
 params_option = click.option("--params", "params_path", type=click.Path(dir_okay=False), help="TOML parameter file (seed 004 Table 1 names, SI units); default: the shipped set.")
@@ -77,7 +79,11 @@ def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz:
     if samples < 10:
         msg = f"--duration {duration_s:g} s at --fs {sample_rate_Hz:g} Hz gives {samples} sample(s); identification needs at least 10"
         raise InputError(msg)
-    highest = {"sine": frequency_Hz, "sweep": max(frequency_Hz, frequency_end_Hz)}.get(kind, 0.0)
+    # a binary sequence clocked at the sampling rate changes at most once a sample: its clock counts as twice its highest
+    highest = {
+        "sine": frequency_Hz, "sweep": max(frequency_Hz, frequency_end_Hz), "multisine": frequency_end_Hz,
+        "prbs": frequency_end_Hz / 2,
+    }.get(kind, 0.0)
     if highest > sample_rate_Hz / 2:
         msg = f"the {kind} reaches {highest:g} Hz, above half the sampling rate ({sample_rate_Hz / 2:g} Hz): the samples would alias it; lower the frequency or raise --fs"
         raise InputError(msg)
@@ -86,10 +92,13 @@ def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz:
     response = simulate(params, excitation, sample_rate_Hz, duration_s, noise_fraction, np.random.default_rng(seed))
     write_response(response, out_path)
     stderr.print(f"mtident: wrote {len(response.time_s)} samples to {out_path}", highlight=False)
+    problem = sampling_problem(params, sample_rate_Hz)
+    if problem:
+        stderr.print(f"mtident: note: identification will refuse this record: {problem} (raise --fs)", highlight=False)
     if plot_path:
         from mtident.report.plots import plot_responses
 
-        plot_responses(response, plot_path)
+        plot_responses(response, plot_path, modes(params).frequencies_Hz)
         stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
 
 
@@ -119,6 +128,12 @@ def identify_command(file: str, guess_path: str | None, truth_path: str | None, 
         result = identify_feed_drive(response, guess, measured, noise_fraction, preset, progress=lambda k, n: status.update(f"filtering: {k}/{n} samples"))
     for note in result.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
+    if not result.identifiable.all() and preset == "default":
+        hint = "`mtident feeddrive plan --params-guess FILE` says which test would identify every parameter"
+        stderr.print(f"mtident: hint: {hint}", highlight=False)
+    if result.reproduces_record() is False:
+        hint = f"--noise sets the assumed noise ({noise_fraction:g} of each response's RMS)"
+        stderr.print(f"mtident: hint: {hint}", highlight=False)
     if plot_path:
         from mtident.report.plots import plot_feed_drive_identification
 
@@ -132,7 +147,9 @@ def identify_command(file: str, guess_path: str | None, truth_path: str | None, 
     for column in ("parameter", "guess", "estimate", "± 2σ", "identified", *(("true", "error %") if truth else ())):
         table.add_column(column, justify="right")
     for i, name in enumerate(IDENTIFIED):
-        row = [name, f"{getattr(guess, name):.5g}", f"{result.parameters[i]:.5g}", f"{2 * result.parameters_sd[i]:.2g}", "yes" if result.identifiable[i] else "[yellow]no[/]"]
+        known = "yes" if result.identifiable[i] else "[yellow]no[/]"
+        estimate, half_width = f"{result.parameters[i]:.5g}", f"{2 * result.parameters_std[i]:.2g}"
+        row = [name, f"{getattr(guess, name):.5g}", estimate, half_width, known]
         if truth:
             row += [f"{getattr(truth, name):.5g}", f"{summary['error_percent'][name]:.3g}"]  # type: ignore[index]
         table.add_row(*row)
@@ -143,3 +160,124 @@ def identify_command(file: str, guess_path: str | None, truth_path: str | None, 
     for name, r in result.correlation.items():
         corr.add_row(name, f"{r:.4f}")
     Console().print(corr)
+
+
+@feeddrive.command("params")
+@params_option
+@click.option(
+    "--template", is_flag=True,
+    help="Write the set as a commented TOML file (every name, unit and meaning) to start a parameter file from.",
+)
+@click.option("--out", "out_path", type=OutputPath(), help="Write the template here instead of to stdout.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@user_errors
+def params_command(params_path: str | None, template: bool, out_path: str | None, as_json: bool) -> None:
+    """The parameter names, units and values (default: seed 004's Table 1 with the corrected β)."""
+    params = load_parameters(params_path)
+    if template:
+        text = parameter_template(params)
+        if out_path:
+            Path(out_path).write_text(text, encoding="utf-8")
+            stderr.print(f"mtident: wrote the parameter template to {out_path}", highlight=False)
+        else:
+            click.echo(text, nl=False)
+        return
+    if as_json:
+        print_json({"parameters": params.as_dict(), "units": dict(UNITS), "identified": list(IDENTIFIED)})
+        return
+    table = Table(title="Feed-drive parameters (SI units; TOML names)")
+    for column in ("name", "value", "unit", "meaning", "identified"):
+        table.add_column(column)
+    for name, value in params.as_dict().items():
+        table.add_row(name, f"{value:.6g}", UNITS[name], DESCRIPTIONS[name], "yes" if name in IDENTIFIED else "known")
+    Console(width=max(Console().width, 100)).print(table)
+
+
+def _positive_list(text: str, option: str, example: str) -> tuple[float, ...]:
+    msg = f"{option}: expected comma-separated positive numbers such as {example}; found {text!r}"
+    try:
+        values = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError as exc:
+        raise InputError(msg) from exc
+    if not values or any(not (v > 0 and np.isfinite(v)) for v in values):
+        raise InputError(msg)
+    return values
+
+
+@feeddrive.command("plan")
+@click.option(
+    "--params-guess", "guess_path", type=click.Path(dir_okay=False),
+    help="TOML: the best knowledge of the drive, e.g. an earlier estimate (default: the shipped set).",
+)
+@click.option(
+    "--excitation", "kinds", type=click.Choice(PLAN_KINDS), multiple=True, help="Candidate (repeat; default: all)."
+)
+@click.option(
+    "--on", "places", type=click.Choice(COORDINATES), multiple=True,
+    help="Where the force acts (repeat; default: table and motor_rotation, i.e. table force and motor torque).",
+)
+@click.option("--durations", default="0.25,0.5,1,2", show_default=True, help="Test durations (s), comma-separated.")
+@click.option("--fs", "rates", default="10000", show_default=True, help="Sampling rates (Hz), comma-separated.")
+@click.option(
+    "--measured", type=click.Choice(list(MEASUREMENT_SETS)), default="all", show_default=True,
+    help="all: the 12 responses; realistic: table acceleration + motor angle and velocity.",
+)
+@click.option(
+    "--noise", "noise_fraction", type=FiniteFloatRange(min=0, min_open=True), default=0.01, show_default=True,
+    help="Measurement noise, fraction of each response's RMS.",
+)
+@click.option(
+    "--target", type=FiniteFloatRange(min=0, min_open=True, max=1), default=0.10, show_default=True,
+    help="Identified: the stated ±2σ within this fraction of the value.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@user_errors
+def plan_command(
+    guess_path: str | None, kinds: tuple[str, ...], places: tuple[str, ...], durations: str, rates: str, measured: str,
+    noise_fraction: float, target: float, as_json: bool,
+) -> None:
+    """Which test identifies all eight parameters: the expected standard deviations for candidate
+    excitations, from the Fisher information of the model at the guess, and the cheapest that does."""
+    guess = load_parameters(guess_path)
+    candidates = candidate_tests(
+        guess,
+        kinds or PLAN_KINDS,
+        tuple(COORDINATES.index(p) for p in places) or (0, 3),
+        _positive_list(durations, "--durations", "0.5,1,2"),
+        _positive_list(rates, "--fs", "10000,20000"),
+        measured,
+    )
+    with stderr.status(f"predicting {len(candidates)} tests…"):
+        plan = plan_tests(guess, candidates, noise_fraction, target)
+    if as_json:
+        print_json(plan.summary())
+        return
+    _print_plan(plan, measured)
+
+
+def _print_plan(plan: ExcitationPlan, measured: str) -> None:
+    table = Table(title=f"Stated ±2σ (%) after each test; repeated tests scatter less (--json); "
+                        f"measured: {measured}, noise {plan.noise_fraction:g}")
+    table.add_column("test")
+    for name in IDENTIFIED:
+        table.add_column(name, justify="right")
+    for p in plan.predictions:
+        cells = [f"{200 * s:.2g}" if ok else f"[yellow]{200 * s:.2g}[/]"
+                 for s, ok in zip(p.stated_std_log, p.identified, strict=True)]
+        label = p.candidate.label + (f" [dim]({p.reason.split(':')[0]})[/]" if p.reason else "")
+        table.add_row(("[bold]" + label + "[/]") if p is plan.recommended else label, *cells)
+    Console(width=max(Console().width, 140)).print(table)
+    within = f"within ±{100 * plan.target:g} %"
+    if plan.recommended is not None:
+        chosen = plan.recommended.candidate.label
+        line = f"mtident: recommended (the cheapest that identifies all eight {within}): {chosen}"
+        stderr.print(line, highlight=False)
+        return
+    allowed = [p for p in plan.predictions if p.reason is None]
+    never = [name for j, name in enumerate(IDENTIFIED) if not any(p.identified[j] for p in allowed)]
+    closest = "" if plan.closest is None else (
+        f"; the closest: {plan.closest.candidate.label} (widest ±2σ: {200 * plan.closest.stated_std_log.max():.3g} %)"
+    )
+    stderr.print(f"mtident: no candidate identifies all eight {within}; never within it: {', '.join(never) or 'none'}"
+                 f"{closest}; longer --durations, finer sensors (--noise) or another --measured set may",
+                 highlight=False)

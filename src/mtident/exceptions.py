@@ -11,6 +11,7 @@ __all__ = [
     "DimensionError",
     "InputError",
     "CovarianceError",
+    "DivergenceError",
     "UnstableModelError",
     "NegativeWeightWarning",
     "ModelFitWarning",
@@ -73,6 +74,10 @@ class CovarianceError(MtidentError, ArithmeticError):
     def at(self, step: int, filter_name: str | None) -> CovarianceError:
         """Return the same error, now naming the step and the filter."""
         return CovarianceError(self.stage, self.batch_index, self.min_eigenvalue, step, filter_name)
+
+
+class DivergenceError(MtidentError, ArithmeticError):
+    """A filter's estimate stopped being finite, or its covariance positive definite, on data it accepted."""
 
 
 class NegativeWeightWarning(UserWarning):

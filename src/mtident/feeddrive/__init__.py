@@ -1,10 +1,19 @@
-"""Ball-screw feed drive (seed 004): parameters, modes, RK4 response, UKF identification."""
+"""Ball-screw feed drive (seed 004): parameters, modes, RK4 response, UKF identification, test planning."""
 
 from mtident.feeddrive.identify import FeedDriveIdentification, default_guess, identify_feed_drive
 from mtident.feeddrive.model import Excitation
-from mtident.feeddrive.modes import Modes, modes
-from mtident.feeddrive.params import IDENTIFIED, FeedDriveParameters, load_parameters, validate
+from mtident.feeddrive.modes import Modes, modes, sampling_problem
+from mtident.feeddrive.params import IDENTIFIED, FeedDriveParameters, load_parameters, parameter_template, validate
+from mtident.feeddrive.plan import (
+    CandidateTest,
+    ExcitationPlan,
+    PlanPrediction,
+    candidate_tests,
+    plan_tests,
+    predict_test,
+)
 from mtident.feeddrive.simulate import Response, read_response, simulate, write_response
+from mtident.feeddrive.synthetic import random_drive, random_guess
 
 __all__ = [
     "IDENTIFIED",
@@ -13,11 +22,21 @@ __all__ = [
     "FeedDriveParameters",
     "Modes",
     "Response",
+    "CandidateTest",
+    "ExcitationPlan",
+    "PlanPrediction",
+    "candidate_tests",
     "default_guess",
     "identify_feed_drive",
     "load_parameters",
     "modes",
+    "parameter_template",
+    "plan_tests",
+    "predict_test",
+    "random_drive",
+    "random_guess",
     "read_response",
+    "sampling_problem",
     "simulate",
     "validate",
     "write_response",

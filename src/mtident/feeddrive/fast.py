@@ -1,4 +1,6 @@
-"""The feed-drive UKF loop compiled with numba (the hot loop of ``identify_feed_drive``).
+"""The feed-drive UKF loop compiled with numba (the hot loop of ``identify_feed_drive``), and the
+loops over a record of :mod:`mtident.feeddrive.information` (sensitivities for the open-loop check,
+the filter's covariance recursion for the test plan).
 
 It runs exactly the standard UKF of :mod:`mtident.ukf` (seed 000 Eqs 5-20:
 propagated sigma points, additive Q and R, P⁺ = P⁻ − K Py Kᵀ) on the augmented
@@ -16,7 +18,7 @@ from numba import njit
 
 from mtident._typing import FloatArray
 
-__all__ = ["run_feed_drive_ukf"]
+__all__ = ["run_feed_drive_ukf", "response_moments", "covariance_recursion"]
 
 
 @njit(cache=True, fastmath=False)
@@ -82,8 +84,8 @@ def run_feed_drive_ukf(
     substeps: int,
     log_form: bool,
 ) -> tuple[FloatArray, FloatArray, FloatArray, int, float]:
-    """Filter ``emissions`` (N, m); returns (means (N, 16), covariances (N, 16, 16) diagonal blocks
-    as full matrices, final covariance, failed step or −1, smallest eigenvalue there).
+    """Filter ``emissions`` (N, m); returns (means (N, 16), variances (N, 16), final covariance,
+    failed step or −1, smallest eigenvalue there: NaN where a number stopped being finite).
 
     ``drives`` (N, 4) is M⁻¹F at each sample (held over the interval that starts there).
     """
@@ -143,11 +145,184 @@ def run_feed_drive_ukf(
         dy = outs - y_mean
         pyy = (dy.T * weights_cov) @ dy + emission_cov
         pxy = (dx.T * weights_cov) @ dy
+        if not (np.all(np.isfinite(pyy)) and np.all(np.isfinite(pxy))):
+            return means, variances, cov, k, np.nan
         gain = np.linalg.solve(pyy, pxy.T).T
         mean = prior + gain @ (emissions[k] - y_mean)
         cov = prior_cov - gain @ pyy @ gain.T
         cov = 0.5 * (cov + cov.T)
+        if not (np.all(np.isfinite(cov)) and np.all(np.isfinite(mean))):
+            # a sigma point's model blew up (unstable or unresolved): stop here, not at a NaN later
+            return means, variances, cov, k, np.nan
         means[k] = mean
         for i in range(n):
             variances[k, i] = cov[i, i]
     return means, variances, cov, -1, 0.0
+
+
+@njit(cache=True, fastmath=False)
+def response_moments(
+    step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    start: FloatArray,
+    forces: FloatArray,
+    rows: tuple[FloatArray, FloatArray, FloatArray],
+    data: FloatArray,
+    with_start: bool,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Run the state X, its sensitivities sⱼ to the log-parameters and (``with_start``) fᵢ to the
+    initial state over the record, and accumulate per response r the moments of its sensitivities
+    and of its residual against ``data`` (N, R), NaN where not measured.
+
+    ``step`` = (Φ (8, 8), Γ (8, 4), Φₛ (8, 8, 8), Γₛ (8, 8, 4)): X⁺ = Φ X + Γ u and
+    sⱼ⁺ = Φₛⱼ X + Φ sⱼ + Γₛⱼ u (the exact step of the augmented system is block triangular).
+    ``rows`` = (c (R, 8), e (R, 4), cₛ (R, 8, 8)): ŷ = c X + e u, ∂ŷ/∂zⱼ = c sⱼ + cₛⱼ X, ∂ŷ/∂X₀ᵢ = c fᵢ.
+    Returns (G (R, P, P) = Σ g gᵀ, b (R, P) = Σ g (y − ŷ), c (R,) = Σ (y − ŷ)², s (R,) = Σ ŷ²),
+    P = 8 or 16, the residual sums over the measured samples only.
+    """
+    phi, gamma, phi_s, gamma_s = step
+    c_row, e_row, c_s = rows
+    r_count = data.shape[1]
+    p = 16 if with_start else 8
+    big_g = np.zeros((r_count, p, p))
+    big_b = np.zeros((r_count, p))
+    big_c = np.zeros(r_count)
+    big_s = np.zeros(r_count)
+    x = start.copy()
+    sens = np.zeros((8, 8))
+    free = np.eye(8)
+    g = np.empty(p)
+    x_next = np.empty(8)
+    sens_next = np.empty((8, 8))
+    free_next = np.empty((8, 8))
+    for k in range(forces.shape[0]):
+        u = forces[k]
+        for r in range(r_count):
+            model = 0.0
+            for i in range(8):
+                model += c_row[r, i] * x[i]
+            for i in range(4):
+                model += e_row[r, i] * u[i]
+            for j in range(8):
+                acc = 0.0
+                for i in range(8):
+                    acc += c_row[r, i] * sens[j, i] + c_s[r, j, i] * x[i]
+                g[j] = acc
+            if with_start:
+                for j in range(8):
+                    acc = 0.0
+                    for i in range(8):
+                        acc += c_row[r, i] * free[j, i]
+                    g[8 + j] = acc
+            big_s[r] += model * model
+            for a in range(p):
+                for b in range(a, p):
+                    big_g[r, a, b] += g[a] * g[b]
+            y = data[k, r]
+            if y == y:  # measured (not NaN)
+                res = y - model
+                big_c[r] += res * res
+                for a in range(p):
+                    big_b[r, a] += g[a] * res
+        for i in range(8):
+            acc = 0.0
+            for c in range(8):
+                acc += phi[i, c] * x[c]
+            for c in range(4):
+                acc += gamma[i, c] * u[c]
+            x_next[i] = acc
+            for j in range(8):
+                acc = 0.0
+                for c in range(8):
+                    acc += phi_s[j, i, c] * x[c] + phi[i, c] * sens[j, c]
+                for c in range(4):
+                    acc += gamma_s[j, i, c] * u[c]
+                sens_next[j, i] = acc
+                if with_start:
+                    acc = 0.0
+                    for c in range(8):
+                        acc += phi[i, c] * free[j, c]
+                    free_next[j, i] = acc
+        x[:] = x_next
+        sens[:] = sens_next
+        if with_start:
+            free[:] = free_next
+    for r in range(r_count):
+        for a in range(p):
+            for b in range(a):
+                big_g[r, a, b] = big_g[r, b, a]
+    return big_g, big_b, big_c, big_s
+
+
+@njit(cache=True, fastmath=False)
+def covariance_recursion(
+    step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    forces: FloatArray,
+    rows: tuple[FloatArray, FloatArray, FloatArray],
+    state_scale: FloatArray,
+    output_scale: FloatArray,
+    noise: tuple[FloatArray, FloatArray, FloatArray],
+) -> tuple[FloatArray, FloatArray]:
+    """The Kalman covariance recursion of the augmented filter (8 scaled states, 8 log-parameters)
+    linearised along the noise-free response from rest. Returns the final covariances (16, 16):
+
+    * the filter's own, P: for a model linear in its unknowns, the inverse of the Fisher information
+      with the filter's process noise and prior (Sarkka 2013, §4.3, §12.1), which the UKF, a
+      second-order method, follows to the order of its linearisation;
+    * the scatter its estimate actually has over draws of the measurement noise when the record
+      has no process noise: the error ε⁺ = (I − KH)(F ε) + K v of a filter run with gains K
+      designed for noise the data lack (Gelb, Applied Optimal Estimation, 1974, §7.2).
+
+    ``step`` and ``rows`` as in :func:`response_moments`; ``noise`` = (P₀ (16, 16), Q (16, 16),
+    R (m, m)) in the filter's scaled units.
+    """
+    phi, gamma, phi_s, gamma_s = step
+    c_row, _, c_s = rows
+    cov0, process_cov, emission_cov = noise
+    m = c_row.shape[0]
+    cov = cov0.copy()
+    scatter = np.zeros((16, 16))
+    x = np.zeros(8)
+    x_next = np.empty(8)
+    trans = np.eye(16)
+    meas = np.zeros((m, 16))
+    for i in range(8):
+        for j in range(8):
+            trans[i, j] = phi[i, j] * state_scale[j] / state_scale[i]
+    for r in range(m):
+        for i in range(8):
+            meas[r, i] = c_row[r, i] * state_scale[i] / output_scale[r]
+    for k in range(1, forces.shape[0]):
+        u = forces[k - 1]
+        # ∂X⁺/∂zⱼ over one sample, from the state at its start: the j-th sensitivity system's step
+        for j in range(8):
+            for i in range(8):
+                acc = 0.0
+                for c in range(8):
+                    acc += phi_s[j, i, c] * x[c]
+                for c in range(4):
+                    acc += gamma_s[j, i, c] * u[c]
+                trans[i, 8 + j] = acc / state_scale[i]
+        for i in range(8):
+            acc = 0.0
+            for c in range(8):
+                acc += phi[i, c] * x[c]
+            for c in range(4):
+                acc += gamma[i, c] * u[c]
+            x_next[i] = acc
+        x[:] = x_next
+        prior = trans @ cov @ trans.T + process_cov
+        for r in range(m):
+            for j in range(8):
+                acc = 0.0
+                for c in range(8):
+                    acc += c_s[r, j, c] * x[c]
+                meas[r, 8 + j] = acc / output_scale[r]
+        cross = prior @ meas.T
+        innovation = meas @ cross + emission_cov
+        gain = np.linalg.solve(innovation, cross.T).T
+        cov = prior - gain @ innovation @ gain.T
+        cov = 0.5 * (cov + cov.T)
+        closed = (np.eye(16) - gain @ meas) @ trans
+        scatter = closed @ scatter @ closed.T + gain @ emission_cov @ gain.T
+        scatter = 0.5 * (scatter + scatter.T)
+    return cov, scatter

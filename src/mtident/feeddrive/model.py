@@ -18,9 +18,59 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.feeddrive.params import FeedDriveParameters, damping_matrix, mass_matrix, stiffness_matrix
 
-__all__ = ["Excitation", "system_matrix", "input_matrix", "rk4_linear_step", "exact_step", "EXCITATION_KINDS", "accelerations"]
+__all__ = [
+    "Excitation", "system_matrix", "input_matrix", "rk4_linear_step", "exact_step", "EXCITATION_KINDS", "accelerations",
+    "parameter_basis", "system_matrices", "prbs_bits", "multisine",
+]
 
-EXCITATION_KINDS = ("impulse", "step", "sine", "sweep")
+EXCITATION_KINDS = ("impulse", "step", "sine", "sweep", "prbs", "multisine")
+# Feedback taps of maximal-length Fibonacci shift registers, by register length (Xilinx XAPP052, Table 3).
+_LFSR_TAPS = {
+    5: (5, 3), 6: (6, 5), 7: (7, 6), 8: (8, 6, 5, 4), 9: (9, 5), 10: (10, 7), 11: (11, 9), 12: (12, 6, 4, 1),
+    13: (13, 4, 3, 1), 14: (14, 5, 3, 1), 15: (15, 14), 16: (16, 15, 13, 4), 17: (17, 14), 18: (18, 11),
+    19: (19, 6, 2, 1), 20: (20, 17),
+}
+
+
+def prbs_bits(count: int) -> FloatArray:
+    """±1 from a maximal-length sequence whose period (2ⁿ − 1) is at least ``count`` (deterministic;
+    beyond 2²⁰ − 1 bits the 20-bit sequence repeats).
+
+    Examples
+    --------
+    >>> bits = prbs_bits(31)
+    >>> len(bits), int(bits.sum())  # one period of a 5-bit sequence: 16 ones, 15 minus ones
+    (31, 1)
+    """
+    length = min(max(5, int(np.ceil(np.log2(count + 1)))), max(_LFSR_TAPS))
+    taps = _LFSR_TAPS[length]
+    register = [1] * length
+    out = np.empty(count)
+    for k in range(count):
+        out[k] = 1.0 if register[-1] else -1.0
+        feedback = 0
+        for tap in taps:
+            feedback ^= register[tap - 1]
+        register = [feedback, *register[:-1]]
+    return out
+
+
+def multisine(count: int, h: float, low_Hz: float, high_Hz: float) -> FloatArray:
+    """Equal-amplitude sines on the record's frequency grid (1/(count·h)) from ``low_Hz`` to ``high_Hz``,
+    Schroeder phases for a low crest factor, scaled to a peak of 1 (periodic over the record).
+
+    Schroeder, IEEE Trans. Inf. Theory 16 (1970) 85: φₖ = −πk(k−1)/K.
+    """
+    bins = np.arange(count // 2 + 1)
+    frequencies = bins / (count * h)
+    lines = bins[(frequencies >= low_Hz) & (frequencies <= high_Hz) & (bins > 0)]
+    if len(lines) == 0:  # a band narrower than the grid: the nearest line
+        lines = np.array([max(1, min(count // 2, int(round(0.5 * (low_Hz + high_Hz) * count * h))))])
+    k = np.arange(1, len(lines) + 1)
+    spectrum = np.zeros(count // 2 + 1, dtype=complex)
+    spectrum[lines] = np.exp(-1j * np.pi * k * (k - 1) / len(lines))
+    signal = np.fft.irfft(spectrum, n=count)
+    return signal / np.abs(signal).max()
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,10 +79,14 @@ class Excitation:
 
     Parameters
     ----------
-    kind : {"impulse", "step", "sine", "sweep"}
+    kind : {"impulse", "step", "sine", "sweep", "prbs", "multisine"}
         impulse: ``amplitude`` for the first sample only (seed 004 §3.1);
         step: ``amplitude`` from ``start_s`` on; sine: amplitude·sin(2πft);
-        sweep: a linear chirp from ``frequency_Hz`` to ``frequency_end_Hz`` over the record.
+        sweep: a linear chirp from ``frequency_Hz`` to ``frequency_end_Hz`` over the record;
+        prbs: ±amplitude from a maximal-length binary sequence clocked at ``frequency_end_Hz``
+        (its power is within 3 dB of flat up to 0.44 × the clock);
+        multisine: sines from ``frequency_Hz`` to ``frequency_end_Hz`` on the record's frequency
+        grid, Schroeder phases, peak ``amplitude``.
     coordinate : int
         0 table force (N), 1 screw axial force (N), 2 screw torque (N m), 3 motor torque T_m (N m).
     amplitude : float
@@ -64,10 +118,16 @@ class Excitation:
             value = np.where(t >= self.start_s, self.amplitude, 0.0)
         elif self.kind == "sine":
             value = self.amplitude * np.sin(2 * np.pi * self.frequency_Hz * t)
-        else:
+        elif self.kind == "sweep":
             span = max(float(t[-1] - t[0]), 1e-12)
             rate = (self.frequency_end_Hz - self.frequency_Hz) / span
             value = self.amplitude * np.sin(2 * np.pi * (self.frequency_Hz * t + 0.5 * rate * t**2))
+        elif self.kind == "prbs":
+            ticks = np.floor((t - t[0]) * self.frequency_end_Hz + 1e-9).astype(int)
+            value = self.amplitude * prbs_bits(int(ticks[-1]) + 1)[ticks]
+        else:
+            h = float(t[1] - t[0]) if len(t) > 1 else 1.0
+            value = self.amplitude * multisine(len(t), h, self.frequency_Hz, self.frequency_end_Hz)
         out = np.zeros((len(t), 4))
         out[:, self.coordinate] = value
         return out
@@ -77,6 +137,36 @@ def system_matrix(p: FeedDriveParameters) -> FloatArray:
     """A (8, 8) of Eq. 8."""
     m_inv = np.diag(1.0 / np.diag(mass_matrix(p)))
     return np.block([[np.zeros((4, 4)), np.eye(4)], [-m_inv @ stiffness_matrix(p), -m_inv @ damping_matrix(p)]])
+
+
+def parameter_basis(fixed: FeedDriveParameters) -> tuple[FloatArray, FloatArray]:
+    """A is linear in the identified parameters: A(p) = A₀ + Σⱼ pⱼ Dⱼ. Returns (A₀, D (8, 8, 8)).
+
+    ``fixed`` gives the masses, inertias and β; its identified parameters are not used.
+    """
+    a0 = np.zeros((8, 8))
+    a0[:4, 4:] = np.eye(4)
+    basis = np.zeros((8, 8, 8))
+    for j, unit in enumerate(np.eye(8)):
+        basis[j, 4:, :] = _system_rows(unit, fixed)  # the part of A that parameter j multiplies
+    return a0, basis
+
+
+def _system_rows(params: FloatArray, fixed: FeedDriveParameters) -> FloatArray:
+    """Rows 5-8 of A, [−M⁻¹K | −M⁻¹C], for one vector of identified parameters K1..K4, Bt, Bb, Qb, Qm."""
+    k1, k2, k3, k4, bt, bb, qb, qm = params
+    beta = fixed.beta
+    stiffness = np.array(
+        [[k1, -k1, -beta * k1, 0.0], [-k1, k2, beta * k1, 0.0], [-beta * k1, beta * k1, k3, -k4], [0.0, 0.0, -k4, k4]]
+    )
+    m_inv = 1.0 / np.array([fixed.Mt, fixed.Mb, fixed.Jb, fixed.Jm])
+    return np.hstack([-m_inv[:, None] * stiffness, -np.diag(m_inv * np.array([bt, bb, qb, qm]))])
+
+
+def system_matrices(params: FloatArray, basis: tuple[FloatArray, FloatArray]) -> FloatArray:
+    """A (..., 8, 8) for identified parameters (..., 8) = K1..K4, Bt, Bb, Qb, Qm."""
+    a0, d = basis
+    return a0 + (params @ d.reshape(8, 64)).reshape(*params.shape[:-1], 8, 8)
 
 
 def input_matrix(p: FeedDriveParameters) -> FloatArray:

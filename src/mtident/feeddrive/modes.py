@@ -51,3 +51,46 @@ def modes(p: FeedDriveParameters) -> Modes:
     shapes = shapes * signs
     modal_damping = np.diag(shapes.T @ damping_matrix(p) @ shapes)
     return Modes(omega / (2.0 * np.pi), shapes, modal_damping / (2.0 * omega), bool(np.all(eigenvalues > 0)))
+
+
+# Samples per period of the highest mode the filter needs. Seed 004 (§3.1) samples at 5-20 times
+# the highest natural frequency. Below that the sigma points, which spread the stiffnesses over the
+# prior's range, put the highest mode near or past the Nyquist frequency; the filter then settles
+# with intervals that miss the truth by tens of standard deviations, or diverges.
+SAMPLES_PER_PERIOD = 5.0
+
+
+def sampling_problem(p: FeedDriveParameters, sample_rate_Hz: float, name: str = "the parameters") -> str | None:
+    """Why a record sampled at ``sample_rate_Hz`` cannot be identified with modes like those of ``p``, or None.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        The parameters whose modes the filter must follow (the guess).
+    sample_rate_Hz : float
+    name : str
+        What ``p`` is, in the message ("the guess").
+
+    Returns
+    -------
+    str or None
+        One line naming the highest mode, the rate it needs and the modes the rate does follow.
+
+    Examples
+    --------
+    >>> print(sampling_problem(FeedDriveParameters(), 10_000.0))
+    None
+    >>> sampling_problem(FeedDriveParameters(), 1_000.0).split(":")[0]
+    'sampling at 1000 Hz cannot follow mode 4 of the parameters (1444 Hz)'
+    """
+    frequencies = modes(p).frequencies_Hz
+    needed = SAMPLES_PER_PERIOD * frequencies[-1]
+    if sample_rate_Hz >= needed:
+        return None
+    followed = int(np.sum(SAMPLES_PER_PERIOD * frequencies <= sample_rate_Hz))
+    which = f"modes 1-{followed} only" if followed > 1 else "mode 1 only" if followed == 1 else "none of the four modes"
+    return (
+        f"sampling at {sample_rate_Hz:g} Hz cannot follow mode 4 of {name} ({frequencies[-1]:.0f} Hz): "
+        f"the filter needs {SAMPLES_PER_PERIOD:g} samples per period of the highest mode, a rate of at least "
+        f"{needed:.0f} Hz; at {sample_rate_Hz:g} Hz it follows {which}, and all four act in every response"
+    )

@@ -43,6 +43,8 @@ __all__ = [
     "validate",
     "PRINTED_BETA",
     "COORDINATES",
+    "DESCRIPTIONS",
+    "parameter_template",
 ]
 
 PRINTED_BETA = 2.55e-3
@@ -52,6 +54,22 @@ IDENTIFIED = ("K1", "K2", "K3", "K4", "Bt", "Bb", "Qb", "Qm")
 UNITS = {
     "Mt": "kg", "Mb": "kg", "Jm": "kg m²", "Jb": "kg m²", "K1": "N/m", "K2": "N/m", "K3": "N m/rad",
     "K4": "N m/rad", "beta": "m/rad", "Bt": "N s/m", "Bb": "N s/m", "Qm": "N m s/rad", "Qb": "N m s/rad",
+}
+# What each parameter is (seed 004, Table 1).
+DESCRIPTIONS = {
+    "Mt": "mass of the working table",
+    "Mb": "mass of the ball screw",
+    "Jm": "moment of inertia of the motor",
+    "Jb": "moment of inertia of the ball screw",
+    "K1": "stiffness of the ball-screw nut",
+    "K2": "equivalent axial stiffness of the screw",
+    "K3": "equivalent torsional stiffness of the screw",
+    "K4": "torsional stiffness between screw and motor",
+    "beta": "lead / (2π): table travel per radian of the screw",
+    "Bt": "viscous damping of the table's guideway",
+    "Bb": "axial viscous damping of the screw's support bearing",
+    "Qm": "rotational viscous damping of the motor",
+    "Qb": "rotational viscous damping of the support bearing",
 }
 
 
@@ -151,6 +169,47 @@ def validate(p: FeedDriveParameters) -> FeedDriveParameters:
         )
         raise UnstableModelError(msg)
     return p
+
+
+def parameter_template(p: FeedDriveParameters | None = None) -> str:
+    """A commented TOML parameter file: every name with its unit, meaning and value (default: the shipped set).
+
+    :func:`load_parameters` reads it back to the same set.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters, optional
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> print(parameter_template().splitlines()[5])
+    Mt = 15.0  # kg: mass of the working table
+    """
+    p = p or FeedDriveParameters()
+    shipped = FeedDriveParameters()
+    lines = [
+        "# Ball-screw feed drive parameters, SI units (names of seed 004, Table 1).",
+        "# Values: " + ("the shipped set (seed 004's Table 1, β corrected)." if p == shipped else "as given."),
+        "# Delete a line to keep the shipped value. mtident identifies K1-K4, Bt, Bb, Qb and Qm;",
+        "# Mt, Mb, Jm, Jb and beta are taken as known.",
+        "",
+    ]
+    for f in fields(FeedDriveParameters):
+        value = float(getattr(p, f.name))
+        short = f"{value:.6g}"
+        text = short if float(short) == value else repr(value)  # short where it reads back exactly
+        if f.name == "beta":
+            lines.append(
+                f"# Table 1 prints β = {PRINTED_BETA:g} 'Nm/rad', which makes K indefinite; "
+                "0.01/(2π) reproduces its frequencies"
+            )
+        number = text if any(c in text for c in ".en") else text + ".0"  # a TOML float, not an integer
+        lines.append(f"{f.name} = {number}  # {UNITS[f.name]}: {DESCRIPTIONS[f.name]}")
+    return "\n".join(lines) + "\n"
 
 
 def load_parameters(path: str | Path | None, base: FeedDriveParameters | None = None) -> FeedDriveParameters:

@@ -122,42 +122,120 @@ def plot_min_time(result: MinTimeResult, path: str | Path | None = None) -> Path
     return _save(fig, path, 110)
 
 
-def plot_responses(response, path: str | Path | None = None) -> Path | Figure:  # noqa: ANN001 - feeddrive.Response
-    """Displacements, velocities and accelerations of the four coordinates (seed 004 Figs 2-4)."""
+# Samples a panel draws at most: beyond, a line of a ringing response fills the panel solid.
+_PANEL_POINTS = 2000
+# The zoom shows this many periods of the lowest mode: enough to see the modes ring down.
+_ZOOM_PERIODS = 8
+
+
+def _zoom(time_s, lowest_Hz: float | None) -> slice:  # noqa: ANN001 - (N,) times
+    """The first samples of a record: ``_ZOOM_PERIODS`` periods of the lowest mode, or ``_PANEL_POINTS`` samples."""
+    h = float(time_s[1] - time_s[0])
+    count = int(_ZOOM_PERIODS / (lowest_Hz * h)) if lowest_Hz else _PANEL_POINTS
+    return slice(0, max(10, min(len(time_s), count)))
+
+
+def _spectrum(values, h: float):  # noqa: ANN001, ANN202 - (N,) samples -> (frequencies, amplitude)
+    """One-sided amplitude spectrum of a record (Hann window), for a log-scale panel."""
+    window = np.hanning(len(values))
+    amplitude = 2.0 * np.abs(np.fft.rfft((values - np.mean(values)) * window)) / window.sum()
+    return np.fft.rfftfreq(len(values), h), np.maximum(amplitude, 1e-300)
+
+
+def _draw_spectra(axes, time_s, measured, model, modes_Hz) -> None:  # noqa: ANN001
+    """Row of four spectra, one per coordinate: measured (and the model's where given), modes marked."""
+    from mtident.feeddrive.params import COORDINATES
     from mtident.feeddrive.simulate import RESPONSE_COLUMNS
 
-    fig = Figure(figsize=(16, 8))
-    axes = fig.subplots(3, 4, sharex=True)
-    for i, ax in enumerate(axes.ravel()):
-        ax.plot(response.time_s, response.values[:, i], lw=0.6)
+    h = float(time_s[1] - time_s[0])
+    for c, ax in enumerate(axes):
+        column = next((i + c for i in (8, 4, 0) if np.isfinite(measured[:, i + c]).all()), None)
+        if column is None:
+            ax.set_visible(False)
+            continue
+        f, amplitude = _spectrum(measured[:, column], h)
+        ax.semilogy(f, amplitude, lw=0.6, color="0.45", label="measured")
+        if model is not None:
+            ax.semilogy(f, _spectrum(model[:, column], h)[1], lw=0.6, color="tab:blue", label="model, open loop")
+        for fn in modes_Hz if modes_Hz is not None else ():
+            ax.axvline(fn, color="k", ls=":", lw=0.8)
+        if modes_Hz is not None:  # the band of the modes, not the noise up to the Nyquist frequency
+            ax.set_xlim(0, min(f[-1], 1.5 * float(np.max(modes_Hz))))
+        ax.set_ylim(amplitude.max() * 1e-6, amplitude.max() * 3)
+        ax.set_title(f"spectrum of {RESPONSE_COLUMNS[column]} ({COORDINATES[c]})", fontsize=9)
+        ax.set_xlabel("frequency (Hz)")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+
+
+def plot_responses(
+    response, path: str | Path | None = None, modes_Hz=None  # noqa: ANN001 - feeddrive.Response, (4,) Hz
+) -> Path | Figure:
+    """Displacements, velocities and accelerations of the four coordinates (seed 004 Figs 2-4), readable
+    at any length: the first periods of the lowest mode sample by sample, and the spectrum of the
+    whole record per coordinate with the natural frequencies ``modes_Hz`` (Hz) marked where given."""
+    from mtident.feeddrive.simulate import RESPONSE_COLUMNS
+
+    zoom = _zoom(response.time_s, None if modes_Hz is None else float(np.min(modes_Hz)))
+    fig = Figure(figsize=(16, 10.5))
+    axes = fig.subplots(4, 4)
+    t = response.time_s[zoom]
+    for i, ax in enumerate(axes[:3].ravel()):
+        ax.plot(t * 1e3, response.values[zoom, i], lw=0.7)
         ax.set_title(RESPONSE_COLUMNS[i], fontsize=9)
         ax.grid(alpha=0.3)
-    for ax in axes[-1]:
-        ax.set_xlabel("time (s)")
+    for ax in axes[2]:
+        ax.set_xlabel("time (ms)")
+    _draw_spectra(axes[3], response.time_s, response.values, None, modes_Hz)
+    span = response.time_s[-1] - response.time_s[0]
+    fig.suptitle(f"first {1e3 * (t[-1] - t[0]):.3g} ms of {span:.3g} s; spectra over the whole record", fontsize=10)
     return _save(fig, path, 100)
 
 
 def plot_feed_drive_identification(result, response, path: str | Path | None = None, truth=None) -> Path | Figure:  # noqa: ANN001
-    """Estimated vs measured responses (seed 004 Figs 5-7) and parameter convergence with ±2σ (Figs 8-9)."""
+    """Measured, filtered and open-loop model responses over the first periods (seed 004 Figs 5-7), the
+    spectra of measured vs model responses, and parameter convergence with ±2σ (Figs 8-9).
+
+    The filtered responses follow the data whatever the parameters; the open-loop model (the set the
+    consistency check fitted, run with the measured forces alone) shows whether the parameters do."""
+    from mtident.feeddrive.modes import modes
     from mtident.feeddrive.params import IDENTIFIED
     from mtident.feeddrive.simulate import RESPONSE_COLUMNS
 
-    fig = Figure(figsize=(16, 15))
-    axes = fig.subplots(5, 4)
-    t = result.time_s
+    estimate = result.guess.with_identified(result.parameters)
+    frequencies = modes(estimate).frequencies_Hz
+    model = result.model_response(response)
+    zoom = _zoom(result.time_s, float(frequencies[0]))
+    fig = Figure(figsize=(16, 19))
+    axes = fig.subplots(6, 4)
+    t = result.time_s[zoom] * 1e3
     for i, ax in enumerate(axes[:3].ravel()):
-        ax.plot(t, response.values[:, i], lw=0.5, color="0.6", label="measured")
-        ax.plot(t, result.estimated[:, i], lw=0.6, color="tab:red", label="UKF")
-        ax.set_title(RESPONSE_COLUMNS[i], fontsize=9)
+        if RESPONSE_COLUMNS[i] not in result.measured_columns:
+            ax.set_title(f"{RESPONSE_COLUMNS[i]} (not measured)", fontsize=9)
+        else:
+            ax.plot(t, response.values[zoom, i], lw=0.5, color="0.6", label="measured")
+            ax.set_title(RESPONSE_COLUMNS[i], fontsize=9)
+        ax.plot(t, result.estimated[zoom, i], lw=0.6, color="tab:red", label="UKF (filtered)")
+        ax.plot(t, model[zoom, i], lw=0.6, ls="--", color="tab:blue", label="model, open loop")
         ax.grid(alpha=0.3)
+    for ax in axes[2]:
+        ax.set_xlabel("time (ms)")
     axes[0, 0].legend(fontsize=7)
-    for j, ax in enumerate(axes[3:].ravel()):
-        mean, sd = result.history[:, j], result.history_sd[:, j]
-        ax.plot(t, mean, color="tab:blue", lw=1)
-        ax.fill_between(t, mean - 2 * sd, mean + 2 * sd, color="tab:blue", alpha=0.2, lw=0)
+    measured = np.where(np.isin(np.array(RESPONSE_COLUMNS), result.measured_columns), response.values, np.nan)
+    _draw_spectra(axes[3], result.time_s, measured, model, frequencies)
+    stride = max(1, len(result.time_s) // _PANEL_POINTS)
+    th = result.time_s[::stride]
+    for j, ax in enumerate(axes[4:].ravel()):
+        mean, sd = result.history[::stride, j], result.history_std[::stride, j]
+        ax.plot(th, mean, color="tab:blue", lw=1)
+        ax.fill_between(th, mean - 2 * sd, mean + 2 * sd, color="tab:blue", alpha=0.2, lw=0)
         if truth is not None:
             ax.axhline(getattr(truth, IDENTIFIED[j]), color="k", ls="--", lw=1)
-        ax.set_title(f"{IDENTIFIED[j]} ({'identified' if result.identifiable[j] else 'not identifiable'})", fontsize=9)
+        settled = slice(len(th) // 20, None)  # the start, from the guess, would flatten the rest
+        low, high = np.min((mean - 2 * sd)[settled]), np.max((mean + 2 * sd)[settled])
+        if np.isfinite(low) and np.isfinite(high) and high > low:
+            ax.set_ylim(low - 0.2 * (high - low), high + 0.2 * (high - low))
+        ax.set_title(f"{IDENTIFIED[j]} ({'identified' if result.identifiable[j] else 'not identified'})", fontsize=9)
         ax.set_xlabel("time (s)")
         ax.grid(alpha=0.3)
     return _save(fig, path, 90)

@@ -1,0 +1,326 @@
+"""Which test identifies the feed drive: the expected standard deviation of every parameter, from the
+Fisher information of the model at a guess, for candidate excitations, and the cheapest test that
+identifies all eight.
+
+An impulse on the table rings the modes down in a few hundred milliseconds: it pins the stiffnesses
+to a few parts per million but leaves the table's and the screw's axial damping (Bt, Bb) barely
+informed, because a lightly damped mode shows its damping only over many periods of motion.
+A broadband excitation held through the record (a sweep, a binary sequence, a multisine) keeps every
+mode moving, and the information about its damping grows with the record.
+
+The prediction is the Cramér-Rao bound of the filter's own model: the Fisher information of the
+log-parameters for white noise of the stated fraction of each response's RMS (as the filter
+assumes), plus the filter's prior on them (:mod:`mtident.feeddrive.information`). A single sine is
+listed but never recommended: its information is local, and the filter can settle on a wrong set
+that fits one frequency (a 100 Hz sine near the first mode did, 17-45 % off with intervals under 1 %).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mtident._typing import BoolArray, FloatArray
+from mtident.exceptions import InputError
+from mtident.feeddrive.identify import IDENTIFIED_WITHIN, MEASUREMENT_SETS, filter_noise
+from mtident.feeddrive.information import SensitivitySystem, filter_covariance, sensitivity_system
+from mtident.feeddrive.model import Excitation
+from mtident.feeddrive.modes import modes, sampling_problem
+from mtident.feeddrive.params import COORDINATES, IDENTIFIED, FeedDriveParameters, validate
+from mtident.feeddrive.simulate import RESPONSE_COLUMNS
+
+__all__ = [
+    "CandidateTest",
+    "PlanPrediction",
+    "ExcitationPlan",
+    "candidate_tests",
+    "predict_test",
+    "plan_tests",
+    "PLAN_KINDS",
+]
+
+# The kinds a plan tries, simplest first (the order breaks ties in cost).
+PLAN_KINDS = ("impulse", "step", "sweep", "prbs", "multisine", "sine")
+_FORCE_NAMES = {0: "table force", 1: "screw axial force", 2: "screw torque", 3: "motor torque"}
+
+
+@dataclass(frozen=True, slots=True)
+class CandidateTest:
+    """One test: an excitation, how long, how fast it is sampled and what is measured.
+
+    Attributes
+    ----------
+    excitation : Excitation
+    duration_s, sample_rate_Hz : float
+    measured : tuple of int
+        Indices into ``RESPONSE_COLUMNS``.
+    """
+
+    excitation: Excitation
+    duration_s: float
+    sample_rate_Hz: float
+    measured: tuple[int, ...]
+
+    @property
+    def label(self) -> str:
+        """E.g. ``sweep 52-2166 Hz, motor torque, 0.5 s at 10000 Hz``."""
+        e = self.excitation
+        detail = {
+            "sine": f" {e.frequency_Hz:.0f} Hz",
+            "sweep": f" {e.frequency_Hz:.0f}-{e.frequency_end_Hz:.0f} Hz",
+            "multisine": f" {e.frequency_Hz:.0f}-{e.frequency_end_Hz:.0f} Hz",
+            "prbs": f" clock {e.frequency_end_Hz:.0f} Hz",
+        }.get(e.kind, "")
+        return f"{e.kind}{detail}, {_FORCE_NAMES[e.coordinate]}, {self.duration_s:g} s at {self.sample_rate_Hz:g} Hz"
+
+
+@dataclass(frozen=True, slots=True)
+class PlanPrediction:
+    """What a test is expected to tell.
+
+    Attributes
+    ----------
+    candidate : CandidateTest
+    stated_std_log : ndarray, shape (8,)
+        The standard deviation of ln(parameter) the identification will state after the test
+        (≈ relative standard deviation; what its intervals and its "identified" rest on).
+    expected_std_log : ndarray, shape (8,)
+        The scatter of ln(estimate) over repeated tests, where the model fits the drive and the
+        noise is as stated (the stated one is larger: the filter's random walk on the states).
+    identified : ndarray of bool, shape (8,)
+        Stated ±2σ within the plan's target: the identification will call it identified.
+    reason : str or None
+        Why the test is not recommended whatever its numbers (sampling too slow, one frequency).
+    """
+
+    candidate: CandidateTest
+    stated_std_log: FloatArray
+    expected_std_log: FloatArray
+    identified: BoolArray
+    reason: str | None
+
+    @property
+    def identifies_all(self) -> bool:
+        """All eight within the target, and nothing against the test."""
+        return bool(self.identified.all()) and self.reason is None
+
+
+@dataclass(frozen=True, slots=True)
+class ExcitationPlan:
+    """Predictions for every candidate, and the cheapest that identifies all eight (None if none does).
+
+    Attributes
+    ----------
+    guess : FeedDriveParameters
+    target : float
+        Half-width of the ±2σ interval, relative, that counts as identified.
+    noise_fraction : float
+    predictions : tuple of PlanPrediction
+        In the order of cost: shortest, then slowest sampling, then simplest excitation.
+    recommended : PlanPrediction or None
+        The cheapest that identifies all eight (None if none does).
+    closest : PlanPrediction or None
+        The one whose widest interval, relative to the target, is narrowest (the cheapest of
+        equals); the recommended one where there is one. None only if every test is ruled out.
+    """
+
+    guess: FeedDriveParameters
+    target: float
+    noise_fraction: float
+    predictions: tuple[PlanPrediction, ...]
+    recommended: PlanPrediction | None
+    closest: PlanPrediction | None
+
+    def summary(self) -> dict[str, object]:
+        """A JSON-ready dict: every candidate's expected standard deviations (relative) and the recommendation."""
+
+        def one(p: PlanPrediction) -> dict[str, object]:
+            return {
+                "test": p.candidate.label,
+                "kind": p.candidate.excitation.kind,
+                "on": COORDINATES[p.candidate.excitation.coordinate],
+                "duration_s": p.candidate.duration_s,
+                "sample_rate_Hz": p.candidate.sample_rate_Hz,
+                "frequency_Hz": p.candidate.excitation.frequency_Hz,
+                "frequency_end_Hz": p.candidate.excitation.frequency_end_Hz,
+                "measured": [RESPONSE_COLUMNS[i] for i in p.candidate.measured],
+                "stated_std_relative": {n: float(s) for n, s in zip(IDENTIFIED, p.stated_std_log, strict=True)},
+                "expected_std_relative": {n: float(s) for n, s in zip(IDENTIFIED, p.expected_std_log, strict=True)},
+                "identified": {n: bool(k) for n, k in zip(IDENTIFIED, p.identified, strict=True)},
+                "reason": p.reason,
+            }
+
+        return {
+            "target_2sd_relative": self.target,
+            "noise_fraction": self.noise_fraction,
+            "recommended": None if self.recommended is None else one(self.recommended),
+            "closest": None if self.closest is None else one(self.closest),
+            "candidates": [one(p) for p in self.predictions],
+        }
+
+
+def _measured(measured: str | tuple[int, ...]) -> tuple[int, ...]:
+    if isinstance(measured, str):
+        if measured not in MEASUREMENT_SETS:
+            msg = f"measurement set {measured!r} is not one of: {', '.join(MEASUREMENT_SETS)}"
+            raise InputError(msg)
+        return MEASUREMENT_SETS[measured]
+    bad = [i for i in measured if i not in range(len(RESPONSE_COLUMNS))]
+    if bad or not measured:
+        msg = f"measured responses {list(measured)}: expected indices 0-11 of {', '.join(RESPONSE_COLUMNS)}"
+        raise InputError(msg)
+    return tuple(measured)
+
+
+def candidate_tests(
+    guess: FeedDriveParameters,
+    kinds: tuple[str, ...] = PLAN_KINDS,
+    coordinates: tuple[int, ...] = (0, 3),
+    durations_s: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0),
+    sample_rates_Hz: tuple[float, ...] = (10_000.0,),
+    measured: str | tuple[int, ...] = "all",
+) -> list[CandidateTest]:
+    """Candidate tests around the guess's modes.
+
+    The sine is at the first mode; the sweep and the multisine span half the first mode to 1.5 × the
+    highest (at most 0.4 × the sampling rate); the binary sequence is clocked at 3 × the highest mode
+    (at most half the sampling rate), which keeps its power within 3 dB up to 1.3 × that mode.
+
+    Parameters
+    ----------
+    guess : FeedDriveParameters
+    kinds : tuple of str
+        Out of ``PLAN_KINDS``.
+    coordinates : tuple of int
+        Where the force acts: 0 table force, 3 motor torque (1, 2: screw force, screw torque).
+    durations_s, sample_rates_Hz : tuple of float
+    measured : {"all", "realistic"} or tuple of int
+
+    Returns
+    -------
+    list of CandidateTest
+    """
+    frequencies = modes(validate(guess)).frequencies_Hz
+    unknown = [k for k in kinds if k not in PLAN_KINDS]
+    if unknown:
+        msg = f"excitation {unknown[0]!r} is not one of: {', '.join(PLAN_KINDS)}"
+        raise InputError(msg)
+    if any(not (d > 0) for d in durations_s) or any(not (f > 0) for f in sample_rates_Hz):
+        msg = f"durations {list(durations_s)} s and sampling rates {list(sample_rates_Hz)} Hz must be positive"
+        raise InputError(msg)
+    indices = _measured(measured)
+    out = []
+    for rate, duration, kind, coordinate in (
+        (r, d, k, c) for r in sorted(sample_rates_Hz) for d in sorted(durations_s) for k in kinds for c in coordinates
+    ):
+        low, high = 0.5 * frequencies[0], min(1.5 * frequencies[-1], 0.4 * rate)
+        frequency, end = {
+            "sine": (frequencies[0], frequencies[0]),
+            "prbs": (0.0, min(3.0 * frequencies[-1], 0.5 * rate)),
+        }.get(kind, (low, high))
+        out.append(CandidateTest(Excitation(kind, coordinate, 1.0, frequency, end), duration, rate, indices))
+    return out
+
+
+def predict_test(
+    guess: FeedDriveParameters,
+    candidate: CandidateTest,
+    noise_fraction: float = 0.01,
+    target: float = IDENTIFIED_WITHIN,
+    system: SensitivitySystem | None = None,
+) -> PlanPrediction:
+    """The expected standard deviations after ``candidate``, for the filter started at ``guess``.
+
+    Parameters
+    ----------
+    guess : FeedDriveParameters
+    candidate : CandidateTest
+    noise_fraction : float
+        Measurement noise standard deviation as a fraction of each response's RMS.
+    target : float
+        Half-width of the ±2σ interval, relative, that counts as identified.
+    system : SensitivitySystem, optional
+        The guess's sensitivity system at the candidate's sampling and responses (shared among candidates).
+
+    Returns
+    -------
+    PlanPrediction
+    """
+    h = 1.0 / candidate.sample_rate_Hz
+    count = int(round(candidate.duration_s * candidate.sample_rate_Hz)) + 1
+    forces = candidate.excitation.forces(np.arange(count, dtype=np.float64) * h)
+    noise = filter_noise(noise_fraction, len(candidate.measured))
+    stated, scatter = filter_covariance(guess, forces, h, candidate.measured, noise, system)
+    stated_std = np.sqrt(np.diag(stated))
+    reason = sampling_problem(guess, candidate.sample_rate_Hz, "the guess")
+    if reason is None and candidate.excitation.kind == "sine":
+        reason = "one frequency: its information is local, and the filter can settle on a wrong set that fits it"
+    return PlanPrediction(candidate, stated_std, np.sqrt(np.diag(scatter)), 2 * stated_std <= target, reason)
+
+
+def plan_tests(
+    guess: FeedDriveParameters,
+    candidates: list[CandidateTest] | None = None,
+    noise_fraction: float = 0.01,
+    target: float = IDENTIFIED_WITHIN,
+) -> ExcitationPlan:
+    """Predict every candidate and recommend the cheapest that identifies all eight parameters.
+
+    Cost is the test's duration, then its sampling rate, then the excitation's simplicity
+    (the order of ``PLAN_KINDS``), table force before motor torque.
+
+    Parameters
+    ----------
+    guess : FeedDriveParameters
+        Where the information is evaluated: the best knowledge of the drive (an earlier estimate).
+    candidates : list of CandidateTest, optional
+        Default: :func:`candidate_tests` of the guess.
+    noise_fraction : float
+        Measurement noise standard deviation as a fraction of each response's RMS.
+    target : float
+        Half-width of the ±2σ interval, relative, that counts as identified (default ±10 %).
+
+    Returns
+    -------
+    ExcitationPlan
+
+    Examples
+    --------
+    Seed 004's impulse at 1 % noise leaves the guideway damping Bt barely known; with sensors a
+    hundred times finer, 2 s of it identify all eight:
+
+    >>> tests = candidate_tests(FeedDriveParameters(), kinds=("impulse",), coordinates=(0,), durations_s=(0.5, 2.0))
+    >>> plan = plan_tests(FeedDriveParameters(), tests)
+    >>> [round(200 * p.stated_std_log[IDENTIFIED.index("Bt")]) for p in plan.predictions]  # Bt's ±2σ, %
+    [72, 46]
+    >>> print(plan.recommended)
+    None
+    >>> plan_tests(FeedDriveParameters(), tests, noise_fraction=1e-4).recommended.candidate.label
+    'impulse, table force, 2 s at 10000 Hz'
+    """
+    guess = validate(guess)
+    if not (0 < target < 10 and noise_fraction > 0):
+        msg = (
+            f"target {target:g} and noise fraction {noise_fraction:g}: "
+            "expected 0 < target < 10 (relative) and a positive noise"
+        )
+        raise InputError(msg)
+    chosen = candidate_tests(guess) if candidates is None else list(candidates)
+
+    def cost(c: CandidateTest) -> tuple[float, float, int, int]:
+        return (c.duration_s, c.sample_rate_Hz, PLAN_KINDS.index(c.excitation.kind), c.excitation.coordinate)
+
+    systems: dict[tuple[float, tuple[int, ...]], SensitivitySystem] = {}
+    for c in chosen:  # one per sampling rate and measured set, shared by the excitations
+        key = (c.sample_rate_Hz, c.measured)
+        systems.setdefault(key, sensitivity_system(guess, 1.0 / c.sample_rate_Hz, c.measured))
+    predictions = tuple(
+        predict_test(guess, c, noise_fraction, target, systems[(c.sample_rate_Hz, c.measured)])
+        for c in sorted(chosen, key=cost)
+    )
+    recommended = next((p for p in predictions if p.identifies_all), None)
+    allowed = [p for p in predictions if p.reason is None]
+    # min keeps the first of equals: the cheapest
+    closest = recommended or (min(allowed, key=lambda p: float(np.max(p.stated_std_log))) if allowed else None)
+    return ExcitationPlan(guess, target, noise_fraction, predictions, recommended, closest)
