@@ -79,7 +79,8 @@ def normalisation_from_reference(reference_output: FloatArray) -> FloatArray:
     [0.8485, 1.1314]
     """
     y0 = np.asarray(reference_output, dtype=float)
-    return np.abs(y0) * np.sqrt(y0.shape[-1] / np.sum(y0**2, axis=-1, keepdims=True))
+    normalisation: FloatArray = np.abs(y0) * np.sqrt(y0.shape[-1] / np.sum(y0**2, axis=-1, keepdims=True))
+    return normalisation
 
 
 def residual_memory(
@@ -89,7 +90,8 @@ def residual_memory(
     scaled = innovation if fading.normalisation is None else innovation / fading.normalisation
     outer = scaled[..., :, None] * scaled[..., None, :]
     xi = fading.forgetting
-    return np.where(first[..., None, None], outer, (xi * memory + outer) / (1.0 + xi))
+    updated: FloatArray = np.where(first[..., None, None], outer, (xi * memory + outer) / (1.0 + xi))
+    return updated
 
 
 def fading_value(
@@ -102,7 +104,8 @@ def fading_value(
         emission_cov = emission_cov / scale
     numerator = np.trace(memory - fading.weakening * emission_cov, axis1=-2, axis2=-1)
     denominator = np.trace(innovation_cov, axis1=-2, axis2=-1)
-    return np.clip(numerator / denominator, 1.0, fading.max_factor)
+    factor: FloatArray = np.clip(numerator / denominator, 1.0, fading.max_factor)
+    return factor
 
 
 @dataclass(frozen=True, slots=True)
