@@ -6,16 +6,40 @@ import json
 import re
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
+
+from mtident.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def mtident(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "mtident", *args], capture_output=True, text=True, timeout=300, check=False)
+@dataclass(frozen=True)
+class Outcome:
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def mtident(*args: str) -> Outcome:
+    """The command in-process (a subprocess costs 1-2 s of start-up a call): exit code, stdout, stderr.
+    What a process boundary is for is tested with real processes below (`python -m mtident`, the
+    modules a command imports, matplotlib's backend) and in test_watch (SIGKILL, SIGINT)."""
+    result = CliRunner().invoke(main, list(args), catch_exceptions=False)
+    return Outcome(result.exit_code, result.stdout, result.stderr)
+
+
+def test_python_dash_m_mtident_runs_end_to_end():
+    """Smoke test of the entry point in a process of its own: one JSON object on stdout, exit 0.
+    (The other tests call the command in-process; test_watch runs `python -m mtident thermal
+    watch` in processes it kills and resumes.)"""
+    out = subprocess.run([sys.executable, "-m", "mtident", "thermal", "identify", "@sample", "--sensor", "T1", "--method", "ukf", "--json"], capture_output=True, text=True, timeout=300, check=False)
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["sensor"] == "T1" and "Traceback" not in out.stderr
 
 
 def test_help_lists_the_command_groups():
@@ -83,7 +107,7 @@ def test_a_sensor_whose_name_holds_a_comma_can_be_asked_for(tmp_path):
     rows = "".join(f"{m:g};{26.7 - 8.8 * np.exp(-0.016 * m):.3f};{20 + 0.01 * m:.2f}\n".replace(".", ",") for m in t)
     log = tmp_path / "komma.csv"
     log.write_text("Zeit;Temp, Spindel;Temp, Motor\n" + rows)
-    out = mtident("thermal", "identify", str(log), "--sensor", "Temp, Spindel", "--json")
+    out = mtident("thermal", "identify", str(log), "--sensor", "Temp, Spindel", "--method", "ukf", "--json")  # the name, not the method, is tested
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["sensor"] == "Temp, Spindel"
 
@@ -132,9 +156,10 @@ def test_user_errors_are_one_line_without_traceback(args, message):
     ],
 )
 @pytest.mark.parametrize("command", [["thermal", "identify", "@sample"], ["thermal", "watch", "@sample", "--replay"], ["feeddrive", "simulate", "--duration", "0.01", "--out", "r.csv"]])
-def test_a_bad_plot_path_is_refused_before_the_work(tmp_path, command, plot, message):
+def test_a_bad_plot_path_is_refused_before_the_work(tmp_path, monkeypatch, command, plot, message):
     """A mistyped folder used to end the whole run in an errno message about a temporary file."""
-    out = subprocess.run([sys.executable, "-m", "mtident", *command, "--plot", plot], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    monkeypatch.chdir(tmp_path)
+    out = mtident(*command, "--plot", plot)
     assert out.returncode == 2 and "Traceback" not in out.stderr
     assert message in out.stderr
     assert not list(tmp_path.iterdir())  # nothing was computed or written
@@ -148,22 +173,24 @@ def test_a_bad_plot_path_is_refused_before_the_work(tmp_path, command, plot, mes
     ],
 )
 @pytest.mark.parametrize("command", [["thermal", "identify", "@sample", "--curve"], ["feeddrive", "simulate", "--duration", "0.01", "--out"]])
-def test_a_bad_output_path_is_refused_before_the_work(tmp_path, command, path, message):
+def test_a_bad_output_path_is_refused_before_the_work(tmp_path, monkeypatch, command, path, message):
     """The simulation's --out used to be checked only when written, after the work (pandas' "Cannot
     save file into a non-existent directory")."""
-    out = subprocess.run([sys.executable, "-m", "mtident", *command, path], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    monkeypatch.chdir(tmp_path)
+    out = mtident(*command, path)
     assert out.returncode == 2 and "Traceback" not in out.stderr
     assert message in out.stderr
     assert not list(tmp_path.iterdir())
 
 
-def test_identify_writes_its_curves_for_a_spreadsheet(tmp_path):
+def test_identify_writes_its_curves_for_a_spreadsheet(tmp_path, monkeypatch):
     import pandas as pd
 
     from mtident.io import read_temperature_log, sample_log_path
     from mtident.thermal import identify
 
-    out = subprocess.run([sys.executable, "-m", "mtident", "thermal", "identify", "@sample", "--sensor", "T1,T9", "--window", "30", "--method", "ukf", "--curve", "c.csv"], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    monkeypatch.chdir(tmp_path)
+    out = mtident("thermal", "identify", "@sample", "--sensor", "T1,T9", "--window", "30", "--method", "ukf", "--curve", "c.csv")
     assert out.returncode == 0, out.stderr
     assert "curves written to c.csv (401 rows to t = 400 min)" in out.stderr
     table = pd.read_csv(tmp_path / "c.csv")
@@ -176,9 +203,10 @@ def test_identify_writes_its_curves_for_a_spreadsheet(tmp_path):
 
 
 @pytest.mark.parametrize(("name", "magic"), [("fit.svg", b"<?xml"), ("fit.pdf", b"%PDF"), ("fit.PNG", b"\x89PNG"), ("fit", b"\x89PNG")])
-def test_the_plot_suffix_chooses_the_picture_format(tmp_path, name, magic):
+def test_the_plot_suffix_chooses_the_picture_format(tmp_path, monkeypatch, name, magic):
     """'fit.svg' used to be written as a PNG (the temporary file's suffix chose the format)."""
-    out = subprocess.run([sys.executable, "-m", "mtident", "thermal", "identify", "@sample", "--sensor", "T1", "--plot", name], capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+    monkeypatch.chdir(tmp_path)
+    out = mtident("thermal", "identify", "@sample", "--sensor", "T1", "--method", "ukf", "--plot", name)  # the picture, not the method, is tested
     assert out.returncode == 0, out.stderr
     assert (tmp_path / name).read_bytes().startswith(magic)
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]  # no temporary file left beside it
@@ -199,15 +227,15 @@ def test_a_dead_column_can_be_left_out_as_the_error_says(tmp_path):
     path = tmp_path / "dead.csv"
     # a few readings, then none: refused, with the advice
     path.write_text("time_min,dead,A,room\n" + "".join(f"{tk:g},{'20.0' if tk < 3 else ''},{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t))
-    out = mtident("thermal", "identify", str(path), "--window", "30")
+    out = mtident("thermal", "identify", str(path), "--window", "30", "--method", "ukf")  # the columns, not the method, are tested
     assert out.returncode == 2 and "leave this sensor out with --sensor" in out.stderr
     # never a reading (an unplugged channel, an event channel that logged nothing): left out with a note
     path.write_text("time_min,dead,A,room\n" + "".join(f"{tk:g},,{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t))
-    out = mtident("thermal", "identify", str(path), "--window", "30", "--json")
+    out = mtident("thermal", "identify", str(path), "--window", "30", "--method", "ukf", "--json")
     assert out.returncode == 0 and "left out, no readings in them: dead" in out.stderr
     assert [d["sensor"] for d in json.loads(out.stdout)["sensors"]] == ["A", "room"]
     for extra in ((), ("--ambient", "room")):
-        out = mtident("thermal", "identify", str(path), "--sensor", "A", "--window", "30", "--json", *extra)
+        out = mtident("thermal", "identify", str(path), "--sensor", "A", "--window", "30", "--method", "ukf", "--json", *extra)
         assert out.returncode == 0, out.stderr
         assert json.loads(out.stdout)["sensor"] == "A"
 
@@ -237,7 +265,7 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     assert data["sensor"] == "spindle"  # the room column is the input, not a sensor
     assert "named as a room sensor" not in out.stderr
     # without --ambient the column named as the room is a sensor, and the user is told of the option
-    out = mtident("thermal", "identify", str(path), "--window", "60", "--json")
+    out = mtident("thermal", "identify", str(path), "--window", "60", "--method", "ukf", "--json")  # the columns, not the method, are tested
     assert out.returncode == 0, out.stderr
     assert [d["sensor"] for d in json.loads(out.stdout)["sensors"]] == ["spindle", "room"]
     assert "'room' is named as a room sensor and identified as a machine sensor; if it measures the room, --ambient room makes it" in out.stderr
@@ -264,36 +292,36 @@ def test_plots_leave_the_users_matplotlib_alone_and_return_a_figure_without_a_pa
     assert out.stdout.split() == ["svg", "Figure", "2"]
 
 
-def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats():
+@pytest.fixture(scope="module")
+def loaded_modules(tmp_path_factory: pytest.TempPathFactory) -> dict[str, bool]:
+    """One fresh process (an interpreter's start-up costs 1-2 s) runs `thermal watch --replay` of a
+    numeric log, then `thermal identify` of the sample with the default method, and says after each
+    which modules it had loaded."""
+    folder = tmp_path_factory.mktemp("imports")
+    (folder / "log.csv").write_text("time_min,T1\n" + "".join(f"{m},{26.7 - 8.8 * 2.718281828 ** (-m / 62.5):.2f}\n" for m in range(60)))
+    code = (
+        "import json, sys; from mtident.cli import main; "
+        "main(['thermal', 'watch', 'log.csv', '--replay', '--json'], standalone_mode=False); "
+        "watch = {'pandas': 'pandas' in sys.modules}; "
+        "main(['thermal', 'identify', '@sample', '--sensor', 'T1', '--json'], standalone_mode=False); "
+        "print(json.dumps({'watch': watch, 'identify': {m: m in sys.modules for m in ('mtident.cli_feeddrive', 'scipy.stats', 'mtident.cli_thermal')}}))"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=folder, timeout=300)
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats(loaded_modules):
     """Start-up: commands load on first use (`mtident --version` took 0.60-0.78 s with every
     command imported, 0.08-0.10 s without), and identify's F quantile comes from
-    scipy.special (importing scipy.stats for it cost 0.5 s of each `thermal identify`)."""
-    import subprocess
-    import sys
-
-    code = (
-        "import sys; from mtident.cli import main; "
-        "main(['thermal', 'identify', '@sample', '--sensor', 'T1', '--json'], standalone_mode=False); "
-        "print([m in sys.modules for m in ('mtident.cli_feeddrive', 'scipy.stats', 'mtident.cli_thermal')])"
-    )
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert result.stdout.strip().splitlines()[-1] == "[False, False, True]"
+    scipy.special (importing scipy.stats for it cost 0.5 s of each `thermal identify`).
+    Here after a watch and an identify in one process."""
+    assert loaded_modules["identify"] == {"mtident.cli_feeddrive": False, "scipy.stats": False, "mtident.cli_thermal": True}
 
 
-def test_watch_of_a_numeric_log_does_not_load_pandas(tmp_path):
+def test_watch_of_a_numeric_log_does_not_load_pandas(loaded_modules):
     """pandas costs 0.5 s of start-up; a check for two-column time stamps loaded it for every log
-    (watch's replay of the sample: 1.9 s against 1.0 s)."""
-    import subprocess
-    import sys
-
-    (tmp_path / "log.csv").write_text("time_min,T1\n" + "".join(f"{m},{26.7 - 8.8 * 2.718281828 ** (-m / 62.5):.2f}\n" for m in range(60)))
-    code = (
-        "import sys; from mtident.cli import main; "
-        "main(['thermal', 'watch', 'log.csv', '--replay', '--json'], standalone_mode=False); "
-        "print('pandas' in sys.modules)"
-    )
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
-    assert result.stdout.strip().splitlines()[-1] == "False"
+    (watch's replay of the sample: 1.9 s against 1.0 s). The watch is the process's first command."""
+    assert loaded_modules["watch"] == {"pandas": False}
 
 
 def test_min_time_table_gives_l_to_a_tenth_of_a_minute_for_a_fast_log(tmp_path):

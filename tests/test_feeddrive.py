@@ -5,8 +5,7 @@ from __future__ import annotations
 import json
 import math
 import re
-import subprocess
-import sys
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -201,8 +200,17 @@ def test_identify_errors():
         identify_feed_drive(dead)
 
 
-def run(*args):
-    return subprocess.run([sys.executable, "-m", "mtident", *args], capture_output=True, text=True, timeout=600, check=False)
+@dataclass(frozen=True)
+class Outcome:
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def run(*args: str) -> Outcome:
+    """The command in-process (test_cli runs `python -m mtident` in a process of its own)."""
+    result = CliRunner().invoke(main, list(args), catch_exceptions=False)
+    return Outcome(result.exit_code, result.stdout, result.stderr)
 
 
 def test_cli_modes_simulate_identify(tmp_path):

@@ -177,9 +177,13 @@ def test_any_summer_time_change_reads_alike_whole_and_live(tmp_path_factory, day
     import datetime as dt
 
 
-    rows = max(int(7200 / step_s), 8) if step_s < 60 else int(14400 / step_s) + 1
-    first = dt.datetime.fromisoformat(day) + dt.timedelta(minutes=start_min)
     change = dt.datetime.fromisoformat(day) + dt.timedelta(hours=3 if back and day.startswith("2026-10") else 2)
+    if step_s < 60:  # 1-s and 10-s rows: 5 min with the change 1-4 min from the start (the follower
+        rows = 300 // step_s  # parses a stamp a row: two hours of 1-s rows from midnight cost 2-4 s an example)
+        first = change - dt.timedelta(minutes=1 + start_min % 4)
+    else:  # four hours from midnight + start_min: the change in them, or (started after it) not
+        rows = int(14400 / step_s) + 1
+        first = dt.datetime.fromisoformat(day) + dt.timedelta(minutes=start_min)
     real = [first + dt.timedelta(seconds=step_s * k) for k in range(rows)]
     clock = [r - dt.timedelta(hours=1) if back and r >= change else r + dt.timedelta(hours=1) if not back and r >= change else r for r in real]
     text = "time,T1\n" + "".join(f"{c.strftime(fmt)},{20 + k / rows:.4f}\n" for k, c in enumerate(clock))
