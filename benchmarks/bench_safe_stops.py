@@ -17,9 +17,11 @@ a JSON-lines file, one case a line, so a long run can be resumed and several can
 (``--shard K/N``); ``--report`` summarises a file.
 
 The seeds used while the rules were tuned are 0-299 (the global search checked against brute
-force, the misfit threshold); seeds 1000-1008 were seen once, in a first run that found a
-conduction body's sensor fitted with a false confidence. The default seeds (2000 on) were never
-looked at before this benchmark ran.
+force, the misfit threshold). Seeds 1000-1008 and 2000-2417 were evaluation runs of earlier
+rules; their failures were looked at (a conduction body's far sensor fitted with false
+confidence; fast transients taking the place of a slow mode in a three-mode family) and the
+rules changed, so they are no longer held out. The default seeds (3000 on) were never looked at
+before this benchmark ran.
 
 Run: python benchmarks/bench_safe_stops.py --cases 500 --out results.jsonl [--shard 1/2]
      python benchmarks/bench_safe_stops.py --report results.jsonl
@@ -48,7 +50,7 @@ from mtident.thermal.synthetic import modal_amplitudes, random_warmup, reference
 TOLERANCE_C = 0.2
 FRACTIONS = (0.25, 0.5)
 NEAR_FIRST_ORDER_SHARE = 0.97
-FIRST_SEED = 2000
+FIRST_SEED = 3000
 
 
 def _log(t: np.ndarray, y: np.ndarray, name: str) -> TemperatureLog:

@@ -65,7 +65,7 @@ __all__ = [
 # five hours; ISO 230-3 warm-ups run 4-6 h for that reason. A mode slower than this is
 # taken as absent; said in every answer.
 DEFAULT_MAX_TIME_CONSTANT_MIN = 300.0
-MAX_MODES = 3
+MAX_MODES = 4
 # A bin spans about this fraction of the time since the log began: fast modes are resolved
 # early, and a record of any length keeps a few hundred bins.
 BIN_FRACTION = 0.02
@@ -120,12 +120,18 @@ class ModeFamily:
         reference's, and no other mode is allowed.
     reference_box : tuple of float
         Relative half-width of each reference time constant's box (0.1: ±10 %).
+    free_fast : int
+        With a reference: up to this many more modes, free, faster than the reference's fastest
+        box. A reference run pins a machine's slow modes; a fast one (a sensor's lag, a local
+        transient, a mode the run could not resolve) left out would take a slow mode's place in
+        the fit and pin T∞ falsely.
     """
 
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
     max_modes: int = MAX_MODES
     reference_min: tuple[float, ...] | None = None
     reference_box: tuple[float, ...] = ()
+    free_fast: int = 0
 
     def without_reference(self) -> ModeFamily:
         """The same family without the reference's boxes."""
@@ -354,7 +360,7 @@ class _Problem:
 
     def bounds(self, k: int) -> FloatArray:
         if self.family.reference_min is not None:
-            return _reference_grid(self.family)[1]
+            return _reference_bounds(self.family, self.tau_bounds[0], k - len(self.family.reference_min))
         return np.tile(self.tau_bounds, (k, 1))
 
 
@@ -472,20 +478,38 @@ def _grid_fits(problem: _Problem) -> list[_Fits]:
     return out
 
 
-def _reference_grid(family: ModeFamily, points: int = 7) -> tuple[FloatArray, FloatArray]:
-    """A grid over the reference's boxes: (T, k) time constants and the bounds (k, 2)."""
+def _reference_bounds(family: ModeFamily, fast_lo: float, extra: int) -> FloatArray:
+    """Bounds (k, 2) of a reference family's time constants: the boxes, then ``extra`` free fast
+    modes from ``fast_lo`` to the fastest box's lower end."""
     ref = np.asarray(family.reference_min, dtype=float)
     box = np.asarray(family.reference_box, dtype=float)
     bounds = np.column_stack([ref * (1 - box), ref * (1 + box)])
+    fast = np.tile([min(fast_lo, bounds[:, 0].min()), bounds[:, 0].min()], (extra, 1))
+    return np.concatenate([bounds, fast]) if extra else bounds
+
+
+def _reference_grids(family: ModeFamily, fast_lo: float, points: int = 7) -> list[FloatArray]:
+    """Grids (T, k) over the reference's boxes, one per number of free fast modes."""
+    bounds = _reference_bounds(family, fast_lo, 0)
     axes = [np.geomspace(lo, hi, points) for lo, hi in bounds]
-    grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(ref), -1).T
-    return grid, bounds
+    grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(bounds), -1).T
+    grids = [grid]
+    ceiling = float(bounds[:, 0].min())
+    fast = np.geomspace(fast_lo, ceiling, max(2, int(np.ceil(np.log(ceiling / fast_lo) / np.log(_MAX_GRID_RATIO))) + 1)) if ceiling > fast_lo else np.empty(0)
+    apart = max(1, int(np.ceil(np.log(MIN_MODE_RATIO) / np.log(_MAX_GRID_RATIO))))
+    for extra in range(1, family.free_fast + 1):
+        combos = _grid_tuples(len(fast), extra, apart)
+        if not len(combos):
+            break
+        taus = fast[combos]
+        grids.append(np.concatenate([np.repeat(grid, len(taus), axis=0), np.tile(taus, (len(grid), 1))], axis=1))
+    return grids
 
 
 def _candidates(problem: _Problem) -> list[_Fits]:
     """Every model of the family's search grid, fitted."""
     if problem.family.reference_min is not None:
-        return [_fit(problem, _reference_grid(problem.family)[0])]
+        return [_fit(problem, grid) for grid in _reference_grids(problem.family, problem.tau_bounds[0])]
     return _grid_fits(problem)
 
 
@@ -570,7 +594,7 @@ def _refine(problem: _Problem, fits: _Fits, i: int, objective: _RssObjective | _
     down, which a search on a grid or along the axes misses."""
     k = fits.tau.shape[1]
     bounds = np.log(problem.bounds(k))
-    apart = problem.family.reference_min is None and k > 1
+    apart = (problem.family.reference_min is None or problem.family.free_fast > 0) and k > 1
 
     inputs = problem.kernel_inputs()
     penalty = problem.penalty(k)
@@ -706,7 +730,7 @@ def _lattice_search(problem: _Problem, starts: list[_Fits], objective: _EndObjec
     phi = np.log(np.concatenate([f.tau for f in starts]))
     offsets = np.array(np.meshgrid(*[[-1.0, 0.0, 1.0]] * k, indexing="ij")).reshape(k, -1).T
     step = np.log(_MAX_GRID_RATIO)
-    apart = problem.family.reference_min is None and k > 1
+    apart = (problem.family.reference_min is None or problem.family.free_fast > 0) and k > 1
     for _ in range(rounds):
         lattice = np.clip(phi[:, None, :] + step * offsets[None], bounds[:, 0], bounds[:, 1])
         flat = lattice.reshape(-1, k)

@@ -376,11 +376,14 @@ def _status(estimate: SensorEstimate, within: bool, ready: bool) -> str:
 
 
 def _next_check(now: float, estimate: SensorEstimate, passes: int, readings: Readings, settings: MonitorSettings) -> float:
-    """When to check the sensor again: after the next reading while it passes; else after a share
-    of the time since its warm-up began that grows with how far its interval is from the tolerance."""
+    """When to check the sensor again: after the next reading while it confirms a first pass; else
+    after a share of the time since its warm-up began, which grows with how far its interval is
+    from the tolerance (a sensor that may stop, waiting for the others, at the shortest share)."""
     step = sampling_interval_min(readings.time_min)
-    if estimate.fit is None or passes:
+    if estimate.fit is None or 0 < passes < settings.consecutive_checks:
         return now + step
+    if passes:
+        return now + max(step, settings.check_spacing * (now - estimate.onset_min))
     ratio = estimate.half_width(settings.decision_level) / settings.tolerance_C
     factor = 1.0 if ratio <= 1.5 else 2.0 if ratio <= 5.0 else 4.0
     return now + max(step, settings.check_spacing * factor * (now - estimate.onset_min))

@@ -39,6 +39,9 @@ MIN_REFERENCE_BOX = 0.10
 # modes at a factor of 3 put T∞ 0.7 °C outside a 99 % interval of ±0.08 °C; correct fits rarely
 # reach 2.5.
 MISFIT_FACTOR = 2.5
+# With a reference, up to this many free modes faster than its fastest (the cost of a check grows
+# with each).
+MAX_FREE_FAST = 2
 # A test whose readings a fit with free time constants describes better than the reference's
 # boxes at this level does not follow the reference.
 DISAGREEMENT_LEVEL = 0.99
@@ -69,7 +72,7 @@ class RobustSettings:
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
     room_wander_C_per_h: float = 0.05
     levels: tuple[float, ...] = (0.95, 0.99)
-    max_modes: int = 3
+    max_modes: int = 4
 
 
 @dataclass(frozen=True)
@@ -97,7 +100,7 @@ class Assumptions:
     max_time_constant_min: float
     room: str
     reference: str | None = None
-    model: str = "a sum of up to three exponential modes"
+    model: str = "a sum of up to four exponential modes"
 
     def to_dict(self) -> dict[str, object]:
         """The JSON object of the contract's ``assumptions``."""
@@ -255,7 +258,7 @@ def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSe
     family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
     if reference is not None:
         boxes = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box)
-        boxed = ModeFamily(settings.max_time_constant_min, len(reference.time_constants_min), tuple(reference.time_constants_min), boxes)
+        boxed = ModeFamily(settings.max_time_constant_min, len(reference.time_constants_min), tuple(reference.time_constants_min), boxes, free_fast=free_fast(reference, settings))
         fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=boxed, levels=settings.levels, refine_within=refine_within)
         # the free fit costs most of a check: where the boxed answer is far from any decision, the
         # cheap tests alone decide whether to use it
@@ -269,6 +272,12 @@ def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSe
             "or did the reference run miss a mode? The answer does not use the reference",
         )
     return fit_steady_state(binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels, refine_within=refine_within), False
+
+
+def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
+    """How many free modes faster than a reference's a test may add (the total at most
+    ``settings.max_modes``, and at most ``MAX_FREE_FAST``)."""
+    return max(0, min(MAX_FREE_FAST, settings.max_modes - len(reference.time_constants_min)))
 
 
 def _disagreement(binned: Binned, noise: float, interval: float, boxed: SteadyState, family: ModeFamily, likelihood_ratio: bool = True) -> str | None:
