@@ -390,7 +390,7 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
     text = " ".join(out.split())
     assert "Not yet: keep the test running." in text and "still fits" in text
     assert "Ways on: continue the test, or give a reference run of this machine" in text
-    assert "Assumes: a sum of up to three exponential modes, time constants up to 300 min" in text
+    assert "Assumes: a sum of up to four exponential modes, time constants up to 300 min" in text
 
 
 def test_watch_old_options_are_taken_with_a_note(tmp_path):

@@ -160,7 +160,7 @@ def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineRe
     type=click.Choice(IDENTIFY_METHODS),
     default=DEFAULT_METHOD,
     show_default=True,
-    help="robust: sums of up to three exponential modes, with an interval over every model the data cannot exclude. "
+    help="robust: sums of up to four exponential modes, with an interval over every model the data cannot exclude. "
     "The papers' first-order filters (their interval assumes a first-order machine): ukf, aukf (Xia 2014), fukf, afukf (Yu 2019), or lsq (least squares).",
 )
 @click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True, help="First-order filters: initial values and tuning from the data, or a paper's exactly.")
@@ -214,7 +214,7 @@ def identify_command(
             msg = "--reference needs the model-robust method (--method robust): the first-order filters have one mode and no reference to use"
             raise InputError(msg)
         result = identify(log, window_min, method, preset, horizon_min, pseudo_seed, room)
-        stderr.print("mtident: note: the papers' first-order model: the interval assumes a first-order machine (a slower mode not yet seen moves T∞ beyond it); --method robust covers up to three modes", highlight=False)
+        stderr.print("mtident: note: the papers' first-order model: the interval assumes a first-order machine (a slower mode not yet seen moves T∞ beyond it); --method robust covers up to four modes", highlight=False)
     for note in result.notes[len(log.notes):]:
         stderr.print(f"mtident: warning: {note}", highlight=False)
     if plot_path:
@@ -233,7 +233,7 @@ def identify_command(
 
 
 def _identify_table(source: str, result: Identification | RobustIdentification, summaries: list[dict[str, object]], method: str, preset: str) -> None:
-    how = "model-robust: up to three modes" if method == ROBUST_METHOD else f"{method}, preset {preset}: first order"
+    how = "model-robust: up to four modes" if method == ROBUST_METHOD else f"{method}, preset {preset}: first order"
     table = Table(title=f"{source}: identified from the first {result.window_min:g} min ({how})")
     for column in ("sensor", "T∞ (°C)", "95 % interval", "t_eq (min)", "RMSE (°C)", "trusted", "measured T / t_eq"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))

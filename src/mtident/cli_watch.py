@@ -72,7 +72,7 @@ def watch_command(
 ) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
-    Each sensor's readings so far are fitted with sums of up to three exponential modes; a
+    Each sensor's readings so far are fitted with sums of up to four exponential modes; a
     sensor may stop when every model the data cannot exclude (modes up to --max-time-constant,
     or near a reference run's) puts its steady-state temperature T∞ within the tolerance, at
     two checks in a row. The test may stop when every sensor may. Until then the answer says

@@ -406,7 +406,7 @@ def identify(
     window_min : float
         Identification time L (minutes from the first sample).
     method : {"robust", "ukf", "aukf", "fukf", "afukf", "lsq"}
-        "robust" (the model-robust estimate: sums of up to three modes, an interval over every
+        "robust" (the model-robust estimate: sums of up to four modes, an interval over every
         model the data cannot exclude; :func:`~mtident.thermal.robust_identify.identify_robust`
         for its settings), or one of the papers' first-order filters, whose interval assumes a
         first-order machine.

@@ -6,7 +6,7 @@ capacity) of the structure, with a lagged sensor or a distant part giving modes 
 either sign. The papers' first-order model keeps one mode; a machine has several, and
 a slow one not yet visible in the data moves T∞ far from what one mode predicts.
 
-This module fits up to three modes, their time constants at least a factor
+This module fits up to four modes, their time constants at least a factor
 ``MIN_MODE_RATIO`` apart, to all the data so far, by variable projection: for given time constants the
 model is linear in T∞ and the amplitudes, so only the time constants are searched,
 first on a log grid from the sampling interval to the largest time constant the
@@ -215,7 +215,7 @@ class SteadyState:
     correlation_factor : float
         How much the residuals' correlation widens the interval's variance (1: none).
     rss, dof : float
-        Weighted residual sum of squares and degrees of freedom of the best three-mode fit.
+        Weighted residual sum of squares and degrees of freedom of the best fit with the most modes.
     n_bins : int
     room_level_C : float or None
         The room's last level, where a room sensor is used.

@@ -8,7 +8,7 @@ are records a terminal, a web page or a test renders or asserts on. Persistence 
 from the dataclass fields (:mod:`mtident.persist`); resuming is loading a state.
 
 The decision rests on the model-robust interval (:mod:`mtident.thermal.robust`): a sensor may
-stop when every model the data cannot exclude (sums of up to three modes with time constants
+stop when every model the data cannot exclude (sums of up to four modes with time constants
 up to the largest the machine may have, or within a reference run's boxes) puts T∞ within the
 tolerance of the estimate, at the decision's level, at two checks in a row. The test may stop
 when every sensor may. Checks come as the data come: every few per cent of the time since the

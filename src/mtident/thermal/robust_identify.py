@@ -1,6 +1,6 @@
 """Identify every sensor of a log with the model-robust estimate: the default of ``identify``.
 
-Each sensor's readings up to the identification time are fitted with sums of up to three
+Each sensor's readings up to the identification time are fitted with sums of up to four
 exponential modes (:mod:`mtident.thermal.robust`); the answer is the best-fitting model's course
 and T∞, with the interval over every model the data cannot exclude. The predicted curve's band
 is the envelope of the best model and the two models that set the interval's ends.

@@ -40,7 +40,7 @@ METHODS = ("ukf", "aukf", "fukf", "afukf", "lsq")
 PRESETS = ("data", "xia2014", "yu2019")
 # Chosen by the Monte Carlo study in benchmarks/bench_thermal.py (closest to the
 # Cramér-Rao bound with calibrated intervals); see README.
-# the model-robust estimate (sums of up to three modes); the others are the papers' first-order filters
+# the model-robust estimate (sums of up to four modes); the others are the papers' first-order filters
 ROBUST_METHOD = "robust"
 IDENTIFY_METHODS = (ROBUST_METHOD, *METHODS)
 DEFAULT_METHOD = ROBUST_METHOD
