@@ -180,18 +180,19 @@ def replay(columns: dict[str, np.ndarray], t: np.ndarray = T, room: np.ndarray |
 
 def test_a_first_order_machine_known_from_a_reference_stops_early_and_right():
     """A reference of one mode (the machine is known to be first order): the stop comes before
-    0.4·t95, as the papers' filters' did, and within the tolerance."""
+    0.85·t95 (0.72-0.81 on these seeds: the test may still hold up to two free modes faster than
+    the reference's, which a reference run can miss), and within the tolerance."""
     for seed in (1, 2):
         state = replay({"S": noisy(first_order(T), seed)}, reference=one_mode_reference("S"))
         check = state.checks[0]
-        assert state.stopped and state.stop_time_min <= 0.45 * PAPER_T95, state.stop_time_min
+        assert state.stopped and state.stop_time_min <= 0.85 * PAPER_T95, state.stop_time_min
         assert abs(check.steady_C - 26.7) < 0.2 and check.low_C <= 26.7 <= check.high_C
         assert check.reference_used and check.model_ok
 
 
 def test_without_a_reference_a_first_order_machine_stops_late_but_right():
     """Nothing excludes a mode of 300 min until the data do: the honest stop is late."""
-    t = np.arange(0.0, 601.0, 4.0)  # every 4 min: stops at 384 min (every 2 min at 506), in a quarter of the time
+    t = np.arange(0.0, 761.0, 4.0)  # every 4 min: stops at 696 min, 3.7·t95 (four modes up to 300 min)
     state = replay({"S": noisy(first_order(t), 3)}, t)
     check = state.checks[0]
     assert state.stopped and state.stop_time_min > PAPER_T95
@@ -228,14 +229,14 @@ def test_fast_plus_slow_does_not_stop_with_a_wrong_answer():
     assert check.low_C <= 27.9 <= check.high_C and check.high_C - check.low_C < 1.0
 
 
-BATCHED_T = np.arange(0.0, 121.0)
+BATCHED_T = np.arange(0.0, 181.0)
 BATCHED_Y = noisy(first_order(BATCHED_T), 6)[:, None]
 
 
 @functools.cache
 def monitored_whole() -> MonitorState:
-    """The monitor fed the papers' curve's 121 readings at once, with a one-mode reference (it stops
-    at 70 min), computed once for the tests below: each run costs 1-2 s of model-robust fits."""
+    """The monitor fed the papers' curve's 181 readings at once, with a one-mode reference (it stops
+    at 148 min), computed once for the tests below: each run costs 1-2 s of model-robust fits."""
     state, _ = monitor_step(new_state(["S"]), BATCHED_T, BATCHED_Y, None, MonitorSettings(reference=one_mode_reference("S")))
     assert state.stopped  # a decision to compare, not two monitors that never stop
     return state
@@ -251,11 +252,11 @@ def test_the_readiness_predicate_needs_a_trusted_model_within_the_tolerance():
     assert not is_within(estimate, MonitorSettings(tolerance_C=0.01, reference=one_mode_reference("S")))
 
 
-# 3 drawn examples and one around the stop at 70 min, fed a reading at a time there (each costs a
+# 3 drawn examples and one around the stop at 148 min, fed a reading at a time there (each costs a
 # monitor run of 1-2 s; 6 drawn examples, each with its own whole run, took 20-28 s)
 @settings(max_examples=3, deadline=None)
-@example(cuts=[69, 70, 71])
-@given(cuts=st.lists(st.integers(min_value=1, max_value=120), min_size=1, max_size=4, unique=True))
+@example(cuts=[147, 148, 149])
+@given(cuts=st.lists(st.integers(min_value=1, max_value=180), min_size=1, max_size=4, unique=True))
 def test_the_decision_does_not_depend_on_how_the_readings_are_batched(cuts):
     t, y = BATCHED_T, BATCHED_Y
     options = MonitorSettings(reference=one_mode_reference("S"))
@@ -317,7 +318,7 @@ def test_a_drifting_room_measured_by_a_room_sensor_stops_within_the_tolerance():
 
 def test_the_state_file_lives_beside_the_log_and_a_replay_starts_afresh(tmp_path):
     log = tmp_path / "run.csv"
-    log.write_text(csv_text(T[:100], {"S": noisy(first_order(T[:100]), 9)}))
+    log.write_text(csv_text(T[:180], {"S": noisy(first_order(T[:180]), 9)}))
     options = MonitorSettings(reference=one_mode_reference("S"))
     assert default_state_path(log) == tmp_path / "run.csv.watch-state.npz"
     first = WatchSession(log, options)
@@ -333,7 +334,7 @@ def test_the_state_file_lives_beside_the_log_and_a_replay_starts_afresh(tmp_path
 
 def test_a_different_log_copied_over_the_same_path_is_not_resumed(tmp_path):
     log = tmp_path / "run.csv"
-    log.write_text(csv_text(T[:100], {"S": noisy(first_order(T[:100]), 10)}))
+    log.write_text(csv_text(T[:180], {"S": noisy(first_order(T[:180]), 10)}))
     options = MonitorSettings(reference=one_mode_reference("S"))
     session = WatchSession(log, options)
     session.poll()
@@ -371,7 +372,7 @@ def test_watch_replay_json_says_the_decision_what_it_assumes_and_checks_it(tmp_p
     assert code == 0, err
     data = json.loads(out)
     assert set(data) >= {"stop_time_min", "steady_state_C", "steady_state_ci95_C", "equilibrium_time_min", "model_ok", "warnings", "assumptions", "sensors", "decision"}
-    assert data["decision"] == "stop" and data["stop_time_min"] <= 0.45 * PAPER_T95 and data["reason"] is None
+    assert data["decision"] == "stop" and data["stop_time_min"] <= 0.85 * PAPER_T95 and data["reason"] is None
     assert data["assumptions"]["max_time_constant_min"] == 300.0 and "reference.csv" in data["assumptions"]["reference"]
     assert "random walk of 0.05 °C in an hour" in data["assumptions"]["room"]
     for sensor, truth in zip(data["sensors"], (26.7, 29.0), strict=True):
