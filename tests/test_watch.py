@@ -26,7 +26,7 @@ from mtident.io.follow import LogFollower
 from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
 from mtident.thermal.reference import MachineReference
-from mtident.thermal.robust import SensorModes
+from mtident.thermal.robust import RobustSettings, SensorModes
 from mtident.thermal.session import SavedWatch, WatchSession, default_state_path
 
 T = np.arange(0.0, 401.0)
@@ -188,6 +188,21 @@ def test_a_first_order_machine_known_from_a_reference_stops_early_and_right():
         assert state.stopped and state.stop_time_min <= 0.85 * PAPER_T95, state.stop_time_min
         assert abs(check.steady_C - 26.7) < 0.2 and check.low_C <= 26.7 <= check.high_C
         assert check.reference_used and check.model_ok
+
+
+def test_a_reference_said_to_hold_every_mode_stops_as_early_as_the_papers_filters():
+    """--free-fast-modes 0: no mode faster than the reference's, an assumption the answer states;
+    the stop comes by about 0.4·t95 (66 and 75 min: 0.35 and 0.40 on these seeds), within the tolerance."""
+    from mtident.thermal.monitor import assumptions
+
+    settings = MonitorSettings(reference=one_mode_reference("S"), robust=RobustSettings(free_fast_modes=0))
+    for seed in (1, 2):
+        state = replay({"S": noisy(first_order(T), seed)}, reference=settings.reference, robust=settings.robust)
+        check = state.checks[0]
+        assert state.stopped and state.stop_time_min <= 0.41 * PAPER_T95, state.stop_time_min
+        assert abs(check.steady_C - 26.7) < 0.2 and check.low_C <= 26.7 <= check.high_C
+    assert "no mode faster than these (assumed: --free-fast-modes 0)" in str(assumptions(settings, "S").reference)
+    assert "up to 2 free mode(s) faster than these" in str(assumptions(MonitorSettings(reference=one_mode_reference("S")), "S").reference)
 
 
 def test_without_a_reference_a_first_order_machine_stops_late_but_right():
@@ -409,6 +424,8 @@ def test_watch_refuses_a_missing_reference_and_a_bad_tolerance(tmp_path):
     assert code == 2 and "no such file (learn one with `mtident thermal learn" in err
     code, _, err = run("thermal", "watch", str(log), "--replay", "--tolerance", "nan")
     assert code == 2 and "--tolerance" in err
+    code, _, err = run("thermal", "watch", str(log), "--replay", "--free-fast-modes", "3")
+    assert code == 2 and "--free-fast-modes" in err and "0<=x<=2" in err
 
 
 def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):

@@ -19,6 +19,7 @@ from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperatur
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 from mtident.thermal.identify import Identification
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
+from mtident.thermal.robust import MAX_FREE_FAST
 from mtident.thermal.settings import IDENTIFY_METHODS, ROBUST_METHOD
 
 if TYPE_CHECKING:
@@ -126,6 +127,18 @@ def reference_option(func):  # noqa: ANN001,ANN201 - click decorator
     )(func)
 
 
+def free_fast_option(func):  # noqa: ANN001,ANN201 - click decorator
+    return click.option(
+        "--free-fast-modes",
+        "free_fast_modes",
+        type=click.IntRange(0, MAX_FREE_FAST),
+        default=MAX_FREE_FAST,
+        show_default=True,
+        help="With --reference: how many modes faster than the reference's a test may add, free (a reference run can miss a mode). "
+        "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, which the answer states.",
+    )(func)
+
+
 def max_time_constant_option(func):  # noqa: ANN001,ANN201 - click decorator
     return click.option(
         "--max-time-constant",
@@ -166,6 +179,7 @@ def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineRe
 @click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True, help="First-order filters: initial values and tuning from the data, or a paper's exactly.")
 @max_time_constant_option
 @reference_option
+@free_fast_option
 @click.option("--room-wander", "room_wander", type=FiniteFloatRange(min=0.0), default=0.05, show_default=True, help="robust, without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk).")
 @click.option("--horizon", "horizon_min", type=FiniteFloatRange(min=0, min_open=True), help="Predict to this time (min).")
 @click.option("--pseudo-seed", type=int, help="First-order filters: predict with the noisy pseudo-measurements of Xia et al. (2014), Eqs 21-22, from this seed.")
@@ -184,6 +198,7 @@ def identify_command(
     preset: str,
     max_tau_min: float,
     reference_path: str | None,
+    free_fast_modes: int,
     room_wander: float,
     horizon_min: float | None,
     pseudo_seed: int | None,
@@ -206,7 +221,7 @@ def identify_command(
         if preset != "data" or pseudo_seed is not None:
             msg = f"--{'preset' if preset != 'data' else 'pseudo-seed'} is a setting of the papers' first-order filters: give --method ukf, aukf, fukf, afukf or lsq with it"
             raise InputError(msg)
-        settings = RobustSettings(max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander)
+        settings = RobustSettings(max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes)
         with stderr.status(f"fitting {len(log.sensors)} sensor(s)…"):
             result: Identification | RobustIdentification = identify_robust(log, window_min, room, settings, load_reference_file(reference_path), horizon_min, ambient_col)
     else:

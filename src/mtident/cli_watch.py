@@ -18,7 +18,20 @@ from rich.console import Console
 from rich.table import Table
 
 from mtident.cli import FiniteFloatRange, PicturePath, print_json, user_errors
-from mtident.cli_thermal import _column_layout, _fmt, _say_room_candidates, asked_sensors, load_reference_file, log_options, log_path, max_time_constant_option, reference_option, stderr, thermal
+from mtident.cli_thermal import (
+    _column_layout,
+    _fmt,
+    _say_room_candidates,
+    asked_sensors,
+    free_fast_option,
+    load_reference_file,
+    log_options,
+    log_path,
+    max_time_constant_option,
+    reference_option,
+    stderr,
+    thermal,
+)
 from mtident.exceptions import InputError
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
@@ -35,6 +48,7 @@ _SAID = ("note", "warning", "ready", "not ready", "stop")
 @click.option("--confidence", "decision_level", type=FiniteFloatRange(min=0.5, max=0.999), default=0.99, show_default=True, help="Confidence level of the interval the decision uses.")
 @max_time_constant_option
 @reference_option
+@free_fast_option
 @click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes an input of every mode's heat balance, so a drifting room does not fool the rule.")
 @click.option("--room-wander", "room_wander", type=FiniteFloatRange(min=0.0), default=0.05, show_default=True, help="Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 takes the room as steady.")
 @click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible (afresh, unless --resume).")
@@ -57,6 +71,7 @@ def watch_command(
     decision_level: float,
     max_tau_min: float,
     reference_path: str | None,
+    free_fast_modes: int,
     ambient_col: str | None,
     room_wander: float,
     replay: bool,
@@ -91,7 +106,7 @@ def watch_command(
     settings = MonitorSettings(
         tolerance_C=tolerance_C,
         decision_level=decision_level,
-        robust=RobustSettings(max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander),
+        robust=RobustSettings(max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes),
         reference=load_reference_file(reference_path),
         room_sensor=ambient_col,
     )

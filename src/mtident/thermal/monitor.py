@@ -29,7 +29,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.thermal.modes import model_curve
 from mtident.thermal.reference import MachineReference
-from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, estimate_sensor, sampling_interval_min
+from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, describe_assumptions, estimate_sensor, sampling_interval_min
 
 __all__ = [
     "Event",
@@ -467,14 +467,7 @@ def _candidate_times(now: float, horizon: float, origin: float) -> list[float]:
 
 def assumptions(settings: MonitorSettings, sensor: str) -> Assumptions:
     """What a sensor's interval rests on, as the answer says it."""
-    if settings.room_sensor is not None:
-        room = f"measured by {settings.room_sensor!r}, an input of every mode; T∞ at the room's last level"
-    elif settings.robust.room_wander_C_per_h > 0:
-        room = f"not measured; taken to wander as a random walk of {settings.robust.room_wander_C_per_h:g} °C in an hour"
-    else:
-        room = "not measured; taken as steady"
-    reference = None if settings.reference is None else settings.reference.describe(sensor)
-    return Assumptions(settings.robust.max_time_constant_min, room, reference)
+    return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor)
 
 
 def result(state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None) -> dict[str, object]:

@@ -10,6 +10,7 @@ agrees with them), and the verdict a script reads (``model_ok`` and the warnings
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.special import chdtri, ndtri
@@ -19,11 +20,15 @@ from mtident.thermal.lsq import flat_lead
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, Binned, ModeFamily, SteadyState, best_fit, bin_samples, fit_steady_state
 from mtident.thermal.settings import display_resolution, noise_sigma
 
+if TYPE_CHECKING:
+    from mtident.thermal.reference import MachineReference
+
 __all__ = [
     "Assumptions",
     "RobustSettings",
     "SensorEstimate",
     "SensorModes",
+    "describe_assumptions",
     "estimate_sensor",
     "rise_threshold_C",
     "sampling_interval_min",
@@ -67,12 +72,17 @@ class RobustSettings:
         Confidence levels of the intervals computed (the report's and the decision's).
     max_modes : int
         At most this many modes.
+    free_fast_modes : int
+        With a reference: at most this many free modes faster than its fastest box, which a
+        reference run can miss (0 assumes the reference holds every mode of the machine: the
+        earliest stops, and an assumption every answer then states).
     """
 
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
     room_wander_C_per_h: float = 0.05
     levels: tuple[float, ...] = (0.95, 0.99)
     max_modes: int = 4
+    free_fast_modes: int = MAX_FREE_FAST
 
 
 @dataclass(frozen=True)
@@ -276,8 +286,23 @@ def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSe
 
 def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
     """How many free modes faster than a reference's a test may add (the total at most
-    ``settings.max_modes``, and at most ``MAX_FREE_FAST``)."""
-    return max(0, min(MAX_FREE_FAST, settings.max_modes - len(reference.time_constants_min)))
+    ``settings.max_modes``, and at most ``settings.free_fast_modes``)."""
+    return max(0, min(settings.free_fast_modes, settings.max_modes - len(reference.time_constants_min)))
+
+
+def describe_assumptions(settings: RobustSettings, room_sensor: str | None, reference: MachineReference | None, sensor: str) -> Assumptions:
+    """What a sensor's interval rests on, in words."""
+    if room_sensor is not None:
+        room = f"measured by {room_sensor!r}, an input of every mode; T∞ at the room's last level"
+    elif settings.room_wander_C_per_h > 0:
+        room = f"not measured; taken to wander as a random walk of {settings.room_wander_C_per_h:g} °C in an hour"
+    else:
+        room = "not measured; taken as steady"
+    if reference is None or sensor not in reference.sensors:
+        return Assumptions(settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor))
+    extra = free_fast(reference.sensors[sensor], settings)
+    faster = f"up to {extra} free mode(s) faster than these" if extra else "no mode faster than these (assumed: --free-fast-modes 0)"
+    return Assumptions(settings.max_time_constant_min, room, f"{reference.describe(sensor)}; {faster}")
 
 
 def _disagreement(binned: Binned, noise: float, interval: float, boxed: SteadyState, family: ModeFamily, likelihood_ratio: bool = True) -> str | None:

@@ -20,12 +20,12 @@ from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, measured_equilibrium, rmse
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference
-from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, estimate_sensor
+from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, describe_assumptions, estimate_sensor
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["RobustIdentification", "identify_robust", "robust_assumptions"]
+__all__ = ["RobustIdentification", "identify_robust"]
 
 REPORT_LEVEL = 0.95
 # the prediction runs this many of the slowest mode's time constants past the window, at least
@@ -156,17 +156,6 @@ def _model_dict(e: SensorEstimate) -> dict[str, object]:
     }
 
 
-def robust_assumptions(settings: RobustSettings, room_sensor: str | None, reference: MachineReference | None, sensor: str) -> Assumptions:
-    """What a sensor's interval rests on, in words."""
-    if room_sensor is not None:
-        room = f"measured by {room_sensor!r}, an input of every mode; T∞ at the room's last level"
-    elif settings.room_wander_C_per_h > 0:
-        room = f"not measured; taken to wander as a random walk of {settings.room_wander_C_per_h:g} °C in an hour"
-    else:
-        room = "not measured; taken as steady"
-    return Assumptions(settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor))
-
-
 def identify_robust(
     log: TemperatureLog,
     window_min: float,
@@ -241,7 +230,7 @@ def identify_robust(
         band_low_C=low,
         band_high_C=high,
         estimates=estimates,
-        assumptions=tuple(robust_assumptions(settings, room_sensor, reference, name) for name in log.sensors),
+        assumptions=tuple(describe_assumptions(settings, room_sensor, reference, name) for name in log.sensors),
         rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
