@@ -301,7 +301,7 @@ def describe_assumptions(settings: RobustSettings, room_sensor: str | None, refe
     if reference is None or sensor not in reference.sensors:
         return Assumptions(settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor))
     extra = free_fast(reference.sensors[sensor], settings)
-    faster = f"up to {extra} free mode(s) faster than these" if extra else "no mode faster than these (assumed: --free-fast-modes 0)"
+    faster = f"up to {extra} free mode(s) faster than these" if extra else "no mode faster than these (assumed)"
     return Assumptions(settings.max_time_constant_min, room, f"{reference.describe(sensor)}; {faster}")
 
 
