@@ -257,7 +257,7 @@ def estimate_sensor(
     if len(binned) < MIN_BINS:
         return _without_fit(sensor, "too few readings", rise, noise, float(t[onset]), settings, f"{len(binned)} readings since its warm-up began: too few for a model")
     fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes, refine_within)
-    intervals = _with_room_wander(fit, room_C is not None, settings)
+    intervals = _nested(_with_room_wander(fit, room_C is not None, settings))
     ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, notes)
     return SensorEstimate(sensor, "estimated", fit, float(t[onset]), rise, noise, intervals, ok, *notes.said(), reference_used, int(wild.sum()))
 
@@ -349,6 +349,17 @@ def _with_room_wander(fit: SteadyState, room_measured: bool, settings: RobustSet
         extra = float(ndtri(0.5 + q / 2.0)) * sd
         out[q] = (fit.steady_C - float(np.hypot(fit.steady_C - lo, extra)), fit.steady_C + float(np.hypot(hi - fit.steady_C, extra)))
     return out
+
+
+def _nested(intervals: dict[float, tuple[float, float]]) -> dict[float, tuple[float, float]]:
+    """The intervals with each level's inside every higher level's: a lower level's end the
+    search left open (infinite) is bounded by the higher level's end."""
+    out: dict[float, tuple[float, float]] = {}
+    outer = (-np.inf, np.inf)
+    for q in sorted(intervals, reverse=True):
+        lo, hi = intervals[q]
+        out[q] = outer = (max(lo, outer[0]), min(hi, outer[1]))
+    return dict(sorted(out.items()))
 
 
 class _Notes:
