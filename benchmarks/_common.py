@@ -22,6 +22,8 @@ def filterpy_ukf(dim_x: int, dim_z: int, fx, hx, x0, P0, Q, R, alpha=1.0, beta=2
     """A filterpy UnscentedKalmanFilter set up like ours (MerweScaledSigmaPoints)."""
     from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
-    ukf = UnscentedKalmanFilter(dim_x=dim_x, dim_z=dim_z, dt=1.0, fx=fx, hx=hx, points=MerweScaledSigmaPoints(dim_x, alpha, beta, kappa))
+    ukf = UnscentedKalmanFilter(
+        dim_x=dim_x, dim_z=dim_z, dt=1.0, fx=fx, hx=hx, points=MerweScaledSigmaPoints(dim_x, alpha, beta, kappa)
+    )
     ukf.x, ukf.P, ukf.Q, ukf.R = np.array(x0, float), np.array(P0, float), np.array(Q, float), np.array(R, float)
     return ukf

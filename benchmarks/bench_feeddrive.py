@@ -52,9 +52,16 @@ def accuracy() -> None:
         result = identify_feed_drive(response, measured=measured)
         errors, covers = result.errors_percent(truth), result.covers(truth)
         print(f"\nmeasured: {measured} ({', '.join(result.measured_columns)})")
-        print(f"{'param':>6} {'guess':>11} {'estimate':>11} {'2σ %':>8} {'error %':>9} {'±2σ covers':>11} {'identified':>11}")
+        print(
+            f"{'param':>6} {'guess':>11} {'estimate':>11} {'2σ %':>8} {'error %':>9} {'±2σ covers':>11} "
+            f"{'identified':>11}"
+        )
         for i, name in enumerate(IDENTIFIED):
-            print(f"{name:>6} {getattr(result.guess, name):11.5g} {result.parameters[i]:11.5g} {200 * result.parameters_std[i] / result.parameters[i]:8.3g} {errors[name]:9.3g} {str(covers[name]):>11} {str(bool(result.identifiable[i])):>11}")
+            print(
+                f"{name:>6} {getattr(result.guess, name):11.5g} {result.parameters[i]:11.5g} "
+                f"{200 * result.parameters_std[i] / result.parameters[i]:8.3g} {errors[name]:9.3g} "
+                f"{str(covers[name]):>11} {str(bool(result.identifiable[i])):>11}"
+            )
         print("correlation (Table 2): " + ", ".join(f"{k} {v:.5f}" for k, v in result.correlation.items()))
 
 
@@ -84,7 +91,10 @@ def speed() -> None:
         d = h / m
         f = lambda y: a @ y + np.concatenate([np.zeros(4), drive])  # noqa: E731
         for _ in range(m):
-            k1 = f(x); k2 = f(x + d / 2 * k1); k3 = f(x + d / 2 * k2); k4 = f(x + d * k3)  # noqa: E702
+            k1 = f(x)
+            k2 = f(x + d / 2 * k1)
+            k3 = f(x + d / 2 * k2)
+            k4 = f(x + d * k3)  # noqa: E702
             x = x + d / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         return np.concatenate([x / scale[:8], z[8:]])
 
@@ -93,7 +103,16 @@ def speed() -> None:
         x = z[:8] * scale[:8]
         return np.concatenate([x, a[4:] @ x + drive]) / scale
 
-    ukf = filterpy_ukf(16, 12, fx, hx, np.zeros(16), np.diag([1e-4] * 8 + [0.25] * 8), np.diag([1e-8] * 8 + [1e-12] * 8), np.diag((0.01 * np.ones(12)) ** 2))
+    ukf = filterpy_ukf(
+        16,
+        12,
+        fx,
+        hx,
+        np.zeros(16),
+        np.diag([1e-4] * 8 + [0.25] * 8),
+        np.diag([1e-8] * 8 + [1e-12] * 8),
+        np.diag((0.01 * np.ones(12)) ** 2),
+    )
     drives = response.forces * m_inv
     start = time.perf_counter()
     for k in range(1, steps + 1):
@@ -101,20 +120,42 @@ def speed() -> None:
         ukf.update(response.values[k] / scale, drive=drives[k])
     t_peer = (time.perf_counter() - start) * 20_000 / steps
     print(f"\n20,000-step identification (16 states, 12 responses, RK4 with {m} sub-steps):")
-    print(f"  mtident {t_ours:.2f} s (real time: 2.00 s)   filterpy {t_peer:.0f} s (300 steps timed, scaled)   ratio filterpy/mtident = {t_peer / t_ours:.0f}x")
+    print(
+        f"  mtident {t_ours:.2f} s (real time: 2.00 s)   filterpy {t_peer:.0f} s (300 steps timed, scaled)   ratio "
+        f"filterpy/mtident = {t_peer / t_ours:.0f}x"
+    )
     print(f"  with the open-loop check: mtident {t_checked:.2f} s   ratio filterpy/mtident = {t_peer / t_checked:.0f}x")
 
 
 # A heavy, soft drive (400 kg table, 20 mm lead): every mode below 110 Hz.
-HEAVY = FeedDriveParameters(Mt=400.0, Mb=40.0, Jm=4e-3, Jb=6e-3, K1=1.0e7, K2=1.5e7, K3=700.0, K4=250.0,
-                            beta=0.02 / (2 * math.pi), Bt=20.0, Bb=20.0, Qm=0.05, Qb=0.05)
+HEAVY = FeedDriveParameters(
+    Mt=400.0,
+    Mb=40.0,
+    Jm=4e-3,
+    Jb=6e-3,
+    K1=1.0e7,
+    K2=1.5e7,
+    K3=700.0,
+    K4=250.0,
+    beta=0.02 / (2 * math.pi),
+    Bt=20.0,
+    Bb=20.0,
+    Qm=0.05,
+    Qb=0.05,
+)
 
 
 def rates() -> None:
     print("\nsampling rates (2 s; noise 1 %; guess 30 % off):")
     print(f"{'drive':>7} {'excitation':>10} {'fs Hz':>7}  result")
-    cases = [(FeedDriveParameters(), "shipped", Excitation(), fs) for fs in (50, 100, 500, 1000, 2000, 5000, 7000, 8000, 10_000, 20_000, 50_000)]
-    cases += [(FeedDriveParameters(), "shipped", Excitation("sweep", 0, 20.0, 50.0, 0.4 * fs), fs) for fs in (1000, 8000, 50_000)]
+    cases = [
+        (FeedDriveParameters(), "shipped", Excitation(), fs)
+        for fs in (50, 100, 500, 1000, 2000, 5000, 7000, 8000, 10_000, 20_000, 50_000)
+    ]
+    cases += [
+        (FeedDriveParameters(), "shipped", Excitation("sweep", 0, 20.0, 50.0, 0.4 * fs), fs)
+        for fs in (1000, 8000, 50_000)
+    ]
     cases += [(HEAVY, "heavy", Excitation("impulse", 0, 200.0), fs) for fs in (500, 1000)]
     for truth, name, excitation, fs in cases:
         record = simulate(truth, excitation, float(fs), 2.0, noise_fraction=0.01, rng=np.random.default_rng(1))
@@ -125,12 +166,17 @@ def rates() -> None:
             print(f"{name:>7} {excitation.kind:>10} {fs:7d}  refused: {str(exc)[:150]}")
             continue
         errors = result.errors_percent(truth)
-        print(f"{name:>7} {excitation.kind:>10} {fs:7d}  ok in {time.perf_counter() - start:.1f} s: K error max {max(errors[k] for k in IDENTIFIED[:4]):.3g} %, "
-              f"±2σ covers {sum(result.covers(truth).values())}/8, identified {int(result.identifiable.sum())}/8, reproduces record {result.reproduces_record()}")
+        print(
+            f"{name:>7} {excitation.kind:>10} {fs:7d}  ok in {time.perf_counter() - start:.1f} s: K error max "
+            f"{max(errors[k] for k in IDENTIFIED[:4]):.3g} %, "
+            f"±2σ covers {sum(result.covers(truth).values())}/8, identified {int(result.identifiable.sum())}/8, "
+            f"reproduces record {result.reproduces_record()}"
+        )
 
 
 def _old_rule(result, record, noise_fraction: float = 0.01) -> float:  # noqa: ANN001
-    """The check before issue 21: replay from the filtered state a tenth in, worst RMS misfit / noise (alarm above 3)."""
+    """The check before issue 21: replay from the filtered state a tenth in, worst RMS misfit / noise
+    (alarm above 3)."""
     estimate = result.guess.with_identified(result.parameters)
     start = len(record.time_s) // 10
     phi, gamma = exact_step(system_matrix(estimate), input_matrix(estimate), float(record.time_s[1] - record.time_s[0]))
@@ -145,39 +191,71 @@ def false_alarms(drives: int = 6, draws: int = 20) -> None:
     while len(pairs) < drives:
         truth = random_drive(rng)
         pairs.append((truth, random_guess(truth, rng)))
-    print(f"\nopen-loop check on correct estimates: {drives} drives x {draws} noise draws, impulse, 2 s, noise 1 %, guess 30 % off")
+    print(
+        f"\nopen-loop check on correct estimates: {drives} drives x {draws} noise draws, impulse, 2 s, noise 1 %, "
+        "guess 30 % off"
+    )
     old_total = new_total = 0
     for d, (truth, guess) in enumerate(pairs):
         fs = max(10_000.0, math.ceil(6 * modes(guess).frequencies_Hz[-1] / 1000) * 1000)
         old = new = covered = 0
         worst = 0.0
         for seed in range(draws):
-            record = simulate(truth, Excitation(), fs, 2.0, noise_fraction=0.01, rng=np.random.default_rng(1000 * d + seed))
+            record = simulate(
+                truth, Excitation(), fs, 2.0, noise_fraction=0.01, rng=np.random.default_rng(1000 * d + seed)
+            )
             result = identify_feed_drive(record, guess)
             old += _old_rule(result, record) > 3.0
             new += not result.reproduces_record()
             covered += all(result.covers(truth).values())
             worst = max(worst, float(result.consistency.misfit.max()))
         old_total, new_total = old_total + old, new_total + new
-        print(f"  drive {d} ({fs:.0f} Hz): all eight within ±2σ in {covered}/{draws}; alarms before {old}, now {new} (worst misfit {worst:.3f})")
+        print(
+            f"  drive {d} ({fs:.0f} Hz): all eight within ±2σ in {covered}/{draws}; alarms before {old}, now {new} "
+            f"(worst misfit {worst:.3f})"
+        )
     total = drives * draws
-    print(f"  false-alarm rate: before {old_total}/{total} = {100 * old_total / total:.1f} %, now {new_total}/{total} = {100 * new_total / total:.1f} %")
+    print(
+        f"  false-alarm rate: before {old_total}/{total} = {100 * old_total / total:.1f} %, now {new_total}/{total} = "
+        f"{100 * new_total / total:.1f} %"
+    )
     truth = FeedDriveParameters()
     for duration in (0.3, 2.0):
-        sine = simulate(truth, Excitation("sine", frequency_Hz=100.0), 10_000.0, duration, noise_fraction=0.01, rng=np.random.default_rng(3))
+        sine = simulate(
+            truth,
+            Excitation("sine", frequency_Hz=100.0),
+            10_000.0,
+            duration,
+            noise_fraction=0.01,
+            rng=np.random.default_rng(3),
+        )
         result = identify_feed_drive(sine, default_guess())
-        print(f"  100 Hz sine, {duration:g} s: ±2σ covers {sum(result.covers(truth).values())}/8, reproduces record {result.reproduces_record()} "
-              f"(misfit {result.consistency.misfit.max():.3g}, distance {result.consistency.distance:.3g})")
+        print(
+            f"  100 Hz sine, {duration:g} s: ±2σ covers {sum(result.covers(truth).values())}/8, reproduces record "
+            f"{result.reproduces_record()} "
+            f"(misfit {result.consistency.misfit.max():.3g}, distance {result.consistency.distance:.3g})"
+        )
 
 
 def _scatter(truth, guess, candidate, noise_fraction: float, draws: int) -> None:  # noqa: ANN001
     prediction = plan_tests(guess, [candidate], noise_fraction).predictions[0]
-    excitation = Excitation(candidate.excitation.kind, candidate.excitation.coordinate, 20.0, candidate.excitation.frequency_Hz,
-                            candidate.excitation.frequency_end_Hz)
+    excitation = Excitation(
+        candidate.excitation.kind,
+        candidate.excitation.coordinate,
+        20.0,
+        candidate.excitation.frequency_Hz,
+        candidate.excitation.frequency_end_Hz,
+    )
     logs, stated, identified = [], [], []
     for seed in range(draws):
-        record = simulate(truth, excitation, candidate.sample_rate_Hz, candidate.duration_s, noise_fraction=noise_fraction,
-                          rng=np.random.default_rng(500 + seed))
+        record = simulate(
+            truth,
+            excitation,
+            candidate.sample_rate_Hz,
+            candidate.duration_s,
+            noise_fraction=noise_fraction,
+            rng=np.random.default_rng(500 + seed),
+        )
         result = identify_feed_drive(record, guess, noise_fraction=noise_fraction, check=False)
         logs.append(np.log(result.parameters / truth.identified()))
         stated.append(result.parameters_std / result.parameters)
@@ -185,17 +263,27 @@ def _scatter(truth, guess, candidate, noise_fraction: float, draws: int) -> None
     scatter = np.std(logs, axis=0, ddof=1)
     reported = np.mean(stated, axis=0)
     print(f"\n{candidate.label}, noise {noise_fraction:g}, {draws} draws (relative standard deviations, %):")
-    print(f"{'param':>6} {'predicted':>10} {'measured':>10} {'ratio':>6} | {'stated: predicted':>17} {'reported':>9} | identified")
+    print(
+        f"{'param':>6} {'predicted':>10} {'measured':>10} {'ratio':>6} | {'stated: predicted':>17} {'reported':>9} | "
+        "identified"
+    )
     for j, name in enumerate(IDENTIFIED):
-        print(f"{name:>6} {100 * prediction.expected_std_log[j]:10.4g} {100 * scatter[j]:10.4g} {scatter[j] / prediction.expected_std_log[j]:6.2f} | "
-              f"{100 * prediction.stated_std_log[j]:17.4g} {100 * reported[j]:9.4g} | {np.mean(np.array(identified)[:, j]):.2f}")
+        print(
+            f"{name:>6} {100 * prediction.expected_std_log[j]:10.4g} {100 * scatter[j]:10.4g} "
+            f"{scatter[j] / prediction.expected_std_log[j]:6.2f} | "
+            f"{100 * prediction.stated_std_log[j]:17.4g} {100 * reported[j]:9.4g} | "
+            f"{np.mean(np.array(identified)[:, j]):.2f}"
+        )
 
 
 def plan_check(draws: int = 40) -> None:
     truth = FeedDriveParameters()
     first = identify_feed_drive(simulate(truth, noise_fraction=0.01, rng=np.random.default_rng(99)), default_guess())
     estimate = first.guess.with_identified(first.parameters)
-    print("\nafter seed 004's impulse (2 s, noise 1 %): not identified:", [n for n, k in zip(IDENTIFIED, first.identifiable, strict=True) if not k])
+    print(
+        "\nafter seed 004's impulse (2 s, noise 1 %): not identified:",
+        [n for n, k in zip(IDENTIFIED, first.identifiable, strict=True) if not k],
+    )
     for noise in (0.01, 1e-4):
         plan = plan_tests(estimate, noise_fraction=noise)
         chosen = plan.recommended or plan.closest

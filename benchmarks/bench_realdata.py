@@ -41,7 +41,10 @@ def main() -> None:
     for c in heaters:
         learnt, _ = learn_reference(_log(c))
         references[c.name] = learnt
-    print(f"{'curve':>28} {'t95':>5} {'at':>5} {'robust T∞ [95 %]':>26} {'ok':>3} {'covers':>6} {'first-order T∞ [95 %]':>26} {'covers':>6}")
+    print(
+        f"{'curve':>28} {'t95':>5} {'at':>5} {'robust T∞ [95 %]':>26} {'ok':>3} {'covers':>6} "
+        f"{'first-order T∞ [95 %]':>26} {'covers':>6}"
+    )
     for c in curves:
         truth = truth_of[c.name]
         for fraction in (0.25, 0.5):
@@ -53,7 +56,8 @@ def main() -> None:
             first = identify(_log(c), window, "ukf")
             flo, fhi = first.steady_state_ci95()[0]
             print(
-                f"{c.name:>28} {c.t95_min:5.1f} {window:5.1f} {robust.steady_state_C[0]:8.2f} [{lo:7.2f}, {hi:7.2f}] {'yes' if robust.model_ok[0] else 'no':>3} {str(lo <= truth <= hi):>6} "
+                f"{c.name:>28} {c.t95_min:5.1f} {window:5.1f} {robust.steady_state_C[0]:8.2f} [{lo:7.2f}, {hi:7.2f}] "
+                f"{'yes' if robust.model_ok[0] else 'no':>3} {str(lo <= truth <= hi):>6} "
                 f"{first.steady_state_C[0]:8.2f} [{flo:7.2f}, {fhi:7.2f}] {str(flo <= truth <= fhi):>6}"
             )
     print(f"\nMonitor (tolerance {TOLERANCE_C} °C at 99 %), against where each record settled:")
@@ -62,10 +66,31 @@ def main() -> None:
         for label, reference in (("no reference", None), ("reference: the other run", others[0] if others else None)):
             if label != "no reference" and reference is None:
                 continue
-            reference = None if reference is None else type(reference)(reference.source, reference.learnt_on, reference.max_time_constant_min, reference.room, {"S": reference.sensors["S"]})
-            state, _ = monitor_step(new_state(["S"]), c.time_min, c.reading_C[:, None], None, MonitorSettings(tolerance_C=TOLERANCE_C, reference=reference))
+            reference = (
+                None
+                if reference is None
+                else type(reference)(
+                    reference.source,
+                    reference.learnt_on,
+                    reference.max_time_constant_min,
+                    reference.room,
+                    {"S": reference.sensors["S"]},
+                )
+            )
+            state, _ = monitor_step(
+                new_state(["S"]),
+                c.time_min,
+                c.reading_C[:, None],
+                None,
+                MonitorSettings(tolerance_C=TOLERANCE_C, reference=reference),
+            )
             check = state.checks[0]
-            stop = f"stop at {state.stop_time_min:5.1f} min ({state.stop_time_min / c.t95_min:.2f} t95), error {check.steady_C - truth_of[c.name]:+.2f} °C" if state.stopped else f"no stop ({check.status}; 99 % interval {check.low_C:.2f} to {check.high_C:.2f})"
+            stop = (
+                f"stop at {state.stop_time_min:5.1f} min ({state.stop_time_min / c.t95_min:.2f} t95), error "
+                f"{check.steady_C - truth_of[c.name]:+.2f} °C"
+                if state.stopped
+                else f"no stop ({check.status}; 99 % interval {check.low_C:.2f} to {check.high_C:.2f})"
+            )
             print(f"{c.name:>28} {label:>26}: {stop}")
 
 

@@ -59,7 +59,9 @@ def _log(t: np.ndarray, y: np.ndarray, name: str) -> TemperatureLog:
 
 def _replay(warm, reference) -> dict[str, object]:  # noqa: ANN001
     room = warm.room_C
-    settings = MonitorSettings(tolerance_C=TOLERANCE_C, reference=reference, room_sensor="room" if room is not None else None)
+    settings = MonitorSettings(
+        tolerance_C=TOLERANCE_C, reference=reference, room_sensor="room" if room is not None else None
+    )
     state = new_state(["S"], with_room=room is not None)
     started = time.perf_counter()
     state, _ = monitor_step(state, warm.time_min, warm.reading_C[:, None], room, settings)
@@ -67,7 +69,9 @@ def _replay(warm, reference) -> dict[str, object]:  # noqa: ANN001
     check = state.checks[0]
     out: dict[str, object] = {"seconds": seconds, "stopped": state.stopped, "last_min": float(warm.time_min[-1])}
     at = state.stop_time_min if state.stopped else float(warm.time_min[-1])
-    truth = float(warm.steady_C[int(np.searchsorted(warm.time_min, at))] if at < warm.time_min[-1] else warm.steady_C[-1])
+    truth = float(
+        warm.steady_C[int(np.searchsorted(warm.time_min, at))] if at < warm.time_min[-1] else warm.steady_C[-1]
+    )
     out.update(
         stop_min=state.stop_time_min if state.stopped else None,
         error_C=check.steady_C - truth,
@@ -88,16 +92,28 @@ def _identify_at(warm, fraction: float, reference) -> dict[str, object]:  # noqa
     n = int(np.searchsorted(warm.time_min, window, side="right"))
     truth = float(warm.steady_C[n - 1])
     out: dict[str, object] = {}
-    robust = identify_robust(log, window, warm.room_C, reference=reference, room_sensor="room" if warm.room_C is not None else None)
+    robust = identify_robust(
+        log, window, warm.room_C, reference=reference, room_sensor="room" if warm.room_C is not None else None
+    )
     lo, hi = robust.steady_state_ci95()[0]
-    out["robust"] = {"covered": bool(lo <= truth <= hi), "half_width_C": float((hi - lo) / 2), "error_C": float(robust.steady_state_C[0] - truth), "model_ok": bool(robust.model_ok[0])}
+    out["robust"] = {
+        "covered": bool(lo <= truth <= hi),
+        "half_width_C": float((hi - lo) / 2),
+        "error_C": float(robust.steady_state_C[0] - truth),
+        "model_ok": bool(robust.model_ok[0]),
+    }
     if reference is None:
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
             try:
                 first = identify(log, window, "ukf", ambient_C=warm.room_C)
                 flo, fhi = first.steady_state_ci95()[0]
-                out["first_order"] = {"covered": bool(flo <= truth <= fhi), "half_width_C": float((fhi - flo) / 2), "error_C": float(first.steady_state_C[0] - truth), "model_ok": bool(first.summary(0)["model_ok"])}
+                out["first_order"] = {
+                    "covered": bool(flo <= truth <= fhi),
+                    "half_width_C": float((fhi - flo) / 2),
+                    "error_C": float(first.steady_state_C[0] - truth),
+                    "model_ok": bool(first.summary(0)["model_ok"]),
+                }
             except Exception as exc:  # noqa: BLE001 - the peer's failure is a result too
                 out["first_order"] = {"failed": str(exc)[:200]}
     return out
@@ -150,7 +166,11 @@ def _summary(cases: list[dict], key: str) -> dict[str, object]:
         "covered95_at_stop": float(np.mean([c[key]["covered95"] for c in stops])) if stops else None,
         "median_stop_over_t95": float(np.median(ratio)) if len(ratio) else None,
         "p90_stop_over_t95": float(np.percentile(ratio, 90)) if len(ratio) else None,
-        "stopped_within_1.5_t95": float(np.mean([c[key]["stopped"] and c[key]["stop_min"] <= 1.5 * c["t95_min"] for c in runs])) if runs else None,
+        "stopped_within_1.5_t95": float(
+            np.mean([c[key]["stopped"] and c[key]["stop_min"] <= 1.5 * c["t95_min"] for c in runs])
+        )
+        if runs
+        else None,
         "median_seconds": float(np.median([c[key]["seconds"] for c in runs])) if runs else None,
     }
 
@@ -172,34 +192,63 @@ def _identify_summary(cases: list[dict], key: str, method: str) -> dict[str, obj
 
 def report(paths: list[Path]) -> dict[str, object]:
     cases = [json.loads(line) for path in paths for line in path.read_text().splitlines() if line.strip()]
-    out: dict[str, object] = {"cases": len(cases), "seeds": [min(c["seed"] for c in cases), max(c["seed"] for c in cases)] if cases else None}
-    for group, chosen in (("near first order", [c for c in cases if c["near_first_order"]]), ("multi-mode", [c for c in cases if not c["near_first_order"]]), ("all", cases)):
+    out: dict[str, object] = {
+        "cases": len(cases),
+        "seeds": [min(c["seed"] for c in cases), max(c["seed"] for c in cases)] if cases else None,
+    }
+    for group, chosen in (
+        ("near first order", [c for c in cases if c["near_first_order"]]),
+        ("multi-mode", [c for c in cases if not c["near_first_order"]]),
+        ("all", cases),
+    ):
         block: dict[str, object] = {"cases": len(chosen)}
         for key in ("without_reference", "with_reference"):
             block[key] = _summary(chosen, key)
         for fraction in FRACTIONS:
             block[f"identify at {fraction} t95, robust"] = _identify_summary(chosen, f"identify_{fraction}", "robust")
-            block[f"identify at {fraction} t95, first-order UKF"] = _identify_summary(chosen, f"identify_{fraction}", "first_order")
-            block[f"identify at {fraction} t95, robust with reference"] = _identify_summary(chosen, f"identify_ref_{fraction}", "robust")
+            block[f"identify at {fraction} t95, first-order UKF"] = _identify_summary(
+                chosen, f"identify_{fraction}", "first_order"
+            )
+            block[f"identify at {fraction} t95, robust with reference"] = _identify_summary(
+                chosen, f"identify_ref_{fraction}", "robust"
+            )
         out[group] = block
     return out
 
 
 def markdown(summary: dict[str, object]) -> str:
     """The report as Markdown tables: the monitor's stops, then identify's intervals."""
-    lines = [f"{summary['cases']} warm-ups, seeds {summary['seeds'][0]}-{summary['seeds'][1]}, tolerance {TOLERANCE_C} °C.", ""]  # type: ignore[index]
-    lines += ["| cases | reference | stopped | beyond tolerance (worst °C) | 95 % covers at stop | stop/t95 median (p90) | stopped within 1.5·t95 |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        f"{summary['cases']} warm-ups, seeds {summary['seeds'][0]}-{summary['seeds'][1]}, tolerance {TOLERANCE_C} °C.",
+        "",
+    ]  # type: ignore[index]
+    lines += [
+        "| cases | reference | stopped | beyond tolerance (worst °C) | 95 % covers at stop | stop/t95 median (p90) | "
+        "stopped within 1.5·t95 |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for group in ("near first order", "multi-mode", "all"):
         block = summary[group]
         assert isinstance(block, dict)
         for key, label in (("without_reference", "none"), ("with_reference", "learnt")):
             r = block[key]
             worst = "—" if r["worst_error_C"] is None else f"{r['worst_error_C']:.3f}"
-            median = "—" if r["median_stop_over_t95"] is None else f"{r['median_stop_over_t95']:.2f} ({r['p90_stop_over_t95']:.2f})"
+            median = (
+                "—"
+                if r["median_stop_over_t95"] is None
+                else f"{r['median_stop_over_t95']:.2f} ({r['p90_stop_over_t95']:.2f})"
+            )
             covered = "—" if r["covered95_at_stop"] is None else f"{100 * r['covered95_at_stop']:.1f} %"
             within = "—" if r["stopped_within_1.5_t95"] is None else f"{100 * r['stopped_within_1.5_t95']:.0f} %"
-            lines.append(f"| {group} ({r['cases']}) | {label} | {r['stopped']} | {r['beyond_tolerance']} ({worst}) | {covered} | {median} | {within} |")
-    lines += ["", "| cases | identify at | method | 95 % covers | median half-width °C | model_ok | misses with model_ok |", "|---|---|---|---|---|---|---|"]
+            lines.append(
+                f"| {group} ({r['cases']}) | {label} | {r['stopped']} | {r['beyond_tolerance']} ({worst}) | {covered} "
+                f"| {median} | {within} |"
+            )
+    lines += [
+        "",
+        "| cases | identify at | method | 95 % covers | median half-width °C | model_ok | misses with model_ok |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for group in ("near first order", "multi-mode", "all"):
         block = summary[group]
         assert isinstance(block, dict)
@@ -207,7 +256,10 @@ def markdown(summary: dict[str, object]) -> str:
             for method in ("robust", "first-order UKF", "robust with reference"):
                 r = block[f"identify at {fraction} t95, {method}"]
                 if r:
-                    lines.append(f"| {group} | {fraction}·t95 | {method} | {100 * r['covered95']:.1f} % ({r['cases']}) | {r['median_half_width_C']:.3g} | {r['model_ok']} | {r['missed_with_model_ok']} |")
+                    lines.append(
+                        f"| {group} | {fraction}·t95 | {method} | {100 * r['covered95']:.1f} % ({r['cases']}) | "
+                        f"{r['median_half_width_C']:.3g} | {r['model_ok']} | {r['missed_with_model_ok']} |"
+                    )
     return "\n".join(lines)
 
 
@@ -225,8 +277,16 @@ def main() -> None:
         print(markdown(summary) if args.markdown else json.dumps(summary, indent=2))
         return
     k, n = (int(v) for v in args.shard.split("/"))
-    done = {json.loads(line)["seed"] for line in args.out.read_text().splitlines() if line.strip()} if args.out.exists() else set()
-    seeds = [s for s in range(args.first_seed, args.first_seed + args.cases) if (s - args.first_seed) % n == k - 1 and s not in done]
+    done = (
+        {json.loads(line)["seed"] for line in args.out.read_text().splitlines() if line.strip()}
+        if args.out.exists()
+        else set()
+    )
+    seeds = [
+        s
+        for s in range(args.first_seed, args.first_seed + args.cases)
+        if (s - args.first_seed) % n == k - 1 and s not in done
+    ]
     for seed in seeds:
         started = time.perf_counter()
         case = run_case(seed)

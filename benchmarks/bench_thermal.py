@@ -34,8 +34,15 @@ def monte_carlo(runs: int) -> None:
     bound = np.sqrt(cramer_rao_bound(t[: int(WINDOW) + 1], START, RATE, STEADY, SIGMA)[2, 2])
     print(f"\nMonte Carlo: {runs} runs of {START} -> {STEADY} °C, λ = {RATE}/min, σ = {SIGMA} °C, L = {WINDOW:g} min")
     print(f"Cramér-Rao bound on T∞: {bound:.3f} °C")
-    print(f"{'method':>16} {'bias °C':>9} {'spread °C':>10} {'spread/CRB':>11} {'mean sd':>8} {'coverage':>9} {'misfit':>7} {'time s':>7}")
-    for preset, methods in (("data", ("ukf", "aukf", "fukf", "afukf", "lsq")), ("xia2014", ("ukf", "aukf")), ("yu2019", ("fukf", "afukf"))):
+    print(
+        f"{'method':>16} {'bias °C':>9} {'spread °C':>10} {'spread/CRB':>11} {'mean sd':>8} {'coverage':>9} "
+        f"{'misfit':>7} {'time s':>7}"
+    )
+    for preset, methods in (
+        ("data", ("ukf", "aukf", "fukf", "afukf", "lsq")),
+        ("xia2014", ("ukf", "aukf")),
+        ("yu2019", ("fukf", "afukf")),
+    ):
         for method in methods:
             start = time.perf_counter()
             with warnings.catch_warnings():
@@ -58,11 +65,19 @@ def monte_carlo(runs: int) -> None:
 
 def presets_on_sample() -> None:
     log = read_temperature_log(sample_log_path())
-    print(f"\nSample log ({len(log.sensors)} sensors, {log.time_min[-1]:g} min), L = 28 min: T∞ (°C) against the measured final temperature")
+    print(
+        f"\nSample log ({len(log.sensors)} sensors, {log.time_min[-1]:g} min), L = 28 min: T∞ (°C) against the "
+        "measured final temperature"
+    )
     rows = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        for label, method, preset in (("ukf (default)", "ukf", "data"), ("lsq", "lsq", "data"), ("aukf/xia2014", "aukf", "xia2014"), ("afukf/yu2019", "afukf", "yu2019")):
+        for label, method, preset in (
+            ("ukf (default)", "ukf", "data"),
+            ("lsq", "lsq", "data"),
+            ("aukf/xia2014", "aukf", "xia2014"),
+            ("afukf/yu2019", "afukf", "yu2019"),
+        ):
             rows[label] = identify(log, 28.0, method, preset)
     first = next(iter(rows.values()))
     print(f"{'sensor':>7} {'measured':>9} " + " ".join(f"{label:>15}" for label in rows))
@@ -78,7 +93,10 @@ def presets_on_sample() -> None:
         if not np.isfinite(err).any():
             print(f"  {label:>15}: diverged on every sensor")
             continue
-        print(f"  {label:>15}: median |T∞ − measured| = {np.nanmedian(err):.2f} °C, RMSE over 400 min median {np.nanmedian(result.rmse_C):.3f} °C")
+        print(
+            f"  {label:>15}: median |T∞ − measured| = {np.nanmedian(err):.2f} °C, RMSE over 400 min median "
+            f"{np.nanmedian(result.rmse_C):.3f} °C"
+        )
 
 
 def filterpy_min_time(log: TemperatureLog, windows: np.ndarray, periods: np.ndarray) -> np.ndarray:
@@ -105,7 +123,16 @@ def _filterpy_window(t: np.ndarray, y: np.ndarray, n: int, n_total: int, tuning)
     """Filter to sample n with filterpy plus the adaptive law, then predict to n_total (None if it fails)."""
     law = AdaptiveLaw(threshold=float(tuning.threshold_C[0]))
     up, down = law.search_multipliers()
-    ukf = filterpy_ukf(3, 1, lambda x, dt: slope_transition(x, dt), lambda x: x[:1], tuning.initial_mean[0], tuning.initial_cov[0], tuning.process_cov[0], tuning.emission_cov[0])
+    ukf = filterpy_ukf(
+        3,
+        1,
+        lambda x, dt: slope_transition(x, dt),
+        lambda x: x[:1],
+        tuning.initial_mean[0],
+        tuning.initial_cov[0],
+        tuning.process_cov[0],
+        tuning.emission_cov[0],
+    )
     estimate = np.empty(n_total)
     try:
         for k in range(n_total):
@@ -146,10 +173,14 @@ def speed() -> None:
         warnings.simplefilter("ignore")
         peer = filterpy_min_time(log, windows, periods)
     t_peer = time.perf_counter() - start
-    agree = np.mean(ours.windows_min[np.nanargmin(np.where(np.isfinite(peer), peer, np.inf), axis=1)] == ours.best_per_period_min)
+    agree = np.mean(
+        ours.windows_min[np.nanargmin(np.where(np.isfinite(peer), peer, np.inf), axis=1)] == ours.best_per_period_min
+    )
     print("\nMinimal-identification-time search, 10 sensors, L = 5..60 min, 4 sampling periods, aukf:")
     print(f"  mtident {t_ours:.3f} s   filterpy loop {t_peer:.1f} s   ratio filterpy/mtident = {t_peer / t_ours:.0f}x")
-    print(f"  best L per (period, sensor) identical in {agree:.0%} of cases (filterpy: dense form; mtident: square-root)")
+    print(
+        f"  best L per (period, sensor) identical in {agree:.0%} of cases (filterpy: dense form; mtident: square-root)"
+    )
 
 
 def main() -> None:

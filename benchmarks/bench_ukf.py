@@ -38,7 +38,9 @@ def data(batch: int) -> np.ndarray:
 
 def ours(ys: np.ndarray) -> np.ndarray:
     batch = ys.shape[1]
-    rec = run_filter(GaussianState(np.tile(X0, (batch, 1)), P0), ys, lambda p, k: f(p), h, Q, R, FilterConfig(redraw=True))
+    rec = run_filter(
+        GaussianState(np.tile(X0, (batch, 1)), P0), ys, lambda p, k: f(p), h, Q, R, FilterConfig(redraw=True)
+    )
     return rec.means[-1]
 
 
@@ -58,11 +60,17 @@ def main() -> None:
     np.testing.assert_allclose(ours(single), peer(single), rtol=1e-9)
     t_ours = best_time(lambda: ours(single), 5)
     t_peer = best_time(lambda: peer(single), 5)
-    print(f"(a) 1 filter x {STEPS} steps:      mtident {t_ours*1e3:8.1f} ms   filterpy {t_peer*1e3:8.1f} ms   ratio filterpy/mtident = {t_peer/t_ours:6.1f}x")
+    print(
+        f"(a) 1 filter x {STEPS} steps:      mtident {t_ours * 1e3:8.1f} ms   filterpy {t_peer * 1e3:8.1f} ms   ratio "
+        f"filterpy/mtident = {t_peer / t_ours:6.1f}x"
+    )
     many = data(1000)
     t_ours = best_time(lambda: ours(many), 3)
     t_peer = best_time(lambda: peer(many[:, :50]), 1) * 1000 / 50
-    print(f"(b) 1000 filters x {STEPS} steps:  mtident {t_ours*1e3:8.1f} ms   filterpy {t_peer*1e3:8.1f} ms (50 filters timed, x20)   ratio = {t_peer/t_ours:6.1f}x")
+    print(
+        f"(b) 1000 filters x {STEPS} steps:  mtident {t_ours * 1e3:8.1f} ms   filterpy {t_peer * 1e3:8.1f} ms (50 "
+        f"filters timed, x20)   ratio = {t_peer / t_ours:6.1f}x"
+    )
 
 
 if __name__ == "__main__":

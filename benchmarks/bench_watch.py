@@ -47,7 +47,17 @@ def equilibrium_of(curve: np.ndarray) -> float:
 T_LONG = np.arange(0.0, 2001.0)
 
 
-def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None, room_sensor=None, steady: float = 26.7, wander: float = 0.05, times: np.ndarray = T, taus: tuple[float, ...] | None = None) -> tuple[str, float | None, float, float]:  # noqa: ANN001
+def run_case(
+    name: str,
+    clean_long: np.ndarray,
+    noisy: np.ndarray,
+    ambient=None,
+    room_sensor=None,
+    steady: float = 26.7,
+    wander: float = 0.05,
+    times: np.ndarray = T,
+    taus: tuple[float, ...] | None = None,
+) -> tuple[str, float | None, float, float]:  # noqa: ANN001
     """Replay one sensor; return (name, stop time, equilibrium time, |T∞ error| at stop).
 
     The truth is the curve's value at 2,000 min; with a drifting room (``ambient``
@@ -56,9 +66,20 @@ def run_case(name: str, clean_long: np.ndarray, noisy: np.ndarray, ambient=None,
     settles to if the room stays as it is then. ``taus``: a reference of these
     time constants (±10 %).
     """
-    reference = None if taus is None else MachineReference("known", "", 300.0, "", {"S": SensorModes(taus, tuple(0.1 for _ in taus))})
-    settings = MonitorSettings(tolerance_C=TOLERANCE, robust=RobustSettings(room_wander_C_per_h=wander), reference=reference, room_sensor=None if room_sensor is None else "room")
-    state, _ = monitor_step(new_state(["S"], with_room=room_sensor is not None), times, noisy[:, None], room_sensor, settings)
+    reference = (
+        None
+        if taus is None
+        else MachineReference("known", "", 300.0, "", {"S": SensorModes(taus, tuple(0.1 for _ in taus))})
+    )
+    settings = MonitorSettings(
+        tolerance_C=TOLERANCE,
+        robust=RobustSettings(room_wander_C_per_h=wander),
+        reference=reference,
+        room_sensor=None if room_sensor is None else "room",
+    )
+    state, _ = monitor_step(
+        new_state(["S"], with_room=room_sensor is not None), times, noisy[:, None], room_sensor, settings
+    )
     stop = state.stop_time_min if state.stopped else None
     truth = clean_long[-1]
     if ambient is not None and stop is not None:
@@ -78,6 +99,7 @@ def machine_in_drifting_room(rate_per_min: float = 0.016, rise_C: float = 8.8) -
     dT/dt = λ(T_room(t) + ΔT∞ − T): one heat capacity coupled to the room, so the
     machine follows the room's drift through its own time constant.
     """
+
     def rhs(t: float, T: np.ndarray) -> np.ndarray:
         return rate_per_min * (17.9 + room(t) + rise_C - T)
 
@@ -85,14 +107,18 @@ def machine_in_drifting_room(rate_per_min: float = 0.016, rise_C: float = 8.8) -
     return solution.y[0]
 
 
-def machine_in_wandering_room(rng: np.random.Generator, sigma_C_per_h: float, rate_per_min: float = 0.016, rise_C: float = 8.8):  # noqa: ANN201
+def machine_in_wandering_room(
+    rng: np.random.Generator, sigma_C_per_h: float, rate_per_min: float = 0.016, rise_C: float = 8.8
+):  # noqa: ANN201
     """The papers' heat balance in a room that is a random walk of ``sigma_C_per_h`` (1σ in an hour).
 
     The room the monitor assumes without a room sensor (``--room-wander``);
     returns the machine's curve on ``T_LONG`` and the room's offset as a
     function of time. Exact for a room held over each minute.
     """
-    room_C = np.concatenate([[0.0], np.cumsum(sigma_C_per_h * np.sqrt(1.0 / 60.0) * rng.standard_normal(len(T_LONG) - 1))])
+    room_C = np.concatenate(
+        [[0.0], np.cumsum(sigma_C_per_h * np.sqrt(1.0 / 60.0) * rng.standard_normal(len(T_LONG) - 1))]
+    )
     decay = np.exp(-rate_per_min)
     curve = np.empty(len(T_LONG))
     curve[0] = 17.9
@@ -103,6 +129,7 @@ def machine_in_wandering_room(rng: np.random.Generator, sigma_C_per_h: float, ra
 
 def fast_slow_in_drifting_room() -> np.ndarray:
     """A fast part (4 °C, τ 8 min) on a slow part (6 °C, τ 150 min) that feels the room, on ``T_LONG``."""
+
     def rhs(t: float, T: np.ndarray) -> np.ndarray:
         fast, slow = T
         return np.array([(4.0 - fast) / 8.0, (17.9 + room(t) + 6.0 - slow) / 150.0])
@@ -157,7 +184,9 @@ def families(count: int, with_reference: bool) -> dict[str, list[tuple[str, floa
         room_sensor = 17.9 + room(T) + 0.02 * rng.standard_normal(401)
         case("first-order", first_order, first_order[:401] + noise[0])
         case("first-order, --room-wander 0", first_order, first_order[:401] + noise[0], wander=0.0)
-        late = first_order[np.clip(np.arange(len(T_LONG)) - 15, 0, None)]  # the logger started 15 min before the spindle
+        late = first_order[
+            np.clip(np.arange(len(T_LONG)) - 15, 0, None)
+        ]  # the logger started 15 min before the spindle
         case("first-order, begins 15 min late", late, late[:401] + noise[0])
         case("first-order, 0.1 °C display", first_order, np.round((first_order[:401] + noise[0]) / 0.1) * 0.1)
         fast = np.round((26.7 - 8.8 * np.exp(-0.016 * T_1HZ) + 0.02 * rng.standard_normal(len(T_1HZ))) / 0.1) * 0.1
@@ -173,7 +202,11 @@ def families(count: int, with_reference: bool) -> dict[str, list[tuple[str, floa
             noisy = drifting[:401] + noise[2]
             case("drift, no room sensor" if label == "drift" else f"{label}, no sensor", drifting, noisy, room)
             case("drift + --ambient" if label == "drift" else f"{label}, --ambient", drifting, noisy, room, room_sensor)
-        for sigma, wander, kind in ((0.05, 0.05, "room wanders 0.05/h, no sensor"), (0.1, 0.05, "room wanders 0.1/h, no sensor"), (0.1, 0.1, "room wanders 0.1/h, --room-wander 0.1")):
+        for sigma, wander, kind in (
+            (0.05, 0.05, "room wanders 0.05/h, no sensor"),
+            (0.1, 0.05, "room wanders 0.1/h, no sensor"),
+            (0.1, 0.1, "room wanders 0.1/h, --room-wander 0.1"),
+        ):
             walk_rng = np.random.default_rng(10_000 + seed)
             wandering, room_at = machine_in_wandering_room(walk_rng, sigma)
             case(kind, wandering, wandering[:401] + 0.02 * walk_rng.standard_normal(401), room_at, wander=wander)
@@ -189,7 +222,9 @@ def sample_table(with_reference: bool) -> None:
     if with_reference:
         clean = make_sample_warmup.simulate(log.time_min)
         rng = np.random.default_rng(99)
-        second = np.column_stack([np.round(clean[name] + 0.02 * rng.standard_normal(len(log.time_min)), 2) for name in log.sensors])
+        second = np.column_stack(
+            [np.round(clean[name] + 0.02 * rng.standard_normal(len(log.time_min)), 2) for name in log.sensors]
+        )
         reference, _ = learn_reference(TemperatureLog(log.time_min, log.sensors, second, (), "second run"))
     settings = MonitorSettings(tolerance_C=TOLERANCE, reference=reference)
     start = time.perf_counter()
@@ -197,25 +232,45 @@ def sample_table(with_reference: bool) -> None:
     elapsed = time.perf_counter() - start
     final = {name: float(np.median(log.temperature_C[-10:, s])) for s, name in enumerate(log.sensors)}
     label = "with a reference from a second run" if with_reference else "without a reference"
-    print(f"\nSample log, {label}: replay {elapsed:.1f} s; stop at {state.stop_time_min if state.stopped else 'none'} min")
+    print(
+        f"\nSample log, {label}: replay {elapsed:.1f} s; stop at {state.stop_time_min if state.stopped else 'none'} min"
+    )
     for check in state.checks:
-        print(f"  {check.sensor:>4}: T∞ {check.steady_C:.2f} °C [{check.low_C:.2f}, {check.high_C:.2f}], log's last 10 readings {final[check.sensor]:.2f} °C, {check.status}")
+        print(
+            f"  {check.sensor:>4}: T∞ {check.steady_C:.2f} °C [{check.low_C:.2f}, {check.high_C:.2f}], log's last 10 "
+            f"readings {final[check.sensor]:.2f} °C, {check.status}"
+        )
 
 
 def main() -> None:
     count = int(sys.argv[1]) if len(sys.argv) > 1 else 5
     print(f"Replays of {count} seeded warm-ups of each kind, σ = 0.02 °C, 1-min samples, tolerance {TOLERANCE} °C.")
-    print("error = |T∞ at the stop − the curve's value at 2,000 min|; with a drifting room, the steady state under the room's offset at the stop.")
+    print(
+        "error = |T∞ at the stop − the curve's value at 2,000 min|; with a drifting room, the steady state under the "
+        "room's offset at the stop."
+    )
     for with_reference in (False, True):
-        print("\n" + ("With a reference (the true time constants ±10 %)" if with_reference else "Without a reference (modes up to 300 min)"))
-        print(f"{'kind':>38} {'stopped':>8} {'stop/t_eq median':>17} {'max':>6} {'max error °C':>13} {'error > tol':>12}")
+        print(
+            "\n"
+            + (
+                "With a reference (the true time constants ±10 %)"
+                if with_reference
+                else "Without a reference (modes up to 300 min)"
+            )
+        )
+        print(
+            f"{'kind':>38} {'stopped':>8} {'stop/t_eq median':>17} {'max':>6} {'max error °C':>13} {'error > tol':>12}"
+        )
         for kind, rows in families(count, with_reference).items():
             fractions = np.array([stop / eq for _, stop, eq, _ in rows if stop is not None])
             errors = np.array([error for _, stop, _, error in rows if stop is not None])
             if len(fractions) == 0:
                 print(f"{kind:>38} {0:>5}/{len(rows):<2} {'-':>17} {'-':>6} {'-':>13} {0:>12}")
                 continue
-            print(f"{kind:>38} {len(fractions):>5}/{len(rows):<2} {np.median(fractions):17.2f} {fractions.max():6.2f} {errors.max():13.3f} {int(np.sum(errors > TOLERANCE)):>12}")
+            print(
+                f"{kind:>38} {len(fractions):>5}/{len(rows):<2} {np.median(fractions):17.2f} {fractions.max():6.2f} "
+                f"{errors.max():13.3f} {int(np.sum(errors > TOLERANCE)):>12}"
+            )
     for with_reference in (False, True):
         sample_table(with_reference)
 

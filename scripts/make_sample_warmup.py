@@ -75,7 +75,9 @@ SEED = 2019
 
 def ambient_C(t_min: np.ndarray | float) -> np.ndarray | float:
     """Room temperature: 17.9 °C, a slow rise of 0.3 °C over the test and a 0.1 °C wobble."""
-    return START_C + 0.3 * (1.0 - np.exp(-np.asarray(t_min) / 200.0)) + 0.1 * np.sin(2 * np.pi * np.asarray(t_min) / 150.0)
+    return (
+        START_C + 0.3 * (1.0 - np.exp(-np.asarray(t_min) / 200.0)) + 0.1 * np.sin(2 * np.pi * np.asarray(t_min) / 150.0)
+    )
 
 
 def conductance_matrix(link_scale: float = LINK_SCALE) -> np.ndarray:
@@ -117,7 +119,10 @@ def main() -> None:
     times = np.arange(0.0, DURATION_MIN + 1.0)
     clean = simulate(times)
     lines = ["time_min," + ",".join(SENSORS)]
-    noisy = {name: np.round((values + NOISE_C * rng.standard_normal(len(values))) / RESOLUTION_C) * RESOLUTION_C for name, values in clean.items()}
+    noisy = {
+        name: np.round((values + NOISE_C * rng.standard_normal(len(values))) / RESOLUTION_C) * RESOLUTION_C
+        for name, values in clean.items()
+    }
     for k, t in enumerate(times):
         lines.append(f"{t:g}," + ",".join(f"{noisy[name][k]:.2f}" for name in SENSORS))
     data = Path(__file__).resolve().parents[1] / "src" / "mtident" / "data"
@@ -150,7 +155,12 @@ def write_reference(out: Path) -> None:
     rng = np.random.default_rng(REFERENCE_SEED)
     times = np.arange(0.0, REFERENCE_DURATION_MIN + 1.0)
     clean = simulate(times, heat_scale=REFERENCE_HEAT_SCALE)
-    values = np.column_stack([np.round((clean[name] + NOISE_C * rng.standard_normal(len(times))) / RESOLUTION_C) * RESOLUTION_C for name in SENSORS])
+    values = np.column_stack(
+        [
+            np.round((clean[name] + NOISE_C * rng.standard_normal(len(times))) / RESOLUTION_C) * RESOLUTION_C
+            for name in SENSORS
+        ]
+    )
     room = np.round((ambient_C(times) + NOISE_C * rng.standard_normal(len(times))) / RESOLUTION_C) * RESOLUTION_C
     log = TemperatureLog(times, tuple(SENSORS), values, (), "earlier warm-up at 3,500 r/min (720 min)")
     reference, warnings = learn_reference(log, room)

@@ -37,7 +37,25 @@ def test_python_dash_m_mtident_runs_end_to_end():
     """Smoke test of the entry point in a process of its own: one JSON object on stdout, exit 0.
     (The other tests call the command in-process; test_watch runs `python -m mtident thermal
     watch` in processes it kills and resumes.)"""
-    out = subprocess.run([sys.executable, "-m", "mtident", "thermal", "identify", "@sample", "--sensor", "T1", "--method", "ukf", "--json"], capture_output=True, text=True, timeout=300, check=False)
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mtident",
+            "thermal",
+            "identify",
+            "@sample",
+            "--sensor",
+            "T1",
+            "--method",
+            "ukf",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["sensor"] == "T1" and "Traceback" not in out.stderr
 
@@ -78,7 +96,17 @@ def test_thermal_identify_json_has_the_contract_keys(tmp_path):
     out = mtident("thermal", "identify", "@sample", "--sensor", "T3", "--window", "30", "--json", "--plot", str(png))
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
-    assert set(data) >= {"sensor", "method", "window_min", "steady_state_C", "steady_state_ci95_C", "lambda_per_min", "time_constant_min", "equilibrium_time_min", "rmse_C"}
+    assert set(data) >= {
+        "sensor",
+        "method",
+        "window_min",
+        "steady_state_C",
+        "steady_state_ci95_C",
+        "lambda_per_min",
+        "time_constant_min",
+        "equilibrium_time_min",
+        "rmse_C",
+    }
     assert set(data) >= {"model_ok", "warnings", "assumptions", "model"}
     assert data["sensor"] == "T3" and data["method"] == "robust" and data["window_min"] == 30.0
     # 30 min of a warm-up whose slowest mode is 90 min do not exclude one of 300 min: said, not hidden
@@ -97,7 +125,9 @@ def test_thermal_identify_all_sensors_json_and_table():
     table = mtident("thermal", "identify", "@sample", "--sensor", "T1,T8")
     assert table.returncode == 0 and "T8" in table.stdout and "T∞" in table.stdout
     # a name given twice is one sensor; a space after a comma is no part of the name
-    spaced = mtident("thermal", "identify", "@sample", "--method", "lsq", "--json", "--sensor", "T8, T1", "--sensor", "T8")
+    spaced = mtident(
+        "thermal", "identify", "@sample", "--method", "lsq", "--json", "--sensor", "T8, T1", "--sensor", "T8"
+    )
     assert [d["sensor"] for d in json.loads(spaced.stdout)["sensors"]] == ["T8", "T1"]
 
 
@@ -107,7 +137,9 @@ def test_a_sensor_whose_name_holds_a_comma_can_be_asked_for(tmp_path):
     rows = "".join(f"{m:g};{26.7 - 8.8 * np.exp(-0.016 * m):.3f};{20 + 0.01 * m:.2f}\n".replace(".", ",") for m in t)
     log = tmp_path / "komma.csv"
     log.write_text("Zeit;Temp, Spindel;Temp, Motor\n" + rows)
-    out = mtident("thermal", "identify", str(log), "--sensor", "Temp, Spindel", "--method", "ukf", "--json")  # the name, not the method, is tested
+    out = mtident(
+        "thermal", "identify", str(log), "--sensor", "Temp, Spindel", "--method", "ukf", "--json"
+    )  # the name, not the method, is tested
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["sensor"] == "Temp, Spindel"
 
@@ -131,12 +163,24 @@ def test_thermal_min_time_json_has_the_contract_keys(tmp_path):
         (["thermal", "identify", "missing.csv"], "missing.csv: no such file"),
         (["thermal", "identify", "@sample", "--sensor", "T99"], "no sensor column 'T99'"),
         (["thermal", "identify", "@sample", "--window", "2"], "samples in the first 2 min"),
-        (["thermal", "min-time", "@sample", "--sampling-periods", "35,abc"], "--sampling-periods: expected comma-separated minutes"),
+        (
+            ["thermal", "min-time", "@sample", "--sampling-periods", "35,abc"],
+            "--sampling-periods: expected comma-separated minutes",
+        ),
         (["thermal", "min-time", "@sample", "--sampling-periods", "35,500"], "the longest sampling period is 500 min"),
         (["thermal", "min-time", "@sample", "--windows", "30:10"], "--windows: expected START:STOP"),
-        (["feeddrive", "simulate", "--duration", "1e-9", "--out", "x.csv"], "gives 1 sample(s); identification needs at least 10"),
-        (["feeddrive", "simulate", "--excitation", "sine", "--frequency", "6000", "--out", "x.csv"], "the sine reaches 6000 Hz, above half the sampling rate (5000 Hz)"),
-        (["feeddrive", "simulate", "--excitation", "sweep", "--fs", "1000", "--out", "x.csv"], "the sweep reaches 2000 Hz, above half the sampling rate (500 Hz)"),
+        (
+            ["feeddrive", "simulate", "--duration", "1e-9", "--out", "x.csv"],
+            "gives 1 sample(s); identification needs at least 10",
+        ),
+        (
+            ["feeddrive", "simulate", "--excitation", "sine", "--frequency", "6000", "--out", "x.csv"],
+            "the sine reaches 6000 Hz, above half the sampling rate (5000 Hz)",
+        ),
+        (
+            ["feeddrive", "simulate", "--excitation", "sweep", "--fs", "1000", "--out", "x.csv"],
+            "the sweep reaches 2000 Hz, above half the sampling rate (500 Hz)",
+        ),
     ],
 )
 def test_user_errors_are_one_line_without_traceback(args, message):
@@ -155,7 +199,14 @@ def test_user_errors_are_one_line_without_traceback(args, message):
         (".", "'.' is a folder; give a file name such as 'plot.png'"),
     ],
 )
-@pytest.mark.parametrize("command", [["thermal", "identify", "@sample"], ["thermal", "watch", "@sample", "--replay"], ["feeddrive", "simulate", "--duration", "0.01", "--out", "r.csv"]])
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["thermal", "identify", "@sample"],
+        ["thermal", "watch", "@sample", "--replay"],
+        ["feeddrive", "simulate", "--duration", "0.01", "--out", "r.csv"],
+    ],
+)
 def test_a_bad_plot_path_is_refused_before_the_work(tmp_path, monkeypatch, command, plot, message):
     """A mistyped folder used to end the whole run in an errno message about a temporary file."""
     monkeypatch.chdir(tmp_path)
@@ -172,7 +223,9 @@ def test_a_bad_plot_path_is_refused_before_the_work(tmp_path, monkeypatch, comma
         (".", "'.' is a folder; give a file name such as 'out.csv'"),
     ],
 )
-@pytest.mark.parametrize("command", [["thermal", "identify", "@sample", "--curve"], ["feeddrive", "simulate", "--duration", "0.01", "--out"]])
+@pytest.mark.parametrize(
+    "command", [["thermal", "identify", "@sample", "--curve"], ["feeddrive", "simulate", "--duration", "0.01", "--out"]]
+)
 def test_a_bad_output_path_is_refused_before_the_work(tmp_path, monkeypatch, command, path, message):
     """The simulation's --out used to be checked only when written, after the work (pandas' "Cannot
     save file into a non-existent directory")."""
@@ -190,23 +243,35 @@ def test_identify_writes_its_curves_for_a_spreadsheet(tmp_path, monkeypatch):
     from mtident.thermal import identify
 
     monkeypatch.chdir(tmp_path)
-    out = mtident("thermal", "identify", "@sample", "--sensor", "T1,T9", "--window", "30", "--method", "ukf", "--curve", "c.csv")
+    out = mtident(
+        "thermal", "identify", "@sample", "--sensor", "T1,T9", "--window", "30", "--method", "ukf", "--curve", "c.csv"
+    )
     assert out.returncode == 0, out.stderr
     assert "curves written to c.csv (401 rows to t = 400 min)" in out.stderr
     table = pd.read_csv(tmp_path / "c.csv")
-    assert list(table.columns) == ["time_min", "part", *[f"{s}_{what}_C" for s in ("T1", "T9") for what in ("measured", "model", "low95", "high95")]]
+    assert list(table.columns) == [
+        "time_min",
+        "part",
+        *[f"{s}_{what}_C" for s in ("T1", "T9") for what in ("measured", "model", "low95", "high95")],
+    ]
     assert (table["part"] == "window").sum() == 31 and (table["part"] == "prediction").sum() == 370
     result = identify(read_temperature_log(sample_log_path()).select(["T1", "T9"]), 30.0, "ukf")
     np.testing.assert_allclose(table["T9_model_C"], result.curve_C[:, 1], atol=1e-6)
-    np.testing.assert_allclose(table["T1_high95_C"] - table["T1_model_C"], result.quantile * result.curve_sd_C[:, 0], atol=2e-6)
+    np.testing.assert_allclose(
+        table["T1_high95_C"] - table["T1_model_C"], result.quantile * result.curve_sd_C[:, 0], atol=2e-6
+    )
     np.testing.assert_allclose(table["T1_measured_C"], result.measured_C[:, 0], atol=1e-6)
 
 
-@pytest.mark.parametrize(("name", "magic"), [("fit.svg", b"<?xml"), ("fit.pdf", b"%PDF"), ("fit.PNG", b"\x89PNG"), ("fit", b"\x89PNG")])
+@pytest.mark.parametrize(
+    ("name", "magic"), [("fit.svg", b"<?xml"), ("fit.pdf", b"%PDF"), ("fit.PNG", b"\x89PNG"), ("fit", b"\x89PNG")]
+)
 def test_the_plot_suffix_chooses_the_picture_format(tmp_path, monkeypatch, name, magic):
     """'fit.svg' used to be written as a PNG (the temporary file's suffix chose the format)."""
     monkeypatch.chdir(tmp_path)
-    out = mtident("thermal", "identify", "@sample", "--sensor", "T1", "--method", "ukf", "--plot", name)  # the picture, not the method, is tested
+    out = mtident(
+        "thermal", "identify", "@sample", "--sensor", "T1", "--method", "ukf", "--plot", name
+    )  # the picture, not the method, is tested
     assert out.returncode == 0, out.stderr
     assert (tmp_path / name).read_bytes().startswith(magic)
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]  # no temporary file left beside it
@@ -226,16 +291,25 @@ def test_a_dead_column_can_be_left_out_as_the_error_says(tmp_path):
     t = np.arange(0.0, 61.0)
     path = tmp_path / "dead.csv"
     # a few readings, then none: refused, with the advice
-    path.write_text("time_min,dead,A,room\n" + "".join(f"{tk:g},{'20.0' if tk < 3 else ''},{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t))
-    out = mtident("thermal", "identify", str(path), "--window", "30", "--method", "ukf")  # the columns, not the method, are tested
+    path.write_text(
+        "time_min,dead,A,room\n"
+        + "".join(f"{tk:g},{'20.0' if tk < 3 else ''},{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t)
+    )
+    out = mtident(
+        "thermal", "identify", str(path), "--window", "30", "--method", "ukf"
+    )  # the columns, not the method, are tested
     assert out.returncode == 2 and "leave this sensor out with --sensor" in out.stderr
     # never a reading (an unplugged channel, an event channel that logged nothing): left out with a note
-    path.write_text("time_min,dead,A,room\n" + "".join(f"{tk:g},,{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t))
+    path.write_text(
+        "time_min,dead,A,room\n" + "".join(f"{tk:g},,{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},17.9\n" for tk in t)
+    )
     out = mtident("thermal", "identify", str(path), "--window", "30", "--method", "ukf", "--json")
     assert out.returncode == 0 and "left out, no readings in them: dead" in out.stderr
     assert [d["sensor"] for d in json.loads(out.stdout)["sensors"]] == ["A", "room"]
     for extra in ((), ("--ambient", "room")):
-        out = mtident("thermal", "identify", str(path), "--sensor", "A", "--window", "30", "--method", "ukf", "--json", *extra)
+        out = mtident(
+            "thermal", "identify", str(path), "--sensor", "A", "--window", "30", "--method", "ukf", "--json", *extra
+        )
         assert out.returncode == 0, out.stderr
         assert json.loads(out.stdout)["sensor"] == "A"
 
@@ -256,7 +330,10 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     t = np.arange(0.0, 121.0)
     rng = np.random.default_rng(2)
     room = 17.9 + 0.1 * np.sin(2 * np.pi * t / 240.0)
-    rows = ["time_min,spindle,room"] + [f"{tk:g},{26.7 - 8.8 * np.exp(-0.016 * tk) + 0.02 * rng.standard_normal():.3f},{rk + 0.02 * rng.standard_normal():.3f}" for tk, rk in zip(t, room, strict=True)]
+    rows = ["time_min,spindle,room"] + [
+        f"{tk:g},{26.7 - 8.8 * np.exp(-0.016 * tk) + 0.02 * rng.standard_normal():.3f},{rk + 0.02 * rng.standard_normal():.3f}"
+        for tk, rk in zip(t, room, strict=True)
+    ]
     path = tmp_path / "room.csv"
     path.write_text("\n".join(rows) + "\n")
     out = mtident("thermal", "identify", str(path), "--ambient", "room", "--window", "60", "--json")
@@ -265,10 +342,15 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     assert data["sensor"] == "spindle"  # the room column is the input, not a sensor
     assert "named as a room sensor" not in out.stderr
     # without --ambient the column named as the room is a sensor, and the user is told of the option
-    out = mtident("thermal", "identify", str(path), "--window", "60", "--method", "ukf", "--json")  # the columns, not the method, are tested
+    out = mtident(
+        "thermal", "identify", str(path), "--window", "60", "--method", "ukf", "--json"
+    )  # the columns, not the method, are tested
     assert out.returncode == 0, out.stderr
     assert [d["sensor"] for d in json.loads(out.stdout)["sensors"]] == ["spindle", "room"]
-    assert "'room' is named as a room sensor and identified as a machine sensor; if it measures the room, --ambient room makes it" in out.stderr
+    assert (
+        "'room' is named as a room sensor and identified as a machine sensor; if it measures the room, --ambient room "
+        "makes it" in out.stderr
+    )
     out = mtident("thermal", "identify", str(path), "--ambient", "hall", "--window", "60")
     assert out.returncode == 2 and "no sensor column 'hall'" in out.stderr and "Traceback" not in out.stderr
     out = mtident("thermal", "identify", str(path), "--ambient", "room", "--method", "lsq")
@@ -284,7 +366,8 @@ def test_plots_leave_the_users_matplotlib_alone_and_return_a_figure_without_a_pa
         "import matplotlib; matplotlib.use('svg'); import mtident.report as r; "
         "from mtident.io import read_temperature_log; from mtident.io import sample_log_path; "
         "from mtident.thermal import identify; "
-        "fig = r.plot_identification(identify(read_temperature_log(sample_log_path()).select(['T1', 'T2']), 30.0, 'ukf')); "
+        "fig = r.plot_identification(identify(read_temperature_log(sample_log_path()).select(['T1', 'T2']), 30.0, "
+        "'ukf')); "
         "print(matplotlib.get_backend(), type(fig).__name__, len(fig.axes))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=False)
@@ -298,15 +381,20 @@ def loaded_modules(tmp_path_factory: pytest.TempPathFactory) -> dict[str, bool]:
     numeric log, then `thermal identify` of the sample with the default method, and says after each
     which modules it had loaded."""
     folder = tmp_path_factory.mktemp("imports")
-    (folder / "log.csv").write_text("time_min,T1\n" + "".join(f"{m},{26.7 - 8.8 * 2.718281828 ** (-m / 62.5):.2f}\n" for m in range(60)))
+    (folder / "log.csv").write_text(
+        "time_min,T1\n" + "".join(f"{m},{26.7 - 8.8 * 2.718281828 ** (-m / 62.5):.2f}\n" for m in range(60))
+    )
     code = (
         "import json, sys; from mtident.cli import main; "
         "main(['thermal', 'watch', 'log.csv', '--replay', '--json'], standalone_mode=False); "
         "watch = {'pandas': 'pandas' in sys.modules}; "
         "main(['thermal', 'identify', '@sample', '--sensor', 'T1', '--json'], standalone_mode=False); "
-        "print(json.dumps({'watch': watch, 'identify': {m: m in sys.modules for m in ('mtident.cli_feeddrive', 'scipy.stats', 'mtident.cli_thermal')}}))"
+        "print(json.dumps({'watch': watch, 'identify': {m: m in sys.modules for m in ('mtident.cli_feeddrive', "
+        "'scipy.stats', 'mtident.cli_thermal')}}))"
     )
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=folder, timeout=300)
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=folder, timeout=300
+    )
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
@@ -315,7 +403,11 @@ def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats(loa
     command imported, 0.08-0.10 s without), and identify's F quantile comes from
     scipy.special (importing scipy.stats for it cost 0.5 s of each `thermal identify`).
     Here after a watch and an identify in one process."""
-    assert loaded_modules["identify"] == {"mtident.cli_feeddrive": False, "scipy.stats": False, "mtident.cli_thermal": True}
+    assert loaded_modules["identify"] == {
+        "mtident.cli_feeddrive": False,
+        "scipy.stats": False,
+        "mtident.cli_thermal": True,
+    }
 
 
 def test_watch_of_a_numeric_log_does_not_load_pandas(loaded_modules):
@@ -339,13 +431,18 @@ def test_min_time_table_gives_l_to_a_tenth_of_a_minute_for_a_fast_log(tmp_path):
     assert len(cells) == 5 and all(re.fullmatch(r"\d+(\.\d)?", c) for c in cells), row
 
 
-
 def test_inspect_shows_how_a_logger_export_is_read(tmp_path):
     """`thermal inspect`: the header line, the rows under it, how the time is read, each sensor's
     unit and readings, and every column left out with the reason, as a summary or one JSON object."""
     path = tmp_path / "tinytag.csv"
-    rows = "".join(f"{k + 1},2026-11-22 08:{k:02d}:00,{68 + 0.18 * k:.2f} °F,{56 + k / 100:.1f} %RH\n" for k in range(8))
-    path.write_text(",Time,1,2\nS/N,,227659,227659\nType,,Tinytag,Tinytag\nDescription,,Spindle,Spindle\nProperty,,Temperature,Humidity\n" + rows, encoding="cp1252")
+    rows = "".join(
+        f"{k + 1},2026-11-22 08:{k:02d}:00,{68 + 0.18 * k:.2f} °F,{56 + k / 100:.1f} %RH\n" for k in range(8)
+    )
+    path.write_text(
+        ",Time,1,2\nS/N,,227659,227659\nType,,Tinytag,Tinytag\nDescription,,Spindle,Spindle\nProperty,,Temperature,Humidity\n"
+        + rows,
+        encoding="cp1252",
+    )
     out = mtident("thermal", "inspect", str(path), "--json")
     assert out.returncode == 0, out.stderr
     info = json.loads(out.stdout)
@@ -353,16 +450,33 @@ def test_inspect_shows_how_a_logger_export_is_read(tmp_path):
         "kind": "CSV text", "encoding": "cp1252", "delimiter": "comma", "decimal": ".", "lines_before_header": 0, "header_line": 1,
         "rows_under_header": 4, "units_from": "its cells", "units_in_cells": True,
     }  # fmt: skip
-    assert info["time"] == {"column": "Time", "first_cell": "2026-11-22 08:00:00", "read_as": "time stamps", "samples": 8, "span_min": 7.0, "step_min": 1.0}
+    assert info["time"] == {
+        "column": "Time",
+        "first_cell": "2026-11-22 08:00:00",
+        "read_as": "time stamps",
+        "samples": 8,
+        "span_min": 7.0,
+        "step_min": 1.0,
+    }
     [sensor] = info["sensors"]
     assert sensor["sensor"] == "1" and sensor["unit"] == "°F" and sensor["missing"] == 0
     assert sensor["first_C"] == pytest.approx(20.0) and sensor["max_C"] == pytest.approx(20.7)
-    assert "left out, a row counter: the unnamed first column; the time is 'Time'" in info["notes"] and "left out, not temperatures by its cells: 2 (%RH)" in info["notes"]
+    assert (
+        "left out, a row counter: the unnamed first column; the time is 'Time'" in info["notes"]
+        and "left out, not temperatures by its cells: 2 (%RH)" in info["notes"]
+    )
     text = mtident("thermal", "inspect", str(path)).stdout
-    assert "header on line 1, 4 row(s) under it before the data" in text and "read as time stamps" in text and "note: left out, a row counter" in text
+    assert (
+        "header on line 1, 4 row(s) under it before the data" in text
+        and "read as time stamps" in text
+        and "note: left out, a row counter" in text
+    )
     seconds = tmp_path / "seconds.csv"
     seconds.write_text("t,A\n" + "".join(f"{60 * k},{20 + k / 10:.1f}\n" for k in range(8)))
-    assert json.loads(mtident("thermal", "inspect", str(seconds), "--time-unit", "s", "--json").stdout)["time"]["read_as"] == "numbers in s (--time-unit)"
+    assert (
+        json.loads(mtident("thermal", "inspect", str(seconds), "--time-unit", "s", "--json").stdout)["time"]["read_as"]
+        == "numbers in s (--time-unit)"
+    )
     assert "assumed" in json.loads(mtident("thermal", "inspect", str(seconds), "--json").stdout)["time"]["read_as"]
     begun = tmp_path / "begun.csv"  # a log just begun: no five samples needed to look at it
     begun.write_text("time,A\n0,20.5\n")
@@ -378,11 +492,30 @@ def test_watch_replays_a_workbook(tmp_path):
 
     t = np.arange(0.0, 400.0)
     book = tmp_path / "warmup.xlsx"
-    pd.DataFrame({"Time": pd.date_range("2026-11-22 08:00", periods=len(t), freq="1min"), "Spindle (°C)": 26.7 - 8.8 * np.exp(-0.016 * t)}).to_excel(book, index=False)
-    out = mtident("thermal", "watch", str(book), "--replay", "--room-wander", "0", "--state", str(tmp_path / "state.json"), "--json")
+    pd.DataFrame(
+        {
+            "Time": pd.date_range("2026-11-22 08:00", periods=len(t), freq="1min"),
+            "Spindle (°C)": 26.7 - 8.8 * np.exp(-0.016 * t),
+        }
+    ).to_excel(book, index=False)
+    out = mtident(
+        "thermal",
+        "watch",
+        str(book),
+        "--replay",
+        "--room-wander",
+        "0",
+        "--state",
+        str(tmp_path / "state.json"),
+        "--json",
+    )
     assert out.returncode == 0, out.stderr
     result = json.loads(out.stdout)
     assert result["decision"] == "stop" and abs(result["steady_state_C"] - 26.7) < 0.05
     for extra in ((), ("--ambient", "Time")):  # with --ambient the header was read first, as garbage
         live = mtident("thermal", "watch", str(book), "--timeout", "1", "--state", str(tmp_path / "live.json"), *extra)
-        assert live.returncode == 2 and "an Excel workbook is not written row by row" in live.stderr and "Traceback" not in live.stderr
+        assert (
+            live.returncode == 2
+            and "an Excel workbook is not written row by row" in live.stderr
+            and "Traceback" not in live.stderr
+        )

@@ -58,20 +58,26 @@ def test_modes_reproduce_the_paper_with_the_corrected_beta():
 
 
 def test_printed_beta_is_refused_with_the_indefinite_k_error():
-    with pytest.raises(UnstableModelError, match=r"K3 < K4 \+ β²·K1 .*K is indefinite, the model is unstable \(β = 2.55e-3 is the value printed"):
+    with pytest.raises(
+        UnstableModelError,
+        match=r"K3 < K4 \+ β²·K1 .*K is indefinite, the model is unstable \(β = 2.55e-3 is the value printed",
+    ):
         validate(FeedDriveParameters(beta=2.55e-3))
     with pytest.raises(UnstableModelError, match="K2 = .* ≤ K1"):
         validate(FeedDriveParameters(K2=1e8))
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ("Mt = -1", r"parameter Mt = -1.0: must be a positive number \(kg\)"),
-    ("Bt = -0.5", r"parameter Bt = -0.5: damping must be zero or positive"),
-    ("Kx = 3", r"unknown parameter 'Kx'"),
-    ("K1 = 'stiff'", r"K1 = 'stiff' is not a number"),
-    ("K1 = = 3", r"not valid TOML"),
-    ("beta = 2.55e-3", r"K is indefinite"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("Mt = -1", r"parameter Mt = -1.0: must be a positive number \(kg\)"),
+        ("Bt = -0.5", r"parameter Bt = -0.5: damping must be zero or positive"),
+        ("Kx = 3", r"unknown parameter 'Kx'"),
+        ("K1 = 'stiff'", r"K1 = 'stiff' is not a number"),
+        ("K1 = = 3", r"not valid TOML"),
+        ("beta = 2.55e-3", r"K is indefinite"),
+    ],
+)
 def test_parameter_files_are_validated(tmp_path, text, message):
     path = tmp_path / "p.toml"
     path.write_text(text + "\n")
@@ -117,7 +123,10 @@ def test_rk4_step_matrix_equals_explicit_rk4():
     d = h / 3
     for _ in range(3):
         f = lambda z: a @ z + b @ u  # noqa: E731
-        k1 = f(y); k2 = f(y + d / 2 * k1); k3 = f(y + d / 2 * k2); k4 = f(y + d * k3)  # noqa: E702
+        k1 = f(y)
+        k2 = f(y + d / 2 * k1)
+        k3 = f(y + d / 2 * k2)
+        k4 = f(y + d * k3)  # noqa: E702
         y = y + d / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     np.testing.assert_allclose(phi @ x + gamma @ u, y, rtol=1e-12, atol=1e-20)
 
@@ -249,7 +258,11 @@ def test_cli_identifies_from_the_responses_a_file_has(tmp_path):
     unforced = tmp_path / "unforced.csv"
     unforced.write_text("".join(",".join(row[i] for i in keep[:1] + keep[2:]) + "\n" for row in lines))
     refused = run("feeddrive", "identify", str(unforced))
-    assert refused.returncode == 2 and "no force column; the excitation must be measured" in refused.stderr and "Traceback" not in refused.stderr
+    assert (
+        refused.returncode == 2
+        and "no force column; the excitation must be measured" in refused.stderr
+        and "Traceback" not in refused.stderr
+    )
 
 
 def test_cli_refuses_the_printed_beta(tmp_path):
@@ -290,7 +303,13 @@ def test_a_response_time_printed_with_few_digits_is_the_even_grid(tmp_path):
     np.testing.assert_allclose(np.diff(back.time_s), 1 / 3000.0, rtol=1e-9)
     np.testing.assert_array_equal(back.values, read_response(path).values)
     (tmp_path / "gap.csv").write_text("\n".join(lines[:6] + lines[7:]) + "\n")
-    with pytest.raises(InputError, match=r"evenly spaced \(within 1 %\).*row 7 comes 0.000666667 s after the one before, against a median step of 0.000333333 s"):
+    with pytest.raises(
+        InputError,
+        match=(
+            r"evenly spaced \(within 1 %\).*row 7 comes 0.000666667 s after the one before, against a median step of "
+            r"0.000333333 s"
+        ),
+    ):
         read_response(tmp_path / "gap.csv")
 
 
@@ -300,14 +319,18 @@ def test_an_estimate_that_does_not_reproduce_the_record_is_said():
     reproduces the record open loop; for the impulse, a sweep and a binary sequence the set found
     reproduces it to the noise."""
     truth = FeedDriveParameters()
-    sine = simulate(truth, Excitation("sine", frequency_Hz=100.0), duration_s=0.3, noise_fraction=0.01,
-                    rng=np.random.default_rng(3))
+    sine = simulate(
+        truth, Excitation("sine", frequency_Hz=100.0), duration_s=0.3, noise_fraction=0.01, rng=np.random.default_rng(3)
+    )
     wrong = identify_feed_drive(sine, default_guess())
     assert not all(wrong.covers(truth).values())  # the failure the note is for
     assert wrong.reproduces_record() is False and wrong.consistency.misfit.max() > 10
     assert any("does not reproduce the record" in n and "the intervals do not hold" in n for n in wrong.notes)
     # the cause is said first, from the force alone: one frequency
-    assert wrong.notes[0].startswith("the excitation is one frequency (F_t_N at 100 Hz): the record shows the drive's response at that frequency alone")
+    assert wrong.notes[0].startswith(
+        "the excitation is one frequency (F_t_N at 100 Hz): the record shows the drive's response at that frequency "
+        "alone"
+    )
     for kind in ("impulse", "sweep", "prbs"):
         record = simulate(truth, Excitation(kind), duration_s=0.3, noise_fraction=0.01, rng=np.random.default_rng(5))
         good = identify_feed_drive(record, default_guess())
@@ -323,22 +346,44 @@ def test_an_estimate_that_does_not_reproduce_the_record_is_said():
 
 
 # A heavy, soft drive (a 400 kg table on a 20 mm lead): every mode below 110 Hz.
-HEAVY = FeedDriveParameters(Mt=400.0, Mb=40.0, Jm=4e-3, Jb=6e-3, K1=1.0e7, K2=1.5e7, K3=700.0, K4=250.0,
-                            beta=0.02 / (2 * math.pi), Bt=20.0, Bb=20.0, Qm=0.05, Qb=0.05)
+HEAVY = FeedDriveParameters(
+    Mt=400.0,
+    Mb=40.0,
+    Jm=4e-3,
+    Jb=6e-3,
+    K1=1.0e7,
+    K2=1.5e7,
+    K3=700.0,
+    K4=250.0,
+    beta=0.02 / (2 * math.pi),
+    Bt=20.0,
+    Bb=20.0,
+    Qm=0.05,
+    Qb=0.05,
+)
 
 
 def test_a_rate_too_slow_for_the_highest_mode_is_refused_before_the_work_and_says_which_rate_would():
     """1 kHz on the shipped drive ended in a numba traceback (NaN in a Cholesky factor); 100 Hz in
     "covariance not positive definite ... -2e+47". Both are refused now, naming the mode and the rate."""
     response = simulate(FeedDriveParameters(), sample_rate_Hz=1000.0, duration_s=0.05)
-    with pytest.raises(InputError, match=r"^sampling at 1000 Hz cannot follow mode 4 of the guess \(1580 Hz\): .*"
-                       r"a rate of at least 7902 Hz; at 1000 Hz it follows none of the four modes"):
+    with pytest.raises(
+        InputError,
+        match=r"^sampling at 1000 Hz cannot follow mode 4 of the guess \(1580 Hz\): .*"
+        r"a rate of at least 7902 Hz; at 1000 Hz it follows none of the four modes",
+    ):
         identify_feed_drive(response, default_guess())
     assert "at 5000 Hz it follows modes 1-2 only" in sampling_problem(FeedDriveParameters(), 5000.0)
     # where the physics allows, 1 kHz works: every mode of the heavy drive is below a fifth of it
     assert modes(HEAVY).frequencies_Hz.max() < 110 and sampling_problem(default_guess(HEAVY), 1000.0) is None
-    record = simulate(HEAVY, Excitation("impulse", 0, 200.0), sample_rate_Hz=1000.0, duration_s=2.0,
-                      noise_fraction=0.01, rng=np.random.default_rng(1))
+    record = simulate(
+        HEAVY,
+        Excitation("impulse", 0, 200.0),
+        sample_rate_Hz=1000.0,
+        duration_s=2.0,
+        noise_fraction=0.01,
+        rng=np.random.default_rng(1),
+    )
     result = identify_feed_drive(record, default_guess(HEAVY))
     assert all(result.covers(HEAVY).values()) and result.reproduces_record()
     assert max(result.errors_percent(HEAVY)[k] for k in ("K1", "K2", "K3", "K4")) < 0.1
@@ -362,8 +407,14 @@ def test_any_rate_identifies_or_is_refused_in_one_line(rate, kind, on_motor):
     """No traceback and no NaN from 50 Hz to 50 kHz: a finite result, or an InputError naming the rate needed."""
     nyquist = rate / 2
     excitation = Excitation(kind, 3 if on_motor else 0, 2.0 if on_motor else 20.0, 0.2 * nyquist, 0.8 * nyquist)
-    record = simulate(FeedDriveParameters(), excitation, rate, duration_s=max(400 / rate, 0.01), noise_fraction=0.01,
-                      rng=np.random.default_rng(0))
+    record = simulate(
+        FeedDriveParameters(),
+        excitation,
+        rate,
+        duration_s=max(400 / rate, 0.01),
+        noise_fraction=0.01,
+        rng=np.random.default_rng(0),
+    )
     try:
         result = identify_feed_drive(record, default_guess())
     except InputError as exc:
@@ -453,8 +504,12 @@ def test_the_plan_predicts_what_the_identification_states_and_recommends_the_che
     tests = candidate_tests(truth, kinds=("impulse", "sine"), coordinates=(0,), durations_s=(0.5, 2.0))
     plan = plan_tests(truth, tests, noise_fraction=1e-4)
     labels = [p.candidate.label for p in plan.predictions]
-    assert labels == ["impulse, table force, 0.5 s at 10000 Hz", "sine 104 Hz, table force, 0.5 s at 10000 Hz",
-                      "impulse, table force, 2 s at 10000 Hz", "sine 104 Hz, table force, 2 s at 10000 Hz"]
+    assert labels == [
+        "impulse, table force, 0.5 s at 10000 Hz",
+        "sine 104 Hz, table force, 0.5 s at 10000 Hz",
+        "impulse, table force, 2 s at 10000 Hz",
+        "sine 104 Hz, table force, 2 s at 10000 Hz",
+    ]
     # with sensors of 0.01 % noise, 0.5 s of the impulse leave Bt at ±13 % (2σ); 2 s pin all eight within ±10 %
     assert not plan.predictions[0].identified[4] and plan.predictions[2].identifies_all
     assert plan.recommended is plan.predictions[2] is plan.closest
@@ -480,8 +535,18 @@ def test_plan_input_errors_and_the_cli():
         candidate_tests(FeedDriveParameters(), durations_s=(-1.0,))
     slow = CandidateTest(Excitation(), 0.1, 1000.0, tuple(range(12)))
     assert predict_test(FeedDriveParameters(), slow).reason.startswith("sampling at 1000 Hz cannot follow mode 4")
-    command = ["feeddrive", "plan", "--durations", "0.25", "--excitation", "impulse", "--on", "table",
-               "--measured", "realistic"]
+    command = [
+        "feeddrive",
+        "plan",
+        "--durations",
+        "0.25",
+        "--excitation",
+        "impulse",
+        "--on",
+        "table",
+        "--measured",
+        "realistic",
+    ]
     out = CliRunner().invoke(main, [*command, "--json"])
     assert out.exit_code == 0, out.output
     data = json.loads(out.stdout)

@@ -28,7 +28,9 @@ def test_minutes_seconds_hours_and_timestamps(write_csv):
 
 
 def test_time_column_by_name(write_csv):
-    log = read_temperature_log(write_csv("A,minute,B\n20,0,30\n21,1,31\n22,2,32\n23,3,33\n24,4,34\n"), time_col="minute")
+    log = read_temperature_log(
+        write_csv("A,minute,B\n20,0,30\n21,1,31\n22,2,32\n23,3,33\n24,4,34\n"), time_col="minute"
+    )
     assert log.sensors == ("A", "B")
     np.testing.assert_allclose(log.temperature_C[:, 1], [30, 31, 32, 33, 34])
 
@@ -48,14 +50,45 @@ def test_isolated_bad_samples_are_skipped_with_a_note(write_csv):
         ("time_min,A\n0,20\n2,20\n1,21\n3,21\n4,21\n", {}, r"row 4: time goes back"),
         ("time_min,A\n0,20\n1,20\n", {}, r"2 samples; at least 5 are needed"),
         ("time_min\n0\n1\n2\n3\n4\n", {}, r"need a time column and at least one sensor column"),
-        ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_col": "clock"}, r"no time column 'clock'; the columns are: time_min, A"),
-        ("time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n", {"time_unit": "days"}, r"time unit 'days' is not one of: ms, s, min, h, d"),
-        ("time_min,A\nyesterday,20\n1,20\n2,21\n3,21\n4,21\n", {}, r"row 2: 'yesterday' is neither a number nor a time stamp \(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:00:00\)"),
-        ("stamp,A\n22.11.2026 08:00,20\n22.11.2026 08:01,20\n01/02/2026 08:02,21\n22.11.2026 08:03,21\n22.11.2026 08:04,21\n", {}, r"row 4: '01/02/2026 08:02' is neither a number nor a time stamp like the first one"),
-        ("stamp,A\nFeb 1 2026 08:00,20\nFeb 1 2026 08:01,20\nFeb 1 2026 08:02,21\nFeb 1 2026 08:03,21\nFeb 1 2026 08:04,21\n", {}, r"row 2: .* \(ISO 8601"),
+        (
+            "time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n",
+            {"time_col": "clock"},
+            r"no time column 'clock'; the columns are: time_min, A",
+        ),
+        (
+            "time_min,A\n0,20\n1,20\n2,21\n3,21\n4,21\n",
+            {"time_unit": "days"},
+            r"time unit 'days' is not one of: ms, s, min, h, d",
+        ),
+        (
+            "time_min,A\nyesterday,20\n1,20\n2,21\n3,21\n4,21\n",
+            {},
+            r"row 2: 'yesterday' is neither a number nor a time stamp \(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 "
+            r"08:00:00 AM or 08:00:00\)",
+        ),
+        (
+            "stamp,A\n22.11.2026 08:00,20\n22.11.2026 08:01,20\n01/02/2026 08:02,21\n22.11.2026 08:03,21\n22.11.2026 "
+            "08:04,21\n",
+            {},
+            r"row 4: '01/02/2026 08:02' is neither a number nor a time stamp like the first one",
+        ),
+        (
+            "stamp,A\nFeb 1 2026 08:00,20\nFeb 1 2026 08:01,20\nFeb 1 2026 08:02,21\nFeb 1 2026 08:03,21\nFeb 1 2026 "
+            "08:04,21\n",
+            {},
+            r"row 2: .* \(ISO 8601",
+        ),
         ("time_min,A\n0,20\n1,\n2,\n3,500\n4,21\n", {}, r"sensor 'A': 3 of 5 samples are empty, NaN or open-circuit"),
-        ("time_min,A,B,A\n0,20,20,20\n1,20,20,20\n2,21,21,21\n3,21,21,21\n4,21,21,21\n", {}, r"the column name 'A' appears twice \(columns 2 and 4\); give each column its own name"),
-        ("time_min;A; A\n0;20;20\n1;20;20\n2;21;21\n3;21;21\n4;21;21\n", {}, r"the column name 'A' appears twice \(columns 2 and 3\)"),
+        (
+            "time_min,A,B,A\n0,20,20,20\n1,20,20,20\n2,21,21,21\n3,21,21,21\n4,21,21,21\n",
+            {},
+            r"the column name 'A' appears twice \(columns 2 and 4\); give each column its own name",
+        ),
+        (
+            "time_min;A; A\n0;20;20\n1;20;20\n2;21;21\n3;21;21\n4;21;21\n",
+            {},
+            r"the column name 'A' appears twice \(columns 2 and 3\)",
+        ),
     ],
 )
 def test_bad_logs_are_refused_with_a_message_naming_the_problem(write_csv, text, kwargs, message):
@@ -83,7 +116,10 @@ def test_a_time_of_day_passes_midnight_in_an_overnight_test(write_csv, tmp_path)
     """Before, 23:59 then 00:00 was refused as time going back."""
     from mtident.io.follow import LogFollower
 
-    text = "clock,A\n" + "".join(f"{h:02d}:{m:02d}:00,{20 + k / 10}\n" for k, (h, m) in enumerate([(23, 57), (23, 58), (23, 59), (0, 0), (0, 1), (0, 3)]))
+    text = "clock,A\n" + "".join(
+        f"{h:02d}:{m:02d}:00,{20 + k / 10}\n"
+        for k, (h, m) in enumerate([(23, 57), (23, 58), (23, 59), (0, 0), (0, 1), (0, 3)])
+    )
     np.testing.assert_allclose(read_temperature_log(write_csv(text)).time_min, [0, 1, 2, 3, 4, 6])
     np.testing.assert_allclose(LogFollower(write_csv(text)).poll().time_min, [0, 1, 2, 3, 4, 6])
     with pytest.raises(InputError, match="row 4: time goes back"):
@@ -97,31 +133,70 @@ def test_stamps_whose_offset_changes_when_summer_time_ends_stay_in_order(write_c
     offsets with a ValueError that reached the user as a traceback."""
     from mtident.io.follow import LogFollower
 
-    stamps = ["02:30:00+02:00", "02:40:00+02:00", "02:50:00+02:00", "02:00:00+01:00", "02:10:00+01:00", "02:20:00+01:00"]
+    stamps = [
+        "02:30:00+02:00",
+        "02:40:00+02:00",
+        "02:50:00+02:00",
+        "02:00:00+01:00",
+        "02:10:00+01:00",
+        "02:20:00+01:00",
+    ]
     path = write_csv("stamp,A\n" + "".join(f"2026-10-25T{s},{20 + k / 10}\n" for k, s in enumerate(stamps)))
     np.testing.assert_allclose(read_temperature_log(path).time_min, [0, 10, 20, 30, 40, 50])
     np.testing.assert_allclose(LogFollower(path).poll().time_min, [0, 10, 20, 30, 40, 50])
 
 
-def _local_clock_log(start: str, change_at: int, shift_h: int, rows: int = 240, step_s: int = 60, fmt: str = "%d.%m.%Y %H:%M:%S") -> str:
+def _local_clock_log(
+    start: str, change_at: int, shift_h: int, rows: int = 240, step_s: int = 60, fmt: str = "%d.%m.%Y %H:%M:%S"
+) -> str:
     """A 1-min warm-up log whose local clock (no offset written) is put back (shift_h = -1) or
     forward (+1) by an hour before row ``change_at``."""
     import datetime as dt
 
     first = dt.datetime.fromisoformat(start)
-    clock = [first + dt.timedelta(seconds=step_s * k) + (dt.timedelta(hours=shift_h) if k >= change_at else dt.timedelta()) for k in range(rows)]
-    return "time;T1\n" + "".join(f"{c.strftime(fmt)};{26.7 - 8.8 * np.exp(-0.016 * k * step_s / 60):.3f}\n".replace(".", ",", 1 if fmt.startswith("%Y") else 0) for k, c in enumerate(clock))
+    clock = [
+        first + dt.timedelta(seconds=step_s * k) + (dt.timedelta(hours=shift_h) if k >= change_at else dt.timedelta())
+        for k in range(rows)
+    ]
+    return "time;T1\n" + "".join(
+        f"{c.strftime(fmt)};{26.7 - 8.8 * np.exp(-0.016 * k * step_s / 60):.3f}\n".replace(
+            ".", ",", 1 if fmt.startswith("%Y") else 0
+        )
+        for k, c in enumerate(clock)
+    )
 
 
 @pytest.mark.parametrize(
     ("start", "change_at", "shift_h", "step_s", "said"),
     [
-        ("2026-10-25 00:00:00", 180, -1, 60, "go back an hour at row 182 ('25.10.2026 02:59:00' then '25.10.2026 02:00:00'): read as the end of summer time"),
-        ("2026-11-01 01:40:00", 120, -1, 10, "go back an hour at row 122 ('01.11.2026 01:59:50' then '01.11.2026 01:00:00')"),  # US, 10-s rows
-        ("2026-03-29 00:00:00", 120, 1, 60, "jump an hour at row 122 ('29.03.2026 01:59:00' then '29.03.2026 03:00:00'): read as the start of summer time"),
+        (
+            "2026-10-25 00:00:00",
+            180,
+            -1,
+            60,
+            "go back an hour at row 182 ('25.10.2026 02:59:00' then '25.10.2026 02:00:00'): read as the end of "
+            "summer time",
+        ),
+        (
+            "2026-11-01 01:40:00",
+            120,
+            -1,
+            10,
+            "go back an hour at row 122 ('01.11.2026 01:59:50' then '01.11.2026 01:00:00')",
+        ),  # US, 10-s rows
+        (
+            "2026-03-29 00:00:00",
+            120,
+            1,
+            60,
+            "jump an hour at row 122 ('29.03.2026 01:59:00' then '29.03.2026 03:00:00'): read as the start of summer "
+            "time",
+        ),
     ],
 )
-def test_a_local_clock_changed_for_summer_time_is_read_across_the_change(write_csv, start, change_at, shift_h, step_s, said):
+def test_a_local_clock_changed_for_summer_time_is_read_across_the_change(
+    write_csv, start, change_at, shift_h, step_s, said
+):
     """Stamps without an offset go back an hour when summer time ends (the file was refused:
     "time goes back"; the follower refused the repeated hour row by row) and jump an hour when it
     begins (read as an hour's gap: the warm-up seemed to stand still for an hour). Both readers
@@ -176,7 +251,6 @@ def test_any_summer_time_change_reads_alike_whole_and_live(tmp_path_factory, day
     fed in random pieces, both read the true elapsed time."""
     import datetime as dt
 
-
     change = dt.datetime.fromisoformat(day) + dt.timedelta(hours=3 if back and day.startswith("2026-10") else 2)
     if step_s < 60:  # 1-s and 10-s rows: 5 min with the change 1-4 min from the start (the follower
         rows = 300 // step_s  # parses a stamp a row: two hours of 1-s rows from midnight cost 2-4 s an example)
@@ -185,7 +259,14 @@ def test_any_summer_time_change_reads_alike_whole_and_live(tmp_path_factory, day
         rows = int(14400 / step_s) + 1
         first = dt.datetime.fromisoformat(day) + dt.timedelta(minutes=start_min)
     real = [first + dt.timedelta(seconds=step_s * k) for k in range(rows)]
-    clock = [r - dt.timedelta(hours=1) if back and r >= change else r + dt.timedelta(hours=1) if not back and r >= change else r for r in real]
+    clock = [
+        r - dt.timedelta(hours=1)
+        if back and r >= change
+        else r + dt.timedelta(hours=1)
+        if not back and r >= change
+        else r
+        for r in real
+    ]
     text = "time,T1\n" + "".join(f"{c.strftime(fmt)},{20 + k / rows:.4f}\n" for k, c in enumerate(clock))
     folder = tmp_path_factory.mktemp("summer")
     whole = folder / "whole.csv"
@@ -200,11 +281,19 @@ def test_any_summer_time_change_reads_alike_whole_and_live(tmp_path_factory, day
 def test_an_hour_back_that_is_no_summer_time_change_is_still_refused(write_csv):
     """At noon, on a Saturday, or in July the clock is not changed for summer time, and an hour
     back that is no change of the clock (a half-hour step back) is refused as before."""
-    for start, change_at, shift in (("2026-10-25 10:00:00", 120, -1), ("2026-10-24 00:00:00", 180, -1), ("2026-07-26 00:00:00", 180, -1)):
+    for start, change_at, shift in (
+        ("2026-10-25 10:00:00", 120, -1),
+        ("2026-10-24 00:00:00", 180, -1),
+        ("2026-07-26 00:00:00", 180, -1),
+    ):
         with pytest.raises(InputError, match="time goes back"):
             read_temperature_log(write_csv(_local_clock_log(start, change_at, shift)))
     with pytest.raises(InputError, match="time goes back"):
-        read_temperature_log(write_csv(_local_clock_log("2026-10-25 02:00:00", 30, 0).replace("25.10.2026 02:31:00", "25.10.2026 02:01:30")))
+        read_temperature_log(
+            write_csv(
+                _local_clock_log("2026-10-25 02:00:00", 30, 0).replace("25.10.2026 02:31:00", "25.10.2026 02:01:30")
+            )
+        )
     # a jump forward at noon stays a gap of an hour
     log = read_temperature_log(write_csv(_local_clock_log("2026-03-29 10:00:00", 120, 1)))
     assert log.time_min[120] - log.time_min[119] == 61 and not log.notes
@@ -245,7 +334,9 @@ def test_an_elapsed_clock_past_24_hours_is_read_as_elapsed_time(write_csv):
     assert not second.warnings
     # a cell past 24:00:00 that is no clock is still refused
     with pytest.raises(InputError, match="row 5: '24:75:00' is neither a number nor a time stamp like the first one"):
-        read_temperature_log(write_csv("Time,T1\n23:30:00,20\n23:40:00,20\n23:50:00,20\n24:75:00,20\n25:00:00,20\n25:10:00,20\n"))
+        read_temperature_log(
+            write_csv("Time,T1\n23:30:00,20\n23:40:00,20\n23:50:00,20\n24:75:00,20\n25:00:00,20\n25:10:00,20\n")
+        )
 
 
 def test_excel_sep_line_states_the_delimiter(write_csv):
@@ -256,12 +347,18 @@ def test_excel_sep_line_states_the_delimiter(write_csv):
         log = read_temperature_log(write_csv(directive + "Zeit;Temp, Spindel;Temp, Motor\n" + rows))
         assert log.sensors == ("Temp, Spindel", "Temp, Motor") and log.temperature_C[5].tolist() == [20.5, 19.5]
     # the same tie in a comma-separated header: its rows split into three cells only at ','
-    log = read_temperature_log(write_csv("time,T1;front,T2;rear\n" + "".join(f"{k},{20 + k / 10:.1f},{19 + k / 10:.1f}\n" for k in range(6))))
+    log = read_temperature_log(
+        write_csv("time,T1;front,T2;rear\n" + "".join(f"{k},{20 + k / 10:.1f},{19 + k / 10:.1f}\n" for k in range(6)))
+    )
     assert log.sensors == ("T1;front", "T2;rear")
 
 
 def test_row_numbers_in_messages_count_a_preamble(write_csv):
-    log = read_temperature_log(write_csv("# logger\n# setup\ntime_min;A\n" + "".join(f"{k};{'' if k == 3 else f'20,{k}'}\n" for k in range(30))))
+    log = read_temperature_log(
+        write_csv(
+            "# logger\n# setup\ntime_min;A\n" + "".join(f"{k};{'' if k == 3 else f'20,{k}'}\n" for k in range(30))
+        )
+    )
     assert log.notes == ("sensor 'A': skipped 1 empty/NaN sample(s) (rows 7)",)
     with pytest.raises(InputError, match="sensor 'A', row 5: 'x' is not a number"):
         read_temperature_log(write_csv("# logger\n# setup\ntime_min;A\n0;20\n1;x\n2;21\n3;21\n4;21\n"))
@@ -279,11 +376,15 @@ def test_missing_file_and_unknown_sensor(tmp_path, write_csv):
 def test_a_dead_sensor_that_is_not_asked_for_does_not_stop_the_others(write_csv):
     """The error for a dead sensor says "leave this sensor out with --sensor"; that used to fail
     the same way, because every column was checked before the selection."""
-    path = write_csv("time_min,dead,B,A\n" + "".join(f"{k},{'20' if k == 0 else ''},{30 + k},{20 + k}\n" for k in range(6)))
+    path = write_csv(
+        "time_min,dead,B,A\n" + "".join(f"{k},{'20' if k == 0 else ''},{30 + k},{20 + k}\n" for k in range(6))
+    )
     with pytest.raises(InputError, match="sensor 'dead': 5 of 6 samples are empty"):
         read_temperature_log(path)
     # one that never gave a reading is left out of the default selection, with a note
-    never = read_temperature_log(write_csv("time_min,dead,B,A\n" + "".join(f"{k},,{30 + k},{20 + k}\n" for k in range(6))))
+    never = read_temperature_log(
+        write_csv("time_min,dead,B,A\n" + "".join(f"{k},,{30 + k},{20 + k}\n" for k in range(6)))
+    )
     assert never.sensors == ("B", "A") and "left out, no readings in them: dead" in never.notes
     log = read_temperature_log(path, sensors=["A", "B"])
     assert log.sensors == ("A", "B") and log.temperature_C[2].tolist() == [22.0, 32.0]
@@ -306,10 +407,16 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
     t = np.arange(0.0, 6.0)
     frame = pd.DataFrame({"time_min": t, "A": 20 + t, "B": 30 + t})
     plain = read_temperature_log(frame, sensors=["B"])
-    assert plain.sensors == ("B",) and plain.source == "DataFrame" and plain.temperature_C[:, 0].tolist() == (30 + t).tolist()
+    assert (
+        plain.sensors == ("B",)
+        and plain.source == "DataFrame"
+        and plain.temperature_C[:, 0].tolist() == (30 + t).tolist()
+    )
     by_index = [
         frame.set_index("time_min"),
-        frame.drop(columns="time_min").set_index(pd.date_range("2026-11-22 08:00", periods=6, freq="1min", name="stamp")),
+        frame.drop(columns="time_min").set_index(
+            pd.date_range("2026-11-22 08:00", periods=6, freq="1min", name="stamp")
+        ),
         frame.drop(columns="time_min").set_index(pd.to_timedelta(t, unit="min").rename("elapsed")),
     ]
     for indexed in by_index:
@@ -331,25 +438,112 @@ def test_a_notebook_dataframe_is_read_and_checked_like_a_file():
 # found by the search: a decimal comma with the unit in the cell ("20,00 °C" was not a number), a live
 # UTF-16 log's first byte (taken for a binary file), a CRLF cut between CR and LF (the first row was
 # taken as complete, the date and clock columns were not told apart, every row refused)
-@example(delimiter=";", decimal_comma=True, preamble=[], encoding="utf-8", crlf=False, trailing=False, quoted=False, stamps="minutes", units="none", under="nothing", units_in_cells=True, counter="none", cuts=[])
-@example(delimiter=",", decimal_comma=False, preamble=[], encoding="utf-16-be", crlf=False, trailing=False, quoted=False, stamps="minutes", units="none", under="nothing", units_in_cells=False, counter="none", cuts=[1])
-@example(delimiter=",", decimal_comma=False, preamble=[], encoding="utf-16", crlf=True, trailing=True, quoted=False, stamps="date, clock", units="min", under="nothing", units_in_cells=True, counter="none", cuts=[144])
+@example(
+    delimiter=";",
+    decimal_comma=True,
+    preamble=[],
+    encoding="utf-8",
+    crlf=False,
+    trailing=False,
+    quoted=False,
+    stamps="minutes",
+    units="none",
+    under="nothing",
+    units_in_cells=True,
+    counter="none",
+    cuts=[],
+)
+@example(
+    delimiter=",",
+    decimal_comma=False,
+    preamble=[],
+    encoding="utf-16-be",
+    crlf=False,
+    trailing=False,
+    quoted=False,
+    stamps="minutes",
+    units="none",
+    under="nothing",
+    units_in_cells=False,
+    counter="none",
+    cuts=[1],
+)
+@example(
+    delimiter=",",
+    decimal_comma=False,
+    preamble=[],
+    encoding="utf-16",
+    crlf=True,
+    trailing=True,
+    quoted=False,
+    stamps="date, clock",
+    units="min",
+    under="nothing",
+    units_in_cells=True,
+    counter="none",
+    cuts=[144],
+)
 @given(
     delimiter=st.sampled_from([",", ";", "\t"]),
     decimal_comma=st.booleans(),
-    preamble=st.lists(st.sampled_from(["# logger", "", "#channels: 4", "   ", "sep=DELIMITER", "Logger: GL240", "Interval: 60 s", "Start,22.11.2026"]), max_size=3),
+    preamble=st.lists(
+        st.sampled_from(
+            [
+                "# logger",
+                "",
+                "#channels: 4",
+                "   ",
+                "sep=DELIMITER",
+                "Logger: GL240",
+                "Interval: 60 s",
+                "Start,22.11.2026",
+            ]
+        ),
+        max_size=3,
+    ),
     encoding=st.sampled_from(["utf-8", "cp1252", "utf-16", "utf-16-le", "utf-16-be"]),
     crlf=st.booleans(),
     trailing=st.booleans(),
     quoted=st.booleans(),
-    stamps=st.sampled_from(["minutes", "iso", "dotted", "dashed", "month name", "time of day", "date, clock", "iso date, clock", "ymd date, clock", "us slashed", "day-first slashed"]),
+    stamps=st.sampled_from(
+        [
+            "minutes",
+            "iso",
+            "dotted",
+            "dashed",
+            "month name",
+            "time of day",
+            "date, clock",
+            "iso date, clock",
+            "ymd date, clock",
+            "us slashed",
+            "day-first slashed",
+        ]
+    ),
     units=st.sampled_from(["none", "min", "s"]),
-    under=st.sampled_from(["nothing", "a second row of names", "rows describing the channels", "an empty row and a section tag"]),
+    under=st.sampled_from(
+        ["nothing", "a second row of names", "rows describing the channels", "an empty row and a section tag"]
+    ),
     units_in_cells=st.booleans(),
     counter=st.sampled_from(["none", "NO.", "", "Reading #"]),
     cuts=st.lists(st.integers(1, 2000), max_size=6),
 )
-def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimiter, decimal_comma, preamble, encoding, crlf, trailing, quoted, stamps, units, under, units_in_cells, counter, cuts):
+def test_any_logger_dialect_reads_alike_whole_and_live(
+    tmp_path_factory,
+    delimiter,
+    decimal_comma,
+    preamble,
+    encoding,
+    crlf,
+    trailing,
+    quoted,
+    stamps,
+    units,
+    under,
+    units_in_cells,
+    counter,
+    cuts,
+):
     """Every combination of delimiter, decimal mark, preamble (also a logger's settings without
     '#'), encoding (also UTF-16 with and without a byte-order mark), line end, trailing
     delimiter, quoted cells (as spreadsheets write them), time format (also a date and a time of day in two columns), a units row
@@ -358,7 +552,6 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     unnamed or under any name), read whole and followed live in random pieces, gives the plain
     file's times and temperatures (a channel the description rows call a dew point left out)."""
     import datetime as dt
-
 
     decimal_comma = decimal_comma and delimiter != ","
     t = np.arange(0.0, 25.0) * 1.5
@@ -374,9 +567,20 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
         if stamps == "minutes" and units == "s":
             return [f"{60 * minutes:g}"]
         if stamps.endswith("date, clock"):  # a stamp in two columns
-            return [when.strftime({"iso": "%Y-%m-%d", "ymd": "%Y/%m/%d"}.get(stamps.split()[0], "%d.%m.%Y")), when.strftime("%H:%M:%S")]
-        return [{"minutes": f"{minutes:g}", "iso": when.isoformat(), "dotted": when.strftime("%d.%m.%Y %H:%M:%S"),
-                "dashed": when.strftime("%d-%m-%Y %H:%M:%S"), "month name": when.strftime("%d-%b-%Y %H:%M:%S"), "time of day": when.strftime("%H:%M:%S")}[stamps]]
+            return [
+                when.strftime({"iso": "%Y-%m-%d", "ymd": "%Y/%m/%d"}.get(stamps.split()[0], "%d.%m.%Y")),
+                when.strftime("%H:%M:%S"),
+            ]
+        return [
+            {
+                "minutes": f"{minutes:g}",
+                "iso": when.isoformat(),
+                "dotted": when.strftime("%d.%m.%Y %H:%M:%S"),
+                "dashed": when.strftime("%d-%m-%Y %H:%M:%S"),
+                "month name": when.strftime("%d-%b-%Y %H:%M:%S"),
+                "time of day": when.strftime("%H:%M:%S"),
+            }[stamps]
+        ]
 
     def number(value: float) -> str:
         text = f"{value:.2f}".replace(".", ",") if decimal_comma else f"{value:.2f}"
@@ -395,14 +599,30 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     described = {
         "nothing": [],
         "a second row of names": [row(["Date/Time", *clock, "ch1", "ch2", "ch3"])],  # T&D
-        "rows describing the channels": [row([*no_time, "227659", "227659", "227659"]), row([*no_time, "Temperature", "Temperature", "Dew Point"])],  # Tinytag
-        "an empty row and a section tag": [row([*no_time, "", "", ""]), "[#D]" + delimiter * (len(no_time) + 2 + counted)],  # Rotronic
+        "rows describing the channels": [
+            row([*no_time, "227659", "227659", "227659"]),
+            row([*no_time, "Temperature", "Temperature", "Dew Point"]),
+        ],  # Tinytag
+        "an empty row and a section tag": [
+            row([*no_time, "", "", ""]),
+            "[#D]" + delimiter * (len(no_time) + 2 + counted),
+        ],  # Rotronic
     }[under]
-    lines = [*(line.replace("DELIMITER", delimiter) for line in preamble), row(["time", *clock, "A °C", "B", "C"], counter)]
-    units_row = [row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]", "°C"])] if units != "none" else []  # the time's unit only where the time is a number
+    lines = [
+        *(line.replace("DELIMITER", delimiter) for line in preamble),
+        row(["time", *clock, "A °C", "B", "C"], counter),
+    ]
+    units_row = (
+        [row([units if stamps == "minutes" else "", *["" for _ in clock], "°C", "[°C]", "°C"])]
+        if units != "none"
+        else []
+    )  # the time's unit only where the time is a number
     # rows that describe the channels come straight under the header; empty rows and tags after them
     lines += [*units_row, *described] if under == "an empty row and a section tag" else [*described, *units_row]
-    lines += [row([*time_cells(m), *(number(v) for v in values)], str(k + 1)) for k, (m, values) in enumerate(zip(t, temperatures, strict=True))]
+    lines += [
+        row([*time_cells(m), *(number(v) for v in values)], str(k + 1))
+        for k, (m, values) in enumerate(zip(t, temperatures, strict=True))
+    ]
     data = (end.join(lines) + end).encode(encoding)
     folder = tmp_path_factory.mktemp("dialect")
     whole = folder / "whole.csv"
@@ -411,14 +631,17 @@ def test_any_logger_dialect_reads_alike_whole_and_live(tmp_path_factory, delimit
     dew_point = under == "rows describing the channels"
     assert log.sensors == (("A °C", "B") if dew_point else ("A °C", "B", "C"))
     np.testing.assert_allclose(log.time_min, t, atol=1e-9)
-    np.testing.assert_array_equal(log.temperature_C, [[float(f"{v:.2f}") for v in row[: len(log.sensors)]] for row in temperatures])
+    np.testing.assert_array_equal(
+        log.temperature_C, [[float(f"{v:.2f}") for v in row[: len(log.sensors)]] for row in temperatures]
+    )
     follower, times = followed_in_pieces(folder / "live.csv", data, cuts)
     np.testing.assert_allclose(times, t, atol=1e-9)
     assert tuple(follower.sensors or ()) == log.sensors
 
 
 UNITS_LOG = "time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n" + "".join(
-    f"{60 * m:g};{20 + 0.1 * m:.2f};{293.15 + 0.1 * m:.2f};{68 + 0.18 * m:.2f};{1000 + m:g}\n".replace(".", ",") for m in range(12)
+    f"{60 * m:g};{20 + 0.1 * m:.2f};{293.15 + 0.1 * m:.2f};{68 + 0.18 * m:.2f};{1000 + m:g}\n".replace(".", ",")
+    for m in range(12)
 )
 
 
@@ -429,7 +652,9 @@ def test_a_units_row_states_the_time_unit_and_the_temperature_scale(write_csv):
     log = read_temperature_log(write_csv(UNITS_LOG))
     assert log.sensors == ("T1", "T2", "T3")
     np.testing.assert_allclose(log.time_min, np.arange(12.0))
-    np.testing.assert_allclose(log.temperature_C, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 3, axis=1), atol=1e-9)
+    np.testing.assert_allclose(
+        log.temperature_C, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 3, axis=1), atol=1e-9
+    )
     assert any("'T2': read in K" in n for n in log.notes) and any("'T3': read in °F" in n for n in log.notes)
     assert any("not temperatures by the units row: speed (rpm)" in n for n in log.notes)
     with pytest.raises(InputError, match=r"sensor 'speed' is in 'rpm' by the units row, not a temperature"):
@@ -439,7 +664,9 @@ def test_a_units_row_states_the_time_unit_and_the_temperature_scale(write_csv):
         read_temperature_log(write_csv(UNITS_LOG.replace("20,20", "x")))
 
 
-@pytest.mark.parametrize("cut", [5, len("time;T1;T2;T3;speed\n") + 3, len("time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n") + 4])
+@pytest.mark.parametrize(
+    "cut", [5, len("time;T1;T2;T3;speed\n") + 3, len("time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n") + 4]
+)
 def test_a_live_log_reads_its_units_row_like_the_whole_file(tmp_path, cut):
     """Also when the units row is not yet written at the first look (a cut after the header)."""
     from mtident.io.follow import LogFollower
@@ -463,7 +690,12 @@ def test_a_live_log_reads_its_units_row_like_the_whole_file(tmp_path, cut):
 
 def test_a_first_row_without_readings_is_no_units_row(write_csv):
     """A time stamp with every sensor empty has no unit in it: it stays a data row."""
-    log = read_temperature_log(write_csv("time,T1,T2\n2026-11-22T08:00:00,,\n" + "".join(f"2026-11-22T08:{m:02d}:00,{20 + m / 10:.1f},{21 + m / 10:.1f}\n" for m in range(1, 20))))
+    log = read_temperature_log(
+        write_csv(
+            "time,T1,T2\n2026-11-22T08:00:00,,\n"
+            + "".join(f"2026-11-22T08:{m:02d}:00,{20 + m / 10:.1f},{21 + m / 10:.1f}\n" for m in range(1, 20))
+        )
+    )
     assert len(log.time_min) == 20 and np.isnan(log.temperature_C[0]).all()
 
 
@@ -490,9 +722,26 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
     follower = LogFollower(live)
     follower.poll()
     position = follower.position()
-    assert position["dialect"] == {"delimiter": ";", "decimal": ",", "preamble_lines": 0, "encoding": "utf-8-sig", "units": [], "extra_rows": 0, "units_source": "the units row", "units_in_cells": False, "names": [], "written_names": [], "from_humidity": []}
+    assert position["dialect"] == {
+        "delimiter": ";",
+        "decimal": ",",
+        "preamble_lines": 0,
+        "encoding": "utf-8-sig",
+        "units": [],
+        "extra_rows": 0,
+        "units_source": "the units row",
+        "units_in_cells": False,
+        "names": [],
+        "written_names": [],
+        "from_humidity": [],
+    }
     json.loads(json.dumps(position))  # plain JSON
-    position["dialect"] = [";", ",", 0, "utf-8-sig"]  # as a state file of an older version wrote it: a list of the first four
+    position["dialect"] = [
+        ";",
+        ",",
+        0,
+        "utf-8-sig",
+    ]  # as a state file of an older version wrote it: a list of the first four
     with open(live, "a") as out:
         out.write("1;20,6\n")
     rows = LogFollower.resume(live, position, None, None).poll()
@@ -513,7 +762,9 @@ def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
 def test_a_date_and_a_time_of_day_in_two_columns_are_one_stamp(write_csv):
     """Datum;Uhrzeit as European loggers write them: refused before ("'01.03.2026' is neither a
     number nor a time stamp"); the clock column is no sensor."""
-    text = "Datum;Uhrzeit;T1\n" + "".join(f"01.03.2026;23:{50 + m // 2}:{30 * (m % 2):02d};{20 + m / 10:.1f}\n" for m in range(10))
+    text = "Datum;Uhrzeit;T1\n" + "".join(
+        f"01.03.2026;23:{50 + m // 2}:{30 * (m % 2):02d};{20 + m / 10:.1f}\n" for m in range(10)
+    )
     text += "02.03.2026;00:00:00;21.0\n02.03.2026;00:01:00;21.1\n"  # past midnight: the date tells
     log = read_temperature_log(write_csv(text))
     assert log.sensors == ("T1",)
@@ -538,9 +789,14 @@ def test_a_time_column_in_seconds_read_as_minutes_gets_a_hint(write_csv, tmp_pat
 
     text = "Time,T1\n" + "".join(f"{s},{20 + s / 7200:.4f}\n" for s in range(0, 7201, 10))
     log = read_temperature_log(write_csv(text))
-    assert any("time column 'Time' is read as minutes" in n and "7200 min (5.0 days)" in n and "--time-unit s" in n for n in log.notes)
+    assert any(
+        "time column 'Time' is read as minutes" in n and "7200 min (5.0 days)" in n and "--time-unit s" in n
+        for n in log.notes
+    )
     assert not any("read as minutes" in n for n in read_temperature_log(write_csv(text), time_unit="s").notes)
-    assert not any("read as minutes" in n for n in read_temperature_log(write_csv(text.replace("Time,", "Time_s,"))).notes)
+    assert not any(
+        "read as minutes" in n for n in read_temperature_log(write_csv(text.replace("Time,", "Time_s,"))).notes
+    )
     live = tmp_path / "live.csv"
     live.write_text(text)
     warnings = LogFollower(live).poll().warnings
@@ -550,11 +806,15 @@ def test_a_time_column_in_seconds_read_as_minutes_gets_a_hint(write_csv, tmp_pat
 def test_a_unit_at_the_end_of_a_column_name(write_csv):
     """'Time [s]' was read as minutes (only a _s suffix counted); 'T1 [°F]' as °C. A name whose
     brackets hold no unit ('T2 (spindle)') is a plain °C sensor."""
-    text = "Time [s],T1 [°F],T2 (spindle)\n" + "".join(f"{60 * m},{68 + 0.18 * m:.2f},{20 + 0.1 * m:.1f}\n" for m in range(12))
+    text = "Time [s],T1 [°F],T2 (spindle)\n" + "".join(
+        f"{60 * m},{68 + 0.18 * m:.2f},{20 + 0.1 * m:.1f}\n" for m in range(12)
+    )
     log = read_temperature_log(write_csv(text))
     assert log.sensors == ("T1 [°F]", "T2 (spindle)")
     np.testing.assert_allclose(log.time_min, np.arange(12.0))
-    np.testing.assert_allclose(log.temperature_C, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 2, axis=1), atol=1e-9)
+    np.testing.assert_allclose(
+        log.temperature_C, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 2, axis=1), atol=1e-9
+    )
     assert log.notes == ("sensor 'T1 [°F]': read in °F (its name), converted to °C",)
 
 
@@ -595,7 +855,9 @@ def test_slashed_dates_am_pm_and_clocks_without_seconds(tmp_path, fmt, start):
 
     first = dt.datetime.fromisoformat(start)
     minutes = np.arange(0.0, 30.0)
-    text = "stamp,T1\n" + "".join(f"{(first + dt.timedelta(minutes=float(m))).strftime(fmt)},{20 + m / 10:.1f}\n" for m in minutes)
+    text = "stamp,T1\n" + "".join(
+        f"{(first + dt.timedelta(minutes=float(m))).strftime(fmt)},{20 + m / 10:.1f}\n" for m in minutes
+    )
     path = tmp_path / "log.csv"
     path.write_text(text)
     np.testing.assert_allclose(read_temperature_log(path).time_min, minutes)
@@ -662,7 +924,10 @@ def test_spreadsheet_serial_dates_are_named_not_read_as_minutes(write_csv):
 
     rows = "".join(f"{46348.333333 + k / 1440:.8f},{26.7 - 8.8 * np.exp(-0.016 * k):.2f}\n" for k in range(60))
     path = write_csv("Time,T1\n" + rows)
-    with pytest.raises(InputError, match=r"'Time' looks like spreadsheet serial dates \(days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00\), not minutes: give --time-unit d"):
+    with pytest.raises(
+        InputError,
+        match=r"'Time' looks like spreadsheet serial dates \(days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00\), not minutes: give --time-unit d",
+    ):
         read_temperature_log(path)
     np.testing.assert_allclose(read_temperature_log(path, time_unit="d").time_min, np.arange(60.0), atol=1e-4)
     assert read_temperature_log(path, time_unit="min").time_min[-1] == pytest.approx(59 / 1440, abs=1e-6)
@@ -693,7 +958,10 @@ def test_a_scan_counter_and_milliseconds_after_a_colon(write_csv):
     import datetime as dt
 
     start = dt.datetime(2026, 11, 22, 8, 0, 0)
-    rows = "".join(f"{k + 1},{start + dt.timedelta(seconds=10 * k):%m/%d/%Y %H:%M:%S}:{500 * (k % 2):03d},{20 + k / 100:.3f}\n" for k in range(30))
+    rows = "".join(
+        f"{k + 1},{start + dt.timedelta(seconds=10 * k):%m/%d/%Y %H:%M:%S}:{500 * (k % 2):03d},{20 + k / 100:.3f}\n"
+        for k in range(30)
+    )
     log = read_temperature_log(write_csv("Scan,Time,101 (C)\n" + rows))
     assert log.sensors == ("101 (C)",) and log.notes == ("left out, a row counter: Scan; the time is 'Time'",)
     np.testing.assert_allclose(log.time_min * 60, 10 * np.arange(30) + 0.5 * (np.arange(30) % 2), atol=1e-6)
@@ -714,11 +982,20 @@ def test_real_logger_exports_name_their_channels_and_leave_out_the_rest(write_cs
     ("'S/N' is neither a number nor a time stamp"); T&D's unnamed stamp column with serial dates
     beside it ("row 2 is empty"). The humidity and light channels are left out, and named; so is
     the dew point (in °C, read as a sensor before), by the Property row or by its name (EasyLog)."""
-    tinytag = ",Time,1,2,3\nS/N,,227659,227659,227659\nType,,Tinytag Ultra H°C/%RH,Tinytag Ultra H°C/%RH,csv file\nDescription,,Spindle,Spindle,Spindle\nProperty,,Temperature,Humidity,Dew Point\n"
-    tinytag += "".join(f"{k + 1},2026-11-22 08:{k:02d}:00,{20 + k / 10:.1f} °C,{56 + k / 100:.1f} %RH,{8 + k / 10:.1f} °C\n" for k in range(8))
+    tinytag = (
+        ",Time,1,2,3\nS/N,,227659,227659,227659\nType,,Tinytag Ultra H°C/%RH,Tinytag Ultra H°C/%RH,csv "
+        "file\nDescription,,Spindle,Spindle,Spindle\nProperty,,Temperature,Humidity,Dew Point\n"
+    )
+    tinytag += "".join(
+        f"{k + 1},2026-11-22 08:{k:02d}:00,{20 + k / 10:.1f} °C,{56 + k / 100:.1f} %RH,{8 + k / 10:.1f} °C\n"
+        for k in range(8)
+    )
     log = read_temperature_log(write_csv(tinytag))
     assert log.sensors == ("1",)
-    assert "left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; --sensor reads one all the same): 3" in log.notes
+    assert (
+        "left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; --sensor reads one "
+        "all the same): 3" in log.notes
+    )
     assert read_temperature_log(write_csv(tinytag), sensors=["3"]).temperature_C[0, 0] == 8.0
     np.testing.assert_allclose(log.temperature_C[:, 0], 20 + np.arange(8) / 10)
     np.testing.assert_allclose(log.time_min, np.arange(8.0))
@@ -726,21 +1003,35 @@ def test_real_logger_exports_name_their_channels_and_leave_out_the_rest(write_cs
     from mtident.io.follow import LogFollower
 
     followed = LogFollower(write_csv(tinytag, "live.csv"))
-    assert followed.poll().notes[0] == "left out, a row counter: the unnamed first column; the time is 'Time'" and followed.sensors == ["1"]
+    assert followed.poll().notes[
+        0
+    ] == "left out, a row counter: the unnamed first column; the time is 'Time'" and followed.sensors == ["1"]
     assert "left out, not temperatures by its cells: 2 (%RH)" in log.notes
     # the older export writes no units in the cells: the Property row names the humidity
     plain = re.sub(r" (°C|%RH)", "", tinytag)
     assert read_temperature_log(write_csv(plain)).sensors == ("1",)
     easylog = "Comedor,Time,Celsius(°C),Humidity(%rh),Dew Point(°C),Serial Number\n"
-    easylog += "".join(f"{k + 1},2026-11-22 08:{k:02d}:00,{20 + k / 10:.1f},{56 + k / 100:.1f},{8 + k / 10:.1f}{',10543212' if k == 0 else ''}\n" for k in range(8))
+    easylog += "".join(
+        f"{k + 1},2026-11-22 08:{k:02d}:00,{20 + k / 10:.1f},{56 + k / 100:.1f},{8 + k / 10:.1f}{',10543212' if k == 0 else ''}\n"
+        for k in range(8)
+    )
     log = read_temperature_log(write_csv(easylog))
-    assert log.sensors == ("Celsius(°C)",) and any(n.endswith("heat index; --sensor reads one all the same): Dew Point(°C)") for n in log.notes)
+    assert log.sensors == ("Celsius(°C)",) and any(
+        n.endswith("heat index; --sensor reads one all the same): Dew Point(°C)") for n in log.notes
+    )
     tandd = ",Date/Time,No.1,No.2,No.3,No.4,\n,Date/Time,ch1,ch2,ch3,ch4,\n,,lx,mW/cm2,°C,%,\n"
-    tandd += "".join(f"2026-11-22 08:{k:02d}:00,{46348.333333 + k / 1440:.5f},6.27,0,{20 + k / 10:.1f},51,\n" for k in range(8))
+    tandd += "".join(
+        f"2026-11-22 08:{k:02d}:00,{46348.333333 + k / 1440:.5f},6.27,0,{20 + k / 10:.1f},51,\n" for k in range(8)
+    )
     log = read_temperature_log(write_csv(tandd))
     assert log.sensors == ("No.3",)
-    assert "left out, named as times: Date/Time" in log.notes and "left out, not temperatures by the units row: No.1 (lx), No.2 (mW/cm2), No.4 (%)" in log.notes
-    meaco = 'RECEIVER,TRANSMITTER,DATE,TEMPERATURE,HUMIDITY\n' + "".join(f'"Shop","Spindle","2026-11-22 08:{k:02d}",{20 + k / 10:.2f},55.1\n' for k in range(8))
+    assert (
+        "left out, named as times: Date/Time" in log.notes
+        and "left out, not temperatures by the units row: No.1 (lx), No.2 (mW/cm2), No.4 (%)" in log.notes
+    )
+    meaco = "RECEIVER,TRANSMITTER,DATE,TEMPERATURE,HUMIDITY\n" + "".join(
+        f'"Shop","Spindle","2026-11-22 08:{k:02d}",{20 + k / 10:.2f},55.1\n' for k in range(8)
+    )
     log = read_temperature_log(write_csv(meaco))
     assert log.sensors == ("TEMPERATURE",) and "the time is 'DATE', the first column of time stamps" in log.notes
     with pytest.raises(InputError, match="sensor 'HUMIDITY' is a humidity by its name, not a temperature"):
@@ -755,16 +1046,26 @@ def test_hobo_exports_in_fahrenheit_with_event_rows_at_the_end(write_csv):
     row became the header), the unit after a comma ('Temp, °F (LGR S/N: ...)') was not seen, so
     °F would have been read as °C, and the event rows of the read-out, several at one time and
     without a reading, were refused as duplicate times."""
-    rows = "".join(f"{k + 1},11/22/26 {8 + k // 60:02d}:{k % 60:02d}:00 AM,{68 + 0.18 * k:.3f},50.1,{'Logged' if k == 0 else ''},,\n" for k in range(8))
+    rows = "".join(
+        f"{k + 1},11/22/26 {8 + k // 60:02d}:{k % 60:02d}:00 "
+        f"AM,{68 + 0.18 * k:.3f},50.1,{'Logged' if k == 0 else ''},,\n"
+        for k in range(8)
+    )
     rows += "9,11/22/26 08:10:00 AM,,,,Logged,\n10,11/22/26 08:10:00 AM,,,,,Logged\n"
-    text = 'Plot Title: 20827226,,,,,,\n#,"Date Time, GMT+01:00","Temp, °F (LGR S/N: 20827226, SEN S/N: 20827226)","RH, % (LGR S/N: 20827226)",Coupler Detached (LGR S/N: 20827226),Host Connected (LGR S/N: 20827226),End Of File (LGR S/N: 20827226)\n' + rows
+    text = (
+        'Plot Title: 20827226,,,,,,\n#,"Date Time, GMT+01:00","Temp, °F (LGR S/N: 20827226, SEN S/N: 20827226)","RH, '
+        '% (LGR S/N: 20827226)",Coupler Detached (LGR S/N: 20827226),Host Connected (LGR S/N: 20827226),End Of File '
+        "(LGR S/N: 20827226)\n" + rows
+    )
     log = read_temperature_log(write_csv(text))
     assert log.sensors == ("Temp, °F (LGR S/N: 20827226, SEN S/N: 20827226)",)
     np.testing.assert_allclose(log.temperature_C[:, 0], 20 + 0.1 * np.arange(8), atol=1e-9)
     np.testing.assert_allclose(log.time_min, np.arange(8.0))
     assert any("left out 2 row(s) without a reading" in n for n in log.notes)
     # the classic export: tabs, the unit in brackets with the serial number after it, empty event channels
-    classic = "Date Time\tTemp (°F)  #9724974\tCoupler Detached\tEnd Of File\n" + "".join(f"11/22/26 08:{k:02d}:00\t{68 + 0.18 * k:.3f}\t\t\n" for k in range(8))
+    classic = "Date Time\tTemp (°F)  #9724974\tCoupler Detached\tEnd Of File\n" + "".join(
+        f"11/22/26 08:{k:02d}:00\t{68 + 0.18 * k:.3f}\t\t\n" for k in range(8)
+    )
     log = read_temperature_log(write_csv(classic))
     assert log.sensors == ("Temp (°F)  #9724974",)
     np.testing.assert_allclose(log.temperature_C[:, 0], 20 + 0.1 * np.arange(8), atol=1e-9)
@@ -779,7 +1080,9 @@ def test_alarm_and_status_channels_are_no_sensors(write_csv, tmp_path):
     both readers; asked for with --sensor, it is read."""
     from mtident.io.follow import LogFollower
 
-    text = "Scan,Time,101 (C),Alarm 101,Status\n" + "".join(f"{k + 1},11/22/2026 08:{k:02d}:00:000,{20 + k / 10:.1f},0,0\n" for k in range(8))
+    text = "Scan,Time,101 (C),Alarm 101,Status\n" + "".join(
+        f"{k + 1},11/22/2026 08:{k:02d}:00:000,{20 + k / 10:.1f},0,0\n" for k in range(8)
+    )
     path = write_csv(text)
     log = read_temperature_log(path)
     assert log.sensors == ("101 (C)",) and "left out, the logger's own records: Alarm 101, Status" in log.notes
@@ -794,10 +1097,15 @@ def test_a_live_log_is_read_from_its_first_rows_whatever_its_layout(write_csv):
     receiver's name before the date): 21 minutes without an answer on a 1-min log."""
     from mtident.io.follow import LogFollower
 
-    easylog = write_csv("Spindle,Time,Celsius(°C),Serial Number\n1,22/11/2026 08:00:00,20.5,10543212\n2,22/11/2026 08:01:00,20.6\n", "easylog.csv")
+    easylog = write_csv(
+        "Spindle,Time,Celsius(°C),Serial Number\n1,22/11/2026 08:00:00,20.5,10543212\n2,22/11/2026 08:01:00,20.6\n",
+        "easylog.csv",
+    )
     rows = LogFollower(easylog).poll()
     np.testing.assert_array_equal(rows.temperature_C[:, 0], [20.5, 20.6])
-    wireless = write_csv('RECEIVER,TRANSMITTER,DATE,TEMPERATURE,HUMIDITY\n"Shop","Spindle","2026-11-22 08:00",20.5,55\n', "meaco.csv")
+    wireless = write_csv(
+        'RECEIVER,TRANSMITTER,DATE,TEMPERATURE,HUMIDITY\n"Shop","Spindle","2026-11-22 08:00",20.5,55\n', "meaco.csv"
+    )
     follower = LogFollower(wireless)
     assert follower.poll().temperature_C.tolist() == [[20.5]] and follower.sensors == ["TEMPERATURE"]
 
@@ -816,9 +1124,13 @@ def test_an_excel_workbook_reads_like_the_csv_it_holds(tmp_path):
     stamps = [dt.datetime(2026, 11, 22, 8, 0) + dt.timedelta(minutes=float(m)) for m in t]
     book = tmp_path / "log.xlsx"
     with pd.ExcelWriter(book) as writer:  # a sheet of details before the data's sheet is passed over
-        pd.DataFrame([["Device", "UX120-006M"], ["Serial", "20827226"]]).to_excel(writer, sheet_name="Details", index=False, header=False)
+        pd.DataFrame([["Device", "UX120-006M"], ["Serial", "20827226"]]).to_excel(
+            writer, sheet_name="Details", index=False, header=False
+        )
         pd.DataFrame([["Logger", "HOBO UX120"]]).to_excel(writer, sheet_name="Data", index=False, header=False)
-        pd.DataFrame({"Date Time": stamps, "Temp, °F (LGR S/N: 1)": values * 9 / 5 + 32, "RH, %": 50.0}).to_excel(writer, sheet_name="Data", index=False, startrow=2)
+        pd.DataFrame({"Date Time": stamps, "Temp, °F (LGR S/N: 1)": values * 9 / 5 + 32, "RH, %": 50.0}).to_excel(
+            writer, sheet_name="Data", index=False, startrow=2
+        )
     log = read_temperature_log(book)
     assert log.sensors == ("Temp, °F (LGR S/N: 1)",)
     np.testing.assert_allclose(log.time_min, t, atol=1e-9)
@@ -855,7 +1167,10 @@ def test_other_files_and_line_ends(write_csv, tmp_path):
 
 def test_a_log_of_nothing_but_left_out_columns_says_what_it_left_out(write_csv):
     """With every column left out, the message listed nothing: 'no temperature column: its name gives '."""
-    with pytest.raises(InputError, match=r"no temperature column; left out: Status \(the logger's own record\); by its name: RH/% \(%\) \(--sensor NAME"):
+    with pytest.raises(
+        InputError,
+        match=r"no temperature column; left out: Status \(the logger's own record\); by its name: RH/% \(%\) \(--sensor NAME",
+    ):
         read_temperature_log(write_csv("time,Status,RH/%\n" + "".join(f"{k},1,50\n" for k in range(6))))
 
 
@@ -863,7 +1178,10 @@ def test_a_degree_marked_unit_after_a_space_converts(write_csv):
     """'T1 °F' and 'T2_degF' (no brackets) were read as °C: a Fahrenheit log 1.8 times too warm, silently."""
     from mtident.io.follow import LogFollower
 
-    path = write_csv("time,T1 °F,T2_degF,T3 °C\n" + "".join(f"{k},{68 + 0.18 * k:.2f},{68 + 0.18 * k:.2f},{20 + k / 10:.1f}\n" for k in range(8)))
+    path = write_csv(
+        "time,T1 °F,T2_degF,T3 °C\n"
+        + "".join(f"{k},{68 + 0.18 * k:.2f},{68 + 0.18 * k:.2f},{20 + k / 10:.1f}\n" for k in range(8))
+    )
     log = read_temperature_log(path)
     np.testing.assert_allclose(log.temperature_C, np.repeat((20 + np.arange(8) / 10)[:, None], 3, axis=1), atol=1e-9)
     assert "sensor 'T1 °F': read in °F (its name), converted to °C" in log.notes
@@ -874,7 +1192,9 @@ def test_a_time_column_named_by_its_unit_in_words(write_csv):
     """'Elapsed hours' or 'Seconds' was read as minutes: a 40-min test at 1 min lasted 0.67 min. A
     sensor named 'T min' is still a temperature."""
     for name, per_minute in (("Elapsed hours", 1 / 60), ("Seconds", 60.0), ("Time in minutes", 1.0)):
-        log = read_temperature_log(write_csv(f"{name},T min\n" + "".join(f"{k * per_minute:.6f},{20 + k / 10:.1f}\n" for k in range(8))))
+        log = read_temperature_log(
+            write_csv(f"{name},T min\n" + "".join(f"{k * per_minute:.6f},{20 + k / 10:.1f}\n" for k in range(8)))
+        )
         np.testing.assert_allclose(log.time_min, np.arange(8.0), atol=1e-3)
         assert log.sensors == ("T min",)
 
@@ -882,7 +1202,12 @@ def test_a_time_column_named_by_its_unit_in_words(write_csv):
 def test_a_machines_labels_are_no_units(write_csv):
     """'Bearing (RH)' (right-hand), '(A)', '(N)' label places on a machine: read as sensors, not
     left out as a humidity, an ampere or a newton."""
-    log = read_temperature_log(write_csv("time,Bearing (RH),Bearing (LH),Motor (A),Column (N),RH\n" + "".join(f"{k},{20 + k / 10:.1f},20,20,20,20\n" for k in range(8))))
+    log = read_temperature_log(
+        write_csv(
+            "time,Bearing (RH),Bearing (LH),Motor (A),Column (N),RH\n"
+            + "".join(f"{k},{20 + k / 10:.1f},20,20,20,20\n" for k in range(8))
+        )
+    )
     assert log.sensors == ("Bearing (RH)", "Bearing (LH)", "Motor (A)", "Column (N)", "RH")
 
 
@@ -892,7 +1217,10 @@ def test_channels_named_under_a_numbering_header(write_csv):
     and a state file resumes with them."""
     from mtident.io.follow import LogFollower
 
-    text = ",Date/Time,No.1,No.2,No.3,\n,Date/Time,ch1,Spindle,Motor,\n,,lx,°C,°C,\n" + "".join(f"2026-11-22 08:{k:02d}:00,{46348.333333 + k / 1440:.5f},6.27,{20 + k / 10:.1f},{21 + k / 10:.1f},\n" for k in range(8))
+    text = ",Date/Time,No.1,No.2,No.3,\n,Date/Time,ch1,Spindle,Motor,\n,,lx,°C,°C,\n" + "".join(
+        f"2026-11-22 08:{k:02d}:00,{46348.333333 + k / 1440:.5f},6.27,{20 + k / 10:.1f},{21 + k / 10:.1f},\n"
+        for k in range(8)
+    )
     path = write_csv(text)
     log = read_temperature_log(path)
     assert log.sensors == ("Spindle", "Motor")
@@ -929,10 +1257,25 @@ def test_a_live_log_whose_lines_end_in_a_lone_cr(tmp_path):
 @pytest.mark.parametrize(
     ("name", "room"),
     [
-        ("room", True), ("T_room", True), ("Raumtemperatur", True), ("AmbientTemp", True), ("CH3 Ambient", True),
-        ("T_amb", True), ("TAmb", True), ("Tamb", True), ("Air temp", True), ("AirTemp", True), ("Umgebung", True), ("Halle", True),
+        ("room", True),
+        ("T_room", True),
+        ("Raumtemperatur", True),
+        ("AmbientTemp", True),
+        ("CH3 Ambient", True),
+        ("T_amb", True),
+        ("TAmb", True),
+        ("Tamb", True),
+        ("Air temp", True),
+        ("AirTemp", True),
+        ("Umgebung", True),
+        ("Halle", True),
         # a room's word inside another word, and machine sensors
-        ("Chair", False), ("Shall", False), ("Envelope", False), ("T1", False), ("TC1 (Spindle)", False), ("Bearing front", False),
+        ("Chair", False),
+        ("Shall", False),
+        ("Envelope", False),
+        ("T1", False),
+        ("TC1 (Spindle)", False),
+        ("Bearing front", False),
     ],
 )
 def test_a_column_named_as_the_room_is_told_from_machine_sensors(name, room):

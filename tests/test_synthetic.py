@@ -58,9 +58,7 @@ def test_room_gain_is_one(kind: str) -> None:
     room = room_temperature(run.time_min, run.settings["room_start_C"], run.settings["room_drift"])
     machine = run.machine
     heat = np.linalg.solve(-machine.A, machine.b_heat * run.power)
-    formula = [
-        machine.sensor @ (heat + np.linalg.solve(-machine.A, machine.b_room * r)) for r in room
-    ]
+    formula = [machine.sensor @ (heat + np.linalg.solve(-machine.A, machine.b_room * r)) for r in room]
     np.testing.assert_allclose(run.steady_C, formula, atol=1e-9)
     np.testing.assert_allclose(run.steady_C - run.steady_C[0], room - room[0], atol=1e-9)
     assert run.room_C is not None and np.nanmax(np.abs(run.room_C - room)) < 0.3
@@ -97,9 +95,7 @@ def test_time_constants_in_range() -> None:
         np.testing.assert_allclose(sorted(machine.time_constants_min), expected, rtol=1e-9)
         if machine.sensor_lag_min:
             assert 0.2 <= machine.sensor_lag_min <= 5.0
-    for machine in _machines(
-        5, 20, kind="network", min_time_constant_min=10.0, max_time_constant_min=50.0
-    ):
+    for machine in _machines(5, 20, kind="network", min_time_constant_min=10.0, max_time_constant_min=50.0):
         assert 10.0 <= min(machine.structural_time_constants_min)
         assert max(machine.structural_time_constants_min) <= 50.0
     for machine in _machines(6, 10, kind="network", nodes=3, rise_C=5.0, sensor_lag_min=1.5):
@@ -126,9 +122,7 @@ def test_modal_amplitudes_reproduce_clean(kind: str) -> None:
         taus, amplitudes = modal_amplitudes(machine, run)
         assert np.all(np.diff(taus) <= 0)
         assert amplitudes.sum() == pytest.approx(run.start_C - run.steady_C[0], abs=1e-9)
-        np.testing.assert_allclose(
-            _modal_curve(machine, run, run.time_min), run.clean_C, atol=1e-9, rtol=0
-        )
+        np.testing.assert_allclose(_modal_curve(machine, run, run.time_min), run.clean_C, atol=1e-9, rtol=0)
         # a warm start is not a scaled cold start: the previous heating moved the modes
         if warm:
             assert run.start_C - run.settings["room_start_C"] == pytest.approx(
@@ -159,9 +153,7 @@ def test_t95() -> None:
     rng = np.random.default_rng(10)
     for k in range(16):
         machine = random_machine(rng, ("network", "conduction")[k % 2])
-        run = simulate(
-            machine, rng, interval_min=0.25, warm_start=0.3 * (k % 3 == 0), duration_min=60.0
-        )
+        run = simulate(machine, rng, interval_min=0.25, warm_start=0.3 * (k % 3 == 0), duration_min=60.0)
         rise = run.steady_C[0] - run.start_C
         at = _modal_curve(machine, run, np.array([run.t95_min]))[0]
         assert abs(at - run.start_C) == pytest.approx(0.95 * abs(rise), abs=1e-9)
@@ -173,9 +165,7 @@ def test_t95() -> None:
     machine = random_machine(rng, "network", nodes=1, sensor_lag_min=0.0)
     run = simulate(machine, rng)
     assert run.t95_min == pytest.approx(machine.time_constants_min[0] * math.log(20.0), rel=1e-9)
-    assert run.duration_min == pytest.approx(
-        np.clip(1.5 * run.t95_min, *DURATION_LIMITS_MIN), abs=run.interval_min
-    )
+    assert run.duration_min == pytest.approx(np.clip(1.5 * run.t95_min, *DURATION_LIMITS_MIN), abs=run.interval_min)
 
 
 @pytest.mark.parametrize("kind", ["network", "conduction"])

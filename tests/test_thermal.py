@@ -43,7 +43,9 @@ def test_uneven_sampling_is_handled():
 def test_slope_transition_caps_the_growth_of_a_negative_rate():
     # λΔt ≥ −0.5 is left as it is (the Gaussian approximation's small excursions) ...
     state = np.array([20.0, 1.0, -0.2])
-    np.testing.assert_allclose(slope_transition(state, 1.0), [20.0 + (np.exp(0.2) - 1) / 0.2, np.exp(0.2), -0.2], rtol=1e-13)
+    np.testing.assert_allclose(
+        slope_transition(state, 1.0), [20.0 + (np.exp(0.2) - 1) / 0.2, np.exp(0.2), -0.2], rtol=1e-13
+    )
     # ... beyond, a sigma point of a widened filter (λ = −10/min) grows by e^0.5 a step, not e^10
     far = slope_transition(np.array([20.0, 1.0, -10.0]), 1.0)
     np.testing.assert_allclose(far, [20.0 + (np.exp(0.5) - 1) / 0.5, np.exp(0.5), -10.0], rtol=1e-13)
@@ -185,7 +187,9 @@ def test_a_gap_in_the_first_minutes_is_no_flat_start():
         assert flat_lead(t[keep][:8], y[keep][:8, None], np.array([0.05]), 0.1, 5.0)[0] == 0
         state, events = monitor_step(new_state(["S"]), t[keep], y[keep][:, None], None, options)
         assert not [e for e in events if "flat until" in e.text or "no rise" in e.text]
-        assert state.stopped and state.checks[0].origin_min == 0.0 and abs(state.checks[0].steady_C - PAPER_STEADY) <= 0.2
+        assert (
+            state.stopped and state.checks[0].origin_min == 0.0 and abs(state.checks[0].steady_C - PAPER_STEADY) <= 0.2
+        )
 
 
 @pytest.mark.parametrize(("step", "expected"), [(0.1, 0.1), (0.01, 0.01), (1 / 16, 0.0625), (0.5, 0.5), (None, 0.0)])
@@ -217,11 +221,20 @@ def test_a_sensor_that_does_not_rise_has_no_equilibrium_time():
     """It was given one (30 min: a λ fitted to a flat line) and said to fit."""
     rng = np.random.default_rng(5)
     t = np.arange(0.0, 121.0)
-    log = make_log(t, {"heating": first_order(t) + 0.02 * rng.standard_normal(len(t)), "cold": 20.0 + 0.02 * rng.standard_normal(len(t))})
+    log = make_log(
+        t,
+        {
+            "heating": first_order(t) + 0.02 * rng.standard_normal(len(t)),
+            "cold": 20.0 + 0.02 * rng.standard_normal(len(t)),
+        },
+    )
     result = identify(log, 30.0, "ukf")
     assert np.isnan(result.equilibrium_time_min[1]) and result.summary(1)["equilibrium_time_min"] is None
     assert result.equilibrium_time_min[0] == pytest.approx(187.0, abs=25.0)
-    assert [n for n in result.notes if "no rise" in n] == ["sensor 'cold': no rise in the first 30 min (0.08 °C from lowest to highest): no warm-up to identify; it has no equilibrium time"]
+    assert [n for n in result.notes if "no rise" in n] == [
+        "sensor 'cold': no rise in the first 30 min (0.08 °C from lowest to highest): no warm-up to identify; it has "
+        "no equilibrium time"
+    ]
 
 
 @pytest.mark.parametrize("period_min", [1.0, 1.0 / 60.0])
@@ -230,7 +243,9 @@ def test_a_sensor_lag_is_told_from_noise_at_any_sampling_rate(period_min):
     rng = np.random.default_rng(8)
     t = np.arange(0.0, 30.0 + 1e-9, period_min)
     plain = (20 + 10 * (1 - np.exp(-t / 94)))[:, None] + 0.02 * rng.standard_normal((len(t), 40))
-    lagged = (20 + 10 * (1 - (94 * np.exp(-t / 94) - np.exp(-t)) / 93))[:, None] + 0.02 * rng.standard_normal((len(t), 10))  # a 1-min lag
+    lagged = (20 + 10 * (1 - (94 * np.exp(-t / 94) - np.exp(-t)) / 93))[:, None] + 0.02 * rng.standard_normal(
+        (len(t), 10)
+    )  # a 1-min lag
     assert np.count_nonzero(first_order_onset(t, plain)) <= 4  # ~4 % by design
     onsets_min = t[first_order_onset(t, lagged)]
     assert np.all(onsets_min <= 6.0)
@@ -292,12 +307,15 @@ def test_a_warm_up_that_began_after_the_log_is_fitted_from_its_start():
     late = first_order(np.clip(t - 15.0, 0.0, None)) + 0.02 * np.random.default_rng(0).standard_normal(len(t))
     on_time = first_order(t) + 0.02 * np.random.default_rng(1).standard_normal(len(t))
     result = identify(make_log(t, {"late": late, "on time": on_time}), 60.0, "ukf")
-    assert any("the first 15 min stay at their first level (the warm-up began after the log)" in n for n in result.notes)
+    assert any(
+        "the first 15 min stay at their first level (the warm-up began after the log)" in n for n in result.notes
+    )
     assert not any("'on time'" in n for n in result.notes)
     lo, hi = result.steady_state_ci95()[0]
     assert lo <= 26.7 <= hi and hi - lo < 0.6
     assert abs(result.equilibrium_time_min[0] - result.measured_equilibrium_time_min[0]) < 10.0
-    # RMSE 0.101 °C (0.094 median over 100 seeds before the quick estimate took each sensor on its own span, 0.080 after)
+    # RMSE 0.101 °C (0.094 median over 100 seeds before the quick estimate took each sensor on its own span, 0.080
+    # after)
     assert result.start_C[0] == pytest.approx(late[:3].mean(), abs=0.03) and result.rmse_C[0] < 0.11
     np.testing.assert_array_equal(result.curve_C[:15, 0], np.median(late[:3]))
 
@@ -430,7 +448,8 @@ def test_a_window_that_does_not_determine_the_steady_state_is_said():
 def test_sensors_with_the_same_slow_start_are_named_in_one_note():
     notes = [n for n in identify(sample_log(), 30.0, "ukf").notes if "rise slower than a first-order curve starts" in n]
     assert notes == [
-        "sensors 'T1' (3 min), 'T2' (2 min), 'T4' (3 min), 'T5' (2 min), 'T9' (3 min): the first minutes rise slower than a "
+        "sensors 'T1' (3 min), 'T2' (2 min), 'T4' (3 min), 'T5' (2 min), 'T9' (3 min): the first minutes rise slower "
+        "than a "
         "first-order curve starts (a sensor lag, or heat still on its way); each model is fitted from the end of them"
     ]
 
@@ -481,9 +500,18 @@ def test_min_time_uses_one_filter_run_for_every_window():
     ("call", "message"),
     [
         (lambda log: identify(log, 3.0, "ukf"), r"only 4 samples in the first 3 min"),
-        (lambda log: identify(log, 30.0, "kalman"), r"method 'kalman' is not one of: robust, ukf, aukf, fukf, afukf, lsq"),
-        (lambda log: identify(log, 30.0, "ukf", preset="smith"), r"preset 'smith' is not one of: data, xia2014, yu2019"),
-        (lambda log: minimal_identification_time(log, periods_min=[35, 400]), r"covers 59 min; the longest sampling period is 400 min"),
+        (
+            lambda log: identify(log, 30.0, "kalman"),
+            r"method 'kalman' is not one of: robust, ukf, aukf, fukf, afukf, lsq",
+        ),
+        (
+            lambda log: identify(log, 30.0, "ukf", preset="smith"),
+            r"preset 'smith' is not one of: data, xia2014, yu2019",
+        ),
+        (
+            lambda log: minimal_identification_time(log, periods_min=[35, 400]),
+            r"covers 59 min; the longest sampling period is 400 min",
+        ),
         (lambda log: minimal_identification_time(log, "x"), r"method 'x' is not one of"),
     ],
 )
@@ -516,7 +544,15 @@ def _machine_in_drifting_room(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     def room(tt):  # noqa: ANN001, ANN202
         return 17.9 + 0.15 * np.sin(2 * np.pi * np.asarray(tt) / 240.0) + 0.1 * (1 - np.exp(-np.asarray(tt) / 200.0))
 
-    solution = solve_ivp(lambda tt, T: 0.016 * (room(tt) + 8.8 - T), (t[0], t[-1]), [17.9], t_eval=t, rtol=1e-10, atol=1e-10, max_step=1.0)
+    solution = solve_ivp(
+        lambda tt, T: 0.016 * (room(tt) + 8.8 - T),
+        (t[0], t[-1]),
+        [17.9],
+        t_eval=t,
+        rtol=1e-10,
+        atol=1e-10,
+        max_step=1.0,
+    )
     return solution.y[0], room(t)
 
 
@@ -569,7 +605,8 @@ def test_min_time_with_a_room_sensor_predicts_with_the_measured_room():
     search = {"periods_min": [300.0], "windows_min": [60.0, 90.0, 120.0]}
     plain = minimal_identification_time(log, "ukf", **search)
     with_room = minimal_identification_time(log, "ukf", ambient_C=room_sensor, **search)
-    # measured: median RMSE over 300 min from L = 60/90/120 is 0.19/0.15/0.10 °C without the room, 0.04/0.02/0.02 with it
+    # measured: median RMSE over 300 min from L = 60/90/120 is 0.19/0.15/0.10 °C without the room, 0.04/0.02/0.02 with
+    # it
     assert np.all(np.median(with_room.rmse_C, axis=-1) < 0.5 * np.median(plain.rmse_C, axis=-1))
     # a steady room reading is no input at all: the same search to the last digit
     steady = minimal_identification_time(log, "ukf", ambient_C=np.full(len(t), 17.9), **search)
@@ -586,7 +623,10 @@ def test_results_show_their_answer_in_a_notebook_not_their_arrays():
     result = identify(log.select(["T1", "T2"]), 30.0, "ukf")
     text = repr(result)
     assert len(text) < 400 and text.splitlines()[1].startswith(f"  T1: T∞ {result.steady_state_C[0]:.2f} ± ")
-    assert repr(log) == f"TemperatureLog({str(log.source)!r}: 10 sensor(s) (T1, T2, T3, T4, T5, ..., T10), 401 samples over 0-400 min, 0 note(s))"
+    assert repr(log) == (
+        f"TemperatureLog({str(log.source)!r}: 10 sensor(s) (T1, T2, T3, T4, T5, ..., T10), 401 samples over 0-400 "
+        "min, 0 note(s))"
+    )
     assert repr(minimal_identification_time(log.select(["T1"]))).startswith("MinTimeResult(aukf: minimal L (min) T1 ")
     state, _ = monitor_step(new_state(["T1"]), log.time_min[:50], log.temperature_C[:50, :1], None, MonitorSettings())
     assert repr(state) == "MonitorState(1 sensor(s), t = 49 min, decision: continue; T1 undetermined)"
@@ -604,8 +644,17 @@ def test_identify_and_min_time_take_a_dataframe_and_refuse_what_they_cannot_use(
     assert from_frame == identify(read_temperature_log(frame), window_min=60, method="ukf").summary(0)
     low, high = from_frame["steady_state_ci95_C"]
     assert low < 26.7 < high and high - low < 0.5
-    assert minimal_identification_time(frame).min_identification_time_min.tolist() == minimal_identification_time(read_temperature_log(frame)).min_identification_time_min.tolist()
-    with pytest.raises(InputError, match=r"identify takes a TemperatureLog \(read_temperature_log\(path or DataFrame\)\) or a pandas DataFrame, not ndarray"):
+    assert (
+        minimal_identification_time(frame).min_identification_time_min.tolist()
+        == minimal_identification_time(read_temperature_log(frame)).min_identification_time_min.tolist()
+    )
+    with pytest.raises(
+        InputError,
+        match=(
+            r"identify takes a TemperatureLog \(read_temperature_log\(path or DataFrame\)\) or a pandas DataFrame, "
+            r"not ndarray"
+        ),
+    ):
         identify(frame.to_numpy(), window_min=30, method="ukf")  # type: ignore[arg-type]
     for window in (-5.0, 0.0, float("nan")):
         with pytest.raises(InputError, match="window_min must be a positive number of minutes"):
@@ -627,7 +676,10 @@ def test_one_sensors_late_start_does_not_cut_or_crash_another_sensors_fit(late_a
     rng = np.random.default_rng(31)
     housing = 24.38 - 1.2 * np.exp(-t / 5.0) - 2.3 * np.exp(-t / 40.0) - 2.98 * np.exp(-t / 200.0)
     late = np.where(t < late_at, 20.0, 20.0 + 3.0 * (1 - np.exp(-(t - late_at) / 40.0)))
-    columns = {"housing": housing + 0.02 * rng.standard_normal(len(t)), "late": late + 0.02 * rng.standard_normal(len(t))}
+    columns = {
+        "housing": housing + 0.02 * rng.standard_normal(len(t)),
+        "late": late + 0.02 * rng.standard_normal(len(t)),
+    }
     onsets = first_order_onset(t, np.column_stack(list(columns.values())))
     alone = first_order_onset(t, columns["housing"][:, None])
     assert onsets[0] == alone[0] and t[onsets[0]] < 10.0
@@ -652,7 +704,9 @@ def test_identify_never_calls_a_risen_sensor_flat():
     the rise and its interval whatever it is."""
     t = np.arange(0.0, 121.0)
     rng = np.random.default_rng(32)
-    columns = {f"r{r}": 20.0 + r * (1 - np.exp(-t / 150.0)) + 0.02 * rng.standard_normal(len(t)) for r in (0.5, 1.5, 3.5)}
+    columns = {
+        f"r{r}": 20.0 + r * (1 - np.exp(-t / 150.0)) + 0.02 * rng.standard_normal(len(t)) for r in (0.5, 1.5, 3.5)
+    }
     result = identify(make_log(t, columns), 120.0)
     for i in range(3):
         summary = result.summary(i)

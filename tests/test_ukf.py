@@ -50,7 +50,9 @@ def thermal_data(seed: int = 0, steps: int = 400, sigma: float = 0.02) -> np.nda
 def filterpy_run(ys, x0, P0, Q, R, fx, hx, alpha=1.0, beta=2.0, kappa=0.0):
     n = len(x0)
     pts = FPPoints(n, alpha=alpha, beta=beta, kappa=kappa)
-    ukf = UnscentedKalmanFilter(dim_x=n, dim_z=ys.shape[1], dt=DT, fx=lambda x, dt: fx(x[None])[0], hx=lambda x: hx(x[None])[0], points=pts)
+    ukf = UnscentedKalmanFilter(
+        dim_x=n, dim_z=ys.shape[1], dt=DT, fx=lambda x, dt: fx(x[None])[0], hx=lambda x: hx(x[None])[0], points=pts
+    )
     ukf.x, ukf.P, ukf.Q, ukf.R = x0.copy(), P0.copy(), Q.copy(), R.copy()
     means, covs = [], []
     for y in ys:
@@ -72,7 +74,9 @@ def test_standard_ukf_equals_filterpy_on_thermal_model(alpha, beta, kappa):
     ys = thermal_data()
     ref_m, ref_P = filterpy_run(ys, THERMAL_X0, THERMAL_P0, THERMAL_Q, THERMAL_R, thermal_f, first, alpha, beta, kappa)
     config = FilterConfig(sigma_points=MerweScaledSigmaPoints(alpha, beta, kappa), redraw=FILTERPY_REDRAWS)
-    rec = run_filter(GaussianState(THERMAL_X0, THERMAL_P0), ys, lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, config)
+    rec = run_filter(
+        GaussianState(THERMAL_X0, THERMAL_P0), ys, lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, config
+    )
     np.testing.assert_allclose(rec.means, ref_m, rtol=1e-9)
     np.testing.assert_allclose(rec.covs, ref_P, rtol=1e-9, atol=1e-18)
 
@@ -123,7 +127,9 @@ def test_ukf_equals_exact_kalman_filter_on_linear_gaussian_model():
 
 def test_square_root_ukf_equals_standard_ukf():
     ys = thermal_data(3)
-    run = lambda cfg: run_filter(GaussianState(THERMAL_X0, THERMAL_P0), ys, lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, cfg)  # noqa: E731
+    run = lambda cfg: run_filter(  # noqa: E731
+        GaussianState(THERMAL_X0, THERMAL_P0), ys, lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, cfg
+    )
     dense = run(FilterConfig())
     sqrt = run(FilterConfig(square_root=True))
     np.testing.assert_allclose(sqrt.means, dense.means, rtol=1e-8)
@@ -138,8 +144,19 @@ def test_square_root_stays_positive_definite_where_standard_fails():
     """
     d = 1e-6
     H = np.array([[1.0, 1.0], [1.0, 1.0 + d]])
-    run = lambda sr: run_filter(GaussianState(np.zeros(2), np.eye(2)), np.zeros((5, 2)), lambda p, k: p, lambda p: p @ H.T, 1e-30 * np.eye(2), d**2 * np.eye(2), FilterConfig(square_root=sr, redraw=True, name="std" if not sr else "sr"))  # noqa: E731
-    with pytest.raises(CovarianceError, match=r"filter 'std', step 1: .*stage 'sigma points of the previous posterior'.*smallest eigenvalue"):
+    run = lambda sr: run_filter(  # noqa: E731
+        GaussianState(np.zeros(2), np.eye(2)),
+        np.zeros((5, 2)),
+        lambda p, k: p,
+        lambda p: p @ H.T,
+        1e-30 * np.eye(2),
+        d**2 * np.eye(2),
+        FilterConfig(square_root=sr, redraw=True, name="std" if not sr else "sr"),
+    )
+    with pytest.raises(
+        CovarianceError,
+        match=r"filter 'std', step 1: .*stage 'sigma points of the previous posterior'.*smallest eigenvalue",
+    ):
         run(False)
     rec = run(True)
     assert np.all(np.isfinite(rec.covs))
@@ -153,7 +170,15 @@ def test_square_root_survives_nearly_singular_posterior(d):
     cancels to rounding and the Joseph-form fallback takes over instead of NaN."""
     F = np.array([[1.0, 0.1], [0.0, 1.0]])
     H = np.array([[1.0, 1.0]])
-    rec = run_filter(GaussianState(np.zeros(2), np.diag([1e4, 1e-4])), np.zeros((50, 1)), lambda p, k: p @ F.T, lambda p: p @ H.T, np.diag([1e-12, 1e-12]), np.array([[d**2]]), FilterConfig(square_root=True, redraw=True))
+    rec = run_filter(
+        GaussianState(np.zeros(2), np.diag([1e4, 1e-4])),
+        np.zeros((50, 1)),
+        lambda p, k: p @ F.T,
+        lambda p: p @ H.T,
+        np.diag([1e-12, 1e-12]),
+        np.array([[d**2]]),
+        FilterConfig(square_root=True, redraw=True),
+    )
     assert np.all(np.isfinite(rec.covs)) and np.linalg.eigvalsh(rec.covs).min() > 0
 
 
@@ -162,10 +187,17 @@ def test_batch_equals_one_at_a_time():
     # times each), and the runs cost 40 % of the time
     ys = np.stack([thermal_data(s, steps=150) for s in range(5)], axis=1)  # (T, 5, 1)
     x0 = np.stack([THERMAL_X0 + [0.1 * s, 0.0, 0.5 * s] for s in range(5)])
-    for cfg in (FilterConfig(), FilterConfig(square_root=True, fading=FadingFactor(), adaptive_law=AdaptiveLaw(threshold=1e-3))):
-        batch = run_filter(GaussianState(x0, THERMAL_P0), ys, lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, cfg)
+    for cfg in (
+        FilterConfig(),
+        FilterConfig(square_root=True, fading=FadingFactor(), adaptive_law=AdaptiveLaw(threshold=1e-3)),
+    ):
+        batch = run_filter(
+            GaussianState(x0, THERMAL_P0), ys, lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, cfg
+        )
         for s in range(5):
-            single = run_filter(GaussianState(x0[s], THERMAL_P0), ys[:, s], lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, cfg)
+            single = run_filter(
+                GaussianState(x0[s], THERMAL_P0), ys[:, s], lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, cfg
+            )
             np.testing.assert_allclose(batch.means[:, s], single.means, rtol=1e-12)
             np.testing.assert_allclose(batch.covs[:, s], single.covs, rtol=1e-12, atol=1e-20)
             np.testing.assert_allclose(batch.emission_covs[:, s], single.emission_covs, rtol=1e-12)
@@ -173,7 +205,9 @@ def test_batch_equals_one_at_a_time():
 
 
 def test_covariances_stay_symmetric_positive_definite():
-    rec = run_filter(GaussianState(THERMAL_X0, THERMAL_P0), thermal_data(7), lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R)
+    rec = run_filter(
+        GaussianState(THERMAL_X0, THERMAL_P0), thermal_data(7), lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R
+    )
     np.testing.assert_array_equal(rec.covs, np.swapaxes(rec.covs, -1, -2))
     assert np.linalg.eigvalsh(rec.covs).min() > 0
 
@@ -233,15 +267,23 @@ def test_dimension_errors_name_the_input():
     with pytest.raises(DimensionError, match="initial covariance"):
         initial_carry(GaussianState(THERMAL_X0, np.eye(2)), THERMAL_Q, THERMAL_R, FilterConfig())
     with pytest.raises(DimensionError, match="scalar measurement"):
-        initial_carry(GaussianState(THERMAL_X0, THERMAL_P0), THERMAL_Q, np.eye(2), FilterConfig(adaptive_law=AdaptiveLaw()))
+        initial_carry(
+            GaussianState(THERMAL_X0, THERMAL_P0), THERMAL_Q, np.eye(2), FilterConfig(adaptive_law=AdaptiveLaw())
+        )
 
 
 def test_non_positive_definite_initial_covariance_is_named():
     with pytest.raises(CovarianceError, match="batch index \\(1,\\).*initial covariance P0 of filter 'afukf'"):
-        initial_carry(GaussianState(np.zeros((2, 3)), np.stack([np.eye(3), -np.eye(3)])), THERMAL_Q, THERMAL_R, FilterConfig(square_root=True, name="afukf"))
+        initial_carry(
+            GaussianState(np.zeros((2, 3)), np.stack([np.eye(3), -np.eye(3)])),
+            THERMAL_Q,
+            THERMAL_R,
+            FilterConfig(square_root=True, name="afukf"),
+        )
 
 
 # --- adaptive law -------------------------------------------------------------------------
+
 
 def _one_step(y: float, law: AdaptiveLaw, x0=THERMAL_X0, fading=None, square_root=False):
     cfg = FilterConfig(adaptive_law=law, fading=fading, square_root=square_root)
@@ -296,6 +338,7 @@ def test_adaptive_law_decrease_never_reaches_zero():
 
 # --- fading factor -------------------------------------------------------------------------
 
+
 def test_fading_factor_is_one_when_residuals_match_and_grows_after_a_jump():
     rng = np.random.default_rng(5)
     F = np.array([[1.0]])
@@ -308,7 +351,15 @@ def test_fading_factor_is_one_when_residuals_match_and_grows_after_a_jump():
     rec = run_filter(GaussianState(np.zeros(1), np.eye(1)), np.array(ys), lambda p, k: p @ F.T, lambda p: p, Q, R, cfg)
     assert np.mean(rec.fading[50:200] == 1.0) > 0.95
     assert rec.fading[200] == 2.0  # the bound: tr(V − ρR)/tr(Py) is far above it after a 5σ·50 jump
-    unbounded = run_filter(GaussianState(np.zeros(1), np.eye(1)), np.array(ys[:201]), lambda p, k: p @ F.T, lambda p: p, Q, R, FilterConfig(fading=FadingFactor(max_factor=np.inf)))
+    unbounded = run_filter(
+        GaussianState(np.zeros(1), np.eye(1)),
+        np.array(ys[:201]),
+        lambda p, k: p @ F.T,
+        lambda p: p,
+        Q,
+        R,
+        FilterConfig(fading=FadingFactor(max_factor=np.inf)),
+    )
     assert unbounded.fading[200] > 10.0
     plain = run_filter(GaussianState(np.zeros(1), np.eye(1)), np.array(ys), lambda p, k: p @ F.T, lambda p: p, Q, R)
     # after the jump the faded filter is back on the data sooner
@@ -319,7 +370,15 @@ def test_fading_factor_is_one_when_residuals_match_and_grows_after_a_jump():
 def test_fading_factor_with_sqrt_equals_dense():
     ys = thermal_data(2)
     ys[100:] += 0.5
-    run = lambda sr: run_filter(GaussianState(THERMAL_X0, THERMAL_P0), ys, lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, FilterConfig(square_root=sr, fading=FadingFactor()))  # noqa: E731
+    run = lambda sr: run_filter(  # noqa: E731
+        GaussianState(THERMAL_X0, THERMAL_P0),
+        ys,
+        lambda p, k: thermal_f(p),
+        first,
+        THERMAL_Q,
+        THERMAL_R,
+        FilterConfig(square_root=sr, fading=FadingFactor()),
+    )
     dense, sqrt = run(False), run(True)
     assert dense.fading.max() > 1.0
     np.testing.assert_allclose(sqrt.means, dense.means, rtol=1e-7)
@@ -330,7 +389,18 @@ def test_normalised_fading_factor():
     lam = normalisation_from_reference(np.array([20.0]))
     np.testing.assert_allclose(lam, [1.0])  # Eq. 29 with m = 1: the normalisation is the identity
     ys = thermal_data(6)
-    runs = [run_filter(GaussianState(THERMAL_X0, THERMAL_P0), ys, lambda p, k: thermal_f(p), first, THERMAL_Q, THERMAL_R, FilterConfig(fading=f)) for f in (FadingFactor(), FadingFactor(normalisation=lam))]
+    runs = [
+        run_filter(
+            GaussianState(THERMAL_X0, THERMAL_P0),
+            ys,
+            lambda p, k: thermal_f(p),
+            first,
+            THERMAL_Q,
+            THERMAL_R,
+            FilterConfig(fading=f),
+        )
+        for f in (FadingFactor(), FadingFactor(normalisation=lam))
+    ]
     np.testing.assert_allclose(runs[0].means, runs[1].means, rtol=1e-12)
     two = normalisation_from_reference(np.array([1.0, 100.0]))
     np.testing.assert_allclose(np.sum(two**2), 2.0)

@@ -43,7 +43,9 @@ def csv_text(t: np.ndarray, columns: dict[str, np.ndarray]) -> str:
 
 
 def one_mode_reference(*names: str, tau: float = PAPER_TAU) -> MachineReference:
-    return MachineReference("reference.csv", "2026-11-24", 300.0, "not measured", {n: SensorModes((tau,), (0.1,)) for n in names})
+    return MachineReference(
+        "reference.csv", "2026-11-24", 300.0, "not measured", {n: SensorModes((tau,), (0.1,)) for n in names}
+    )
 
 
 def noisy(curve: np.ndarray, seed: int, sigma: float = 0.02) -> np.ndarray:
@@ -167,11 +169,12 @@ def test_follower_never_writes_to_the_log(tmp_path):
 # ---- stopping rule -------------------------------------------------------------------------
 
 
-
 # ---- the decision --------------------------------------------------------------------------
 
 
-def replay(columns: dict[str, np.ndarray], t: np.ndarray = T, room: np.ndarray | None = None, **options: object) -> MonitorState:
+def replay(
+    columns: dict[str, np.ndarray], t: np.ndarray = T, room: np.ndarray | None = None, **options: object
+) -> MonitorState:
     settings = MonitorSettings(**options)  # type: ignore[arg-type]
     state = new_state(tuple(columns), with_room=room is not None)
     state, _ = monitor_step(state, t, np.column_stack(list(columns.values())), room, settings)
@@ -202,7 +205,9 @@ def test_a_reference_said_to_hold_every_mode_stops_as_early_as_the_papers_filter
         assert state.stopped and state.stop_time_min <= 0.41 * PAPER_T95, state.stop_time_min
         assert abs(check.steady_C - 26.7) < 0.2 and check.low_C <= 26.7 <= check.high_C
     assert "no mode faster than these (assumed)" in str(assumptions(settings, "S").reference)
-    assert "up to 2 free mode(s) faster than these" in str(assumptions(MonitorSettings(reference=one_mode_reference("S")), "S").reference)
+    assert "up to 2 free mode(s) faster than these" in str(
+        assumptions(MonitorSettings(reference=one_mode_reference("S")), "S").reference
+    )
 
 
 def test_without_a_reference_a_first_order_machine_stops_late_but_right():
@@ -252,7 +257,9 @@ BATCHED_Y = noisy(first_order(BATCHED_T), 6)[:, None]
 def monitored_whole() -> MonitorState:
     """The monitor fed the papers' curve's 181 readings at once, with a one-mode reference (it stops
     at 148 min), computed once for the tests below: each run costs 1-2 s of model-robust fits."""
-    state, _ = monitor_step(new_state(["S"]), BATCHED_T, BATCHED_Y, None, MonitorSettings(reference=one_mode_reference("S")))
+    state, _ = monitor_step(
+        new_state(["S"]), BATCHED_T, BATCHED_Y, None, MonitorSettings(reference=one_mode_reference("S"))
+    )
     assert state.stopped  # a decision to compare, not two monitors that never stop
     return state
 
@@ -304,7 +311,13 @@ def test_the_state_saved_and_loaded_decides_alike(tmp_path):
 )
 def test_monitor_step_names_what_is_wrong_with_its_readings(times, values, room, message):
     with pytest.raises(InputError, match=message):
-        monitor_step(new_state(["S"]), np.array(times), np.array(values), None if room is None else np.array(room), MonitorSettings())
+        monitor_step(
+            new_state(["S"]),
+            np.array(times),
+            np.array(values),
+            None if room is None else np.array(room),
+            MonitorSettings(),
+        )
 
 
 def test_bad_settings_are_refused():
@@ -319,10 +332,27 @@ def test_a_drifting_room_measured_by_a_room_sensor_stops_within_the_tolerance():
     from mtident.thermal.synthetic import Machine, simulate
 
     rate = 1.0 / PAPER_TAU
-    machine = Machine("network", np.array([[-rate]]), np.array([8.8 * rate]), np.array([rate]), np.array([1.0]), (PAPER_TAU,), "one node")
-    drift = {"amplitude_C": 0.3, "period_min": 240.0, "phase_rad": 0.5, "slope_C_per_h": 0.0, "noise_C": 0.02, "rounding_C": 0.01}
+    machine = Machine(
+        "network",
+        np.array([[-rate]]),
+        np.array([8.8 * rate]),
+        np.array([rate]),
+        np.array([1.0]),
+        (PAPER_TAU,),
+        "one node",
+    )
+    drift = {
+        "amplitude_C": 0.3,
+        "period_min": 240.0,
+        "phase_rad": 0.5,
+        "slope_C_per_h": 0.0,
+        "noise_C": 0.02,
+        "rounding_C": 0.01,
+    }
     warm = simulate(machine, np.random.default_rng(8), duration_min=400.0, room_drift=drift, room_start_C=17.9)
-    state = replay({"S": warm.reading_C}, warm.time_min, warm.room_C, reference=one_mode_reference("S"), room_sensor="room")
+    state = replay(
+        {"S": warm.reading_C}, warm.time_min, warm.room_C, reference=one_mode_reference("S"), room_sensor="room"
+    )
     assert state.stopped
     stop = int(np.searchsorted(warm.time_min, state.stop_time_min))
     assert abs(state.checks[0].steady_C - warm.steady_C[stop]) < 0.2
@@ -383,10 +413,30 @@ def test_watch_replay_json_says_the_decision_what_it_assumes_and_checks_it(tmp_p
     from mtident.thermal.reference import save_reference
 
     save_reference(one_mode_reference("A", "B"), reference)
-    code, out, err = run("thermal", "watch", str(log), "--replay", "--json", "--reference", str(reference), "--plot", str(tmp_path / "w.png"))
+    code, out, err = run(
+        "thermal",
+        "watch",
+        str(log),
+        "--replay",
+        "--json",
+        "--reference",
+        str(reference),
+        "--plot",
+        str(tmp_path / "w.png"),
+    )
     assert code == 0, err
     data = json.loads(out)
-    assert set(data) >= {"stop_time_min", "steady_state_C", "steady_state_ci95_C", "equilibrium_time_min", "model_ok", "warnings", "assumptions", "sensors", "decision"}
+    assert set(data) >= {
+        "stop_time_min",
+        "steady_state_C",
+        "steady_state_ci95_C",
+        "equilibrium_time_min",
+        "model_ok",
+        "warnings",
+        "assumptions",
+        "sensors",
+        "decision",
+    }
     assert data["decision"] == "stop" and data["stop_time_min"] <= 0.85 * PAPER_T95 and data["reason"] is None
     assert data["assumptions"]["max_time_constant_min"] == 300.0 and "reference.csv" in data["assumptions"]["reference"]
     assert "random walk of 0.05 °C in an hour" in data["assumptions"]["room"]
@@ -435,7 +485,9 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     save_reference(one_mode_reference("A"), tmp_path / "machine.toml")
     full = tmp_path / "full.csv"
     full.write_text(csv_text(T[:150], {"A": noisy(first_order(T[:150]), 18)}))
-    code, out, err = run("thermal", "watch", str(full), "--replay", "--json", "--reference", str(tmp_path / "machine.toml"))
+    code, out, err = run(
+        "thermal", "watch", str(full), "--replay", "--json", "--reference", str(tmp_path / "machine.toml")
+    )
     assert code == 0, err
     reference = json.loads(out)
     reference.pop("hindsight", None)
@@ -444,7 +496,23 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     lines = full.read_text().splitlines(keepends=True)
     live.write_text("".join(lines[:20]))
     state = tmp_path / "live-state.npz"
-    cmd = [sys.executable, "-m", "mtident", "thermal", "watch", str(live), "--json", "--state", str(state), "--poll", "0.05", "--timeout", "20", "--reference", str(tmp_path / "machine.toml")]
+    cmd = [
+        sys.executable,
+        "-m",
+        "mtident",
+        "thermal",
+        "watch",
+        str(live),
+        "--json",
+        "--state",
+        str(state),
+        "--poll",
+        "0.05",
+        "--timeout",
+        "20",
+        "--reference",
+        str(tmp_path / "machine.toml"),
+    ]
     proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         deadline = time.monotonic() + 60
@@ -473,9 +541,24 @@ def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path):
     log.write_text(csv_text(T[:30], {"A": noisy(first_order(T[:30]), 19)}))
     state = tmp_path / "live-state.npz"
     proc = subprocess.Popen(
-        [sys.executable, "-c", "import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); from mtident.cli import main; sys.argv = ['mtident', *sys.argv[1:]]; main()",
-         "thermal", "watch", str(log), "--json", "--state", str(state), "--poll", "0.05"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+        [
+            sys.executable,
+            "-c",
+            "import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); from mtident.cli import "
+            "main; sys.argv = ['mtident', *sys.argv[1:]]; main()",
+            "thermal",
+            "watch",
+            str(log),
+            "--json",
+            "--state",
+            str(state),
+            "--poll",
+            "0.05",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=tmp_path,
     )
     try:
         deadline = time.monotonic() + 120
@@ -497,4 +580,7 @@ def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypa
     monkeypatch.chdir(tmp_path)
     code, _, err = run("thermal", "watch", "later.csv", "--poll", "0.05", "--timeout", "0.3")
     assert code == 2
-    assert "waiting for later.csv to appear" in err and "later.csv: no such file (not created within the --timeout of 0.3 s)" in err
+    assert (
+        "waiting for later.csv to appear" in err
+        and "later.csv: no such file (not created within the --timeout of 0.3 s)" in err
+    )

@@ -133,4 +133,3 @@ def thermal() -> None:
 @main.group(cls=LazyGroup, commands_module="mtident.cli_feeddrive")
 def feeddrive() -> None:
     """Ball-screw feed drive: 4-DOF model, modes, simulation, identification."""
-

@@ -28,7 +28,12 @@ from mtident.feeddrive.params import COORDINATES, DESCRIPTIONS, UNITS, parameter
 from mtident.feeddrive.plan import PLAN_KINDS, ExcitationPlan, candidate_tests, plan_tests
 
 stderr = Console(stderr=True, soft_wrap=True)
-params_option = click.option("--params", "params_path", type=click.Path(dir_okay=False), help="TOML parameter file (seed 004 Table 1 names, SI units); default: the shipped set.")
+params_option = click.option(
+    "--params",
+    "params_path",
+    type=click.Path(dir_okay=False),
+    help="TOML parameter file (seed 004 Table 1 names, SI units); default: the shipped set.",
+)
 
 
 @feeddrive.command("modes")
@@ -44,7 +49,9 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
                 "natural_frequencies_Hz": [float(f) for f in result.frequencies_Hz],
                 "positive_definite": result.positive_definite,
                 "damping_ratios": [float(z) for z in result.damping_ratios],
-                "mode_shapes": {name: [float(v) for v in row] for name, row in zip(COORDINATES, result.shapes, strict=True)},
+                "mode_shapes": {
+                    name: [float(v) for v in row] for name, row in zip(COORDINATES, result.shapes, strict=True)
+                },
             }
         )
         return
@@ -55,37 +62,118 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
     for name in COORDINATES:
         table.add_column(name, justify="right")
     for j in range(4):
-        table.add_row(str(j + 1), f"{result.frequencies_Hz[j]:.2f}", f"{result.damping_ratios[j]:.2e}", *[f"{v:+.3g}" for v in result.shapes[:, j]])
+        table.add_row(
+            str(j + 1),
+            f"{result.frequencies_Hz[j]:.2f}",
+            f"{result.damping_ratios[j]:.2e}",
+            *[f"{v:+.3g}" for v in result.shapes[:, j]],
+        )
     Console(width=max(Console().width, 100)).print(table)
 
 
 @feeddrive.command("simulate")
 @params_option
-@click.option("--duration", "duration_s", type=FiniteFloatRange(min=0, min_open=True), default=2.0, show_default=True, help="Seconds.")
-@click.option("--fs", "sample_rate_Hz", type=FiniteFloatRange(min=0, min_open=True), default=10_000.0, show_default=True, help="Sampling rate (Hz).")
-@click.option("--impulse", "amplitude", type=FiniteFloatRange(), default=20.0, show_default=True, help="Force amplitude (N or N m).")
+@click.option(
+    "--duration",
+    "duration_s",
+    type=FiniteFloatRange(min=0, min_open=True),
+    default=2.0,
+    show_default=True,
+    help="Seconds.",
+)
+@click.option(
+    "--fs",
+    "sample_rate_Hz",
+    type=FiniteFloatRange(min=0, min_open=True),
+    default=10_000.0,
+    show_default=True,
+    help="Sampling rate (Hz).",
+)
+@click.option(
+    "--impulse",
+    "amplitude",
+    type=FiniteFloatRange(),
+    default=20.0,
+    show_default=True,
+    help="Force amplitude (N or N m).",
+)
 @click.option("--excitation", "kind", type=click.Choice(EXCITATION_KINDS), default="impulse", show_default=True)
-@click.option("--on", "coordinate", type=click.Choice(COORDINATES), default="table", show_default=True, help="Coordinate the force acts on (motor_rotation: motor torque T_m).")
-@click.option("--frequency", "frequency_Hz", type=FiniteFloatRange(min=0), default=100.0, show_default=True, help="Sine frequency, or sweep start (Hz).")
-@click.option("--frequency-end", "frequency_end_Hz", type=FiniteFloatRange(min=0), default=2000.0, show_default=True, help="Sweep end (Hz).")
-@click.option("--noise", "noise_fraction", type=FiniteFloatRange(min=0), default=0.0, show_default=True, help="Measurement noise, fraction of each response's RMS.")
+@click.option(
+    "--on",
+    "coordinate",
+    type=click.Choice(COORDINATES),
+    default="table",
+    show_default=True,
+    help="Coordinate the force acts on (motor_rotation: motor torque T_m).",
+)
+@click.option(
+    "--frequency",
+    "frequency_Hz",
+    type=FiniteFloatRange(min=0),
+    default=100.0,
+    show_default=True,
+    help="Sine frequency, or sweep start (Hz).",
+)
+@click.option(
+    "--frequency-end",
+    "frequency_end_Hz",
+    type=FiniteFloatRange(min=0),
+    default=2000.0,
+    show_default=True,
+    help="Sweep end (Hz).",
+)
+@click.option(
+    "--noise",
+    "noise_fraction",
+    type=FiniteFloatRange(min=0),
+    default=0.0,
+    show_default=True,
+    help="Measurement noise, fraction of each response's RMS.",
+)
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--out", "out_path", type=OutputPath(), required=True, help="CSV to write.")
-@click.option("--plot", "plot_path", type=PicturePath(), help="Draw the responses to this picture (PNG; .svg or .pdf by the suffix).")
+@click.option(
+    "--plot",
+    "plot_path",
+    type=PicturePath(),
+    help="Draw the responses to this picture (PNG; .svg or .pdf by the suffix).",
+)
 @user_errors
-def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz: float, amplitude: float, kind: str, coordinate: str, frequency_Hz: float, frequency_end_Hz: float, noise_fraction: float, seed: int, out_path: str, plot_path: str | None) -> None:
+def simulate_command(
+    params_path: str | None,
+    duration_s: float,
+    sample_rate_Hz: float,
+    amplitude: float,
+    kind: str,
+    coordinate: str,
+    frequency_Hz: float,
+    frequency_end_Hz: float,
+    noise_fraction: float,
+    seed: int,
+    out_path: str,
+    plot_path: str | None,
+) -> None:
     """Simulate the vibration response by classical RK4 and write it as CSV."""
     samples = int(np.floor(duration_s * sample_rate_Hz + 1e-9)) + 1
     if samples < 10:
-        msg = f"--duration {duration_s:g} s at --fs {sample_rate_Hz:g} Hz gives {samples} sample(s); identification needs at least 10"
+        msg = (
+            f"--duration {duration_s:g} s at --fs {sample_rate_Hz:g} Hz gives {samples} sample(s); identification "
+            "needs at least 10"
+        )
         raise InputError(msg)
-    # a binary sequence clocked at the sampling rate changes at most once a sample: its clock counts as twice its highest
+    # a binary sequence clocked at the sampling rate changes at most once a sample: its clock counts as twice its
+    # highest
     highest = {
-        "sine": frequency_Hz, "sweep": max(frequency_Hz, frequency_end_Hz), "multisine": frequency_end_Hz,
+        "sine": frequency_Hz,
+        "sweep": max(frequency_Hz, frequency_end_Hz),
+        "multisine": frequency_end_Hz,
         "prbs": frequency_end_Hz / 2,
     }.get(kind, 0.0)
     if highest > sample_rate_Hz / 2:
-        msg = f"the {kind} reaches {highest:g} Hz, above half the sampling rate ({sample_rate_Hz / 2:g} Hz): the samples would alias it; lower the frequency or raise --fs"
+        msg = (
+            f"the {kind} reaches {highest:g} Hz, above half the sampling rate ({sample_rate_Hz / 2:g} Hz): the "
+            "samples would alias it; lower the frequency or raise --fs"
+        )
         raise InputError(msg)
     params = load_parameters(params_path)
     excitation = Excitation(kind, COORDINATES.index(coordinate), amplitude, frequency_Hz, frequency_end_Hz)
@@ -104,28 +192,72 @@ def simulate_command(params_path: str | None, duration_s: float, sample_rate_Hz:
 
 @feeddrive.command("identify")
 @click.argument("file", type=click.Path(dir_okay=False))
-@click.option("--params-guess", "guess_path", type=click.Path(dir_okay=False), help="TOML starting guess (default: the shipped set ±30 %).")
-@click.option("--truth", "truth_path", type=click.Path(dir_okay=False), help="TOML true parameters (simulated data): adds the error table (seed 004 Table 3).")
+@click.option(
+    "--params-guess",
+    "guess_path",
+    type=click.Path(dir_okay=False),
+    help="TOML starting guess (default: the shipped set ±30 %).",
+)
+@click.option(
+    "--truth",
+    "truth_path",
+    type=click.Path(dir_okay=False),
+    help="TOML true parameters (simulated data): adds the error table (seed 004 Table 3).",
+)
 @click.option(
     "--measured",
     type=click.Choice([PRESENT, *MEASUREMENT_SETS]),
     default=PRESENT,
     show_default=True,
-    help="present: every response column the file has; all: the 12 (refused if one is missing); realistic: table acceleration + motor angle and velocity.",
+    help=(
+        "present: every response column the file has; all: the 12 (refused if one is missing); realistic: table "
+        "acceleration + motor angle and velocity."
+    ),
 )
-@click.option("--noise", "noise_fraction", type=FiniteFloatRange(min=0, min_open=True), default=0.01, show_default=True, help="Measurement noise, fraction of each response's RMS.")
+@click.option(
+    "--noise",
+    "noise_fraction",
+    type=FiniteFloatRange(min=0, min_open=True),
+    default=0.01,
+    show_default=True,
+    help="Measurement noise, fraction of each response's RMS.",
+)
 @click.option("--preset", type=click.Choice(["default", "paper"]), default="default", show_default=True)
-@click.option("--plot", "plot_path", type=PicturePath(), help="Draw estimated vs measured responses and parameter convergence to this picture (PNG; .svg or .pdf by the suffix).")
+@click.option(
+    "--plot",
+    "plot_path",
+    type=PicturePath(),
+    help=(
+        "Draw estimated vs measured responses and parameter convergence to this picture (PNG; .svg or .pdf by the "
+        "suffix)."
+    ),
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def identify_command(file: str, guess_path: str | None, truth_path: str | None, measured: str, noise_fraction: float, preset: str, plot_path: str | None, as_json: bool) -> None:
+def identify_command(
+    file: str,
+    guess_path: str | None,
+    truth_path: str | None,
+    measured: str,
+    noise_fraction: float,
+    preset: str,
+    plot_path: str | None,
+    as_json: bool,
+) -> None:
     """Estimate stiffness and damping from a response CSV (time_s, forces, responses)."""
     response = read_response(file)
     guess = load_parameters(guess_path) if guess_path else default_guess()
     truth = load_parameters(truth_path) if truth_path else None
     steps = len(response.time_s)
     with stderr.status(f"filtering {steps} samples…") as status:
-        result = identify_feed_drive(response, guess, measured, noise_fraction, preset, progress=lambda k, n: status.update(f"filtering: {k}/{n} samples"))
+        result = identify_feed_drive(
+            response,
+            guess,
+            measured,
+            noise_fraction,
+            preset,
+            progress=lambda k, n: status.update(f"filtering: {k}/{n} samples"),
+        )
     for note in result.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
     if not result.identifiable.all() and preset == "default":
@@ -165,7 +297,8 @@ def identify_command(file: str, guess_path: str | None, truth_path: str | None, 
 @feeddrive.command("params")
 @params_option
 @click.option(
-    "--template", is_flag=True,
+    "--template",
+    is_flag=True,
     help="Write the set as a commented TOML file (every name, unit and meaning) to start a parameter file from.",
 )
 @click.option("--out", "out_path", type=OutputPath(), help="Write the template here instead of to stdout.")
@@ -206,35 +339,57 @@ def _positive_list(text: str, option: str, example: str) -> tuple[float, ...]:
 
 @feeddrive.command("plan")
 @click.option(
-    "--params-guess", "guess_path", type=click.Path(dir_okay=False),
+    "--params-guess",
+    "guess_path",
+    type=click.Path(dir_okay=False),
     help="TOML: the best knowledge of the drive, e.g. an earlier estimate (default: the shipped set).",
 )
 @click.option(
     "--excitation", "kinds", type=click.Choice(PLAN_KINDS), multiple=True, help="Candidate (repeat; default: all)."
 )
 @click.option(
-    "--on", "places", type=click.Choice(COORDINATES), multiple=True,
+    "--on",
+    "places",
+    type=click.Choice(COORDINATES),
+    multiple=True,
     help="Where the force acts (repeat; default: table and motor_rotation, i.e. table force and motor torque).",
 )
 @click.option("--durations", default="0.25,0.5,1,2", show_default=True, help="Test durations (s), comma-separated.")
 @click.option("--fs", "rates", default="10000", show_default=True, help="Sampling rates (Hz), comma-separated.")
 @click.option(
-    "--measured", type=click.Choice(list(MEASUREMENT_SETS)), default="all", show_default=True,
+    "--measured",
+    type=click.Choice(list(MEASUREMENT_SETS)),
+    default="all",
+    show_default=True,
     help="all: the 12 responses; realistic: table acceleration + motor angle and velocity.",
 )
 @click.option(
-    "--noise", "noise_fraction", type=FiniteFloatRange(min=0, min_open=True), default=0.01, show_default=True,
+    "--noise",
+    "noise_fraction",
+    type=FiniteFloatRange(min=0, min_open=True),
+    default=0.01,
+    show_default=True,
     help="Measurement noise, fraction of each response's RMS.",
 )
 @click.option(
-    "--target", type=FiniteFloatRange(min=0, min_open=True, max=1), default=0.10, show_default=True,
+    "--target",
+    type=FiniteFloatRange(min=0, min_open=True, max=1),
+    default=0.10,
+    show_default=True,
     help="Identified: the stated ±2σ within this fraction of the value.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def plan_command(
-    guess_path: str | None, kinds: tuple[str, ...], places: tuple[str, ...], durations: str, rates: str, measured: str,
-    noise_fraction: float, target: float, as_json: bool,
+    guess_path: str | None,
+    kinds: tuple[str, ...],
+    places: tuple[str, ...],
+    durations: str,
+    rates: str,
+    measured: str,
+    noise_fraction: float,
+    target: float,
+    as_json: bool,
 ) -> None:
     """Which test identifies all eight parameters: the expected standard deviations for candidate
     excitations, from the Fisher information of the model at the guess, and the cheapest that does."""
@@ -256,14 +411,18 @@ def plan_command(
 
 
 def _print_plan(plan: ExcitationPlan, measured: str) -> None:
-    table = Table(title=f"Stated ±2σ (%) after each test; repeated tests scatter less (--json); "
-                        f"measured: {measured}, noise {plan.noise_fraction:g}")
+    table = Table(
+        title=f"Stated ±2σ (%) after each test; repeated tests scatter less (--json); "
+        f"measured: {measured}, noise {plan.noise_fraction:g}"
+    )
     table.add_column("test")
     for name in IDENTIFIED:
         table.add_column(name, justify="right")
     for p in plan.predictions:
-        cells = [f"{200 * s:.2g}" if ok else f"[yellow]{200 * s:.2g}[/]"
-                 for s, ok in zip(p.stated_std_log, p.identified, strict=True)]
+        cells = [
+            f"{200 * s:.2g}" if ok else f"[yellow]{200 * s:.2g}[/]"
+            for s, ok in zip(p.stated_std_log, p.identified, strict=True)
+        ]
         label = p.candidate.label + (f" [dim]({p.reason.split(':')[0]})[/]" if p.reason else "")
         table.add_row(("[bold]" + label + "[/]") if p is plan.recommended else label, *cells)
     Console(width=max(Console().width, 140)).print(table)
@@ -275,9 +434,16 @@ def _print_plan(plan: ExcitationPlan, measured: str) -> None:
         return
     allowed = [p for p in plan.predictions if p.reason is None]
     never = [name for j, name in enumerate(IDENTIFIED) if not any(p.identified[j] for p in allowed)]
-    closest = "" if plan.closest is None else (
-        f"; the closest: {plan.closest.candidate.label} (widest ±2σ: {200 * plan.closest.stated_std_log.max():.3g} %)"
+    closest = (
+        ""
+        if plan.closest is None
+        else (
+            f"; the closest: {plan.closest.candidate.label} (widest ±2σ: "
+            f"{200 * plan.closest.stated_std_log.max():.3g} %)"
+        )
     )
-    stderr.print(f"mtident: no candidate identifies all eight {within}; never within it: {', '.join(never) or 'none'}"
-                 f"{closest}; longer --durations, finer sensors (--noise) or another --measured set may",
-                 highlight=False)
+    stderr.print(
+        f"mtident: no candidate identifies all eight {within}; never within it: {', '.join(never) or 'none'}"
+        f"{closest}; longer --durations, finer sensors (--noise) or another --measured set may",
+        highlight=False,
+    )

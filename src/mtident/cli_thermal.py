@@ -48,13 +48,17 @@ def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
 
 def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None) -> TemperatureLog:
     path = log_path(file)
-    log = read_temperature_log(path, time_col=time_col, time_unit=time_unit, sensors=asked_sensors(sensors, path) or None)
+    log = read_temperature_log(
+        path, time_col=time_col, time_unit=time_unit, sensors=asked_sensors(sensors, path) or None
+    )
     for note in log.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
     return log
 
 
-def load_log_with_room(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, room_col: str | None) -> tuple[TemperatureLog, np.ndarray | None]:
+def load_log_with_room(
+    file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, room_col: str | None
+) -> tuple[TemperatureLog, np.ndarray | None]:
     """The log's sensors, and the room column split off from them when one is named."""
     if room_col is None:
         log = load_log(file, sensors, time_col, time_unit)
@@ -77,16 +81,31 @@ def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str) ->
     rooms = [name for name in sensors if room_named(name)]
     if rooms and len(rooms) < len(sensors):
         stderr.print(
-            f"mtident: note: {', '.join(repr(r) for r in rooms)} {'is' if len(rooms) == 1 else 'are'} named as a room sensor and {taken_as}; "
-            f"if it measures the room, --ambient {shlex.quote(rooms[0])} makes it the input of each sensor's heat balance (a drifting room then stays out of T∞)",
+            f"mtident: note: {', '.join(repr(r) for r in rooms)} {'is' if len(rooms) == 1 else 'are'} named as a room "
+            f"sensor and {taken_as}; "
+            f"if it measures the room, --ambient {shlex.quote(rooms[0])} makes it the input of each sensor's heat "
+            "balance (a drifting room then stays out of T∞)",
             highlight=False,
         )
 
 
 def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
-    func = click.option("--time-unit", type=click.Choice(list(TIME_UNITS)), help="Unit of a numeric time column (default: from its name, Time_s or Time [s], or a units row; else min). d: days, as spreadsheet serial dates (46348.33 = 22.11.2026 08:00).")(func)
+    func = click.option(
+        "--time-unit",
+        type=click.Choice(list(TIME_UNITS)),
+        help=(
+            "Unit of a numeric time column (default: from its name, Time_s or Time [s], or a units row; else min). d: "
+            "days, as spreadsheet serial dates (46348.33 = 22.11.2026 08:00)."
+        ),
+    )(func)
     func = click.option("--time-col", metavar="NAME", help="Time column (default: the first column).")(func)
-    func = click.option("--sensor", "sensors", multiple=True, metavar="NAME", help="Sensor column(s) to use; repeat or comma-separate (default: all).")(func)
+    func = click.option(
+        "--sensor",
+        "sensors",
+        multiple=True,
+        metavar="NAME",
+        help="Sensor column(s) to use; repeat or comma-separate (default: all).",
+    )(func)
     func = click.argument("file", metavar="FILE")(func)
     return func
 
@@ -122,7 +141,8 @@ def reference_option(func):  # noqa: ANN001,ANN201 - click decorator
         "--reference",
         "reference_path",
         type=click.Path(dir_okay=False),
-        help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are searched only near those it learnt, "
+        help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are "
+        "searched only near those it learnt, "
         "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
     )(func)
 
@@ -134,8 +154,10 @@ def free_fast_option(func):  # noqa: ANN001,ANN201 - click decorator
         type=click.IntRange(0, MAX_FREE_FAST),
         default=MAX_FREE_FAST,
         show_default=True,
-        help="With --reference: how many modes faster than the reference's a test may add, free (a reference run can miss a mode). "
-        "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, which the answer states.",
+        help="With --reference: how many modes faster than the reference's a test may add, free (a reference run can "
+        "miss a mode). "
+        "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, "
+        "which the answer states.",
     )(func)
 
 
@@ -146,7 +168,8 @@ def max_time_constant_option(func):  # noqa: ANN001,ANN201 - click decorator
         type=FiniteFloatRange(min=1.0),
         default=DEFAULT_MAX_TIME_CONSTANT_MIN,
         show_default=True,
-        help="The slowest thermal mode the machine may have (min). The interval covers every mode up to this that the data cannot exclude: "
+        help="The slowest thermal mode the machine may have (min). The interval covers every mode up to this that the "
+        "data cannot exclude: "
         "a machine's bed or column warms with 1-5 h time constants.",
     )(func)
 
@@ -160,32 +183,86 @@ def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineRe
     if reference_path in SAMPLES:
         return load_reference(sample_log_path(reference_path))
     if not Path(reference_path).is_file():
-        msg = f"--reference {reference_path}: no such file (learn one with `mtident thermal learn FULL_LOG -o {Path(reference_path).name}`)"
+        msg = (
+            f"--reference {reference_path}: no such file (learn one with `mtident thermal learn FULL_LOG -o "
+            f"{Path(reference_path).name}`)"
+        )
         raise InputError(msg)
     return load_reference(reference_path)
 
 
 @thermal.command("identify")
 @log_options
-@click.option("--window", "window_min", type=FiniteFloatRange(min=0, min_open=True), default=30.0, show_default=True, help="Identification time L in minutes from the first sample.")
+@click.option(
+    "--window",
+    "window_min",
+    type=FiniteFloatRange(min=0, min_open=True),
+    default=30.0,
+    show_default=True,
+    help="Identification time L in minutes from the first sample.",
+)
 @click.option(
     "--method",
     type=click.Choice(IDENTIFY_METHODS),
     default=DEFAULT_METHOD,
     show_default=True,
     help="robust: sums of up to four exponential modes, with an interval over every model the data cannot exclude. "
-    "The papers' first-order filters (their interval assumes a first-order machine): ukf, aukf (Xia 2014), fukf, afukf (Yu 2019), or lsq (least squares).",
+    "The papers' first-order filters (their interval assumes a first-order machine): ukf, aukf (Xia 2014), fukf, "
+    "afukf (Yu 2019), or lsq (least squares).",
 )
-@click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True, help="First-order filters: initial values and tuning from the data, or a paper's exactly.")
+@click.option(
+    "--preset",
+    type=click.Choice(PRESETS),
+    default="data",
+    show_default=True,
+    help="First-order filters: initial values and tuning from the data, or a paper's exactly.",
+)
 @max_time_constant_option
 @reference_option
 @free_fast_option
-@click.option("--room-wander", "room_wander", type=FiniteFloatRange(min=0.0), default=0.05, show_default=True, help="robust, without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk).")
-@click.option("--horizon", "horizon_min", type=FiniteFloatRange(min=0, min_open=True), help="Predict to this time (min).")
-@click.option("--pseudo-seed", type=int, help="First-order filters: predict with the noisy pseudo-measurements of Xia et al. (2014), Eqs 21-22, from this seed.")
-@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes an input of each sensor's heat balance; T∞ at the room's level at the window's end.")
-@click.option("--plot", "plot_path", type=PicturePath(), help="Draw measured and predicted curves to this picture (PNG; .svg or .pdf by the suffix).")
-@click.option("--curve", "curve_path", type=OutputPath(), help="Write the measured and predicted curves with their 95 % band to this CSV (a row per time; for a report or a spreadsheet).")
+@click.option(
+    "--room-wander",
+    "room_wander",
+    type=FiniteFloatRange(min=0.0),
+    default=0.05,
+    show_default=True,
+    help="robust, without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk).",
+)
+@click.option(
+    "--horizon", "horizon_min", type=FiniteFloatRange(min=0, min_open=True), help="Predict to this time (min)."
+)
+@click.option(
+    "--pseudo-seed",
+    type=int,
+    help=(
+        "First-order filters: predict with the noisy pseudo-measurements of Xia et al. (2014), Eqs 21-22, from this "
+        "seed."
+    ),
+)
+@click.option(
+    "--ambient",
+    "ambient_col",
+    metavar="NAME",
+    help=(
+        "Room-temperature column: the room becomes an input of each sensor's heat balance; T∞ at the room's level at "
+        "the window's end."
+    ),
+)
+@click.option(
+    "--plot",
+    "plot_path",
+    type=PicturePath(),
+    help="Draw measured and predicted curves to this picture (PNG; .svg or .pdf by the suffix).",
+)
+@click.option(
+    "--curve",
+    "curve_path",
+    type=OutputPath(),
+    help=(
+        "Write the measured and predicted curves with their 95 % band to this CSV (a row per time; for a report or a "
+        "spreadsheet)."
+    ),
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def identify_command(
@@ -219,18 +296,32 @@ def identify_command(
         from mtident.thermal.robust_identify import identify_robust
 
         if preset != "data" or pseudo_seed is not None:
-            msg = f"--{'preset' if preset != 'data' else 'pseudo-seed'} is a setting of the papers' first-order filters: give --method ukf, aukf, fukf, afukf or lsq with it"
+            msg = (
+                f"--{'preset' if preset != 'data' else 'pseudo-seed'} is a setting of the papers' first-order "
+                "filters: give --method ukf, aukf, fukf, afukf or lsq with it"
+            )
             raise InputError(msg)
-        settings = RobustSettings(max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes)
+        settings = RobustSettings(
+            max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
+        )
         with stderr.status(f"fitting {len(log.sensors)} sensor(s)…"):
-            result: Identification | RobustIdentification = identify_robust(log, window_min, room, settings, load_reference_file(reference_path), horizon_min, ambient_col)
+            result: Identification | RobustIdentification = identify_robust(
+                log, window_min, room, settings, load_reference_file(reference_path), horizon_min, ambient_col
+            )
     else:
         if reference_path is not None:
-            msg = "--reference needs the model-robust method (--method robust): the first-order filters have one mode and no reference to use"
+            msg = (
+                "--reference needs the model-robust method (--method robust): the first-order filters have one mode "
+                "and no reference to use"
+            )
             raise InputError(msg)
         result = identify(log, window_min, method, preset, horizon_min, pseudo_seed, room)
-        stderr.print("mtident: note: the papers' first-order model: the interval assumes a first-order machine (a slower mode not yet seen moves T∞ beyond it); --method robust covers up to four modes", highlight=False)
-    for note in result.notes[len(log.notes):]:
+        stderr.print(
+            "mtident: note: the papers' first-order model: the interval assumes a first-order machine (a slower mode "
+            "not yet seen moves T∞ beyond it); --method robust covers up to four modes",
+            highlight=False,
+        )
+    for note in result.notes[len(log.notes) :]:
         stderr.print(f"mtident: warning: {note}", highlight=False)
     if plot_path:
         from mtident.report import plot_identification
@@ -239,15 +330,28 @@ def identify_command(
         stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
     if curve_path:
         result.curve_frame().to_csv(curve_path, index=False, float_format="%.6f")
-        stderr.print(f"mtident: curves written to {curve_path} ({len(result.time_min)} rows to t = {result.time_min[-1]:g} min)", highlight=False)
+        stderr.print(
+            f"mtident: curves written to {curve_path} ({len(result.time_min)} rows to t = {result.time_min[-1]:g} min)",
+            highlight=False,
+        )
     summaries = [result.summary(i) for i in range(len(result.sensors))]
     if as_json:
-        print_json(summaries[0] if len(summaries) == 1 else {"sensors": summaries, "method": method, "window_min": result.window_min})
+        print_json(
+            summaries[0]
+            if len(summaries) == 1
+            else {"sensors": summaries, "method": method, "window_min": result.window_min}
+        )
         return
     _identify_table(log.source, result, summaries, method, preset)
 
 
-def _identify_table(source: str, result: Identification | RobustIdentification, summaries: list[dict[str, object]], method: str, preset: str) -> None:
+def _identify_table(
+    source: str,
+    result: Identification | RobustIdentification,
+    summaries: list[dict[str, object]],
+    method: str,
+    preset: str,
+) -> None:
     how = "model-robust: up to four modes" if method == ROBUST_METHOD else f"{method}, preset {preset}: first order"
     table = Table(title=f"{source}: identified from the first {result.window_min:g} min ({how})")
     for column in ("sensor", "T∞ (°C)", "95 % interval", "t_eq (min)", "RMSE (°C)", "trusted", "measured T / t_eq"):
@@ -256,30 +360,63 @@ def _identify_table(source: str, result: Identification | RobustIdentification, 
         interval = d["steady_state_ci95_C"]
         assert isinstance(interval, list)
         lo, hi = interval
-        measured = "—" if d["measured_final_C"] is None else f"{d['measured_final_C']:.2f} / {_fmt(d['measured_equilibrium_time_min'], 0)}"
+        measured = (
+            "—"
+            if d["measured_final_C"] is None
+            else f"{d['measured_final_C']:.2f} / {_fmt(d['measured_equilibrium_time_min'], 0)}"
+        )
         table.add_row(
-            str(d["sensor"]), _fmt(d["steady_state_C"]), f"{_fmt(lo)} to {_fmt(hi)}",
-            _fmt(d["equilibrium_time_min"], 0), _fmt(d["rmse_C"], 3),
-            "yes" if d["model_ok"] else "[yellow]no[/]", measured,
+            str(d["sensor"]),
+            _fmt(d["steady_state_C"]),
+            f"{_fmt(lo)} to {_fmt(hi)}",
+            _fmt(d["equilibrium_time_min"], 0),
+            _fmt(d["rmse_C"], 3),
+            "yes" if d["model_ok"] else "[yellow]no[/]",
+            measured,
         )
     console = Console(width=max(Console().width, 100))
     console.print(table)
     assumed = summaries[0]["assumptions"]
     assert isinstance(assumed, dict)
     if method == ROBUST_METHOD:
-        console.print(f"Assumes: {assumed['model']}, time constants up to {assumed['max_time_constant_min']:g} min; room {assumed['room']}" + (f"; reference {assumed['reference']}" if assumed["reference"] else "") + ".", highlight=False)
+        console.print(
+            f"Assumes: {assumed['model']}, time constants up to {assumed['max_time_constant_min']:g} min; room "
+            f"{assumed['room']}" + (f"; reference {assumed['reference']}" if assumed["reference"] else "") + ".",
+            highlight=False,
+        )
     else:
         console.print(f"Assumes: {assumed['model']}.", highlight=False)
 
 
 @thermal.command("learn")
 @log_options
-@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: an input of every mode's heat balance while learning.")
+@click.option(
+    "--ambient",
+    "ambient_col",
+    metavar="NAME",
+    help="Room-temperature column: an input of every mode's heat balance while learning.",
+)
 @max_time_constant_option
-@click.option("-o", "--output", "output_path", type=OutputPath(), required=True, help="The reference file to write (TOML), for --reference in identify and watch.")
+@click.option(
+    "-o",
+    "--output",
+    "output_path",
+    type=OutputPath(),
+    required=True,
+    help="The reference file to write (TOML), for --reference in identify and watch.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def learn_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, ambient_col: str | None, max_tau_min: float, output_path: str, as_json: bool) -> None:
+def learn_command(
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    ambient_col: str | None,
+    max_tau_min: float,
+    output_path: str,
+    as_json: bool,
+) -> None:
     """Learn each sensor's thermal modes from FILE, a warm-up that ran to equilibrium.
 
     The time constants belong to the machine's structure, not to the load: a later test of the
@@ -300,8 +437,24 @@ def learn_command(file: str, sensors: tuple[str, ...], time_col: str | None, tim
     save_reference(reference, output_path)
     stderr.print(f"mtident: reference written to {output_path}", highlight=False)
     if as_json:
-        sensors_out = {name: {"time_constants_min": list(m.time_constants_min), "box": list(m.box), "amplitudes_C": list(m.amplitudes_C)} for name, m in reference.sensors.items()}
-        print_json({"reference": str(output_path), "source": reference.source, "max_time_constant_min": reference.max_time_constant_min, "room": reference.room, "sensors": sensors_out, "warnings": warnings})
+        sensors_out = {
+            name: {
+                "time_constants_min": list(m.time_constants_min),
+                "box": list(m.box),
+                "amplitudes_C": list(m.amplitudes_C),
+            }
+            for name, m in reference.sensors.items()
+        }
+        print_json(
+            {
+                "reference": str(output_path),
+                "source": reference.source,
+                "max_time_constant_min": reference.max_time_constant_min,
+                "room": reference.room,
+                "sensors": sensors_out,
+                "warnings": warnings,
+            }
+        )
         return
     table = Table(title=f"{log.source}: modes learnt (time constants with their box)")
     for column in ("sensor", "time constants (min)", "amplitudes (°C)"):
@@ -326,15 +479,46 @@ def _float_list(text: str, option: str) -> list[float]:
 
 @thermal.command("min-time")
 @log_options
-@click.option("--sampling-periods", default="35,40,45,50", show_default=True, help="Sampling periods M (min), comma-separated.")
-@click.option("--windows", default=None, help="Candidate identification times L as START:STOP[:STEP] minutes (default: every sample from 5 min to the longest period).")
+@click.option(
+    "--sampling-periods", default="35,40,45,50", show_default=True, help="Sampling periods M (min), comma-separated."
+)
+@click.option(
+    "--windows",
+    default=None,
+    help=(
+        "Candidate identification times L as START:STOP[:STEP] minutes (default: every sample from 5 min to the "
+        "longest period)."
+    ),
+)
 @click.option("--method", type=click.Choice(METHODS), default="aukf", show_default=True)
 @click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True)
-@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the input of each sensor's heat balance, before and after L.")
-@click.option("--plot", "plot_path", type=PicturePath(), help="Draw RMSE against identification time to this picture (PNG; .svg or .pdf by the suffix).")
+@click.option(
+    "--ambient",
+    "ambient_col",
+    metavar="NAME",
+    help="Room-temperature column: the input of each sensor's heat balance, before and after L.",
+)
+@click.option(
+    "--plot",
+    "plot_path",
+    type=PicturePath(),
+    help="Draw RMSE against identification time to this picture (PNG; .svg or .pdf by the suffix).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, sampling_periods: str, windows: str | None, method: str, preset: str, ambient_col: str | None, plot_path: str | None, as_json: bool) -> None:
+def min_time_command(
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    sampling_periods: str,
+    windows: str | None,
+    method: str,
+    preset: str,
+    ambient_col: str | None,
+    plot_path: str | None,
+    as_json: bool,
+) -> None:
     """Find the minimal identification time (seed 000 §2.4): RMSE against L for several sampling periods."""
     periods = _float_list(sampling_periods, "--sampling-periods")
     candidates = None
@@ -348,9 +532,15 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
     log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
     with stderr.status("searching identification times…"):
         result = minimal_identification_time(log, method, preset, periods, candidates, room)
-    for name, begins in zip(result.sensors, result.rise_begins_min if result.rise_begins_min is not None else [], strict=False):
+    for name, begins in zip(
+        result.sensors, result.rise_begins_min if result.rise_begins_min is not None else [], strict=False
+    ):
         if np.isfinite(begins):
-            stderr.print(f"mtident: sensor {name!r} stays at its first level until t = {begins:g} min (the warm-up began after the log); fitted from there, L still counts from the log's start", highlight=False)
+            stderr.print(
+                f"mtident: sensor {name!r} stays at its first level until t = {begins:g} min (the warm-up began "
+                "after the log); fitted from there, L still counts from the log's start",
+                highlight=False,
+            )
     if plot_path:
         from mtident.report import plot_min_time
 
@@ -361,9 +551,18 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
         for warning in d["warnings"]:  # type: ignore[attr-defined]
             stderr.print(f"mtident: warning: {warning}", highlight=False)
     if as_json:
-        print_json(summaries[0] if len(summaries) == 1 else {"sensors": summaries, "method": method, "sampling_periods_min": periods})
+        print_json(
+            summaries[0]
+            if len(summaries) == 1
+            else {"sensors": summaries, "method": method, "sampling_periods_min": periods}
+        )
         return
-    table = Table(title=f"{log.source}: minimal identification time ({method}); choosing it took {result.measuring_time_min:g} min of measurement")
+    table = Table(
+        title=(
+            f"{log.source}: minimal identification time ({method}); choosing it took {result.measuring_time_min:g} "
+            "min of measurement"
+        )
+    )
     table.add_column("sensor")
     table.add_column("minimal L (min)", justify="right")
     for p in result.periods_min:
@@ -373,7 +572,12 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
         # to 0.1 min: a 1-Hz log has a candidate L every second (39.9667 min)
         minimal = d["min_identification_time_min"]
         best = [f"{round(float(b), 1):g}" for b in result.best_per_period_min[:, i]]
-        table.add_row(str(d["sensor"]), f"{round(minimal, 1):g}" if isinstance(minimal, float) else "—", *best, "yes" if d["periods_agree"] else "[yellow]no[/]")
+        table.add_row(
+            str(d["sensor"]),
+            f"{round(minimal, 1):g}" if isinstance(minimal, float) else "—",
+            *best,
+            "yes" if d["periods_agree"] else "[yellow]no[/]",
+        )
     Console(width=max(Console().width, 100)).print(table)
 
 
@@ -381,7 +585,9 @@ def min_time_command(file: str, sensors: tuple[str, ...], time_col: str | None, 
 @log_options
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the summary.")
 @user_errors
-def inspect_command(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, as_json: bool) -> None:
+def inspect_command(
+    file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, as_json: bool
+) -> None:
     """Show how FILE is read: its format, the header line, the time column and step, each
     sensor's unit and readings, and every column left out with the reason.
 
@@ -398,15 +604,26 @@ def inspect_command(file: str, sensors: tuple[str, ...], time_col: str | None, t
     assert isinstance(fmt, dict) and isinstance(time, dict)
     console = Console(soft_wrap=True)  # a line per fact, as a terminal or a file shows it
     rows_under = fmt["rows_under_header"]
-    text = "" if str(fmt["kind"]).startswith("Excel") else f", {fmt['encoding']}, {fmt['delimiter']}-separated, decimal {fmt['decimal']!r}"
+    text = (
+        ""
+        if str(fmt["kind"]).startswith("Excel")
+        else f", {fmt['encoding']}, {fmt['delimiter']}-separated, decimal {fmt['decimal']!r}"
+    )
     console.print(
-        f"[bold]{file}[/]: {fmt['kind']}{text}; header on line {fmt['header_line']}" + (f", {rows_under} row(s) under it before the data" if rows_under else "") + f"; units from {fmt['units_from']}",
+        f"[bold]{file}[/]: {fmt['kind']}{text}; header on line {fmt['header_line']}"
+        + (f", {rows_under} row(s) under it before the data" if rows_under else "")
+        + f"; units from {fmt['units_from']}",
         highlight=False,
     )
     step = time["step_min"]
     console.print(
         f"time: {time['column']!r}, read as {time['read_as']} (first cell {time['first_cell']!r}); "
-        + ("1 sample so far" if step is None else f"{time['samples']} samples over {_fmt(time['span_min'], 1)} min, a step of " + (f"{step * 60:g} s" if step < 1 else f"{_fmt(step, 2)} min")),
+        + (
+            "1 sample so far"
+            if step is None
+            else f"{time['samples']} samples over {_fmt(time['span_min'], 1)} min, a step of "
+            + (f"{step * 60:g} s" if step < 1 else f"{_fmt(step, 2)} min")
+        ),
         highlight=False,
     )
     table = Table()
@@ -415,7 +632,15 @@ def inspect_command(file: str, sensors: tuple[str, ...], time_col: str | None, t
     sensor_rows = info["sensors"]
     assert isinstance(sensor_rows, list)
     for d in sensor_rows:
-        table.add_row(d["sensor"], d["unit"], str(d["missing"]), _fmt(d["first_C"]), _fmt(d["last_C"]), _fmt(d["min_C"]), _fmt(d["max_C"]))
+        table.add_row(
+            d["sensor"],
+            d["unit"],
+            str(d["missing"]),
+            _fmt(d["first_C"]),
+            _fmt(d["last_C"]),
+            _fmt(d["min_C"]),
+            _fmt(d["max_C"]),
+        )
     console.print(table)
     notes = info["notes"]
     assert isinstance(notes, list)

@@ -44,20 +44,80 @@ _SAID = ("note", "warning", "ready", "not ready", "stop")
 
 @thermal.command("watch")
 @log_options
-@click.option("--tolerance", "tolerance_C", type=FiniteFloatRange(min=0, min_open=True), default=0.2, show_default=True, help="A sensor may stop when every model the data allow puts T∞ within this of the estimate (°C).")
-@click.option("--confidence", "decision_level", type=FiniteFloatRange(min=0.5, max=0.999), default=0.99, show_default=True, help="Confidence level of the interval the decision uses.")
+@click.option(
+    "--tolerance",
+    "tolerance_C",
+    type=FiniteFloatRange(min=0, min_open=True),
+    default=0.2,
+    show_default=True,
+    help="A sensor may stop when every model the data allow puts T∞ within this of the estimate (°C).",
+)
+@click.option(
+    "--confidence",
+    "decision_level",
+    type=FiniteFloatRange(min=0.5, max=0.999),
+    default=0.99,
+    show_default=True,
+    help="Confidence level of the interval the decision uses.",
+)
 @max_time_constant_option
 @reference_option
 @free_fast_option
-@click.option("--ambient", "ambient_col", metavar="NAME", help="Room-temperature column: the room becomes an input of every mode's heat balance, so a drifting room does not fool the rule.")
-@click.option("--room-wander", "room_wander", type=FiniteFloatRange(min=0.0), default=0.05, show_default=True, help="Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 takes the room as steady.")
-@click.option("--replay", is_flag=True, help="Run a finished log as if it arrived live, as fast as possible (afresh, unless --resume).")
+@click.option(
+    "--ambient",
+    "ambient_col",
+    metavar="NAME",
+    help=(
+        "Room-temperature column: the room becomes an input of every mode's heat balance, so a drifting room does not "
+        "fool the rule."
+    ),
+)
+@click.option(
+    "--room-wander",
+    "room_wander",
+    type=FiniteFloatRange(min=0.0),
+    default=0.05,
+    show_default=True,
+    help=(
+        "Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 takes the "
+        "room as steady."
+    ),
+)
+@click.option(
+    "--replay",
+    is_flag=True,
+    help="Run a finished log as if it arrived live, as fast as possible (afresh, unless --resume).",
+)
 @click.option("--resume", is_flag=True, help="With --replay: resume from the state file instead of starting afresh.")
-@click.option("--state", "state_path", type=click.Path(dir_okay=False), help="State file for resuming (default: beside the log, LOG.watch-state.npz).")
-@click.option("--poll", "poll_s", type=FiniteFloatRange(min=0.05), default=0.5, show_default=True, help="Seconds between looks at a growing log.")
-@click.option("--timeout", "timeout_s", type=FiniteFloatRange(min=0), help="Give up after this many seconds without a new row.")
-@click.option("--plot", "plot_path", type=PicturePath(), help="Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.")
-@click.option("--json", "as_json", is_flag=True, help="Print the contract's JSON object when the decision is reached (or the log ends).")
+@click.option(
+    "--state",
+    "state_path",
+    type=click.Path(dir_okay=False),
+    help="State file for resuming (default: beside the log, LOG.watch-state.npz).",
+)
+@click.option(
+    "--poll",
+    "poll_s",
+    type=FiniteFloatRange(min=0.05),
+    default=0.5,
+    show_default=True,
+    help="Seconds between looks at a growing log.",
+)
+@click.option(
+    "--timeout", "timeout_s", type=FiniteFloatRange(min=0), help="Give up after this many seconds without a new row."
+)
+@click.option(
+    "--plot",
+    "plot_path",
+    type=PicturePath(),
+    help="Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.",
+)
+@click.option(
+    "--json",
+    "as_json",
+    is_flag=True,
+    help="Print the contract's JSON object when the decision is reached (or the log ends).",
+)
 @click.option("--hold", hidden=True, type=float)
 @click.option("--bin", "bin_s", hidden=True, type=float)
 @click.option("--room-coupling", hidden=True)
@@ -96,9 +156,15 @@ def watch_command(
     """
     for name, given in (("--hold", hold), ("--bin", bin_s), ("--room-coupling", room_coupling)):
         if given is not None:
-            stderr.print(f"mtident: note: {name} is no longer used (the decision rests on the modal fit of all readings so far) and was ignored", highlight=False)
+            stderr.print(
+                f"mtident: note: {name} is no longer used (the decision rests on the modal fit of all readings so "
+                "far) and was ignored",
+                highlight=False,
+            )
     if resume and not replay:
-        stderr.print("mtident: note: --resume is the default for a live log; it matters only with --replay", highlight=False)
+        stderr.print(
+            "mtident: note: --resume is the default for a live log; it matters only with --replay", highlight=False
+        )
     path = log_path(file)
     if replay and not path.is_file():
         msg = f"{path}: no such file"
@@ -106,7 +172,9 @@ def watch_command(
     settings = MonitorSettings(
         tolerance_C=tolerance_C,
         decision_level=decision_level,
-        robust=RobustSettings(max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes),
+        robust=RobustSettings(
+            max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
+        ),
         reference=load_reference_file(reference_path),
         room_sensor=ambient_col,
     )
@@ -128,7 +196,11 @@ def watch_command(
     if session.state is None:
         if interrupted:
             sys.exit(130)
-        msg = f"{path}: no data rows" if path.is_file() else f"{path}: no such file (not created within the --timeout of {timeout_s:g} s)"
+        msg = (
+            f"{path}: no data rows"
+            if path.is_file()
+            else f"{path}: no such file (not created within the --timeout of {timeout_s:g} s)"
+        )
         raise InputError(msg)
     if plot_path:
         _plot(session, plot_path)
@@ -137,7 +209,15 @@ def watch_command(
         sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
 
 
-def _follow(session: WatchSession, path: Path, replay: bool, poll_s: float, timeout_s: float | None, plot_path: str | None, live: bool) -> bool:
+def _follow(
+    session: WatchSession,
+    path: Path,
+    replay: bool,
+    poll_s: float,
+    timeout_s: float | None,
+    plot_path: str | None,
+    live: bool,
+) -> bool:
     """Poll the log until the decision, the log's end (a replay) or a timeout; True if Ctrl-C
     ended it (the state file then holds the last rows fed)."""
     from rich.live import Live
@@ -169,8 +249,16 @@ def _follow(session: WatchSession, path: Path, replay: bool, poll_s: float, time
                     return False
                 time.sleep(poll_s)
     except KeyboardInterrupt:
-        where = "before the first sample" if session.state is None else f"at t = {minutes(session.state.readings.latest_min)} min"
-        kept = f"the state is in {session.state_path}; the same command resumes from there" if session.state_path.is_file() else "nothing was saved"
+        where = (
+            "before the first sample"
+            if session.state is None
+            else f"at t = {minutes(session.state.readings.latest_min)} min"
+        )
+        kept = (
+            f"the state is in {session.state_path}; the same command resumes from there"
+            if session.state_path.is_file()
+            else "nothing was saved"
+        )
         stderr.print(f"mtident: interrupted (Ctrl-C) {where}; {kept}", highlight=False)
         return True
 
@@ -187,7 +275,11 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     outcome = session.result()
     hindsight = session.hindsight() if replay else None
     if hindsight is not None:
-        stderr.print(f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)} min: checking the decision against where it settled", highlight=False)
+        stderr.print(
+            f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)} min: checking the decision against "
+            "where it settled",
+            highlight=False,
+        )
     if as_json:
         print_json(outcome if hindsight is None else {**outcome, "hindsight": hindsight.to_dict()})
         return
@@ -196,7 +288,11 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     state = session.state
     assert state is not None
     said = assumptions(session.settings, state.sensors[0])
-    console.print(f"Assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}" + (f"; reference {said.reference}" if said.reference else ""), highlight=False)
+    console.print(
+        f"Assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
+        + (f"; reference {said.reference}" if said.reference else ""),
+        highlight=False,
+    )
     if state.stopped:
         saved = outcome.get("time_saved_min")
         gain = f"; {saved:.0f} min before the predicted equilibrium" if isinstance(saved, float) and saved > 0 else ""
@@ -210,7 +306,11 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     console.print(str(outcome["reason"]), highlight=False)
     expected = outcome.get("expected_stop_time_min")
     if isinstance(expected, float):
-        console.print(f"Expected stop: t ≈ {minutes(round(expected))} min on the best model's course (a slower mode that still fits moves it later).", highlight=False)
+        console.print(
+            f"Expected stop: t ≈ {minutes(round(expected))} min on the best model's course (a slower mode that still "
+            "fits moves it later).",
+            highlight=False,
+        )
 
 
 def _status_table(session: WatchSession, path: Path) -> Table:
@@ -220,7 +320,9 @@ def _status_table(session: WatchSession, path: Path) -> Table:
     table = Table(title=f"{path.name}: {where}")
     level = f"{session.settings.decision_level:.0%}"
     for column in ("sensor", "latest (°C)", "T∞ (°C)", "95 % interval", f"{level} interval", "t_eq (min)", "status"):
-        table.add_column(column, justify="left" if column in ("sensor", "status") else "right", **_column_layout(column))
+        table.add_column(
+            column, justify="left" if column in ("sensor", "status") else "right", **_column_layout(column)
+        )
     if state is None:
         return table
     values = state.readings.values_C
@@ -228,7 +330,15 @@ def _status_table(session: WatchSession, path: Path) -> Table:
         column = values[:, s]
         finite = column[np.isfinite(column)]
         latest = float(finite[-1]) if finite.size else math.nan
-        colour = "green" if check.may_stop else "yellow" if check.status in ("confirming", "narrowing") else "red" if check.status == "misfit" else "white"
+        colour = (
+            "green"
+            if check.may_stop
+            else "yellow"
+            if check.status in ("confirming", "narrowing")
+            else "red"
+            if check.status == "misfit"
+            else "white"
+        )
         table.add_row(
             check.sensor,
             _fmt(latest),
@@ -250,7 +360,11 @@ def _plot(session: WatchSession, plot_path: str) -> None:
 
 def _print_hindsight(hindsight: Hindsight) -> None:
     """The table of the decision against the rest of the log, and what it comes to."""
-    room = f"; the room moved {hindsight.room_shift_C:+.2f} °C after the stop, added to T∞" if hindsight.room_shift_C else ""
+    room = (
+        f"; the room moved {hindsight.room_shift_C:+.2f} °C after the stop, added to T∞"
+        if hindsight.room_shift_C
+        else ""
+    )
     table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)} min){room}")
     for column in ("sensor", "T∞ at stop (°C)", "settled (°C)", "difference (°C)", "95 % rise at (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
@@ -260,21 +374,41 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         shown = _fmt(float(error)) if settled[i] else "—"
         if settled[i] and not hindsight.within[i]:
             shown = f"[yellow]{shown}[/]"
-        table.add_row(name, _fmt(float(hindsight.steady_state_C[i])), _fmt(float(hindsight.settled_C[i])), shown, _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0))
+        table.add_row(
+            name,
+            _fmt(float(hindsight.steady_state_C[i])),
+            _fmt(float(hindsight.settled_C[i])),
+            shown,
+            _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0),
+        )
     Console(width=max(Console().width, 100)).print(table)
     if not settled.any():
         Console().print("The log ends before its sensors settled: nothing to check the decision against.")
         return
-    beyond = [name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok]
-    unsettled = [name for name, known, decided in zip(hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), strict=True) if decided and not known]
+    beyond = [
+        name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok
+    ]
+    unsettled = [
+        name
+        for name, known, decided in zip(hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), strict=True)
+        if decided and not known
+    ]
     verdict = (
-        f"{len(beyond)} of {int(settled.sum())} sensors settled beyond the tolerance ({hindsight.tolerance_C:g} °C) of T∞ at the stop: {', '.join(beyond)}"
+        f"{len(beyond)} of {int(settled.sum())} sensors settled beyond the tolerance ({hindsight.tolerance_C:g} °C) "
+        f"of T∞ at the stop: {', '.join(beyond)}"
         if beyond
-        else f"every sensor that settled ({int(settled.sum())}) is within the tolerance ({hindsight.tolerance_C:g} °C) of T∞ at the stop"
+        else (
+            f"every sensor that settled ({int(settled.sum())}) is within the tolerance ({hindsight.tolerance_C:g} °C) "
+            "of T∞ at the stop"
+        )
     )
     reached = float(np.nanmax(hindsight.measured_equilibrium_time_min[settled]))
     saved = reached - hindsight.stop_time_min
-    timing = f"the log reached 95 % of its rise by t = {minutes(reached)} min, " + (f"{minutes(saved)} min after the stop" if saved > 0 else f"{minutes(-saved)} min before the stop: the rule saved no time on this log")
+    timing = f"the log reached 95 % of its rise by t = {minutes(reached)} min, " + (
+        f"{minutes(saved)} min after the stop"
+        if saved > 0
+        else f"{minutes(-saved)} min before the stop: the rule saved no time on this log"
+    )
     not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
     Console().print(f"{verdict[0].upper()}{verdict[1:]}; {timing}{not_settled}.", highlight=False)
 

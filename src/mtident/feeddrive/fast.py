@@ -53,7 +53,9 @@ def _rk4(a: FloatArray, y: FloatArray, drive: FloatArray, h: float, substeps: in
 
 
 @njit(cache=True, fastmath=False)
-def _system(z: FloatArray, a0: FloatArray, basis: FloatArray, reference: FloatArray, log_form: bool, a: FloatArray) -> None:
+def _system(
+    z: FloatArray, a0: FloatArray, basis: FloatArray, reference: FloatArray, log_form: bool, a: FloatArray
+) -> None:
     """A(p) into ``a`` for the parameters in z[8:] (log form: p = reference·e^z)."""
     a[:] = a0
     for j in range(8):

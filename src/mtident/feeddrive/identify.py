@@ -271,7 +271,8 @@ def _one_frequency_note(forces: FloatArray, h: float) -> list[str]:
             return []
         found.append(f"{FORCE_COLUMNS[k]} at {best_frequency:.3g} Hz")
     return [
-        f"the excitation is one frequency ({', '.join(found)}): the record shows the drive's response at that frequency alone, "
+        f"the excitation is one frequency ({', '.join(found)}): the record shows the drive's response at that "
+        "frequency alone, "
         "too little to tell its stiffness and damping parameters apart; an impulse, a step or a sweep excites "
         "every mode, and a test plan (plan_tests) says which identifies all eight"
     ]

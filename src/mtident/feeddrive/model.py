@@ -19,16 +19,38 @@ from mtident.exceptions import InputError
 from mtident.feeddrive.params import FeedDriveParameters, damping_matrix, mass_matrix, stiffness_matrix
 
 __all__ = [
-    "Excitation", "system_matrix", "input_matrix", "rk4_linear_step", "exact_step", "EXCITATION_KINDS", "accelerations",
-    "parameter_basis", "system_matrices", "prbs_bits", "multisine",
+    "Excitation",
+    "system_matrix",
+    "input_matrix",
+    "rk4_linear_step",
+    "exact_step",
+    "EXCITATION_KINDS",
+    "accelerations",
+    "parameter_basis",
+    "system_matrices",
+    "prbs_bits",
+    "multisine",
 ]
 
 EXCITATION_KINDS = ("impulse", "step", "sine", "sweep", "prbs", "multisine")
 # Feedback taps of maximal-length Fibonacci shift registers, by register length (Xilinx XAPP052, Table 3).
 _LFSR_TAPS = {
-    5: (5, 3), 6: (6, 5), 7: (7, 6), 8: (8, 6, 5, 4), 9: (9, 5), 10: (10, 7), 11: (11, 9), 12: (12, 6, 4, 1),
-    13: (13, 4, 3, 1), 14: (14, 5, 3, 1), 15: (15, 14), 16: (16, 15, 13, 4), 17: (17, 14), 18: (18, 11),
-    19: (19, 6, 2, 1), 20: (20, 17),
+    5: (5, 3),
+    6: (6, 5),
+    7: (7, 6),
+    8: (8, 6, 5, 4),
+    9: (9, 5),
+    10: (10, 7),
+    11: (11, 9),
+    12: (12, 6, 4, 1),
+    13: (13, 4, 3, 1),
+    14: (14, 5, 3, 1),
+    15: (15, 14),
+    16: (16, 15, 13, 4),
+    17: (17, 14),
+    18: (18, 11),
+    19: (19, 6, 2, 1),
+    20: (20, 17),
 }
 
 
@@ -105,7 +127,10 @@ class Excitation:
             msg = f"excitation {self.kind!r} is not one of: {', '.join(EXCITATION_KINDS)}"
             raise InputError(msg)
         if self.coordinate not in range(4):
-            msg = f"excitation coordinate {self.coordinate}: expected 0 (table), 1 (screw), 2 (screw rotation) or 3 (motor)"
+            msg = (
+                f"excitation coordinate {self.coordinate}: expected 0 (table), 1 (screw), 2 (screw rotation) or 3 "
+                "(motor)"
+            )
             raise InputError(msg)
 
     def forces(self, time_s: FloatArray) -> FloatArray:

@@ -52,8 +52,19 @@ COORDINATES = ("table", "screw", "screw_rotation", "motor_rotation")
 # The parameters the UKF estimates (seed 004 Eq. 37, state x9..x16).
 IDENTIFIED = ("K1", "K2", "K3", "K4", "Bt", "Bb", "Qb", "Qm")
 UNITS = {
-    "Mt": "kg", "Mb": "kg", "Jm": "kg m²", "Jb": "kg m²", "K1": "N/m", "K2": "N/m", "K3": "N m/rad",
-    "K4": "N m/rad", "beta": "m/rad", "Bt": "N s/m", "Bb": "N s/m", "Qm": "N m s/rad", "Qb": "N m s/rad",
+    "Mt": "kg",
+    "Mb": "kg",
+    "Jm": "kg m²",
+    "Jb": "kg m²",
+    "K1": "N/m",
+    "K2": "N/m",
+    "K3": "N m/rad",
+    "K4": "N m/rad",
+    "beta": "m/rad",
+    "Bt": "N s/m",
+    "Bb": "N s/m",
+    "Qm": "N m s/rad",
+    "Qb": "N m s/rad",
 }
 # What each parameter is (seed 004, Table 1).
 DESCRIPTIONS = {
@@ -162,7 +173,10 @@ def validate(p: FeedDriveParameters) -> FeedDriveParameters:
     if p.K3 - coupling <= p.K4:
         hint = ""
         if abs(p.beta - PRINTED_BETA) < 1e-9:
-            hint = " (β = 2.55e-3 is the value printed in seed 004's Table 1; β = lead/(2π) = 0.01/(2π) ≈ 1.5915e-3 m/rad reproduces the paper's frequencies)"
+            hint = (
+                " (β = 2.55e-3 is the value printed in seed 004's Table 1; β = lead/(2π) = 0.01/(2π) ≈ 1.5915e-3 "
+                "m/rad reproduces the paper's frequencies)"
+            )
         msg = (
             f"K3 < K4 + β²·K1 ({p.K3:.6g} < {p.K4:.6g} + {coupling:.6g} N m/rad): K is indefinite, "
             f"the model is unstable{hint}"

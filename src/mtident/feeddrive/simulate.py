@@ -12,12 +12,30 @@ from mtident.exceptions import InputError
 from mtident.feeddrive.model import Excitation, accelerations, exact_step, input_matrix, rk4_linear_step, system_matrix
 from mtident.feeddrive.params import FeedDriveParameters, validate
 
-__all__ = ["Response", "simulate", "run_responses", "write_response", "read_response", "RESPONSE_COLUMNS", "FORCE_COLUMNS", "substeps_for"]
+__all__ = [
+    "Response",
+    "simulate",
+    "run_responses",
+    "write_response",
+    "read_response",
+    "RESPONSE_COLUMNS",
+    "FORCE_COLUMNS",
+    "substeps_for",
+]
 
 RESPONSE_COLUMNS = (
-    "x_t_m", "x_b_m", "theta_b_rad", "theta_m_rad",
-    "v_t_m_per_s", "v_b_m_per_s", "omega_b_rad_per_s", "omega_m_rad_per_s",
-    "a_t_m_per_s2", "a_b_m_per_s2", "alpha_b_rad_per_s2", "alpha_m_rad_per_s2",
+    "x_t_m",
+    "x_b_m",
+    "theta_b_rad",
+    "theta_m_rad",
+    "v_t_m_per_s",
+    "v_b_m_per_s",
+    "omega_b_rad_per_s",
+    "omega_m_rad_per_s",
+    "a_t_m_per_s2",
+    "a_b_m_per_s2",
+    "alpha_b_rad_per_s2",
+    "alpha_m_rad_per_s2",
 )
 FORCE_COLUMNS = ("F_t_N", "F_b_N", "T_b_Nm", "T_m_Nm")
 
@@ -45,7 +63,9 @@ class Response:
         return 1.0 / float(self.time_s[1] - self.time_s[0])
 
     def __repr__(self) -> str:
-        measured = [name for name, column in zip(RESPONSE_COLUMNS, self.values.T, strict=True) if np.isfinite(column).any()]
+        measured = [
+            name for name, column in zip(RESPONSE_COLUMNS, self.values.T, strict=True) if np.isfinite(column).any()
+        ]
         rate = f" at {self.sample_rate_Hz:g} Hz" if len(self.time_s) > 1 else ""
         return f"Response({len(self.time_s)} samples{rate}, {len(measured)} of 12 responses: {', '.join(measured)})"
 
@@ -57,7 +77,9 @@ def substeps_for(p: FeedDriveParameters, h: float, max_phase_step: float = 0.01)
     return 1 << (needed - 1).bit_length()
 
 
-def run_responses(p: FeedDriveParameters, phi: FloatArray, gamma: FloatArray, start: FloatArray, forces: FloatArray) -> FloatArray:
+def run_responses(
+    p: FeedDriveParameters, phi: FloatArray, gamma: FloatArray, start: FloatArray, forces: FloatArray
+) -> FloatArray:
     """The 12 responses (N, 12) from state ``start`` under ``forces`` (N, 4), stepped by (phi, gamma).
 
     The input over [t_k, t_k+1) is forces[k]; row 0 is ``start``.
@@ -134,7 +156,10 @@ def write_response(response: Response, path: str | Path) -> Path:
     """CSV with time_s, the four generalized forces and the twelve responses, units in the headers."""
     import pandas as pd
 
-    frame = pd.DataFrame(np.hstack([response.time_s[:, None], response.forces, response.values]), columns=["time_s", *FORCE_COLUMNS, *RESPONSE_COLUMNS])
+    frame = pd.DataFrame(
+        np.hstack([response.time_s[:, None], response.forces, response.values]),
+        columns=["time_s", *FORCE_COLUMNS, *RESPONSE_COLUMNS],
+    )
     out = Path(path)
     frame.to_csv(out, index=False, float_format="%.9e")
     return out
@@ -163,7 +188,10 @@ def read_response(path: str | Path) -> Response:
         raise InputError(msg)
     if not any(c in frame.columns for c in FORCE_COLUMNS):
         # an excitation taken as zero leaves nothing to identify: the result would be the guess
-        msg = f"{path}: no force column; the excitation must be measured in one at least of: {', '.join(FORCE_COLUMNS)} (the others are taken as zero)"
+        msg = (
+            f"{path}: no force column; the excitation must be measured in one at least of: {', '.join(FORCE_COLUMNS)} "
+            "(the others are taken as zero)"
+        )
         raise InputError(msg)
     numeric = frame.apply(pd.to_numeric, errors="coerce")
     for column in ["time_s", *measured, *[c for c in FORCE_COLUMNS if c in frame.columns]]:
@@ -183,10 +211,15 @@ def read_response(path: str | Path) -> Response:
         msg = f"{path}: time_s must be evenly spaced (within 1 %) and increasing, with at least 10 samples"
         if len(time) >= 10 and np.all(steps > 0):
             k = int(np.argmax(np.abs(steps - np.median(steps))))
-            msg += f"; row {k + first_row + 1} comes {steps[k]:.6g} s after the one before, against a median step of {np.median(steps):.6g} s"
+            msg += (
+                f"; row {k + first_row + 1} comes {steps[k]:.6g} s after the one before, against a median step of "
+                f"{np.median(steps):.6g} s"
+            )
         raise InputError(msg)
     time = time[0] + np.arange(len(time)) * (time[-1] - time[0]) / (len(time) - 1)
-    forces = np.column_stack([numeric[c].to_numpy(dtype=float) if c in frame.columns else np.zeros(len(time)) for c in FORCE_COLUMNS])
+    forces = np.column_stack(
+        [numeric[c].to_numpy(dtype=float) if c in frame.columns else np.zeros(len(time)) for c in FORCE_COLUMNS]
+    )
     values = np.full((len(time), 12), np.nan)
     for i, column in enumerate(RESPONSE_COLUMNS):
         if column in frame.columns:

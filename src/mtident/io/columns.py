@@ -65,7 +65,12 @@ def counter_before_time(header: list[str], first_row: list[str], dialect: Dialec
     logger's name there, MadgeTech calls it "Reading #")."""
     if len(header) < 3 or len(first_row) < 2:
         return False
-    if first_row[0].strip().isdigit() and not is_number(first_row[1]) and first_row[1].strip() and (stamp_format(first_row[1]) or parses_as(first_row[1], DATE_FORMATS)):
+    if (
+        first_row[0].strip().isdigit()
+        and not is_number(first_row[1])
+        and first_row[1].strip()
+        and (stamp_format(first_row[1]) or parses_as(first_row[1], DATE_FORMATS))
+    ):
         return True
     if not {unit_key(header[0]), unit_key(dialect.unit_of(header[0]))} & _COUNTER_NAMES:
         return False
@@ -90,7 +95,9 @@ def text_before_stamps(first_row: list[str]) -> int:
     return 0
 
 
-def choose_time_column(header: list[str], first_row: list[str], dialect: DialectView, time_col: str | None) -> tuple[str, bool, list[str]]:
+def choose_time_column(
+    header: list[str], first_row: list[str], dialect: DialectView, time_col: str | None
+) -> tuple[str, bool, list[str]]:
     """The time column's name (``time_col`` where given), whether the first column is a row
     counter before it, and notes; both readers of a log take the time column here, by the header
     and the first data row's cells."""
@@ -125,19 +132,49 @@ _TIME_NAME_STARTS = ("time", "date", "zeit", "datum", "uhrzeit", "timestamp", "�
 # a comment column (LabVIEW's), alarm and status channels (Keysight BenchLink's "Alarm 101" holds
 # 0 or 1: as a sensor it was flat, "no rise", or, once it switched, a 1-degree step taken for a warm-up).
 _EVENT_NAME_STARTS = (
-    "couplerdetached", "couplerattached", "hostconnected", "stopped", "endoffile", "buttonup", "buttondown", "badbattery", "goodbattery", "started",
-    "serialnumber", "serialno", "comment", "alarm", "status", "flag", "event", "trigger", "logic", "pulse",
+    "couplerdetached",
+    "couplerattached",
+    "hostconnected",
+    "stopped",
+    "endoffile",
+    "buttonup",
+    "buttondown",
+    "badbattery",
+    "goodbattery",
+    "started",
+    "serialnumber",
+    "serialno",
+    "comment",
+    "alarm",
+    "status",
+    "flag",
+    "event",
+    "trigger",
+    "logic",
+    "pulse",
 )
 
 
 def event_named(name: str) -> bool:
-    """Whether a column's name says it records the logger itself (HOBO's "Host Connected", a serial number): no sensor."""
+    """Whether a column's name says it records the logger itself (HOBO's "Host Connected", a serial
+    number): no sensor."""
     return unit_key(name).startswith(_EVENT_NAME_STARTS)
 
 
 # Names of a room sensor: inside a name ("T_room", "Raumtemperatur", "AmbientTemp") and as a word
 # of its own (camelCase split), where a shorter one would hide in other words ("Chair", "Shall").
-_ROOM_NAME_PARTS = ("room", "ambient", "ambiant", "umgebung", "raumtemp", "hallentemp", "lufttemp", "environment", "室温", "周囲")
+_ROOM_NAME_PARTS = (
+    "room",
+    "ambient",
+    "ambiant",
+    "umgebung",
+    "raumtemp",
+    "hallentemp",
+    "lufttemp",
+    "environment",
+    "室温",
+    "周囲",
+)
 _ROOM_NAME_WORDS = frozenset({"amb", "tamb", "air", "env", "raum", "halle", "hall", "luft", "umg"})
 
 
@@ -152,7 +189,9 @@ def room_named(name: str) -> bool:
     return any(word in _ROOM_NAME_WORDS for word in words)
 
 
-def temperature_columns(names: list[str], asked: bool, dialect: DialectView, source: str | Path) -> tuple[list[str], list[str]]:
+def temperature_columns(
+    names: list[str], asked: bool, dialect: DialectView, source: str | Path
+) -> tuple[list[str], list[str]]:
     """The sensor columns to read, and notes, by their units (a units row, or a unit in the name).
 
     A column whose unit is no temperature (a logger's speed or voltage channel),
@@ -196,14 +235,24 @@ def temperature_columns(names: list[str], asked: bool, dialect: DialectView, sou
     if events:
         notes.append(f"left out, the logger's own records: {', '.join(events)}")
     if computed:
-        notes.append(f"left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; --sensor reads one all the same): {', '.join(computed)}")
+        notes.append(
+            "left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; --sensor reads "
+            f"one all the same): {', '.join(computed)}"
+        )
     if other:
         notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
     if not kept:
-        left_out = [*(f"{n} (named as a time)" for n in times), *(f"{n} (the logger's own record)" for n in events), *(f"{n} (computed from the humidity)" for n in computed)]
+        left_out = [
+            *(f"{n} (named as a time)" for n in times),
+            *(f"{n} (the logger's own record)" for n in events),
+            *(f"{n} (computed from the humidity)" for n in computed),
+        ]
         if other:
             left_out.append(f"by {by}: {', '.join(other)}")
-        msg = f"{source}: no temperature column; left out: {'; '.join(left_out)} (--sensor NAME reads a column all the same, if it is a temperature)"
+        msg = (
+            f"{source}: no temperature column; left out: {'; '.join(left_out)} (--sensor NAME reads a column all the "
+            "same, if it is a temperature)"
+        )
         raise InputError(msg)
     return kept, notes
 
@@ -214,6 +263,9 @@ def check_unique_names(header: list[str], source: str | Path) -> None:
     seen: dict[str, int] = {}
     for position, name in enumerate(header, start=1):
         if name and name in seen and not time_named(name):  # a repeated time column's name: no sensor is meant
-            msg = f"{source}: the column name {name!r} appears twice (columns {seen[name]} and {position}); give each column its own name"
+            msg = (
+                f"{source}: the column name {name!r} appears twice (columns {seen[name]} and {position}); give each "
+                "column its own name"
+            )
             raise InputError(msg)
         seen[name] = position

@@ -23,7 +23,9 @@ __all__ = ["describe_log"]
 _DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab"}
 
 
-def describe_log(path: str | Path, time_col: str | None = None, time_unit: str | None = None, sensors: list[str] | None = None) -> dict[str, object]:
+def describe_log(
+    path: str | Path, time_col: str | None = None, time_unit: str | None = None, sensors: list[str] | None = None
+) -> dict[str, object]:
     """How the log at ``path`` is read, as plain JSON types.
 
     Keys: ``file``; ``format`` (what the file is, its encoding, delimiter, decimal
@@ -88,7 +90,11 @@ def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect:
     unit = next(unit for unit, minutes in TIME_UNITS.items() if minutes == factor)
     if time_unit is not None:
         return f"numbers in {unit} (--time-unit)"
-    return f"numbers in {unit} (assumed: no unit in its name, a units row or --time-unit)" if time_unit_assumed(name, time_unit, stated) else f"numbers in {unit} (as the log states)"
+    return (
+        f"numbers in {unit} (assumed: no unit in its name, a units row or --time-unit)"
+        if time_unit_assumed(name, time_unit, stated)
+        else f"numbers in {unit} (as the log states)"
+    )
 
 
 def _format(dialect: CsvDialect, kind: str | None) -> dict[str, object]:

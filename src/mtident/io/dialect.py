@@ -29,7 +29,16 @@ from typing import TYPE_CHECKING
 
 from mtident.exceptions import InputError
 from mtident.io.columns import check_unique_names, event_named
-from mtident.io.units import carried_unit, is_from_humidity, is_humidity, is_number, is_time_or_temperature_unit, number_without_unit, time_unit_name, unit_in_name
+from mtident.io.units import (
+    carried_unit,
+    is_from_humidity,
+    is_humidity,
+    is_number,
+    is_time_or_temperature_unit,
+    number_without_unit,
+    time_unit_name,
+    unit_in_name,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -51,7 +60,9 @@ _SEP_DIRECTIVE = re.compile(r"^sep=(.)\r?$")
 # a header whose first column, the row counter, is named "#" (HOBOware: #,"Date Time, GMT+01:00",...): no comment
 _HASH_HEADER = re.compile(r'^\s*"?#"?\s*[,;\t]')
 # a time column's unit in words at the end of its name
-_TIME_WORDS = frozenset(("milliseconds", "seconds", "second", "secs", "sec", "minutes", "minute", "mins", "hours", "hour", "hrs", "days"))
+_TIME_WORDS = frozenset(
+    ("milliseconds", "seconds", "second", "secs", "sec", "minutes", "minute", "mins", "hours", "hour", "hrs", "days")
+)
 # Line ends as pandas reads them: CRLF (Windows), LF, and a lone CR (old Macs, some instruments'
 # serial loggers), which inside a line made the csv module fail with a traceback.
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
@@ -163,7 +174,7 @@ class CsvDialect:
         return unit_in_name(column)
 
     def time_unit(self, column: str) -> str | None:
-        """"ms", "s", "min", "h" or "d" if the units row or the time column's name states its
+        """ "ms", "s", "min", "h" or "d" if the units row or the time column's name states its
         unit, else None. A time column's name may be its unit in words ("Seconds", "Elapsed
         hours", "Time in minutes": read as minutes before, a 6-h test lasted 6 min); a sensor's
         may not ("T min" is a lowest temperature)."""
@@ -215,7 +226,9 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
     delimiter = stated or _delimiter(header, complete[preamble + 1 : preamble + 21])
     decimal = "."
     if delimiter != ",":
-        rows = csv.reader(complete[preamble + 1 : preamble + 21], delimiter=delimiter)  # "17,90" quoted, as spreadsheets write it
+        rows = csv.reader(
+            complete[preamble + 1 : preamble + 21], delimiter=delimiter
+        )  # "17,90" quoted, as spreadsheets write it
         if any(_DECIMAL_COMMA.match(number_without_unit(cell)) for row in rows for cell in row):  # also "20,5 °C"
             decimal = ","
     dialect = _stated_units(CsvDialect(delimiter, decimal, preamble, encoding), complete)
@@ -241,7 +254,11 @@ def _stated_units(dialect: CsvDialect, lines: list[str]) -> CsvDialect:
     from_humidity: list[str] = []
     for line in lines[k + 1 : k + 1 + extra]:
         cells = dialect.cells(line)
-        from_humidity += [name for name, cell in zip(header, cells, strict=False) if is_from_humidity(cell) and name not in from_humidity]
+        from_humidity += [
+            name
+            for name, cell in zip(header, cells, strict=False)
+            if is_from_humidity(cell) and name not in from_humidity
+        ]
         if not units and _is_units_row(cells, dialect):
             units, source = {name: unit for name, unit in zip(header, cells, strict=False) if unit}, "the units row"
         elif not units:
@@ -249,7 +266,11 @@ def _stated_units(dialect: CsvDialect, lines: list[str]) -> CsvDialect:
             units, source = named, "the rows under the header"
     in_cells = False
     if k + 1 + extra < len(lines):
-        carried = {name: unit for name, cell in zip(header, dialect.cells(lines[k + 1 + extra]), strict=False) if (unit := carried_unit(cell))}
+        carried = {
+            name: unit
+            for name, cell in zip(header, dialect.cells(lines[k + 1 + extra]), strict=False)
+            if (unit := carried_unit(cell))
+        }
         in_cells = bool(carried)
         if carried:  # the readings' own units say most
             units, source = {**units, **carried}, "its cells"
@@ -275,7 +296,10 @@ def _channel_names(header: list[str], below: list[str]) -> list[str] | None:
     and leaves every name distinct; None otherwise."""
     if any(is_number(c) for c in below if c) or any(is_time_or_temperature_unit(c) for c in below if c):
         return None
-    names = [b if _NUMBERED.fullmatch(h) and b and not _NUMBERED.fullmatch(b) else h for h, b in zip(header, [*below, *[""] * len(header)], strict=False)]
+    names = [
+        b if _NUMBERED.fullmatch(h) and b and not _NUMBERED.fullmatch(b) else h
+        for h, b in zip(header, [*below, *[""] * len(header)], strict=False)
+    ]
     renamed = [i for i, (n, h) in enumerate(zip(names, header, strict=True)) if n != h]
     # a new name must name one column only (the header's own repeats, T&D's "Date/Time" twice, stay)
     if not renamed or any(names.count(names[i]) > 1 for i in renamed):
@@ -340,7 +364,9 @@ def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row:
             continue
         above = next(csv.reader([lines[k - 1]], delimiter=delimiter), [])
         # (a title padded with delimiters, "Plot Title: 20827226,,,,", is no row of a table)
-        inside = sum(bool(c.strip()) for c in above) >= 2 and len(above) == len(next(csv.reader([lines[k]], delimiter=delimiter)))
+        inside = sum(bool(c.strip()) for c in above) >= 2 and len(above) == len(
+            next(csv.reader([lines[k]], delimiter=delimiter))
+        )
         if not inside and _data_row_below(lines, k, delimiter):
             return k
     written = [line for line in lines[first:] if not _blank_like(line)]
@@ -378,7 +404,11 @@ def _table_delimiter(lines: list[str], k: int, stated: str | None) -> str | None
     following = _following(lines, k)
     for delimiter in (stated,) if stated else _DELIMITERS:
         cells = next(csv.reader([lines[k]], delimiter=delimiter), [])
-        if sum(bool(c.strip()) for c in cells) >= 2 and following and all(_continues(row, cells) for row in csv.reader(following, delimiter=delimiter)):
+        if (
+            sum(bool(c.strip()) for c in cells) >= 2
+            and following
+            and all(_continues(row, cells) for row in csv.reader(following, delimiter=delimiter))
+        ):
             return delimiter
     return None
 
@@ -389,7 +419,11 @@ def _continues(row: list[str], header: list[str]) -> bool:
     fewer where the header ends in a column of the logger's own records, which rows leave out
     (LabVIEW's "Comment", the "Serial Number" EasyLog writes in the first row alone)."""
     count = len(header)
-    return len(row) == count or (len(row) == count + 1 and not row[-1].strip()) or (len(row) == count - 1 and event_named(header[-1]))
+    return (
+        len(row) == count
+        or (len(row) == count + 1 and not row[-1].strip())
+        or (len(row) == count - 1 and event_named(header[-1]))
+    )
 
 
 def _data_row_below(lines: list[str], k: int, delimiter: str) -> bool:
@@ -533,7 +567,9 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
     frame.columns = [str(c).removeprefix("\ufeff") for c in frame.columns]  # UTF-16's byte-order mark
     if dialect.names:  # by position: pandas has renamed a repeated name ("Date/Time.1"), left as it is
         new = dict(enumerate(dialect.names))
-        frame.columns = [new[i] if i in new and new[i] != dialect.written_names[i] else c for i, c in enumerate(frame.columns)]
+        frame.columns = [
+            new[i] if i in new and new[i] != dialect.written_names[i] else c for i, c in enumerate(frame.columns)
+        ]
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
     return frame.drop(columns=unnamed), dialect
 
@@ -567,7 +603,10 @@ def workbook_as_csv(file: Path, path: str | Path) -> bytes:
     try:
         sheets = pd.read_excel(file, sheet_name=None, header=None, dtype=object)
     except Exception as exc:  # openpyxl raises many kinds for a damaged or foreign zip
-        msg = f"{path}: not a readable Excel workbook ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+        msg = (
+            f"{path}: not a readable Excel workbook ({type(exc).__name__}: "
+            f"{str(exc).splitlines()[0] if str(exc) else ''})"
+        )
         raise InputError(msg) from exc
 
     def cell(value: object) -> str:
@@ -595,5 +634,3 @@ def _decodes(data: bytes, encoding: str = "utf-8-sig") -> bool:
     except UnicodeDecodeError:
         return False
     return True
-
-

@@ -33,9 +33,25 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.columns import check_unique_names, choose_time_column, millisecond_column, temperature_columns, text_only_cells
+from mtident.io.columns import (
+    check_unique_names,
+    choose_time_column,
+    millisecond_column,
+    temperature_columns,
+    text_only_cells,
+)
 from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
-from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, UNLIKELY_MINUTES, names_a_date, seconds_hint, serial_date_hint, serial_date_note, time_unit_assumed, time_unit_factor
+from mtident.io.logs import (
+    OPEN_CIRCUIT_HIGH_C,
+    OPEN_CIRCUIT_LOW_C,
+    UNLIKELY_MINUTES,
+    names_a_date,
+    seconds_hint,
+    serial_date_hint,
+    serial_date_note,
+    time_unit_assumed,
+    time_unit_factor,
+)
 from mtident.io.stamps import (
     CLOCK_DAY_ZERO_MIN,
     IMPLAUSIBLE_STEP_MIN,
@@ -68,7 +84,10 @@ class Rows:
 
 def _dialect_to_save(dialect: CsvDialect) -> dict[str, object]:
     """The dialect for the state file, by its fields' names (JSON: its tuples as lists)."""
-    return {name: [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, tuple) else value for name, value in asdict(dialect).items()}
+    return {
+        name: [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, tuple) else value
+        for name, value in asdict(dialect).items()
+    }
 
 
 def _saved_dialect(saved: dict[str, Any] | list[Any]) -> CsvDialect:
@@ -77,12 +96,25 @@ def _saved_dialect(saved: dict[str, Any] | list[Any]) -> CsvDialect:
     has four entries; one written before the rows under the header were counted, five (a units
     row, if any); one written before the channels' names under the header were read, eight."""
     if isinstance(saved, dict):  # its lists are the dialect's tuples (units: of pairs)
-        fields: dict[str, Any] = {name: tuple(tuple(v) if isinstance(v, list) else v for v in value) if isinstance(value, list) else value for name, value in saved.items()}
+        fields: dict[str, Any] = {
+            name: tuple(tuple(v) if isinstance(v, list) else v for v in value) if isinstance(value, list) else value
+            for name, value in saved.items()
+        }
         return CsvDialect(**fields)
     units = tuple((str(n), str(u)) for n, u in (saved[4] if len(saved) > 4 else []))
     if len(saved) > 5:  # (the channels' names from the row under the header since the 9th and 10th)
         names = (tuple(str(n) for n in saved[8]), tuple(str(n) for n in saved[9])) if len(saved) > 9 else ((), ())
-        return CsvDialect(str(saved[0]), str(saved[1]), int(saved[2]), str(saved[3]), units, int(saved[5]), str(saved[6]), bool(saved[7]), *names)
+        return CsvDialect(
+            str(saved[0]),
+            str(saved[1]),
+            int(saved[2]),
+            str(saved[3]),
+            units,
+            int(saved[5]),
+            str(saved[6]),
+            bool(saved[7]),
+            *names,
+        )
     return CsvDialect(str(saved[0]), str(saved[1]), int(saved[2]), str(saved[3]), units, int(bool(units)))
 
 
@@ -174,7 +206,10 @@ class LogFollower:
         assert self.dialect is not None
         header = self.dialect.header(line)
         if len(header) < 2:
-            msg = f"{self.path}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found: {', '.join(header)}"
+            msg = (
+                f"{self.path}: need a time column and at least one sensor column, separated by ',', ';' or tabs; "
+                f"found: {', '.join(header)}"
+            )
             raise InputError(msg)
         check_unique_names(header, self.path)
         time_name, no_sensors, notes = self._take_time_columns(header, rows[0] if rows else [])
@@ -196,14 +231,22 @@ class LogFollower:
             msg = f"{self.path}: no time column {time_name!r}; the columns are: {', '.join(header)}"
             raise InputError(msg)
         following = header.index(time_name) + 1
-        if following < min(len(header), len(first_row)) and date_and_clock(first_row[header.index(time_name)], first_row[following]):
+        if following < min(len(header), len(first_row)) and date_and_clock(
+            first_row[header.index(time_name)], first_row[following]
+        ):
             self.clock_column = following
         clock_name = header[self.clock_column] if self.clock_column is not None else None
         self.millisecond_column = millisecond_column(header, header.index(clock_name or time_name))
         milliseconds = header[self.millisecond_column] if self.millisecond_column is not None else None
-        return time_name, [n for n in (time_name, clock_name, milliseconds, header[0] if counter else None) if n is not None], notes
+        return (
+            time_name,
+            [n for n in (time_name, clock_name, milliseconds, header[0] if counter else None) if n is not None],
+            notes,
+        )
 
-    def _choose_sensors(self, header: list[str], names: list[str], rows: list[list[str]]) -> tuple[list[str], list[str]]:
+    def _choose_sensors(
+        self, header: list[str], names: list[str], rows: list[list[str]]
+    ) -> tuple[list[str], list[str]]:
         """The sensor columns to read, the room sensor last, and notes: those asked for, or every
         column of ``names`` but text-only and non-temperature ones (left out with a note)."""
         assert self.dialect is not None
@@ -211,7 +254,12 @@ class LogFollower:
         chosen = self.sensors if asked and self.sensors is not None else names
         notes = []
         if not asked:
-            text_only = [n for n in chosen if n != self.room and text_only_cells([row[header.index(n)] for row in rows if header.index(n) < len(row)])]
+            text_only = [
+                n
+                for n in chosen
+                if n != self.room
+                and text_only_cells([row[header.index(n)] for row in rows if header.index(n) < len(row)])
+            ]
             if text_only and len(text_only) < len([n for n in chosen if n != self.room]):
                 notes.append(f"left out, no numbers in them: {', '.join(text_only)}")
                 chosen = [n for n in chosen if n not in text_only]
@@ -241,7 +289,9 @@ class LogFollower:
             return []
         header_line, lines = lines[0], lines[1 + self.dialect.extra_rows :]
         if self.header is None:
-            rows_so_far = [cells for cells in csv.reader(lines, delimiter=self.dialect.delimiter) if any(c.strip() for c in cells)]
+            rows_so_far = [
+                cells for cells in csv.reader(lines, delimiter=self.dialect.delimiter) if any(c.strip() for c in cells)
+            ]
             notes.extend(self._set_header(header_line, rows_so_far))
         return lines
 
@@ -272,7 +322,14 @@ class LogFollower:
             time_name = self.header[self.columns[0]]
             if self._time_scale is None:
                 stated = self.dialect.time_unit(time_name)
-                self._time_scale = (MINUTES_PER_DAY, False) if self.serial_days else (time_unit_factor(time_name, self.time_unit, stated), time_unit_assumed(time_name, self.time_unit, stated))
+                self._time_scale = (
+                    (MINUTES_PER_DAY, False)
+                    if self.serial_days
+                    else (
+                        time_unit_factor(time_name, self.time_unit, stated),
+                        time_unit_assumed(time_name, self.time_unit, stated),
+                    )
+                )
             scale, assumed = self._time_scale
             stamp = raw * scale
         except ValueError:
@@ -306,7 +363,11 @@ class LogFollower:
     def _local_dated_stamps(self) -> bool:
         """Whether the log's times are dated stamps of a local clock, written without their offset
         from UTC: the clock may change for summer time during the log."""
-        return self.time_format is not None and self.time_format not in TIME_OF_DAY_FORMATS and not has_utc_offset(self.first_stamp or "")
+        return (
+            self.time_format is not None
+            and self.time_format not in TIME_OF_DAY_FORMATS
+            and not has_utc_offset(self.first_stamp or "")
+        )
 
     def _stamp_minutes(self, text: str) -> float:
         """A time stamp in minutes since 1970 in the log's format; ValueError if it is none.
@@ -359,7 +420,10 @@ class LogFollower:
         identity = (stat.st_dev, stat.st_ino)
         restarted = self.identity is not None and (identity != self.identity or stat.st_size < self.offset)
         if restarted:
-            warnings.append(f"{self.path}: the log was truncated or replaced (logger restarted?); reading it again from the start, skipping rows already counted")
+            warnings.append(
+                f"{self.path}: the log was truncated or replaced (logger restarted?); reading it again from the "
+                "start, skipping rows already counted"
+            )
             self.offset = 0
         self.identity = identity
         with open(self.path, "rb") as handle:
@@ -367,7 +431,10 @@ class LogFollower:
                 head = handle.read(HEAD_BYTES)
                 kind = binary_kind(head)
                 if kind in ("xlsx", "xls"):
-                    msg = f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger writes (identify and min-time read the workbook, and watch --replay replays it)"
+                    msg = (
+                        f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger "
+                        "writes (identify and min-time read the workbook, and watch --replay replays it)"
+                    )
                     raise InputError(msg)
                 if kind is not None:
                     msg = f"{self.path}: not a text file; watch follows the CSV text a logger writes"
@@ -392,7 +459,9 @@ class LogFollower:
         if start_offset == 0:
             lines = self._data_lines(lines, notes)
         assert self.header is not None
-        conversions = np.array([celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]).reshape(-1, 2)
+        conversions = np.array(
+            [celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]
+        ).reshape(-1, 2)
         times, rows = [], []
         # the previous row's time as the clock wrote it (minutes from the first row) and its cell: a
         # summer-time change is a step between two rows; a log read again from its start after a
@@ -405,7 +474,11 @@ class LogFollower:
             if not line or all(not c.strip() for c in line):
                 continue
             try:
-                cell = line[self.columns[0]].strip() if self.clock_column is None else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}"
+                cell = (
+                    line[self.columns[0]].strip()
+                    if self.clock_column is None
+                    else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}"
+                )
                 t = self._parse_time(cell, notes)
                 if self.millisecond_column is not None:
                     t += dialect.number(line[self.millisecond_column]) / 60_000.0
@@ -421,13 +494,28 @@ class LogFollower:
                 if shift:
                     self.clock_shift += shift
                     if self.last_time is None or raw + self.clock_shift > self.last_time:  # not said again on a re-read
-                        notes.append(clock_change_note(shift, f"after t = {previous_raw + self.clock_shift - shift:g} min", repr(previous_cell or "the row before"), repr(cell)))
+                        notes.append(
+                            clock_change_note(
+                                shift,
+                                f"after t = {previous_raw + self.clock_shift - shift:g} min",
+                                repr(previous_cell or "the row before"),
+                                repr(cell),
+                            )
+                        )
             t = raw + self.clock_shift
-            if t > UNLIKELY_MINUTES >= (self.last_time or 0.0) and self.time_format is None and self._time_scale is not None and self._time_scale[1]:
+            if (
+                t > UNLIKELY_MINUTES >= (self.last_time or 0.0)
+                and self.time_format is None
+                and self._time_scale is not None
+                and self._time_scale[1]
+            ):
                 warnings.append(f"{self.path}: {seconds_hint(self.header[self.columns[0]], t)}")
             if self.last_time is not None and t <= self.last_time:
                 if not restarted:  # after a restart the old rows come again: expected, not an error
-                    warnings.append(f"{self.path}: refused the row at t = {t:g} min: it repeats or goes back from t = {self.last_time:g} min")
+                    warnings.append(
+                        f"{self.path}: refused the row at t = {t:g} min: it repeats or goes back from t = "
+                        f"{self.last_time:g} min"
+                    )
                 else:
                     previous_raw, previous_cell = raw, cell
                 continue
@@ -448,4 +536,6 @@ class LogFollower:
             previous_raw = raw
             times.append(t)
             rows.append(values)
-        return Rows(np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings), tuple(notes))
+        return Rows(
+            np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings), tuple(notes)
+        )

@@ -29,7 +29,13 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.columns import check_unique_names, choose_time_column, millisecond_column, temperature_columns, text_only_cells
+from mtident.io.columns import (
+    check_unique_names,
+    choose_time_column,
+    millisecond_column,
+    temperature_columns,
+    text_only_cells,
+)
 from mtident.io.dialect import CsvDialect, read_csv
 from mtident.io.stamps import (
     IMPLAUSIBLE_STEP_MIN,
@@ -49,14 +55,41 @@ from mtident.io.units import celsius_conversion, number_without_unit
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["TemperatureLog", "read_temperature_log", "sample_log_path", "SAMPLES", "time_unit_assumed", "seconds_hint", "serial_date_hint", "serial_date_note", "names_a_date", "UNLIKELY_MINUTES", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C", "TIME_UNITS", "time_unit_factor"]
+__all__ = [
+    "TemperatureLog",
+    "read_temperature_log",
+    "sample_log_path",
+    "SAMPLES",
+    "time_unit_assumed",
+    "seconds_hint",
+    "serial_date_hint",
+    "serial_date_note",
+    "names_a_date",
+    "UNLIKELY_MINUTES",
+    "OPEN_CIRCUIT_HIGH_C",
+    "OPEN_CIRCUIT_LOW_C",
+    "TIME_UNITS",
+    "time_unit_factor",
+]
 
 # A PT100 channel with a broken wire reads far outside any machine-tool temperature.
 OPEN_CIRCUIT_HIGH_C = 400.0
 OPEN_CIRCUIT_LOW_C = -60.0
 # What loggers write in place of a reading for a broken thermocouple or an overrange (Graphtec
 # "BURNOUT"); the live follower reads any text as a missing reading.
-OPEN_CIRCUIT_TEXT = ("burnout", "burn out", "open", "ol", "over", "+over", "-over", "overrange", "under", "+++++", "-----")
+OPEN_CIRCUIT_TEXT = (
+    "burnout",
+    "burn out",
+    "open",
+    "ol",
+    "over",
+    "+over",
+    "-over",
+    "overrange",
+    "under",
+    "+++++",
+    "-----",
+)
 # Above this share of bad samples a sensor is refused rather than bridged.
 MAX_BAD_FRACTION = 0.1
 TIME_UNITS = {"ms": 1.0 / 60_000.0, "s": 1.0 / 60.0, "min": 1.0, "h": 60.0, "d": 1440.0}
@@ -93,7 +126,10 @@ class TemperatureLog:
     def __repr__(self) -> str:
         names = ", ".join(self.sensors if len(self.sensors) <= 6 else [*self.sensors[:5], "...", self.sensors[-1]])
         span = f"{self.time_min[0]:g}-{self.time_min[-1]:g} min" if len(self.time_min) else "no samples"
-        return f"TemperatureLog({self.source!r}: {len(self.sensors)} sensor(s) ({names}), {len(self.time_min)} samples over {span}, {len(self.notes)} note(s))"
+        return (
+            f"TemperatureLog({self.source!r}: {len(self.sensors)} sensor(s) ({names}), {len(self.time_min)} samples "
+            f"over {span}, {len(self.notes)} note(s))"
+        )
 
     def select(self, names: list[str] | None) -> TemperatureLog:
         """The same log restricted to ``names`` (all sensors if None or ["all"])."""
@@ -104,7 +140,9 @@ class TemperatureLog:
             msg = f"{self.source}: no sensor column {missing[0]!r}; the log has: {', '.join(self.sensors)}"
             raise InputError(msg)
         idx = [self.sensors.index(n) for n in names]
-        return TemperatureLog(self.time_min, tuple(names), self.temperature_C[:, idx], self.notes, self.source, self.time_column)
+        return TemperatureLog(
+            self.time_min, tuple(names), self.temperature_C[:, idx], self.notes, self.source, self.time_column
+        )
 
     def window(self, minutes: float) -> int:
         """Number of samples with time ≤ ``minutes``."""
@@ -113,7 +151,13 @@ class TemperatureLog:
 
 # The logs shipped in the package (scripts/make_sample_warmup.py), by the names the CLI and
 # read_temperature_log take: the 10-sensor warm-up, and the same with a room sensor column "room".
-SAMPLES = {"@sample": "spindle_warmup.csv", "@sample-room": "spindle_warmup_room.csv", "@sample-machine": "spindle_machine.toml"}
+SAMPLES = {
+    "@sample": "spindle_warmup.csv",
+    "@sample-room": "spindle_warmup_room.csv",
+    "@sample-machine": "spindle_machine.toml",
+}
+
+_STAMP_EXAMPLES = "(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:00:00)"
 
 
 def sample_log_path(name: str = "@sample") -> Path:
@@ -169,20 +213,31 @@ def _serial_date(first: float) -> str:
 
 def serial_date_note(header: str, first: float) -> str:
     """What a reader says when it reads a time column's spreadsheet serial dates as days."""
-    return f"time column {header!r} read as spreadsheet serial dates ({_serial_date(first)}); give --time-unit min if it is minutes"
+    return (
+        f"time column {header!r} read as spreadsheet serial dates ({_serial_date(first)}); give --time-unit min if it "
+        "is minutes"
+    )
 
 
 def serial_date_hint(header: str, first: float, step: float) -> str | None:
     """A message if a time column read as minutes holds spreadsheet serial dates (days since
     30.12.1899: 46348.33 is 22.11.2026 08:00, as a spreadsheet saves a date cell formatted as a
     number): read as minutes, a 2-h test lasted 0.08 min and was identified as nonsense."""
-    if not (20_000.0 <= first <= 80_000.0 and 0.0 < step <= 0.05 and first != math.floor(first)):  # 1954-2119, steps under 72 min
+    if not (
+        20_000.0 <= first <= 80_000.0 and 0.0 < step <= 0.05 and first != math.floor(first)
+    ):  # 1954-2119, steps under 72 min
         return None
-    return f"time column {header!r} looks like spreadsheet serial dates ({_serial_date(first)}), not minutes: give --time-unit d (or --time-unit min if it is minutes)"
+    return (
+        f"time column {header!r} looks like spreadsheet serial dates ({_serial_date(first)}), not minutes: give "
+        "--time-unit d (or --time-unit min if it is minutes)"
+    )
 
 
 def seconds_hint(header: str, span_min: float) -> str:
-    return f"time column {header!r} is read as minutes (no unit in its name, a units row or --time-unit) and runs to {span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give --time-unit s"
+    return (
+        f"time column {header!r} is read as minutes (no unit in its name, a units row or --time-unit) and runs to "
+        f"{span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give --time-unit s"
+    )
 
 
 def _cell(value: object) -> str:
@@ -193,7 +248,13 @@ def _cell(value: object) -> str:
 
 
 def _parse_time(
-    column: pd.Series, header: str, time_unit: str | None, source: str, first_row: int = 2, stated_unit: str | None = None, sub_second_min: FloatArray | None = None
+    column: pd.Series,
+    header: str,
+    time_unit: str | None,
+    source: str,
+    first_row: int = 2,
+    stated_unit: str | None = None,
+    sub_second_min: FloatArray | None = None,
 ) -> tuple[FloatArray, list[str]]:
     """Minutes from the first sample, and notes (a summer-time change read); ``first_row``
     numbers the rows in messages (2: a CSV file's first data line); ``sub_second_min``: a
@@ -211,7 +272,11 @@ def _parse_time(
         values = minutes_since_first(column)
     elif numeric.notna().all():
         values = numeric.to_numpy(dtype=float) * time_unit_factor(header, time_unit, stated_unit)
-        serial = serial_date_hint(header, values[0], float(np.median(np.diff(values)))) if len(values) > 1 and time_unit_assumed(header, time_unit, stated_unit) else None
+        serial = (
+            serial_date_hint(header, values[0], float(np.median(np.diff(values))))
+            if len(values) > 1 and time_unit_assumed(header, time_unit, stated_unit)
+            else None
+        )
         if serial is not None and names_a_date(header):
             notes.append(serial_date_note(header, float(values[0])))
             values = values * MINUTES_PER_DAY
@@ -227,13 +292,21 @@ def _parse_time(
             raise InputError(msg)
         fmt = stamp_format(str(text.iloc[0]))
         # as UTC: stamps with offsets that change (summer time ends during the test) stay in order
-        stamps = pd.to_datetime(text, format=fmt, errors="coerce", utc=True) if fmt is not None else pd.Series(pd.NaT, index=text.index)
+        stamps = (
+            pd.to_datetime(text, format=fmt, errors="coerce", utc=True)
+            if fmt is not None
+            else pd.Series(pd.NaT, index=text.index)
+        )
         swapped = other_date_order(fmt)
         if swapped is not None:  # a slashed date: day and month the other way round, if that reads better
             other = pd.to_datetime(text, format=swapped, errors="coerce", utc=True)
-            if other.notna().all() and (stamps.isna().any() or _longest_step(other) < min(_longest_step(stamps), IMPLAUSIBLE_STEP_MIN)):
+            if other.notna().all() and (
+                stamps.isna().any() or _longest_step(other) < min(_longest_step(stamps), IMPLAUSIBLE_STEP_MIN)
+            ):
                 stamps = other
-        elapsed = [elapsed_minutes(str(cell)) for cell in text] if fmt in TIME_OF_DAY_FORMATS and stamps.isna().any() else []
+        elapsed = (
+            [elapsed_minutes(str(cell)) for cell in text] if fmt in TIME_OF_DAY_FORMATS and stamps.isna().any() else []
+        )
         if elapsed and None not in elapsed:
             # a clock that runs past 24:00:00 is elapsed time since the start of the test
             notes.append(f"time column {header!r} read as hours:minutes:seconds elapsed (it runs past 24:00:00)")
@@ -241,8 +314,9 @@ def _parse_time(
         elif stamps.isna().any():
             row = int(stamps.isna().to_numpy().argmax())
             msg = (
-                f"{source}: time column {header!r}, row {row + first_row}: {_cell(column.iloc[row])} is neither a number "
-                f"nor a time stamp {'like the first one' if fmt is not None and row > 0 else '(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:00:00)'}"
+                f"{source}: time column {header!r}, row {row + first_row}: {_cell(column.iloc[row])} is neither a "
+                "number "
+                f"nor a time stamp {'like the first one' if fmt is not None and row > 0 else _STAMP_EXAMPLES}"
             )
             raise InputError(msg)
         else:
@@ -262,12 +336,17 @@ def _parse_time(
         raise InputError(msg)
     if np.any(steps < 0):
         row = int(np.argmax(steps < 0)) + 1
-        msg = f"{source}: time column {header!r}, row {row + first_row}: time goes back ({_cell(column.iloc[row - 1])} then {_cell(column.iloc[row])}); time must increase"
+        msg = (
+            f"{source}: time column {header!r}, row {row + first_row}: time goes back ({_cell(column.iloc[row - 1])} "
+            f"then {_cell(column.iloc[row])}); time must increase"
+        )
         raise InputError(msg)
     return values - values[0], notes
 
 
-def _across_clock_changes(values: FloatArray, first_min: float, column: pd.Series, first_row: int, notes: list[str]) -> FloatArray:
+def _across_clock_changes(
+    values: FloatArray, first_min: float, column: pd.Series, first_row: int, notes: list[str]
+) -> FloatArray:
     """Minutes from the first local stamp (written without an offset) with the clock's summer-time
     changes taken out (:func:`~mtident.io.stamps.clock_change`); a note for each, naming the row
     and its cells. ``first_min``: the first stamp in minutes since 1970 as written."""
@@ -279,7 +358,9 @@ def _across_clock_changes(values: FloatArray, first_min: float, column: pd.Serie
         shift = clock_change(first_min + values[k - 1], first_min + values[k], interval)
         if shift:
             shifted[k:] += shift
-            notes.append(clock_change_note(shift, f"at row {k + first_row}", _cell(column.iloc[k - 1]), _cell(column.iloc[k])))
+            notes.append(
+                clock_change_note(shift, f"at row {k + first_row}", _cell(column.iloc[k - 1]), _cell(column.iloc[k]))
+            )
     return shifted
 
 
@@ -293,7 +374,11 @@ def _rows_with_readings(frame: pd.DataFrame, header: str, sensors: list[str]) ->
     empty = np.ones(len(frame), dtype=bool)
     for name in sensors:
         column = frame[name]
-        blank = column.isna() if pd.api.types.is_numeric_dtype(column) else column.isna() | (column.astype(str).str.strip() == "")
+        blank = (
+            column.isna()
+            if pd.api.types.is_numeric_dtype(column)
+            else column.isna() | (column.astype(str).str.strip() == "")
+        )
         empty &= blank.to_numpy()
     if empty.all():
         return np.ones(len(frame), dtype=bool)
@@ -343,7 +428,10 @@ def as_temperature_log(log: object, caller: str) -> TemperatureLog:
 
     if isinstance(log, pd.DataFrame):
         return read_temperature_log(log)
-    msg = f"{caller} takes a TemperatureLog (read_temperature_log(path or DataFrame)) or a pandas DataFrame, not {type(log).__name__}"
+    msg = (
+        f"{caller} takes a TemperatureLog (read_temperature_log(path or DataFrame)) or a pandas DataFrame, not "
+        f"{type(log).__name__}"
+    )
     raise InputError(msg)
 
 
@@ -401,7 +489,10 @@ def read_temperature_log(
     if isinstance(path, pd.DataFrame):  # a CSV file's header was checked by read_csv, before pandas renamed a repeat
         check_unique_names(list(frame.columns), source)
     if frame.shape[1] < 2:
-        msg = f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found columns: {', '.join(frame.columns)}"
+        msg = (
+            f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found "
+            f"columns: {', '.join(frame.columns)}"
+        )
         raise InputError(msg)
     notes: list[str] = [renamed] if (renamed := dialect.renaming()) else []
     first_cells = [str(v) for v in frame.iloc[0]] if len(frame) else []
@@ -421,7 +512,10 @@ def read_temperature_log(
         sub_second = pd.to_numeric(frame[milliseconds], errors="coerce").to_numpy(dtype=float)
         if np.isnan(sub_second).any():
             row = int(np.isnan(sub_second).argmax())
-            msg = f"{source}: millisecond column {milliseconds!r}, row {row + first_row}: {_cell(frame[milliseconds].iloc[row])} is not a number"
+            msg = (
+                f"{source}: millisecond column {milliseconds!r}, row {row + first_row}: "
+                f"{_cell(frame[milliseconds].iloc[row])} is not a number"
+            )
             raise InputError(msg)
         sub_second = sub_second / 60_000.0
     left_out = (header, clock, milliseconds, frame.columns[0] if counter else None)
@@ -446,7 +540,10 @@ def read_temperature_log(
     notes.extend(unit_notes)
     keep = _rows_with_readings(frame, header, sensors)
     if not keep.all():
-        notes.append(f"left out {int((~keep).sum())} row(s) without a reading at the end or at a repeated time (a logger's events: coupler, host connected, end of file)")
+        notes.append(
+            f"left out {int((~keep).sum())} row(s) without a reading at the end or at a repeated time (a logger's "
+            "events: coupler, host connected, end of file)"
+        )
         frame = frame[keep]
         sub_second = None if sub_second is None else sub_second[keep]
     if clock is None:
@@ -458,7 +555,14 @@ def read_temperature_log(
             notes.append(seconds_hint(header, float(time_min[-1])))
     else:  # the date in one column, the time of day in the next: one stamp
         stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
-        time_min, time_notes = _parse_time(stamps.where(frame[header].notna() & frame[clock].notna()), f"{header} + {clock}", time_unit, source, first_row, sub_second_min=sub_second)
+        time_min, time_notes = _parse_time(
+            stamps.where(frame[header].notna() & frame[clock].notna()),
+            f"{header} + {clock}",
+            time_unit,
+            source,
+            first_row,
+            sub_second_min=sub_second,
+        )
         notes.extend(time_notes)
 
     columns = []
@@ -497,7 +601,17 @@ def read_temperature_log(
                 kinds.append(f"{int(missing.sum())} empty/NaN")
             if open_circuit.any():
                 kinds.append(f"{int(open_circuit.sum())} open-circuit")
-            notes.append(f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows {rows}{', ...' if bad.sum() > 5 else ''})")
+            notes.append(
+                f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows "
+                f"{rows}{', ...' if bad.sum() > 5 else ''})"
+            )
             values = np.where(bad, np.nan, values)
         columns.append(values)
-    return TemperatureLog(time_min, tuple(sensors), np.column_stack(columns), tuple(notes), source, header if clock is None else f"{header} + {clock}")
+    return TemperatureLog(
+        time_min,
+        tuple(sensors),
+        np.column_stack(columns),
+        tuple(notes),
+        source,
+        header if clock is None else f"{header} + {clock}",
+    )

@@ -42,18 +42,51 @@ TIME_OF_DAY_FORMATS = ("%H:%M:%S.%f", "%H:%M:%S", "%H:%M:%S:%f", "%H:%M", "%I:%M
 _DOTTED = tuple(f"%d.%m.{year} {clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
 # day first with dashes too (22-11-2026, and 22-Nov-2026 as spreadsheets and LabVIEW write it; a
 # building-management export, 22-Nov-26 8:00:00 am)
-_DASHED = tuple(f"%d-{month}-{year} {clock}" for month in ("%m", "%b") for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
-_SLASHED = tuple(f"{date} {clock}" for date in ("%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y", "%d/%b/%y") for clock in TIME_OF_DAY_FORMATS)
+_DASHED = tuple(
+    f"%d-{month}-{year} {clock}" for month in ("%m", "%b") for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS
+)
+_SLASHED = tuple(
+    f"{date} {clock}"
+    for date in ("%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y", "%d/%b/%y")
+    for clock in TIME_OF_DAY_FORMATS
+)
 # The time of day before the date (Hanwell: 08:00:00 22/Nov/2026), and a comma between a dotted
 # date and the time inside one ';'-separated cell (a climate controller's "date,time" column).
-_TIME_FIRST = tuple(f"{clock} {date}" for date in ("%d/%b/%Y", "%d/%b/%y", "%d-%b-%Y", "%d.%m.%Y", "%d.%m.%y", "%Y-%m-%d") for clock in TIME_OF_DAY_FORMATS)
+_TIME_FIRST = tuple(
+    f"{clock} {date}"
+    for date in ("%d/%b/%Y", "%d/%b/%y", "%d-%b-%Y", "%d.%m.%Y", "%d.%m.%y", "%Y-%m-%d")
+    for clock in TIME_OF_DAY_FORMATS
+)
 _DOTTED_COMMA = tuple(f"%d.%m.{year},{clock}" for year in ("%Y", "%y") for clock in TIME_OF_DAY_FORMATS)
-_STAMP_FORMATS = (*_DOTTED, *_DASHED, *_SLASHED, *_TIME_FIRST, *_DOTTED_COMMA, "%Y-%m-%d %I:%M:%S %p", "%Y-%m-%d %I:%M %p", *TIME_OF_DAY_FORMATS)
+_STAMP_FORMATS = (
+    *_DOTTED,
+    *_DASHED,
+    *_SLASHED,
+    *_TIME_FIRST,
+    *_DOTTED_COMMA,
+    "%Y-%m-%d %I:%M:%S %p",
+    "%Y-%m-%d %I:%M %p",
+    *TIME_OF_DAY_FORMATS,
+)
 MINUTES_PER_DAY = 1440.0
 # a step that long between two rows of a warm-up log is a date read in the wrong order
 IMPLAUSIBLE_STEP_MIN = 20 * MINUTES_PER_DAY
 # a date without a time: the first of two time-stamp columns
-DATE_FORMATS = ("%d.%m.%Y", "%d.%m.%y", "%d-%m-%Y", "%d-%b-%Y", "%d-%m-%y", "%d-%b-%y", "%Y-%m-%d", "%Y/%m/%d", "%m/%d/%Y", "%m/%d/%y", "%d/%m/%Y", "%d/%m/%y", "%d/%b/%Y")
+DATE_FORMATS = (
+    "%d.%m.%Y",
+    "%d.%m.%y",
+    "%d-%m-%Y",
+    "%d-%b-%Y",
+    "%d-%m-%y",
+    "%d-%b-%y",
+    "%Y-%m-%d",
+    "%Y/%m/%d",
+    "%m/%d/%Y",
+    "%m/%d/%y",
+    "%d/%m/%Y",
+    "%d/%m/%y",
+    "%d/%b/%Y",
+)
 
 
 def date_and_clock(date_cell: str, clock_cell: str) -> bool:
@@ -146,9 +179,13 @@ def clock_change(before_min: float, after_min: float, interval_min: float | None
 def clock_change_note(shift: float, where: str, before: str, after: str) -> str:
     """What a reader did at a clock change (:func:`clock_change`), for the engineer."""
     if shift > 0:
-        return f"the time stamps go back an hour {where} ({before} then {after}): read as the end of summer time; the rows from there on are taken an hour later"
+        return (
+            f"the time stamps go back an hour {where} ({before} then {after}): read as the end of summer time; the "
+            "rows from there on are taken an hour later"
+        )
     return (
-        f"the time stamps jump an hour {where} ({before} then {after}): read as the start of summer time; the rows from there on are taken an hour earlier "
+        f"the time stamps jump an hour {where} ({before} then {after}): read as the start of summer time; the rows "
+        "from there on are taken an hour earlier "
         "(if the logger's clock does not change for summer time, the log paused for an hour here)"
     )
 

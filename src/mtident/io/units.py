@@ -28,7 +28,28 @@ __all__ = [
 # A units row's cells, brackets, spaces and degree signs taken away (º, and Â from a UTF-8 ° read
 # as cp1252, too), lower case. The time units name the keys of logs.TIME_UNITS; a temperature unit
 # gives (scale, offset) to °C.
-_TIME_UNIT_NAMES = {"ms": "ms", "msec": "ms", "milliseconds": "ms", "s": "s", "sec": "s", "secs": "s", "second": "s", "seconds": "s", "min": "min", "mins": "min", "minute": "min", "minutes": "min", "h": "h", "hr": "h", "hrs": "h", "hour": "h", "hours": "h", "d": "d", "day": "d", "days": "d"}
+_TIME_UNIT_NAMES = {
+    "ms": "ms",
+    "msec": "ms",
+    "milliseconds": "ms",
+    "s": "s",
+    "sec": "s",
+    "secs": "s",
+    "second": "s",
+    "seconds": "s",
+    "min": "min",
+    "mins": "min",
+    "minute": "min",
+    "minutes": "min",
+    "h": "h",
+    "hr": "h",
+    "hrs": "h",
+    "hour": "h",
+    "hours": "h",
+    "d": "d",
+    "day": "d",
+    "days": "d",
+}
 _TEMPERATURE_UNITS = {
     # "ﾟC": Japanese loggers (Graphtec) write the half-width ﾟ of Shift-JIS for the degree sign
     **dict.fromkeys(("c", "degc", "celsius", "gradc", "degreesc", "degreec", "ﾟc"), (1.0, 0.0)),
@@ -40,15 +61,77 @@ _TEMPERATURE_UNITS = {
 # Not the letters a machine's sensors are labelled with: "Bearing (A)", "(N)" for north, and "(RH)"
 # for the right-hand side would have left a temperature out.
 _OTHER_UNITS = frozenset(
-    ("%", "%rh", "%rf", "v", "mv", "µv", "uv", "ma", "rpm", "1/min", "u/min", "hz", "khz", "bar", "mbar", "pa", "kpa", "hpa", "mpa", "psi",
-     "kw", "lx", "lux", "lxh", "mm", "µm", "um", "nm", "kn", "ppm", "m/s2", "m/s^2", "mm/s", "l/min", "ohm", "Ω", "kΩ", "mw/cm2", "w/cm2h",
-     "mg/l", "µs/cm", "us/cm", "ms/cm", "lum/ft²", "lum/ft2", "m/s", "mph", "kwh", "wh", "va")
+    (
+        "%",
+        "%rh",
+        "%rf",
+        "v",
+        "mv",
+        "µv",
+        "uv",
+        "ma",
+        "rpm",
+        "1/min",
+        "u/min",
+        "hz",
+        "khz",
+        "bar",
+        "mbar",
+        "pa",
+        "kpa",
+        "hpa",
+        "mpa",
+        "psi",
+        "kw",
+        "lx",
+        "lux",
+        "lxh",
+        "mm",
+        "µm",
+        "um",
+        "nm",
+        "kn",
+        "ppm",
+        "m/s2",
+        "m/s^2",
+        "mm/s",
+        "l/min",
+        "ohm",
+        "Ω",
+        "kΩ",
+        "mw/cm2",
+        "w/cm2h",
+        "mg/l",
+        "µs/cm",
+        "us/cm",
+        "ms/cm",
+        "lum/ft²",
+        "lum/ft2",
+        "m/s",
+        "mph",
+        "kwh",
+        "wh",
+        "va",
+    )
 )
 # A column named as a humidity ("Humidity", "RH", "Feuchte", "湿度"; the name alone, without a unit)
 _HUMIDITY_WORDS = ("humidity", "feuchte", "湿度")
 # Temperatures a logger computes from the air's humidity: in °C, but no temperature of the machine
 # (Tinytag's and EasyLog's dew point channel beside their temperature and humidity).
-_FROM_HUMIDITY_WORDS = ("dewpoint", "dewpt", "taupunkt", "pointderosée", "pointderosee", "puntoderocío", "puntoderocio", "露点", "wetbulb", "feuchtkugel", "heatindex", "hitzeindex")
+_FROM_HUMIDITY_WORDS = (
+    "dewpoint",
+    "dewpt",
+    "taupunkt",
+    "pointderosée",
+    "pointderosee",
+    "puntoderocío",
+    "puntoderocio",
+    "露点",
+    "wetbulb",
+    "feuchtkugel",
+    "heatindex",
+    "hitzeindex",
+)
 # A unit at the end of a column's name (a unit this module knows): "Time [s]", "T1 (°C)", "Temp (°C)
 # #9724974" (a serial number after it), "T/°C", and after a comma before the logger's details,
 # "Temp, °F (LGR S/N: 10679014, SEN S/N: 10679014)" (HOBOware).
@@ -123,7 +206,7 @@ def unit_in_name(column: str) -> str:
 
 
 def time_unit_name(unit: str) -> str | None:
-    """"ms", "s", "min", "h" or "d" for a unit of time as written ("[sec]", "Minutes"), else None."""
+    """ "ms", "s", "min", "h" or "d" for a unit of time as written ("[sec]", "Minutes"), else None."""
     return _TIME_UNIT_NAMES.get(unit_key(unit))
 
 

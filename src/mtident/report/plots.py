@@ -21,7 +21,14 @@ if TYPE_CHECKING:
     from mtident.thermal.min_time import MinTimeResult
     from mtident.thermal.robust_identify import RobustIdentification
 
-__all__ = ["plot_identification", "plot_min_time", "plot_monitor", "plot_responses", "plot_feed_drive_identification", "grid"]
+__all__ = [
+    "plot_identification",
+    "plot_min_time",
+    "plot_monitor",
+    "plot_responses",
+    "plot_feed_drive_identification",
+    "grid",
+]
 
 
 def picture_format(path: str | Path) -> str:
@@ -32,7 +39,10 @@ def picture_format(path: str | Path) -> str:
     suffix = Path(path).suffix.lower().lstrip(".") or "png"
     formats = FigureCanvasBase.get_supported_filetypes()
     if suffix not in formats:
-        msg = f"'.{suffix}' is not a picture format matplotlib writes; use one of: {', '.join('.' + f for f in sorted(formats))}"
+        msg = (
+            f"'.{suffix}' is not a picture format matplotlib writes; use one of: "
+            f"{', '.join('.' + f for f in sorted(formats))}"
+        )
         raise ValueError(msg)
     return suffix
 
@@ -111,7 +121,13 @@ def plot_min_time(result: MinTimeResult, path: str | Path | None = None) -> Path
             curve = result.rmse_C[p, :, s]
             ok = np.isfinite(curve)
             ax.plot(result.windows_min[ok], curve[ok], marker=".", ms=3, lw=1, label=f"M = {period:g} min")
-        ax.axvline(result.min_identification_time_min[s], color="k", ls="--", lw=1, label=f"chosen {result.min_identification_time_min[s]:g} min")
+        ax.axvline(
+            result.min_identification_time_min[s],
+            color="k",
+            ls="--",
+            lw=1,
+            label=f"chosen {result.min_identification_time_min[s]:g} min",
+        )
         ax.set_yscale("log")
         ax.set_title(f"{result.sensors[s]} ({result.method})", fontsize=10)
         ax.set_xlabel("identification time L (min)")
@@ -169,7 +185,9 @@ def _draw_spectra(axes, time_s, measured, model, modes_Hz) -> None:  # noqa: ANN
 
 
 def plot_responses(
-    response, path: str | Path | None = None, modes_Hz=None  # noqa: ANN001 - feeddrive.Response, (4,) Hz
+    response,
+    path: str | Path | None = None,
+    modes_Hz=None,  # noqa: ANN001 - feeddrive.Response, (4,) Hz
 ) -> Path | Figure:
     """Displacements, velocities and accelerations of the four coordinates (seed 004 Figs 2-4), readable
     at any length: the first periods of the lowest mode sample by sample, and the spectrum of the
@@ -241,7 +259,9 @@ def plot_feed_drive_identification(result, response, path: str | Path | None = N
     return _save(fig, path, 90)
 
 
-def plot_monitor(state, settings, path: str | Path | None = None, expected: dict[str, float] | None = None) -> Path | Figure:  # noqa: ANN001 - MonitorState, MonitorSettings
+def plot_monitor(
+    state, settings, path: str | Path | None = None, expected: dict[str, float] | None = None
+) -> Path | Figure:  # noqa: ANN001 - MonitorState, MonitorSettings
     """Each sensor's readings so far, its best model's course on from there, the T∞ intervals
     (95 % and the decision's), and the stop or the expected stop."""
     from mtident.thermal.modes import Mode, model_curve
@@ -257,7 +277,10 @@ def plot_monitor(state, settings, path: str | Path | None = None, expected: dict
             slowest = max(tau for tau, _ in check.modes)
             future = np.linspace(check.origin_min, now + max(3.0 * slowest, 0.5 * now, 30.0), 300)
             room = 0.0 if np.isnan(check.room_level_C) else check.room_level_C
-            curve = model_curve(tuple(Mode(t, a) for t, a in check.modes), check.steady_C - room, check.origin_min, future) + room
+            curve = (
+                model_curve(tuple(Mode(t, a) for t, a in check.modes), check.steady_C - room, check.origin_min, future)
+                + room
+            )
             ax.plot(future, curve, color="tab:red", lw=1.5, label="best model")
         if np.isfinite(check.low95_C) and np.isfinite(check.high95_C):
             ax.axhspan(check.low95_C, check.high95_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
@@ -265,7 +288,9 @@ def plot_monitor(state, settings, path: str | Path | None = None, expected: dict
             for edge in (check.low_C, check.high_C):
                 ax.axhline(edge, color="tab:green", lw=0.8, ls="--")
         if state.stopped:
-            ax.axvline(state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)} min")
+            ax.axvline(
+                state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)} min"
+            )
         elif expected and np.isfinite(expected.get(check.sensor, np.nan)):
             ax.axvline(expected[check.sensor], color="0.4", ls=":", lw=1, label="expected stop")
         ax.set_title(f"{check.sensor}: {check.status}", fontsize=10)

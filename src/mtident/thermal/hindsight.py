@@ -44,14 +44,24 @@ class Hindsight:
     def __repr__(self) -> str:
         # a notebook shows the verdict, not the arrays
         room = f", room moved {self.room_shift_C:+.2f} °C" if self.room_shift_C else ""
-        lines = [f"Hindsight(stop at {self.stop_time_min:g} min, log to {self.log_end_min:g} min{room}, tolerance {self.tolerance_C:g} °C)"]
+        lines = [
+            f"Hindsight(stop at {self.stop_time_min:g} min, log to {self.log_end_min:g} min{room}, tolerance "
+            f"{self.tolerance_C:g} °C)"
+        ]
         for i, name in enumerate(self.sensors):
             if not self.checked[i]:
-                why = "left out of the decision" if not np.isfinite(self.steady_state_C[i]) else "not settled by the log's end"
+                why = (
+                    "left out of the decision"
+                    if not np.isfinite(self.steady_state_C[i])
+                    else "not settled by the log's end"
+                )
                 lines.append(f"  {name}: {why}")
                 continue
             verdict = "within" if self.within[i] else "BEYOND the tolerance"
-            lines.append(f"  {name}: T∞ {self.steady_state_C[i]:.2f} °C, settled at {self.settled_C[i]:.2f} °C: {self.error_C[i]:+.3f} °C, {verdict}")
+            lines.append(
+                f"  {name}: T∞ {self.steady_state_C[i]:.2f} °C, settled at {self.settled_C[i]:.2f} °C: "
+                f"{self.error_C[i]:+.3f} °C, {verdict}"
+            )
         return "\n".join(lines)
 
     @property

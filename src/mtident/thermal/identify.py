@@ -17,8 +17,28 @@ from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
-from mtident.thermal.model import EQUILIBRIUM_FRACTION, equilibrium_time, heat_balance_path, observe_temperature, rise_curve, slope_transition, to_physical, transition_for
-from mtident.thermal.settings import DEFAULT_METHOD, IDENTIFY_METHODS, METHODS, ROBUST_METHOD, ThermalTuning, filter_config, noise_sigma, preset_tuning, reading_range, tuning_from_data
+from mtident.thermal.model import (
+    EQUILIBRIUM_FRACTION,
+    equilibrium_time,
+    heat_balance_path,
+    observe_temperature,
+    rise_curve,
+    slope_transition,
+    to_physical,
+    transition_for,
+)
+from mtident.thermal.settings import (
+    DEFAULT_METHOD,
+    IDENTIFY_METHODS,
+    METHODS,
+    ROBUST_METHOD,
+    ThermalTuning,
+    filter_config,
+    noise_sigma,
+    preset_tuning,
+    reading_range,
+    tuning_from_data,
+)
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
 
 if TYPE_CHECKING:
@@ -26,7 +46,17 @@ if TYPE_CHECKING:
 
     from mtident.thermal.robust_identify import RobustIdentification
 
-__all__ = ["Identification", "identify", "room_input", "room_rates", "rmse", "model_check", "first_order_suffices", "measured_equilibrium", "Z95"]
+__all__ = [
+    "Identification",
+    "identify",
+    "room_input",
+    "room_rates",
+    "rmse",
+    "model_check",
+    "first_order_suffices",
+    "measured_equilibrium",
+    "Z95",
+]
 
 Z95 = 1.959963984540054
 MIN_WINDOW_SAMPLES = 6
@@ -95,12 +125,15 @@ class Identification:
 
     def __repr__(self) -> str:
         # a notebook shows the answer, not ~40 kB of arrays
-        lines = [f"Identification({self.method}/{self.preset}, L = {self.window_min:g} min, {len(self.sensors)} sensor(s))"]
+        lines = [
+            f"Identification({self.method}/{self.preset}, L = {self.window_min:g} min, {len(self.sensors)} sensor(s))"
+        ]
         for i, name in enumerate(self.sensors):
             half = self.quantile * self.steady_state_sd_C[i]
             lines.append(
                 f"  {name}: T∞ {self.steady_state_C[i]:.2f} ± {half:.2f} °C, λ {self.rate_per_min[i]:.4g}/min, "
-                f"t_eq {self.equilibrium_time_min[i]:.0f} min, RMSE {self.rmse_C[i]:.3f} °C{'' if self.fits[i] else ', model check failed'}"
+                f"t_eq {self.equilibrium_time_min[i]:.0f} min, RMSE {self.rmse_C[i]:.3f} "
+                f"°C{'' if self.fits[i] else ', model check failed'}"
             )
         return "\n".join(lines)
 
@@ -112,7 +145,10 @@ class Identification:
         import pandas as pd
 
         half = self.quantile * self.curve_sd_C
-        columns: dict[str, object] = {"time_min": self.time_min, "part": np.where(self.time_min <= self.window_min + 1e-9, "window", "prediction")}
+        columns: dict[str, object] = {
+            "time_min": self.time_min,
+            "part": np.where(self.time_min <= self.window_min + 1e-9, "window", "prediction"),
+        }
         for s, name in enumerate(self.sensors):
             columns[f"{name}_measured_C"] = self.measured_C[:, s]
             columns[f"{name}_model_C"] = self.curve_C[:, s]
@@ -161,7 +197,8 @@ class Identification:
 
 
 FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
-    "model": "first order (one exponential, the papers' model): the interval assumes a first-order machine; a slower mode not yet seen moves T∞ beyond it",
+    "model": "first order (one exponential, the papers' model): the interval assumes a first-order machine; "
+    "a slower mode not yet seen moves T∞ beyond it",
     "max_time_constant_min": None,
     "room": "the room at its level in the window (or the room sensor's course, where given)",
     "reference": None,
@@ -220,7 +257,9 @@ def first_order_suffices(time_min: FloatArray, values: FloatArray, level: float 
     rss_alt = _best_rss(time_min, values, with_drift=True)
     floor = len(values) * (1e-4) ** 2  # residuals of a noise-free curve are rounding error
     f_stat = (rss_null - rss_alt) / max(rss_alt, floor) * (len(values) - 4)
-    return bool(f_stat < fdtri(1, len(values) - 4, level))  # the F(1, N − 4) quantile; scipy.stats costs 0.5 s to import
+    return bool(
+        f_stat < fdtri(1, len(values) - 4, level)
+    )  # the F(1, N − 4) quantile; scipy.stats costs 0.5 s to import
 
 
 def model_check(
@@ -305,7 +344,11 @@ def measured_equilibrium(time_min: FloatArray, values: FloatArray) -> tuple[Floa
 
 
 def filter_window(
-    time_min: FloatArray, values: FloatArray, config: FilterConfig, tuning: ThermalTuning, room_rate: FloatArray | None = None
+    time_min: FloatArray,
+    values: FloatArray,
+    config: FilterConfig,
+    tuning: ThermalTuning,
+    room_rate: FloatArray | None = None,
 ) -> tuple[FilterRecord, FloatArray, FloatArray]:
     """Filter samples (N, S) of every sensor at once; the first is measured at t₀ itself (Δt = 0).
 
@@ -365,7 +408,10 @@ def room_input(log: TemperatureLog, ambient_C: FloatArray | None, method: str, p
     if ambient_C is None:
         return None
     if method == "lsq" or preset != "data":
-        msg = "a room sensor (--ambient) needs a UKF method with the data tuning: lsq and the papers' presets model a steady room"
+        msg = (
+            "a room sensor (--ambient) needs a UKF method with the data tuning: lsq and the papers' presets model a "
+            "steady room"
+        )
         raise InputError(msg)
     if len(ambient_C) != len(log.time_min):
         msg = f"the room sensor has {len(ambient_C)} readings for {len(log.time_min)} samples"
@@ -443,7 +489,10 @@ def identify(
         from mtident.thermal.robust_identify import identify_robust
 
         if preset != "data":
-            msg = f"preset {preset!r} is a setting of the papers' first-order filters; with it choose one of: {', '.join(METHODS)}"
+            msg = (
+                f"preset {preset!r} is a setting of the papers' first-order filters; with it choose one of: "
+                f"{', '.join(METHODS)}"
+            )
             raise InputError(msg)
         return identify_robust(log, window_min, ambient_C, horizon_min=horizon_min)
     if not (np.isfinite(window_min) and window_min > 0):
@@ -493,10 +542,17 @@ def _identify(
             which = [i for i in np.flatnonzero(onsets).tolist() if late_start[i] == late]
             for i in which:
                 yw[: onsets[i], i] = np.nan
-            why = "stay at their first level (the warm-up began after the log)" if late else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
+            why = (
+                "stay at their first level (the warm-up began after the log)"
+                if late
+                else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
+            )
             if len(which) == 1:
                 i = which[0]
-                notes.append(f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min {why}; the model is fitted from t = {tw[onsets[i]]:g} min")
+                notes.append(
+                    f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min {why}; the model is fitted "
+                    f"from t = {tw[onsets[i]]:g} min"
+                )
             elif which:  # one note for all: the sample's five lagging sensors made five lines
                 lead = ", ".join(f"{log.sensors[i]!r} ({tw[onsets[i]] - tw[0]:g} min)" for i in which)
                 notes.append(f"sensors {lead}: the first minutes {why}; each model is fitted from the end of them")
@@ -524,7 +580,9 @@ def _identify(
         window_fit = mean_curve[:n_window]
     else:
         config = filter_config(method, tuning)
-        record, history, history_cov = filter_window(tw, yw, config, tuning, None if room_rate is None else room_rate[:n_window])
+        record, history, history_cov = filter_window(
+            tw, yw, config, tuning, None if room_rate is None else room_rate[:n_window]
+        )
         history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
         # A-posteriori variance factor: R came from a noise estimate (±20 % from ~30
         # samples); the residual variance of the best first-order fit says how far off
@@ -589,7 +647,10 @@ def _identify(
     rise = reading_range(yw)
     no_rise = rise < rise_threshold(sigma)
     for s in np.flatnonzero(no_rise).tolist():
-        notes.append(f"sensor {log.sensors[s]!r}: no rise in the first {tw[-1]:g} min ({rise[s]:.2f} °C from lowest to highest): no warm-up to identify; it has no equilibrium time")
+        notes.append(
+            f"sensor {log.sensors[s]!r}: no rise in the first {tw[-1]:g} min ({rise[s]:.2f} °C from lowest to "
+            "highest): no warm-up to identify; it has no equilibrium time"
+        )
     eq_time = np.where(no_rise, np.nan, eq_time)
     # An interval wider than the whole rise so far: the window's course is still nearly straight and
     # does not tell where it bends (the sample's T6, T7, T9, T10 at 30 min; T7 still at 45; none at 60).
@@ -598,10 +659,15 @@ def _identify(
     with np.errstate(invalid="ignore"):
         undetermined = ~no_rise & (half > rise)
     if np.any(undetermined):
-        names = ", ".join(f"{log.sensors[s]!r} (± {half[s]:.2g} °C, rose {rise[s]:.2g} °C)" for s in np.flatnonzero(undetermined).tolist())
+        names = ", ".join(
+            f"{log.sensors[s]!r} (± {half[s]:.2g} °C, rose {rise[s]:.2g} °C)"
+            for s in np.flatnonzero(undetermined).tolist()
+        )
         notes.append(
-            f"T∞ is barely determined by the first {tw[-1]:g} min for {names}: the 95 % interval is wider than the rise "
-            "seen so far (the course is still nearly straight); a longer --window narrows it (thermal watch says when it is narrow enough)"
+            f"T∞ is barely determined by the first {tw[-1]:g} min for {names}: the 95 % interval is wider than the "
+            "rise "
+            "seen so far (the course is still nearly straight); a longer --window narrows it (thermal watch says when "
+            "it is narrow enough)"
         )
     n_log = len(t)
     measured_part = np.full((len(times), S), np.nan)
@@ -638,7 +704,9 @@ def _identify(
     )
 
 
-def _future_times(t: FloatArray, n_window: int, window_min: float, horizon_min: float | None, rate: FloatArray) -> FloatArray:
+def _future_times(
+    t: FloatArray, n_window: int, window_min: float, horizon_min: float | None, rate: FloatArray
+) -> FloatArray:
     """Sample times after the window: the log's own, then uniform steps to the horizon."""
     logged = t[n_window:]
     step = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
@@ -683,7 +751,9 @@ def _predict_after_window(
     normal = replace(config, adaptive_law=None, square_root=False)
     if seed is None:
         mean = rise_curve((t_future - t_last)[:, None], physical_mean[:, 0], physical_mean[:, 1], physical_mean[:, 2])
-        predicted = forecast(GaussianState(carry.mean, carry.covariance()), transition, carry.process_cov, len(dts), normal)
+        predicted = forecast(
+            GaussianState(carry.mean, carry.covariance()), transition, carry.process_cov, len(dts), normal
+        )
         return mean, predicted.cov[:, :, 0, 0]
     # Seed 000 Eqs 21-22: sₖ = f(x̂ₖ₋₁) + q·randn, yₖ = h(sₖ) + r·randn, then a normal UKF update.
     rng = np.random.default_rng(seed)

@@ -14,7 +14,16 @@ from mtident.thermal.model import rise_curve
 # how often a true first-order curve is taken for a lagged one: 2.5σ on each of 3 leading samples
 _LAG_FALSE_FLAG = 3 * 2 * float(ndtr(-2.5))
 
-__all__ = ["LeastSquaresFit", "fit_rise", "rise_threshold", "flat_lead", "late_onset", "first_level", "first_order_onset", "cramer_rao_bound"]
+__all__ = [
+    "LeastSquaresFit",
+    "fit_rise",
+    "rise_threshold",
+    "flat_lead",
+    "late_onset",
+    "first_level",
+    "first_order_onset",
+    "cramer_rao_bound",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,7 +67,14 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
                 with warnings.catch_warnings():
                     # no covariance for a flat window: reported as unbounded below
                     warnings.simplefilter("ignore", OptimizeWarning)
-                    p, c = curve_fit(rise_curve, t, y, p0=start, bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]), max_nfev=2000)
+                    p, c = curve_fit(
+                        rise_curve,
+                        t,
+                        y,
+                        p0=start,
+                        bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]),
+                        max_nfev=2000,
+                    )
             except RuntimeError:  # no convergence within max_nfev
                 pass
         if not np.all(np.isfinite(c)):
@@ -70,7 +86,9 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
     return LeastSquaresFit(np.array(params), np.array(covs), np.array(sigmas))
 
 
-def cramer_rao_bound(time_min: FloatArray, start_C: float, rate_per_min: float, steady_C: float, sigma_C: float) -> FloatArray:
+def cramer_rao_bound(
+    time_min: FloatArray, start_C: float, rate_per_min: float, steady_C: float, sigma_C: float
+) -> FloatArray:
     """Cramér-Rao bound (covariance, 3×3) of [T₀, λ, T∞] for white noise σ at the sample times.
 
     Inverse of the Fisher information JᵀJ/σ², J the sensitivities of T(t).
@@ -86,7 +104,9 @@ def rise_threshold(sigma: FloatArray, min_rise_C: float = 0.1) -> FloatArray:
     return np.maximum(min_rise_C, 6.0 * np.asarray(sigma))
 
 
-def flat_lead(time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_rise_C: float = 0.1, min_flat_min: float = 10.0) -> IntArray:
+def flat_lead(
+    time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_rise_C: float = 0.1, min_flat_min: float = 10.0
+) -> IntArray:
     """Per sensor, the index of the last sample at the first level, where a late warm-up begins.
 
     The logger started before the spindle: the sensor stays at its first level
@@ -153,7 +173,8 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     >>> t = np.arange(0.0, 61.0)
     >>> lagged = 20 + 10 * (1 - (94 * np.exp(-t / 94) - np.exp(-t)) / 93)  # a 1-min sensor lag
     >>> plain = 20 + 10 * (1 - np.exp(-t / 94))
-    >>> first_order_onset(t, np.column_stack([lagged, plain]) + 0.02 * np.random.default_rng(0).standard_normal((61, 2))).tolist()
+    >>> noise = 0.02 * np.random.default_rng(0).standard_normal((61, 2))
+    >>> first_order_onset(t, np.column_stack([lagged, plain]) + noise).tolist()
     [4, 0]
     """
     from mtident.thermal.settings import noise_sigma, quick_estimate

@@ -74,9 +74,14 @@ class MinTimeResult:
     rise_begins_min: FloatArray | None = None
 
     def __repr__(self) -> str:
-        chosen = ", ".join(f"{name} {value:g}" for name, value in zip(self.sensors, self.min_identification_time_min, strict=True))
+        chosen = ", ".join(
+            f"{name} {value:g}" for name, value in zip(self.sensors, self.min_identification_time_min, strict=True)
+        )
         periods = "/".join(f"{p:g}" for p in self.periods_min)
-        return f"MinTimeResult({self.method}: minimal L (min) {chosen}; sampling periods {periods} min, measured for {self.measuring_time_min:g} min)"
+        return (
+            f"MinTimeResult({self.method}: minimal L (min) {chosen}; sampling periods {periods} min, measured for "
+            f"{self.measuring_time_min:g} min)"
+        )
 
     def warnings(self, index: int) -> list[str]:
         """What the criterion's answer for one sensor does not say: a best L at the end of every
@@ -85,10 +90,14 @@ class MinTimeResult:
         said = []
         step = float(np.median(np.diff(self.windows_min))) if len(self.windows_min) > 1 else 1.0
         last = [float(self.windows_min[self.windows_min < p].max(initial=-np.inf)) for p in self.periods_min]
-        at_end = [np.isfinite(b) and b >= end - 1.5 * step for b, end in zip(self.best_per_period_min[:, index], last, strict=True)]
+        at_end = [
+            np.isfinite(b) and b >= end - 1.5 * step
+            for b, end in zip(self.best_per_period_min[:, index], last, strict=True)
+        ]
         if all(at_end):
             said.append(
-                f"{name}: the RMSE falls to the end of every sampling period (best L = the longest window each allows): "
+                f"{name}: the RMSE falls to the end of every sampling period (best L = the longest window each "
+                "allows): "
                 "the criterion only says that more data fit better, not that a shorter test suffices"
             )
         curves = self.rmse_C[:, :, index]
@@ -97,18 +106,26 @@ class MinTimeResult:
         if exploded.any() or not np.isfinite(rise):
             windows = self.windows_min[np.any(exploded, axis=0)]
             said.append(
-                f"{name}: the RMSE explodes (largest {np.nanmax(curves[exploded]):.3g} °C) from L = {windows.min():g} to {windows.max():g} min: "
+                f"{name}: the RMSE explodes (largest {np.nanmax(curves[exploded]):.3g} °C) from L = {windows.min():g} "
+                f"to {windows.max():g} min: "
                 f"the {self.method} filter left the data's course from those windows; they are no candidates"
             )
         if not self.agreement[index]:
-            said.append(f"{name}: the sampling periods pick different L; the one with the smallest summed relative RMSE is given")
+            said.append(
+                f"{name}: the sampling periods pick different L; the one with the smallest summed relative RMSE is "
+                "given"
+            )
         return said
 
     def summary(self, index: int) -> dict[str, object]:
         """The contract's JSON object for one sensor, with its verdict and what it assumes."""
         table = {}
         for p, period in enumerate(self.periods_min):
-            rows = [[float(w), float(self.rmse_C[p, i, index])] for i, w in enumerate(self.windows_min) if np.isfinite(self.rmse_C[p, i, index])]
+            rows = [
+                [float(w), float(self.rmse_C[p, i, index])]
+                for i, w in enumerate(self.windows_min)
+                if np.isfinite(self.rmse_C[p, i, index])
+            ]
             table[f"{period:g}"] = rows
         return {
             "sensor": self.sensors[index],
@@ -116,13 +133,19 @@ class MinTimeResult:
             "min_identification_time_min": finite_or_none(self.min_identification_time_min[index]),
             "sampling_periods_min": [float(p) for p in self.periods_min],
             "rmse_C": table,
-            "best_per_period_min": {f"{p:g}": float(b) for p, b in zip(self.periods_min, self.best_per_period_min[:, index], strict=True)},
+            "best_per_period_min": {
+                f"{p:g}": float(b) for p, b in zip(self.periods_min, self.best_per_period_min[:, index], strict=True)
+            },
             "periods_agree": bool(self.agreement[index]),
             "measuring_time_needed_min": float(self.measuring_time_min),
             "model_ok": not any(": the RMSE falls to the end" in w for w in self.warnings(index)),
             "warnings": self.warnings(index),
             "assumptions": FIRST_ORDER_ASSUMPTIONS,
-            **({"rise_begins_min": float(self.rise_begins_min[index])} if self.rise_begins_min is not None and np.isfinite(self.rise_begins_min[index]) else {}),
+            **(
+                {"rise_begins_min": float(self.rise_begins_min[index])}
+                if self.rise_begins_min is not None and np.isfinite(self.rise_begins_min[index])
+                else {}
+            ),
         }
 
 
@@ -164,7 +187,9 @@ def minimal_identification_time(
         raise InputError(msg)
     log = as_temperature_log(log, "minimal_identification_time")
     for name, values in (("periods_min", periods_min), ("windows_min", windows_min)):
-        if values is not None and not (len(values) and np.all(np.isfinite(values)) and np.all(np.asarray(values, dtype=float) > 0)):
+        if values is not None and not (
+            len(values) and np.all(np.isfinite(values)) and np.all(np.asarray(values, dtype=float) > 0)
+        ):
             msg = f"{name} must be positive numbers of minutes, not {values!r}"
             raise InputError(msg)
     room_rate = room_input(log, ambient_C, method, preset)
@@ -220,13 +245,21 @@ def _search(
             curves[i][:, usable[i]] = rise_curve(t[:n_total, None], params[:, 0], params[:, 1], params[:, 2])
     else:
         tuning = _prior(t, y, fitted, int(counts[0]), onsets) if preset == "data" else preset_tuning(preset, S)
-        _, physical, _ = filter_window(t[:n_max], fitted[:n_max], filter_config(method, tuning), tuning, None if room_rate is None else room_rate[:n_max])
+        _, physical, _ = filter_window(
+            t[:n_max],
+            fitted[:n_max],
+            filter_config(method, tuning),
+            tuning,
+            None if room_rate is None else room_rate[:n_max],
+        )
         last = counts - 1
         at_window = physical[last]  # (W, S, 3): [T, λ, T∞] after each L's last sample
         if room_rate is None:
             # The prediction from L is the model curve through the state at L, for all L at once.
             elapsed = t[None, :n_total, None] - t[last][:, None, None]  # (W, n_total, 1)
-            predicted = rise_curve(elapsed, at_window[:, None, :, 0], at_window[:, None, :, 1], at_window[:, None, :, 2])
+            predicted = rise_curve(
+                elapsed, at_window[:, None, :, 0], at_window[:, None, :, 1], at_window[:, None, :, 2]
+            )
         else:
             predicted = _predict_with_room(t[:n_total], room_rate[:n_total], at_window, last)
         filtered = physical[:, :, 0]  # (n_max, S)
@@ -253,24 +286,35 @@ def _search(
     overall = candidates[np.argmin(np.sum(np.where(np.isfinite(relative), relative, 1e9), axis=0), axis=0)]
     chosen = np.where(agreement, best[0], overall)
     begins = np.where(onsets > 0, t[onsets], np.nan)
-    return MinTimeResult(log.sensors, method, candidates, periods, table, best, chosen, agreement, float(periods[-1]), begins)
+    return MinTimeResult(
+        log.sensors, method, candidates, periods, table, best, chosen, agreement, float(periods[-1]), begins
+    )
 
 
-def _prior(time_min: FloatArray, values: FloatArray, fitted: FloatArray, n_first: int, onsets: IntArray) -> ThermalTuning:
+def _prior(
+    time_min: FloatArray, values: FloatArray, fitted: FloatArray, n_first: int, onsets: IntArray
+) -> ThermalTuning:
     """The data tuning from each sensor's first ``n_first`` samples of its rise (``fitted``: NaN before its onset)."""
     tuning = tuning_from_data(time_min[:n_first], values[:n_first])
     for s in np.flatnonzero(onsets):
         onset = int(onsets[s])
         # the late sensor's own window from its onset, carried back to the log's start
-        own = tuning_from_data(time_min[onset : onset + n_first], fitted[onset : onset + n_first, [s]], start_min=float(time_min[0]))
-        fields = {name: getattr(tuning, name).copy() for name in ("initial_mean", "initial_cov", "process_cov", "emission_cov", "threshold_C")}
+        own = tuning_from_data(
+            time_min[onset : onset + n_first], fitted[onset : onset + n_first, [s]], start_min=float(time_min[0])
+        )
+        fields = {
+            name: getattr(tuning, name).copy()
+            for name in ("initial_mean", "initial_cov", "process_cov", "emission_cov", "threshold_C")
+        }
         for name, array in fields.items():
             array[s] = getattr(own, name)[0]
         tuning = replace(tuning, **fields)
     return tuning
 
 
-def _predict_with_room(time_min: FloatArray, room_rate: FloatArray, at_window: FloatArray, last: IntArray) -> FloatArray:
+def _predict_with_room(
+    time_min: FloatArray, room_rate: FloatArray, at_window: FloatArray, last: IntArray
+) -> FloatArray:
     """(W, N, S): the heat balance run on from each L's state with the measured room as input."""
     T, rate, steady = at_window[..., 0], at_window[..., 1], at_window[..., 2]
     state = np.stack([T, rate * (steady - T), rate], axis=-1)  # [T, s, λ] at each L

@@ -39,7 +39,15 @@ def lag_rows(room: FloatArray, time_min: FloatArray, tau: FloatArray) -> FloatAr
 
 
 @njit(cache=True)
-def fit_one(u: FloatArray, time_min: FloatArray, weight: FloatArray, target: FloatArray, room: FloatArray, log_tau: FloatArray, penalty: FloatArray):  # noqa: ANN201  # pragma: no cover - compiled
+def fit_one(
+    u: FloatArray,
+    time_min: FloatArray,
+    weight: FloatArray,
+    target: FloatArray,
+    room: FloatArray,
+    log_tau: FloatArray,
+    penalty: FloatArray,
+):  # noqa: ANN201  # pragma: no cover - compiled
     """The penalised least-squares fit of one model and its slopes in log τ.
 
     Parameters

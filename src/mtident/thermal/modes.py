@@ -412,7 +412,9 @@ class _Fits:
         return self.theta.shape[1] + self.tau.shape[1]
 
 
-def _solve(gram: FloatArray, rhs: FloatArray, yy: float, penalty: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+def _solve(
+    gram: FloatArray, rhs: FloatArray, yy: float, penalty: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Batched penalised normal equations, solved in normalised form: rss, θ, [G⁻¹]₀₀, G⁻¹e₀."""
     gram = gram + np.diag(penalty)
     scale = np.sqrt(np.maximum(np.diagonal(gram, axis1=-2, axis2=-1), 1e-300))
@@ -495,7 +497,11 @@ def _reference_grids(family: ModeFamily, fast_lo: float, points: int = 7) -> lis
     grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(bounds), -1).T
     grids = [grid]
     ceiling = float(bounds[:, 0].min())
-    fast = np.geomspace(fast_lo, ceiling, max(2, int(np.ceil(np.log(ceiling / fast_lo) / np.log(_MAX_GRID_RATIO))) + 1)) if ceiling > fast_lo else np.empty(0)
+    fast = (
+        np.geomspace(fast_lo, ceiling, max(2, int(np.ceil(np.log(ceiling / fast_lo) / np.log(_MAX_GRID_RATIO))) + 1))
+        if ceiling > fast_lo
+        else np.empty(0)
+    )
     apart = max(1, int(np.ceil(np.log(MIN_MODE_RATIO) / np.log(_MAX_GRID_RATIO))))
     for extra in range(1, family.free_fast + 1):
         combos = _grid_tuples(len(fast), extra, apart)
@@ -536,8 +542,12 @@ def _fit_with_slopes(problem: _Problem, log_tau: FloatArray) -> tuple[_Fits, _Sl
     (:func:`~mtident.thermal.modal_kernel.fit_one`)."""
     u, time_min, weight, target, room = problem.kernel_inputs()
     k = len(log_tau)
-    rss, theta, var0, direction, d_rss, d_steady, d_var = fit_one(u, time_min, weight, target, room, np.asarray(log_tau, dtype=float), problem.penalty(k))
-    fits = _Fits(np.exp(log_tau)[None, :], np.array([rss]), theta[None, 0], np.array([var0]), direction[None, :], theta[None, :])
+    rss, theta, var0, direction, d_rss, d_steady, d_var = fit_one(
+        u, time_min, weight, target, room, np.asarray(log_tau, dtype=float), problem.penalty(k)
+    )
+    fits = _Fits(
+        np.exp(log_tau)[None, :], np.array([rss]), theta[None, 0], np.array([var0]), direction[None, :], theta[None, :]
+    )
     return fits, _Slopes(d_rss, d_steady, d_var)
 
 
@@ -580,7 +590,9 @@ class _EndObjective:
         d_slack = -slopes.rss
         if slack >= 0:
             root = max(np.sqrt(slack * var), 1e-300)
-            return -self.sign * steady - root, -self.sign * slopes.steady - (d_slack * var + slack * slopes.var_steady) / (2.0 * root)
+            return -self.sign * steady - root, -self.sign * slopes.steady - (
+                d_slack * var + slack * slopes.var_steady
+            ) / (2.0 * root)
         reach = np.sqrt(var * self.gap)
         d_reach = slopes.var_steady * self.gap / (2.0 * reach)
         value = -self.sign * steady - _EDGE_PENALTY * reach * slack / self.gap
@@ -607,7 +619,14 @@ def _refine(problem: _Problem, fits: _Fits, i: int, objective: _RssObjective | _
         return value, np.nan_to_num(gradient)
 
     start = np.clip(np.log(fits.tau[i]), bounds[:, 0], bounds[:, 1])
-    found = minimize(value_and_gradient, start, jac=True, method="L-BFGS-B", bounds=bounds, options={"maxiter": _MAXITER, "maxfun": _MAXFUN})
+    found = minimize(
+        value_and_gradient,
+        start,
+        jac=True,
+        method="L-BFGS-B",
+        bounds=bounds,
+        options={"maxiter": _MAXITER, "maxfun": _MAXFUN},
+    )
     best = _fit(problem, np.exp(np.vstack([start, found.x])))
     values = objective(best) + (np.array([_apart_penalty(row) for row in np.log(best.tau)]) if apart else 0.0)
     return best.take(int(np.argmin(values)))
@@ -633,7 +652,11 @@ def _apart_penalty_gradient(log_tau: FloatArray) -> FloatArray:
 def _closeness(log_tau: FloatArray) -> FloatArray:
     """How far (log) each row's closest two modes are inside ``MIN_MODE_RATIO`` of each other."""
     gaps = np.diff(np.sort(log_tau, axis=1), axis=1)
-    return np.maximum(np.log(MIN_MODE_RATIO) - gaps.min(axis=1, initial=np.inf), 0.0) if gaps.size else np.zeros(len(log_tau))
+    return (
+        np.maximum(np.log(MIN_MODE_RATIO) - gaps.min(axis=1, initial=np.inf), 0.0)
+        if gaps.size
+        else np.zeros(len(log_tau))
+    )
 
 
 def _best_per_count(problem: _Problem, candidates: list[_Fits]) -> dict[int, _Fits]:
@@ -648,12 +671,16 @@ def _best_per_count(problem: _Problem, candidates: list[_Fits]) -> dict[int, _Fi
     return best
 
 
-def _leading(candidates: list[_Fits], objective: Objective, count: int, apart_log: float = 0.0) -> list[tuple[_Fits, int]]:
+def _leading(
+    candidates: list[_Fits], objective: Objective, count: int, apart_log: float = 0.0
+) -> list[tuple[_Fits, int]]:
     """The ``count`` models with the lowest finite ``objective`` among all the batches; with
     ``apart_log``, each of a different basin: a model whose log time constants all lie within
     ``apart_log`` of a model already taken (of as many modes) is passed over."""
     taken: list[tuple[_Fits, int]] = []
-    scored = [(fits, np.where(np.isfinite(v := np.asarray(objective(fits), dtype=float)), v, np.inf)) for fits in candidates]
+    scored = [
+        (fits, np.where(np.isfinite(v := np.asarray(objective(fits), dtype=float)), v, np.inf)) for fits in candidates
+    ]
     while len(taken) < count:
         batch = min(range(len(scored)), key=lambda n: float(scored[n][1].min(initial=np.inf)), default=None)
         if batch is None or not np.isfinite(scored[batch][1].min(initial=np.inf)):
@@ -694,7 +721,14 @@ def _grid_half_width(candidates: list[_Fits], threshold: float, steady: float) -
 
 
 def _hull_end(
-    problem: _Problem, candidates: list[_Fits], threshold: float, sign: float, gap: float, fallback: _Fits, refine: bool = True, seeds: list[_Fits] | None = None
+    problem: _Problem,
+    candidates: list[_Fits],
+    threshold: float,
+    sign: float,
+    gap: float,
+    fallback: _Fits,
+    refine: bool = True,
+    seeds: list[_Fits] | None = None,
 ) -> _Fits:
     """The model that sets one end of the hull (``fallback``, the best fit, if none stays within
     the threshold): the grid's leading models of different basins, each improved by a local
@@ -708,7 +742,10 @@ def _hull_end(
         polish = [(f, 0) for f in seeds]
     else:
         starts = _leading(candidates, objective, problem.end_starts(), problem.basin_log())
-        improved = [_lattice_search(problem, [f.take(i) for f, i in starts if f.tau.shape[1] == k], objective) for k in {f.tau.shape[1] for f, _ in starts}]
+        improved = [
+            _lattice_search(problem, [f.take(i) for f, i in starts if f.tau.shape[1] == k], objective)
+            for k in {f.tau.shape[1] for f, _ in starts}
+        ]
         polish = _leading(improved, objective, problem.polished(), problem.basin_log())
     best, best_value = None, np.inf
     for fits, i in polish:
@@ -721,7 +758,9 @@ def _hull_end(
     return fallback if best is None else best
 
 
-def _lattice_search(problem: _Problem, starts: list[_Fits], objective: _EndObjective, rounds: int = _LATTICE_ROUNDS) -> _Fits:
+def _lattice_search(
+    problem: _Problem, starts: list[_Fits], objective: _EndObjective, rounds: int = _LATTICE_ROUNDS
+) -> _Fits:
     """Each start (k modes each) moved to the best of the 3ᵏ points of a lattice around it in
     log τ, the lattice halved each round: a search with no gradient that crosses a thin ridge
     diagonally, run for every start in one batch of fits."""
@@ -844,7 +883,14 @@ def _grid_best(candidates: list[_Fits]) -> dict[int, _Fits]:
     return {f.tau.shape[1]: f.take(int(np.argmin(f.rss))) for f in candidates if len(f.rss)}
 
 
-def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _Fits], levels: tuple[float, ...], refine_within: float | None = None, refine: bool = True) -> SteadyState:
+def _steady_state(
+    problem: _Problem,
+    candidates: list[_Fits],
+    best: dict[int, _Fits],
+    levels: tuple[float, ...],
+    refine_within: float | None = None,
+    refine: bool = True,
+) -> SteadyState:
     """The estimate from the best fits per number of modes, and its hull over ``candidates``
     (refined off the grid where ``refine`` and, with ``refine_within``, where the grid's hull is
     within that)."""
@@ -860,7 +906,9 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
     common = dict(
         steady_C=steady,
         modes=modes,
-        room_gains=tuple(float(g) for g in chosen.theta[0, 1 + chosen.tau.shape[1] :]) if binned.room_C is not None else (),
+        room_gains=tuple(float(g) for g in chosen.theta[0, 1 + chosen.tau.shape[1] :])
+        if binned.room_C is not None
+        else (),
         start_C=start,
         origin_min=problem.origin,
         rss=float(full.rss[0]),
@@ -872,7 +920,15 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
     )
     if dof < 2:
         wide = (-np.inf, np.inf)
-        return SteadyState(interval_C={q: wide for q in levels}, ends={}, equilibrium_time_min=float("nan"), noise_C=float(np.sqrt(problem.sigma2)), correlation_factor=1.0, determined=False, **common)
+        return SteadyState(
+            interval_C={q: wide for q in levels},
+            ends={},
+            equilibrium_time_min=float("nan"),
+            noise_C=float(np.sqrt(problem.sigma2)),
+            correlation_factor=1.0,
+            determined=False,
+            **common,
+        )
     factor = _correlation_factor(_weighted_residuals(problem, full))
     sigma2 = max(float(full.rss[0]) / dof, problem.sigma2) * factor
     intervals, ends = {}, {}
@@ -893,7 +949,11 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
         # with a tolerance the widest level's hull misses, a narrower level is polished from the
         # wider level's end models alone (the same ridges set both): a report's interval while the
         # decision waits; searched in full once the decision may be near
-        near = refine_within is None or not intervals or max(steady - intervals[max(intervals)][0], intervals[max(intervals)][1] - steady) <= refine_within
+        near = (
+            refine_within is None
+            or not intervals
+            or max(steady - intervals[max(intervals)][0], intervals[max(intervals)][1] - steady) <= refine_within
+        )
         seeds = None if near else list(ends_models)
         low = _hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level, seeds)
         high = _hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level, seeds)
@@ -905,12 +965,20 @@ def _steady_state(problem: _Problem, candidates: list[_Fits], best: dict[int, _F
         refined[q] = refine_level
     t_eq = equilibrium_time(modes, steady, start, problem.origin)
     intervals = {q: intervals[q] for q in levels}
-    return SteadyState(interval_C=intervals, ends=ends, equilibrium_time_min=t_eq, noise_C=float(np.sqrt(sigma2)), correlation_factor=factor, refined=refined, **common)
+    return SteadyState(
+        interval_C=intervals,
+        ends=ends,
+        equilibrium_time_min=t_eq,
+        noise_C=float(np.sqrt(sigma2)),
+        correlation_factor=factor,
+        refined=refined,
+        **common,
+    )
 
 
-
-
-def best_fit(binned: Binned, *, noise_C: float, interval_min: float, family: ModeFamily = ModeFamily()) -> tuple[float, int, float]:
+def best_fit(
+    binned: Binned, *, noise_C: float, interval_min: float, family: ModeFamily = ModeFamily()
+) -> tuple[float, int, float]:
     """The best fit of ``family`` alone, without an interval: its residual sum of squares, its
     number of parameters, and how much its residuals' correlation widens a variance (a
     reference's boxed fit is compared with it).
@@ -969,7 +1037,13 @@ def model_curve(modes: tuple[Mode, ...], steady_C: float, origin_min: float, tim
     return out
 
 
-def fitted_curve(fit: SteadyState, time_min: FloatArray, room_C: FloatArray | None = None, modes: tuple[Mode, ...] | None = None, steady_C: float | None = None) -> FloatArray:
+def fitted_curve(
+    fit: SteadyState,
+    time_min: FloatArray,
+    room_C: FloatArray | None = None,
+    modes: tuple[Mode, ...] | None = None,
+    steady_C: float | None = None,
+) -> FloatArray:
     """The fitted model's course at ``time_min`` (from the log's start), with the room's own
     course where the fit had a room sensor (``room_C`` at those times; held at its last level
     where missing); ``modes`` and ``steady_C`` replace the best model's (an interval's end).
@@ -1049,6 +1123,8 @@ def log_time_constant_sd(binned: Binned, fit: SteadyState) -> tuple[float, ...]:
     u = (binned.time_min - problem.origin)[:, None]
     slopes = amplitude * (u / tau) * np.exp(-u / tau)  # ∂model/∂log τ
     J = np.concatenate([X, slopes], axis=1)
-    info = (J * binned.count[:, None]).T @ J + np.diag(np.concatenate([problem.penalty(len(fit.modes)), np.zeros(len(fit.modes))]))
+    info = (J * binned.count[:, None]).T @ J + np.diag(
+        np.concatenate([problem.penalty(len(fit.modes)), np.zeros(len(fit.modes))])
+    )
     cov = fit.noise_C**2 * np.linalg.pinv(info)
     return tuple(float(np.sqrt(max(v, 0.0))) for v in np.diagonal(cov)[-len(fit.modes) :])

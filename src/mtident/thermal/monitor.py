@@ -29,7 +29,14 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.thermal.modes import model_curve
 from mtident.thermal.reference import MachineReference
-from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, describe_assumptions, estimate_sensor, sampling_interval_min
+from mtident.thermal.robust import (
+    Assumptions,
+    RobustSettings,
+    SensorEstimate,
+    describe_assumptions,
+    estimate_sensor,
+    sampling_interval_min,
+)
 
 __all__ = [
     "Event",
@@ -84,12 +91,27 @@ class MonitorSettings:
 
     def __post_init__(self) -> None:
         checks = [
-            ("tolerance_C", self.tolerance_C, math.isfinite(self.tolerance_C) and self.tolerance_C > 0, "a positive number of °C"),
+            (
+                "tolerance_C",
+                self.tolerance_C,
+                math.isfinite(self.tolerance_C) and self.tolerance_C > 0,
+                "a positive number of °C",
+            ),
             ("decision_level", self.decision_level, 0.5 < self.decision_level < 1.0, "a probability between 0.5 and 1"),
             ("consecutive_checks", self.consecutive_checks, self.consecutive_checks >= 1, "at least 1"),
             ("check_spacing", self.check_spacing, 0 < self.check_spacing <= 1, "a fraction in (0, 1]"),
-            ("max_time_constant_min", self.robust.max_time_constant_min, math.isfinite(self.robust.max_time_constant_min) and self.robust.max_time_constant_min > 0, "a positive number of minutes"),
-            ("room_wander_C_per_h", self.robust.room_wander_C_per_h, math.isfinite(self.robust.room_wander_C_per_h) and self.robust.room_wander_C_per_h >= 0, "0 or more °C in an hour"),
+            (
+                "max_time_constant_min",
+                self.robust.max_time_constant_min,
+                math.isfinite(self.robust.max_time_constant_min) and self.robust.max_time_constant_min > 0,
+                "a positive number of minutes",
+            ),
+            (
+                "room_wander_C_per_h",
+                self.robust.room_wander_C_per_h,
+                math.isfinite(self.robust.room_wander_C_per_h) and self.robust.room_wander_C_per_h >= 0,
+                "0 or more °C in an hour",
+            ),
         ]
         for name, value, ok, expected in checks:
             if not ok:
@@ -154,7 +176,9 @@ class SensorCheck:
     @property
     def half_width_C(self) -> float:
         """The larger distance from T∞ to an end of the decision's interval."""
-        return max(self.steady_C - self.low_C, self.high_C - self.steady_C) if math.isfinite(self.steady_C) else math.inf
+        return (
+            max(self.steady_C - self.low_C, self.high_C - self.steady_C) if math.isfinite(self.steady_C) else math.inf
+        )
 
     @property
     def may_stop(self) -> bool:
@@ -180,7 +204,10 @@ class MonitorState:
         # a notebook shows the decision, not the readings' arrays
         decision = f"stop at t = {minutes(self.stop_time_min)} min" if self.stopped else "continue"
         statuses = ", ".join(f"{c.sensor} {c.status}" for c in self.checks)
-        return f"MonitorState({len(self.sensors)} sensor(s), t = {minutes(self.readings.latest_min)} min, decision: {decision}; {statuses})"
+        return (
+            f"MonitorState({len(self.sensors)} sensor(s), t = {minutes(self.readings.latest_min)} min, decision: "
+            f"{decision}; {statuses})"
+        )
 
 
 @dataclass(frozen=True)
@@ -225,13 +252,18 @@ def new_state(sensors: tuple[str, ...] | list[str], with_room: bool = False) -> 
     return MonitorState(names, empty, tuple(SensorCheck(name) for name in names))
 
 
-def _validated(state: MonitorState, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None) -> tuple[FloatArray, FloatArray, FloatArray | None]:
+def _validated(
+    state: MonitorState, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None
+) -> tuple[FloatArray, FloatArray, FloatArray | None]:
     """The new readings as arrays of the right shapes, or an InputError naming what is wrong."""
     t = np.atleast_1d(np.asarray(time_min, dtype=float))
     y = np.asarray(values, dtype=float)
     y = y.reshape(len(t), -1) if y.ndim < 2 else y
     if y.shape != (len(t), len(state.sensors)):
-        msg = f"values: expected shape ({len(t)}, {len(state.sensors)}) for {len(t)} time(s) and the sensors {', '.join(state.sensors)}; found {np.shape(values)}"
+        msg = (
+            f"values: expected shape ({len(t)}, {len(state.sensors)}) for {len(t)} time(s) and the sensors "
+            f"{', '.join(state.sensors)}; found {np.shape(values)}"
+        )
         raise InputError(msg)
     if not np.all(np.isfinite(t)):
         msg = "time_min: expected finite minutes; found NaN or infinity"
@@ -242,7 +274,9 @@ def _validated(state: MonitorState, time_min: FloatArray, values: FloatArray, ro
         raise InputError(msg)
     with_room = state.readings.room_C is not None
     if with_room != (room_C is not None):
-        msg = "room_C: this monitor was started " + ("with a room sensor; give its readings" if with_room else "without a room sensor; give none")
+        msg = "room_C: this monitor was started " + (
+            "with a room sensor; give its readings" if with_room else "without a room sensor; give none"
+        )
         raise InputError(msg)
     room = None if room_C is None else np.atleast_1d(np.asarray(room_C, dtype=float))
     if room is not None and room.shape != t.shape:
@@ -251,7 +285,9 @@ def _validated(state: MonitorState, time_min: FloatArray, values: FloatArray, ro
     return t, y, room
 
 
-def monitor_step(state: MonitorState, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: MonitorSettings) -> tuple[MonitorState, list[Event]]:
+def monitor_step(
+    state: MonitorState, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: MonitorSettings
+) -> tuple[MonitorState, list[Event]]:
     """Take new readings, check each sensor when it falls due, and decide.
 
     The readings are taken up to each time a check falls due and the check is made there, so
@@ -309,25 +345,49 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
             events.extend(_check_events(check, checks[s], estimate, said, now))
     stop = now if all(c.may_stop for c in checks) else math.nan
     if math.isfinite(stop):
-        events.append(Event("stop", now, f"every sensor's T∞ is within ±{settings.tolerance_C:g} °C at {settings.decision_level:.0%}: the test can stop at t = {minutes(now)} min"))
+        events.append(
+            Event(
+                "stop",
+                now,
+                f"every sensor's T∞ is within ±{settings.tolerance_C:g} °C at {settings.decision_level:.0%}: the "
+                f"test can stop at t = {minutes(now)} min",
+            )
+        )
     return MonitorState(state.sensors, readings, tuple(checks), stop, tuple(sorted(said))), events
 
 
-def sensor_estimate(readings: Readings, s: int, sensor: str, settings: MonitorSettings, noise_C: float | None = None) -> SensorEstimate:
+def sensor_estimate(
+    readings: Readings, s: int, sensor: str, settings: MonitorSettings, noise_C: float | None = None
+) -> SensorEstimate:
     """The model-robust estimate of sensor ``s`` from every reading so far (its intervals refined
     where they may be within the tolerance; elsewhere the search grid's, already too wide)."""
     reference = None if settings.reference is None else settings.reference.modes(sensor)
     robust = replace(settings.robust, levels=settings.levels)
-    return estimate_sensor(sensor, readings.time_min, readings.values_C[:, s], readings.room_C, robust, reference, noise_C, refine_within=settings.tolerance_C)
+    return estimate_sensor(
+        sensor,
+        readings.time_min,
+        readings.values_C[:, s],
+        readings.room_C,
+        robust,
+        reference,
+        noise_C,
+        refine_within=settings.tolerance_C,
+    )
 
 
 def is_within(estimate: SensorEstimate, settings: MonitorSettings) -> bool:
     """The readiness predicate, shared by the decision and the forecast: a trusted model whose
     interval at the decision's level lies within the tolerance of T∞."""
-    return estimate.fit is not None and estimate.model_ok and estimate.half_width(settings.decision_level) <= settings.tolerance_C
+    return (
+        estimate.fit is not None
+        and estimate.model_ok
+        and estimate.half_width(settings.decision_level) <= settings.tolerance_C
+    )
 
 
-def _checked(check: SensorCheck, estimate: SensorEstimate, now: float, readings: Readings, settings: MonitorSettings) -> SensorCheck:
+def _checked(
+    check: SensorCheck, estimate: SensorEstimate, now: float, readings: Readings, settings: MonitorSettings
+) -> SensorCheck:
     """The sensor's check after ``estimate``: its numbers, its run of passes, when to look again."""
     within = is_within(estimate, settings)
     passes = check.passes + 1 if within else 0
@@ -375,7 +435,9 @@ def _status(estimate: SensorEstimate, within: bool, ready: bool) -> str:
     return "undetermined" if "undetermined" in estimate.warning_codes else "narrowing"
 
 
-def _next_check(now: float, estimate: SensorEstimate, passes: int, readings: Readings, settings: MonitorSettings) -> float:
+def _next_check(
+    now: float, estimate: SensorEstimate, passes: int, readings: Readings, settings: MonitorSettings
+) -> float:
     """When to check the sensor again: after the next reading while it confirms a first pass; else
     after a share of the time since its warm-up began, which grows with how far its interval is
     from the tolerance (a sensor that may stop, waiting for the others, at the shortest share)."""
@@ -389,7 +451,9 @@ def _next_check(now: float, estimate: SensorEstimate, passes: int, readings: Rea
     return now + max(step, settings.check_spacing * factor * (now - estimate.onset_min))
 
 
-def _check_events(before: SensorCheck, after: SensorCheck, estimate: SensorEstimate, said: set[str], now: float) -> list[Event]:
+def _check_events(
+    before: SensorCheck, after: SensorCheck, estimate: SensorEstimate, said: set[str], now: float
+) -> list[Event]:
     """What a check has to say: a status that changed, and each kind of warning once."""
     events = []
     for code, text in zip(estimate.warning_codes, estimate.warnings, strict=True):
@@ -399,7 +463,12 @@ def _check_events(before: SensorCheck, after: SensorCheck, estimate: SensorEstim
             events.append(Event("warning", now, text, after.sensor))
     if after.status != before.status:
         kind = "ready" if after.may_stop else "not ready" if before.may_stop else "check"
-        text = f"{after.sensor}: {after.status}, T∞ {after.steady_C:.2f} °C, interval {after.low_C:.2f} to {after.high_C:.2f} °C" if math.isfinite(after.steady_C) else f"{after.sensor}: {after.status}"
+        text = (
+            f"{after.sensor}: {after.status}, T∞ {after.steady_C:.2f} °C, interval {after.low_C:.2f} to "
+            f"{after.high_C:.2f} °C"
+            if math.isfinite(after.steady_C)
+            else f"{after.sensor}: {after.status}"
+        )
         events.append(Event(kind, now, text, after.sensor))
     return events
 
@@ -470,7 +539,9 @@ def assumptions(settings: MonitorSettings, sensor: str) -> Assumptions:
     return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor)
 
 
-def result(state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None) -> dict[str, object]:
+def result(
+    state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None
+) -> dict[str, object]:
     """The contract's JSON object: the decision, the single-sensor keys of the sensor the test
     waits for (the slowest to equilibrium once stopped, the widest interval before), and per
     sensor its answer, verdict and assumptions; ``expected``: each sensor's expected stop, where
@@ -489,11 +560,24 @@ def result(state: MonitorState, settings: MonitorSettings, expected: dict[str, f
     sensors = [_sensor_summary(c, settings, None if expected is None else expected.get(c.sensor)) for c in state.checks]
     stopped = state.stopped
     if stopped:
-        key = max(state.checks, key=lambda c: c.equilibrium_time_min if math.isfinite(c.equilibrium_time_min) else -math.inf)
+        key = max(
+            state.checks, key=lambda c: c.equilibrium_time_min if math.isfinite(c.equilibrium_time_min) else -math.inf
+        )
     else:
         key = max(state.checks, key=lambda c: c.half_width_C)
     lead = sensors[state.checks.index(key)]
-    out: dict[str, object] = {k: lead[k] for k in ("sensor", "steady_state_C", "steady_state_ci95_C", "equilibrium_time_min", "model_ok", "warnings", "assumptions")}
+    out: dict[str, object] = {
+        k: lead[k]
+        for k in (
+            "sensor",
+            "steady_state_C",
+            "steady_state_ci95_C",
+            "equilibrium_time_min",
+            "model_ok",
+            "warnings",
+            "assumptions",
+        )
+    }
     out.update(
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
@@ -519,12 +603,20 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
     parts = []
     for c in waiting:
         if c.status == "no rise":
-            parts.append(f"{c.sensor}: no rise above its noise yet (if the test does not heat it, leave it out of the sensors watched)")
+            parts.append(
+                f"{c.sensor}: no rise above its noise yet (if the test does not heat it, leave it out of the sensors "
+                "watched)"
+            )
         elif not math.isfinite(c.steady_C):
             parts.append(f"{c.sensor}: {c.status}")
         else:
-            parts.append(f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} interval {c.low_C:.2f} to {c.high_C:.2f} °C, wider than ±{settings.tolerance_C:g} °C ({c.ends})")
-    ways = "continue the test" + ("" if settings.reference is not None else ", or give a reference run of this machine (mtident thermal learn)")
+            parts.append(
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} interval {c.low_C:.2f} to "
+                f"{c.high_C:.2f} °C, wider than ±{settings.tolerance_C:g} °C ({c.ends})"
+            )
+    ways = "continue the test" + (
+        "" if settings.reference is not None else ", or give a reference run of this machine (mtident thermal learn)"
+    )
     return "; ".join(parts) + f". Ways on: {ways}."
 
 
@@ -546,5 +638,3 @@ def _sensor_summary(c: SensorCheck, settings: MonitorSettings, expected: float |
         "reference_used": c.reference_used,
         "expected_stop_time_min": None if expected is None else finite_or_none(expected),
     }
-
-

@@ -73,7 +73,9 @@ class MachineReference:
         return f"{self.source} ({self.learnt_on}): τ {parts}"
 
 
-def learn_reference(log: TemperatureLog, room_C: FloatArray | None = None, settings: RobustSettings | None = None) -> tuple[MachineReference, list[str]]:
+def learn_reference(
+    log: TemperatureLog, room_C: FloatArray | None = None, settings: RobustSettings | None = None
+) -> tuple[MachineReference, list[str]]:
     """Each sensor's modes from a warm-up that ran to equilibrium.
 
     Parameters
@@ -102,23 +104,44 @@ def learn_reference(log: TemperatureLog, room_C: FloatArray | None = None, setti
         estimate, box = learnt
         fit = estimate.fit
         assert fit is not None
-        sensors[name] = SensorModes(tuple(m.time_constant_min for m in fit.modes), box, tuple(m.amplitude_C for m in fit.modes))
+        sensors[name] = SensorModes(
+            tuple(m.time_constant_min for m in fit.modes), box, tuple(m.amplitude_C for m in fit.modes)
+        )
         lo, hi = estimate.interval_C[min(estimate.interval_C)]
         if not estimate.model_ok or (hi - lo) / 2 > 0.1:
-            warnings.append(f"{name}: the log does not pin its steady state down (95 % interval {lo:.2f} to {hi:.2f} °C): did it run to equilibrium? Its slowest mode is uncertain (±{box[int(np.argmax([m.time_constant_min for m in fit.modes]))]:.0%})")
+            warnings.append(
+                f"{name}: the log does not pin its steady state down (95 % interval {lo:.2f} to {hi:.2f} °C): did it "
+                "run to equilibrium? Its slowest mode is uncertain "
+                f"(±{box[int(np.argmax([m.time_constant_min for m in fit.modes]))]:.0%})"
+            )
         if max(m.time_constant_min for m in fit.modes) >= 0.98 * settings.max_time_constant_min:
-            warnings.append(f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the machine may have a slower one (--max-time-constant)")
+            warnings.append(
+                f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the "
+                "machine may have a slower one (--max-time-constant)"
+            )
     room = "a room sensor, an input of every mode" if room_C is not None else "not measured"
-    return MachineReference(log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors), warnings
+    return MachineReference(
+        log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors
+    ), warnings
 
 
-def _learn_sensor(name: str, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: RobustSettings) -> tuple[SensorEstimate, tuple[float, ...]] | None:
+def _learn_sensor(
+    name: str, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: RobustSettings
+) -> tuple[SensorEstimate, tuple[float, ...]] | None:
     """The sensor's modes and their boxes: the most modes whose time constants the run determines
     (each within ±``MAX_MODE_SD`` at one standard deviation). A mode the run cannot pin down is
     no property of the machine to carry into later tests; without it a later test's residuals
     show the misfit and its interval widens."""
     for count in range(3, 0, -1):
-        estimate = estimate_sensor(name, time_min, values, room_C, RobustSettings(settings.max_time_constant_min, settings.room_wander_C_per_h, settings.levels, max_modes=count))
+        estimate = estimate_sensor(
+            name,
+            time_min,
+            values,
+            room_C,
+            RobustSettings(
+                settings.max_time_constant_min, settings.room_wander_C_per_h, settings.levels, max_modes=count
+            ),
+        )
         fit = estimate.fit
         if fit is None or not fit.modes:
             return None
@@ -148,7 +171,11 @@ def save_reference(reference: MachineReference, path: str | Path) -> None:
         "max_time_constant_min": reference.max_time_constant_min,
         "room": reference.room,
         "sensors": {
-            name: {"time_constants_min": list(m.time_constants_min), "box": list(m.box), "amplitudes_C": list(m.amplitudes_C)}
+            name: {
+                "time_constants_min": list(m.time_constants_min),
+                "box": list(m.box),
+                "amplitudes_C": list(m.amplitudes_C),
+            }
             for name, m in reference.sensors.items()
         },
     }
@@ -182,16 +209,33 @@ def load_reference(path: str | Path) -> MachineReference:
         msg = f"{p}: no [sensors.NAME] tables; learn one with `mtident thermal learn FULL_LOG -o {p.name}`"
         raise InputError(msg)
     sensors = {str(name): _sensor_modes(p, str(name), entry) for name, entry in table.items()}
-    return MachineReference(str(doc.get("source", p.name)), str(doc.get("learnt_on", "")), float(doc.get("max_time_constant_min", math.nan)), str(doc.get("room", "")), sensors)
+    return MachineReference(
+        str(doc.get("source", p.name)),
+        str(doc.get("learnt_on", "")),
+        float(doc.get("max_time_constant_min", math.nan)),
+        str(doc.get("room", "")),
+        sensors,
+    )
 
 
 def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
     taus = entry.get("time_constants_min") if isinstance(entry, dict) else None
-    boxes = entry.get("box", [MIN_REFERENCE_BOX] * len(taus)) if isinstance(entry, dict) and isinstance(taus, list) else None
+    boxes = (
+        entry.get("box", [MIN_REFERENCE_BOX] * len(taus))
+        if isinstance(entry, dict) and isinstance(taus, list)
+        else None
+    )
     ok = isinstance(taus, list) and isinstance(boxes, list) and 0 < len(taus) <= 3 and len(boxes) == len(taus)
     ok = ok and all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in [*taus, *boxes])  # type: ignore[misc]
     if not ok:
-        msg = f"{path}: sensor {name!r}: expected time_constants_min = [1 to 3 positive minutes] and box = [as many positive fractions]; found {entry!r}"
+        msg = (
+            f"{path}: sensor {name!r}: expected time_constants_min = [1 to 3 positive minutes] and box = [as many "
+            f"positive fractions]; found {entry!r}"
+        )
         raise InputError(msg)
     assert isinstance(taus, list) and isinstance(boxes, list) and isinstance(entry, dict)
-    return SensorModes(tuple(float(v) for v in taus), tuple(float(v) for v in boxes), tuple(float(v) for v in entry.get("amplitudes_C", [])))
+    return SensorModes(
+        tuple(float(v) for v in taus),
+        tuple(float(v) for v in boxes),
+        tuple(float(v) for v in entry.get("amplitudes_C", [])),
+    )

@@ -17,7 +17,15 @@ from scipy.special import chdtri, ndtri
 
 from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
-from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, Binned, ModeFamily, SteadyState, best_fit, bin_samples, fit_steady_state
+from mtident.thermal.modes import (
+    DEFAULT_MAX_TIME_CONSTANT_MIN,
+    Binned,
+    ModeFamily,
+    SteadyState,
+    best_fit,
+    bin_samples,
+    fit_steady_state,
+)
 from mtident.thermal.settings import display_resolution, noise_sigma
 
 if TYPE_CHECKING:
@@ -114,7 +122,12 @@ class Assumptions:
 
     def to_dict(self) -> dict[str, object]:
         """The JSON object of the contract's ``assumptions``."""
-        return {"model": self.model, "max_time_constant_min": self.max_time_constant_min, "room": self.room, "reference": self.reference}
+        return {
+            "model": self.model,
+            "max_time_constant_min": self.max_time_constant_min,
+            "room": self.room,
+            "reference": self.reference,
+        }
 
 
 @dataclass(frozen=True)
@@ -181,7 +194,10 @@ class SensorEstimate:
         for end, label in zip(self.fit.ends[level], ("low", "high"), strict=True):
             slowest = end.slowest()
             if slowest is not None:
-                words.append(f"{label} end {end.steady_C:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min with {slowest.amplitude_C:+.2f} °C still fits")
+                words.append(
+                    f"{label} end {end.steady_C:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min with "
+                    f"{slowest.amplitude_C:+.2f} °C still fits"
+                )
         return "; ".join(words)
 
 
@@ -236,7 +252,9 @@ def estimate_sensor(
     y = np.asarray(values, dtype=float)
     valid = np.isfinite(y) if room_C is None else np.isfinite(y) & np.isfinite(room_C)
     if not valid.any():
-        return _without_fit(sensor, "no data", 0.0, 0.0, float(t[0]) if len(t) else 0.0, settings, "no valid reading yet")
+        return _without_fit(
+            sensor, "no data", 0.0, 0.0, float(t[0]) if len(t) else 0.0, settings, "no valid reading yet"
+        )
     rounding = max(float(display_resolution(y[:, None])[0]), quantisation_step(y))
     noise = max(float(noise_sigma(y[:, None], t)[0]), rounding / np.sqrt(12.0)) if noise_C is None else noise_C
     notes = _Notes(sensor)
@@ -248,40 +266,105 @@ def estimate_sensor(
     rise = float(np.nanmax(np.abs(y - first)))
     threshold = rise_threshold_C(noise, rounding)
     if int((valid & ~wild).sum()) < MIN_BINS:
-        return _without_fit(sensor, "too few readings", rise, noise, float(t[0]), settings, f"{int((valid & ~wild).sum())} readings: too few for a model")
+        return _without_fit(
+            sensor,
+            "too few readings",
+            rise,
+            noise,
+            float(t[0]),
+            settings,
+            f"{int((valid & ~wild).sum())} readings: too few for a model",
+        )
     if rise < threshold:
-        return _without_fit(sensor, "no rise", rise, noise, float(t[0]), settings, f"no rise above its noise yet ({rise:.3g} °C from its first level, noise {noise:.2g} °C): no warm-up to identify")
+        return _without_fit(
+            sensor,
+            "no rise",
+            rise,
+            noise,
+            float(t[0]),
+            settings,
+            f"no rise above its noise yet ({rise:.3g} °C from its first level, noise {noise:.2g} °C): no warm-up to "
+            "identify",
+        )
     lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
     onset = lead if lead < len(t) else 0
     binned = bin_samples(t[onset:], y[onset:], None if room_C is None else np.asarray(room_C, dtype=float)[onset:])
     if len(binned) < MIN_BINS:
-        return _without_fit(sensor, "too few readings", rise, noise, float(t[onset]), settings, f"{len(binned)} readings since its warm-up began: too few for a model")
+        return _without_fit(
+            sensor,
+            "too few readings",
+            rise,
+            noise,
+            float(t[onset]),
+            settings,
+            f"{len(binned)} readings since its warm-up began: too few for a model",
+        )
     fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes, refine_within)
     intervals = _nested(_with_room_wander(fit, room_C is not None, settings))
     ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, notes)
-    return SensorEstimate(sensor, "estimated", fit, float(t[onset]), rise, noise, intervals, ok, *notes.said(), reference_used, int(wild.sum()))
+    return SensorEstimate(
+        sensor,
+        "estimated",
+        fit,
+        float(t[onset]),
+        rise,
+        noise,
+        intervals,
+        ok,
+        *notes.said(),
+        reference_used,
+        int(wild.sum()),
+    )
 
 
-def _modal_fit(binned: Binned, noise: float, interval: float, settings: RobustSettings, reference: SensorModes | None, notes: _Notes, refine_within: float | None) -> tuple[SteadyState, bool]:
+def _modal_fit(
+    binned: Binned,
+    noise: float,
+    interval: float,
+    settings: RobustSettings,
+    reference: SensorModes | None,
+    notes: _Notes,
+    refine_within: float | None,
+) -> tuple[SteadyState, bool]:
     """The fit within the reference's boxes where the test follows them, else over every model up
     to the largest time constant; and whether the reference was used."""
     family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
     if reference is not None:
         boxes = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box)
-        boxed = ModeFamily(settings.max_time_constant_min, len(reference.time_constants_min), tuple(reference.time_constants_min), boxes, free_fast=free_fast(reference, settings))
-        fit = fit_steady_state(binned, noise_C=noise, interval_min=interval, family=boxed, levels=settings.levels, refine_within=refine_within)
+        boxed = ModeFamily(
+            settings.max_time_constant_min,
+            len(reference.time_constants_min),
+            tuple(reference.time_constants_min),
+            boxes,
+            free_fast=free_fast(reference, settings),
+        )
+        fit = fit_steady_state(
+            binned,
+            noise_C=noise,
+            interval_min=interval,
+            family=boxed,
+            levels=settings.levels,
+            refine_within=refine_within,
+        )
         # the free fit costs most of a check: where the boxed answer is far from any decision, the
         # cheap tests alone decide whether to use it
-        far = refine_within is not None and fit.determined and fit.half_width(max(settings.levels)) > DECISION_MARGIN * refine_within
+        far = (
+            refine_within is not None
+            and fit.determined
+            and fit.half_width(max(settings.levels)) > DECISION_MARGIN * refine_within
+        )
         why = _disagreement(binned, noise, interval, fit, family, likelihood_ratio=not far)
         if why is None:
             return fit, True
         notes.add(
             "reference-disagrees",
-            f"this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; {why}): has the machine changed, "
+            f"this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; {why}): has the "
+            "machine changed, "
             "or did the reference run miss a mode? The answer does not use the reference",
         )
-    return fit_steady_state(binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels, refine_within=refine_within), False
+    return fit_steady_state(
+        binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels, refine_within=refine_within
+    ), False
 
 
 def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
@@ -290,7 +373,9 @@ def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
     return max(0, min(settings.free_fast_modes, settings.max_modes - len(reference.time_constants_min)))
 
 
-def describe_assumptions(settings: RobustSettings, room_sensor: str | None, reference: MachineReference | None, sensor: str) -> Assumptions:
+def describe_assumptions(
+    settings: RobustSettings, room_sensor: str | None, reference: MachineReference | None, sensor: str
+) -> Assumptions:
     """What a sensor's interval rests on, in words."""
     if room_sensor is not None:
         room = f"measured by {room_sensor!r}, an input of every mode; T∞ at the room's last level"
@@ -299,13 +384,17 @@ def describe_assumptions(settings: RobustSettings, room_sensor: str | None, refe
     else:
         room = "not measured; taken as steady"
     if reference is None or sensor not in reference.sensors:
-        return Assumptions(settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor))
+        return Assumptions(
+            settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor)
+        )
     extra = free_fast(reference.sensors[sensor], settings)
     faster = f"up to {extra} free mode(s) faster than these" if extra else "no mode faster than these (assumed)"
     return Assumptions(settings.max_time_constant_min, room, f"{reference.describe(sensor)}; {faster}")
 
 
-def _disagreement(binned: Binned, noise: float, interval: float, boxed: SteadyState, family: ModeFamily, likelihood_ratio: bool = True) -> str | None:
+def _disagreement(
+    binned: Binned, noise: float, interval: float, boxed: SteadyState, family: ModeFamily, likelihood_ratio: bool = True
+) -> str | None:
     """Why the readings do not follow the reference's boxed modes, or None where they do: residuals
     correlated like a misfit, or a fit with free time constants that is better beyond chance (a
     likelihood-ratio test at ``DISAGREEMENT_LEVEL``; a mode the reference run missed shows here
@@ -315,9 +404,14 @@ def _disagreement(binned: Binned, noise: float, interval: float, boxed: SteadySt
     if not boxed.determined:
         return None
     slowest = max(boxed.modes, key=lambda m: m.time_constant_min)
-    ceiling = max(ref * (1.0 + box) for ref, box in zip(boxed.family.reference_min or (), boxed.family.reference_box, strict=True))
+    ceiling = max(
+        ref * (1.0 + box) for ref, box in zip(boxed.family.reference_min or (), boxed.family.reference_box, strict=True)
+    )
     if slowest.time_constant_min >= ceiling * (1.0 - EDGE_SHARE):
-        return f"the slowest mode's time constant is at its box's upper end, {ceiling:.3g} min: the readings ask for a slower one"
+        return (
+            f"the slowest mode's time constant is at its box's upper end, {ceiling:.3g} min: the readings ask for a "
+            "slower one"
+        )
     if not likelihood_ratio:
         return None
     rss, n_params, factor = best_fit(binned, noise_C=noise, interval_min=interval, family=family)
@@ -336,7 +430,9 @@ def _taus(taus: tuple[float, ...]) -> str:
     return "τ " + ", ".join(f"{x:.3g}" for x in taus) + " min"
 
 
-def _with_room_wander(fit: SteadyState, room_measured: bool, settings: RobustSettings) -> dict[float, tuple[float, float]]:
+def _with_room_wander(
+    fit: SteadyState, room_measured: bool, settings: RobustSettings
+) -> dict[float, tuple[float, float]]:
     """The intervals widened by the unmeasured room's wander: the room's random walk over the last
     slowest-mode time constant (since the warm-up began) is not yet in the readings, and moves the
     steady state at the room's level with it."""
@@ -347,7 +443,10 @@ def _with_room_wander(fit: SteadyState, room_measured: bool, settings: RobustSet
     out = {}
     for q, (lo, hi) in fit.interval_C.items():
         extra = float(ndtri(0.5 + q / 2.0)) * sd
-        out[q] = (fit.steady_C - float(np.hypot(fit.steady_C - lo, extra)), fit.steady_C + float(np.hypot(hi - fit.steady_C, extra)))
+        out[q] = (
+            fit.steady_C - float(np.hypot(fit.steady_C - lo, extra)),
+            fit.steady_C + float(np.hypot(hi - fit.steady_C, extra)),
+        )
     return out
 
 
@@ -378,25 +477,47 @@ class _Notes:
         return tuple(self.texts), tuple(self.codes)
 
 
-def _verdict(fit: SteadyState, intervals: dict[float, tuple[float, float]], rise: float, threshold: float, onset_min: float | None, notes: _Notes) -> bool:
+def _verdict(
+    fit: SteadyState,
+    intervals: dict[float, tuple[float, float]],
+    rise: float,
+    threshold: float,
+    onset_min: float | None,
+    notes: _Notes,
+) -> bool:
     """``model_ok`` of one fitted sensor; its warnings go to ``notes``."""
     ok = fit.determined
     if onset_min is not None:
-        notes.add("late-start", f"flat until t = {onset_min:g} min (the warm-up began after the log); the modes are counted from there")
+        notes.add(
+            "late-start",
+            f"flat until t = {onset_min:g} min (the warm-up began after the log); the modes are counted from there",
+        )
     if fit.correlation_factor > MISFIT_FACTOR:
         ok = False
-        notes.add("misfit", f"the residuals are {fit.correlation_factor:.1f}x as correlated as noise: no sum of up to {fit.family.max_modes} modes describes these readings well (the interval is widened by that factor's square root)")
+        notes.add(
+            "misfit",
+            f"the residuals are {fit.correlation_factor:.1f}x as correlated as noise: no sum of up to "
+            f"{fit.family.max_modes} modes describes these readings well (the interval is widened by that factor's "
+            "square root)",
+        )
     level = min(intervals)
     lo, hi = intervals[level]
     if not np.isfinite(hi - lo) or (hi - lo) / 2 > max(rise, threshold):
         ok = False
-        notes.add("undetermined", f"T∞ not determined yet ({level:.0%} interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)")
+        notes.add(
+            "undetermined",
+            f"T∞ not determined yet ({level:.0%} interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)",
+        )
     return ok
 
 
-def _without_fit(sensor: str, status: str, rise: float, noise: float, onset: float, settings: RobustSettings, why: str) -> SensorEstimate:
+def _without_fit(
+    sensor: str, status: str, rise: float, noise: float, onset: float, settings: RobustSettings, why: str
+) -> SensorEstimate:
     wide = {q: (-np.inf, np.inf) for q in settings.levels}
-    return SensorEstimate(sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",), (status.replace(" ", "-"),))
+    return SensorEstimate(
+        sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",), (status.replace(" ", "-"),)
+    )
 
 
 def quantisation_step(values: FloatArray) -> float:

@@ -103,7 +103,10 @@ class RobustIdentification:
         """The measured and modelled curve of every sensor with its 95 % band, a row per time."""
         import pandas as pd
 
-        columns: dict[str, object] = {"time_min": self.time_min, "part": np.where(self.time_min <= self.window_min + 1e-9, "window", "prediction")}
+        columns: dict[str, object] = {
+            "time_min": self.time_min,
+            "part": np.where(self.time_min <= self.window_min + 1e-9, "window", "prediction"),
+        }
         for s, name in enumerate(self.sensors):
             columns[f"{name}_measured_C"] = self.measured_C[:, s]
             columns[f"{name}_model_C"] = self.curve_C[:, s]
@@ -146,7 +149,9 @@ def _model_dict(e: SensorEstimate) -> dict[str, object]:
     fit = e.fit
     return {
         "status": e.status,
-        "modes": [] if fit is None else [{"time_constant_min": m.time_constant_min, "amplitude_C": m.amplitude_C} for m in fit.modes],
+        "modes": []
+        if fit is None
+        else [{"time_constant_min": m.time_constant_min, "amplitude_C": m.amplitude_C} for m in fit.modes],
         "onset_min": finite_or_none(e.onset_min),
         "rise_C": finite_or_none(e.rise_C),
         "noise_C": finite_or_none(e.noise_C),
@@ -200,7 +205,10 @@ def identify_robust(
         raise InputError(msg)
     n = log.window(window_min)
     if n < MIN_WINDOW_SAMPLES:
-        msg = f"{log.source}: only {n} samples in the first {window_min:g} min; the identification needs at least {MIN_WINDOW_SAMPLES} (a longer window)"
+        msg = (
+            f"{log.source}: only {n} samples in the first {window_min:g} min; the identification needs at least "
+            f"{MIN_WINDOW_SAMPLES} (a longer window)"
+        )
         raise InputError(msg)
     t, y = log.time_min, log.temperature_C
     if room_C is not None and len(room_C) != len(t):
@@ -208,7 +216,10 @@ def identify_robust(
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
     estimates = tuple(
-        estimate_sensor(name, t[:n], y[:n, s], room_window, settings, None if reference is None else reference.modes(name)) for s, name in enumerate(log.sensors)
+        estimate_sensor(
+            name, t[:n], y[:n, s], room_window, settings, None if reference is None else reference.modes(name)
+        )
+        for s, name in enumerate(log.sensors)
     )
     times = _prediction_times(t, n, estimates, horizon_min)
     room_all = None if room_C is None else np.concatenate([room_C, np.full(len(times) - len(t), np.nan)])[: len(times)]
@@ -238,7 +249,9 @@ def identify_robust(
     )
 
 
-def _prediction_times(t: FloatArray, n: int, estimates: tuple[SensorEstimate, ...], horizon_min: float | None) -> FloatArray:
+def _prediction_times(
+    t: FloatArray, n: int, estimates: tuple[SensorEstimate, ...], horizon_min: float | None
+) -> FloatArray:
     """The log's times, then steps of its sampling interval to the horizon."""
     slowest = [e.fit.slowest_time_constant_min() for e in estimates if e.fit is not None and e.fit.modes]
     default = t[n - 1] + HORIZON_TIME_CONSTANTS * max(slowest, default=0.0)
@@ -249,7 +262,9 @@ def _prediction_times(t: FloatArray, n: int, estimates: tuple[SensorEstimate, ..
     return np.concatenate([t, np.arange(t[-1] + step, horizon + step / 2, step)])
 
 
-def _course(e: SensorEstimate, times: FloatArray, room_C: FloatArray | None) -> tuple[FloatArray, FloatArray, FloatArray]:
+def _course(
+    e: SensorEstimate, times: FloatArray, room_C: FloatArray | None
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The best model's course and the band of the models at the 95 % interval's ends."""
     fit = e.fit
     assert fit is not None
@@ -257,7 +272,10 @@ def _course(e: SensorEstimate, times: FloatArray, room_C: FloatArray | None) -> 
     if REPORT_LEVEL not in fit.ends:
         return curve, np.full(times.shape, -np.inf), np.full(times.shape, np.inf)
     best_modal = fitted_curve(fit, times)
-    ends = [curve + fitted_curve(fit, times, modes=end.modes, steady_C=end.steady_C) - best_modal for end in fit.ends[REPORT_LEVEL]]
+    ends = [
+        curve + fitted_curve(fit, times, modes=end.modes, steady_C=end.steady_C) - best_modal
+        for end in fit.ends[REPORT_LEVEL]
+    ]
     # the room's unmeasured wander widens T∞'s interval beyond the ends' models: the band reaches it
     lo, hi = e.interval_C[REPORT_LEVEL]
     grow = np.clip((times - fit.origin_min) / max(times[-1] - fit.origin_min, 1e-9), 0.0, 1.0)

@@ -24,7 +24,16 @@ from mtident.exceptions import InputError
 from mtident.io.follow import LogFollower
 from mtident.persist import StateFileError, load_dataclass, save_dataclass
 from mtident.thermal.hindsight import Hindsight, check_decision
-from mtident.thermal.monitor import Event, MonitorSettings, MonitorState, expected_stop, minutes, monitor_step, new_state, result
+from mtident.thermal.monitor import (
+    Event,
+    MonitorSettings,
+    MonitorState,
+    expected_stop,
+    minutes,
+    monitor_step,
+    new_state,
+    result,
+)
 
 __all__ = ["SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
 
@@ -66,11 +75,21 @@ def log_fingerprint(path: Path, length: int = FINGERPRINT_BYTES) -> tuple[str, i
     return hashlib.sha256(head).hexdigest(), len(head)
 
 
-def _settings_key(settings: MonitorSettings, sensors: list[str] | None, time_col: str | None, time_unit: str | None) -> str:
+def _settings_key(
+    settings: MonitorSettings, sensors: list[str] | None, time_col: str | None, time_unit: str | None
+) -> str:
     """Everything that changes the answer, as text: a state saved with another key is not resumed."""
     fields = dataclasses.asdict(settings)
-    fields["reference"] = None if settings.reference is None else {name: dataclasses.asdict(m) for name, m in settings.reference.sensors.items()}
-    return json.dumps({"settings": fields, "sensors": sensors, "time_col": time_col, "time_unit": time_unit}, sort_keys=True, default=str)
+    fields["reference"] = (
+        None
+        if settings.reference is None
+        else {name: dataclasses.asdict(m) for name, m in settings.reference.sensors.items()}
+    )
+    return json.dumps(
+        {"settings": fields, "sensors": sensors, "time_col": time_col, "time_unit": time_unit},
+        sort_keys=True,
+        default=str,
+    )
 
 
 class WatchSession:
@@ -140,7 +159,10 @@ class WatchSession:
         if saved.settings_key != self._key:
             differs.append("other settings or sensors")
         if differs:
-            self.notes.append(f"the state file {self.state_path} was written for {' and '.join(differs)}; starting afresh (it will be overwritten)")
+            self.notes.append(
+                f"the state file {self.state_path} was written for {' and '.join(differs)}; starting afresh (it will "
+                "be overwritten)"
+            )
             return
         self.follower = LogFollower.resume(self.path, json.loads(saved.position), time_col, time_unit)
         self.state = saved.monitor
@@ -155,7 +177,9 @@ class WatchSession:
             # taken again while the log is short: a live log's head grows to its full length
             self._fingerprint = log_fingerprint(self.path)
         position = json.dumps(self.follower.position())
-        save_dataclass(self.state_path, SavedWatch(str(self.path.resolve()), *self._fingerprint, self._key, position, self.state))
+        save_dataclass(
+            self.state_path, SavedWatch(str(self.path.resolve()), *self._fingerprint, self._key, position, self.state)
+        )
 
     # -- following ---------------------------------------------------------------------------
 
@@ -189,10 +213,16 @@ class WatchSession:
             self.state = self._new_state(self.follower.sensors)
         if self.state is None or not len(rows.time_min):
             return events
-        values, room = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if self.settings.room_sensor else (rows.temperature_C, None)
+        values, room = (
+            (rows.temperature_C[:, :-1], rows.temperature_C[:, -1])
+            if self.settings.room_sensor
+            else (rows.temperature_C, None)
+        )
         for start in range(0, len(rows.time_min), FEED_ROWS):
             part = slice(start, start + FEED_ROWS)
-            self.state, said = monitor_step(self.state, rows.time_min[part], values[part], None if room is None else room[part], self.settings)
+            self.state, said = monitor_step(
+                self.state, rows.time_min[part], values[part], None if room is None else room[part], self.settings
+            )
             events.extend(said)
             if progress is not None:
                 progress(self)
@@ -237,4 +267,6 @@ class WatchSession:
             return None
         values, room_C = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if room else (rows.temperature_C, None)
         steady = np.array([c.steady_C for c in state.checks])
-        return check_decision(state.sensors, steady, state.stop_time_min, rows.time_min, values, self.settings.tolerance_C, room_C)
+        return check_decision(
+            state.sensors, steady, state.stop_time_min, rows.time_min, values, self.settings.tolerance_C, room_C
+        )

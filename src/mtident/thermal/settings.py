@@ -87,7 +87,9 @@ def filter_config(method: str, tuning: ThermalTuning) -> FilterConfig:
     # The data-driven tuning lets R be as small as the data's noise (1e-9 °C on a noise-free
     # curve), where P⁻ − K Py Kᵀ cancels to rounding: it runs in square-root form.
     square_root = tuning.parametrisation == "slope"
-    base = FilterConfig(sigma_points=MerweScaledSigmaPoints(1.0, 2.0, 0.0), redraw=tuning.redraw, square_root=square_root, name=method)
+    base = FilterConfig(
+        sigma_points=MerweScaledSigmaPoints(1.0, 2.0, 0.0), redraw=tuning.redraw, square_root=square_root, name=method
+    )
     if method == "ukf":
         return base
     if method == "aukf":
@@ -106,7 +108,9 @@ def filter_config(method: str, tuning: ThermalTuning) -> FilterConfig:
 
 # Display steps a logger rounds to, coarsest first: decimal ones, and the binary ones of digital
 # sensors (a DS18B20 reads in steps of 1/16 °C at 12 bits, 1/2 °C at 9 bits).
-DISPLAY_STEPS_C = np.array(sorted({1.0, 0.5, 0.25, 0.125, 0.1, 0.0625, 0.05, 0.03125, 0.01, 0.005, 0.001}, reverse=True))
+DISPLAY_STEPS_C = np.array(
+    sorted({1.0, 0.5, 0.25, 0.125, 0.1, 0.0625, 0.05, 0.03125, 0.01, 0.005, 0.001}, reverse=True)
+)
 
 
 def on_display_steps(values: FloatArray) -> np.ndarray:
@@ -317,7 +321,9 @@ def tuning_from_data(time_min: FloatArray, values: FloatArray, start_min: float 
     # C = 2σ: the law reacts to residuals the noise does not explain. The papers'
     # C = 1e-4 °C, far below the noise of a PT100, makes the filter chase every
     # noisy sample (R collapses; 57 of 200 Monte Carlo runs diverged).
-    return ThermalTuning(mean, cov, q, (sigma**2)[:, None, None], threshold_C=2.0 * sigma, redraw=True, parametrisation="slope")
+    return ThermalTuning(
+        mean, cov, q, (sigma**2)[:, None, None], threshold_C=2.0 * sigma, redraw=True, parametrisation="slope"
+    )
 
 
 def preset_tuning(preset: str, n_sensors: int) -> ThermalTuning:

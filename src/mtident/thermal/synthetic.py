@@ -72,9 +72,7 @@ MIN_SENSOR_SHARE = 0.1
 # Time constants closer than this (relative) are drawn again: the lag state and an equal network
 # mode would make A defective, and near it the modal amplitudes lose digits.
 MIN_RELATIVE_GAP = 0.02
-ROOM_DRIFT_KEYS = frozenset(
-    {"amplitude_C", "period_min", "phase_rad", "slope_C_per_h", "noise_C", "rounding_C"}
-)
+ROOM_DRIFT_KEYS = frozenset({"amplitude_C", "period_min", "phase_rad", "slope_C_per_h", "noise_C", "rounding_C"})
 
 
 @dataclass(frozen=True)
@@ -235,9 +233,7 @@ class RealCurve:
 
 
 def _steady_state(machine: Machine, power: float, room: float) -> FloatArray:
-    return np.asarray(
-        np.linalg.solve(-machine.A, machine.b_heat * power + machine.b_room * room), dtype=float
-    )
+    return np.asarray(np.linalg.solve(-machine.A, machine.b_heat * power + machine.b_room * room), dtype=float)
 
 
 def _free_response(machine: Machine, h0: FloatArray, dt: float, n: int) -> FloatArray:
@@ -299,9 +295,7 @@ def _crossing_time(machine: Machine, h0: FloatArray, fraction: float) -> float:
     raise InputError("the sensor never reaches the level")  # pragma: no cover - stable A
 
 
-def room_temperature(
-    time_min: FloatArray, room_start_C: float, room_drift: Mapping[str, float] | None
-) -> FloatArray:
+def room_temperature(time_min: FloatArray, room_start_C: float, room_drift: Mapping[str, float] | None) -> FloatArray:
     """The true room temperature at the given times.
 
     room(t) = room_start + slope·t + amplitude·(sin(2πt/period + phase) − sin(phase)), so that
@@ -482,9 +476,7 @@ def _network(
     return np.asarray(A, dtype=float), capacity, convection, structure
 
 
-def _conduction(
-    rng: np.random.Generator, tau_slow: float
-) -> tuple[FloatArray, FloatArray, FloatArray, dict[str, Any]]:
+def _conduction(rng: np.random.Generator, tau_slow: float) -> tuple[FloatArray, FloatArray, FloatArray, dict[str, Any]]:
     """A shaft of unit length in N finite volumes; its slowest time constant is tau_slow."""
     n = int(rng.integers(30, 61))
     z = (np.arange(n) + 0.5) / n
@@ -631,9 +623,7 @@ def random_machine(
     structure["sensor_lag_min"] = lag
     all_taus = tuple(sorted((-1.0 / np.linalg.eigvals(A).real).tolist(), reverse=True))
     if kind == "network":
-        description = (
-            f"network {n} nodes ({structure['topology']}), tau {_format_taus(structural)} min"
-        )
+        description = f"network {n} nodes ({structure['topology']}), tau {_format_taus(structural)} min"
     else:
         description = (
             f"conduction {n} nodes, tau {_format_taus(structural[:3])}… min, bearing at "
@@ -1028,9 +1018,7 @@ def _real_curve(name: str, t: FloatArray, y: FloatArray) -> RealCurve | None:
         past = np.flatnonzero(smooth >= level)
         if past.size and past[0] > 0:
             k = int(past[0])
-            t95 = float(
-                t[k - 1] + (level - smooth[k - 1]) / (smooth[k] - smooth[k - 1]) * (t[k] - t[k - 1])
-            )
+            t95 = float(t[k - 1] + (level - smooth[k - 1]) / (smooth[k] - smooth[k - 1]) * (t[k] - t[k - 1]))
     return RealCurve(name, t, y, settled, t95, rounding, start, end, last_quarter)
 
 

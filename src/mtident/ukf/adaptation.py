@@ -83,9 +83,7 @@ def normalisation_from_reference(reference_output: FloatArray) -> FloatArray:
     return normalisation
 
 
-def residual_memory(
-    fading: FadingFactor, memory: FloatArray, first: FloatArray, innovation: FloatArray
-) -> FloatArray:
+def residual_memory(fading: FadingFactor, memory: FloatArray, first: FloatArray, innovation: FloatArray) -> FloatArray:
     """Vₖ of Eq. 22 (or V'ₖ of Eq. 25) for the new innovation εₖ, batched."""
     scaled = innovation if fading.normalisation is None else innovation / fading.normalisation
     outer = scaled[..., :, None] * scaled[..., None, :]

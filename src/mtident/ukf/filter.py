@@ -213,7 +213,9 @@ def _inflate(prior: Prior, moments: MeasurementMoments, alpha: FloatArray) -> tu
     a = alpha[..., None, None]
     root = np.sqrt(alpha)[..., None, None]
     inflated = Prior(prior.mean, a * prior.cov, None if prior.chol is None else root * prior.chol, prior.sigmas)
-    return inflated, MeasurementMoments(moments.mean, root * moments.deviations, a * moments.cov_without_noise, a * moments.cross_cov)
+    return inflated, MeasurementMoments(
+        moments.mean, root * moments.deviations, a * moments.cov_without_noise, a * moments.cross_cov
+    )
 
 
 def _joseph_factor(
@@ -243,13 +245,20 @@ def _fading(
     return fading_value(config.fading, memory, moments.cov_without_noise + emission_cov, emission_cov)
 
 
-def _with_process_cov(prior: Prior, old: FloatArray, new: FloatArray, config: FilterConfig, weights: SigmaWeights) -> Prior:
+def _with_process_cov(
+    prior: Prior, old: FloatArray, new: FloatArray, config: FilterConfig, weights: SigmaWeights
+) -> Prior:
     """The same prior with Q replaced (the sigma points do not change)."""
     cov = symmetrize(prior.cov + (new - old))
     chol = None
     if config.square_root:
         deviations = prior.sigmas - prior.mean[..., None, :]
-        chol = sqrt_factor(deviations, safe_cholesky(new, "square root of the adapted Q"), weights, "predict: rank-1 update with the centre point")
+        chol = sqrt_factor(
+            deviations,
+            safe_cholesky(new, "square root of the adapted Q"),
+            weights,
+            "predict: rank-1 update with the centre point",
+        )
     return Prior(mean=prior.mean, cov=cov, chol=chol, sigmas=prior.sigmas)
 
 

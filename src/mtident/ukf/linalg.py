@@ -67,7 +67,9 @@ def lower_factor_from_qr(columns: FloatArray) -> FloatArray:
     return np.swapaxes(upper * signs[..., :, None], -1, -2)
 
 
-def cholesky_downdate_or_mask(chol: FloatArray, vector: FloatArray, sign: float | FloatArray) -> tuple[FloatArray, FloatArray]:
+def cholesky_downdate_or_mask(
+    chol: FloatArray, vector: FloatArray, sign: float | FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """Like :func:`cholesky_update`, but returns ``(L, failed)`` instead of raising.
 
     ``failed`` (shape ...) marks the filters whose downdate would have made the
