@@ -18,7 +18,7 @@ from mtident.thermal import METHODS, identify, minimal_identification_time
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, Z95, rmse
 from mtident.thermal.lsq import cramer_rao_bound, first_order_onset
 from mtident.thermal.model import rise_transition, slope_transition, to_physical
-from mtident.thermal.settings import display_resolution, noise_sigma, quick_estimate
+from mtident.thermal.readings import display_resolution, noise_sigma, quick_estimate
 
 
 @pytest.mark.parametrize("method", METHODS)

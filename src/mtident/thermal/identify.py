@@ -27,6 +27,7 @@ from mtident.thermal.model import (
     to_physical,
     transition_for,
 )
+from mtident.thermal.readings import noise_sigma, reading_range
 from mtident.thermal.settings import (
     DEFAULT_METHOD,
     IDENTIFY_METHODS,
@@ -34,9 +35,7 @@ from mtident.thermal.settings import (
     ROBUST_METHOD,
     ThermalTuning,
     filter_config,
-    noise_sigma,
     preset_tuning,
-    reading_range,
     tuning_from_data,
 )
 from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
@@ -283,7 +282,7 @@ def model_check(
     residuals : ndarray, shape (N, S)
         Data minus the identified curve inside the window.
     sigma : ndarray, shape (S,)
-        Noise level from :func:`~mtident.thermal.settings.noise_sigma`.
+        Noise level from :func:`~mtident.thermal.readings.noise_sigma`.
 
     Returns
     -------

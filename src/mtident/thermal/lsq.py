@@ -161,7 +161,7 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     sample log: +0.3 to +0.6 °C from 60 min, outside the 95 % intervals). The
     leading samples (within the first ``lead_fraction`` of the window, at least
     3) that the best first-order fit misses by more than 2.5σ (σ from
-    :func:`~mtident.thermal.settings.noise_sigma`), and the samples right after
+    :func:`~mtident.thermal.readings.noise_sigma`), and the samples right after
     them missed by more than σ/2 on the same side (the lag's tail), are left
     out, and the fit repeated once without them. 0 for a sensor that fits from
     its first sample. Leaving out a few samples of a true first-order curve by
@@ -177,7 +177,7 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     >>> first_order_onset(t, np.column_stack([lagged, plain]) + noise).tolist()
     [4, 0]
     """
-    from mtident.thermal.settings import noise_sigma, quick_estimate
+    from mtident.thermal.readings import noise_sigma, quick_estimate
 
     t = np.asarray(time_min, dtype=float)
     y = np.asarray(values, dtype=float)

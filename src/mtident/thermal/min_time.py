@@ -31,7 +31,8 @@ from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import FIRST_ORDER_ASSUMPTIONS, MIN_WINDOW_SAMPLES, filter_window, rmse, room_input
 from mtident.thermal.lsq import first_level, fit_rise, late_onset
 from mtident.thermal.model import heat_balance_path, rise_curve
-from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, noise_sigma, preset_tuning, tuning_from_data
+from mtident.thermal.readings import noise_sigma
+from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, preset_tuning, tuning_from_data
 
 __all__ = ["MinTimeResult", "minimal_identification_time"]
 

@@ -26,7 +26,7 @@ from mtident.thermal.modes import (
     bin_samples,
     fit_steady_state,
 )
-from mtident.thermal.settings import display_resolution, noise_sigma
+from mtident.thermal.readings import display_resolution, noise_sigma
 
 if TYPE_CHECKING:
     from mtident.thermal.reference import MachineReference

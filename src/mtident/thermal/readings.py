@@ -1,0 +1,201 @@
+"""What a sensor's readings say before any model is fitted: the display step a logger rounds
+to, the noise level, and a first guess of the warm-up's start, rate and steady state.
+
+These feed every method: the first-order filters' tuning
+(:func:`~mtident.thermal.settings.tuning_from_data`), the flat-start search of
+:mod:`~mtident.thermal.lsq` and the model-robust fit's noise (:mod:`~mtident.thermal.robust`).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from mtident._typing import FloatArray
+
+__all__ = [
+    "DISPLAY_STEPS_C",
+    "display_resolution",
+    "noise_sigma",
+    "on_display_steps",
+    "quick_estimate",
+    "reading_range",
+    "step_from_grid",
+]
+
+# Display steps a logger rounds to, coarsest first: decimal ones, and the binary ones of digital
+# sensors (a DS18B20 reads in steps of 1/16 °C at 12 bits, 1/2 °C at 9 bits).
+DISPLAY_STEPS_C = np.array(
+    sorted({1.0, 0.5, 0.25, 0.125, 0.1, 0.0625, 0.05, 0.03125, 0.01, 0.005, 0.001}, reverse=True)
+)
+
+
+def on_display_steps(values: FloatArray) -> np.ndarray:
+    """(..., S, len(DISPLAY_STEPS_C)): whether each reading is a whole multiple of each step (NaN: yes)."""
+    multiples = np.asarray(values, dtype=float)[..., None] / DISPLAY_STEPS_C
+    with np.errstate(invalid="ignore"):
+        return ~(np.abs(multiples - np.round(multiples)) >= 1e-6)
+
+
+def step_from_grid(on_grid: np.ndarray, spread: FloatArray) -> FloatArray:
+    """Per sensor, the coarsest step every reading is a multiple of and the readings span at least
+    twice (a flat ``20.0`` is not a 1 °C display); 0 where there is none."""
+    usable = on_grid & (np.asarray(spread, dtype=float)[:, None] >= 2.0 * DISPLAY_STEPS_C - 1e-9)
+    return np.where(usable.any(axis=1), DISPLAY_STEPS_C[np.argmax(usable, axis=1)], 0.0)
+
+
+def display_resolution(values: FloatArray) -> FloatArray:
+    """The step each sensor's readings are rounded to (°C), 0 where none is seen: the coarsest of
+    the usual display steps (0.1, 0.01, 1/16 °C, ...) that fits every valid reading
+    (:func:`step_from_grid`).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N, S)
+    """
+    return step_from_grid(np.asarray(on_display_steps(values).all(axis=0)), np.nan_to_num(reading_range(values)))
+
+
+def reading_range(values: FloatArray) -> FloatArray:
+    """Per sensor, the highest valid reading less the lowest (NaN for a column without one)."""
+    y = np.asarray(values, dtype=float)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a column without a valid reading
+        return np.nanmax(y, axis=0) - np.nanmin(y, axis=0)
+
+
+def noise_sigma(values: FloatArray, time_min: FloatArray | None = None) -> FloatArray:
+    """Measurement noise per sensor from fourth differences, robust to spikes (MAD).
+
+    For white noise of standard deviation σ, Δ⁴y has standard deviation σ√70; a
+    smooth warm-up curve contributes only D·(λΔt)⁴ to it (about 1e-6 °C for the
+    papers' curves), so a noise-free curve gives σ ≈ 0 and is fitted exactly.
+
+    With ``time_min``, five readings in a row that are not evenly spaced (a gap
+    of rows, a missing reading) are combined with the weights of their fourth
+    divided difference, normalised: the combination that cancels any cubic at
+    those times, σ times a unit vector for white noise (Δ⁴y/√70 on an even grid).
+    Taken as if even, a 5-min gap in the papers' first 12 min put the curve's own
+    slope into σ (0.22 °C for 0.02), and the live monitor read the rise as flat.
+
+    A rounded reading (a logger's 0.01 or 0.1 °C display) is never better than
+    its rounding, q/√12 for a display step q (:func:`display_resolution`). The
+    MAD alone does not see it: on a smooth curve most fourth differences of the
+    rounded readings are exactly 0, the MAD was 0, and a filter told the noise
+    was 1e-9 °C chased the rounding off course (a clean 0.1 °C log ended in a
+    Cholesky failure, a 0.01 °C one never stopped the live monitor).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N, S)
+    time_min : ndarray, shape (N,), optional
+        The readings' times; without them the readings are taken as evenly spaced.
+    """
+    out = []
+    y_all = np.asarray(values, dtype=float)
+    t_all = np.arange(len(y_all), dtype=float) if time_min is None else np.asarray(time_min, dtype=float)
+    for column in y_all.T:
+        finite = np.isfinite(column)
+        d4 = _unit_fourth_differences(t_all[finite], column[finite])
+        if d4.size < 3:
+            out.append(0.05)
+            continue
+        sigma = np.median(np.abs(d4 - np.median(d4))) * 1.4826
+        spacing = np.diff(t_all[finite])
+        broken = not finite.all() or bool(np.ptp(spacing) > 1e-6 * max(float(np.median(spacing)), 1e-12))
+        if broken and d4.size < _FEW_DIFFERENCES:
+            # A handful of differences around missing readings can all be small by chance (4 gave
+            # 0.003 °C for 0.02 in a monitor's first 10 min with readings missing, and its filter took
+            # every later reading for a spike); the residuals of a cubic through the short window use
+            # every reading, and the larger of the two is kept. (A complete short window keeps the
+            # differences alone: a cubic cannot follow a late start's kink, 0.038 °C for 0.02.)
+            sigma = max(sigma, _cubic_residual_sigma(t_all[finite], column[finite]))
+        out.append(max(sigma, 1e-9))
+    return np.maximum(np.array(out), display_resolution(values) / np.sqrt(12.0))
+
+
+# below this many fourth differences around missing readings, their MAD alone is no noise estimate to trust
+_FEW_DIFFERENCES = 10
+
+
+def _cubic_residual_sigma(t: FloatArray, y: FloatArray) -> float:
+    """σ from the residuals of a least-squares cubic in time (len(y) − 4 degrees of freedom); a short
+    window of a smooth warm-up bends less than a cubic can follow."""
+    if len(y) < 6:
+        return 0.0
+    scaled = (t - t.mean()) / max(float(np.ptp(t)), 1e-9)
+    residuals = y - np.polyval(np.polyfit(scaled, y, 3), scaled)
+    return float(np.sqrt(np.sum(residuals**2) / (len(y) - 4)))
+
+
+def _unit_fourth_differences(t: FloatArray, y: FloatArray) -> FloatArray:
+    """Each five readings in a row combined by their normalised fourth divided difference: zero for
+    any cubic through them, σ times a unit vector for white noise (Δ⁴y/√70 on an even grid)."""
+    if len(y) < 5:
+        return np.empty(0)
+    windows = np.lib.stride_tricks.sliding_window_view(np.arange(len(y)), 5)
+    times, readings = t[windows], y[windows]
+    apart = times[:, :, None] - times[:, None, :]
+    apart[:, np.arange(5), np.arange(5)] = 1.0
+    with np.errstate(divide="ignore", invalid="ignore"):  # two readings at one time: no difference there
+        weights = 1.0 / np.prod(apart, axis=2)
+        weights /= np.linalg.norm(weights, axis=1, keepdims=True)
+        combined = np.sum(weights * readings, axis=1)
+    return combined[np.isfinite(combined)]
+
+
+def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """T₀, λ and T∞ per sensor from the means of three equal thirds of the window.
+
+    For T = T∞ + D e^(−λt), segment means A₁, A₂, A₃ spaced τ apart satisfy
+    (A₃ − A₂)/(A₂ − A₁) = e^(−λτ), independent of D. Where the ratio is not in
+    (0, 1) (no curvature yet, or noise), λ falls back to 3/window — a curve
+    still rising steeply at the end of the window. Each sensor is taken on a
+    uniform grid over its own span from its first to its last valid reading
+    (missing readings and gaps interpolated), so T₀ is its first valid reading.
+
+    Returns
+    -------
+    start_C, rate_per_min, steady_C : ndarray, shape (S,)
+    """
+    t = np.asarray(time_min, dtype=float)
+    y = np.asarray(values, dtype=float)
+    # Each sensor on a uniform grid over its own valid span, its readings interpolated onto it: the
+    # thirds' formula needs equally spaced thirds of equal weight. A missing reading left out of its
+    # third's mean tilted the mean against the third's mean time (three of them on the noiseless
+    # papers' curve gave λ = 0.107/min, T∞ = 21.0 °C), and a gap of rows made the thirds unequal
+    # (a 6-min gap: T∞ 20.9 °C); a filter started from that guess inherited it.
+    n, S = y.shape
+    grid_t = np.tile(t[:, None], (1, S))
+    grid_y = np.full((n, S), np.nan)
+    start = np.full(S, np.nan)  # each sensor's first valid reading
+    for s in range(S):
+        valid = np.isfinite(y[:, s])
+        if not valid.any():
+            continue
+        start[s] = y[valid, s][0]
+        if valid.sum() >= 2:
+            grid_t[:, s] = np.linspace(t[valid][0], t[valid][-1], n)
+            grid_y[:, s] = np.interp(grid_t[:, s], t[valid], y[valid, s])
+        else:
+            grid_y[:, s] = start[s]
+    size = n // 3
+    thirds = [np.arange(n - 3 * size + j * size, n - 3 * size + (j + 1) * size) for j in range(3)]
+    seg_t = np.stack([grid_t[i].mean(axis=0) for i in thirds])  # (3, S)
+    seg_y = np.stack([grid_y[i].mean(axis=0) for i in thirds])
+    tau = (seg_t[2] - seg_t[0]) / 2.0
+    d1, d2 = seg_y[1] - seg_y[0], seg_y[2] - seg_y[1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = d2 / d1
+    span = np.maximum(grid_t[-1] - grid_t[0], 1e-9)
+    fallback = 3.0 / span
+    ok = (ratio > 0.05) & (ratio < 0.98) & np.isfinite(ratio) & (tau > 0)
+    rate = np.where(ok, -np.log(np.where(ok, ratio, 0.5)) / np.where(ok, tau, 1.0), fallback)
+    # Segment means are A_j = T∞ + D·m_j with m_j the segment mean of e^(−λt).
+    m = np.stack([np.exp(-rate[None, :] * (grid_t[i] - grid_t[0][None, :])).mean(axis=0) for i in thirds])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        amplitude = (seg_y[2] - seg_y[0]) / (m[2] - m[0])
+        steady = seg_y[0] - amplitude * m[0]
+    steady = np.where(np.isfinite(steady), steady, seg_y[2])
+    return start, rate, steady
