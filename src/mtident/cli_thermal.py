@@ -648,4 +648,4 @@ def inspect_command(
         console.print(f"note: {note}", highlight=False)
 
 
-from mtident import cli_watch  # noqa: E402,F401 - registers `thermal watch` on the group
+from mtident import cli_watch  # noqa: E402,F401 - registers `thermal watch` and `thermal report` on the group

@@ -33,6 +33,7 @@ from mtident.cli_thermal import (
     thermal,
 )
 from mtident.exceptions import InputError
+from mtident.io.logs import SAMPLES
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
 from mtident.thermal.robust import RobustSettings
@@ -42,47 +43,88 @@ from mtident.thermal.session import WatchSession, default_state_path
 _SAID = ("note", "warning", "ready", "not ready", "stop")
 
 
+def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
+    """The options of the stop decision, shared by watch and report."""
+    options = [
+        click.option(
+            "--tolerance",
+            "tolerance_C",
+            type=FiniteFloatRange(min=0, min_open=True),
+            default=0.2,
+            show_default=True,
+            help="A sensor may stop when every model the data allow puts T∞ within this of the estimate (°C).",
+        ),
+        click.option(
+            "--confidence",
+            "decision_level",
+            type=FiniteFloatRange(min=0.5, max=0.999),
+            default=0.99,
+            show_default=True,
+            help="Confidence level of the interval the decision uses.",
+        ),
+        max_time_constant_option,
+        reference_option,
+        free_fast_option,
+        click.option(
+            "--ambient",
+            "ambient_col",
+            metavar="NAME",
+            help=(
+                "Room-temperature column: the room becomes an input of every mode's heat balance, so a drifting room "
+                "does not "
+                "fool the rule."
+            ),
+        ),
+        click.option(
+            "--room-wander",
+            "room_wander",
+            type=FiniteFloatRange(min=0.0),
+            default=0.05,
+            show_default=True,
+            help=(
+                "Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 "
+                "takes the "
+                "room as steady."
+            ),
+        ),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return func
+
+
+def state_file(file: str, path: Path, given: str | None) -> Path:
+    """The state file: the one given, else beside the log; for a shipped sample, in the current
+    folder (not inside the installed package)."""
+    if given:
+        return Path(given)
+    return Path.cwd() / default_state_path(path).name if file in SAMPLES else default_state_path(path)
+
+
+def monitor_settings(
+    tolerance_C: float,
+    decision_level: float,
+    max_tau_min: float,
+    reference_path: str | None,
+    free_fast_modes: int,
+    ambient_col: str | None,
+    room_wander: float,
+) -> MonitorSettings:
+    """The decision's settings from the options of :func:`decision_options`."""
+    return MonitorSettings(
+        tolerance_C=tolerance_C,
+        decision_level=decision_level,
+        robust=RobustSettings(
+            max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
+        ),
+        reference=load_reference_file(reference_path),
+        room_sensor=ambient_col,
+    )
+
+
 @thermal.command("watch")
 @log_options
-@click.option(
-    "--tolerance",
-    "tolerance_C",
-    type=FiniteFloatRange(min=0, min_open=True),
-    default=0.2,
-    show_default=True,
-    help="A sensor may stop when every model the data allow puts T∞ within this of the estimate (°C).",
-)
-@click.option(
-    "--confidence",
-    "decision_level",
-    type=FiniteFloatRange(min=0.5, max=0.999),
-    default=0.99,
-    show_default=True,
-    help="Confidence level of the interval the decision uses.",
-)
-@max_time_constant_option
-@reference_option
-@free_fast_option
-@click.option(
-    "--ambient",
-    "ambient_col",
-    metavar="NAME",
-    help=(
-        "Room-temperature column: the room becomes an input of every mode's heat balance, so a drifting room does not "
-        "fool the rule."
-    ),
-)
-@click.option(
-    "--room-wander",
-    "room_wander",
-    type=FiniteFloatRange(min=0.0),
-    default=0.05,
-    show_default=True,
-    help=(
-        "Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 takes the "
-        "room as steady."
-    ),
-)
+@decision_options
 @click.option(
     "--replay",
     is_flag=True,
@@ -169,14 +211,8 @@ def watch_command(
     if replay and not path.is_file():
         msg = f"{path}: no such file"
         raise InputError(msg)
-    settings = MonitorSettings(
-        tolerance_C=tolerance_C,
-        decision_level=decision_level,
-        robust=RobustSettings(
-            max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
-        ),
-        reference=load_reference_file(reference_path),
-        room_sensor=ambient_col,
+    settings = monitor_settings(
+        tolerance_C, decision_level, max_tau_min, reference_path, free_fast_modes, ambient_col, room_wander
     )
     followed = _workbook_as_replayed_csv(path) if replay else path
     session = WatchSession(
@@ -185,7 +221,7 @@ def watch_command(
         sensors=asked_sensors(sensors, path) or None,
         time_col=time_col,
         time_unit=time_unit,
-        state_path=Path(state_path) if state_path else default_state_path(path),
+        state_path=state_file(file, path, state_path),
         resume=resume or not replay,
     )
     for note in session.notes:
@@ -443,3 +479,4 @@ def _workbook_as_replayed_csv(path: Path) -> Path:
     copy = folder / f"{path.stem}.csv"
     copy.write_bytes(workbook_as_csv(path, path))
     return copy
+from mtident import cli_report  # noqa: E402,F401 - registers `thermal report` (it shares the decision options)

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.follow import LogFollower
 from mtident.persist import StateFileError, load_dataclass, save_dataclass
@@ -259,14 +260,22 @@ class WatchSession:
         state = self.state
         if state is None or not state.stopped:
             return None
-        room = self.settings.room_sensor
-        columns = [*state.sensors, *([room] if room else [])]
-        reader = LogFollower(self.path, columns, self.follower.time_col, self.follower.time_unit, room=room)
-        rows = reader.poll()
-        if not len(rows.time_min) or rows.time_min[-1] <= state.stop_time_min:
+        time_min, values, room_C = self.whole_log()
+        if not len(time_min) or time_min[-1] <= state.stop_time_min:
             return None
-        values, room_C = (rows.temperature_C[:, :-1], rows.temperature_C[:, -1]) if room else (rows.temperature_C, None)
         steady = np.array([c.steady_C for c in state.checks])
         return check_decision(
-            state.sensors, steady, state.stop_time_min, rows.time_min, values, self.settings.tolerance_C, room_C
+            state.sensors, steady, state.stop_time_min, time_min, values, self.settings.tolerance_C, room_C
         )
+
+    def whole_log(self) -> tuple[FloatArray, FloatArray, FloatArray | None]:
+        """The watched sensors' readings (T, S) over the whole log, read again, and the room's
+        (None without a room sensor); empty before the log's header is read."""
+        if self.state is None:
+            return np.empty(0), np.empty((0, 0)), None
+        room = self.settings.room_sensor
+        columns = [*self.state.sensors, *([room] if room else [])]
+        rows = LogFollower(self.path, columns, self.follower.time_col, self.follower.time_unit, room=room).poll()
+        if room:
+            return rows.time_min, rows.temperature_C[:, :-1], rows.temperature_C[:, -1]
+        return rows.time_min, rows.temperature_C, None

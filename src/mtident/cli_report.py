@@ -1,0 +1,96 @@
+"""`mtident thermal report`: a finished or stopped warm-up test written up as HTML or PDF."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from mtident.cli import OutputPath, user_errors
+from mtident.cli_thermal import asked_sensors, log_options, log_path, stderr, thermal
+from mtident.cli_watch import _workbook_as_replayed_csv, decision_options, monitor_settings, state_file
+from mtident.exceptions import InputError
+from mtident.thermal.monitor import minutes
+from mtident.thermal.session import WatchSession
+
+REPORT_FORMATS = (".html", ".htm", ".pdf")
+
+
+@thermal.command("report")
+@log_options
+@decision_options
+@click.option(
+    "-o",
+    "--output",
+    "output_path",
+    type=OutputPath(),
+    required=True,
+    help="The report: .html (one self-contained page, the figure embedded) or .pdf (A4).",
+)
+@click.option(
+    "--state",
+    "state_path",
+    type=click.Path(dir_okay=False),
+    help="The state file of a watch of this log, to start from (default: beside the log, LOG.watch-state.npz).",
+)
+@user_errors
+def report_command(
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    tolerance_C: float,
+    decision_level: float,
+    max_tau_min: float,
+    reference_path: str | None,
+    free_fast_modes: int,
+    ambient_col: str | None,
+    room_wander: float,
+    output_path: str,
+    state_path: str | None,
+) -> None:
+    """Write up a finished or stopped warm-up test of FILE for the customer.
+
+    The report holds the setup, per sensor the measured curve with the predicted curve and its
+    band, T∞ with its interval, λ and t_eq, the decision and when it came, the check against the
+    rest of the log where the log runs on, the warnings, what the answer assumes, the method and
+    the software version. The decision is the one `thermal watch` reaches with the same options;
+    where a watch of this log left its state file, the report starts from it.
+    """
+    output = Path(output_path)
+    if output.suffix.lower() not in REPORT_FORMATS:
+        msg = f"-o {output_path}: the report is written as HTML or PDF; give a name ending in .html or .pdf"
+        raise InputError(msg)
+    path = log_path(file)
+    if not path.is_file():
+        msg = f"{path}: no such file"
+        raise InputError(msg)
+    settings = monitor_settings(
+        tolerance_C, decision_level, max_tau_min, reference_path, free_fast_modes, ambient_col, room_wander
+    )
+    session = WatchSession(
+        _workbook_as_replayed_csv(path),
+        settings,
+        sensors=asked_sensors(sensors, path) or None,
+        time_col=time_col,
+        time_unit=time_unit,
+        state_path=state_file(file, path, state_path),
+    )
+    for note in session.notes:
+        stderr.print(f"mtident: {note}", highlight=False)
+    from mtident.report.test_report import build_report, write_html, write_pdf
+
+    with stderr.status("reading the log…") as status:
+
+        def progress(current: WatchSession) -> None:
+            if current.state is not None:
+                status.update(f"deciding: t = {minutes(current.state.readings.latest_min)} min of the log")
+
+        report = build_report(session, progress)
+    written = write_pdf(report, output) if output.suffix.lower() == ".pdf" else write_html(report, output)
+    verdict = (
+        f"the test could stop at t = {minutes(report.stop_time_min)} min"
+        if report.decision == "stop"
+        else "no stop within the log"
+    )
+    click.echo(f"{written}: {verdict}")

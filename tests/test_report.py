@@ -1,0 +1,77 @@
+"""`mtident thermal report`: the write-up of a finished or stopped warm-up test."""
+
+from __future__ import annotations
+
+import numpy as np
+from click.testing import CliRunner
+from test_watch import T, csv_text, first_order, noisy, one_mode_reference
+
+from mtident.cli import main
+from mtident.thermal.reference import save_reference
+
+
+def report(*args: str) -> tuple[int, str, str]:
+    outcome = CliRunner().invoke(main, ["thermal", "report", *args], catch_exceptions=False)
+    return outcome.exit_code, outcome.stdout, outcome.stderr
+
+
+def logged_test(tmp_path, steady_b: float = 29.0):  # noqa: ANN001, ANN201
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T, {"A": noisy(first_order(T), 21), "B": noisy(first_order(T, steady=steady_b), 22)}))
+    reference = tmp_path / "machine.toml"
+    save_reference(one_mode_reference("A", "B"), reference)
+    return log, reference
+
+
+def test_the_html_report_says_the_decision_each_sensor_and_what_it_rests_on(tmp_path):
+    log, reference = logged_test(tmp_path)
+    out = tmp_path / "report.html"
+    code, stdout, err = report(str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out))
+    assert code == 0, err
+    assert stdout.startswith(f"{out}: the test could stop at t = ")
+    page = out.read_text(encoding="utf-8")
+    stop = float(stdout.split("t = ")[1].split()[0])
+    assert f"The test could stop at t = {stop:g} min" in page and 50 <= stop <= 80
+    assert page.count("<td>A</td>") == 1 and page.count("<td>B</td>") == 1
+    assert "every sensor that settled (2) is within the tolerance (0.2 °C)" in page
+    assert "no mode faster than these (assumed)" in page and "time constants up to 300 min" in page
+    assert 'src="data:image/png;base64,' in page and "Made with mtident" in page
+    # T∞ of each sensor in its row, within the tolerance of the truth
+    for truth in (26.7, 29.0):
+        assert any(abs(float(cell) - truth) < 0.2 for cell in _cells(page, 2))
+
+
+def _cells(page: str, column: int) -> list[str]:
+    rows = page.split("<tr>")[2:]
+    return [row.split("<td")[column + 1].split(">", 1)[1].split("<")[0] for row in rows]
+
+
+def test_the_pdf_report_has_the_summary_and_the_curves(tmp_path):
+    log, reference = logged_test(tmp_path)
+    out = tmp_path / "report.pdf"
+    code, _, err = report(str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out))
+    assert code == 0, err
+    data = out.read_bytes()
+    assert data.startswith(b"%PDF") and data.count(b"/Type /Page\n") + data.count(b"/Type /Page ") >= 2
+
+
+def test_a_test_that_cannot_stop_is_reported_with_the_reason(tmp_path):
+    t = np.arange(0.0, 90.0)
+    log = tmp_path / "short.csv"
+    log.write_text(csv_text(t, {"S": noisy(first_order(t), 23)}))
+    out = tmp_path / "short.html"
+    code, stdout, err = report(str(log), "-o", str(out))
+    assert code == 0, err
+    assert stdout.endswith("no stop within the log\n")
+    page = out.read_text(encoding="utf-8")
+    assert "No stop within the log (to 89 min)" in page and "Why not yet:" in page and "still fits" in page
+
+
+def test_report_refuses_what_it_cannot_write_or_read(tmp_path):
+    log, _ = logged_test(tmp_path)
+    code, _, err = report(str(log), "-o", str(tmp_path / "report.docx"))
+    assert code == 2 and "give a name ending in .html or .pdf" in err
+    code, _, err = report(str(tmp_path / "none.csv"), "-o", str(tmp_path / "r.html"))
+    assert code == 2 and "no such file" in err
+    code, _, err = report(str(log), "-o", str(tmp_path / "missing" / "r.html"))
+    assert code == 2 and "does not exist" in err
