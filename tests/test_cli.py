@@ -519,3 +519,22 @@ def test_watch_replays_a_workbook(tmp_path):
             and "an Excel workbook is not written row by row" in live.stderr
             and "Traceback" not in live.stderr
         )
+
+
+def test_the_command_line_says_options_where_the_library_names_its_parameters(tmp_path):
+    """The library's messages name its parameters (`time_unit='d'`); the command says the option
+    instead, in an error, a note and the JSON alike."""
+    from mtident.cli import as_options
+
+    assert as_options("give `time_unit='s'`; `sensors=[NAME]` reads it; a longer `window_min`") == (
+        "give --time-unit s; --sensor NAME reads it; a longer --window"
+    )
+    assert as_options("`other` and `time_unit`") == "`other` and --time-unit"
+    serial = tmp_path / "serial.csv"
+    serial.write_text("Time,T1\n" + "".join(f"{46348.333333 + k / 1440:.8f},{20 + k / 100:.2f}\n" for k in range(60)))
+    out = mtident("thermal", "identify", str(serial), "--method", "lsq")
+    assert out.returncode == 2 and "not minutes: give --time-unit d (or --time-unit min if it is minutes)" in out.stderr
+    seconds = tmp_path / "seconds.csv"
+    seconds.write_text("Time,T1\n" + "".join(f"{s},{20 + s / 7200:.4f}\n" for s in range(0, 7201, 60)))
+    info = json.loads(mtident("thermal", "inspect", str(seconds), "--json").stdout)
+    assert any("if it is in seconds, give --time-unit s" in note for note in info["notes"])

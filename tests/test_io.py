@@ -790,7 +790,7 @@ def test_a_time_column_in_seconds_read_as_minutes_gets_a_hint(write_csv, tmp_pat
     text = "Time,T1\n" + "".join(f"{s},{20 + s / 7200:.4f}\n" for s in range(0, 7201, 10))
     log = read_temperature_log(write_csv(text))
     assert any(
-        "time column 'Time' is read as minutes" in n and "7200 min (5.0 days)" in n and "--time-unit s" in n
+        "time column 'Time' is read as minutes" in n and "7200 min (5.0 days)" in n and "give `time_unit='s'`" in n
         for n in log.notes
     )
     assert not any("read as minutes" in n for n in read_temperature_log(write_csv(text), time_unit="s").notes)
@@ -926,7 +926,7 @@ def test_spreadsheet_serial_dates_are_named_not_read_as_minutes(write_csv):
     path = write_csv("Time,T1\n" + rows)
     with pytest.raises(
         InputError,
-        match=r"'Time' looks like spreadsheet serial dates \(days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00\), not minutes: give --time-unit d",
+        match=r"'Time' looks like spreadsheet serial dates \(days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00\), not minutes: give `time_unit='d'`",
     ):
         read_temperature_log(path)
     np.testing.assert_allclose(read_temperature_log(path, time_unit="d").time_min, np.arange(60.0), atol=1e-4)
@@ -934,7 +934,7 @@ def test_spreadsheet_serial_dates_are_named_not_read_as_minutes(write_csv):
     dated = write_csv("Date,T1\n" + rows, "dated.csv")
     log = read_temperature_log(dated)
     np.testing.assert_allclose(log.time_min, np.arange(60.0), atol=1e-4)
-    said = "time column 'Date' read as spreadsheet serial dates (days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00); give --time-unit min if it is minutes"
+    said = "time column 'Date' read as spreadsheet serial dates (days since 30.12.1899: 46348.33333 is 22.11.2026 08:00:00); give `time_unit='min'` if it is minutes"
     assert log.notes == (said,)
     live = write_csv("Date,T1\n" + "".join(rows.splitlines(True)[:30]), "live.csv")
     follower = LogFollower(live)
@@ -993,7 +993,7 @@ def test_real_logger_exports_name_their_channels_and_leave_out_the_rest(write_cs
     log = read_temperature_log(write_csv(tinytag))
     assert log.sensors == ("1",)
     assert (
-        "left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; --sensor reads one "
+        "left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; `sensors` reads one "
         "all the same): 3" in log.notes
     )
     assert read_temperature_log(write_csv(tinytag), sensors=["3"]).temperature_C[0, 0] == 8.0
@@ -1017,7 +1017,7 @@ def test_real_logger_exports_name_their_channels_and_leave_out_the_rest(write_cs
     )
     log = read_temperature_log(write_csv(easylog))
     assert log.sensors == ("Celsius(°C)",) and any(
-        n.endswith("heat index; --sensor reads one all the same): Dew Point(°C)") for n in log.notes
+        n.endswith("heat index; `sensors` reads one all the same): Dew Point(°C)") for n in log.notes
     )
     tandd = ",Date/Time,No.1,No.2,No.3,No.4,\n,Date/Time,ch1,ch2,ch3,ch4,\n,,lx,mW/cm2,°C,%,\n"
     tandd += "".join(
@@ -1169,7 +1169,7 @@ def test_a_log_of_nothing_but_left_out_columns_says_what_it_left_out(write_csv):
     """With every column left out, the message listed nothing: 'no temperature column: its name gives '."""
     with pytest.raises(
         InputError,
-        match=r"no temperature column; left out: Status \(the logger's own record\); by its name: RH/% \(%\) \(--sensor NAME",
+        match=r"no temperature column; left out: Status \(the logger's own record\); by its name: RH/% \(%\) \(`sensors=\[NAME\]`",
     ):
         read_temperature_log(write_csv("time,Status,RH/%\n" + "".join(f"{k},1,50\n" for k in range(6))))
 

@@ -9,12 +9,14 @@ from __future__ import annotations
 import importlib
 import json
 import math
+import re
 import sys
 from collections.abc import Callable
 from functools import wraps
 from typing import Any, TypeVar
 
 import click
+from rich.console import Console
 
 from mtident import __version__
 from mtident.exceptions import MtidentError
@@ -22,9 +24,53 @@ from mtident.exceptions import MtidentError
 F = TypeVar("F", bound=Callable[..., Any])
 
 
+# The library's messages name its parameters in backticks (`time_unit='s'`); the command line says
+# the option instead (--time-unit s).
+_OPTION_OF = {
+    "time_unit": "--time-unit",
+    "time_col": "--time-col",
+    "sensors": "--sensor",
+    "window_min": "--window",
+    "max_time_constant_min": "--max-time-constant",
+    "ambient_C": "--ambient",
+}
+_PARAMETER = re.compile(r"`(\w+)(?:=(?:'([^']*)'|\[([^\]]*)\]))?`")
+
+
+def as_options(text: str) -> str:
+    """A library message as the command line says it: each parameter named in backticks, with
+    its value, becomes the option (``time_unit='s'`` -> ``--time-unit s``)."""
+
+    def option(match: re.Match[str]) -> str:
+        flag = _OPTION_OF.get(match[1])
+        if flag is None:
+            return match[0]
+        value = match[2] if match[2] is not None else match[3]
+        return f"{flag} {value}" if value else flag
+
+    return _PARAMETER.sub(option, text)
+
+
+def _said_as_options(value: Any) -> Any:
+    if isinstance(value, str):
+        return as_options(value)
+    if isinstance(value, dict):
+        return {k: _said_as_options(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_said_as_options(v) for v in value]
+    return value
+
+
+class OptionConsole(Console):
+    """A rich Console that says the library's parameters as the command line's options."""
+
+    def print(self, *objects: Any, **kwargs: Any) -> None:
+        super().print(*(as_options(o) if isinstance(o, str) else o for o in objects), **kwargs)
+
+
 def print_json(payload: dict[str, Any]) -> None:
-    """Exactly one JSON object on stdout."""
-    click.echo(json.dumps(payload, indent=2, sort_keys=True, allow_nan=False))
+    """Exactly one JSON object on stdout (the library's parameters said as options)."""
+    click.echo(json.dumps(_said_as_options(payload), indent=2, sort_keys=True, allow_nan=False))
 
 
 class FiniteFloatRange(click.FloatRange):
@@ -94,7 +140,7 @@ def user_errors(func: F) -> F:
         try:
             return func(*args, **kwargs)
         except (MtidentError, OSError) as exc:
-            click.echo(f"mtident: error: {exc}", err=True)
+            click.echo(f"mtident: error: {as_options(str(exc))}", err=True)
             sys.exit(2)
 
     return wrapper  # type: ignore[return-value]

@@ -9,10 +9,9 @@ from typing import TYPE_CHECKING, Literal, TypedDict
 
 import click
 import numpy as np
-from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, OutputPath, PicturePath, print_json, thermal, user_errors
+from mtident.cli import FiniteFloatRange, OptionConsole, OutputPath, PicturePath, print_json, thermal, user_errors
 from mtident.exceptions import InputError
 from mtident.io.columns import room_named
 from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
@@ -25,7 +24,7 @@ from mtident.thermal.settings import IDENTIFY_METHODS, ROBUST_METHOD
 if TYPE_CHECKING:
     from mtident.thermal.robust_identify import RobustIdentification
 
-stderr = Console(stderr=True, soft_wrap=True)
+stderr = OptionConsole(stderr=True, soft_wrap=True)
 
 
 def log_path(file: str) -> Path:
@@ -374,7 +373,7 @@ def _identify_table(
             "yes" if d["model_ok"] else "[yellow]no[/]",
             measured,
         )
-    console = Console(width=max(Console().width, 100))
+    console = OptionConsole(width=max(OptionConsole().width, 100))
     console.print(table)
     assumed = summaries[0]["assumptions"]
     assert isinstance(assumed, dict)
@@ -462,7 +461,7 @@ def learn_command(
     for name, m in reference.sensors.items():
         taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(m.time_constants_min, m.box, strict=True))
         table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C))
-    Console(width=max(Console().width, 100)).print(table)
+    OptionConsole(width=max(OptionConsole().width, 100)).print(table)
 
 
 def _float_list(text: str, option: str) -> list[float]:
@@ -578,7 +577,7 @@ def min_time_command(
             *best,
             "yes" if d["periods_agree"] else "[yellow]no[/]",
         )
-    Console(width=max(Console().width, 100)).print(table)
+    OptionConsole(width=max(OptionConsole().width, 100)).print(table)
 
 
 @thermal.command("inspect")
@@ -602,7 +601,7 @@ def inspect_command(
         return
     fmt, time = info["format"], info["time"]
     assert isinstance(fmt, dict) and isinstance(time, dict)
-    console = Console(soft_wrap=True)  # a line per fact, as a terminal or a file shows it
+    console = OptionConsole(soft_wrap=True)  # a line per fact, as a terminal or a file shows it
     rows_under = fmt["rows_under_header"]
     text = (
         ""

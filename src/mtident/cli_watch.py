@@ -14,10 +14,9 @@ from pathlib import Path
 
 import click
 import numpy as np
-from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, PicturePath, print_json, user_errors
+from mtident.cli import FiniteFloatRange, OptionConsole, PicturePath, print_json, user_errors
 from mtident.cli_thermal import (
     _column_layout,
     _fmt,
@@ -262,7 +261,7 @@ def _follow(
     last_plot = 0.0
     said_room = False
     try:
-        with Live(console=Console(), auto_refresh=False, transient=False) if live else _Nothing() as view:
+        with Live(console=OptionConsole(), auto_refresh=False, transient=False) if live else _Nothing() as view:
 
             def redraw(s: WatchSession) -> None:
                 view.update(_status_table(s, path), refresh=True)
@@ -319,7 +318,7 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     if as_json:
         print_json(outcome if hindsight is None else {**outcome, "hindsight": hindsight.to_dict()})
         return
-    console = Console(width=max(Console().width, 100))
+    console = OptionConsole(width=max(OptionConsole().width, 100))
     console.print(_status_table(session, path))
     state = session.state
     assert state is not None
@@ -417,9 +416,9 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             shown,
             _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0),
         )
-    Console(width=max(Console().width, 100)).print(table)
+    OptionConsole(width=max(OptionConsole().width, 100)).print(table)
     if not settled.any():
-        Console().print("The log ends before its sensors settled: nothing to check the decision against.")
+        OptionConsole().print("The log ends before its sensors settled: nothing to check the decision against.")
         return
     beyond = [
         name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok
@@ -446,7 +445,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         else f"{minutes(-saved)} min before the stop: the rule saved no time on this log"
     )
     not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
-    Console().print(f"{verdict[0].upper()}{verdict[1:]}; {timing}{not_settled}.", highlight=False)
+    OptionConsole().print(f"{verdict[0].upper()}{verdict[1:]}; {timing}{not_settled}.", highlight=False)
 
 
 class _Nothing:
@@ -479,4 +478,6 @@ def _workbook_as_replayed_csv(path: Path) -> Path:
     copy = folder / f"{path.stem}.csv"
     copy.write_bytes(workbook_as_csv(path, path))
     return copy
+
+
 from mtident import cli_report  # noqa: E402,F401 - registers `thermal report` (it shares the decision options)

@@ -236,7 +236,7 @@ def temperature_columns(
         notes.append(f"left out, the logger's own records: {', '.join(events)}")
     if computed:
         notes.append(
-            "left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; --sensor reads "
+            "left out, computed from the humidity (a dew point, wet-bulb temperature or heat index; `sensors` reads "
             f"one all the same): {', '.join(computed)}"
         )
     if other:
@@ -250,7 +250,8 @@ def temperature_columns(
         if other:
             left_out.append(f"by {by}: {', '.join(other)}")
         msg = (
-            f"{source}: no temperature column; left out: {'; '.join(left_out)} (--sensor NAME reads a column all the "
+            f"{source}: no temperature column; left out: {'; '.join(left_out)} (`sensors=[NAME]` reads a column all "
+            "the "
             "same, if it is a temperature)"
         )
         raise InputError(msg)

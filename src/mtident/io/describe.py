@@ -89,9 +89,9 @@ def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect:
     factor = time_unit_factor(name, time_unit, stated)
     unit = next(unit for unit, minutes in TIME_UNITS.items() if minutes == factor)
     if time_unit is not None:
-        return f"numbers in {unit} (--time-unit)"
+        return f"numbers in {unit} (`time_unit`)"
     return (
-        f"numbers in {unit} (assumed: no unit in its name, a units row or --time-unit)"
+        f"numbers in {unit} (assumed: no unit in its name, a units row or `time_unit`)"
         if time_unit_assumed(name, time_unit, stated)
         else f"numbers in {unit} (as the log states)"
     )

@@ -433,7 +433,7 @@ class LogFollower:
                 if kind in ("xlsx", "xls"):
                     msg = (
                         f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger "
-                        "writes (identify and min-time read the workbook, and watch --replay replays it)"
+                        "writes (identify and min-time read the workbook, and a replay replays it)"
                     )
                     raise InputError(msg)
                 if kind is not None:

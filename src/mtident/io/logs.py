@@ -214,7 +214,8 @@ def _serial_date(first: float) -> str:
 def serial_date_note(header: str, first: float) -> str:
     """What a reader says when it reads a time column's spreadsheet serial dates as days."""
     return (
-        f"time column {header!r} read as spreadsheet serial dates ({_serial_date(first)}); give --time-unit min if it "
+        f"time column {header!r} read as spreadsheet serial dates ({_serial_date(first)}); give `time_unit='min'` if "
+        "it "
         "is minutes"
     )
 
@@ -229,14 +230,14 @@ def serial_date_hint(header: str, first: float, step: float) -> str | None:
         return None
     return (
         f"time column {header!r} looks like spreadsheet serial dates ({_serial_date(first)}), not minutes: give "
-        "--time-unit d (or --time-unit min if it is minutes)"
+        "`time_unit='d'` (or `time_unit='min'` if it is minutes)"
     )
 
 
 def seconds_hint(header: str, span_min: float) -> str:
     return (
-        f"time column {header!r} is read as minutes (no unit in its name, a units row or --time-unit) and runs to "
-        f"{span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give --time-unit s"
+        f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`) and runs to "
+        f"{span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give `time_unit='s'`"
     )
 
 
@@ -591,7 +592,7 @@ def read_temperature_log(
             msg = (
                 f"{source}: sensor {name!r}: {int(bad.sum())} of {len(values)} samples are empty, NaN or "
                 f"open-circuit (outside {OPEN_CIRCUIT_LOW_C:g}..{OPEN_CIRCUIT_HIGH_C:g} °C); check the wiring "
-                "or leave this sensor out with --sensor"
+                "or leave this sensor out with `sensors`"
             )
             raise InputError(msg)
         if np.any(bad):

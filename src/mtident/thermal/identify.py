@@ -408,7 +408,7 @@ def room_input(log: TemperatureLog, ambient_C: FloatArray | None, method: str, p
         return None
     if method == "lsq" or preset != "data":
         msg = (
-            "a room sensor (--ambient) needs a UKF method with the data tuning: lsq and the papers' presets model a "
+            "a room sensor (`ambient_C`) needs a UKF method with the data tuning: lsq and the papers' presets model a "
             "steady room"
         )
         raise InputError(msg)
@@ -516,7 +516,7 @@ def _identify(
     if n_window < MIN_WINDOW_SAMPLES:
         msg = (
             f"{log.source}: only {n_window} samples in the first {window_min:g} min; the identification "
-            f"needs at least {MIN_WINDOW_SAMPLES} (use a longer --window)"
+            f"needs at least {MIN_WINDOW_SAMPLES} (use a longer `window_min`)"
         )
         raise InputError(msg)
     t = log.time_min
@@ -624,7 +624,7 @@ def _identify(
         notes.append(
             f"sensor {log.sensors[s]!r}: no approach to a steady state in the first {tw[-1]:g} min "
             f"(λ = {rate_now[s]:.3g}/min with the {method} filter); T∞ is not identifiable from this window — "
-            "use a longer --window"
+            "use a longer `window_min`"
         )
     steady_sd = np.where(no_steady, np.nan, steady_sd)
     final_mean = final_mean.copy()
@@ -665,7 +665,8 @@ def _identify(
         notes.append(
             f"T∞ is barely determined by the first {tw[-1]:g} min for {names}: the 95 % interval is wider than the "
             "rise "
-            "seen so far (the course is still nearly straight); a longer --window narrows it (thermal watch says when "
+            "seen so far (the course is still nearly straight); a longer `window_min` narrows it (thermal watch says "
+            "when "
             "it is narrow enough)"
         )
     n_log = len(t)

@@ -117,7 +117,7 @@ def learn_reference(
         if max(m.time_constant_min for m in fit.modes) >= 0.98 * settings.max_time_constant_min:
             warnings.append(
                 f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the "
-                "machine may have a slower one (--max-time-constant)"
+                "machine may have a slower one (raise `max_time_constant_min`)"
             )
     room = "a room sensor, an input of every mode" if room_C is not None else "not measured"
     return MachineReference(
