@@ -84,12 +84,12 @@ def report_command(
 
         def progress(current: WatchSession) -> None:
             if current.state is not None:
-                status.update(f"deciding: t = {minutes(current.state.readings.latest_min)} min of the log")
+                status.update(f"deciding: t = {minutes(current.state.readings.latest_min)} of the log")
 
         report = build_report(session, progress)
     written = write_pdf(report, output) if output.suffix.lower() == ".pdf" else write_html(report, output)
     verdict = (
-        f"the test could stop at t = {minutes(report.stop_time_min)} min"
+        f"the test could stop at t = {minutes(report.stop_time_min)}"
         if report.decision == "stop"
         else "no stop within the log"
     )

@@ -10,13 +10,15 @@ from __future__ import annotations
 import math
 import sys
 import time
+import urllib.parse
+from collections.abc import Callable
 from pathlib import Path
 
 import click
 import numpy as np
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, OptionConsole, PicturePath, print_json, user_errors
+from mtident.cli import FiniteFloatRange, OptionConsole, OutputPath, PicturePath, print_json, user_errors
 from mtident.cli_thermal import (
     _column_layout,
     _fmt,
@@ -33,6 +35,7 @@ from mtident.cli_thermal import (
 )
 from mtident.exceptions import InputError
 from mtident.io.logs import SAMPLES
+from mtident.io.mtconnect import MTConnectRecorder
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
 from mtident.thermal.robust import RobustSettings
@@ -90,6 +93,49 @@ def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
     for option in reversed(options):
         func = option(func)
     return func
+
+
+def agent_recorder(
+    file: str,
+    device: str | None,
+    items: tuple[str, ...],
+    record_path: str | None,
+    from_buffer_start: bool,
+    replay: bool,
+) -> MTConnectRecorder | None:
+    """The recorder of an MTConnect agent where FILE is one (http:// or https://), else None;
+    the agent's options refused for a file."""
+    if not file.startswith(("http://", "https://")):
+        given = [
+            name
+            for name, value in (
+                ("--device", device),
+                ("--item", items),
+                ("--record", record_path),
+                ("--from-buffer-start", from_buffer_start),
+            )
+            if value
+        ]
+        if given:
+            msg = f"{', '.join(given)}: for an MTConnect agent (FILE as http://host:5000), not for a log file"
+            raise InputError(msg)
+        return None
+    if replay:
+        msg = (
+            f"{file}: --replay replays a log file; the agent's readings are recorded (--record) and can be replayed "
+            "from there"
+        )
+        raise InputError(msg)
+    mapping = {}
+    for item in items:
+        key, sep, name = item.partition("=")
+        if not sep or not key.strip() or not name.strip():
+            msg = f"--item {item!r}: expected ID=NAME (a data item's id or name, and the sensor's name)"
+            raise InputError(msg)
+        mapping[key.strip()] = name.strip()
+    host = urllib.parse.urlparse(file).hostname or "agent"
+    log = Path(record_path) if record_path else Path.cwd() / f"{device or host}.csv"
+    return MTConnectRecorder(file, log, device, mapping or None, from_buffer_start=from_buffer_start)
 
 
 def state_file(file: str, path: Path, given: str | None) -> Path:
@@ -159,6 +205,25 @@ def monitor_settings(
     is_flag=True,
     help="Print the contract's JSON object when the decision is reached (or the log ends).",
 )
+@click.option("--device", metavar="NAME", help="MTConnect (FILE is the agent, http://host:5000): the device's name.")
+@click.option(
+    "--item",
+    "items",
+    multiple=True,
+    metavar="ID=NAME",
+    help="MTConnect: record this TEMPERATURE data item (id or name) as sensor NAME; repeat (default: every one).",
+)
+@click.option(
+    "--record",
+    "record_path",
+    type=OutputPath(),
+    help="MTConnect: the CSV log the agent's readings are written to, to replay later (default: DEVICE.csv here).",
+)
+@click.option(
+    "--from-buffer-start",
+    is_flag=True,
+    help="MTConnect: begin with every reading the agent still holds (a test begun before the watch).",
+)
 @click.option("--hold", hidden=True, type=float)
 @click.option("--bin", "bin_s", hidden=True, type=float)
 @click.option("--room-coupling", hidden=True)
@@ -182,6 +247,10 @@ def watch_command(
     timeout_s: float | None,
     plot_path: str | None,
     as_json: bool,
+    device: str | None,
+    items: tuple[str, ...],
+    record_path: str | None,
+    from_buffer_start: bool,
     hold: float | None,
     bin_s: float | None,
     room_coupling: str | None,
@@ -206,7 +275,8 @@ def watch_command(
         stderr.print(
             "mtident: note: --resume is the default for a live log; it matters only with --replay", highlight=False
         )
-    path = log_path(file)
+    recorder = agent_recorder(file, device, items, record_path, from_buffer_start, replay)
+    path = log_path(file) if recorder is None else recorder.log
     if replay and not path.is_file():
         msg = f"{path}: no such file"
         raise InputError(msg)
@@ -220,14 +290,19 @@ def watch_command(
         sensors=asked_sensors(sensors, path) or None,
         time_col=time_col,
         time_unit=time_unit,
-        state_path=state_file(file, path, state_path),
+        state_path=state_file(str(path) if recorder else file, path, state_path),
         resume=resume or not replay,
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)
-    if not path.is_file():
+    if recorder is not None:
+        stderr.print(f"mtident: recording the agent {file} to {path}", highlight=False)
+    elif not path.is_file():
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
-    interrupted = _follow(session, path, replay, poll_s, timeout_s, plot_path, live=sys.stdout.isatty() and not as_json)
+    live = sys.stdout.isatty() and not as_json
+    interrupted = _follow(
+        session, path, replay, poll_s, timeout_s, plot_path, live, None if recorder is None else recorder.fetch
+    )
     if session.state is None:
         if interrupted:
             sys.exit(130)
@@ -252,6 +327,7 @@ def _follow(
     timeout_s: float | None,
     plot_path: str | None,
     live: bool,
+    fetch: Callable[[], list[str]] | None = None,
 ) -> bool:
     """Poll the log until the decision, the log's end (a replay) or a timeout; True if Ctrl-C
     ended it (the state file then holds the last rows fed)."""
@@ -267,6 +343,8 @@ def _follow(
                 view.update(_status_table(s, path), refresh=True)
 
             while True:
+                for note in fetch() if fetch is not None else []:
+                    stderr.print(f"mtident: {note}", highlight=False)
                 events = session.poll(redraw if live else None)
                 _say(events)
                 if session.state is not None and not said_room and session.settings.room_sensor is None:
@@ -287,7 +365,7 @@ def _follow(
         where = (
             "before the first sample"
             if session.state is None
-            else f"at t = {minutes(session.state.readings.latest_min)} min"
+            else f"at t = {minutes(session.state.readings.latest_min)}"
         )
         kept = (
             f"the state is in {session.state_path}; the same command resumes from there"
@@ -311,7 +389,7 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     hindsight = session.hindsight() if replay else None
     if hindsight is not None:
         stderr.print(
-            f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)} min: checking the decision against "
+            f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)}: checking the decision against "
             "where it settled",
             highlight=False,
         )
@@ -331,7 +409,7 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     if state.stopped:
         saved = outcome.get("time_saved_min")
         gain = f"; {saved:.0f} min before the predicted equilibrium" if isinstance(saved, float) and saved > 0 else ""
-        console.print(f"[bold green]The test can stop at t = {minutes(state.stop_time_min)} min{gain}.[/]")
+        console.print(f"[bold green]The test can stop at t = {minutes(state.stop_time_min)}{gain}.[/]")
         if live:
             console.bell()  # the engineer may be at the other end of the machine
         if hindsight is not None:
@@ -342,7 +420,7 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     expected = outcome.get("expected_stop_time_min")
     if isinstance(expected, float):
         console.print(
-            f"Expected stop: t ≈ {minutes(round(expected))} min on the best model's course (a slower mode that still "
+            f"Expected stop: t ≈ {minutes(round(expected))} on the best model's course (a slower mode that still "
             "fits moves it later).",
             highlight=False,
         )
@@ -351,7 +429,7 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
 def _status_table(session: WatchSession, path: Path) -> Table:
     """Per sensor: the latest reading, T∞ with its 95 % interval and the decision's, t_eq, status."""
     state = session.state
-    where = "before the first sample" if state is None else f"at t = {minutes(state.readings.latest_min)} min"
+    where = "before the first sample" if state is None else f"at t = {minutes(state.readings.latest_min)}"
     table = Table(title=f"{path.name}: {where}")
     level = f"{session.settings.decision_level:.0%}"
     for column in ("sensor", "latest (°C)", "T∞ (°C)", "95 % interval", f"{level} interval", "t_eq (min)", "status"):
@@ -400,7 +478,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         if hindsight.room_shift_C
         else ""
     )
-    table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)} min){room}")
+    table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}")
     for column in ("sensor", "T∞ at stop (°C)", "settled (°C)", "difference (°C)", "95 % rise at (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     settled = hindsight.checked
@@ -439,10 +517,10 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     )
     reached = float(np.nanmax(hindsight.measured_equilibrium_time_min[settled]))
     saved = reached - hindsight.stop_time_min
-    timing = f"the log reached 95 % of its rise by t = {minutes(reached)} min, " + (
-        f"{minutes(saved)} min after the stop"
+    timing = f"the log reached 95 % of its rise by t = {minutes(reached)}, " + (
+        f"{minutes(saved)} after the stop"
         if saved > 0
-        else f"{minutes(-saved)} min before the stop: the rule saved no time on this log"
+        else f"{minutes(-saved)} before the stop: the rule saved no time on this log"
     )
     not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
     OptionConsole().print(f"{verdict[0].upper()}{verdict[1:]}; {timing}{not_settled}.", highlight=False)

@@ -159,7 +159,18 @@ class Excitation:
 
 
 def system_matrix(p: FeedDriveParameters) -> FloatArray:
-    """A (8, 8) of Eq. 8."""
+    """A (8, 8) of Eq. 8.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        Masses, inertias, stiffnesses, dampings and β (SI units).
+
+    Returns
+    -------
+    ndarray, shape (8, 8)
+        A = [[0, I], [−M⁻¹K, −M⁻¹C]] for the state X = [x_t, x_b, θ_b, θ_m, ẋ_t, ẋ_b, θ̇_b, θ̇_m].
+    """
     m_inv = np.diag(1.0 / np.diag(mass_matrix(p)))
     return np.block([[np.zeros((4, 4)), np.eye(4)], [-m_inv @ stiffness_matrix(p), -m_inv @ damping_matrix(p)]])
 
@@ -195,7 +206,18 @@ def system_matrices(params: FloatArray, basis: tuple[FloatArray, FloatArray]) ->
 
 
 def input_matrix(p: FeedDriveParameters) -> FloatArray:
-    """B (8, 4): Ẋ = A X + B F."""
+    """B (8, 4): Ẋ = A X + B F.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        Its masses and inertias are used (SI units).
+
+    Returns
+    -------
+    ndarray, shape (8, 4)
+        [0; M⁻¹]: the generalized forces F (N, N, N m, N m) reach the accelerations only.
+    """
     return np.vstack([np.zeros((4, 4)), np.diag(1.0 / np.diag(mass_matrix(p)))])
 
 
@@ -212,6 +234,24 @@ def rk4_linear_step(a: FloatArray, b: FloatArray, h: float, substeps: int) -> tu
     One RK4 step of a linear system is X⁺ = T X + S b with T = Σ₀⁴ (Ah)ʲ/j! and
     S = h Σ₀³ (Ah)ʲ/(j+1)!; ``substeps`` steps are composed by repeated squaring
     when it is a power of two, else step by step.
+
+    Parameters
+    ----------
+    a : ndarray, shape (..., n, n)
+        System matrices A.
+    b : ndarray, shape (n, m) or (..., n, m)
+        Input matrix B, shared by the batch or one per A.
+    h : float
+        Sampling interval (s): the input is held constant over it.
+    substeps : int
+        RK4 steps of size h/substeps per sample (1 or more).
+
+    Returns
+    -------
+    phi : ndarray, shape (..., n, n)
+        Φ, the state transition over one sample.
+    gamma : ndarray, shape (..., n, m)
+        Γ, the held input's effect over one sample.
     """
     n = a.shape[-1]
     eye = np.broadcast_to(np.eye(n), a.shape)
@@ -236,7 +276,24 @@ def rk4_linear_step(a: FloatArray, b: FloatArray, h: float, substeps: int) -> tu
 
 
 def exact_step(a: FloatArray, b: FloatArray, h: float) -> tuple[FloatArray, FloatArray]:
-    """Zero-order-hold discretisation by the matrix exponential: the reference for RK4."""
+    """Zero-order-hold discretisation by the matrix exponential: the reference for RK4.
+
+    Parameters
+    ----------
+    a : ndarray, shape (n, n)
+        System matrix A (one, not a batch).
+    b : ndarray, shape (n, m)
+        Input matrix B.
+    h : float
+        Sampling interval (s): the input is held constant over it.
+
+    Returns
+    -------
+    phi : ndarray, shape (n, n)
+        Φ = e^(Ah).
+    gamma : ndarray, shape (n, m)
+        Γ = ∫₀ʰ e^(As) ds B, so that X⁺ = Φ X + Γ u.
+    """
     n, m = b.shape
     block = np.zeros((n + m, n + m))
     block[:n, :n] = a

@@ -35,7 +35,30 @@ def describe_log(
     and the median step in minutes); ``sensors`` (per sensor:
     its unit as the log states it, valid and missing samples, first, last, lowest
     and highest reading in °C); ``notes`` (columns left out, conversions, rows
-    skipped). Raises :class:`~mtident.exceptions.InputError` as the readers do.
+    skipped).
+
+    Parameters
+    ----------
+    path : str or Path
+        The log file (CSV text or an Excel workbook).
+    time_col : str, optional
+        Name of the time column (default: the first column).
+    time_unit : {"ms", "s", "min", "h", "d"}, optional
+        Unit of a numeric time column (default: the header's suffix or a units row, else minutes).
+    sensors : list of str, optional
+        The sensor columns to describe, in this order (default: all).
+
+    Returns
+    -------
+    dict
+        The keys above; a value that cannot be known (a sensor without a valid reading, the
+        step of a single sample) is None. A log of a single sample is described too.
+
+    Raises
+    ------
+    InputError
+        As the readers do (:func:`~mtident.io.logs.read_temperature_log`): a missing or
+        unreadable file, no such column, a time column that does not increase.
     """
     file = Path(path)
     frame, dialect = read_csv(file)

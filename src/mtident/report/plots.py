@@ -68,7 +68,21 @@ def _save(fig: Figure, path: str | Path | None, dpi: int = 110) -> Path | Figure
 
 
 def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 - (figure, flat axes)
-    """A figure with ``count`` panels in up to 3 columns; returns (figure, list of axes)."""
+    """A figure with ``count`` panels in up to 3 columns; returns (figure, list of axes).
+
+    Parameters
+    ----------
+    count : int
+        Panels wanted (1 or more); the grid's cells beyond them are hidden.
+    width, height : float
+        Size of one panel (inches).
+
+    Returns
+    -------
+    figure : Figure
+    axes : list of Axes
+        The ``count`` visible panels, row by row.
+    """
     cols = min(count, 3)
     rows = math.ceil(count / cols)
     fig = Figure(figsize=(width * cols, height * rows))
@@ -81,7 +95,26 @@ def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 -
 
 def plot_identification(result: Identification | RobustIdentification, path: str | Path | None = None) -> Path | Figure:
     """Measured and predicted temperature per sensor, with the 95 % band, the
-    identification time, T∞ and the predicted equilibrium time (seed 000 Figs 6-8)."""
+    identification time, T∞ and the predicted equilibrium time (seed 000 Figs 6-8).
+
+    Parameters
+    ----------
+    result : Identification or RobustIdentification
+        One panel per sensor: the curve fitted up to ``result.window_min`` (min), predicted after it.
+    path : str or Path, optional
+        Where to write the picture, its format from the suffix (PNG without one); default:
+        return the Figure instead.
+
+    Returns
+    -------
+    Path or Figure
+        ``path`` once written, or the Figure where no path is given.
+
+    Raises
+    ------
+    ValueError
+        ``path``'s suffix is not a picture format matplotlib writes.
+    """
     fig, axes = grid(len(result.sensors))
     t = result.time_min
     for s, ax in enumerate(axes):
@@ -114,7 +147,27 @@ def plot_identification(result: Identification | RobustIdentification, path: str
 
 
 def plot_min_time(result: MinTimeResult, path: str | Path | None = None) -> Path | Figure:
-    """RMSE against identification time for each sampling period (seed 000 Figs 5 and 9)."""
+    """RMSE against identification time for each sampling period (seed 000 Figs 5 and 9).
+
+    Parameters
+    ----------
+    result : MinTimeResult
+        One panel per sensor: a curve per sampling period M (min), the chosen minimal
+        identification time (min) marked.
+    path : str or Path, optional
+        Where to write the picture, its format from the suffix (PNG without one); default:
+        return the Figure instead.
+
+    Returns
+    -------
+    Path or Figure
+        ``path`` once written, or the Figure where no path is given.
+
+    Raises
+    ------
+    ValueError
+        ``path``'s suffix is not a picture format matplotlib writes.
+    """
     fig, axes = grid(len(result.sensors))
     for s, ax in enumerate(axes):
         for p, period in enumerate(result.periods_min):
@@ -191,7 +244,30 @@ def plot_responses(
 ) -> Path | Figure:
     """Displacements, velocities and accelerations of the four coordinates (seed 004 Figs 2-4), readable
     at any length: the first periods of the lowest mode sample by sample, and the spectrum of the
-    whole record per coordinate with the natural frequencies ``modes_Hz`` (Hz) marked where given."""
+    whole record per coordinate with the natural frequencies ``modes_Hz`` (Hz) marked where given.
+
+    Parameters
+    ----------
+    response : Response
+        The record: times (N,) in s and the 12 responses (N, 12). A spectrum shows a coordinate's
+        acceleration, else its velocity, else its displacement: the first with no NaN.
+    path : str or Path, optional
+        Where to write the picture, its format from the suffix (PNG without one); default:
+        return the Figure instead.
+    modes_Hz : array_like, shape (4,), optional
+        Natural frequencies (Hz): the zoom spans a few periods of the lowest and the spectra
+        the band up to 1.5 × the highest. Without them the zoom is the first samples.
+
+    Returns
+    -------
+    Path or Figure
+        ``path`` once written, or the Figure where no path is given.
+
+    Raises
+    ------
+    ValueError
+        ``path``'s suffix is not a picture format matplotlib writes.
+    """
     from mtident.feeddrive.simulate import RESPONSE_COLUMNS
 
     zoom = _zoom(response.time_s, None if modes_Hz is None else float(np.min(modes_Hz)))
@@ -215,7 +291,31 @@ def plot_feed_drive_identification(result, response, path: str | Path | None = N
     spectra of measured vs model responses, and parameter convergence with ±2σ (Figs 8-9).
 
     The filtered responses follow the data whatever the parameters; the open-loop model (the set the
-    consistency check fitted, run with the measured forces alone) shows whether the parameters do."""
+    consistency check fitted, run with the measured forces alone) shows whether the parameters do.
+
+    Parameters
+    ----------
+    result : FeedDriveIdentification
+        The estimate, its history with ±2σ per identified parameter, and the filtered responses.
+    response : Response
+        The record identified from: its forces drive the open-loop model, and its measured
+        columns (``result.measured_columns``) are drawn.
+    path : str or Path, optional
+        Where to write the picture, its format from the suffix (PNG without one); default:
+        return the Figure instead.
+    truth : FeedDriveParameters, optional
+        The true parameters (a synthetic record): drawn as a line on each convergence panel.
+
+    Returns
+    -------
+    Path or Figure
+        ``path`` once written, or the Figure where no path is given.
+
+    Raises
+    ------
+    ValueError
+        ``path``'s suffix is not a picture format matplotlib writes.
+    """
     from mtident.feeddrive.modes import modes
     from mtident.feeddrive.params import IDENTIFIED
     from mtident.feeddrive.simulate import RESPONSE_COLUMNS
@@ -263,7 +363,31 @@ def plot_monitor(
     state, settings, path: str | Path | None = None, expected: dict[str, float] | None = None
 ) -> Path | Figure:  # noqa: ANN001 - MonitorState, MonitorSettings
     """Each sensor's readings so far, its best model's course on from there, the T∞ intervals
-    (95 % and the decision's), and the stop or the expected stop."""
+    (95 % and the decision's), and the stop or the expected stop.
+
+    Parameters
+    ----------
+    state : MonitorState
+        The readings (min, °C) and each sensor's latest check; one panel per sensor.
+    settings : MonitorSettings
+        The settings ``state`` was decided with; the intervals drawn are the ones its checks hold.
+    path : str or Path, optional
+        Where to write the picture, its format from the suffix (PNG without one); default:
+        return the Figure instead.
+    expected : dict of str to float, optional
+        Sensor name → expected stop (min), drawn where finite and the test has not stopped
+        (:meth:`~mtident.thermal.session.WatchSession.expected_stops`).
+
+    Returns
+    -------
+    Path or Figure
+        ``path`` once written, or the Figure where no path is given.
+
+    Raises
+    ------
+    ValueError
+        ``path``'s suffix is not a picture format matplotlib writes.
+    """
     from mtident.thermal.modes import Mode, model_curve
     from mtident.thermal.monitor import minutes
 
@@ -289,7 +413,7 @@ def plot_monitor(
                 ax.axhline(edge, color="tab:green", lw=0.8, ls="--")
         if state.stopped:
             ax.axvline(
-                state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)} min"
+                state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)}"
             )
         elif expected and np.isfinite(expected.get(check.sensor, np.nan)):
             ax.axvline(expected[check.sensor], color="0.4", ls=":", lw=1, label="expected stop")

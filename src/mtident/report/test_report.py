@@ -224,15 +224,15 @@ def _line(summary: dict[str, Any], readings: np.ndarray, hindsight: Any, s: int)
 def _hindsight_verdict(lines: tuple[SensorLine, ...], log_end_min: float, settings: MonitorSettings) -> str:
     checked = [line for line in lines if line.within_tolerance is not None]
     if not checked:
-        return f"The log runs on to {minutes(log_end_min)} min, but no sensor settled by its end: nothing to check."
+        return f"The log runs on to {minutes(log_end_min)}, but no sensor settled by its end: nothing to check."
     beyond = [line.sensor for line in checked if not line.within_tolerance]
     if beyond:
         return (
-            f"Against the rest of the log (to {minutes(log_end_min)} min): {', '.join(beyond)} settled beyond the "
+            f"Against the rest of the log (to {minutes(log_end_min)}): {', '.join(beyond)} settled beyond the "
             f"tolerance ({settings.tolerance_C:g} °C) of T∞ at the stop."
         )
     return (
-        f"Against the rest of the log (to {minutes(log_end_min)} min): every sensor that settled ({len(checked)}) "
+        f"Against the rest of the log (to {minutes(log_end_min)}): every sensor that settled ({len(checked)}) "
         f"is within the tolerance ({settings.tolerance_C:g} °C) of T∞ at the stop."
     )
 
@@ -263,7 +263,20 @@ _ENVIRONMENT.filters.update(fmt=_fmt, interval=_interval, minutes=minutes)
 
 
 def write_html(report: WarmupReport, path: str | Path) -> Path:
-    """Write the report as one self-contained HTML page (the figure embedded); returns the path."""
+    """Write the report as one self-contained HTML page (the figure embedded); returns the path.
+
+    Parameters
+    ----------
+    report : WarmupReport
+        From :func:`build_report`; its figure is embedded as a base64 PNG.
+    path : str or Path
+        The page to write (UTF-8), replaced if it exists.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     page = _ENVIRONMENT.get_template("report.html.j2").render(
         r=report, figure=base64.b64encode(report.figure_png).decode("ascii"), isfinite=math.isfinite
     )
@@ -278,7 +291,20 @@ _A4_INCHES = (8.27, 11.69)
 
 
 def write_pdf(report: WarmupReport, path: str | Path) -> Path:
-    """Write the report as a PDF (A4: the summary and table, then the curves); returns the path."""
+    """Write the report as a PDF (A4: the summary and table, then the curves); returns the path.
+
+    Parameters
+    ----------
+    report : WarmupReport
+        From :func:`build_report`.
+    path : str or Path
+        The PDF to write (two A4 pages), replaced if it exists.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     out = Path(path)
     with PdfPages(out, metadata={"Title": f"Warm-up test: {Path(report.source).name}", "Creator": "mtident"}) as pdf:
         pdf.savefig(summary_page(report))
@@ -356,11 +382,11 @@ def _figure_page(report: WarmupReport) -> Figure:
 def _verdict(report: WarmupReport) -> str:
     if report.decision == "stop":
         return (
-            f"The test could stop at t = {minutes(report.stop_time_min)} min (tolerance ±{report.tolerance_C:g} °C at "
+            f"The test could stop at t = {minutes(report.stop_time_min)} (tolerance ±{report.tolerance_C:g} °C at "
             f"{report.decision_level:.0%})."
         )
     return (
-        f"No stop within the log (to {minutes(report.log_end_min)} min): tolerance ±{report.tolerance_C:g} °C at "
+        f"No stop within the log (to {minutes(report.log_end_min)}): tolerance ±{report.tolerance_C:g} °C at "
         f"{report.decision_level:.0%}."
     )
 
@@ -368,7 +394,7 @@ def _verdict(report: WarmupReport) -> str:
 def _setup(report: WarmupReport) -> str:
     return (
         f"Log: {report.source}. {len(report.lines)} sensor(s), {report.samples} readings every "
-        f"{_fmt(report.sampling_interval_min)} min to t = {minutes(report.log_end_min)} min. Room {report.room}."
+        f"{_fmt(report.sampling_interval_min)} min to t = {minutes(report.log_end_min)}. Room {report.room}."
     )
 
 

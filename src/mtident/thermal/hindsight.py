@@ -110,7 +110,30 @@ def check_decision(
     tolerance_C: float,
     room_C: FloatArray | None = None,
 ) -> Hindsight:
-    """Compare T∞ at the stop (one per sensor, NaN for one left out) with where the whole log settled."""
+    """Compare T∞ at the stop (one per sensor, NaN for one left out) with where the whole log settled.
+
+    Parameters
+    ----------
+    sensors : tuple of str
+    steady_state_C : ndarray, shape (S,)
+        T∞ at the stop (°C), NaN for a sensor left out of the decision.
+    stop_time_min : float
+        The stop (min).
+    time_min : ndarray, shape (N,)
+        The whole log's times (min), past the stop.
+    values : ndarray, shape (N, S)
+        The whole log's readings (°C, NaN: missing).
+    tolerance_C : float
+        The decision's tolerance (°C).
+    room_C : ndarray, shape (N,), optional
+        The room sensor's readings (°C): its move from the stop (the median within 5 min of it)
+        to the log's end (the median of its last 10 valid readings) is added to T∞. No shift
+        where it has fewer than 10 valid readings or none within 5 min of the stop.
+
+    Returns
+    -------
+    Hindsight
+    """
     settled, equilibrium = measured_equilibrium(time_min, values)
     shift = 0.0
     if room_C is not None:

@@ -92,6 +92,28 @@ def cramer_rao_bound(
     """Cramér-Rao bound (covariance, 3×3) of [T₀, λ, T∞] for white noise σ at the sample times.
 
     Inverse of the Fisher information JᵀJ/σ², J the sensitivities of T(t).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min), t = 0 at T₀.
+    start_C, rate_per_min, steady_C : float
+        The curve the sensitivities are taken on: T₀ (°C), λ (1/min) and T∞ (°C) of
+        T(t) = T∞ + (T₀ − T∞)e^(−λt).
+    sigma_C : float
+        The noise's standard deviation (°C, per sample).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        The covariance bound of [T₀, λ, T∞].
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        The information is exactly singular, as where T₀ = T∞ (no rise). Fewer than three
+        distinct times need not raise: the information is then singular only up to rounding and
+        the bound returned is meaningless.
     """
     t = np.asarray(time_min, dtype=float)
     decay = np.exp(-rate_per_min * t)

@@ -202,10 +202,10 @@ class MonitorState:
 
     def __repr__(self) -> str:
         # a notebook shows the decision, not the readings' arrays
-        decision = f"stop at t = {minutes(self.stop_time_min)} min" if self.stopped else "continue"
+        decision = f"stop at t = {minutes(self.stop_time_min)}" if self.stopped else "continue"
         statuses = ", ".join(f"{c.sensor} {c.status}" for c in self.checks)
         return (
-            f"MonitorState({len(self.sensors)} sensor(s), t = {minutes(self.readings.latest_min)} min, decision: "
+            f"MonitorState({len(self.sensors)} sensor(s), t = {minutes(self.readings.latest_min)}, decision: "
             f"{decision}; {statuses})"
         )
 
@@ -223,12 +223,28 @@ class Event:
 
 def minutes(value: float) -> str:
     """Minutes as a person reads them: whole where whole, else to 0.1 (or to the second below
-    a minute)."""
+    a minute).
+
+    Parameters
+    ----------
+    value : float
+        A time (min).
+
+    Returns
+    -------
+    str
+        With its unit: "12 min", "12.3 min", below a minute "30 s"; "—" for NaN or infinity.
+
+    Examples
+    --------
+    >>> minutes(12.0), minutes(12.34), minutes(0.5), minutes(float("nan"))
+    ('12 min', '12.3 min', '30 s', '—')
+    """
     if not math.isfinite(value):
         return "—"
     if abs(value - round(value)) < 1e-6:
-        return f"{round(value):d}"
-    return f"{value:.1f}" if abs(value) >= 1 else f"{value * 60:.0f} s"
+        return f"{round(value):d} min"
+    return f"{value:.1f} min" if abs(value) >= 1 else f"{value * 60:.0f} s"
 
 
 def new_state(sensors: tuple[str, ...] | list[str], with_room: bool = False) -> MonitorState:
@@ -270,7 +286,7 @@ def _validated(
         raise InputError(msg)
     previous = state.readings.latest_min
     if np.any(np.diff(t) <= 0) or (len(t) and math.isfinite(previous) and t[0] <= previous):
-        msg = f"time_min: expected times increasing after t = {minutes(previous)} min; found {t.tolist()[:5]}"
+        msg = f"time_min: expected times increasing after t = {minutes(previous)}; found {t.tolist()[:5]}"
         raise InputError(msg)
     with_room = state.readings.room_C is not None
     if with_room != (room_C is not None):
@@ -350,7 +366,7 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
                 "stop",
                 now,
                 f"every sensor's T∞ is within ±{settings.tolerance_C:g} °C at {settings.decision_level:.0%}: the "
-                f"test can stop at t = {minutes(now)} min",
+                f"test can stop at t = {minutes(now)}",
             )
         )
     return MonitorState(state.sensors, readings, tuple(checks), stop, tuple(sorted(said))), events
@@ -360,7 +376,25 @@ def sensor_estimate(
     readings: Readings, s: int, sensor: str, settings: MonitorSettings, noise_C: float | None = None
 ) -> SensorEstimate:
     """The model-robust estimate of sensor ``s`` from every reading so far (its intervals refined
-    where they may be within the tolerance; elsewhere the search grid's, already too wide)."""
+    where they may be within the tolerance; elsewhere the search grid's, already too wide).
+
+    Parameters
+    ----------
+    readings : Readings
+        Times (N,) in min, the sensors' readings (N, S) in °C and the room's (N,) where measured.
+    s : int
+        The sensor's column in ``readings.values_C``.
+    sensor : str
+        Its name: picks its modes from ``settings.reference``, and names it in the messages.
+    settings : MonitorSettings
+        The intervals come at the report's level (95 %) and ``settings.decision_level``.
+    noise_C : float, optional
+        The readings' noise (°C, per reading), if known (default: estimated from the readings).
+
+    Returns
+    -------
+    SensorEstimate
+    """
     reference = None if settings.reference is None else settings.reference.modes(sensor)
     robust = replace(settings.robust, levels=settings.levels)
     return estimate_sensor(
@@ -377,7 +411,23 @@ def sensor_estimate(
 
 def is_within(estimate: SensorEstimate, settings: MonitorSettings) -> bool:
     """The readiness predicate, shared by the decision and the forecast: a trusted model whose
-    interval at the decision's level lies within the tolerance of T∞."""
+    interval at the decision's level lies within the tolerance of T∞.
+
+    Parameters
+    ----------
+    estimate : SensorEstimate
+        From :func:`sensor_estimate`.
+    settings : MonitorSettings
+        ``tolerance_C`` (°C) and ``decision_level``.
+
+    Returns
+    -------
+    bool
+        True where the estimate has a fit, its model is not contradicted by the data
+        (``model_ok``), and both ends of its interval at the decision's level lie within
+        ``tolerance_C`` of T∞. One check only: a sensor may stop after
+        ``consecutive_checks`` in a row.
+    """
     return (
         estimate.fit is not None
         and estimate.model_ok
@@ -480,6 +530,25 @@ def expected_stop(state: MonitorState, settings: MonitorSettings, s: int, horizo
 
     The forecast assumes the best model: a slower mode that the data cannot yet exclude, the very
     thing that keeps the interval wide, would move the stop later.
+
+    Parameters
+    ----------
+    state : MonitorState
+    settings : MonitorSettings
+    s : int
+        The sensor's index in ``state.sensors``.
+    horizon_min : float, optional
+        The latest time (min, on the log's clock) to look at; default: the latest reading plus
+        5 × ``settings.robust.max_time_constant_min``.
+
+    Returns
+    -------
+    float
+        The expected stop (min): the first of a set of candidate times, spaced geometrically
+        (a factor 1.15) in the time since the warm-up began, at which the predicate holds. A
+        sensor that may stop already gives the time it became ready. NaN where its status is
+        not "narrowing" or "confirming" (no course to go on), or no candidate up to the horizon
+        (39 at most) passes.
     """
     check = state.checks[s]
     if check.may_stop:
@@ -535,7 +604,20 @@ def _candidate_times(now: float, horizon: float, origin: float) -> list[float]:
 
 
 def assumptions(settings: MonitorSettings, sensor: str) -> Assumptions:
-    """What a sensor's interval rests on, as the answer says it."""
+    """What a sensor's interval rests on, as the answer says it.
+
+    Parameters
+    ----------
+    settings : MonitorSettings
+        The largest time constant, the room's wander or sensor, and the reference run.
+    sensor : str
+        The sensor whose reference modes, if any, are described.
+
+    Returns
+    -------
+    Assumptions
+        The model, the largest time constant (min), how the room entered, and the reference.
+    """
     return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor)
 
 

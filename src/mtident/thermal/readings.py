@@ -155,9 +155,17 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     uniform grid over its own span from its first to its last valid reading
     (missing readings and gaps interpolated), so T₀ is its first valid reading.
 
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min) of the window.
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: missing).
+
     Returns
     -------
     start_C, rate_per_min, steady_C : ndarray, shape (S,)
+        T₀ (°C), λ (1/min) and T∞ (°C); T₀ and T∞ are NaN for a sensor without a valid reading.
     """
     t = np.asarray(time_min, dtype=float)
     y = np.asarray(values, dtype=float)

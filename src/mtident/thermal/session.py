@@ -60,14 +60,41 @@ class SavedWatch:
 
 def default_state_path(log: Path) -> Path:
     """Beside the log (``LOG.watch-state.npz``), or in the current folder where the log's folder
-    cannot be written (a logger's share mounted read-only)."""
+    cannot be written (a logger's share mounted read-only).
+
+    Parameters
+    ----------
+    log : Path
+        The log (it need not exist yet).
+
+    Returns
+    -------
+    Path
+        The log's name with ``.watch-state.npz`` appended, in the log's folder, or in the
+        current working folder (an absolute path) where the log's folder is not writable.
+    """
     beside = log.with_name(log.name + STATE_SUFFIX)
     folder = log.parent if str(log.parent) else Path(".")
     return beside if os.access(folder, os.W_OK) else Path.cwd() / beside.name
 
 
 def log_fingerprint(path: Path, length: int = FINGERPRINT_BYTES) -> tuple[str, int]:
-    """The SHA-256 of the log's first ``length`` bytes (fewer if it is shorter), and how many."""
+    """The SHA-256 of the log's first ``length`` bytes (fewer if it is shorter), and how many.
+
+    Parameters
+    ----------
+    path : Path
+        The log.
+    length : int
+        Bytes to read from its start: its header and first rows.
+
+    Returns
+    -------
+    digest : str
+        The hexadecimal SHA-256 of the bytes read ("" where the file cannot be read).
+    count : int
+        How many bytes were read (0 where the file cannot be read).
+    """
     try:
         with path.open("rb") as handle:
             head = handle.read(length)
@@ -168,7 +195,7 @@ class WatchSession:
         self.follower = LogFollower.resume(self.path, json.loads(saved.position), time_col, time_unit)
         self.state = saved.monitor
         self._fingerprint = (saved.fingerprint, saved.fingerprint_bytes)
-        self.notes.append(f"resuming from {self.state_path} at t = {minutes(saved.monitor.readings.latest_min)} min")
+        self.notes.append(f"resuming from {self.state_path} at t = {minutes(saved.monitor.readings.latest_min)}")
 
     def save(self) -> None:
         """Write the state file (atomically: a killed process leaves the old or the new one)."""

@@ -130,7 +130,31 @@ class FilterRecord:
 def initial_carry(
     initial: GaussianState, process_cov: FloatArray, emission_cov: FloatArray, config: FilterConfig
 ) -> FilterCarry:
-    """Start a batch of filters; Q and R broadcast to the batch shape of ``initial``."""
+    """Start a batch of filters; Q and R broadcast to the batch shape of ``initial``.
+
+    Parameters
+    ----------
+    initial : GaussianState
+        x̂₀ and P₀, shapes (..., n) and (..., n, n); P₀ broadcast to the mean's batch shape.
+    process_cov : ndarray, shape (..., n, n)
+        Q.
+    emission_cov : ndarray, shape (..., m, m)
+        R; its last axis gives m.
+    config : FilterConfig
+        With ``square_root`` the carry holds P₀'s Cholesky factor instead of P₀.
+
+    Returns
+    -------
+    FilterCarry
+        No update seen yet, and the fading factor's residual memory at zero.
+
+    Raises
+    ------
+    DimensionError
+        P₀ or Q not (..., n, n), or an adaptive law with m other than 1.
+    CovarianceError
+        In the square-root form, P₀ is not positive definite.
+    """
     batch = initial.mean.shape[:-1]
     n = initial.mean.shape[-1]
     m = np.shape(emission_cov)[-1]
@@ -415,7 +439,20 @@ def filter_step(
 
 
 def transition_at(transition: StepTransition, k: int) -> Callable[[FloatArray], FloatArray]:
-    """The transition of step ``k`` as a function of the sigma points alone."""
+    """The transition of step ``k`` as a function of the sigma points alone.
+
+    Parameters
+    ----------
+    transition : callable
+        ``transition(points, k)``, sigma points (..., 2n+1, n) from step k−1 to step k.
+    k : int
+        The step.
+
+    Returns
+    -------
+    callable
+        ``step(points)`` = ``transition(points, k)``: the form :func:`filter_step` calls.
+    """
 
     def step(points: FloatArray) -> FloatArray:
         return transition(points, k)
@@ -518,6 +555,30 @@ def forecast(
 
     Returns a GaussianState with a leading step axis (steps, ..., n). Step k
     calls ``transition(points, k)``.
+
+    Parameters
+    ----------
+    state : GaussianState
+        Where to start: mean (..., n) and covariance (..., n, n), e.g. the filter's last posterior.
+    transition : callable
+        ``transition(points, k)`` propagates sigma points (..., 2n+1, n) by one step; k counts
+        from 0 for the first step after ``state``.
+    process_cov : ndarray, shape (..., n, n)
+        Q, added at every step.
+    steps : int
+        How many steps to predict.
+    config : FilterConfig
+        Its sigma points and name; the standard form is used whatever ``square_root`` says.
+
+    Returns
+    -------
+    GaussianState
+        Means (steps, ..., n) and covariances (steps, ..., n, n); index 0 is one step after ``state``.
+
+    Raises
+    ------
+    CovarianceError
+        A covariance lost positive definiteness; names the step and the filter.
     """
     weights = config.sigma_points.weights(state.mean.shape[-1])
     mean, cov = np.asarray(state.mean, dtype=float), np.asarray(state.cov, dtype=float)
