@@ -13,6 +13,7 @@ import time
 import urllib.parse
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 import numpy as np
@@ -40,6 +41,9 @@ from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
 from mtident.thermal.robust import RobustSettings
 from mtident.thermal.session import WatchSession, default_state_path
+
+if TYPE_CHECKING:
+    from mtident.web import LivePage, Served
 
 # events said on stderr as they come (a status change while narrowing is shown in the table)
 _SAID = ("note", "warning", "ready", "not ready", "stop")
@@ -224,6 +228,12 @@ def monitor_settings(
     is_flag=True,
     help="MTConnect: begin with every reading the agent still holds (a test begun before the watch).",
 )
+@click.option(
+    "--serve",
+    "serve_address",
+    metavar="HOST:PORT",
+    help="Serve a live page of the table and the curves, read-only (127.0.0.1:8050; 0.0.0.0:8050 for the network).",
+)
 @click.option("--hold", hidden=True, type=float)
 @click.option("--bin", "bin_s", hidden=True, type=float)
 @click.option("--room-coupling", hidden=True)
@@ -251,6 +261,7 @@ def watch_command(
     items: tuple[str, ...],
     record_path: str | None,
     from_buffer_start: bool,
+    serve_address: str | None,
     hold: float | None,
     bin_s: float | None,
     room_coupling: str | None,
@@ -300,9 +311,22 @@ def watch_command(
     elif not path.is_file():
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
     live = sys.stdout.isatty() and not as_json
-    interrupted = _follow(
-        session, path, replay, poll_s, timeout_s, plot_path, live, None if recorder is None else recorder.fetch
-    )
+    page, served = _serve(serve_address, path)
+    try:
+        interrupted = _follow(
+            session,
+            path,
+            replay,
+            poll_s,
+            timeout_s,
+            plot_path,
+            live,
+            None if recorder is None else recorder.fetch,
+            page,
+        )
+    finally:
+        if served is not None:
+            served.stop()
     if session.state is None:
         if interrupted:
             sys.exit(130)
@@ -328,13 +352,14 @@ def _follow(
     plot_path: str | None,
     live: bool,
     fetch: Callable[[], list[str]] | None = None,
+    page: LivePage | None = None,
 ) -> bool:
     """Poll the log until the decision, the log's end (a replay) or a timeout; True if Ctrl-C
     ended it (the state file then holds the last rows fed)."""
     from rich.live import Live
 
     last_data = time.monotonic()
-    last_plot = 0.0
+    last_plot = last_page = 0.0
     said_room = False
     try:
         with Live(console=OptionConsole(), auto_refresh=False, transient=False) if live else _Nothing() as view:
@@ -352,6 +377,8 @@ def _follow(
                     said_room = True
                 if session.last_rows:
                     last_data = time.monotonic()
+                if page is not None and session.state is not None and (session.last_rows or session.stopped):
+                    last_page = _publish(page, session, last_page)
                 if plot_path and session.state is not None and (time.monotonic() - last_plot > 5.0 or session.stopped):
                     _plot(session, plot_path)
                     last_plot = time.monotonic()
@@ -374,6 +401,43 @@ def _follow(
         )
         stderr.print(f"mtident: interrupted (Ctrl-C) {where}; {kept}", highlight=False)
         return True
+
+
+def _serve(address: str | None, path: Path) -> tuple[LivePage | None, Served | None]:
+    """The live page and its server, where --serve asks for one."""
+    if address is None:
+        return None, None
+    from mtident.web import LivePage, parse_address, serve
+
+    page = LivePage(path.name)
+    served = serve(page, *parse_address(address))
+    stderr.print(f"mtident: the live page is at {served.url} (read-only)", highlight=False)
+    return page, served
+
+
+# the expected stops cost a forecast per sensor: asked for on the page this seldom (s)
+_PAGE_FORECAST_S = 10.0
+
+
+def _publish(page: LivePage, session: WatchSession, last_forecast: float) -> float:
+    """Show the session's answer and curves on the live page; returns when the forecast was made."""
+    import io
+
+    from mtident.report.plots import plot_monitor
+
+    state = session.state
+    assert state is not None
+    forecast = not state.stopped and time.monotonic() - last_forecast > _PAGE_FORECAST_S
+    answer = session.result(with_forecast=forecast)
+    latest = {}
+    for s, name in enumerate(state.sensors):
+        valid = state.readings.values_C[:, s][np.isfinite(state.readings.values_C[:, s])]
+        latest[name] = float(valid[-1]) if len(valid) else None
+    figure = plot_monitor(state, session.settings)
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=90)  # type: ignore[union-attr]
+    page.publish({**answer, "latest_C": latest}, buffer.getvalue())
+    return time.monotonic() if forecast else last_forecast
 
 
 def _say(events: list[Event]) -> None:

@@ -1,0 +1,137 @@
+"""The live page of `watch --serve`: served by a real server on the loopback interface, read with
+HTTP and with a headless browser where one is installed."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from test_watch import T, csv_text, first_order, noisy, one_mode_reference
+
+from mtident.cli import main
+from mtident.exceptions import InputError
+from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state, result
+from mtident.thermal.robust import RobustSettings
+from mtident.web import LivePage, parse_address, serve
+
+ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts"
+
+
+def _answer() -> dict[str, object]:
+    settings = MonitorSettings(reference=one_mode_reference("S"), robust=RobustSettings(free_fast_modes=0))
+    state, _ = monitor_step(new_state(["S"]), T[:100], noisy(first_order(T[:100]), 41)[:, None], None, settings)
+    assert state.stopped
+    return {**result(state, settings), "latest_C": {"S": 23.9}}
+
+
+def _get(url: str) -> bytes:
+    with urllib.request.urlopen(url, timeout=10) as answer:
+        return bytes(answer.read())
+
+
+@pytest.fixture
+def served_page():  # noqa: ANN201
+    page = LivePage("run.csv")
+    served = serve(page, "127.0.0.1", 0)
+    yield page, served
+    served.stop()
+
+
+def test_the_page_serves_the_answer_the_curves_and_a_stream_of_answers(served_page):
+    page, served = served_page
+    assert served.url.startswith("http://127.0.0.1:")
+    html = _get(served.url).decode()
+    assert "<title>mtident watch: run.csv</title>" in html and 'new EventSource("events")' in html
+    answer = _answer()
+    page.publish(answer, b"\x89PNG fake")
+    state = json.loads(_get(served.url + "state.json"))
+    assert state["version"] == 1 and state["answer"]["decision"] == "stop"
+    assert _get(served.url + "plot.png") == b"\x89PNG fake"
+    # the stream sends each new answer: the latency from publish to receipt over 20 answers
+    latencies = []
+    with urllib.request.urlopen(served.url + "events", timeout=10) as stream:
+        assert json.loads(stream.readline().decode().removeprefix("data: "))["version"] == 1
+        stream.readline()
+        for _ in range(20):
+            sent = time.monotonic()
+            page.publish(answer)
+            line = stream.readline().decode()
+            stream.readline()
+            latencies.append(time.monotonic() - sent)
+            assert json.loads(line.removeprefix("data: "))["version"] == page.version
+    assert float(np.median(latencies)) < 0.5
+
+
+def test_the_page_is_read_only(served_page):
+    _, served = served_page
+    request = urllib.request.Request(served.url + "state.json", data=b"{}", method="POST")
+    with pytest.raises(urllib.error.HTTPError, match="405"):
+        urllib.request.urlopen(request, timeout=10)
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [("127.0.0.1:8050", ("127.0.0.1", 8050)), ("8050", ("127.0.0.1", 8050)), ("[::1]:0", ("::1", 0))],
+)
+def test_addresses_are_read_and_bad_ones_refused(text, expected):
+    assert parse_address(text) == expected
+    for bad in ("host:port", "127.0.0.1:70000", ":8050"):
+        with pytest.raises(InputError, match="expected HOST:PORT"):
+            parse_address(bad)
+
+
+def test_watch_serve_says_where_the_page_is(tmp_path):
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:30], {"S": noisy(first_order(T[:30]), 42)}))
+    out = CliRunner().invoke(
+        main, ["thermal", "watch", str(log), "--replay", "--serve", "127.0.0.1:0"], catch_exceptions=False
+    )
+    assert out.exit_code == 0, out.stderr
+    assert "the live page is at http://127.0.0.1:" in out.stderr
+    bad = CliRunner().invoke(
+        main, ["thermal", "watch", str(log), "--replay", "--serve", "nowhere"], catch_exceptions=False
+    )
+    assert bad.exit_code == 2 and "expected HOST:PORT" in bad.stderr
+
+
+BROWSER = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
+
+
+@pytest.mark.skipif(BROWSER is None, reason="no headless Chromium here (Debian's package `chromium`)")
+def test_a_browser_shows_the_decision(served_page):
+    page, served = served_page
+    page.publish(_answer(), _png())
+    common = [BROWSER, "--headless", "--no-sandbox", "--disable-gpu", "--timeout=4000"]
+    dom = subprocess.run(
+        [*common, "--dump-dom", served.url], capture_output=True, text=True, timeout=120, check=True
+    ).stdout
+    assert "The test can stop (at t = " in dom and '<td class="text">may stop</td>' in dom
+    ARTIFACTS.mkdir(exist_ok=True)
+    shot = ARTIFACTS / "live-page.png"
+    subprocess.run(
+        [*common, "--window-size=1200,900", f"--screenshot={shot}", served.url],
+        capture_output=True,
+        timeout=120,
+        check=True,
+    )
+    assert shot.stat().st_size > 10_000
+
+
+def _png() -> bytes:
+    import io
+
+    from mtident.report.plots import plot_monitor
+
+    settings = MonitorSettings(reference=one_mode_reference("S"), robust=RobustSettings(free_fast_modes=0))
+    state, _ = monitor_step(new_state(["S"]), T[:100], noisy(first_order(T[:100]), 41)[:, None], None, settings)
+    buffer = io.BytesIO()
+    plot_monitor(state, settings).savefig(buffer, format="png")  # type: ignore[union-attr]
+    return buffer.getvalue()
