@@ -109,19 +109,16 @@ BROWSER = shutil.which("chromium") or shutil.which("chromium-browser") or shutil
 def test_a_browser_shows_the_decision(served_page):
     page, served = served_page
     page.publish(_answer(), _png())
-    common = [BROWSER, "--headless", "--no-sandbox", "--disable-gpu", "--timeout=4000"]
-    dom = subprocess.run(
-        [*common, "--dump-dom", served.url], capture_output=True, text=True, timeout=120, check=True
-    ).stdout
-    assert "The test can stop (at t = " in dom and '<td class="text">may stop</td>' in dom
+    common = [BROWSER, "--headless", "--no-sandbox", "--disable-gpu"]
+    run = subprocess.run([*common, "--dump-dom", served.url], capture_output=True, text=True, timeout=120)
+    if run.returncode != 0 or "<html" not in run.stdout:
+        pytest.skip(f"Chromium here does not run headless: {run.stderr.strip().splitlines()[-1:]}")
+    assert '<p id="decision" class="stop">The test can stop (at t = 70 min).</p>' in run.stdout
+    assert '<td class="text">S</td><td>23.90</td><td>26.68</td>' in run.stdout and "may stop" in run.stdout
     ARTIFACTS.mkdir(exist_ok=True)
     shot = ARTIFACTS / "live-page.png"
-    subprocess.run(
-        [*common, "--window-size=1200,900", f"--screenshot={shot}", served.url],
-        capture_output=True,
-        timeout=120,
-        check=True,
-    )
+    screenshot = [*common, "--timeout=4000", "--window-size=1200,900", f"--screenshot={shot}", served.url]
+    subprocess.run(screenshot, capture_output=True, timeout=120, check=True)
     assert shot.stat().st_size > 10_000
 
 

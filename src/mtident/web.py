@@ -78,7 +78,8 @@ def app(page: LivePage) -> Starlette:
     """The Starlette app of the page (read-only: GET only)."""
 
     async def index(request: Request) -> HTMLResponse:
-        return HTMLResponse(_PAGE.render(title=page.title))
+        # the answer so far in the page itself: it reads without its script, which only updates it
+        return HTMLResponse(_PAGE.render(title=page.title, answer=page.snapshot()[1]))
 
     async def state(request: Request) -> JSONResponse:
         version, answer, published = page.snapshot()
