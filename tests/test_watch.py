@@ -584,3 +584,16 @@ def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypa
         "waiting for later.csv to appear" in err
         and "later.csv: no such file (not created within the --timeout of 0.3 s)" in err
     )
+
+
+def test_readings_in_steps_as_coarse_as_the_tolerance_never_stop_within_it():
+    """A 10-bit converter's 0.32 °C steps and hardly any noise: rounding can bias T∞ by half a
+    step where the curve flattens within one, which no interval shows (a held-out warm-up stopped
+    0.25 °C off), so a tolerance of 0.2 °C is refused, and one of 0.4 °C is not."""
+    y = np.round(first_order(T) / 0.32) * 0.32
+    fast = RobustSettings(free_fast_modes=0)
+    state = replay({"S": y}, reference=one_mode_reference("S"), robust=fast)
+    assert not state.stopped and state.checks[0].status == "too coarse"
+    reason = str(result(state, MonitorSettings(reference=one_mode_reference("S"), robust=fast))["reason"])
+    assert "its readings come in steps of 0.32 °C, no finer than the tolerance" in reason
+    assert replay({"S": y}, reference=one_mode_reference("S"), robust=fast, tolerance_C=0.4).stopped

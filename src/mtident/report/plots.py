@@ -412,9 +412,7 @@ def plot_monitor(
             for edge in (check.low_C, check.high_C):
                 ax.axhline(edge, color="tab:green", lw=0.8, ls="--")
         if state.stopped:
-            ax.axvline(
-                state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)}"
-            )
+            ax.axvline(state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)}")
         elif expected and np.isfinite(expected.get(check.sensor, np.nan)):
             ax.axvline(expected[check.sensor], color="0.4", ls=":", lw=1, label="expected stop")
         ax.set_title(f"{check.sensor}: {check.status}", fontsize=10)

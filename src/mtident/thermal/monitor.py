@@ -148,7 +148,8 @@ class SensorCheck:
 
     ``passes`` counts the checks in a row that found the interval within the tolerance;
     ``status`` is one of "collecting", "no data", "no rise", "undetermined", "narrowing",
-    "confirming", "may stop", "misfit", "off reference".
+    "confirming", "may stop", "misfit", "off reference", "too coarse" (readings in steps no finer than the
+    tolerance).
     """
 
     sensor: str
@@ -424,15 +425,33 @@ def is_within(estimate: SensorEstimate, settings: MonitorSettings) -> bool:
     -------
     bool
         True where the estimate has a fit, its model is not contradicted by the data
-        (``model_ok``), and both ends of its interval at the decision's level lie within
-        ``tolerance_C`` of T∞. One check only: a sensor may stop after
-        ``consecutive_checks`` in a row.
+        (``model_ok``), its readings resolve the tolerance (their display step is finer), and
+        both ends of its interval at the decision's level lie within ``tolerance_C`` of T∞. One
+        check only: a sensor may stop after ``consecutive_checks`` in a row.
     """
     return (
         estimate.fit is not None
         and estimate.model_ok
+        and resolves_tolerance(estimate, settings)
         and estimate.half_width(settings.decision_level) <= settings.tolerance_C
     )
+
+
+def resolves_tolerance(estimate: SensorEstimate, settings: MonitorSettings) -> bool:
+    """Whether the readings come in steps finer than the tolerance. Rounding to a step as coarse
+    as the tolerance, with too little noise to dither it, can bias T∞ by half a step wherever the
+    curve flattens within one step, and no interval from the readings shows it.
+
+    Parameters
+    ----------
+    estimate : SensorEstimate
+    settings : MonitorSettings
+
+    Returns
+    -------
+    bool
+    """
+    return estimate.display_step_C < settings.tolerance_C
 
 
 def _checked(
@@ -443,7 +462,7 @@ def _checked(
     passes = check.passes + 1 if within else 0
     ready = passes >= settings.consecutive_checks
     fit = estimate.fit
-    status = _status(estimate, within, ready)
+    status = _status(estimate, within, ready) if resolves_tolerance(estimate, settings) else "too coarse"
     lo95, hi95 = estimate.interval_C.get(REPORT_LEVEL, (-math.inf, math.inf))
     lo, hi = estimate.interval_C.get(settings.decision_level, (-math.inf, math.inf))
     return SensorCheck(
@@ -466,7 +485,9 @@ def _checked(
         model_ok=estimate.model_ok,
         reference_used=estimate.reference_used,
         warnings=estimate.warnings,
-        ends=estimate.what_sets_the_ends(settings.decision_level),
+        ends=estimate.what_sets_the_ends(settings.decision_level)
+        if resolves_tolerance(estimate, settings)
+        else f"its readings come in steps of {estimate.display_step_C:.3g} °C, no finer than the tolerance",
         room_level_C=math.nan if fit is None or fit.room_level_C is None else fit.room_level_C,
     )
 
@@ -691,6 +712,12 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
             )
         elif not math.isfinite(c.steady_C):
             parts.append(f"{c.sensor}: {c.status}")
+        elif c.status == "too coarse":
+            parts.append(
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, but {c.ends} (±{settings.tolerance_C:g} °C): rounding can bias "
+                "T∞ "
+                "by half a step, which no interval shows; give a tolerance above the step"
+            )
         else:
             parts.append(
                 f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} interval {c.low_C:.2f} to "

@@ -158,6 +158,8 @@ class SensorEstimate:
         The reference's time constants were used (the test agrees with them).
     spikes : int
         Readings left out as spikes.
+    display_step_C : float
+        The step the readings come in (a display's rounding or a converter's; 0 where none).
     """
 
     sensor: str
@@ -172,6 +174,7 @@ class SensorEstimate:
     warning_codes: tuple[str, ...] = ()
     reference_used: bool = False
     spikes: int = 0
+    display_step_C: float = 0.0
 
     @property
     def steady_C(self) -> float:
@@ -314,6 +317,7 @@ def estimate_sensor(
         *notes.said(),
         reference_used,
         int(wild.sum()),
+        rounding,
     )
 
 
