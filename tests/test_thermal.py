@@ -732,3 +732,19 @@ def test_robust_answers_over_generated_warm_ups_are_consistent(seed, fraction):
         (lo95, hi95), (lo99, hi99) = estimate.interval_C[0.95], estimate.interval_C[0.99]
         assert lo99 <= lo95 <= estimate.steady_C <= hi95 <= hi99
     json.dumps(result.summary(0), allow_nan=False)
+
+
+def test_a_room_sensor_does_not_move_the_equilibrium_time_or_the_start():
+    """With a room sensor the fit is of the readings less the room; its start was left at the
+    room's zero, so t_eq (5 % of a rise 20 °C too large) came 2-5x early (115 min for 227)."""
+    from mtident.thermal.robust import RobustSettings, estimate_sensor
+
+    t = np.arange(0.0, 421.0)
+    rng = np.random.default_rng(1)
+    room = 20 + 0.02 * rng.standard_normal(len(t))
+    y = np.round(20 + 3 * (1 - np.exp(-t / 15)) + 5 * (1 - np.exp(-t / 90)) + 0.02 * rng.standard_normal(len(t)), 2)
+    alone, with_room = (estimate_sensor("S", t, y, r, RobustSettings()) for r in (None, room))
+    assert alone.fit is not None and with_room.fit is not None
+    truth = 227.4  # 3 e^(-t/15) + 5 e^(-t/90) falls to 0.4 °C
+    assert abs(alone.fit.equilibrium_time_min - truth) < 3 and abs(with_room.fit.equilibrium_time_min - truth) < 3
+    assert abs(with_room.fit.start_C - 20.0) < 0.05

@@ -900,7 +900,10 @@ def _steady_state(
     candidates = [*candidates, *best.values()]
     shift = problem.centre + (0.0 if binned.room_C is None else float(binned.room_C[-1]))
     modes = _modes_of(chosen)
+    # the fit is of the readings less the room: the start is at the room's first level
     start = float(_columns(problem, chosen.tau)[0, 0] @ chosen.theta[0]) + problem.centre
+    if binned.room_C is not None:
+        start += float(binned.room_C[0])
     steady = float(chosen.steady[0]) + shift
     dof = float(len(binned) - full.n_params)
     common = dict(
