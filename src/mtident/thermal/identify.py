@@ -503,6 +503,186 @@ def identify(
         return _identify(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, room_rate)
 
 
+@dataclass(frozen=True)
+class _WarmupStart:
+    """Where each sensor's warm-up begins in the window: a warm-up that began after the log
+    (``late``, flat at ``level`` until ``begins``), and the window's readings with a flat start
+    left out (NaN) where the data tuning fits from the end of it."""
+
+    window_readings: FloatArray
+    late: np.ndarray
+    begins: FloatArray
+    level: FloatArray
+
+    @classmethod
+    def of(cls, log: TemperatureLog, n_window: int, preset: str, notes: list[str]) -> _WarmupStart:
+        tw, yw = log.time_min[:n_window], log.temperature_C[:n_window]
+        sensors = yw.shape[1]
+        if preset != "data":
+            # the papers' presets fit from the first sample, as the papers do
+            return cls(yw, np.zeros(sensors, dtype=bool), np.full(sensors, tw[0]), first_level(yw))
+        onset = late_onset(tw, yw, noise_sigma(yw, tw))
+        late = onset > 0
+        # the data tuning leaves out a flat start (a sensor lag, or a warm-up that began later),
+        # which a first-order model cannot follow
+        onsets = first_order_onset(tw, yw)
+        trimmed = yw.copy()
+        for is_late in (True, False):
+            which = [i for i in np.flatnonzero(onsets).tolist() if late[i] == is_late]
+            for i in which:
+                trimmed[: onsets[i], i] = np.nan
+            why = (
+                "stay at their first level (the warm-up began after the log)"
+                if is_late
+                else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
+            )
+            if len(which) == 1:
+                i = which[0]
+                notes.append(
+                    f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min {why}; the model is fitted "
+                    f"from t = {tw[onsets[i]]:g} min"
+                )
+            elif which:  # one note for all: the sample's five lagging sensors made five lines
+                lead = ", ".join(f"{log.sensors[i]!r} ({tw[onsets[i]] - tw[0]:g} min)" for i in which)
+                notes.append(f"sensors {lead}: the first minutes {why}; each model is fitted from the end of them")
+        return cls(trimmed, late, tw[onset], first_level(yw))
+
+
+@dataclass(frozen=True)
+class _Course:
+    """A first-order identification's course: the curve over the window and on, its variance,
+    the parameters' history over the window and their final mean and covariance."""
+
+    times: FloatArray
+    mean_curve: FloatArray
+    curve_var: FloatArray
+    history: FloatArray
+    history_sd: FloatArray
+    final_mean: FloatArray
+    final_cov: FloatArray
+    window_fit: FloatArray
+
+
+def _least_squares_course(
+    t: FloatArray, tw: FloatArray, yw: FloatArray, tuning: ThermalTuning, window_min: float, horizon_min: float | None
+) -> _Course:
+    fit = fit_rise(tw, yw, tuning.initial_mean)
+    params, cov = fit.params, fit.cov
+    times = np.concatenate([tw, _future_times(t, len(tw), window_min, horizon_min, params[:, 1])])
+    mean_curve = rise_curve(times[:, None], params[:, 0], params[:, 1], params[:, 2])
+    jac = _rise_jacobian(times[:, None], params)
+    n, sensors = len(tw), yw.shape[1]
+    return _Course(
+        times=times,
+        mean_curve=mean_curve,
+        curve_var=np.einsum("nsi,sij,nsj->ns", jac, cov, jac),
+        history=np.broadcast_to(params, (n, sensors, 3)).copy(),
+        history_sd=np.broadcast_to(np.sqrt(np.diagonal(cov, axis1=-2, axis2=-1)), (n, sensors, 3)).copy(),
+        final_mean=params,
+        final_cov=cov,
+        window_fit=mean_curve[:n],
+    )
+
+
+def _filtered_course(
+    t: FloatArray,
+    tw: FloatArray,
+    yw: FloatArray,
+    method: str,
+    preset: str,
+    tuning: ThermalTuning,
+    window_min: float,
+    horizon_min: float | None,
+    pseudo_measurement_seed: int | None,
+    room_rate: FloatArray | None,
+) -> _Course:
+    n, sensors = len(tw), yw.shape[1]
+    t_future = _future_times(t, n, window_min, horizon_min, tuning.initial_mean[:, 1])
+    config = filter_config(method, tuning)
+    record, history, history_cov = filter_window(tw, yw, config, tuning, None if room_rate is None else room_rate[:n])
+    history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
+    # A-posteriori variance factor: R came from a noise estimate (±20 % from ~30 samples); the
+    # residual variance of the best first-order fit says how far off it was, and the covariance
+    # is scaled by the ratio (as curve_fit does with absolute_sigma=False).
+    variance_factor = np.ones(sensors)
+    if preset == "data":
+        for s in range(sensors):
+            ok = np.isfinite(yw[:, s])
+            fit_var = _best_rss(tw[ok], yw[ok, s], with_drift=False) / max(int(ok.sum()) - 3, 1)
+            variance_factor[s] = np.clip(fit_var / tuning.emission_cov[s, 0, 0], 0.25, 25.0)
+    history_sd = history_sd * np.sqrt(variance_factor)[:, None]
+    final_mean, final_cov = history[-1], history_cov[-1] * variance_factor[:, None, None]
+    future_mean, future_var = _predict_after_window(
+        record.final, final_mean, t_future, tw[-1], config, tuning, pseudo_measurement_seed
+    )
+    # the model curve through the final state, back over the window, for the residual test
+    if room_rate is None:
+        window_fit = rise_curve(tw[:, None] - tw[-1], final_mean[:, 0], final_mean[:, 1], final_mean[:, 2])
+    else:
+        window_fit = _curve_with_room(tw, yw, room_rate[:n], final_mean)
+    return _Course(
+        times=np.concatenate([tw, t_future]),
+        mean_curve=np.concatenate([history[:, :, 0], future_mean]),
+        curve_var=np.concatenate([history_sd[:, :, 0] ** 2, future_var * variance_factor]),
+        history=history,
+        history_sd=history_sd,
+        final_mean=final_mean,
+        final_cov=final_cov,
+        window_fit=window_fit,
+    )
+
+
+def _verdicts(
+    log: TemperatureLog,
+    tw: FloatArray,
+    method: str,
+    course: _Course,
+    chi2: FloatArray,
+    autocorr: FloatArray,
+    fits: np.ndarray,
+    notes: list[str],
+) -> tuple[FloatArray, FloatArray]:
+    """The final mean (T∞ NaN where there is no approach to a steady state) and T∞'s standard
+    deviation, widened where the first-order model does not fit the window; said in ``notes``."""
+    for s in np.flatnonzero(~fits).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: the first-order model does not fit the window (residual χ²/dof "
+            f"{chi2[s]:.2f}, lag-1 autocorrelation {autocorr[s]:.2f}); the T∞ interval was widened by "
+            f"{max(np.sqrt(chi2[s]), 2.0):.1f}x, and a longer window or a two-term model may be needed"
+        )
+    steady_sd = np.sqrt(course.final_cov[:, 2, 2]) * np.where(fits, 1.0, np.maximum(np.sqrt(chi2), 2.0))
+    final_mean = course.final_mean.copy()
+    rate_now = final_mean[:, 1]
+    no_steady = ~(np.isfinite(rate_now) & (rate_now > 0) & np.isfinite(final_mean[:, 2]) & np.isfinite(steady_sd))
+    for s in np.flatnonzero(no_steady).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: no approach to a steady state in the first {tw[-1]:g} min "
+            f"(λ = {rate_now[s]:.3g}/min with the {method} filter); T∞ is not identifiable from this window — "
+            "use a longer `window_min`"
+        )
+    final_mean[no_steady, 2] = np.nan
+    return final_mean, np.where(no_steady, np.nan, steady_sd)
+
+
+def _say_undetermined(
+    log: TemperatureLog, tw: FloatArray, half: FloatArray, rise: FloatArray, no_rise: np.ndarray, notes: list[str]
+) -> None:
+    """An interval wider than the whole rise so far: the window's course is still nearly
+    straight and does not tell where it bends."""
+    with np.errstate(invalid="ignore"):
+        undetermined = ~no_rise & (half > rise)
+    if not np.any(undetermined):
+        return
+    names = ", ".join(
+        f"{log.sensors[s]!r} (± {half[s]:.2g} °C, rose {rise[s]:.2g} °C)" for s in np.flatnonzero(undetermined).tolist()
+    )
+    notes.append(
+        f"T∞ is barely determined by the first {tw[-1]:g} min for {names}: the 95 % interval is wider than the rise "
+        "seen so far (the course is still nearly straight); a longer `window_min` narrows it (thermal watch says when "
+        "it is narrow enough)"
+    )
+
+
 def _identify(
     log: TemperatureLog,
     window_min: float,
@@ -521,126 +701,32 @@ def _identify(
         raise InputError(msg)
     t = log.time_min
     y = log.temperature_C
-    S = y.shape[1]
-    tw, yw = t[:n_window], y[:n_window]
+    tw = t[:n_window]
     notes: list[str] = list(log.notes)
-    # A warm-up that began after the log: flat at its first level until ``begins`` (data tuning only).
-    late_start = np.zeros(S, dtype=bool)
-    begins = np.full(S, tw[0])
-    if preset == "data":
-        onset = late_onset(tw, yw, noise_sigma(yw, tw))
-        level = first_level(yw)
-        late_start = onset > 0
-        begins = tw[onset]
-        # The papers' presets fit from the first sample, as the papers do. The data tuning leaves
-        # out a flat start (a sensor lag, or a warm-up that began later), which a first-order model
-        # cannot follow.
-        onsets = first_order_onset(tw, yw)
-        yw = yw.copy()
-        for late in (True, False):
-            which = [i for i in np.flatnonzero(onsets).tolist() if late_start[i] == late]
-            for i in which:
-                yw[: onsets[i], i] = np.nan
-            why = (
-                "stay at their first level (the warm-up began after the log)"
-                if late
-                else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
-            )
-            if len(which) == 1:
-                i = which[0]
-                notes.append(
-                    f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min {why}; the model is fitted "
-                    f"from t = {tw[onsets[i]]:g} min"
-                )
-            elif which:  # one note for all: the sample's five lagging sensors made five lines
-                lead = ", ".join(f"{log.sensors[i]!r} ({tw[onsets[i]] - tw[0]:g} min)" for i in which)
-                notes.append(f"sensors {lead}: the first minutes {why}; each model is fitted from the end of them")
-    tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, S)
+    start = _WarmupStart.of(log, n_window, preset, notes)
+    yw = start.window_readings
+    tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, y.shape[1])
     # the data tuning has the noise level already (its R); the papers' R is a setting, not the noise
     sigma = np.sqrt(tuning.emission_cov[:, 0, 0]) if preset == "data" else noise_sigma(yw, tw)
-
-    # Future sample times: the log's, then a uniform extension to the horizon.
     if method == "lsq":
-        fit = fit_rise(tw, yw, tuning.initial_mean)
-        rate_guess = fit.params[:, 1]
+        course = _least_squares_course(t, tw, yw, tuning, window_min, horizon_min)
     else:
-        rate_guess = tuning.initial_mean[:, 1]
-    t_future = _future_times(t, n_window, window_min, horizon_min, rate_guess)
-    times = np.concatenate([t[:n_window], t_future])
-
-    if method == "lsq":
-        params, cov = fit.params, fit.cov
-        mean_curve = rise_curve(times[:, None], params[:, 0], params[:, 1], params[:, 2])
-        jac = _rise_jacobian(times[:, None], params)
-        curve_var = np.einsum("nsi,sij,nsj->ns", jac, cov, jac)
-        history = np.broadcast_to(params, (n_window, S, 3)).copy()
-        history_sd = np.broadcast_to(np.sqrt(np.diagonal(cov, axis1=-2, axis2=-1)), (n_window, S, 3)).copy()
-        final_mean, final_cov = params, cov
-        window_fit = mean_curve[:n_window]
-    else:
-        config = filter_config(method, tuning)
-        record, history, history_cov = filter_window(
-            tw, yw, config, tuning, None if room_rate is None else room_rate[:n_window]
+        course = _filtered_course(
+            t, tw, yw, method, preset, tuning, window_min, horizon_min, pseudo_measurement_seed, room_rate
         )
-        history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
-        # A-posteriori variance factor: R came from a noise estimate (±20 % from ~30
-        # samples); the residual variance of the best first-order fit says how far off
-        # it was, and the covariance is scaled by the ratio (as curve_fit does with
-        # absolute_sigma=False).
-        variance_factor = np.ones(S)
-        if preset == "data":
-            for s in range(S):
-                ok = np.isfinite(yw[:, s])
-                fit_var = _best_rss(tw[ok], yw[ok, s], with_drift=False) / max(int(ok.sum()) - 3, 1)
-                variance_factor[s] = np.clip(fit_var / tuning.emission_cov[s, 0, 0], 0.25, 25.0)
-        history_sd = history_sd * np.sqrt(variance_factor)[:, None]
-        final_mean, final_cov = history[-1], history_cov[-1] * variance_factor[:, None, None]
-        future_mean, future_var = _predict_after_window(
-            record.final, final_mean, t_future, tw[-1], config, tuning, pseudo_measurement_seed
-        )
-        future_var = future_var * variance_factor
-        mean_curve = np.concatenate([history[:, :, 0], future_mean])
-        curve_var = np.concatenate([history_sd[:, :, 0] ** 2, future_var])
-        # The model curve through the final state, back over the window, for the residual test.
-        if room_rate is None:
-            window_fit = rise_curve(tw[:, None] - tw[-1], final_mean[:, 0], final_mean[:, 1], final_mean[:, 2])
-        else:
-            window_fit = _curve_with_room(tw, yw, room_rate[:n_window], final_mean)
-
-    chi2, autocorr, fits = model_check(tw, yw, yw - window_fit, sigma)
-    steady_sd = np.sqrt(final_cov[:, 2, 2])
-    rate_sd = np.sqrt(final_cov[:, 1, 1])
-    for s in np.flatnonzero(~fits).tolist():
-        notes.append(
-            f"sensor {log.sensors[s]!r}: the first-order model does not fit the window (residual χ²/dof "
-            f"{chi2[s]:.2f}, lag-1 autocorrelation {autocorr[s]:.2f}); the T∞ interval was widened by "
-            f"{max(np.sqrt(chi2[s]), 2.0):.1f}x, and a longer window or a two-term model may be needed"
-        )
-    widen = np.where(fits, 1.0, np.maximum(np.sqrt(chi2), 2.0))
-    steady_sd = steady_sd * widen
-    rate_now = final_mean[:, 1]
-    no_steady = ~(np.isfinite(rate_now) & (rate_now > 0) & np.isfinite(final_mean[:, 2]) & np.isfinite(steady_sd))
-    for s in np.flatnonzero(no_steady).tolist():
-        notes.append(
-            f"sensor {log.sensors[s]!r}: no approach to a steady state in the first {tw[-1]:g} min "
-            f"(λ = {rate_now[s]:.3g}/min with the {method} filter); T∞ is not identifiable from this window — "
-            "use a longer `window_min`"
-        )
-    steady_sd = np.where(no_steady, np.nan, steady_sd)
-    final_mean = final_mean.copy()
-    final_mean[no_steady, 2] = np.nan
-
-    if np.any(late_start):
+    chi2, autocorr, fits = model_check(tw, yw, yw - course.window_fit, sigma)
+    final_mean, steady_sd = _verdicts(log, tw, method, course, chi2, autocorr, fits, notes)
+    mean_curve, curve_var, times = course.mean_curve, course.curve_var, course.times
+    if np.any(start.late):
         # before its warm-up began the sensor stayed at its first level; the equilibrium time
         # counts from the log's start, as the measured one does
-        before = late_start[None, :] & (times[:, None] < begins[None, :])
-        mean_curve = np.where(before, level[None, :], mean_curve)
+        before = start.late[None, :] & (times[:, None] < start.begins[None, :])
+        mean_curve = np.where(before, start.level[None, :], mean_curve)
         curve_var = np.where(before, sigma[None, :] ** 2, curve_var)
-    start = mean_curve[0]
     steady = final_mean[:, 2]
     rate = final_mean[:, 1]
     with np.errstate(divide="ignore", invalid="ignore"):
-        eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan) + np.where(late_start, begins - tw[0], 0.0)
+        eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan) + np.where(start.late, start.begins - tw[0], 0.0)
     # A sensor that does not rise in the window (never heated, or not connected) is at its level;
     # a λ fitted to its noise would give it an "equilibrium time" it never had.
     rise = reading_range(yw)
@@ -651,30 +737,16 @@ def _identify(
             "highest): no warm-up to identify; it has no equilibrium time"
         )
     eq_time = np.where(no_rise, np.nan, eq_time)
-    # An interval wider than the whole rise so far: the window's course is still nearly straight and
-    # does not tell where it bends (the sample's T6, T7, T9, T10 at 30 min; T7 still at 45; none at 60).
     quantile = float(stdtrit(max(n_window - 3, 1), 0.975))
-    half = quantile * steady_sd
-    with np.errstate(invalid="ignore"):
-        undetermined = ~no_rise & (half > rise)
-    if np.any(undetermined):
-        names = ", ".join(
-            f"{log.sensors[s]!r} (± {half[s]:.2g} °C, rose {rise[s]:.2g} °C)"
-            for s in np.flatnonzero(undetermined).tolist()
-        )
-        notes.append(
-            f"T∞ is barely determined by the first {tw[-1]:g} min for {names}: the 95 % interval is wider than the "
-            "rise "
-            "seen so far (the course is still nearly straight); a longer `window_min` narrows it (thermal watch says "
-            "when "
-            "it is narrow enough)"
-        )
+    _say_undetermined(log, tw, quantile * steady_sd, rise, no_rise, notes)
     n_log = len(t)
-    measured_part = np.full((len(times), S), np.nan)
+    measured_part = np.full((len(times), y.shape[1]), np.nan)
     measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]
     in_log = times <= t[-1] + 1e-9
     errors = rmse(mean_curve[in_log], y[: int(in_log.sum())])
     final_measured, eq_measured = measured_equilibrium(t, y)
+    history, history_sd = course.history, course.history_sd
+    rate_sd = np.sqrt(course.final_cov[:, 1, 1])
     return Identification(
         sensors=log.sensors,
         method=method,
@@ -689,7 +761,7 @@ def _identify(
         steady_state_sd_C=steady_sd,
         rate_per_min=rate,
         rate_sd_per_min=rate_sd,
-        start_C=start,
+        start_C=mean_curve[0],
         equilibrium_time_min=eq_time,
         rmse_C=errors,
         fit_chi2=chi2,
