@@ -13,7 +13,7 @@ import time
 import urllib.parse
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import click
 import numpy as np
@@ -99,37 +99,61 @@ def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
     return func
 
 
-def agent_recorder(
+class Recorder(Protocol):
+    """A network source recorded to the CSV log the watch follows."""
+
+    log: Path
+
+    def fetch(self) -> list[str]: ...
+
+    def close(self) -> None: ...
+
+
+def network_recorder(
     file: str,
     device: str | None,
+    nodes: tuple[str, ...],
     items: tuple[str, ...],
     record_path: str | None,
     from_buffer_start: bool,
     replay: bool,
-) -> MTConnectRecorder | None:
-    """The recorder of an MTConnect agent where FILE is one (http:// or https://), else None;
-    the agent's options refused for a file."""
-    if not file.startswith(("http://", "https://")):
-        given = [
-            name
-            for name, value in (
-                ("--device", device),
-                ("--item", items),
-                ("--record", record_path),
-                ("--from-buffer-start", from_buffer_start),
-            )
-            if value
-        ]
-        if given:
-            msg = f"{', '.join(given)}: for an MTConnect agent (FILE as http://host:5000), not for a log file"
-            raise InputError(msg)
+) -> Recorder | None:
+    """The recorder of an MTConnect agent (http:// or https://) or an OPC UA server (opc.tcp://)
+    where FILE is one, else None; a source's options refused for a file."""
+    is_agent, is_server = file.startswith(("http://", "https://")), file.startswith("opc.tcp://")
+    given = {
+        "--device": device,
+        "--item": items,
+        "--from-buffer-start": from_buffer_start,
+        "--node": nodes,
+        "--record": record_path,
+    }
+    wrong = [
+        name
+        for name, value in given.items()
+        if value and not (is_agent and name != "--node" or is_server and name in ("--node", "--record"))
+    ]
+    if wrong:
+        msg = (
+            f"{', '.join(wrong)}: not for "
+            f"{'an OPC UA server' if is_server else 'an MTConnect agent' if is_agent else 'a log file'} "
+            "(--device, --item and --from-buffer-start are for an MTConnect agent, http://host:5000; --node for an OPC "
+            "UA server, opc.tcp://host:4840; --record for either)"
+        )
+        raise InputError(msg)
+    if not (is_agent or is_server):
         return None
     if replay:
         msg = (
-            f"{file}: --replay replays a log file; the agent's readings are recorded (--record) and can be replayed "
-            "from there"
+            f"{file}: --replay replays a log file; the readings are recorded (--record) and can be replayed from there"
         )
         raise InputError(msg)
+    host = urllib.parse.urlparse(file).hostname or "source"
+    log = Path(record_path) if record_path else Path.cwd() / f"{device or host}.csv"
+    if is_server:
+        from mtident.io.opcua import OpcUaRecorder
+
+        return OpcUaRecorder(file, log, list(nodes))
     mapping = {}
     for item in items:
         key, sep, name = item.partition("=")
@@ -137,8 +161,6 @@ def agent_recorder(
             msg = f"--item {item!r}: expected ID=NAME (a data item's id or name, and the sensor's name)"
             raise InputError(msg)
         mapping[key.strip()] = name.strip()
-    host = urllib.parse.urlparse(file).hostname or "agent"
-    log = Path(record_path) if record_path else Path.cwd() / f"{device or host}.csv"
     return MTConnectRecorder(file, log, device, mapping or None, from_buffer_start=from_buffer_start)
 
 
@@ -211,6 +233,13 @@ def monitor_settings(
 )
 @click.option("--device", metavar="NAME", help="MTConnect (FILE is the agent, http://host:5000): the device's name.")
 @click.option(
+    "--node",
+    "nodes",
+    multiple=True,
+    metavar="NODEID",
+    help="OPC UA (FILE is the server, opc.tcp://host:4840): a node to record, such as ns=2;s=Spindle.T1; repeat.",
+)
+@click.option(
     "--item",
     "items",
     multiple=True,
@@ -258,6 +287,7 @@ def watch_command(
     plot_path: str | None,
     as_json: bool,
     device: str | None,
+    nodes: tuple[str, ...],
     items: tuple[str, ...],
     record_path: str | None,
     from_buffer_start: bool,
@@ -286,7 +316,7 @@ def watch_command(
         stderr.print(
             "mtident: note: --resume is the default for a live log; it matters only with --replay", highlight=False
         )
-    recorder = agent_recorder(file, device, items, record_path, from_buffer_start, replay)
+    recorder = network_recorder(file, device, nodes, items, record_path, from_buffer_start, replay)
     path = log_path(file) if recorder is None else recorder.log
     if replay and not path.is_file():
         msg = f"{path}: no such file"
@@ -307,7 +337,7 @@ def watch_command(
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)
     if recorder is not None:
-        stderr.print(f"mtident: recording the agent {file} to {path}", highlight=False)
+        stderr.print(f"mtident: recording {file} to {path}", highlight=False)
     elif not path.is_file():
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
     live = sys.stdout.isatty() and not as_json
@@ -327,6 +357,8 @@ def watch_command(
     finally:
         if served is not None:
             served.stop()
+        if recorder is not None:
+            recorder.close()
     if session.state is None:
         if interrupted:
             sys.exit(130)

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mtident.exceptions import InputError
+from mtident.io.record import last_logged_time, quoted
 
 __all__ = ["DataItem", "MTConnectRecorder", "Observation", "StreamHeader", "parse_probe", "parse_streams"]
 
@@ -247,7 +248,7 @@ class MTConnectRecorder:
         self.origin = None if saved["origin"] is None else dt.datetime.fromisoformat(saved["origin"])
         # the log, not the sidecar, says what was written: a recorder killed between the two
         # writes would otherwise write those rows again
-        self.last_time_min = _last_logged_time(self.log) if self.log.is_file() else -math.inf
+        self.last_time_min = last_logged_time(self.log) if self.log.is_file() else -math.inf
 
     def _save(self) -> None:
         saved = {
@@ -290,6 +291,9 @@ class MTConnectRecorder:
         if not_celsius:
             msg = f"{', '.join(not_celsius)}: not in degrees Celsius at the agent"
             raise InputError(msg)
+
+    def close(self) -> None:
+        """Nothing to close: each request is its own connection."""
 
     def fetch(self) -> list[str]:
         """Ask the agent for the observations since the last, and append them to the log.
@@ -360,28 +364,10 @@ class MTConnectRecorder:
         new = not self.log.is_file() or self.log.stat().st_size == 0
         with self.log.open("a", encoding="utf-8", newline="") as out:
             if new:
-                out.write("time_min," + ",".join(_csv_name(self.columns[i]) for i in order) + "\n")
+                out.write("time_min," + ",".join(quoted(self.columns[i]) for i in order) + "\n")
             for t in sorted(rows):
                 cells = ("" if math.isnan(v) else f"{v:g}" for v in (rows[t].get(i, math.nan) for i in order))
                 out.write(f"{t:.6f}," + ",".join(cells) + "\n")
             out.flush()
             os.fsync(out.fileno())
         self.last_time_min = max(rows)
-
-
-def _last_logged_time(log: Path) -> float:
-    """The last row's time in the log (minus infinity for a log without rows)."""
-    with log.open("rb") as handle:
-        handle.seek(0, os.SEEK_END)
-        handle.seek(max(0, handle.tell() - 4096))
-        lines = [line for line in handle.read().decode("utf-8", "replace").splitlines() if line.strip()]
-    for line in reversed(lines):
-        try:
-            return float(line.split(",", 1)[0])
-        except ValueError:
-            continue
-    return -math.inf
-
-
-def _csv_name(name: str) -> str:
-    return '"' + name.replace('"', '""') + '"' if any(c in name for c in ',"\n') else name

@@ -1,0 +1,28 @@
+"""What the recorders of network sources (MTConnect, OPC UA) share: the CSV log they append to."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+__all__ = ["last_logged_time", "quoted"]
+
+
+def last_logged_time(log: Path) -> float:
+    """The last row's time in the log (minus infinity for a log without rows)."""
+    with log.open("rb") as handle:
+        handle.seek(0, os.SEEK_END)
+        handle.seek(max(0, handle.tell() - 4096))
+        lines = [line for line in handle.read().decode("utf-8", "replace").splitlines() if line.strip()]
+    for line in reversed(lines):
+        try:
+            return float(line.split(",", 1)[0])
+        except ValueError:
+            continue
+    return -math.inf
+
+
+def quoted(name: str) -> str:
+    """A column name as a CSV header cell (quoted where it holds a comma, a quote or a line end)."""
+    return '"' + name.replace('"', '""') + '"' if any(c in name for c in ',"\n') else name

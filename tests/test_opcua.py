@@ -1,0 +1,144 @@
+"""Temperatures from an OPC UA server: the recorder against a real asyncua server on the loopback
+interface, stopped and started again mid-test; bad status codes as missing readings."""
+
+from __future__ import annotations
+
+import datetime as dt
+import socket
+
+import numpy as np
+import pytest
+
+pytest.importorskip("asyncua", reason="the OPC UA source needs the asyncua package (mtident[opcua])")
+
+from asyncua import ua  # noqa: E402
+from asyncua.sync import Server  # noqa: E402
+
+from mtident.exceptions import InputError  # noqa: E402
+from mtident.io.logs import read_temperature_log  # noqa: E402
+from mtident.io.opcua import OpcUaRecorder  # noqa: E402
+
+START = dt.datetime(2026, 11, 24, 8, 0, tzinfo=dt.UTC)
+NODES = ["ns=2;s=Spindle.T1", "ns=2;s=Spindle.T2"]
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+class Machine:
+    """An OPC UA server with two temperature nodes, started and stopped on one port."""
+
+    def __init__(self) -> None:
+        self.url = f"opc.tcp://127.0.0.1:{_free_port()}/mtident/"
+        self.server: Server | None = None
+        self.variables: list = []
+
+    def start(self) -> None:
+        server = Server()
+        server.set_endpoint(self.url)
+        idx = server.register_namespace("urn:mtident:test")
+        assert idx == 2
+        spindle = server.nodes.objects.add_object(idx, "Spindle")
+        self.variables = [
+            spindle.add_variable(node, name, 20.0) for node, name in zip(NODES, ("T1", "T2"), strict=True)
+        ]
+        server.start()
+        self.server = server
+
+    def stop(self) -> None:
+        assert self.server is not None
+        self.server.stop()
+        self.server = None
+
+    def publish(self, minute: float, values: tuple[float, float], good: bool = True) -> None:
+        stamp = START + dt.timedelta(minutes=minute)
+        status = ua.StatusCode(ua.StatusCodes.Good if good else ua.StatusCodes.BadSensorFailure)
+        for variable, value in zip(self.variables, values, strict=True):
+            variable.write_value(
+                ua.DataValue(
+                    ua.Variant(value, ua.VariantType.Double), status, SourceTimestamp=stamp, ServerTimestamp=stamp
+                )
+            )
+
+
+@pytest.fixture
+def machine():  # noqa: ANN201
+    m = Machine()
+    m.start()
+    yield m
+    if m.server is not None:
+        m.stop()
+
+
+def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path):
+    log = tmp_path / "opc.csv"
+    recorder = OpcUaRecorder(machine.url, log, NODES)
+    published = []
+    for k in range(10):
+        machine.publish(float(k), (20 + k / 10, 21 + k / 10))
+        published.append(k)
+        assert recorder.fetch() == []
+        assert recorder.fetch() == []  # read again: nothing written twice
+    machine.stop()
+    notes = recorder.fetch()
+    assert len(notes) == 1 and "does not answer" in notes[0]
+    assert recorder.fetch() == []
+    machine.start()
+    for k in range(10, 15):
+        machine.publish(float(k), (20 + k / 10, 21 + k / 10))
+        published.append(k)
+        said = recorder.fetch()
+        assert said in ([], [f"the OPC UA server at {machine.url} answers again"])
+    recorder.close()
+    again = OpcUaRecorder(machine.url, log, NODES)  # a watch started again goes on from its sidecar
+    machine.publish(15.0, (21.5, 22.5))
+    published.append(15)
+    again.fetch()
+    again.fetch()
+    again.close()
+    recorded = read_temperature_log(log)
+    np.testing.assert_allclose(recorded.time_min, published)
+    np.testing.assert_allclose(recorded.temperature_C[:, 0], [20 + k / 10 for k in published])
+    assert recorded.sensors == ("T1", "T2")
+
+
+def test_a_bad_status_is_a_missing_reading(machine, tmp_path):
+    recorder = OpcUaRecorder(machine.url, tmp_path / "bad.csv", NODES)
+    machine.publish(0.0, (20.0, 21.0))
+    recorder.fetch()
+    machine.publish(1.0, (99.0, 99.0), good=False)
+    recorder.fetch()
+    recorder.close()
+    lines = (tmp_path / "bad.csv").read_text().splitlines()
+    assert lines == ["time_min,T1,T2", "0.000000,20,21", "1.000000,,"]
+
+
+def test_unknown_nodes_and_no_nodes_are_refused(machine, tmp_path):
+    with pytest.raises(InputError, match="name the nodes to record"):
+        OpcUaRecorder(machine.url, tmp_path / "x.csv", [])
+    with pytest.raises(InputError, match="cannot read the nodes ns=2;s=Nowhere"):
+        OpcUaRecorder(machine.url, tmp_path / "y.csv", ["ns=2;s=Nowhere"]).fetch()
+
+
+def test_watch_follows_a_server_and_refuses_its_options_for_a_file(machine, tmp_path):
+    import json
+
+    from click.testing import CliRunner
+
+    from mtident.cli import main
+
+    for k in range(5):
+        machine.publish(float(k), (20 + k / 10, 21 + k / 10))
+    record = tmp_path / "opc.csv"
+    args = ["thermal", "watch", machine.url, "--node", NODES[0], "--node", NODES[1], "--record", str(record)]
+    out = CliRunner().invoke(main, [*args, "--poll", "0.05", "--timeout", "1", "--json"], catch_exceptions=False)
+    assert out.exit_code == 0, out.stderr
+    assert f"recording {machine.url} to {record}" in out.stderr
+    assert json.loads(out.stdout)["decision"] == "continue"
+    # a poll sees the values of now: the server's last, at minute 4
+    assert record.read_text().splitlines() == ["time_min,T1,T2", "0.000000,20.4,21.4"]
+    wrong = CliRunner().invoke(main, ["thermal", "watch", str(record), "--node", NODES[0]], catch_exceptions=False)
+    assert wrong.exit_code == 2 and "--node: not for a log file" in wrong.stderr
