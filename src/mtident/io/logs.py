@@ -436,6 +436,54 @@ def as_temperature_log(log: object, caller: str) -> TemperatureLog:
     raise InputError(msg)
 
 
+def _sensor_readings(
+    frame: pd.DataFrame, name: str, dialect: CsvDialect, source: str, first_row: int, notes: list[str]
+) -> FloatArray:
+    """A sensor's column in °C, NaN for an empty or open-circuit cell (said in ``notes``); an
+    error naming the first cell that is no number, or a column mostly empty."""
+    import pandas as pd
+
+    raw = frame[name]
+    scale, offset = celsius_conversion(dialect.unit_of(name)) or (1.0, 0.0)
+    # One bad cell leaves a decimal-comma column as text: its good cells must still read as numbers
+    # (the message named the first good cell, '20,00', instead of the bad one).
+    cells = raw
+    if dialect.units_in_cells and not pd.api.types.is_numeric_dtype(raw):  # "13.1 °C"
+        cells = raw.astype(str).map(number_without_unit).where(raw.notna())
+    if dialect.decimal == "," and not pd.api.types.is_numeric_dtype(cells):
+        cells = cells.astype(str).str.replace(",", ".", regex=False).where(cells.notna())
+    values = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
+    text = raw.astype(str).str.strip().str.lower()
+    marked_open = text.isin(OPEN_CIRCUIT_TEXT).to_numpy()
+    non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.isin(["nan", ""]).to_numpy() & ~marked_open
+    if np.any(non_numeric):
+        row = int(np.argmax(non_numeric))
+        msg = f"{source}: sensor {name!r}, row {row + first_row}: {_cell(raw.iloc[row])} is not a number"
+        raise InputError(msg)
+    missing = np.isnan(values) & ~marked_open
+    open_circuit = (values > OPEN_CIRCUIT_HIGH_C) | (values < OPEN_CIRCUIT_LOW_C) | marked_open
+    bad = missing | open_circuit
+    if np.mean(bad) > MAX_BAD_FRACTION:
+        msg = (
+            f"{source}: sensor {name!r}: {int(bad.sum())} of {len(values)} samples are empty, NaN or "
+            f"open-circuit (outside {OPEN_CIRCUIT_LOW_C:g}..{OPEN_CIRCUIT_HIGH_C:g} °C); check the wiring "
+            "or leave this sensor out with `sensors`"
+        )
+        raise InputError(msg)
+    if np.any(bad):
+        rows = ", ".join(str(int(r) + first_row) for r in np.flatnonzero(bad)[:5])
+        kinds = []
+        if missing.any():
+            kinds.append(f"{int(missing.sum())} empty/NaN")
+        if open_circuit.any():
+            kinds.append(f"{int(open_circuit.sum())} open-circuit")
+        notes.append(
+            f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows {rows}{', ...' if bad.sum() > 5 else ''})"
+        )
+        values = np.where(bad, np.nan, values)
+    return values
+
+
 def read_temperature_log(
     path: str | Path | pd.DataFrame,
     time_col: str | None = None,
@@ -566,48 +614,7 @@ def read_temperature_log(
         )
         notes.extend(time_notes)
 
-    columns = []
-    for name in sensors:
-        raw = frame[name]
-        scale, offset = celsius_conversion(dialect.unit_of(name)) or (1.0, 0.0)
-        # One bad cell leaves a decimal-comma column as text: its good cells must still read as numbers
-        # (the message named the first good cell, '20,00', instead of the bad one).
-        cells = raw
-        if dialect.units_in_cells and not pd.api.types.is_numeric_dtype(raw):  # "13.1 °C"
-            cells = raw.astype(str).map(number_without_unit).where(raw.notna())
-        if dialect.decimal == "," and not pd.api.types.is_numeric_dtype(cells):
-            cells = cells.astype(str).str.replace(",", ".", regex=False).where(cells.notna())
-        values = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
-        text = raw.astype(str).str.strip().str.lower()
-        marked_open = text.isin(OPEN_CIRCUIT_TEXT).to_numpy()
-        non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.isin(["nan", ""]).to_numpy() & ~marked_open
-        if np.any(non_numeric):
-            row = int(np.argmax(non_numeric))
-            msg = f"{source}: sensor {name!r}, row {row + first_row}: {_cell(raw.iloc[row])} is not a number"
-            raise InputError(msg)
-        missing = np.isnan(values) & ~marked_open
-        open_circuit = (values > OPEN_CIRCUIT_HIGH_C) | (values < OPEN_CIRCUIT_LOW_C) | marked_open
-        bad = missing | open_circuit
-        if np.mean(bad) > MAX_BAD_FRACTION:
-            msg = (
-                f"{source}: sensor {name!r}: {int(bad.sum())} of {len(values)} samples are empty, NaN or "
-                f"open-circuit (outside {OPEN_CIRCUIT_LOW_C:g}..{OPEN_CIRCUIT_HIGH_C:g} °C); check the wiring "
-                "or leave this sensor out with `sensors`"
-            )
-            raise InputError(msg)
-        if np.any(bad):
-            rows = ", ".join(str(int(r) + first_row) for r in np.flatnonzero(bad)[:5])
-            kinds = []
-            if missing.any():
-                kinds.append(f"{int(missing.sum())} empty/NaN")
-            if open_circuit.any():
-                kinds.append(f"{int(open_circuit.sum())} open-circuit")
-            notes.append(
-                f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows "
-                f"{rows}{', ...' if bad.sum() > 5 else ''})"
-            )
-            values = np.where(bad, np.nan, values)
-        columns.append(values)
+    columns = [_sensor_readings(frame, name, dialect, source, first_row, notes) for name in sensors]
     return TemperatureLog(
         time_min,
         tuple(sensors),
