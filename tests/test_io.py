@@ -1282,3 +1282,13 @@ def test_a_column_named_as_the_room_is_told_from_machine_sensors(name, room):
     from mtident.io.columns import room_named
 
     assert room_named(name) is room
+
+
+def test_a_column_named_with_another_case_or_a_slip_is_pointed_to(write_csv):
+    path = write_csv("time_min,Spindle,room\n" + "".join(f"{k},{20 + k / 10:.2f},19.9\n" for k in range(8)))
+    with pytest.raises(InputError, match=r"no sensor column 'Room' \(did you mean 'room'\?\); the log has: Spindle, room"):
+        read_temperature_log(path, sensors=["Room"])
+    with pytest.raises(InputError, match=r"no sensor column 'Spindel' \(did you mean 'Spindle'\?\)"):
+        read_temperature_log(path, sensors=["Spindel"])
+    with pytest.raises(InputError, match=r"no sensor column 'T9'; the log has"):
+        read_temperature_log(path, sensors=["T9"])

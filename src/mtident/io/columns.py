@@ -19,6 +19,7 @@ from mtident.io.stamps import DATE_FORMATS, parses_as, stamp_format
 from mtident.io.units import celsius_conversion, is_from_humidity, is_humidity, is_number, unit_key
 
 __all__ = [
+    "missing_column",
     "text_only_cells",
     "choose_time_column",
     "counter_before_time",
@@ -270,3 +271,13 @@ def check_unique_names(header: list[str], source: str | Path) -> None:
             )
             raise InputError(msg)
         seen[name] = position
+
+
+def missing_column(source: object, name: str, available: list[str] | tuple[str, ...]) -> str:
+    """The message for a column the log does not have: the columns it has, and the nearest one
+    where the name differs only a little (a capital letter, a typing slip)."""
+    import difflib
+
+    near = [c for c in available if c.lower() == name.lower()] or difflib.get_close_matches(name, available, n=1)
+    hint = f" (did you mean {near[0]!r}?)" if near else ""
+    return f"{source}: no sensor column {name!r}{hint}; the log has: {', '.join(available)}"

@@ -37,6 +37,7 @@ from mtident.io.columns import (
     check_unique_names,
     choose_time_column,
     millisecond_column,
+    missing_column,
     temperature_columns,
     text_only_cells,
 )
@@ -268,7 +269,7 @@ class LogFollower:
             chosen = [n for n in chosen if n != room_last] + [room_last]
         missing = [s for s in chosen if s not in header]
         if missing:
-            msg = f"{self.path}: no sensor column {missing[0]!r}; the log has: {', '.join(names)}"
+            msg = missing_column(self.path, missing[0], names)
             raise InputError(msg)
         if room_last is not None and len(chosen) == 1:
             msg = f"{self.path}: no sensor column besides the room sensor {room_last!r}"

@@ -33,6 +33,7 @@ from mtident.io.columns import (
     check_unique_names,
     choose_time_column,
     millisecond_column,
+    missing_column,
     temperature_columns,
     text_only_cells,
 )
@@ -137,7 +138,7 @@ class TemperatureLog:
             return self
         missing = [n for n in names if n not in self.sensors]
         if missing:
-            msg = f"{self.source}: no sensor column {missing[0]!r}; the log has: {', '.join(self.sensors)}"
+            msg = missing_column(self.source, missing[0], self.sensors)
             raise InputError(msg)
         idx = [self.sensors.index(n) for n in names]
         return TemperatureLog(
@@ -571,7 +572,7 @@ def read_temperature_log(
     available = [c for c in frame.columns if c not in left_out]
     missing_names = [n for n in sensors or [] if n not in available]
     if missing_names:
-        msg = f"{source}: no sensor column {missing_names[0]!r}; the log has: {', '.join(available)}"
+        msg = missing_column(source, missing_names[0], available)
         raise InputError(msg)
     if not sensors:
         # A column of text alone (a logger's status or comment channel) is no sensor; one asked for
