@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mtident.exceptions import InputError
-from mtident.io.record import last_logged_time, quoted
+from mtident.io.record import last_logged_time, quoted, save_position
 
 __all__ = ["DataItem", "MTConnectRecorder", "Observation", "StreamHeader", "parse_probe", "parse_streams"]
 
@@ -259,9 +259,7 @@ class MTConnectRecorder:
             "next_sequence": self.next_sequence,
             "origin": None if self.origin is None else self.origin.isoformat(),
         }
-        partial = self._sidecar.with_name(self._sidecar.name + ".partial")
-        partial.write_text(json.dumps(saved), encoding="utf-8")
-        os.replace(partial, self._sidecar)
+        save_position(self._sidecar, saved)
 
     # -- the agent ----------------------------------------------------------------------------
 

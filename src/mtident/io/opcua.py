@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from mtident.exceptions import InputError
-from mtident.io.record import last_logged_time, quoted
+from mtident.io.record import last_logged_time, quoted, save_position
 
 __all__ = ["OpcUaRecorder"]
 
@@ -91,9 +91,7 @@ class OpcUaRecorder:
             "origin": None if self.origin is None else self.origin.isoformat(),
             "last_stamp": self.last_stamp,
         }
-        partial = self._sidecar.with_name(self._sidecar.name + ".partial")
-        partial.write_text(json.dumps(saved), encoding="utf-8")
-        os.replace(partial, self._sidecar)
+        save_position(self._sidecar, saved)
 
     def _connect(self) -> Any:  # noqa: ANN401
         client = _client_class()(self.url, timeout=self.timeout_s)

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from pathlib import Path
 
-__all__ = ["last_logged_time", "quoted"]
+__all__ = ["last_logged_time", "quoted", "save_position"]
 
 
 def last_logged_time(log: Path) -> float:
@@ -26,3 +27,10 @@ def last_logged_time(log: Path) -> float:
 def quoted(name: str) -> str:
     """A column name as a CSV header cell (quoted where it holds a comma, a quote or a line end)."""
     return '"' + name.replace('"', '""') + '"' if any(c in name for c in ',"\n') else name
+
+
+def save_position(sidecar: Path, position: dict[str, object]) -> None:
+    """Write a recorder's sidecar atomically (a killed recorder leaves the old or the new one)."""
+    partial = sidecar.with_name(sidecar.name + ".partial")
+    partial.write_text(json.dumps(position), encoding="utf-8")
+    os.replace(partial, sidecar)

@@ -141,8 +141,9 @@ def build_report(session: WatchSession, progress: Callable[[WatchSession], None]
         raise InputError(msg)
     settings = session.settings
     outcome = session.result(with_forecast=False)
-    hindsight = session.hindsight()
-    time_min, values, _ = session.whole_log()
+    whole = session.whole_log()
+    hindsight = session.hindsight(whole)
+    time_min, values, _ = whole
     lines = tuple(
         _line(summary, state.readings.values_C[:, s], hindsight, s) for s, summary in enumerate(_sensors(outcome))
     )

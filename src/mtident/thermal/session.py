@@ -281,13 +281,14 @@ class WatchSession:
         expected = self.expected_stops() if with_forecast and not self.state.stopped else None
         return result(self.state, self.settings, expected)
 
-    def hindsight(self) -> Hindsight | None:
+    def hindsight(self, whole: tuple[FloatArray, FloatArray, FloatArray | None] | None = None) -> Hindsight | None:
         """The decision against where the log settled, for a log that runs on past the stop (read
-        again whole); None before a decision or where the log ends at it."""
+        again whole, unless ``whole`` is :meth:`whole_log` already read); None before a decision
+        or where the log ends at it."""
         state = self.state
         if state is None or not state.stopped:
             return None
-        time_min, values, room_C = self.whole_log()
+        time_min, values, room_C = self.whole_log() if whole is None else whole
         if not len(time_min) or time_min[-1] <= state.stop_time_min:
             return None
         steady = np.array([c.steady_C for c in state.checks])
