@@ -1286,7 +1286,9 @@ def test_a_column_named_as_the_room_is_told_from_machine_sensors(name, room):
 
 def test_a_column_named_with_another_case_or_a_slip_is_pointed_to(write_csv):
     path = write_csv("time_min,Spindle,room\n" + "".join(f"{k},{20 + k / 10:.2f},19.9\n" for k in range(8)))
-    with pytest.raises(InputError, match=r"no sensor column 'Room' \(did you mean 'room'\?\); the log has: Spindle, room"):
+    with pytest.raises(
+        InputError, match=r"no sensor column 'Room' \(did you mean 'room'\?\); the log has: Spindle, room"
+    ):
         read_temperature_log(path, sensors=["Room"])
     with pytest.raises(InputError, match=r"no sensor column 'Spindel' \(did you mean 'Spindle'\?\)"):
         read_temperature_log(path, sensors=["Spindel"])

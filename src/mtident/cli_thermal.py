@@ -153,8 +153,8 @@ def free_fast_option(func):  # noqa: ANN001,ANN201 - click decorator
         type=click.IntRange(0, MAX_FREE_FAST),
         default=MAX_FREE_FAST,
         show_default=True,
-        help="With --reference: how many modes faster than the reference's a test may add, free (a reference run can "
-        "miss a mode). "
+        help="With --reference: how many free modes faster than the reference's slowest a test may add (a "
+        "reference run can miss a mode). "
         "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, "
         "which the answer states.",
     )(func)
@@ -441,6 +441,7 @@ def learn_command(
                 "time_constants_min": list(m.time_constants_min),
                 "box": list(m.box),
                 "amplitudes_C": list(m.amplitudes_C),
+                "doubt": m.doubt,
             }
             for name, m in reference.sensors.items()
         }
@@ -456,11 +457,11 @@ def learn_command(
         )
         return
     table = Table(title=f"{log.source}: modes learnt (time constants with their box)")
-    for column in ("sensor", "time constants (min)", "amplitudes (°C)"):
+    for column in ("sensor", "time constants (min)", "amplitudes (°C)", "used by later tests"):
         table.add_column(column, justify="left" if column == "sensor" else "right", **_column_layout(column))
     for name, m in reference.sensors.items():
         taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(m.time_constants_min, m.box, strict=True))
-        table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C))
+        table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), "no" if m.doubt else "yes")
     OptionConsole(width=max(OptionConsole().width, 100)).print(table)
 
 

@@ -481,12 +481,14 @@ def _grid_fits(problem: _Problem) -> list[_Fits]:
 
 
 def _reference_bounds(family: ModeFamily, fast_lo: float, extra: int) -> FloatArray:
-    """Bounds (k, 2) of a reference family's time constants: the boxes, then ``extra`` free fast
-    modes from ``fast_lo`` to the fastest box's lower end."""
+    """Bounds (k, 2) of a reference family's time constants: the boxes, then ``extra`` free
+    modes from ``fast_lo`` to the slowest box's lower end (a reference run can miss a mode faster
+    than its slowest, between its others as well as below them)."""
     ref = np.asarray(family.reference_min, dtype=float)
     box = np.asarray(family.reference_box, dtype=float)
     bounds = np.column_stack([ref * (1 - box), ref * (1 + box)])
-    fast = np.tile([min(fast_lo, bounds[:, 0].min()), bounds[:, 0].min()], (extra, 1))
+    ceiling = float(bounds[np.argmax(ref), 0])
+    fast = np.tile([min(fast_lo, ceiling), ceiling], (extra, 1))
     return np.concatenate([bounds, fast]) if extra else bounds
 
 
@@ -496,7 +498,7 @@ def _reference_grids(family: ModeFamily, fast_lo: float, points: int = 7) -> lis
     axes = [np.geomspace(lo, hi, points) for lo, hi in bounds]
     grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(bounds), -1).T
     grids = [grid]
-    ceiling = float(bounds[:, 0].min())
+    ceiling = float(bounds[np.argmax(family.reference_min), 0])
     fast = (
         np.geomspace(fast_lo, ceiling, max(2, int(np.ceil(np.log(ceiling / fast_lo) / np.log(_MAX_GRID_RATIO))) + 1))
         if ceiling > fast_lo

@@ -30,10 +30,14 @@ __all__ = ["MachineReference", "learn_reference", "save_reference", "load_refere
 BOX_SDS = 3.0
 MAX_BOX = 0.6
 MAX_MODE_SD = 0.15
+# A reference run pins a sensor down when its own steady state is known within this (95 %): half
+# the usual tolerance of a later test.
+PINNED_HALF_WIDTH_C = 0.1
 _HEADER = """# mtident reference run: each sensor's thermal modes, learnt from a warm-up that ran to
 # equilibrium. `mtident thermal identify|watch LOG --reference THIS_FILE` searches each sensor's
 # time constants only within ±box of these (relative), with free amplitudes, and says so when a
-# new test does not follow them (a changed machine).
+# new test does not follow them (a changed machine). A sensor with a `doubt` is not used: the run
+# did not pin it down (delete the line only if you know the run reached equilibrium).
 """
 
 
@@ -70,6 +74,8 @@ class MachineReference:
         if modes is None:
             return f"{self.source}: no modes for this sensor"
         parts = ", ".join(f"{t:.3g} min ±{b:.0%}" for t, b in zip(modes.time_constants_min, modes.box, strict=True))
+        if modes.doubt is not None:
+            parts += " (doubtful)"
         return f"{self.source} ({self.learnt_on}): τ {parts}"
 
 
@@ -104,15 +110,14 @@ def learn_reference(
         estimate, box = learnt
         fit = estimate.fit
         assert fit is not None
+        doubt = _doubt(estimate)
         sensors[name] = SensorModes(
-            tuple(m.time_constant_min for m in fit.modes), box, tuple(m.amplitude_C for m in fit.modes)
+            tuple(m.time_constant_min for m in fit.modes), box, tuple(m.amplitude_C for m in fit.modes), doubt
         )
-        lo, hi = estimate.interval_C[min(estimate.interval_C)]
-        if not estimate.model_ok or (hi - lo) / 2 > 0.1:
+        if doubt is not None:
             warnings.append(
-                f"{name}: the log does not pin its steady state down (95 % interval {lo:.2f} to {hi:.2f} °C): did it "
-                "run to equilibrium? Its slowest mode is uncertain "
-                f"(±{box[int(np.argmax([m.time_constant_min for m in fit.modes]))]:.0%})"
+                f"{name}: {doubt}: did the run reach equilibrium? Later tests will not use this sensor's modes "
+                "(learn from a longer or denser run)"
             )
         if max(m.time_constant_min for m in fit.modes) >= 0.98 * settings.max_time_constant_min:
             warnings.append(
@@ -123,6 +128,21 @@ def learn_reference(
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors
     ), warnings
+
+
+def _doubt(estimate: SensorEstimate) -> str | None:
+    """Why a reference run did not pin a sensor down, or None: its modes misfit the run, or its own
+    steady state is left wider than ``PINNED_HALF_WIDTH_C``."""
+    lo, hi = estimate.interval_C[min(estimate.interval_C)]
+    if not estimate.model_ok:
+        assert estimate.fit is not None
+        return (
+            f"the {len(estimate.fit.modes)} mode(s) the run pins down do not describe it (residuals "
+            f"{estimate.fit.correlation_factor:.1f}x as correlated as noise)"
+        )
+    if (hi - lo) / 2 > PINNED_HALF_WIDTH_C:
+        return f"the run leaves its steady state between {lo:.2f} and {hi:.2f} °C (95 %)"
+    return None
 
 
 def _learn_sensor(
@@ -175,6 +195,7 @@ def save_reference(reference: MachineReference, path: str | Path) -> None:
                 "time_constants_min": list(m.time_constants_min),
                 "box": list(m.box),
                 "amplitudes_C": list(m.amplitudes_C),
+                **({"doubt": m.doubt} if m.doubt is not None else {}),
             }
             for name, m in reference.sensors.items()
         },
@@ -238,4 +259,5 @@ def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
         tuple(float(v) for v in taus),
         tuple(float(v) for v in boxes),
         tuple(float(v) for v in entry.get("amplitudes_C", [])),
+        str(entry["doubt"]) if entry.get("doubt") else None,
     )

@@ -52,7 +52,7 @@ MIN_REFERENCE_BOX = 0.10
 # modes at a factor of 3 put T∞ 0.7 °C outside a 99 % interval of ±0.08 °C; correct fits rarely
 # reach 2.5.
 MISFIT_FACTOR = 2.5
-# With a reference, up to this many free modes faster than its fastest (the cost of a check grows
+# With a reference, up to this many free modes faster than its slowest (the cost of a check grows
 # with each).
 MAX_FREE_FAST = 2
 # A test whose readings a fit with free time constants describes better than the reference's
@@ -81,9 +81,9 @@ class RobustSettings:
     max_modes : int
         At most this many modes.
     free_fast_modes : int
-        With a reference: at most this many free modes faster than its fastest box, which a
-        reference run can miss (0 assumes the reference holds every mode of the machine: the
-        earliest stops, and an assumption every answer then states).
+        With a reference: at most this many free modes faster than its slowest box (below or
+        between its other boxes), which a reference run can miss (0 assumes the reference holds
+        every mode of the machine: the earliest stops, and an assumption every answer then states).
     """
 
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
@@ -104,11 +104,17 @@ class SensorModes:
         Relative half-width of each time constant's uncertainty (0.1: ±10 %).
     amplitudes_C : tuple of float
         The amplitudes in the reference run (for information; a new test's are free).
+    doubt : str or None
+        Why the reference run did not pin this sensor down (its steady state left uncertain, or its
+        modes a misfit), or None. A doubtful sensor's modes are not used by later tests: a run
+        that did not reach its equilibrium, or that a few modes do not describe, can miss the very
+        mode that sets a later test's steady state.
     """
 
     time_constants_min: tuple[float, ...]
     box: tuple[float, ...]
     amplitudes_C: tuple[float, ...] = ()
+    doubt: str | None = None
 
 
 @dataclass(frozen=True)
@@ -153,7 +159,8 @@ class SensorEstimate:
     warnings : tuple of str
     warning_codes : tuple of str
         What each warning is about, one word each ("late-start", "spikes", "misfit",
-        "undetermined", "reference-disagrees", "too-few-readings", "no-data", "no-rise"): to say each once.
+        "undetermined", "reference-disagrees", "reference-doubtful", "too-few-readings", "no-data", "no-rise"): to
+        say each once.
     reference_used : bool
         The reference's time constants were used (the test agrees with them).
     spikes : int
@@ -333,6 +340,12 @@ def _modal_fit(
     """The fit within the reference's boxes where the test follows them, else over every model up
     to the largest time constant; and whether the reference was used."""
     family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
+    if reference is not None and reference.doubt is not None:
+        notes.add(
+            "reference-doubtful",
+            f"the reference run did not pin this sensor down ({reference.doubt}): the answer does not use it",
+        )
+        reference = None
     if reference is not None:
         boxes = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box)
         boxed = ModeFamily(
@@ -391,8 +404,17 @@ def describe_assumptions(
         return Assumptions(
             settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor)
         )
-    extra = free_fast(reference.sensors[sensor], settings)
-    faster = f"up to {extra} free mode(s) faster than these" if extra else "no mode faster than these (assumed)"
+    modes = reference.sensors[sensor]
+    if modes.doubt is not None:
+        return Assumptions(
+            settings.max_time_constant_min, room, f"{reference.describe(sensor)}; not used: {modes.doubt}"
+        )
+    extra = free_fast(modes, settings)
+    faster = (
+        f"up to {extra} free mode(s) faster than the slowest of these"
+        if extra
+        else "no mode faster than these (assumed)"
+    )
     return Assumptions(settings.max_time_constant_min, room, f"{reference.describe(sensor)}; {faster}")
 
 

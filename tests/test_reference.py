@@ -1,0 +1,105 @@
+"""Reference runs: learning a machine's modes, the file, and which sensors a later test may use."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from conftest import make_log
+from test_cli import mtident
+
+from mtident.exceptions import InputError
+from mtident.thermal.reference import MachineReference, learn_reference, load_reference, save_reference
+from mtident.thermal.robust import SensorModes, estimate_sensor
+
+
+def two_mode(t: np.ndarray, slow_amplitude: float = -6.0) -> np.ndarray:
+    """A housing sensor: a fast mode of 8 min and a slow one of 60 min, from 20 °C."""
+    return 20.0 + 10.0 + slow_amplitude * np.exp(-t / 60.0) - (10.0 + slow_amplitude) * np.exp(-t / 8.0)
+
+
+@pytest.fixture(scope="module")
+def complete_run() -> tuple[MachineReference, list[str]]:
+    t = np.arange(0.0, 480.0, 1.0)
+    y = two_mode(t) + np.random.default_rng(1).normal(0.0, 0.01, t.size)
+    return learn_reference(make_log(t, {"S": np.round(y, 2)}))
+
+
+def test_a_complete_run_pins_down_both_modes(complete_run):
+    reference, warnings = complete_run
+    modes = reference.sensors["S"]
+    assert warnings == [] and modes.doubt is None
+    taus = sorted(modes.time_constants_min)
+    assert len(taus) == 2
+    assert taus[0] == pytest.approx(8.0, rel=0.1) and taus[1] == pytest.approx(60.0, rel=0.05)
+    assert all(0.1 <= b <= 0.6 for b in modes.box)
+
+
+def test_a_run_stopped_before_equilibrium_is_doubtful_and_not_used_later(tmp_path):
+    # 40 min of a 60-min mode, every 5 min: the run cannot show the slow mode it stopped in
+    t = np.arange(0.0, 41.0, 5.0)
+    y = two_mode(t) + np.random.default_rng(2).normal(0.0, 0.02, t.size)
+    reference, warnings = learn_reference(make_log(t, {"S": np.round(y, 2)}))
+    modes = reference.sensors["S"]
+    assert modes.doubt is not None
+    assert len(warnings) == 1 and "Later tests will not use this sensor's modes" in warnings[0]
+    save_reference(reference, tmp_path / "machine.toml")
+    assert 'doubt = "' in (tmp_path / "machine.toml").read_text()
+    loaded = load_reference(tmp_path / "machine.toml").sensors["S"]
+    assert loaded.doubt == modes.doubt
+    test_t = np.arange(0.0, 60.0, 1.0)
+    estimate = estimate_sensor("S", test_t, two_mode(test_t, -3.0), reference=loaded, noise_C=0.01)
+    assert not estimate.reference_used
+    assert "reference-doubtful" in estimate.warning_codes
+    assert any("did not pin this sensor down" in w for w in estimate.warnings)
+
+
+def test_the_reference_file_round_trips(complete_run, tmp_path):
+    reference, _ = complete_run
+    save_reference(reference, tmp_path / "machine.toml")
+    loaded = load_reference(tmp_path / "machine.toml")
+    assert loaded.sensors == reference.sensors
+    assert loaded.source == reference.source and loaded.max_time_constant_min == 300.0
+
+
+def test_a_free_mode_between_the_reference_boxes_is_allowed():
+    # the reference knows 2 and 60 min; the test has a 12-min mode too, which the reference run
+    # missed: a free mode faster than the slowest box (not only than the fastest) takes it
+    reference = SensorModes((2.0, 60.0), (0.1, 0.1))
+    t = np.arange(0.0, 50.0, 0.25)
+    y = 30.0 - 6.0 * np.exp(-t / 60.0) - 3.0 * np.exp(-t / 12.0) - 1.0 * np.exp(-t / 2.0)
+    estimate = estimate_sensor("S", t, y, reference=reference, noise_C=0.005)
+    assert estimate.reference_used
+    taus = sorted(m.time_constant_min for m in estimate.fit.modes)
+    assert any(8.0 < tau < 18.0 for tau in taus)
+    lo, hi = estimate.interval_C[0.95]
+    assert lo <= 30.0 <= hi
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("not toml [", "not a reference file mtident can read"),
+        ("source = 'x'\n", "no [sensors.NAME] tables"),
+        ("[sensors.S]\ntime_constants_min = [-1.0]\nbox = [0.1]\n", "expected time_constants_min"),
+        ("[sensors.S]\ntime_constants_min = [10.0, 20.0]\nbox = [0.1]\n", "as many positive fractions"),
+    ],
+)
+def test_a_bad_reference_file_is_refused_with_what_is_wrong(tmp_path, text, message):
+    path = tmp_path / "machine.toml"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message.replace("[", r"\[").replace(".", r"\.")):
+        load_reference(path)
+
+
+def test_learn_command_writes_the_reference_and_says_its_doubts(tmp_path):
+    t = np.arange(0.0, 41.0, 5.0)
+    y = np.round(two_mode(t) + np.random.default_rng(3).normal(0.0, 0.02, t.size), 2)
+    log = tmp_path / "short.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
+    out = mtident("thermal", "learn", str(log), "-o", str(tmp_path / "m.toml"), "--json")
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result["sensors"]["S"]["doubt"]
+    assert "Later tests will not use this sensor's modes" in out.stderr
