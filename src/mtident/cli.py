@@ -39,7 +39,21 @@ _PARAMETER = re.compile(r"`(\w+)(?:=(?:'([^']*)'|\[([^\]]*)\]))?`")
 
 def as_options(text: str) -> str:
     """A library message as the command line says it: each parameter named in backticks, with
-    its value, becomes the option (``time_unit='s'`` -> ``--time-unit s``)."""
+    its value, becomes the option (``time_unit='s'`` -> ``--time-unit s``).
+
+    Parameters
+    ----------
+    text : str
+        A message from the library. Each parameter it names in backticks, alone or with a quoted
+        value or a bracketed list, is replaced where the command line has an option for it
+        (``time_unit``, ``time_col``, ``sensors``, ``window_min``, ``max_time_constant_min``,
+        ``ambient_C``); other words in backticks are kept as they are.
+
+    Returns
+    -------
+    str
+        The message with those parameters said as options (``--time-unit s``, ``--sensor a, b``).
+    """
 
     def option(match: re.Match[str]) -> str:
         flag = _OPTION_OF.get(match[1])
@@ -69,7 +83,15 @@ class OptionConsole(Console):
 
 
 def print_json(payload: dict[str, Any]) -> None:
-    """Exactly one JSON object on stdout (the library's parameters said as options)."""
+    """Exactly one JSON object on stdout (the library's parameters said as options).
+
+    Parameters
+    ----------
+    payload : dict
+        The answer, JSON-serialisable and free of NaN and infinity (``json.dumps`` refuses them); every
+        string in it, nested ones too, has the library's parameters replaced by :func:`as_options`.
+        It is written indented by 2, keys sorted.
+    """
     click.echo(json.dumps(_said_as_options(payload), indent=2, sort_keys=True, allow_nan=False))
 
 
@@ -133,7 +155,20 @@ class PicturePath(OutputPath):
 
 
 def user_errors(func: F) -> F:
-    """Turn MtidentError (and missing files) into a one-line error and exit code 2."""
+    """Turn MtidentError (and missing files) into a one-line error and exit code 2.
+
+    Parameters
+    ----------
+    func : callable
+        A click command's callback.
+
+    Returns
+    -------
+    callable
+        ``func`` wrapped: an ``MtidentError`` or ``OSError`` it raises is printed as
+        ``mtident: error: <message>`` on stderr (parameters said as options) and the process exits
+        with code 2; any other exception passes through.
+    """
 
     @wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -150,6 +185,14 @@ class LazyGroup(click.Group):
     """A command group whose commands live in a module imported when first needed.
 
     ``mtident thermal ...`` then does not load the feed-drive code (nor ``--version`` either).
+
+    Parameters
+    ----------
+    *args, **kwargs
+        Passed on to ``click.Group``.
+    commands_module : str
+        Dotted name of the module whose import registers the group's commands on it
+        (``"mtident.cli_thermal"``).
     """
 
     def __init__(self, *args: Any, commands_module: str, **kwargs: Any) -> None:

@@ -536,8 +536,8 @@ def _status_table(session: WatchSession, path: Path) -> Table:
         return table
     values = state.readings.values_C
     for s, check in enumerate(state.checks):
-        column = values[:, s]
-        finite = column[np.isfinite(column)]
+        readings = values[:, s]
+        finite = readings[np.isfinite(readings)]
         latest = float(finite[-1]) if finite.size else math.nan
         colour = (
             "green"

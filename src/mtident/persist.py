@@ -62,7 +62,8 @@ def save_dataclass(path: str | Path, value: object) -> None:
     arrays: dict[str, np.ndarray] = {}
     tree = _encode(value, arrays)
     buffer = io.BytesIO()
-    np.savez(buffer, __tree__=np.array(json.dumps({"format": _FORMAT, "tree": tree})), **arrays)
+    arrays["__tree__"] = np.array(json.dumps({"format": _FORMAT, "tree": tree}))
+    np.savez(buffer, **arrays)  # type: ignore[arg-type]
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
     handle, tmp = tempfile.mkstemp(dir=target.parent, prefix=target.name, suffix=".tmp")

@@ -90,6 +90,61 @@ def run_feed_drive_ukf(
     failed step or −1, smallest eigenvalue there: NaN where a number stopped being finite).
 
     ``drives`` (N, 4) is M⁻¹F at each sample (held over the interval that starts there).
+
+    Parameters
+    ----------
+    mean0 : ndarray, shape (16,)
+        Initial mean of the augmented state: the 8 states divided by ``state_scale``, then the 8
+        identified parameters K1..K4, Bt, Bb, Qb, Qm (their logs relative to ``reference`` when
+        ``log_form``, else in SI units).
+    cov0 : ndarray, shape (16, 16)
+        Initial covariance, in the same scaled units.
+    process_cov : ndarray, shape (16, 16)
+        Process noise covariance Q, added at every time update.
+    emission_cov : ndarray, shape (m, m)
+        Measurement noise covariance R of the scaled responses.
+    emissions : ndarray, shape (N, m)
+        Measured responses divided by ``output_scale``; row 0 is not used (the filter starts there).
+    drives : ndarray, shape (N, 4)
+        M⁻¹F: the generalized forces divided by the masses and inertias (m/s², rad/s²).
+    weights_mean, weights_cov : ndarray, shape (33,)
+        Sigma-point weights for the mean and the covariance (2·16 + 1 points).
+    spread : float
+        The sigma points lie at the mean ± ``spread`` times the columns of the lower Cholesky factor
+        of the covariance (√(n + λ)).
+    state_scale : ndarray, shape (8,)
+        Physical state = scaled state × ``state_scale`` (ones for no scaling).
+    output_scale : ndarray, shape (m,)
+        Divisor of each measured response (ones for no scaling).
+    measured : ndarray of int, shape (m,)
+        The measured responses: indices into the 12 responses (the 8 states, then the 4
+        accelerations), as ``RESPONSE_COLUMNS`` orders them.
+    a0 : ndarray, shape (8, 8)
+        The part of A that does not depend on the identified parameters (``model.parameter_basis``).
+    basis : ndarray, shape (8, 8, 8)
+        Dⱼ, the part of A that parameter j multiplies (``model.parameter_basis``).
+    reference : ndarray, shape (8,)
+        Parameters (SI) the log form is relative to: p = reference·e^z.
+    h : float
+        Sampling interval (s).
+    substeps : int
+        RK4 sub-steps per sample.
+    log_form : bool
+        The parameter states are log-parameters (else the parameters themselves).
+
+    Returns
+    -------
+    means : ndarray, shape (N, 16)
+        Filtered means (rows after a failed step are not filled).
+    variances : ndarray, shape (N, 16)
+        Diagonals of the filtered covariances.
+    cov : ndarray, shape (16, 16)
+        The final covariance, or the one at the failed step.
+    failed : int
+        The step at which the filter stopped (no Cholesky factor, or a non-finite number), −1 if none.
+    smallest_eigenvalue : float
+        Smallest eigenvalue of the covariance the Cholesky factor failed on; NaN where a number
+        stopped being finite; 0.0 when the filter ran through.
     """
     n = mean0.shape[0]
     count = emissions.shape[0]
@@ -180,6 +235,33 @@ def response_moments(
     ``rows`` = (c (R, 8), e (R, 4), cₛ (R, 8, 8)): ŷ = c X + e u, ∂ŷ/∂zⱼ = c sⱼ + cₛⱼ X, ∂ŷ/∂X₀ᵢ = c fᵢ.
     Returns (G (R, P, P) = Σ g gᵀ, b (R, P) = Σ g (y − ŷ), c (R,) = Σ (y − ŷ)², s (R,) = Σ ŷ²),
     P = 8 or 16, the residual sums over the measured samples only.
+
+    Parameters
+    ----------
+    step : tuple of ndarray
+        (Φ (8, 8), Γ (8, 4), Φₛ (8, 8, 8), Γₛ (8, 8, 4)), the exact one-sample step of the state and of
+        its sensitivities (``information.sensitivity_system``).
+    start : ndarray, shape (8,)
+        Initial state X₀ (SI units).
+    forces : ndarray, shape (N, 4)
+        Generalized forces u (N, N, N m, N m), held over each sample.
+    rows : tuple of ndarray
+        (c (R, 8), e (R, 4), cₛ (R, 8, 8)), the output rows of the R responses.
+    data : ndarray, shape (N, R)
+        Measured responses (SI units), NaN where not measured.
+    with_start : bool
+        Also take the sensitivities to the initial state (P = 16 instead of 8).
+
+    Returns
+    -------
+    G : ndarray, shape (R, P, P)
+        Σ g gᵀ over all samples, g the sensitivity of the response.
+    b : ndarray, shape (R, P)
+        Σ g (y − ŷ) over the measured samples.
+    c : ndarray, shape (R,)
+        Σ (y − ŷ)² over the measured samples.
+    s : ndarray, shape (R,)
+        Σ ŷ² over all samples.
     """
     phi, gamma, phi_s, gamma_s = step
     c_row, e_row, c_s = rows
@@ -276,6 +358,29 @@ def covariance_recursion(
 
     ``step`` and ``rows`` as in :func:`response_moments`; ``noise`` = (P₀ (16, 16), Q (16, 16),
     R (m, m)) in the filter's scaled units.
+
+    Parameters
+    ----------
+    step : tuple of ndarray
+        (Φ (8, 8), Γ (8, 4), Φₛ (8, 8, 8), Γₛ (8, 8, 4)), as in :func:`response_moments`.
+    forces : ndarray, shape (N, 4)
+        Generalized forces (N, N, N m, N m), held over each sample.
+    rows : tuple of ndarray
+        (c (m, 8), e (m, 4), cₛ (m, 8, 8)), as in :func:`response_moments` (e is not used).
+    state_scale : ndarray, shape (8,)
+        Scale of each state in the filter (physical = scaled × scale).
+    output_scale : ndarray, shape (m,)
+        Scale of each measured response.
+    noise : tuple of ndarray
+        (P₀ (16, 16), Q (16, 16), R (m, m)): the filter's prior, process and measurement noise
+        covariances in its scaled units.
+
+    Returns
+    -------
+    cov : ndarray, shape (16, 16)
+        P, the filter's own final covariance.
+    scatter : ndarray, shape (16, 16)
+        The covariance of its estimation error over draws of the measurement noise alone.
     """
     phi, gamma, phi_s, gamma_s = step
     c_row, _, c_s = rows

@@ -90,7 +90,19 @@ PARAMETER_PROCESS_VAR = 1e-12
 
 
 def default_guess(truth: FeedDriveParameters | None = None) -> FeedDriveParameters:
-    """The shipped set with each identified parameter 30 % high or low (``GUESS_FACTORS``)."""
+    """The shipped set with each identified parameter 30 % high or low (``GUESS_FACTORS``).
+
+    Parameters
+    ----------
+    truth : FeedDriveParameters, optional
+        The set to start from (default: the shipped set).
+
+    Returns
+    -------
+    FeedDriveParameters
+        ``truth`` with K1..K4, Bt, Bb, Qb, Qm multiplied by 0.7, 1.3, 1.3, 0.7, 1.3, 0.7, 1.3, 0.7;
+        the masses, inertias and β are kept.
+    """
     base = truth or FeedDriveParameters()
     return base.with_identified(base.identified() * GUESS_FACTORS)
 

@@ -58,6 +58,16 @@ def prbs_bits(count: int) -> FloatArray:
     """±1 from a maximal-length sequence whose period (2ⁿ − 1) is at least ``count`` (deterministic;
     beyond 2²⁰ − 1 bits the 20-bit sequence repeats).
 
+    Parameters
+    ----------
+    count : int
+        Number of bits.
+
+    Returns
+    -------
+    ndarray, shape (count,)
+        +1.0 and −1.0, from a Fibonacci shift register of 5 to 20 bits started at all ones.
+
     Examples
     --------
     >>> bits = prbs_bits(31)
@@ -82,6 +92,21 @@ def multisine(count: int, h: float, low_Hz: float, high_Hz: float) -> FloatArray
     Schroeder phases for a low crest factor, scaled to a peak of 1 (periodic over the record).
 
     Schroeder, IEEE Trans. Inf. Theory 16 (1970) 85: φₖ = −πk(k−1)/K.
+
+    Parameters
+    ----------
+    count : int
+        Number of samples in the record.
+    h : float
+        Sampling interval (s).
+    low_Hz, high_Hz : float
+        The band (Hz); lines outside 1/(count·h) … 1/(2h) are left out. A band with no line of the
+        grid gets the line nearest its centre.
+
+    Returns
+    -------
+    ndarray, shape (count,)
+        The signal, largest absolute value 1.
     """
     bins = np.arange(count // 2 + 1)
     frequencies = bins / (count * h)
@@ -179,6 +204,18 @@ def parameter_basis(fixed: FeedDriveParameters) -> tuple[FloatArray, FloatArray]
     """A is linear in the identified parameters: A(p) = A₀ + Σⱼ pⱼ Dⱼ. Returns (A₀, D (8, 8, 8)).
 
     ``fixed`` gives the masses, inertias and β; its identified parameters are not used.
+
+    Parameters
+    ----------
+    fixed : FeedDriveParameters
+        Supplies Mt, Mb (kg), Jb, Jm (kg m²) and β (m/rad).
+
+    Returns
+    -------
+    a0 : ndarray, shape (8, 8)
+        A₀ = [[0, I], [0, 0]], the part of A that no identified parameter multiplies.
+    basis : ndarray, shape (8, 8, 8)
+        Dⱼ (rows 5-8 nonzero), the part of A that the j-th of K1..K4, Bt, Bb, Qb, Qm multiplies.
     """
     a0 = np.zeros((8, 8))
     a0[:4, 4:] = np.eye(4)
@@ -200,7 +237,21 @@ def _system_rows(params: FloatArray, fixed: FeedDriveParameters) -> FloatArray:
 
 
 def system_matrices(params: FloatArray, basis: tuple[FloatArray, FloatArray]) -> FloatArray:
-    """A (..., 8, 8) for identified parameters (..., 8) = K1..K4, Bt, Bb, Qb, Qm."""
+    """A (..., 8, 8) for identified parameters (..., 8) = K1..K4, Bt, Bb, Qb, Qm.
+
+    Parameters
+    ----------
+    params : ndarray, shape (..., 8)
+        Identified parameters K1..K4 (N/m, N/m, N m/rad, N m/rad), Bt, Bb (N s/m), Qb, Qm (N m s/rad),
+        with any leading batch axes.
+    basis : tuple of ndarray
+        (A₀ (8, 8), D (8, 8, 8)) from :func:`parameter_basis`.
+
+    Returns
+    -------
+    ndarray, shape (..., 8, 8)
+        A = A₀ + Σⱼ pⱼ Dⱼ for each parameter vector.
+    """
     a0, d = basis
     return a0 + (params @ d.reshape(8, 64)).reshape(*params.shape[:-1], 8, 8)
 
@@ -222,7 +273,22 @@ def input_matrix(p: FeedDriveParameters) -> FloatArray:
 
 
 def accelerations(p: FeedDriveParameters, states: FloatArray, forces: FloatArray) -> FloatArray:
-    """Ẍ = M⁻¹(F − C ẋ − K x) for states (N, 8) and forces (N, 4)."""
+    """Ẍ = M⁻¹(F − C ẋ − K x) for states (N, 8) and forces (N, 4).
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        Masses, inertias, stiffnesses, dampings and β (SI units).
+    states : ndarray, shape (N, 8)
+        X = [x_t, x_b, θ_b, θ_m, ẋ_t, ẋ_b, θ̇_b, θ̇_m] (m, rad, m/s, rad/s).
+    forces : ndarray, shape (N, 4)
+        Generalized forces F (N, N, N m, N m).
+
+    Returns
+    -------
+    ndarray, shape (N, 4)
+        ẍ_t, ẍ_b (m/s²), θ̈_b, θ̈_m (rad/s²).
+    """
     m_inv = 1.0 / np.diag(mass_matrix(p))
     return (forces - states[:, 4:] @ damping_matrix(p).T - states[:, :4] @ stiffness_matrix(p).T) * m_inv
 

@@ -89,6 +89,35 @@ class FeedDriveParameters:
     """The 4-DOF lumped model of a ball-screw feed drive, SI units.
 
     Defaults: seed 004 Table 1 with the corrected β = 0.01/(2π) m/rad.
+
+    Parameters
+    ----------
+    Mt : float
+        Mass of the working table (kg).
+    Mb : float
+        Mass of the ball screw (kg).
+    Jm : float
+        Moment of inertia of the motor (kg m²).
+    Jb : float
+        Moment of inertia of the ball screw (kg m²).
+    K1 : float
+        Stiffness of the ball-screw nut (N/m).
+    K2 : float
+        Equivalent axial stiffness of the screw (N/m).
+    K3 : float
+        Equivalent torsional stiffness of the screw (N m/rad).
+    K4 : float
+        Torsional stiffness between screw and motor (N m/rad).
+    beta : float
+        Lead / (2π): table travel per radian of the screw (m/rad).
+    Bt : float
+        Viscous damping of the table's guideway (N s/m).
+    Bb : float
+        Axial viscous damping of the screw's support bearing (N s/m).
+    Qm : float
+        Rotational viscous damping of the motor (N m s/rad).
+    Qb : float
+        Rotational viscous damping of the support bearing (N m s/rad).
     """
 
     Mt: float = 15.0
@@ -119,17 +148,51 @@ class FeedDriveParameters:
 
 
 def mass_matrix(p: FeedDriveParameters) -> FloatArray:
-    """[M] of Eq. 2 for coordinates (x_t, x_b, θ_b, θ_m)."""
+    """[M] of Eq. 2 for coordinates (x_t, x_b, θ_b, θ_m).
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        Its masses Mt, Mb (kg) and inertias Jb, Jm (kg m²) are used.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        diag(Mt, Mb, Jb, Jm).
+    """
     return np.diag([p.Mt, p.Mb, p.Jb, p.Jm])
 
 
 def damping_matrix(p: FeedDriveParameters) -> FloatArray:
-    """[C] of Eq. 2."""
+    """[C] of Eq. 2.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        Its dampings Bt, Bb (N s/m) and Qb, Qm (N m s/rad) are used.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        diag(Bt, Bb, Qb, Qm) for the coordinates (x_t, x_b, θ_b, θ_m).
+    """
     return np.diag([p.Bt, p.Bb, p.Qb, p.Qm])
 
 
 def stiffness_matrix(p: FeedDriveParameters) -> FloatArray:
-    """[K] of Eq. 2."""
+    """[K] of Eq. 2.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        Its stiffnesses K1, K2 (N/m), K3, K4 (N m/rad) and β (m/rad) are used.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        The symmetric stiffness matrix for the coordinates (x_t, x_b, θ_b, θ_m): the nut K1 couples
+        table, screw and screw rotation (through β), K4 couples the screw and the motor rotations.
+    """
     b, k1 = p.beta, p.K1
     return np.array(
         [
@@ -148,6 +211,16 @@ def validate(p: FeedDriveParameters) -> FeedDriveParameters:
     and K symmetric positive definite. Eliminating x_t shows K is positive
     definite exactly when K2 > K1 and K3 − β²K1 > K4, so the error names which
     of these fails.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        The set to check.
+
+    Returns
+    -------
+    FeedDriveParameters
+        ``p`` itself, unchanged, when it passes.
 
     Raises
     ------
@@ -228,6 +301,19 @@ def parameter_template(p: FeedDriveParameters | None = None) -> str:
 
 def load_parameters(path: str | Path | None, base: FeedDriveParameters | None = None) -> FeedDriveParameters:
     """Read a TOML parameter file over ``base`` (default: the shipped set) and validate it.
+
+    Parameters
+    ----------
+    path : str or Path or None
+        The TOML file: Table 1's names (``Mt``, ``K1``, ``beta``, ...) with numbers in SI units; a
+        name it leaves out keeps its value in ``base``. None reads no file and validates ``base`` alone.
+    base : FeedDriveParameters, optional
+        The values the file is read over (default: the shipped set).
+
+    Returns
+    -------
+    FeedDriveParameters
+        The validated set.
 
     Raises
     ------

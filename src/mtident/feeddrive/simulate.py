@@ -71,7 +71,22 @@ class Response:
 
 
 def substeps_for(p: FeedDriveParameters, h: float, max_phase_step: float = 0.01) -> int:
-    """RK4 sub-steps (a power of two) so that ω_max·h/substeps ≤ ``max_phase_step``."""
+    """RK4 sub-steps (a power of two) so that ω_max·h/substeps ≤ ``max_phase_step``.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        The drive; ω_max is the largest eigenvalue magnitude of its A (rad/s).
+    h : float
+        Sampling interval (s).
+    max_phase_step : float, optional
+        Largest phase advance of the fastest mode per sub-step (rad).
+
+    Returns
+    -------
+    int
+        The smallest power of two (1 or more) that meets the bound.
+    """
     omega = np.abs(np.linalg.eigvals(system_matrix(p))).max()
     needed = max(1, int(np.ceil(omega * h / max_phase_step)))
     return 1 << (needed - 1).bit_length()
@@ -83,6 +98,24 @@ def run_responses(
     """The 12 responses (N, 12) from state ``start`` under ``forces`` (N, 4), stepped by (phi, gamma).
 
     The input over [t_k, t_k+1) is forces[k]; row 0 is ``start``.
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+        The drive, for the accelerations.
+    phi : ndarray, shape (8, 8)
+        Φ, the state transition over one sample.
+    gamma : ndarray, shape (8, 4)
+        Γ, the effect of the held forces over one sample.
+    start : ndarray, shape (8,)
+        Initial state X = [x_t, x_b, θ_b, θ_m, ẋ_t, ẋ_b, θ̇_b, θ̇_m] (m, rad, m/s, rad/s).
+    forces : ndarray, shape (N, 4)
+        Generalized forces (N, N, N m, N m).
+
+    Returns
+    -------
+    ndarray, shape (N, 12)
+        The 8 states and the 4 accelerations at each sample, as ``RESPONSE_COLUMNS`` names them.
     """
     states = np.empty((len(forces), 8))
     states[0] = start
@@ -153,7 +186,20 @@ def simulate(
 
 
 def write_response(response: Response, path: str | Path) -> Path:
-    """CSV with time_s, the four generalized forces and the twelve responses, units in the headers."""
+    """CSV with time_s, the four generalized forces and the twelve responses, units in the headers.
+
+    Parameters
+    ----------
+    response : Response
+        The record to write (NaN where a response was not measured is written as an empty cell).
+    path : str or Path
+        The CSV file, overwritten.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     import pandas as pd
 
     frame = pd.DataFrame(
@@ -167,6 +213,19 @@ def write_response(response: Response, path: str | Path) -> Path:
 
 def read_response(path: str | Path) -> Response:
     """Read a response CSV: time_s, optional force columns (default zero), any of the response columns.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file: ``time_s`` in s, evenly spaced; force columns ``FORCE_COLUMNS`` (N, N m), at
+        least one; response columns named as ``RESPONSE_COLUMNS`` (SI units), at least one. Other
+        columns are ignored.
+
+    Returns
+    -------
+    Response
+        Times put on the exact even grid from the first to the last, missing forces zero, missing
+        responses NaN.
 
     Raises
     ------

@@ -37,16 +37,32 @@ class DialectView(Protocol):
     """What the column rules read of a log's dialect (:class:`mtident.io.dialect.CsvDialect`), which
     itself depends on these rules."""
 
-    units: tuple[tuple[str, str], ...]
-    units_source: str
-    from_humidity: tuple[str, ...]
+    @property
+    def units(self) -> tuple[tuple[str, str], ...]: ...
+
+    @property
+    def units_source(self) -> str: ...
+
+    @property
+    def from_humidity(self) -> tuple[str, ...]: ...
 
     def unit_of(self, column: str) -> str: ...
 
 
 def text_only_cells(cells: list[str]) -> bool:
     """Whether a column's cells hold text and not one number (empty and NaN cells aside; a decimal
-    comma counts as a number): a logger's status channel, no sensor. Both readers of a log use it."""
+    comma counts as a number): a logger's status channel, no sensor. Both readers of a log use it.
+
+    Parameters
+    ----------
+    cells : list of str
+        The column's cells as written in the file (the first data rows, or the rows read so far).
+
+    Returns
+    -------
+    bool
+        True where at least one cell holds something other than NaN and none of them is a number.
+    """
     written = [c.strip() for c in cells if c.strip() and c.strip().lower() != "nan"]
     return bool(written) and not any(is_number(c) for c in written)
 
@@ -63,7 +79,24 @@ def counter_before_time(header: list[str], first_row: list[str], dialect: Dialec
     counter is told by its name, or by its cell in the row under the header (Graphtec writes a
     Japanese header and "NO.,Time,ms,ﾟC" under it), or, whatever its name, as a whole number
     before a time stamp or a date (Tinytag leaves the name empty, Lascar's EasyLog puts the
-    logger's name there, MadgeTech calls it "Reading #")."""
+    logger's name there, MadgeTech calls it "Reading #").
+
+    Parameters
+    ----------
+    header : list of str
+        The column names, in file order.
+    first_row : list of str
+        The cells of the first data row, as written.
+    dialect : DialectView
+        The log's dialect: its units row (Graphtec's row under the header), where the counter may be
+        named instead of in the header.
+
+    Returns
+    -------
+    bool
+        True where the first column is a row counter and the second the time; False for fewer than
+        three columns.
+    """
     if len(header) < 3 or len(first_row) < 2:
         return False
     if (
@@ -86,7 +119,19 @@ def text_before_stamps(first_row: list[str]) -> int:
     """How many columns of text come before the first column of time stamps (a wireless logger's
     receiver and transmitter names before its DATE), by the first data row; 0 where the first
     column holds the time, or where the first time stamp is not clear (a number is no stamp here:
-    a bad first time cell must not make a sensor the time)."""
+    a bad first time cell must not make a sensor the time).
+
+    Parameters
+    ----------
+    first_row : list of str
+        The cells of the first data row, as written; only the first four are looked at.
+
+    Returns
+    -------
+    int
+        The position (0 to 3) of the first column of time stamps, which is the number of text columns
+        before it.
+    """
     for k, cell in enumerate(first_row[:4]):
         text = cell.strip()
         if not text or is_number(text) or parses_as(text, DATE_FORMATS):  # a date: its time of day follows
@@ -101,7 +146,30 @@ def choose_time_column(
 ) -> tuple[str, bool, list[str]]:
     """The time column's name (``time_col`` where given), whether the first column is a row
     counter before it, and notes; both readers of a log take the time column here, by the header
-    and the first data row's cells."""
+    and the first data row's cells.
+
+    Parameters
+    ----------
+    header : list of str
+        The column names, in file order.
+    first_row : list of str
+        The cells of the first data row, as written.
+    dialect : DialectView
+        The log's dialect (its units row, for a counter named there).
+    time_col : str or None
+        The time column the user named (no counter or text columns are looked for then), or None to
+        find it: the second column after a row counter, the first column of time stamps after text
+        columns, else the first column.
+
+    Returns
+    -------
+    name : str
+        The time column's name.
+    counter : bool
+        Whether the first column is a row counter, left out.
+    notes : list of str
+        What was left out and which column is the time, for the user.
+    """
     counter = time_col is None and counter_before_time(header, first_row, dialect)
     text_before = 0 if time_col is not None or counter else text_before_stamps(first_row)
     name = time_col or header[1 if counter else text_before]
@@ -114,14 +182,39 @@ def choose_time_column(
 
 
 def millisecond_column(header: list[str], last_time_column: int) -> int | None:
-    """The column after the time stamp (or its clock column) if it is named as its milliseconds."""
+    """The column after the time stamp (or its clock column) if it is named as its milliseconds.
+
+    Parameters
+    ----------
+    header : list of str
+        The column names, in file order.
+    last_time_column : int
+        Position (from 0) of the time column, or of the clock column where date and clock are two columns.
+
+    Returns
+    -------
+    int or None
+        The position of the next column where it is named "ms", "msec", "millisecond(s)", else None.
+    """
     following = last_time_column + 1
     return following if following < len(header) and unit_key(header[following]) in _MILLISECOND_NAMES else None
 
 
 def time_named(name: str) -> bool:
     """Whether a column's name says it holds a time (a second time column, as T&D writes its
-    stamps' spreadsheet serial dates beside them, or a controller's time difference): no sensor."""
+    stamps' spreadsheet serial dates beside them, or a controller's time difference): no sensor.
+
+    Parameters
+    ----------
+    name : str
+        The column name as read (pandas' ".1" suffix of a repeated name is ignored).
+
+    Returns
+    -------
+    bool
+        True where the name, in lower case without spaces, brackets, points and underscores, begins with a
+        word for time or date ("time", "Zeit", "Datum", "timestamp", "時間", ...).
+    """
     key = unit_key(re.sub(r"\.\d+$", "", name))  # pandas' ".1" after a repeated name
     return key.startswith(_TIME_NAME_STARTS)
 
@@ -158,7 +251,20 @@ _EVENT_NAME_STARTS = (
 
 def event_named(name: str) -> bool:
     """Whether a column's name says it records the logger itself (HOBO's "Host Connected", a serial
-    number): no sensor."""
+    number): no sensor.
+
+    Parameters
+    ----------
+    name : str
+        The column name as read.
+
+    Returns
+    -------
+    bool
+        True where the name, in lower case without spaces, brackets, points and underscores, begins with
+        an event, alarm, status, comment or serial-number word ("Host Connected", "Alarm 101", "Serial
+        Number", ...).
+    """
     return unit_key(name).startswith(_EVENT_NAME_STARTS)
 
 
@@ -181,7 +287,19 @@ _ROOM_NAME_WORDS = frozenset({"amb", "tamb", "air", "env", "raum", "halle", "hal
 
 def room_named(name: str) -> bool:
     """Whether a column's name says it measures the room ("room", "T_amb", "Umgebung", "Air temp"):
-    a candidate for ``--ambient``, which a user who did not give it is told of."""
+    a candidate for ``--ambient``, which a user who did not give it is told of.
+
+    Parameters
+    ----------
+    name : str
+        The column name as read.
+
+    Returns
+    -------
+    bool
+        True where the name contains a word for the room ("room", "ambient", "Umgebung", "室温", ...)
+        or has a short one as a word of its own ("amb", "air", "env", "Raum", "Halle", ...).
+    """
     lower = name.lower()
     if any(part in lower for part in _ROOM_NAME_PARTS):
         return True
@@ -199,6 +317,31 @@ def temperature_columns(
     or that is named as a humidity, is left out of the default selection with a
     note, and refused when ``asked`` for by name; one in K or °F is converted,
     with a note.
+
+    Parameters
+    ----------
+    names : list of str
+        The candidate sensor columns: all but the time columns, or the ones the user asked for.
+    asked : bool
+        ``names`` are the sensors the user named: none is left out for its name (a time, an event, a
+        value computed from the humidity), and a humidity or a column in another unit is an error.
+    dialect : DialectView
+        The log's dialect: each column's unit (from a units row or the name) and the columns computed
+        from the humidity.
+    source : str or Path
+        The log, named in the notes and messages.
+
+    Returns
+    -------
+    sensors : list of str
+        The temperature columns (°C, K or °F), in the order of ``names``.
+    notes : list of str
+        What was left out or converted, and why.
+
+    Raises
+    ------
+    InputError
+        A column asked for is a humidity or in a unit that is no temperature, or no column is left.
     """
     kept, notes, other, times, events, computed = [], [], [], [], [], []
     for name in names:
@@ -261,7 +404,20 @@ def temperature_columns(
 
 def check_unique_names(header: list[str], source: str | Path) -> None:
     """InputError if two columns share a name: which one a sensor name meant could not be told
-    (pandas would call the second 'T1.1', a reader by name would read the first twice)."""
+    (pandas would call the second 'T1.1', a reader by name would read the first twice).
+
+    Parameters
+    ----------
+    header : list of str
+        The column names, in file order; empty names and repeated time columns are let pass.
+    source : str or Path
+        The log, named in the message.
+
+    Raises
+    ------
+    InputError
+        Two columns share a name; the message gives both positions (from 1).
+    """
     seen: dict[str, int] = {}
     for position, name in enumerate(header, start=1):
         if name and name in seen and not time_named(name):  # a repeated time column's name: no sensor is meant
@@ -275,7 +431,22 @@ def check_unique_names(header: list[str], source: str | Path) -> None:
 
 def missing_column(source: object, name: str, available: list[str] | tuple[str, ...]) -> str:
     """The message for a column the log does not have: the columns it has, and the nearest one
-    where the name differs only a little (a capital letter, a typing slip)."""
+    where the name differs only a little (a capital letter, a typing slip).
+
+    Parameters
+    ----------
+    source : object
+        The log (a path, or a live source's description), named first in the message.
+    name : str
+        The sensor column that was asked for.
+    available : list of str or tuple of str
+        The log's sensor columns.
+
+    Returns
+    -------
+    str
+        The message, ending in the columns the log has.
+    """
     import difflib
 
     near = [c for c in available if c.lower() == name.lower()] or difflib.get_close_matches(name, available, n=1)

@@ -198,6 +198,22 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
     data cell reads like ``17,90`` or ``1,5e-05``. The header is the first line
     that is no comment, or, where the lines after it do not continue its table,
     the line that heads the table below (:func:`_table_start`).
+
+    Parameters
+    ----------
+    head : bytes
+        The file's first bytes as the readers take them (``HEAD_BYTES``, 64 KiB, or less of a short
+        file), in any of the encodings a log may have.
+    wait_for_row : bool, optional
+        A live log: return None until the first data row after the header is complete too.
+    whole : bool, optional
+        ``head`` is the whole file: its last line counts as complete without a newline.
+
+    Returns
+    -------
+    CsvDialect or None
+        How the log is written, or None while the header line (or, with ``wait_for_row``, the first
+        data row) is incomplete, or where there are only comments and blank lines.
     """
     text, encoding = _decoded_head(head)
     if not whole:
@@ -499,7 +515,19 @@ def _delimiter(header: str, rows: list[str]) -> str:
 
 def header_names(file: Path) -> list[str]:
     """The column names of a log, read from its head only (a live log may be large); [] while
-    its header line is incomplete."""
+    its header line is incomplete.
+
+    Parameters
+    ----------
+    file : Path
+        The log: CSV text, or an Excel .xlsx workbook (its first sheet with a table).
+
+    Returns
+    -------
+    list of str
+        The names as the log's dialect reads them (a T&D logger's channel names where it gives them),
+        empty names left out.
+    """
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     if binary_kind(head) in ("xlsx", "xls"):
@@ -519,6 +547,25 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
     given, if it is missing or no CSV.
 
     An empty column without a name (a delimiter at the end of every line) is dropped.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file: CSV text in any dialect :func:`sniff_dialect` tells, or an Excel .xlsx workbook.
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+        The data rows under the header (preamble and units or description rows skipped), cells parsed
+        by pandas with the dialect's delimiter and decimal mark.
+    dialect : CsvDialect
+        How the file is written.
+
+    Raises
+    ------
+    InputError
+        The file is missing, binary or an .xls workbook, has no header line or two columns of one name,
+        or pandas cannot parse it.
     """
     import pandas as pd
 
@@ -576,7 +623,18 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
 
 def binary_kind(head: bytes) -> str | None:
     """What a file is if it is no text: "xlsx" for an Excel workbook (a zip archive), "xls" for
-    an Excel 97-2003 one, "binary" for other data with zero bytes (not UTF-16 text); else None."""
+    an Excel 97-2003 one, "binary" for other data with zero bytes (not UTF-16 text); else None.
+
+    Parameters
+    ----------
+    head : bytes
+        The file's first bytes (8 at least to tell binary data from UTF-16 text).
+
+    Returns
+    -------
+    {"xlsx", "xls", "binary"} or None
+        The kind of binary file, or None for text (or a head too short to tell).
+    """
     if head.startswith(b"PK\x03\x04"):
         return "xlsx"
     if head.startswith(b"\xd0\xcf\x11\xe0"):

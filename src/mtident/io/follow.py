@@ -75,7 +75,20 @@ __all__ = ["LogFollower", "Rows"]
 @dataclass(frozen=True)
 class Rows:
     """New samples: times (minutes from the first sample ever read), temperatures (n, S), warnings,
-    and notes (how the header was read: units converted, columns left out)."""
+    and notes (how the header was read: units converted, columns left out).
+
+    Attributes
+    ----------
+    time_min : ndarray, shape (n,)
+        Times of the new rows (min from the first sample ever read).
+    temperature_C : ndarray, shape (n, S)
+        Their readings (°C, converted from K or °F), one column per sensor in the follower's order.
+    warnings : tuple of str
+        What went wrong while reading (a truncated or replaced log, rows refused for an unreadable
+        time or one that goes back, a time column that may be seconds).
+    notes : tuple of str
+        How the header and the time column were read.
+    """
 
     time_min: FloatArray
     temperature_C: FloatArray
@@ -121,7 +134,52 @@ def _saved_dialect(saved: dict[str, Any] | list[Any]) -> CsvDialect:
 
 @dataclass
 class LogFollower:
-    """Tail a CSV temperature log (DESIGN.md contract: time column, one column per sensor)."""
+    """Tail a CSV temperature log (DESIGN.md contract: time column, one column per sensor).
+
+    Parameters
+    ----------
+    path : Path
+        The log being written.
+    sensors : list of str or None
+        The sensor columns to read, in that order; None (or ``["all"]``) to take every temperature
+        column, which the header then sets.
+    time_col : str or None
+        The time column's name, None to find it.
+    time_unit : str or None
+        Unit of a numeric time column ("ms", "s", "min", "h", "d"), None to take it from the log.
+    offset : int
+        Bytes of the file read so far (the next poll reads from there).
+    identity : tuple of int or None
+        (device, inode) of the file when it was last read: another file under the same name, or a
+        shorter one, is read again from the start.
+    header : list of str or None
+        The column names, once the header line was read.
+    origin : float or None
+        The first sample's time (min; from 1970 for time stamps), which is t = 0.
+    last_time : float or None
+        The last row's time (min from ``origin``).
+    columns : list of int
+        Positions of the time column and of the sensors' columns, in that order.
+    dialect : CsvDialect or None
+        How the log is written, from its head once the header line is complete.
+    time_format : str or None
+        pandas format of the time stamps, from the first one; None for a numeric time column.
+    clock_column : int or None
+        The column of the time of day where the time column holds the date alone.
+    millisecond_column : int or None
+        A column with the time stamps' milliseconds (Graphtec's "ms").
+    room : str or None
+        A room sensor's column: where no sensors are named, it is taken with the others and read last
+        (named sensors are read as given, the room among them where the caller puts it).
+    first_stamp : str or None
+        The first time stamp as written (a slashed date may have to be read again day first).
+    clock_shift : float
+        Minutes added to the stamps since summer time ended (+60) or began (−60) during the log.
+    last_step : float or None
+        Minutes between the last two rows taken (a clock change is told against it).
+    serial_days : bool
+        The time column, named as dates, holds spreadsheet serial dates, read in days.
+    """
 
     path: Path
     sensors: list[str] | None = None

@@ -163,7 +163,24 @@ _STAMP_EXAMPLES = "(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:
 
 def sample_log_path(name: str = "@sample") -> Path:
     """A file shipped in the package, by its @-name: the logs @sample and @sample-room, and
-    @sample-machine, the reference run of the sample's machine."""
+    @sample-machine, the reference run of the sample's machine.
+
+    Parameters
+    ----------
+    name : str, optional
+        "@sample" (a spindle warm-up log), "@sample-room" (the same with a room sensor) or
+        "@sample-machine" (its reference run, TOML).
+
+    Returns
+    -------
+    Path
+        The file inside the installed package.
+
+    Raises
+    ------
+    InputError
+        ``name`` is none of these.
+    """
     from importlib import resources
 
     if name not in SAMPLES:
@@ -179,7 +196,28 @@ def _suffix_unit(header: str) -> str | None:
 
 def time_unit_factor(header: str, time_unit: str | None, stated: str | None = None) -> float:
     """Minutes per unit of a numeric time column: ``time_unit``, else the header's suffix (_s, _min,
-    _h), else the unit ``stated`` by a units row or in the name's brackets (``Time [s]``), else minutes."""
+    _h), else the unit ``stated`` by a units row or in the name's brackets (``Time [s]``), else minutes.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name (a suffix such as ``_s`` or ``_min`` states its unit).
+    time_unit : str or None
+        The unit the user gave: "ms", "s", "min", "h" or "d"; None to take it from the log.
+    stated : str or None, optional
+        The unit the log states for the column (units row or brackets in the name), as a key of
+        ``TIME_UNITS``; None where it states none.
+
+    Returns
+    -------
+    float
+        Minutes per unit of the column (1/60 for seconds, 60 for hours, 1440 for days).
+
+    Raises
+    ------
+    InputError
+        ``time_unit`` is not one of the units.
+    """
     if time_unit is not None:
         if time_unit not in TIME_UNITS:
             msg = f"time unit {time_unit!r} is not one of: {', '.join(TIME_UNITS)}"
@@ -195,13 +233,39 @@ UNLIKELY_MINUTES = 2 * 1440.0
 
 
 def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) -> bool:
-    """Whether :func:`time_unit_factor` falls back to minutes: no --time-unit, header suffix or units row."""
+    """Whether :func:`time_unit_factor` falls back to minutes: no --time-unit, header suffix or units row.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+    time_unit : str or None
+        The unit the user gave, or None.
+    stated : str or None
+        The unit the log states for the column, or None.
+
+    Returns
+    -------
+    bool
+        True where neither ``time_unit``, a suffix of ``header`` nor ``stated`` gives a unit.
+    """
     return time_unit is None and stated is None and _suffix_unit(header) is None
 
 
 def names_a_date(header: str) -> bool:
     """Whether a time column's name says it holds dates (``Date``, ``Date/Time``, ``Datum``):
-    spreadsheet serial dates in it are read as days, not refused."""
+    spreadsheet serial dates in it are read as days, not refused.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+
+    Returns
+    -------
+    bool
+        True where the name contains "date", "Datum", "fecha", "日付" or "日時" (any case).
+    """
     key = header.lower()
     return any(word in key for word in ("date", "datum", "fecha", "日付", "日時"))
 
@@ -213,7 +277,20 @@ def _serial_date(first: float) -> str:
 
 
 def serial_date_note(header: str, first: float) -> str:
-    """What a reader says when it reads a time column's spreadsheet serial dates as days."""
+    """What a reader says when it reads a time column's spreadsheet serial dates as days.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+    first : float
+        The column's first value (days since 30.12.1899), shown with the date and time it is.
+
+    Returns
+    -------
+    str
+        The note, suggesting ``time_unit='min'`` where the column is minutes after all.
+    """
     return (
         f"time column {header!r} read as spreadsheet serial dates ({_serial_date(first)}); give `time_unit='min'` if "
         "it "
@@ -224,7 +301,24 @@ def serial_date_note(header: str, first: float) -> str:
 def serial_date_hint(header: str, first: float, step: float) -> str | None:
     """A message if a time column read as minutes holds spreadsheet serial dates (days since
     30.12.1899: 46348.33 is 22.11.2026 08:00, as a spreadsheet saves a date cell formatted as a
-    number): read as minutes, a 2-h test lasted 0.08 min and was identified as nonsense."""
+    number): read as minutes, a 2-h test lasted 0.08 min and was identified as nonsense.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+    first : float
+        The column's first value, as read.
+    step : float
+        The spacing of its values (the median step, or a later value less the first), in the same unit.
+
+    Returns
+    -------
+    str or None
+        The message, suggesting ``time_unit='d'``, where ``first`` is a fractional number from 20000
+        to 80000 (the years 1954 to 2119) and ``step`` is positive and at most 0.05 (72 min as days);
+        else None.
+    """
     if not (
         20_000.0 <= first <= 80_000.0 and 0.0 < step <= 0.05 and first != math.floor(first)
     ):  # 1954-2119, steps under 72 min
@@ -236,6 +330,21 @@ def serial_date_hint(header: str, first: float, step: float) -> str | None:
 
 
 def seconds_hint(header: str, span_min: float) -> str:
+    """What a reader says when a time column read as minutes, for want of a stated unit, runs past two
+    days (``UNLIKELY_MINUTES``): a warm-up is hours long, so the column is more likely seconds.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+    span_min : float
+        The last time read (min), which the message gives in minutes and in days.
+
+    Returns
+    -------
+    str
+        The note, suggesting ``time_unit='s'``.
+    """
     return (
         f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`) and runs to "
         f"{span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give `time_unit='s'`"

@@ -40,7 +40,17 @@ _CELSIUS = {"CELSIUS", "CEL", "°C"}
 
 @dataclass(frozen=True)
 class DataItem:
-    """A TEMPERATURE sample of the device's model."""
+    """A TEMPERATURE sample of the device's model.
+
+    Attributes
+    ----------
+    id : str
+        The data item's id, which its observations name.
+    name : str or None
+        Its name in the device's model, where it has one.
+    units : str or None
+        Its ``units`` (else ``nativeUnits``) as the agent states them ("CELSIUS"), or None.
+    """
 
     id: str
     name: str | None
@@ -49,7 +59,19 @@ class DataItem:
 
 @dataclass(frozen=True)
 class Observation:
-    """One value of a data item (NaN: UNAVAILABLE)."""
+    """One value of a data item (NaN: UNAVAILABLE).
+
+    Attributes
+    ----------
+    item : str
+        The id of the data item it belongs to.
+    time : datetime.datetime
+        The agent's time stamp, timezone-aware (UTC where the stamp gives no offset).
+    value : float
+        The reading in the data item's units; NaN where the agent says UNAVAILABLE or the text is no number.
+    sequence : int
+        The agent's sequence number of the observation.
+    """
 
     item: str
     time: dt.datetime
@@ -59,7 +81,17 @@ class Observation:
 
 @dataclass(frozen=True)
 class StreamHeader:
-    """The agent's instance and the range of sequence numbers its buffer holds."""
+    """The agent's instance and the range of sequence numbers its buffer holds.
+
+    Attributes
+    ----------
+    instance_id : str
+        The agent's instance: a new one (after the agent restarted) numbers its sequence anew.
+    first_sequence : int
+        The oldest sequence number still in the agent's buffer.
+    next_sequence : int
+        The sequence number the next observation will get.
+    """
 
     instance_id: str
     first_sequence: int

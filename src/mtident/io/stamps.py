@@ -91,14 +91,41 @@ DATE_FORMATS = (
 
 def date_and_clock(date_cell: str, clock_cell: str) -> bool:
     """Whether two cells are a date alone and a time of day: a logger that writes its time stamp
-    in two columns (``Datum;Uhrzeit``, ``Date\tTime``), read as one stamp, date first."""
+    in two columns (``Datum;Uhrzeit``, ``Date\tTime``), read as one stamp, date first.
+
+    Parameters
+    ----------
+    date_cell : str
+        The first cell, which must hold a date alone ("22.11.2026", "2026-11-22", "11/22/2026").
+    clock_cell : str
+        The next cell, which must hold a time of day alone ("08:00:00", "8:00 AM").
+
+    Returns
+    -------
+    bool
+        True where the first reads in one of ``DATE_FORMATS`` and the second in one of
+        ``TIME_OF_DAY_FORMATS``.
+    """
     if ":" not in clock_cell or not any(mark in date_cell for mark in "./-"):
         return False  # not worth importing pandas (0.5 s that a numeric live log does not need)
     return parses_as(date_cell, DATE_FORMATS) and parses_as(clock_cell, TIME_OF_DAY_FORMATS)
 
 
 def parses_as(cell: str, formats: tuple[str, ...]) -> bool:
-    """Whether a cell reads in one of the (pandas/strptime) formats."""
+    """Whether a cell reads in one of the (pandas/strptime) formats.
+
+    Parameters
+    ----------
+    cell : str
+        The cell as written (surrounding spaces are ignored).
+    formats : tuple of str
+        strptime formats, such as ``DATE_FORMATS`` or ``TIME_OF_DAY_FORMATS``.
+
+    Returns
+    -------
+    bool
+        True where ``pandas.to_datetime`` reads the cell in one of them.
+    """
     import pandas as pd
 
     for fmt in formats:
@@ -113,14 +140,39 @@ def parses_as(cell: str, formats: tuple[str, ...]) -> bool:
 def after_midnight(previous_min: float | None, t_min: float) -> float:
     """A time of day (minutes from the first one) on the day of the row before, or a later one: an
     overnight test passes midnight, and a step back of more than 12 h is the next day. Both readers
-    of a log use it, row by row."""
+    of a log use it, row by row.
+
+    Parameters
+    ----------
+    previous_min : float or None
+        The time of the row before (min), as already moved on; None for the first row.
+    t_min : float
+        This row's time of day (min from the first row's), as read.
+
+    Returns
+    -------
+    float
+        ``t_min`` plus as many whole days (1440 min) as make it no more than 12 h before
+        ``previous_min``; ``t_min`` itself for the first row.
+    """
     if previous_min is None:
         return t_min
     return t_min + MINUTES_PER_DAY * max(math.ceil((previous_min - t_min - MINUTES_PER_DAY / 2) / MINUTES_PER_DAY), 0)
 
 
 def other_date_order(fmt: str | None) -> str | None:
-    """The same format with day and month swapped, for a slashed date; None for any other."""
+    """The same format with day and month swapped, for a slashed date; None for any other.
+
+    Parameters
+    ----------
+    fmt : str or None
+        A strptime format, as :func:`stamp_format` gives it.
+
+    Returns
+    -------
+    str or None
+        ``%d/%m/...`` for ``%m/%d/...`` and the reverse, the rest of the format kept.
+    """
     if fmt is not None and fmt.startswith(("%m/%d/", "%d/%m/")):
         return ("%d/%m/" if fmt.startswith("%m/%d/") else "%m/%d/") + fmt[6:]
     return None
@@ -128,7 +180,18 @@ def other_date_order(fmt: str | None) -> str | None:
 
 def stamp_format(cell: str) -> str | None:
     """The pandas format of a time-stamp cell: "ISO8601", one of the dotted day-first or
-    time-of-day formats, or None if it is no time stamp."""
+    time-of-day formats, or None if it is no time stamp.
+
+    Parameters
+    ----------
+    cell : str
+        A cell of the time column, as written.
+
+    Returns
+    -------
+    str or None
+        The first format (ISO 8601 first, then the others in order) in which pandas reads the cell.
+    """
     import pandas as pd
 
     text = cell.strip()
@@ -151,7 +214,18 @@ _UTC_OFFSET = re.compile(r"(Z|[+-]\d\d:?\d\d)$")
 
 def has_utc_offset(stamp: str) -> bool:
     """Whether a time stamp carries its offset from UTC (``2026-10-25T02:30:00+01:00``, ``...Z``):
-    such stamps stay in order when summer time ends, and no clock change is looked for."""
+    such stamps stay in order when summer time ends, and no clock change is looked for.
+
+    Parameters
+    ----------
+    stamp : str
+        A time stamp as written.
+
+    Returns
+    -------
+    bool
+        True where it ends in "Z" or a ±hh:mm (or ±hhmm) offset.
+    """
     return bool(_UTC_OFFSET.search(stamp.strip()))
 
 
@@ -166,6 +240,18 @@ def clock_change(before_min: float, after_min: float, interval_min: float | None
     Sunday of a month in which summer time begins or ends somewhere. A step back cannot be a
     real pause; a step forward could be one of an hour to the minute at that hour of that
     Sunday, which the readers' notes name.
+
+    Parameters
+    ----------
+    before_min, after_min : float
+        The two stamps, in minutes since 1970-01-01 00:00 of the logger's clock.
+    interval_min : float or None
+        The log's step before these two (min), or None at its first two rows.
+
+    Returns
+    -------
+    float
+        The shift to add to the stamps from ``after_min`` on (min): +60, −60 or 0.
     """
     step = after_min - before_min
     shift = 60.0 if step < 0 else -60.0
@@ -177,7 +263,22 @@ def clock_change(before_min: float, after_min: float, interval_min: float | None
 
 
 def clock_change_note(shift: float, where: str, before: str, after: str) -> str:
-    """What a reader did at a clock change (:func:`clock_change`), for the engineer."""
+    """What a reader did at a clock change (:func:`clock_change`), for the engineer.
+
+    Parameters
+    ----------
+    shift : float
+        The shift :func:`clock_change` gave (min): positive where summer time ended, negative where it began.
+    where : str
+        Where in the log it happened ("at row 412", "after t = 95 min").
+    before, after : str
+        The two stamps as the log writes them.
+
+    Returns
+    -------
+    str
+        The note.
+    """
     if shift > 0:
         return (
             f"the time stamps go back an hour {where} ({before} then {after}): read as the end of summer time; the "
@@ -199,7 +300,19 @@ CLOCK_DAY_ZERO_MIN = (dt.datetime(1900, 1, 1) - _EPOCH).total_seconds() / 60.0
 def elapsed_minutes(cell: str) -> float | None:
     """An elapsed time written as hours:minutes:seconds, in minutes (``26:15:30`` is 1575.5), or
     None: a log's time column that looks like a time of day but runs past 24:00:00 (a test of
-    more than a day, timed from its start)."""
+    more than a day, timed from its start).
+
+    Parameters
+    ----------
+    cell : str
+        A cell of the time column, as written ("26:15:30", "1:05:00.5").
+
+    Returns
+    -------
+    float or None
+        The elapsed time (min), or None where the cell is not hours:minutes:seconds with minutes and
+        seconds below 60.
+    """
     matched = _ELAPSED.fullmatch(cell.strip())
     if matched is None:
         return None

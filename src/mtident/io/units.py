@@ -148,24 +148,70 @@ _NUMBER_THEN_UNIT = re.compile(r"^\s*([+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-
 
 
 def carried_unit(cell: str) -> str | None:
-    """The unit a reading carries after its number ("13.1 °C": "°C"), if it is one this module knows."""
+    """The unit a reading carries after its number ("13.1 °C": "°C"), if it is one this module knows.
+
+    Parameters
+    ----------
+    cell : str
+        A cell as written in the log.
+
+    Returns
+    -------
+    str or None
+        The unit after the number, as written, where it is a temperature unit or another unit this module
+        knows (%RH, V, rpm, ...); None for a plain number, text, or an unknown unit.
+    """
     match = _NUMBER_THEN_UNIT.match(cell)
     return match.group(2) if match and unit_key(match.group(2)) in (*_TEMPERATURE_UNITS, *_OTHER_UNITS) else None
 
 
 def number_without_unit(cell: str) -> str:
-    """A reading's number with a known unit after it taken off ("13.1 °C": "13.1"); other cells as they are."""
+    """A reading's number with a known unit after it taken off ("13.1 °C": "13.1"); other cells as they are.
+
+    Parameters
+    ----------
+    cell : str
+        A cell as written in the log.
+
+    Returns
+    -------
+    str
+        The number's text (a decimal comma kept), or ``cell`` unchanged.
+    """
     match = _NUMBER_THEN_UNIT.match(cell)
     return match.group(1) if match and carried_unit(cell) else cell
 
 
 def unit_key(cell: str) -> str:
-    """A unit or name as compared here: brackets, spaces, points and degree signs taken away, lower case."""
+    """A unit or name as compared here: brackets, spaces, points and degree signs taken away, lower case.
+
+    Parameters
+    ----------
+    cell : str
+        A unit or a column name as written ("[°C]", "Time (s)", "T_amb").
+
+    Returns
+    -------
+    str
+        ``cell`` without whitespace, brackets, parentheses, points, underscores, degree signs (° and º)
+        and "Â" (a UTF-8 ° read as cp1252), in lower case ("[°C]": "c").
+    """
     return re.sub(r"[\s\[\]()°º.Â_]", "", cell).lower()
 
 
 def is_number(cell: str) -> bool:
-    """Whether a cell is a number (a decimal comma counts)."""
+    """Whether a cell is a number (a decimal comma counts).
+
+    Parameters
+    ----------
+    cell : str
+        A cell as written in the log.
+
+    Returns
+    -------
+    bool
+        True where ``float`` reads it with a decimal comma taken as a point ("nan" and "inf" count too).
+    """
     try:
         float(cell.replace(",", "."))
     except ValueError:
@@ -176,28 +222,76 @@ def is_number(cell: str) -> bool:
 def celsius_conversion(unit: str) -> tuple[float, float] | None:
     """(scale, offset) taking a reading in ``unit`` to °C (°C = scale·reading + offset): (1, 0) for
     °C and for no unit, (1, −273.15) for K, (5/9, −160/9) for °F; None for a unit that is no
-    temperature (V, %, rpm)."""
+    temperature (V, %, rpm).
+
+    Parameters
+    ----------
+    unit : str
+        The unit as written ("°F", "[K]", "degC", "" for none).
+
+    Returns
+    -------
+    tuple of float or None
+        (scale, offset), or None.
+    """
     if not unit.strip():
         return 1.0, 0.0
     return _TEMPERATURE_UNITS.get(unit_key(unit))
 
 
 def is_humidity(name: str) -> bool:
-    """Whether a column's name (or a description row's cell) names a humidity, not a temperature."""
+    """Whether a column's name (or a description row's cell) names a humidity, not a temperature.
+
+    Parameters
+    ----------
+    name : str
+        The column name or cell as written.
+
+    Returns
+    -------
+    bool
+        True for "%RH", "RH%" or a name containing "humidity", "Feuchte" or "湿度" ("RH" alone is not one:
+        it may be a right-hand sensor).
+    """
     key = unit_key(name)
     return key in ("%rh", "rh%") or any(word in key for word in _HUMIDITY_WORDS)  # not "RH": a right-hand sensor
 
 
 def is_from_humidity(name: str) -> bool:
     """Whether a column's name (or a description row's cell) names a temperature computed from the
-    air's humidity (a dew point, a wet-bulb temperature, a heat index), not one of the machine."""
+    air's humidity (a dew point, a wet-bulb temperature, a heat index), not one of the machine.
+
+    Parameters
+    ----------
+    name : str
+        The column name or cell as written.
+
+    Returns
+    -------
+    bool
+        True where the name, without spaces, hyphens, brackets, points and underscores and in lower case,
+        contains "dewpoint", "Taupunkt", "point de rosée", "露点", "wet bulb", "heat index" or the like.
+    """
     key = re.sub(r"[-\s\[\]()°º._]", "", name).lower()
     return any(word in key for word in _FROM_HUMIDITY_WORDS)
 
 
 def unit_in_name(column: str) -> str:
     """The unit at the end of a column's name, as written ("Time [s]": "s"), if it is one this
-    module knows; "" without one ("T (spindle)" names a place, not a unit; "Date/Time" no unit either)."""
+    module knows; "" without one ("T (spindle)" names a place, not a unit; "Date/Time" no unit either).
+
+    Parameters
+    ----------
+    column : str
+        The column name as written.
+
+    Returns
+    -------
+    str
+        The unit (a time or temperature unit, or another known one such as "%" or "rpm") in brackets at
+        the end of the name, after a slash, after a comma, or degree-marked after a space or underscore
+        ("T1 °F"); "" where there is none.
+    """
     for pattern in _UNITS_IN_NAME:
         named = pattern.search(column)
         if named is not None and unit_key(named.group(1)) in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
@@ -206,10 +300,32 @@ def unit_in_name(column: str) -> str:
 
 
 def time_unit_name(unit: str) -> str | None:
-    """ "ms", "s", "min", "h" or "d" for a unit of time as written ("[sec]", "Minutes"), else None."""
+    """ "ms", "s", "min", "h" or "d" for a unit of time as written ("[sec]", "Minutes"), else None.
+
+    Parameters
+    ----------
+    unit : str
+        A unit as written, brackets and case as they come.
+
+    Returns
+    -------
+    str or None
+        The key of the unit in ``logs.TIME_UNITS``, or None where it is no unit of time.
+    """
     return _TIME_UNIT_NAMES.get(unit_key(unit))
 
 
 def is_time_or_temperature_unit(cell: str) -> bool:
-    """Whether a cell names a unit of time or of temperature (a units row has one at least)."""
+    """Whether a cell names a unit of time or of temperature (a units row has one at least).
+
+    Parameters
+    ----------
+    cell : str
+        A cell as written, of a row that may be a units row.
+
+    Returns
+    -------
+    bool
+        True where the cell is a unit of time ("s", "min", "[h]", ...) or of temperature ("°C", "K", "°F", ...).
+    """
     return unit_key(cell) in _TIME_UNIT_NAMES or unit_key(cell) in _TEMPERATURE_UNITS

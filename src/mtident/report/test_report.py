@@ -23,6 +23,7 @@ import jinja2
 import numpy as np
 from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
+from matplotlib.transforms import Bbox
 
 from mtident import __version__
 from mtident.exceptions import InputError
@@ -35,7 +36,37 @@ __all__ = ["SensorLine", "WarmupReport", "build_report", "write_html", "write_pd
 
 @dataclass(frozen=True)
 class SensorLine:
-    """One sensor's row of the report (NaN where there is no value)."""
+    """One sensor's row of the report (NaN where there is no value).
+
+    Attributes
+    ----------
+    sensor : str
+        The sensor column's name.
+    latest_C : float
+        The last valid reading the decision saw (°C): at the stop, or at the log's end.
+    steady_C : float
+        T∞, the estimated steady-state temperature (°C).
+    ci95_C : tuple of float
+        95 % interval of T∞ (°C), (low, high).
+    decision_interval_C : tuple of float
+        The interval at the decision level that is compared with the tolerance (°C), (low, high).
+    slowest_time_constant_min : float
+        Largest time constant of the fitted modes (min).
+    equilibrium_time_min : float
+        When the best model stays within 5 % of its total rise from T∞ (min from the log's start).
+    status : str
+        The monitor's status of the sensor ("may stop", "confirming", "narrowing", "no rise", ...).
+    model_ok : bool
+        The fit can be trusted: T∞ is determined and the residuals are not much more correlated than
+        noise.
+    settled_C : float
+        Where the readings settled by the log's end (°C), NaN where they did not settle or the stop
+        is not checked in hindsight.
+    difference_C : float
+        T∞ at the stop, moved with the room, less ``settled_C`` (°C).
+    within_tolerance : bool or None
+        ``difference_C`` is within the tolerance; None where nothing could be checked.
+    """
 
     sensor: str
     latest_C: float
@@ -343,7 +374,7 @@ def summary_page(report: WarmupReport) -> Figure:
         ]
         for line in report.lines
     ]
-    table = table_ax.table(cellText=rows, colLabels=header, bbox=(0.0, 0.0, 1.0, 1.0), cellLoc="center")
+    table = table_ax.table(cellText=rows, colLabels=header, bbox=Bbox.from_bounds(0.0, 0.0, 1.0, 1.0), cellLoc="center")
     table.auto_set_font_size(False)
     table.set_fontsize(7.5)
     y -= rows_height + 0.035

@@ -35,6 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 from itertools import combinations
+from typing import Any
 
 import numpy as np
 from scipy.optimize import minimize
@@ -498,7 +499,7 @@ def _reference_grids(family: ModeFamily, fast_lo: float, points: int = 7) -> lis
     axes = [np.geomspace(lo, hi, points) for lo, hi in bounds]
     grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(bounds), -1).T
     grids = [grid]
-    ceiling = float(bounds[np.argmax(family.reference_min), 0])
+    ceiling = float(bounds[int(np.argmax(np.asarray(family.reference_min))), 0])
     fast = (
         np.geomspace(fast_lo, ceiling, max(2, int(np.ceil(np.log(ceiling / fast_lo) / np.log(_MAX_GRID_RATIO))) + 1))
         if ceiling > fast_lo
@@ -908,7 +909,7 @@ def _steady_state(
         start += float(binned.room_C[0])
     steady = float(chosen.steady[0]) + shift
     dof = float(len(binned) - full.n_params)
-    common = dict(
+    common: dict[str, Any] = dict(
         steady_C=steady,
         modes=modes,
         room_gains=tuple(float(g) for g in chosen.theta[0, 1 + chosen.tau.shape[1] :])
@@ -936,7 +937,8 @@ def _steady_state(
         )
     factor = _correlation_factor(_weighted_residuals(problem, full))
     sigma2 = max(float(full.rss[0]) / dof, problem.sigma2) * factor
-    intervals, ends = {}, {}
+    intervals: dict[float, tuple[float, float]] = {}
+    ends: dict[float, tuple[IntervalEnd, IntervalEnd]] = {}
     refined: dict[float, bool] = {}
     widest_refined: bool | None = None
     ends_models: tuple[_Fits, _Fits] = (full, full)

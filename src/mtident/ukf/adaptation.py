@@ -73,6 +73,17 @@ class FadingFactor:
 def normalisation_from_reference(reference_output: FloatArray) -> FloatArray:
     """λⱼ = y₀ⱼ √(m / Σ y₀ᵢ²) (seed 001 Eq. 29) from prior knowledge of the outputs.
 
+    Parameters
+    ----------
+    reference_output : ndarray, shape (..., m)
+        y₀, typical magnitudes of the m outputs (in their own units; the sign is ignored, and not all
+        may be zero).
+
+    Returns
+    -------
+    ndarray, shape (..., m)
+        λ, dimensionless ratios whose squares average to 1 over the outputs.
+
     Examples
     --------
     >>> normalisation_from_reference(np.array([3.0, 4.0])).round(4).tolist()
@@ -84,7 +95,24 @@ def normalisation_from_reference(reference_output: FloatArray) -> FloatArray:
 
 
 def residual_memory(fading: FadingFactor, memory: FloatArray, first: FloatArray, innovation: FloatArray) -> FloatArray:
-    """Vₖ of Eq. 22 (or V'ₖ of Eq. 25) for the new innovation εₖ, batched."""
+    """Vₖ of Eq. 22 (or V'ₖ of Eq. 25) for the new innovation εₖ, batched.
+
+    Parameters
+    ----------
+    fading : FadingFactor
+        Supplies ξ (``forgetting``) and λ (``normalisation``, which divides the innovation).
+    memory : ndarray, shape (..., m, m)
+        Vₖ₋₁ of each filter.
+    first : ndarray of bool, shape (...)
+        The filters at their first update, where V₀ = ε₀ε₀ᵀ replaces the memory.
+    innovation : ndarray, shape (..., m)
+        εₖ = yₖ − ŷₖ⁻, in the measurement's units.
+
+    Returns
+    -------
+    ndarray, shape (..., m, m)
+        Vₖ.
+    """
     scaled = innovation if fading.normalisation is None else innovation / fading.normalisation
     outer = scaled[..., :, None] * scaled[..., None, :]
     xi = fading.forgetting
@@ -95,7 +123,24 @@ def residual_memory(fading: FadingFactor, memory: FloatArray, first: FloatArray,
 def fading_value(
     fading: FadingFactor, memory: FloatArray, innovation_cov: FloatArray, emission_cov: FloatArray
 ) -> FloatArray:
-    """αₖ = max(1, tr(Vₖ − ρR)/tr(Py)) (Eqs 18, 21), bounded by ``max_factor``, shape (...)."""
+    """αₖ = max(1, tr(Vₖ − ρR)/tr(Py)) (Eqs 18, 21), bounded by ``max_factor``, shape (...).
+
+    Parameters
+    ----------
+    fading : FadingFactor
+        Supplies ρ (``weakening``), λ (``normalisation``) and the bound ``max_factor``.
+    memory : ndarray, shape (..., m, m)
+        Vₖ from :func:`residual_memory`.
+    innovation_cov : ndarray, shape (..., m, m)
+        Py = S_y S_yᵀ, the predicted measurement covariance (R included).
+    emission_cov : ndarray, shape (..., m, m)
+        Rₖ, the measurement noise covariance.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        αₖ, from 1 to ``max_factor``.
+    """
     if fading.normalisation is not None:
         scale = fading.normalisation[..., :, None] * fading.normalisation[..., None, :]
         innovation_cov = innovation_cov / scale

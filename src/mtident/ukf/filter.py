@@ -41,7 +41,15 @@ StepTransition = Callable[[FloatArray, int], FloatArray]
 
 @dataclass(frozen=True, slots=True)
 class GaussianState:
-    """Mean (..., n) and covariance (..., n, n) of a batch of Gaussian beliefs."""
+    """Mean (..., n) and covariance (..., n, n) of a batch of Gaussian beliefs.
+
+    Attributes
+    ----------
+    mean : ndarray, shape (..., n)
+        The means of the beliefs, in the state's units.
+    cov : ndarray, shape (..., n, n)
+        Their covariances (symmetric positive definite).
+    """
 
     mean: FloatArray
     cov: FloatArray
@@ -82,6 +90,24 @@ class FilterCarry:
 
     ``chol`` is the lower Cholesky factor of the posterior covariance in the
     square-root form; ``cov`` in the standard form (the other is None).
+
+    Attributes
+    ----------
+    mean : ndarray, shape (..., n)
+        Posterior mean x̂ₖ.
+    cov : ndarray, shape (..., n, n) or None
+        Posterior covariance Pₖ (standard form), else None.
+    chol : ndarray, shape (..., n, n) or None
+        Lower Cholesky factor of Pₖ (square-root form), else None.
+    process_cov : ndarray, shape (..., n, n)
+        Q for the next step, as the adaptive law has left it.
+    emission_cov : ndarray, shape (..., m, m)
+        R for the next step, as the adaptive law has left it.
+    residual_memory : ndarray, shape (..., m, m)
+        Vₖ of the fading factor (zeros without one).
+    updates_seen : ndarray, shape (...)
+        Measurement updates done so far (steps with a missing measurement do not count); 0 before
+        the first, where V₀ = ε₀ε₀ᵀ.
     """
 
     mean: FloatArray
@@ -102,7 +128,23 @@ class FilterCarry:
 
 @dataclass(frozen=True, slots=True)
 class StepInfo:
-    """Diagnostics of one step, each with the batch shape in front."""
+    """Diagnostics of one step, each with the batch shape in front.
+
+    Attributes
+    ----------
+    innovation : ndarray, shape (..., m)
+        εₖ = yₖ − ŷₖ⁻, NaN where the measurement was missing.
+    innovation_cov : ndarray, shape (..., m, m)
+        Py, the predicted measurement covariance with R.
+    fading : ndarray, shape (...)
+        αₖ, 1 without a fading factor.
+    posterior_residual : ndarray, shape (..., m)
+        γₖ = yₖ − h(x̂ₖ), NaN without an adaptive law or a measurement.
+    adapted : ndarray of bool, shape (...)
+        The adaptive law changed Q and R at this step.
+    reached : ndarray of bool, shape (...)
+        |γ| ≤ C after the adaptation (True where none was needed).
+    """
 
     innovation: FloatArray  # (..., m), NaN where the measurement was missing
     innovation_cov: FloatArray  # (..., m, m)
@@ -114,7 +156,29 @@ class StepInfo:
 
 @dataclass(frozen=True, slots=True)
 class FilterRecord:
-    """Stacked results of ``run_filter``; the first axis is the step."""
+    """Stacked results of ``run_filter``; the first axis is the step.
+
+    Attributes
+    ----------
+    means : ndarray, shape (T, ..., n)
+        Posterior mean after each step's update.
+    covs : ndarray, shape (T, ..., n, n)
+        Posterior covariance after each step (formed from the factor in the square-root form).
+    process_covs : ndarray, shape (T, ..., n, n)
+        Q after each step.
+    emission_covs : ndarray, shape (T, ..., m, m)
+        R after each step.
+    innovations : ndarray, shape (T, ..., m)
+        εₖ, NaN where the measurement was missing.
+    innovation_covs : ndarray, shape (T, ..., m, m)
+        Py of each step.
+    fading : ndarray, shape (T, ...)
+        αₖ of each step (1 without a fading factor).
+    adapted : ndarray of bool, shape (T, ...)
+        Steps at which the adaptive law changed Q and R.
+    final : FilterCarry
+        The carry after the last step, to go on from.
+    """
 
     means: FloatArray  # (T, ..., n)
     covs: FloatArray  # (T, ..., n, n)

@@ -56,7 +56,19 @@ class Prior:
 
 @dataclass(frozen=True, slots=True)
 class MeasurementMoments:
-    """Predicted measurement statistics without R (Eqs 14-17)."""
+    """Predicted measurement statistics without R (Eqs 14-17).
+
+    Attributes
+    ----------
+    mean : ndarray, shape (..., m)
+        ŷ⁻, the weighted mean of the measured sigma points.
+    deviations : ndarray, shape (..., 2n+1, m)
+        The measured sigma points less ``mean``.
+    cov_without_noise : ndarray, shape (..., m, m)
+        Σ Wᶜᵢ (ŷᵢ − ŷ⁻)(ŷᵢ − ŷ⁻)ᵀ; R is added to it to make Py.
+    cross_cov : ndarray, shape (..., n, m)
+        Pxy, the cross-covariance of the sigma points and their measurements.
+    """
 
     mean: FloatArray  # (..., m)
     deviations: FloatArray  # (..., 2n+1, m)
@@ -93,7 +105,36 @@ def propagate(
     weights: SigmaWeights,
     square_root: bool,
 ) -> Prior:
-    """Time update: sigma points of N(mean, chol cholᵀ) through the transition (Eqs 5-10)."""
+    """Time update: sigma points of N(mean, chol cholᵀ) through the transition (Eqs 5-10).
+
+    Parameters
+    ----------
+    mean : ndarray, shape (..., n)
+        Posterior mean of each filter.
+    chol : ndarray, shape (..., n, n)
+        Lower Cholesky factor of its posterior covariance.
+    transition : callable
+        f, called once on all sigma points, shape (..., 2n+1, n) in and out.
+    process_cov : ndarray, shape (..., n, n)
+        Q, added to the propagated covariance.
+    weights : SigmaWeights
+        Sigma-point spread and weights.
+    square_root : bool
+        Also form the lower factor of the predicted covariance by QR and a rank-1 update (square-root
+        form).
+
+    Returns
+    -------
+    Prior
+        Predicted mean, covariance, its lower factor (square-root form only) and the propagated
+        sigma points.
+
+    Raises
+    ------
+    CovarianceError
+        In the square-root form, Q is not positive definite or the rank-1 downdate with the centre
+        point fails.
+    """
     points = sigma_points(mean, chol, weights)
     propagated = transition(points)
     prior_mean = weights.mean @ propagated
@@ -114,6 +155,27 @@ def measurement_moments(
     With ``redraw=False`` the measurement sigma points are the propagated points
     (seed 000, filterpy). With ``redraw=True`` they are drawn anew from the
     predicted mean and covariance (seed 001 Eq. 8), which lets Q reach the gain.
+
+    Parameters
+    ----------
+    prior : Prior
+        The predicted state of each filter, from :func:`propagate`.
+    measurement : callable
+        h, called once on all sigma points: (..., 2n+1, n) in, (..., 2n+1, m) out.
+    weights : SigmaWeights
+        Sigma-point spread and weights.
+    redraw : bool
+        Draw new sigma points from the prior's mean and covariance instead of reusing the propagated ones.
+
+    Returns
+    -------
+    MeasurementMoments
+        The predicted measurement's mean, deviations, covariance without R, and the cross-covariance.
+
+    Raises
+    ------
+    CovarianceError
+        With ``redraw`` in the dense form, the predicted covariance is not positive definite.
     """
     if redraw:
         chol = prior.chol if prior.chol is not None else safe_cholesky(prior.cov, "redraw sigma points from the prior")
