@@ -459,10 +459,9 @@ def _grid_taus(problem: _Problem) -> FloatArray:
     return np.geomspace(lo, hi, n)
 
 
-def _grid_fits(problem: _Problem) -> list[_Fits]:
-    """Every model with time constants on the search grid, fitted from one Gram matrix of every
-    column any of them uses."""
-    tau = _grid_taus(problem)
+def _gram_fits(problem: _Problem, tau: FloatArray, index_sets: list[IntArray]) -> list[_Fits]:
+    """Fits of batches of models whose time constants are taken from ``tau``: each batch (T, k)
+    of indices into it, all fitted from one Gram matrix of every column any of them uses."""
     m, b = len(tau), problem.binned
     basis = [np.ones((len(b), 1)), np.exp(-(b.time_min - problem.origin)[:, None] / tau[None, :])]
     if b.room_C is not None:
@@ -470,15 +469,21 @@ def _grid_fits(problem: _Problem) -> list[_Fits]:
     X = np.concatenate(basis, axis=1)
     w, y = b.count, problem.target()
     gram, rhs, yy = (X * w[:, None]).T @ X, X.T @ (w * y), float(np.sum(w * y * y))
-    apart = int(np.ceil(np.log(MIN_MODE_RATIO) / np.log(tau[1] / tau[0]) - 1e-9))
     out = []
-    for k in range(1, problem.family.max_modes + 1):
-        idx = _grid_tuples(m, k, apart)
+    for idx in index_sets:
         room = [1 + m + idx] if b.room_C is not None else []
         sel = np.concatenate([np.zeros((len(idx), 1), dtype=int), 1 + idx, *room], axis=1)
+        k = idx.shape[1]
         rss, theta, var0, direction = _solve(gram[sel[:, :, None], sel[:, None, :]], rhs[sel], yy, problem.penalty(k))
         out.append(_Fits(tau[idx], rss, theta[:, 0], var0, direction, theta))
     return out
+
+
+def _grid_fits(problem: _Problem) -> list[_Fits]:
+    """Every model with time constants on the search grid."""
+    tau = _grid_taus(problem)
+    apart = int(np.ceil(np.log(MIN_MODE_RATIO) / np.log(tau[1] / tau[0]) - 1e-9))
+    return _gram_fits(problem, tau, [_grid_tuples(len(tau), k, apart) for k in range(1, problem.family.max_modes + 1)])
 
 
 def _reference_bounds(family: ModeFamily, fast_lo: float, extra: int) -> FloatArray:
@@ -493,12 +498,15 @@ def _reference_bounds(family: ModeFamily, fast_lo: float, extra: int) -> FloatAr
     return np.concatenate([bounds, fast]) if extra else bounds
 
 
-def _reference_grids(family: ModeFamily, fast_lo: float, points: int = 7) -> list[FloatArray]:
-    """Grids (T, k) over the reference's boxes, one per number of free fast modes."""
+def _reference_grid_fits(problem: _Problem, points: int = 7) -> list[_Fits]:
+    """Every model on grids over the reference's boxes, one batch per number of free modes, fitted
+    from one Gram matrix: ``points`` time constants across each box, and the free modes on a
+    log grid below the slowest box."""
+    family, fast_lo = problem.family, problem.tau_bounds[0]
     bounds = _reference_bounds(family, fast_lo, 0)
     axes = [np.geomspace(lo, hi, points) for lo, hi in bounds]
-    grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(bounds), -1).T
-    grids = [grid]
+    boxed = np.array(np.meshgrid(*[np.arange(points) + points * n for n in range(len(axes))], indexing="ij"))
+    boxed = boxed.reshape(len(axes), -1).T
     ceiling = float(bounds[int(np.argmax(np.asarray(family.reference_min))), 0])
     fast = (
         np.geomspace(fast_lo, ceiling, max(2, int(np.ceil(np.log(ceiling / fast_lo) / np.log(_MAX_GRID_RATIO))) + 1))
@@ -506,19 +514,22 @@ def _reference_grids(family: ModeFamily, fast_lo: float, points: int = 7) -> lis
         else np.empty(0)
     )
     apart = max(1, int(np.ceil(np.log(MIN_MODE_RATIO) / np.log(_MAX_GRID_RATIO))))
+    index_sets = [boxed]
     for extra in range(1, family.free_fast + 1):
         combos = _grid_tuples(len(fast), extra, apart)
         if not len(combos):
             break
-        taus = fast[combos]
-        grids.append(np.concatenate([np.repeat(grid, len(taus), axis=0), np.tile(taus, (len(grid), 1))], axis=1))
-    return grids
+        combos = combos + points * len(axes)
+        index_sets.append(
+            np.concatenate([np.repeat(boxed, len(combos), axis=0), np.tile(combos, (len(boxed), 1))], axis=1)
+        )
+    return _gram_fits(problem, np.concatenate([*axes, fast]), index_sets)
 
 
 def _candidates(problem: _Problem) -> list[_Fits]:
     """Every model of the family's search grid, fitted."""
     if problem.family.reference_min is not None:
-        return [_fit(problem, grid) for grid in _reference_grids(problem.family, problem.tau_bounds[0])]
+        return _reference_grid_fits(problem)
     return _grid_fits(problem)
 
 
