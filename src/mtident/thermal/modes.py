@@ -460,22 +460,33 @@ def _grid_taus(problem: _Problem) -> FloatArray:
 
 
 def _gram_fits(problem: _Problem, tau: FloatArray, index_sets: list[IntArray]) -> list[_Fits]:
-    """Fits of batches of models whose time constants are taken from ``tau``: each batch (T, k)
-    of indices into it, all fitted from one Gram matrix of every column any of them uses."""
-    m, b = len(tau), problem.binned
-    basis = [np.ones((len(b), 1)), np.exp(-(b.time_min - problem.origin)[:, None] / tau[None, :])]
+    """Fits of models whose time constants are taken from sets of candidates: ``tau`` (S, m) holds
+    S sets of m time constants, each of ``index_sets`` a batch (T, k) of indices into a set; the
+    fits come per batch (S·T models, set by set), all from one Gram matrix per set of every column
+    any of its models uses."""
+    sets, m = tau.shape
+    b = problem.binned
+    u = b.time_min - problem.origin
+    basis = [np.ones((sets, len(b), 1)), np.exp(-u[None, :, None] / tau[:, None, :])]
     if b.room_C is not None:
-        basis.append((_lag(np.broadcast_to(b.room_C, (m, len(b))), b.time_min, tau) - b.room_C).T)
-    X = np.concatenate(basis, axis=1)
+        lags = _lag(np.broadcast_to(b.room_C, (sets * m, len(b))), b.time_min, tau.reshape(-1)) - b.room_C
+        basis.append(np.swapaxes(lags.reshape(sets, m, len(b)), 1, 2))
+    X = np.concatenate(basis, axis=2)
     w, y = b.count, problem.target()
-    gram, rhs, yy = (X * w[:, None]).T @ X, X.T @ (w * y), float(np.sum(w * y * y))
+    Xw = X * w[None, :, None]
+    gram, rhs, yy = np.swapaxes(Xw, 1, 2) @ X, np.swapaxes(Xw, 1, 2) @ y, float(np.sum(w * y * y))
     out = []
     for idx in index_sets:
         room = [1 + m + idx] if b.room_C is not None else []
         sel = np.concatenate([np.zeros((len(idx), 1), dtype=int), 1 + idx, *room], axis=1)
-        k = idx.shape[1]
-        rss, theta, var0, direction = _solve(gram[sel[:, :, None], sel[:, None, :]], rhs[sel], yy, problem.penalty(k))
-        out.append(_Fits(tau[idx], rss, theta[:, 0], var0, direction, theta))
+        p = sel.shape[1]
+        rss, theta, var0, direction = _solve(
+            gram[:, sel[:, :, None], sel[:, None, :]].reshape(-1, p, p),
+            rhs[:, sel].reshape(-1, p),
+            yy,
+            problem.penalty(idx.shape[1]),
+        )
+        out.append(_Fits(tau[:, idx].reshape(-1, idx.shape[1]), rss, theta[:, 0], var0, direction, theta))
     return out
 
 
@@ -483,7 +494,9 @@ def _grid_fits(problem: _Problem) -> list[_Fits]:
     """Every model with time constants on the search grid."""
     tau = _grid_taus(problem)
     apart = int(np.ceil(np.log(MIN_MODE_RATIO) / np.log(tau[1] / tau[0]) - 1e-9))
-    return _gram_fits(problem, tau, [_grid_tuples(len(tau), k, apart) for k in range(1, problem.family.max_modes + 1)])
+    return _gram_fits(
+        problem, tau[None, :], [_grid_tuples(len(tau), k, apart) for k in range(1, problem.family.max_modes + 1)]
+    )
 
 
 def _reference_bounds(family: ModeFamily, fast_lo: float, extra: int) -> FloatArray:
@@ -523,7 +536,7 @@ def _reference_grid_fits(problem: _Problem, points: int = 7) -> list[_Fits]:
         index_sets.append(
             np.concatenate([np.repeat(boxed, len(combos), axis=0), np.tile(combos, (len(boxed), 1))], axis=1)
         )
-    return _gram_fits(problem, np.concatenate([*axes, fast]), index_sets)
+    return _gram_fits(problem, np.concatenate([*axes, fast])[None, :], index_sets)
 
 
 def _candidates(problem: _Problem) -> list[_Fits]:
@@ -695,21 +708,23 @@ def _leading(
     scored = [
         (fits, np.where(np.isfinite(v := np.asarray(objective(fits), dtype=float)), v, np.inf)) for fits in candidates
     ]
-    while len(taken) < count:
-        batch = min(range(len(scored)), key=lambda n: float(scored[n][1].min(initial=np.inf)), default=None)
-        if batch is None or not np.isfinite(scored[batch][1].min(initial=np.inf)):
-            break
+    lowest = np.array([values.min(initial=np.inf) for _, values in scored])
+    logs = [np.log(fits.tau) for fits, _ in scored] if apart_log > 0 else []
+    while len(taken) < count and len(scored) and np.isfinite(lowest.min()):
+        batch = int(np.argmin(lowest))
         fits, values = scored[batch]
         i = int(np.argmin(values))
         taken.append((fits, i))
         if apart_log > 0:
             # the whole basin of the model taken is passed over, in every batch of as many modes
-            log_tau = np.log(fits.tau[i])
-            for other, other_values in scored:
+            log_tau = logs[batch][i]
+            for n, (other, other_values) in enumerate(scored):
                 if other.tau.shape[1] == len(log_tau):
-                    other_values[np.all(np.abs(np.log(other.tau) - log_tau) <= apart_log, axis=1)] = np.inf
+                    other_values[np.all(np.abs(logs[n] - log_tau) <= apart_log, axis=1)] = np.inf
+                    lowest[n] = other_values.min(initial=np.inf)
         else:
             values[i] = np.inf
+            lowest[batch] = values.min(initial=np.inf)
     return taken
 
 
@@ -777,20 +792,25 @@ def _lattice_search(
 ) -> _Fits:
     """Each start (k modes each) moved to the best of the 3ᵏ points of a lattice around it in
     log τ, the lattice halved each round: a search with no gradient that crosses a thin ridge
-    diagonally, run for every start in one batch of fits."""
+    diagonally. Every start's lattice is fitted at once, from a Gram matrix of its 3k distinct
+    time constants (the moved starts are fitted afresh from their residuals)."""
     k = starts[0].tau.shape[1]
     bounds = np.log(problem.bounds(k))
     phi = np.log(np.concatenate([f.tau for f in starts]))
-    offsets = np.array(np.meshgrid(*[[-1.0, 0.0, 1.0]] * k, indexing="ij")).reshape(k, -1).T
+    choice = np.array(np.meshgrid(*[[0, 1, 2]] * k, indexing="ij")).reshape(k, -1).T
+    columns = choice + 3 * np.arange(k)  # (3ᵏ, k): which of the 3k time constants each point takes
     step = np.log(_MAX_GRID_RATIO)
     apart = (problem.family.reference_min is None or problem.family.free_fast > 0) and k > 1
     for _ in range(rounds):
-        lattice = np.clip(phi[:, None, :] + step * offsets[None], bounds[:, 0], bounds[:, 1])
-        flat = lattice.reshape(-1, k)
-        values = objective(_fit(problem, np.exp(flat)))
+        axes = np.clip(
+            phi[:, :, None] + step * np.array([-1.0, 0.0, 1.0]), bounds[:, 0, None], bounds[:, 1, None]
+        )  # (S, k, 3)
+        (fits,) = _gram_fits(problem, np.exp(axes.reshape(len(phi), 3 * k)), [columns])
+        values = objective(fits)
         if apart:
-            values = values + _APART_PENALTY * _closeness(flat) ** 2
-        phi = lattice[np.arange(len(phi)), np.argmin(values.reshape(len(phi), -1), axis=1)]
+            values = values + _APART_PENALTY * _closeness(np.log(fits.tau)) ** 2
+        best = np.argmin(values.reshape(len(phi), -1), axis=1)
+        phi = np.log(fits.tau.reshape(len(phi), -1, k)[np.arange(len(phi)), best])
         step /= 2.0
     return _fit(problem, np.exp(phi))
 
