@@ -526,6 +526,25 @@ def test_the_plan_predicts_what_the_identification_states_and_recommends_the_che
     assert np.all(rough.predictions[0].expected_std_log <= rough.predictions[0].stated_std_log)
 
 
+def test_where_no_candidate_identifies_all_the_plan_runs_the_best_broadband_one_longer():
+    # at 0.1 % noise, 0.25 s of a binary sequence leave Bt beyond ±10 %; run longer, it identifies all
+    truth = FeedDriveParameters()
+    tests = candidate_tests(truth, kinds=("impulse", "prbs"), coordinates=(0,), durations_s=(0.25,))
+    plan = plan_tests(truth, tests, noise_fraction=1e-3)
+    short = plan.predictions[1]
+    assert short.candidate.excitation.kind == "prbs" and not short.identifies_all
+    longer = plan.lengthened
+    assert longer is plan.recommended is plan.predictions[-1] and longer.identifies_all
+    assert longer.candidate.excitation == short.candidate.excitation
+    # 30 s (found in two lengthenings): Bt's interval shrinks, if anything more slowly than the
+    # square root of the duration (the filter's random walk on the states forgets old samples)
+    assert longer.candidate.duration_s == 30.0
+    ratio = longer.candidate.duration_s / 0.25
+    assert short.stated_std_log[4] / np.sqrt(ratio) < longer.stated_std_log[4] < short.stated_std_log[4]
+    assert plan.summary()["lengthened"]["duration_s"] == longer.candidate.duration_s
+    assert plan_tests(truth, tests, noise_fraction=1e-3, lengthen=False).lengthened is None
+
+
 def test_plan_input_errors_and_the_cli():
     with pytest.raises(InputError, match="excitation 'chirp' is not one of: impulse, step, sweep, prbs, multisine"):
         candidate_tests(FeedDriveParameters(), kinds=("chirp",))

@@ -427,6 +427,13 @@ def _print_plan(plan: ExcitationPlan, measured: str) -> None:
         table.add_row(("[bold]" + label + "[/]") if p is plan.recommended else label, *cells)
     Console(width=max(Console().width, 140)).print(table)
     within = f"within ±{100 * plan.target:g} %"
+    if plan.recommended is not None and plan.recommended is plan.lengthened:
+        stderr.print(
+            f"mtident: no test of the durations asked identifies all eight {within}; recommended, the most "
+            f"informative broadband one run longer: {plan.recommended.candidate.label}",
+            highlight=False,
+        )
+        return
     if plan.recommended is not None:
         chosen = plan.recommended.candidate.label
         line = f"mtident: recommended (the cheapest that identifies all eight {within}): {chosen}"

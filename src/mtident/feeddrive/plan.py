@@ -42,6 +42,14 @@ __all__ = [
 
 # The kinds a plan tries, simplest first (the order breaks ties in cost).
 PLAN_KINDS = ("impulse", "step", "sweep", "prbs", "multisine", "sine")
+# Excitations held through the record: their information grows with its length.
+BROADBAND = ("sweep", "prbs", "multisine")
+# A lengthened test's duration: from its candidate's, for the widest interval times this over the target.
+LENGTHEN_MARGIN = 1.1
+# The longest test a plan proposes (10 kHz for two minutes: 1.2 million samples to identify), and
+# how many lengthenings it predicts on the way.
+MAX_LENGTHENED_S = 120.0
+LENGTHEN_TRIES = 3
 _FORCE_NAMES = {0: "table force", 1: "screw axial force", 2: "screw torque", 3: "motor torque"}
 
 
@@ -123,6 +131,9 @@ class ExcitationPlan:
     closest : PlanPrediction or None
         The one whose widest interval, relative to the target, is narrowest (the cheapest of
         equals); the recommended one where there is one. None only if every test is ruled out.
+    lengthened : PlanPrediction or None
+        Where no candidate identified all eight: the most informative broadband one run longer
+        (also the last of ``predictions``, and the recommended one where it identifies all).
     """
 
     guess: FeedDriveParameters
@@ -131,6 +142,7 @@ class ExcitationPlan:
     predictions: tuple[PlanPrediction, ...]
     recommended: PlanPrediction | None
     closest: PlanPrediction | None
+    lengthened: PlanPrediction | None = None
 
     def summary(self) -> dict[str, object]:
         """A JSON-ready dict: every candidate's expected standard deviations (relative) and the recommendation."""
@@ -155,6 +167,7 @@ class ExcitationPlan:
             "target_2sd_relative": self.target,
             "noise_fraction": self.noise_fraction,
             "recommended": None if self.recommended is None else one(self.recommended),
+            "lengthened": None if self.lengthened is None else one(self.lengthened),
             "closest": None if self.closest is None else one(self.closest),
             "candidates": [one(p) for p in self.predictions],
         }
@@ -264,6 +277,7 @@ def plan_tests(
     candidates: list[CandidateTest] | None = None,
     noise_fraction: float = 0.01,
     target: float = IDENTIFIED_WITHIN,
+    lengthen: bool = True,
 ) -> ExcitationPlan:
     """Predict every candidate and recommend the cheapest that identifies all eight parameters.
 
@@ -280,6 +294,12 @@ def plan_tests(
         Measurement noise standard deviation as a fraction of each response's RMS.
     target : float
         Half-width of the ±2σ interval, relative, that counts as identified (default ±10 %).
+    lengthen : bool
+        Where no candidate identifies all eight, predict the most informative broadband one
+        (sweep, binary sequence, multisine) run as long as it needs, up to ``MAX_LENGTHENED_S``
+        (:attr:`ExcitationPlan.lengthened`):
+        held through the record, its information grows with the duration, so a longer run of it
+        is the cheapest way on (its prediction is computed, not extrapolated).
 
     Returns
     -------
@@ -320,7 +340,50 @@ def plan_tests(
         for c in sorted(chosen, key=cost)
     )
     recommended = next((p for p in predictions if p.identifies_all), None)
+    longer = None
+    if recommended is None and lengthen:
+        longer = _lengthened(guess, predictions, noise_fraction, target, systems)
+        if longer is not None:
+            predictions, recommended = (*predictions, longer), longer if longer.identifies_all else None
     allowed = [p for p in predictions if p.reason is None]
     # min keeps the first of equals: the cheapest
     closest = recommended or (min(allowed, key=lambda p: float(np.max(p.stated_std_log))) if allowed else None)
-    return ExcitationPlan(guess, target, noise_fraction, predictions, recommended, closest)
+    return ExcitationPlan(guess, target, noise_fraction, predictions, recommended, closest, longer)
+
+
+def _lengthened(
+    guess: FeedDriveParameters,
+    predictions: tuple[PlanPrediction, ...],
+    noise_fraction: float,
+    target: float,
+    systems: dict[tuple[float, tuple[int, ...]], SensitivitySystem],
+) -> PlanPrediction | None:
+    """The most informative broadband candidate run long enough to identify all eight, predicted at
+    that duration. The information of an excitation held through the record grows about linearly
+    with it, so the next duration is the last one's times the square of its widest interval over
+    the target, with a margin, rounded up to 1, 1.5, 2, 3, 5 or 7.5 times a power of ten; each
+    is predicted in full (a short record's information grows otherwise), at most
+    ``LENGTHEN_TRIES`` times and up to ``MAX_LENGTHENED_S``. The longest predicted, whether or not
+    it identifies all eight; None where there is no broadband candidate."""
+    broadband = [p for p in predictions if p.reason is None and p.candidate.excitation.kind in BROADBAND]
+    if not broadband:
+        return None
+    last = min(broadband, key=lambda p: float(np.max(2 * p.stated_std_log / target)) / np.sqrt(p.candidate.duration_s))
+    longest = None
+    for _ in range(LENGTHEN_TRIES):
+        ratio = float(np.max(2 * last.stated_std_log / target))
+        c = last.candidate
+        duration = min(_round_up(c.duration_s * (LENGTHEN_MARGIN * ratio) ** 2), MAX_LENGTHENED_S)
+        if duration <= c.duration_s:
+            break
+        longer = CandidateTest(c.excitation, duration, c.sample_rate_Hz, c.measured)
+        last = longest = predict_test(guess, longer, noise_fraction, target, systems[(c.sample_rate_Hz, c.measured)])
+        if last.identifies_all:
+            break
+    return longest
+
+
+def _round_up(seconds: float) -> float:
+    """The next of 1, 1.5, 2, 3, 5, 7.5, 10, 15, ... at or above ``seconds``."""
+    power = 10.0 ** np.floor(np.log10(seconds))
+    return float(next(m * power for m in (1, 1.5, 2, 3, 5, 7.5, 10) if m * power >= seconds * (1 - 1e-9)))
