@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import datetime as dt
 import socket
+import time
 
 import numpy as np
 import pytest
@@ -29,12 +30,14 @@ def _free_port() -> int:
 
 
 class Machine:
-    """An OPC UA server with two temperature nodes, started and stopped on one port."""
+    """An OPC UA server with two temperature nodes, started and stopped on one port; started again,
+    its nodes hold their last values, as a controller's would."""
 
     def __init__(self) -> None:
         self.url = f"opc.tcp://127.0.0.1:{_free_port()}/mtident/"
         self.server: Server | None = None
         self.variables: list = []
+        self.last: tuple[float, tuple[float, float]] | None = None
 
     def start(self) -> None:
         server = Server()
@@ -47,6 +50,8 @@ class Machine:
         ]
         server.start()
         self.server = server
+        if self.last is not None:
+            self.publish(*self.last)
 
     def stop(self) -> None:
         assert self.server is not None
@@ -54,6 +59,7 @@ class Machine:
         self.server = None
 
     def publish(self, minute: float, values: tuple[float, float], good: bool = True) -> None:
+        self.last = (minute, values)
         stamp = START + dt.timedelta(minutes=minute)
         status = ua.StatusCode(ua.StatusCodes.Good if good else ua.StatusCodes.BadSensorFailure)
         for variable, value in zip(self.variables, values, strict=True):
@@ -62,6 +68,20 @@ class Machine:
                     ua.Variant(value, ua.VariantType.Double), status, SourceTimestamp=stamp, ServerTimestamp=stamp
                 )
             )
+
+
+def settle(recorder: OpcUaRecorder, rows: int, timeout_s: float = 10.0) -> list[str]:
+    """Fetch until the log holds ``rows`` data rows (the subscription delivers its changes at its
+    publishing interval); what the recorder said on the way."""
+    said: list[str] = []
+    deadline = time.monotonic() + timeout_s
+    while True:
+        said += recorder.fetch()
+        written = recorder.log.read_text().count("\n") - 1 if recorder.log.is_file() else 0
+        if written >= rows or time.monotonic() > deadline:
+            assert written == rows, (written, rows)
+            return said
+        time.sleep(0.05)
 
 
 @pytest.fixture
@@ -77,27 +97,30 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     log = tmp_path / "opc.csv"
     recorder = OpcUaRecorder(machine.url, log, NODES)
     published = []
-    for k in range(10):
+    machine.publish(0.0, (20.0, 21.0))
+    published.append(0)
+    assert settle(recorder, 1) == []
+    for k in range(1, 10):  # faster than the publishing interval: every change is kept
         machine.publish(float(k), (20 + k / 10, 21 + k / 10))
         published.append(k)
-        assert recorder.fetch() == []
-        assert recorder.fetch() == []  # read again: nothing written twice
+    assert settle(recorder, 10) == []
+    assert settle(recorder, 10) == []  # nothing written twice
     machine.stop()
     notes = recorder.fetch()
     assert len(notes) == 1 and "does not answer" in notes[0]
     assert recorder.fetch() == []
-    machine.start()
+    machine.start()  # subscribed again, the nodes' values of now (minute 9) are not written again
+    said = settle(recorder, 10)
+    assert said == [f"the OPC UA server at {machine.url} answers again"]
     for k in range(10, 15):
         machine.publish(float(k), (20 + k / 10, 21 + k / 10))
         published.append(k)
-        said = recorder.fetch()
-        assert said in ([], [f"the OPC UA server at {machine.url} answers again"])
+        assert settle(recorder, k + 1) == []
     recorder.close()
     again = OpcUaRecorder(machine.url, log, NODES)  # a watch started again goes on from its sidecar
     machine.publish(15.0, (21.5, 22.5))
     published.append(15)
-    again.fetch()
-    again.fetch()
+    settle(again, 16)
     again.close()
     recorded = read_temperature_log(log)
     np.testing.assert_allclose(recorded.time_min, published)
@@ -108,9 +131,9 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
 def test_a_bad_status_is_a_missing_reading(machine, tmp_path):
     recorder = OpcUaRecorder(machine.url, tmp_path / "bad.csv", NODES)
     machine.publish(0.0, (20.0, 21.0))
-    recorder.fetch()
+    settle(recorder, 1)
     machine.publish(1.0, (99.0, 99.0), good=False)
-    recorder.fetch()
+    settle(recorder, 2)
     recorder.close()
     lines = (tmp_path / "bad.csv").read_text().splitlines()
     assert lines == ["time_min,T1,T2", "0.000000,20,21", "1.000000,,"]
@@ -138,7 +161,7 @@ def test_watch_follows_a_server_and_refuses_its_options_for_a_file(machine, tmp_
     assert out.exit_code == 0, out.stderr
     assert f"recording {machine.url} to {record}" in out.stderr
     assert json.loads(out.stdout)["decision"] == "continue"
-    # a poll sees the values of now: the server's last, at minute 4
+    # a subscription starts with the values of now: the server's last, at minute 4
     assert record.read_text().splitlines() == ["time_min,T1,T2", "0.000000,20.4,21.4"]
     wrong = CliRunner().invoke(main, ["thermal", "watch", str(record), "--node", NODES[0]], catch_exceptions=False)
     assert wrong.exit_code == 2 and "--node: not for a log file" in wrong.stderr

@@ -1,15 +1,15 @@
 """Temperatures straight from an OPC UA server, recorded to a CSV log that the monitor follows.
 
-The :class:`OpcUaRecorder` reads each node's value with its source time stamp at every poll
-and writes a value once, at the first poll that sees its time stamp: a value read again is not
-written twice, and a dropped connection is reopened at the next poll. A bad status code is a
-missing reading. Values a node takes and leaves again between two polls, or while the server
-cannot be reached, are not seen: poll faster than the server samples (the watch's ``--poll``).
+The :class:`OpcUaRecorder` subscribes to each node's data changes (with the server's source time
+stamps, every change the server samples queued, not only the last of a publishing interval) and
+writes them at each fetch, in time order, one row per time stamp. A subscription made again after
+a dropped connection starts with each node's value of now, written only where it is newer than
+the last written: nothing twice. A bad status code is a missing reading. Changes while the server
+cannot be reached are not seen (the server keeps no history the recorder asks for).
 
-Every row goes to a CSV log (``time_min`` from the first value, one column per node, named by
-its display name), which the watch follows like any logger's file, so the test can be replayed
-from it afterwards with the same decision. Needs the ``asyncua`` package
-(``pip install mtident[opcua]``).
+Every row goes to a CSV log (``time_min`` from the first value, one column per node, named by its
+display name), which the watch follows like any logger's file, so the test can be replayed from
+it afterwards with the same decision. Needs the ``asyncua`` package (``pip install mtident[opcua]``).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import datetime as dt
 import json
 import math
 import os
+import queue
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +28,12 @@ from mtident.io.record import last_logged_time, quoted, save_position
 __all__ = ["OpcUaRecorder"]
 
 SIDECAR_SUFFIX = ".opcua.json"
+# The subscription's publishing interval, and how many changes of one node the server keeps
+# between two publications (a sampling faster than the publishing loses none).
+PUBLISHING_MS = 200.0
+QUEUE_SIZE = 1000
+# The server's clock (Server.ServerStatus.CurrentTime), read at each fetch to see a dropped connection.
+SERVER_TIME = "i=2258"
 
 
 def _client_class() -> Any:  # noqa: ANN401 - asyncua's sync Client, imported when needed
@@ -72,6 +79,8 @@ class OpcUaRecorder:
         self.timeout_s = timeout_s
         self._client: Any = None
         self._unreachable = False
+        self._changes = _Changes()
+        self._index: dict[str, int] = {}
         self._sidecar = self.log.with_name(self.log.name + SIDECAR_SUFFIX)
         self.names: list[str] = []
         self.origin: dt.datetime | None = None
@@ -100,13 +109,19 @@ class OpcUaRecorder:
         except Exception:
             _close(client)  # its event loop's thread would keep the process alive
             raise
-        if not self.names:
-            try:
-                self.names = [client.get_node(node).read_display_name().Text or node for node in self.nodes]
-            except Exception as exc:
-                _close(client)
-                msg = f"{self.url}: cannot read the nodes {', '.join(self.nodes)} ({exc})"
-                raise InputError(msg) from exc
+        try:
+            nodes = [client.get_node(node) for node in self.nodes]
+            if not self.names:
+                self.names = [
+                    node.read_display_name().Text or node_id for node, node_id in zip(nodes, self.nodes, strict=True)
+                ]
+            self._index = {node.nodeid.to_string(): i for i, node in enumerate(nodes)}
+            subscription = client.create_subscription(PUBLISHING_MS, self._changes)
+            subscription.subscribe_data_change(nodes, queuesize=QUEUE_SIZE)
+        except Exception as exc:
+            _close(client)
+            msg = f"{self.url}: cannot read the nodes {', '.join(self.nodes)} ({exc})"
+            raise InputError(msg) from exc
         return client
 
     def close(self) -> None:
@@ -116,7 +131,8 @@ class OpcUaRecorder:
             self._client = None
 
     def fetch(self) -> list[str]:
-        """Read every node once and append the values not written yet.
+        """Write the data changes received since the last fetch; open the connection where it is
+        closed, and close it where the server no longer answers.
 
         Returns
         -------
@@ -127,10 +143,11 @@ class OpcUaRecorder:
         try:
             if self._client is None:
                 self._client = self._connect()
-            values = [self._client.get_node(node).read_data_value(raise_on_bad_status=False) for node in self.nodes]
+            self._client.get_node(SERVER_TIME).read_value()  # a dropped connection shows here
         except InputError:
             raise
         except Exception as exc:  # noqa: BLE001 - asyncua raises many kinds for a lost server
+            self._write(self._changes.drain(self._index))
             self.close()
             if not self._unreachable:
                 notes.append(f"the OPC UA server at {self.url} does not answer ({type(exc).__name__}); trying again")
@@ -139,38 +156,62 @@ class OpcUaRecorder:
         if self._unreachable:
             notes.append(f"the OPC UA server at {self.url} answers again")
             self._unreachable = False
-        self._append(values)
-        self._save()
+        self._write(self._changes.drain(self._index))
         return notes
 
-    def _append(self, values: list[Any]) -> None:
-        row: dict[int, float] = {}
-        stamps: list[dt.datetime] = []
-        for i, (node, value) in enumerate(zip(self.nodes, values, strict=True)):
+    def _write(self, changes: list[tuple[int, Any]]) -> None:
+        """Append the changes not written yet, one row per source time stamp, in time order."""
+        rows: dict[dt.datetime, dict[int, float]] = {}
+        for i, value in changes:
             stamp = value.SourceTimestamp or value.ServerTimestamp
             if stamp is None:
                 continue
             stamp = stamp if stamp.tzinfo else stamp.replace(tzinfo=dt.UTC)
-            if self.last_stamp.get(node) == stamp.isoformat():
-                continue  # read before
-            self.last_stamp[node] = stamp.isoformat()
+            last = self.last_stamp.get(self.nodes[i])
+            if last is not None and stamp <= dt.datetime.fromisoformat(last):
+                continue  # written before: a subscription made again starts with the value of now
+            self.last_stamp[self.nodes[i]] = stamp.isoformat()
             good = value.StatusCode is None or value.StatusCode.is_good()
             number = value.Value.Value if value.Value is not None else None
-            row[i] = float(number) if good and isinstance(number, int | float) else math.nan
-            stamps.append(stamp)
-        if not row:
+            rows.setdefault(stamp, {})[i] = float(number) if good and isinstance(number, int | float) else math.nan
+        if not rows:
             return
         if self.origin is None:
-            self.origin = min(stamps)
-        t = (max(stamps) - self.origin).total_seconds() / 60.0
-        if t <= self.last_time_min:
-            return  # a server clock that went back: the log's times must increase
+            self.origin = min(rows)
         new = not self.log.is_file() or self.log.stat().st_size == 0
         with self.log.open("a", encoding="utf-8", newline="") as out:
             if new:
                 out.write("time_min," + ",".join(quoted(name) for name in self.names) + "\n")
-            cells = ("" if i not in row or math.isnan(row[i]) else f"{row[i]:g}" for i in range(len(self.nodes)))
-            out.write(f"{t:.6f}," + ",".join(cells) + "\n")
+            for stamp in sorted(rows):
+                t = (stamp - self.origin).total_seconds() / 60.0
+                if t <= self.last_time_min:
+                    continue  # a server clock that went back: the log's times must increase
+                row = rows[stamp]
+                cells = ("" if i not in row or math.isnan(row[i]) else f"{row[i]:g}" for i in range(len(self.nodes)))
+                out.write(f"{t:.6f}," + ",".join(cells) + "\n")
+                self.last_time_min = t
             out.flush()
             os.fsync(out.fileno())
-        self.last_time_min = t
+        self._save()
+
+
+class _Changes:
+    """The subscription's handler: asyncua calls it from its own thread with each data change,
+    which waits in a queue for the recorder's next fetch."""
+
+    def __init__(self) -> None:
+        self._queue: queue.SimpleQueue[tuple[str, Any]] = queue.SimpleQueue()
+
+    def datachange_notification(self, node: Any, val: Any, data: Any) -> None:  # noqa: ANN401, ARG002
+        self._queue.put((node.nodeid.to_string(), data.monitored_item.Value))
+
+    def drain(self, index: dict[str, int]) -> list[tuple[int, Any]]:
+        """Every change received so far, as (the node's place in the recorder's list, DataValue)."""
+        out = []
+        while True:
+            try:
+                node, value = self._queue.get_nowait()
+            except queue.Empty:
+                return out
+            if node in index:
+                out.append((index[node], value))
