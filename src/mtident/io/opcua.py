@@ -207,7 +207,7 @@ class _Changes:
 
     def drain(self, index: dict[str, int]) -> list[tuple[int, Any]]:
         """Every change received so far, as (the node's place in the recorder's list, DataValue)."""
-        out = []
+        out: list[tuple[int, Any]] = []
         while True:
             try:
                 node, value = self._queue.get_nowait()
