@@ -29,7 +29,7 @@ from itertools import product
 
 import numpy as np
 
-from mtident._typing import BoolArray, FloatArray
+from mtident._typing import BoolArray, FloatArray, IntArray
 from mtident.exceptions import CovarianceError, DivergenceError, InputError, NegativeWeightWarning
 from mtident.feeddrive.information import Consistency, closest_consistent
 from mtident.feeddrive.model import (
@@ -513,122 +513,206 @@ def identify_feed_drive(
     """
     guess = validate(guess or default_guess())
     indices = _measured_indices(response, measured)
-    if preset not in ("default", "paper"):
-        msg = f"preset {preset!r} is not one of: default, paper"
-        raise InputError(msg)
-    if engine not in ("compiled", "numpy"):
-        msg = f"engine {engine!r} is not one of: compiled, numpy"
-        raise InputError(msg)
+    for option, value, allowed in (("preset", preset, ("default", "paper")), ("engine", engine, ("compiled", "numpy"))):
+        if value not in allowed:
+            msg = f"{option} {value!r} is not one of: {', '.join(allowed)}"
+            raise InputError(msg)
     h = float(response.time_s[1] - response.time_s[0])
     problem = sampling_problem(guess, 1.0 / h, "the guess")
     if problem:
         raise InputError(f"{problem}; sample faster, or give a guess whose highest mode is within reach")
+    scaled = _scaled_problem(response, guess, indices, preset, noise_fraction, substeps, h)
+    notes = _one_frequency_note(response.forces, h)
+    if preset == "paper":
+        notes.append("paper preset: α = 1/2, β = 2, κ = 3 give a negative centre weight W0m = -2.368 (seed 004 Eq. 41)")
+    ys = response.values[:, scaled.idx] / scaled.out_scale
+    if engine == "compiled":
+        means, variances, final_cov, failed = _run_compiled(scaled, ys, response.forces)
+    else:
+        config = FilterConfig(sigma_points=scaled.setup.sigma, name=f"feed drive ({preset})")
+        means, variances, final_cov, failed = _run_numpy(
+            scaled.setup,
+            ys,
+            scaled.transition_at(response.forces),
+            scaled.measurement_at(response.forces),
+            config,
+            progress,
+        )
+    if failed >= 0:
+        raise _divergence(failed, float(response.time_s[failed]), guess, noise_fraction)
+    return _identification(scaled, response, (means, variances, final_cov), notes, check, noise_fraction, preset)
+
+
+@dataclass(frozen=True)
+class _ScaledProblem:
+    """The filter's problem in its own units: the states and responses divided by their scales,
+    the parameters (in log form) relative to the guess's."""
+
+    guess: FeedDriveParameters
+    setup: _FilterSetup
+    idx: IntArray
+    scale: FloatArray  # every response's scale (the noise is a fraction of it)
+    state_scale: FloatArray
+    out_scale: FloatArray
+    reference: FloatArray
+    basis: tuple[FloatArray, FloatArray]
+    m_inv: FloatArray
+    h: float
+    substeps: int
+
+    def to_params(self, z: FloatArray) -> FloatArray:
+        """The parameters (8,) of filter states (..., 16)."""
+        return self.reference * np.exp(z[..., 8:]) if self.setup.log_form else z[..., 8:]
+
+    def transition_at(self, forces: FloatArray) -> Callable[[int], Callable[[FloatArray], FloatArray]]:
+        """The transition into sample k of sigma points (..., 16), for the generic engine."""
+
+        def at(k: int) -> Callable[[FloatArray], FloatArray]:
+            u = forces[k - 1]
+
+            def transition(points: FloatArray) -> FloatArray:
+                a = system_matrices(self.to_params(points), self.basis)
+                phi, gamma = rk4_linear_step(a, input_matrix(self.guess), self.h, self.substeps)
+                x = points[..., :8] * self.state_scale
+                x_next = (phi @ x[..., None])[..., 0] + gamma @ u
+                return np.concatenate([x_next / self.state_scale, points[..., 8:]], axis=-1)
+
+            return transition
+
+        return at
+
+    def measurement_at(self, forces: FloatArray) -> Callable[[int], Callable[[FloatArray], FloatArray]]:
+        """The measured responses at sample k of sigma points (..., 16), for the generic engine."""
+
+        def at(k: int) -> Callable[[FloatArray], FloatArray]:
+            f = forces[k]
+
+            def measure(points: FloatArray) -> FloatArray:
+                x = points[..., :8] * self.state_scale
+                a = system_matrices(self.to_params(points), self.basis)
+                acc = (a[..., 4:, :] @ x[..., None])[..., 0] + self.m_inv * f
+                return np.concatenate([x, acc], axis=-1)[..., self.idx] / self.out_scale
+
+            return measure
+
+        return at
+
+
+def _scaled_problem(
+    response: Response,
+    guess: FeedDriveParameters,
+    indices: tuple[int, ...],
+    preset: str,
+    noise_fraction: float,
+    substeps: int | None,
+    h: float,
+) -> _ScaledProblem:
     idx = np.array(indices)
     scale = _response_scales(response, guess, h)
     reference = guess.identified()
     setup = _filter_setup(preset, response, idx, reference, scale, noise_fraction)
-    state_scale = scale[:8] if setup.log_form else np.ones(8)
-    out_scale = scale[idx] if setup.log_form else np.ones(len(idx))
-    m = substeps or filter_substeps(guess, h, setup.weights.spread * setup.prior_sd_log)
-    basis = parameter_basis(guess)
-    m_inv = 1.0 / np.array([guess.Mt, guess.Mb, guess.Jb, guess.Jm])
-    forces = response.forces
-    config = FilterConfig(sigma_points=setup.sigma, name=f"feed drive ({preset})")
-    notes = _one_frequency_note(forces, h)
-    if preset == "paper":
-        notes.append("paper preset: α = 1/2, β = 2, κ = 3 give a negative centre weight W0m = -2.368 (seed 004 Eq. 41)")
+    return _ScaledProblem(
+        guess=guess,
+        setup=setup,
+        idx=idx,
+        scale=scale,
+        state_scale=scale[:8] if setup.log_form else np.ones(8),
+        out_scale=scale[idx] if setup.log_form else np.ones(len(idx)),
+        reference=reference,
+        basis=parameter_basis(guess),
+        m_inv=1.0 / np.array([guess.Mt, guess.Mb, guess.Jb, guess.Jm]),
+        h=h,
+        substeps=substeps or filter_substeps(guess, h, setup.weights.spread * setup.prior_sd_log),
+    )
 
-    def to_params(z: FloatArray) -> FloatArray:
-        return reference * np.exp(z[..., 8:]) if setup.log_form else z[..., 8:]
 
-    def transition_at(k: int) -> Callable[[FloatArray], FloatArray]:
-        u = forces[k - 1]
+def _run_compiled(
+    scaled: _ScaledProblem, ys: FloatArray, forces: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, int]:
+    """The numba-compiled loop: (means, variances, final covariance, failed step or −1)."""
+    from mtident.feeddrive.fast import run_feed_drive_ukf
 
-        def transition(points: FloatArray) -> FloatArray:
-            phi, gamma = rk4_linear_step(system_matrices(to_params(points), basis), input_matrix(guess), h, m)
-            x = points[..., :8] * state_scale
-            x_next = (phi @ x[..., None])[..., 0] + gamma @ u
-            return np.concatenate([x_next / state_scale, points[..., 8:]], axis=-1)
+    setup = scaled.setup
+    a0, d = scaled.basis
+    means, variances, final_cov, failed, _ = run_feed_drive_ukf(
+        setup.mean0,
+        setup.cov0,
+        setup.process_cov,
+        setup.emission_cov,
+        ys,
+        forces * scaled.m_inv,
+        setup.weights.mean,
+        setup.weights.cov,
+        setup.weights.spread,
+        scaled.state_scale,
+        scaled.out_scale,
+        scaled.idx.astype(np.int64),
+        a0,
+        d,
+        scaled.reference,
+        scaled.h,
+        scaled.substeps,
+        setup.log_form,
+    )
+    return means, variances, final_cov, failed
 
-        return transition
 
-    def measurement_at(k: int) -> Callable[[FloatArray], FloatArray]:
-        f = forces[k]
-
-        def measure(points: FloatArray) -> FloatArray:
-            x = points[..., :8] * state_scale
-            acc = (system_matrices(to_params(points), basis)[..., 4:, :] @ x[..., None])[..., 0] + m_inv * f
-            return np.concatenate([x, acc], axis=-1)[..., idx] / out_scale
-
-        return measure
-
-    ys = response.values[:, idx] / out_scale
-    if engine == "compiled":
-        from mtident.feeddrive.fast import run_feed_drive_ukf
-
-        a0, d = basis
-        means, variances, final_cov, failed, _ = run_feed_drive_ukf(
-            setup.mean0,
-            setup.cov0,
-            setup.process_cov,
-            setup.emission_cov,
-            ys,
-            forces * m_inv,
-            setup.weights.mean,
-            setup.weights.cov,
-            setup.weights.spread,
-            state_scale,
-            out_scale,
-            idx.astype(np.int64),
-            a0,
-            d,
-            reference,
-            h,
-            m,
-            setup.log_form,
-        )
-    else:
-        means, variances, final_cov, failed = _run_numpy(setup, ys, transition_at, measurement_at, config, progress)
-    if failed >= 0:
-        raise _divergence(failed, float(response.time_s[failed]), guess, noise_fraction)
-
-    param_hist = to_params(means)
+def _identification(
+    scaled: _ScaledProblem,
+    response: Response,
+    run: tuple[FloatArray, FloatArray, FloatArray],
+    notes: list[str],
+    check: bool,
+    noise_fraction: float,
+    preset: str,
+) -> FeedDriveIdentification:
+    """The result from the filter's run: parameters and their intervals, the estimated responses,
+    and (with ``check``) the open-loop check of the estimate against the record."""
+    means, variances, final_cov = run
+    setup, idx = scaled.setup, scaled.idx
+    param_hist = scaled.to_params(means)
     var_z = variances[:, 8:]
     hist_sd = param_hist * np.sqrt(var_z) if setup.log_form else np.sqrt(var_z)
-    states = means[:, :8] * state_scale
-    acc = np.einsum("nij,nj->ni", system_matrices(param_hist, basis)[:, 4:, :], states) + m_inv * forces
-    estimated = np.hstack([states, acc])
+    states = means[:, :8] * scaled.state_scale
+    accelerations = np.einsum("nij,nj->ni", system_matrices(param_hist, scaled.basis)[:, 4:, :], states)
+    estimated = np.hstack([states, accelerations + scaled.m_inv * response.forces])
     correlation = {}
     for i in idx:
-        a_, b_ = estimated[:, i], response.values[:, i]
-        ok = np.isfinite(b_)
-        correlation[RESPONSE_COLUMNS[i]] = float(np.corrcoef(a_[ok], b_[ok])[0, 1])
+        ok = np.isfinite(response.values[:, i])
+        correlation[RESPONSE_COLUMNS[i]] = float(np.corrcoef(estimated[ok, i], response.values[ok, i])[0, 1])
     final_sd_log = np.sqrt(var_z[-1])
     covariance_log = (
         final_cov[8:, 8:] if setup.log_form else final_cov[8:, 8:] / np.outer(param_hist[-1], param_hist[-1])
     )
-    identifiable = 2 * final_sd_log <= IDENTIFIED_WITHIN if setup.log_form else np.zeros(8, dtype=bool)
     if setup.log_form:
         notes.extend(_parameter_notes(final_sd_log, setup.prior_sd_log))
     consistency = None
     columns = tuple(RESPONSE_COLUMNS[i] for i in idx)
     if check and setup.log_form:  # the paper preset keeps its guess (zero prior variance): nothing to check
-        estimate = guess.with_identified(param_hist[-1])
-        noise = noise_fraction * scale[idx]
-        consistency = closest_consistent(estimate, covariance_log, forces, h, indices, response.values[:, idx], noise)
+        estimate = scaled.guess.with_identified(param_hist[-1])
+        noise = noise_fraction * scaled.scale[idx]
+        consistency = closest_consistent(
+            estimate,
+            covariance_log,
+            response.forces,
+            scaled.h,
+            tuple(int(i) for i in idx),
+            response.values[:, idx],
+            noise,
+        )
         notes.extend(_consistency_notes(consistency, columns))
     return FeedDriveIdentification(
         time_s=response.time_s,
         parameters=param_hist[-1],
         parameters_std=hist_sd[-1],
         prior_sd_log=setup.prior_sd_log,
-        identifiable=identifiable,
+        identifiable=2 * final_sd_log <= IDENTIFIED_WITHIN if setup.log_form else np.zeros(8, dtype=bool),
         history=param_hist,
         history_std=hist_sd,
         estimated=estimated,
         correlation=correlation,
         measured_columns=columns,
-        guess=guess,
+        guess=scaled.guess,
         preset=preset,
         notes=tuple(notes),
         covariance_log=covariance_log,
