@@ -470,56 +470,15 @@ class LogFollower:
 
     def poll(self) -> Rows:
         """Read the complete lines added since the last poll."""
-        try:
-            stat = os.stat(self.path)
-        except FileNotFoundError:
-            return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), ())
         warnings: list[str] = []
         notes: list[str] = []
-        identity = (stat.st_dev, stat.st_ino)
-        restarted = self.identity is not None and (identity != self.identity or stat.st_size < self.offset)
-        if restarted:
-            warnings.append(
-                f"{self.path}: the log was truncated or replaced (logger restarted?); reading it again from the "
-                "start, skipping rows already counted"
-            )
-            self.offset = 0
-        self.identity = identity
-        with open(self.path, "rb") as handle:
-            if self.dialect is None:
-                head = handle.read(HEAD_BYTES)
-                kind = binary_kind(head)
-                if kind in ("xlsx", "xls"):
-                    msg = (
-                        f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger "
-                        "writes (identify and min-time read the workbook, and a replay replays it)"
-                    )
-                    raise InputError(msg)
-                if kind is not None:
-                    msg = f"{self.path}: not a text file; watch follows the CSV text a logger writes"
-                    raise InputError(msg)
-                try:
-                    self.dialect = sniff_dialect(head, wait_for_row=True)
-                except csv.Error as exc:
-                    msg = f"{self.path}: not a readable CSV file ({exc})"
-                    raise InputError(msg) from exc
-                if self.dialect is None:  # no complete data row yet
-                    return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
-            handle.seek(self.offset)
-            chunk = handle.read()
-        dialect = self.dialect
-        end = dialect.complete_length(chunk)
-        if end == 0:
+        new = self._new_lines(warnings, notes)
+        if new is None:
             return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
-        start_offset = self.offset
-        self.offset += end
-        text = dialect.decode(chunk[:end])
-        lines = text.splitlines()
-        if start_offset == 0:
-            lines = self._data_lines(lines, notes)
-        assert self.header is not None
+        lines, restarted = new
+        assert self.header is not None and self.dialect is not None
         conversions = np.array(
-            [celsius_conversion(dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]
+            [celsius_conversion(self.dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]
         ).reshape(-1, 2)
         times, rows = [], []
         # the previous row's time as the clock wrote it (minutes from the first row) and its cell: a
@@ -529,38 +488,15 @@ class LogFollower:
             self.clock_shift = 0.0
         previous_raw = None if restarted or self.last_time is None else self.last_time - self.clock_shift
         previous_cell = None if restarted else self._last_stamp
-        for line in csv.reader(io.StringIO("\n".join(lines)), delimiter=dialect.delimiter):
+        for line in csv.reader(io.StringIO("\n".join(lines)), delimiter=self.dialect.delimiter):
             if not line or all(not c.strip() for c in line):
                 continue
-            try:
-                cell = (
-                    line[self.columns[0]].strip()
-                    if self.clock_column is None
-                    else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}"
-                )
-                t = self._parse_time(cell, notes)
-                if self.millisecond_column is not None:
-                    t += dialect.number(line[self.millisecond_column]) / 60_000.0
-            except InputError:  # a ValueError too, but about the whole log, not this row
-                raise
-            except (ValueError, IndexError):
-                warnings.append(f"{self.path}: refused a row with an unreadable time {line[:1]!r}")
+            stamped = self._row_time(line, notes, warnings)
+            if stamped is None:
                 continue
-            raw = t
-            if previous_raw is not None and not 0.0 < raw - previous_raw <= 59.0 and self._local_dated_stamps():
-                assert self.origin is not None
-                shift = clock_change(self.origin + previous_raw, self.origin + raw, self.last_step)
-                if shift:
-                    self.clock_shift += shift
-                    if self.last_time is None or raw + self.clock_shift > self.last_time:  # not said again on a re-read
-                        notes.append(
-                            clock_change_note(
-                                shift,
-                                f"after t = {previous_raw + self.clock_shift - shift:g} min",
-                                repr(previous_cell or "the row before"),
-                                repr(cell),
-                            )
-                        )
+            raw, cell = stamped
+            if previous_raw is not None:
+                self._follow_clock_change(previous_raw, raw, previous_cell, cell, notes)
             t = raw + self.clock_shift
             if (
                 t > UNLIKELY_MINUTES >= (self.last_time or 0.0)
@@ -578,23 +514,115 @@ class LogFollower:
                 else:
                     previous_raw, previous_cell = raw, cell
                 continue
-            values: list[float] = []
-            for index in self.columns[1:]:
-                try:
-                    value = dialect.number(line[index])
-                except (ValueError, IndexError):
-                    value = np.nan
-                scale, offset = conversions[len(values)]
-                value = scale * value + offset
-                if not (OPEN_CIRCUIT_LOW_C <= value <= OPEN_CIRCUIT_HIGH_C):
-                    value = np.nan
-                values.append(value)
             self.last_step = None if self.last_time is None else t - self.last_time
             self.last_time = t
             self._last_stamp = previous_cell = cell
             previous_raw = raw
             times.append(t)
-            rows.append(values)
+            rows.append(self._row_values(line, conversions))
         return Rows(
             np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings), tuple(notes)
         )
+
+    def _new_lines(self, warnings: list[str], notes: list[str]) -> tuple[list[str], bool] | None:
+        """The complete data lines written since the last poll, and whether the log was truncated or
+        replaced (read again from its start); None while there are none (or no log yet)."""
+        try:
+            stat = os.stat(self.path)
+        except FileNotFoundError:
+            return None
+        identity = (stat.st_dev, stat.st_ino)
+        restarted = self.identity is not None and (identity != self.identity or stat.st_size < self.offset)
+        if restarted:
+            warnings.append(
+                f"{self.path}: the log was truncated or replaced (logger restarted?); reading it again from the "
+                "start, skipping rows already counted"
+            )
+            self.offset = 0
+        self.identity = identity
+        with open(self.path, "rb") as handle:
+            if self.dialect is None:
+                self.dialect = self._sniff(handle.read(HEAD_BYTES))
+                if self.dialect is None:  # no complete data row yet
+                    return None
+            handle.seek(self.offset)
+            chunk = handle.read()
+        end = self.dialect.complete_length(chunk)
+        if end == 0:
+            return None
+        start_offset = self.offset
+        self.offset += end
+        lines = self.dialect.decode(chunk[:end]).splitlines()
+        return (self._data_lines(lines, notes) if start_offset == 0 else lines), restarted
+
+    def _sniff(self, head: bytes) -> CsvDialect | None:
+        """The log's dialect from its first bytes (None until a data row is complete)."""
+        kind = binary_kind(head)
+        if kind in ("xlsx", "xls"):
+            msg = (
+                f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger "
+                "writes (identify and min-time read the workbook, and a replay replays it)"
+            )
+            raise InputError(msg)
+        if kind is not None:
+            msg = f"{self.path}: not a text file; watch follows the CSV text a logger writes"
+            raise InputError(msg)
+        try:
+            return sniff_dialect(head, wait_for_row=True)
+        except csv.Error as exc:
+            msg = f"{self.path}: not a readable CSV file ({exc})"
+            raise InputError(msg) from exc
+
+    def _row_time(self, line: list[str], notes: list[str], warnings: list[str]) -> tuple[float, str] | None:
+        """A row's time as its clock wrote it (minutes) and its time cell(s); None, with a warning,
+        for a row whose time cannot be read."""
+        assert self.dialect is not None
+        try:
+            cell = (
+                line[self.columns[0]].strip()
+                if self.clock_column is None
+                else f"{line[self.columns[0]].strip()} {line[self.clock_column].strip()}"
+            )
+            t = self._parse_time(cell, notes)
+            if self.millisecond_column is not None:
+                t += self.dialect.number(line[self.millisecond_column]) / 60_000.0
+        except InputError:  # a ValueError too, but about the whole log, not this row
+            raise
+        except (ValueError, IndexError):
+            warnings.append(f"{self.path}: refused a row with an unreadable time {line[:1]!r}")
+            return None
+        return t, cell
+
+    def _follow_clock_change(
+        self, previous_raw: float, raw: float, previous_cell: str | None, cell: str, notes: list[str]
+    ) -> None:
+        """A step between two rows of local date stamps that a summer-time change explains shifts
+        the clock (said once, not again on a re-read)."""
+        if 0.0 < raw - previous_raw <= 59.0 or not self._local_dated_stamps():
+            return
+        assert self.origin is not None
+        shift = clock_change(self.origin + previous_raw, self.origin + raw, self.last_step)
+        if not shift:
+            return
+        self.clock_shift += shift
+        if self.last_time is None or raw + self.clock_shift > self.last_time:
+            notes.append(
+                clock_change_note(
+                    shift,
+                    f"after t = {previous_raw + self.clock_shift - shift:g} min",
+                    repr(previous_cell or "the row before"),
+                    repr(cell),
+                )
+            )
+
+    def _row_values(self, line: list[str], conversions: FloatArray) -> list[float]:
+        """A row's temperatures in °C (NaN: empty, unreadable, or an open circuit's reading)."""
+        assert self.dialect is not None
+        values: list[float] = []
+        for (scale, offset), index in zip(conversions, self.columns[1:], strict=True):
+            try:
+                value = scale * self.dialect.number(line[index]) + offset
+            except (ValueError, IndexError):
+                value = np.nan
+            values.append(value if OPEN_CIRCUIT_LOW_C <= value <= OPEN_CIRCUIT_HIGH_C else np.nan)
+        return values
