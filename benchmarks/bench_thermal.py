@@ -1,8 +1,10 @@
 """Thermal identification: accuracy (Monte Carlo against the Cramér-Rao bound), the papers'
 presets on the sample log, and the speed of the minimal-identification-time search against
-the same computation done with filterpy in a loop.
+the same computation done with filterpy in a loop; with ``--checks``, the cost of one
+model-robust check of one sensor against the length of its record, and of replays of the
+sample's ten sensors.
 
-Run: python benchmarks/bench_thermal.py [--quick]
+Run: python benchmarks/bench_thermal.py [--quick] [--checks]
 """
 
 from __future__ import annotations
@@ -183,7 +185,48 @@ def speed() -> None:
     )
 
 
+def robust_checks() -> None:
+    """One check of one sensor (all its readings so far), a housing-like warm-up of two modes over
+    two hours, at 100-800 readings: no reference, a two-mode reference (two free faster modes),
+    and the same reference said to hold every mode; then replays of the sample's ten sensors."""
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
+    from mtident.thermal.reference import MachineReference
+    from mtident.thermal.robust import RobustSettings, SensorModes, estimate_sensor
+
+    rng = np.random.default_rng(1)
+    reference = SensorModes((60.0, 8.0), (0.1, 0.1))
+    print("\nOne model-robust check of one sensor (median of 3; seconds):")
+    print(f"{'readings':>9} {'no reference':>13} {'reference':>10} {'ref, free 0':>12}")
+    for n in (100, 200, 400, 800):
+        t = np.linspace(0.0, 120.0, n)
+        y = np.round(28.0 - 6.0 * np.exp(-t / 60.0) - 2.0 * np.exp(-t / 8.0) + rng.normal(0.0, 0.02, n), 2)
+        cells = []
+        said_complete = {"reference": reference, "settings": RobustSettings(free_fast_modes=0)}
+        for kw in ({}, {"reference": reference}, said_complete):
+            times = []
+            for _ in range(3):
+                start = time.perf_counter()
+                estimate_sensor("S", t, y, **kw)
+                times.append(time.perf_counter() - start)
+            cells.append(float(np.median(times)))
+        print(f"{n:>9} {cells[0]:>13.3f} {cells[1]:>10.3f} {cells[2]:>12.3f}")
+    log = read_temperature_log(sample_log_path())
+    known = MachineReference("known", "", 300.0, "", {s: SensorModes((62.5,), (0.1,)) for s in log.sensors})
+    choices = (("no reference", MonitorSettings()), ("one-mode reference", MonitorSettings(reference=known)))
+    for label, settings in choices:
+        state = new_state(list(log.sensors))
+        start = time.perf_counter()
+        state, _ = monitor_step(state, log.time_min, log.temperature_C, None, settings)
+        print(
+            f"replay of the sample, {len(log.sensors)} sensors x {len(log.time_min)} readings, {label}: "
+            f"{time.perf_counter() - start:.1f} s (stopped: {state.stopped}, at {state.stop_time_min} min)"
+        )
+
+
 def main() -> None:
+    if "--checks" in sys.argv:
+        robust_checks()
+        return
     quick = "--quick" in sys.argv
     monte_carlo(50 if quick else 200)
     presets_on_sample()
