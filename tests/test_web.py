@@ -3,9 +3,12 @@ HTTP and with a headless browser where one is installed."""
 
 from __future__ import annotations
 
+import contextlib
+import itertools
 import json
 import re
 import shutil
+import socket
 import subprocess
 import time
 import urllib.error
@@ -120,6 +123,75 @@ def test_a_browser_shows_the_decision(served_page):
     shot = ARTIFACTS / "live-page.png"
     _browser([*common, "--timeout=4000", "--window-size=1200,900", f"--screenshot={shot}", served.url])
     assert shot.stat().st_size > 10_000
+
+
+@pytest.mark.skipif(BROWSER is None, reason="no headless Chromium here (Debian's package `chromium`)")
+def test_a_browser_shows_the_decision_change_as_it_comes(served_page):
+    """The page's own script at work: opened before any answer, it shows the stop once one is
+    published (server-sent events), read from the browser over its DevTools protocol."""
+    page, served = served_page
+    answer, png = _answer(), _png()
+    with _devtools(served.url) as evaluate:
+        decision = 'document.getElementById("decision").textContent'
+        assert evaluate(decision) == "Waiting for the first readings…"
+        published = time.monotonic()
+        page.publish(answer, png)
+        while "can stop" not in (shown := evaluate(decision)) and time.monotonic() - published < 10:
+            time.sleep(0.01)
+        assert re.fullmatch(r"The test can stop \(at t = \d+ min\)\.", shown)
+        assert evaluate('document.querySelector("#sensors td").textContent') == "S"
+
+
+@contextlib.contextmanager
+def _devtools(url: str):  # noqa: ANN202
+    """A headless Chromium showing ``url``; yields a function that evaluates a JavaScript expression
+    in the page (skips where Chromium does not start or answer)."""
+    from websockets.sync.client import connect
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = int(probe.getsockname()[1])
+    command = [BROWSER, "--headless", "--no-sandbox", "--disable-gpu", f"--remote-debugging-port={port}", "about:blank"]
+    browser = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        target = _page_target(port)
+        with connect(target, max_size=None) as socket_:
+            calls = itertools.count(1)
+
+            def call(method: str, **params: object) -> dict:
+                n = next(calls)
+                socket_.send(json.dumps({"id": n, "method": method, "params": params}))
+                while (message := json.loads(socket_.recv(timeout=10))).get("id") != n:
+                    pass
+                return dict(message["result"])
+
+            def evaluate(expression: str) -> object:
+                return call("Runtime.evaluate", expression=expression)["result"].get("value")
+
+            call("Page.navigate", url=url)
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline and not (
+                evaluate("location.href") == url and evaluate("document.readyState") == "complete"
+            ):
+                time.sleep(0.05)
+            yield evaluate
+    finally:
+        browser.terminate()
+        browser.wait(10)
+
+
+def _page_target(port: int) -> str:
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        try:
+            targets = json.loads(_get(f"http://127.0.0.1:{port}/json/list"))
+        except OSError:
+            targets = []
+        pages = [t["webSocketDebuggerUrl"] for t in targets if t.get("type") == "page"]
+        if pages:
+            return str(pages[0])
+        time.sleep(0.2)
+    pytest.skip("Chromium here did not open its DevTools port within 60 s")
 
 
 def _browser(command: list[str]) -> subprocess.CompletedProcess[str]:
