@@ -103,6 +103,7 @@ def test_learn_command_writes_the_reference_and_says_its_doubts(tmp_path):
     result = json.loads(out.stdout)
     assert result["sensors"]["S"]["doubt"]
     assert "Later tests will not use this sensor's modes" in out.stderr
+    assert "none of its sensors will be used by later tests (each is doubtful: S)" in out.stderr
 
 
 def test_a_poorly_determined_slow_mode_at_its_box_end_keeps_the_reference():

@@ -434,7 +434,15 @@ def learn_command(
         msg = f"{log.source}: no sensor's modes could be learnt; nothing written"
         raise InputError(msg)
     save_reference(reference, output_path)
-    stderr.print(f"mtident: reference written to {output_path}", highlight=False)
+    doubtful = [name for name, m in reference.sensors.items() if m.doubt is not None]
+    unused = (
+        f"; none of its sensors will be used by later tests (each is doubtful: {', '.join(doubtful)})"
+        if len(doubtful) == len(reference.sensors)
+        else f"; later tests will not use {', '.join(doubtful)} (doubtful)"
+        if doubtful
+        else ""
+    )
+    stderr.print(f"mtident: reference written to {output_path}{unused}", highlight=False)
     if as_json:
         sensors_out = {
             name: {
