@@ -116,8 +116,9 @@ def learn_reference(
         )
         if doubt is not None:
             warnings.append(
-                f"{name}: {doubt}: did the run reach equilibrium? Later tests will not use this sensor's modes "
-                "(learn from a longer or denser run)"
+                f"{name}: {doubt}. Later tests will not use this sensor's modes: learn from a run that reaches "
+                "equilibrium, logged densely enough to show every mode, in a room that drifts little (a drift of "
+                "the room through the whole run hides the steady state)"
             )
         if max(m.time_constant_min for m in fit.modes) >= 0.98 * settings.max_time_constant_min:
             warnings.append(
