@@ -111,7 +111,9 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     assert recorder.fetch() == []
     machine.start()  # subscribed again, the nodes' values of now (minute 9) are not written again
     said = settle(recorder, 10)
-    assert said == [f"the OPC UA server at {machine.url} answers again"]
+    assert said == [
+        f"the OPC UA server at {machine.url} answers again; the values it published meanwhile are not recorded"
+    ]
     for k in range(10, 15):
         machine.publish(float(k), (20 + k / 10, 21 + k / 10))
         published.append(k)
@@ -120,7 +122,12 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     again = OpcUaRecorder(machine.url, log, NODES)  # a watch started again goes on from its sidecar
     machine.publish(15.0, (21.5, 22.5))
     published.append(15)
-    settle(again, 16)
+    assert settle(again, 16) == [
+        f"recording {machine.url} again: the values it published while the watch was stopped are not recorded"
+    ]
+    machine.publish(16.0, (21.6, 22.6))  # received, not yet fetched: written when the watch closes
+    published.append(16)
+    time.sleep(1.0)
     again.close()
     recorded = read_temperature_log(log)
     np.testing.assert_allclose(recorded.time_min, published)
@@ -137,6 +144,16 @@ def test_a_bad_status_is_a_missing_reading(machine, tmp_path):
     recorder.close()
     lines = (tmp_path / "bad.csv").read_text().splitlines()
     assert lines == ["time_min,T1,T2", "0.000000,20,21", "1.000000,,"]
+
+
+def test_a_record_of_other_nodes_is_not_resumed(machine, tmp_path):
+    log = tmp_path / "opc.csv"
+    recorder = OpcUaRecorder(machine.url, log, NODES)
+    machine.publish(0.0, (20.0, 21.0))
+    settle(recorder, 1)
+    recorder.close()
+    with pytest.raises(InputError, match="was recorded from .* nodes ns=2;s=Spindle.T1, ns=2;s=Spindle.T2; to record"):
+        OpcUaRecorder(machine.url, log, NODES[:1])
 
 
 def test_unknown_nodes_and_no_nodes_are_refused(machine, tmp_path):

@@ -533,10 +533,13 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     assert json.loads(out.stdout) == reference
 
 
-def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path):
-    """Ctrl-C while following a log: no traceback, where it stopped, exit 130. The child gets the
-    default SIGINT handler whatever its parent ignores (nohup, a background job), and is killed in
-    any case."""
+@pytest.mark.parametrize(
+    "stop, said", [(signal.SIGINT, "interrupted (Ctrl-C)"), (signal.SIGTERM, "terminated (SIGTERM)")]
+)
+def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path, stop, said):
+    """Ctrl-C (or a service manager's SIGTERM) while following a log: no traceback, where it
+    stopped, exit 130. The child gets the default SIGINT handler whatever its parent ignores
+    (nohup, a background job), and is killed in any case."""
     log = tmp_path / "live.csv"
     log.write_text(csv_text(T[:30], {"A": noisy(first_order(T[:30]), 19)}))
     state = tmp_path / "live-state.npz"
@@ -565,13 +568,13 @@ def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path):
         while not state.is_file() and time.monotonic() < deadline:
             time.sleep(0.05)
         time.sleep(0.3)  # now it waits for new rows
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(stop)
         out, err = proc.communicate(timeout=60)
     finally:
         proc.kill()
     assert proc.returncode == 130, err
     assert "Traceback" not in err
-    assert "interrupted (Ctrl-C) at t = 29 min" in err and "the same command resumes from there" in err
+    assert f"{said} at t = 29 min" in err and "the same command resumes from there" in err
     assert json.loads(out)["decision"] == "continue" and json.loads(out)["last_time_min"] == 29.0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["live-state.npz", "live.csv"]  # no stray temporary file
 

@@ -8,7 +8,9 @@ tables, a picture and the contract's JSON.
 from __future__ import annotations
 
 import math
+import signal
 import sys
+import threading
 import time
 import urllib.parse
 from collections.abc import Callable
@@ -151,8 +153,12 @@ def network_recorder(
     host = urllib.parse.urlparse(file).hostname or "source"
     log = Path(record_path) if record_path else Path.cwd() / f"{device or host}.csv"
     if is_server:
+        import logging
+
         from mtident.io.opcua import OpcUaRecorder
 
+        # the recorder says when the server does not answer; asyncua's own tracebacks of it are noise here
+        logging.getLogger("asyncua").setLevel(logging.CRITICAL)
         return OpcUaRecorder(file, log, list(nodes))
     mapping = {}
     for item in items:
@@ -250,7 +256,8 @@ def monitor_settings(
     "--record",
     "record_path",
     type=OutputPath(),
-    help="MTConnect: the CSV log the agent's readings are written to, to replay later (default: DEVICE.csv here).",
+    help="MTConnect or OPC UA: the CSV log the readings are written to, to replay later (default: DEVICE.csv or "
+    "HOST.csv here).",
 )
 @click.option(
     "--from-buffer-start",
@@ -342,6 +349,8 @@ def watch_command(
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
     live = sys.stdout.isatty() and not as_json
     page, served = _serve(serve_address, path)
+    on_main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _terminate) if on_main else None
     try:
         interrupted = _follow(
             session,
@@ -355,6 +364,8 @@ def watch_command(
             page,
         )
     finally:
+        if on_main:
+            signal.signal(signal.SIGTERM, previous)
         if served is not None:
             served.stop()
         if recorder is not None:
@@ -420,7 +431,8 @@ def _follow(
                     stderr.print(f"mtident: no new row for {timeout_s:g} s; stopping", highlight=False)
                     return False
                 time.sleep(poll_s)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as stop:
+        how = "terminated (SIGTERM)" if isinstance(stop, _Terminated) else "interrupted (Ctrl-C)"
         where = (
             "before the first sample"
             if session.state is None
@@ -431,8 +443,16 @@ def _follow(
             if session.state_path.is_file()
             else "nothing was saved"
         )
-        stderr.print(f"mtident: interrupted (Ctrl-C) {where}; {kept}", highlight=False)
+        stderr.print(f"mtident: {how} {where}; {kept}", highlight=False)
         return True
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM (a service manager stopping the watch), taken as Ctrl-C: the state kept, the record written."""
+
+
+def _terminate(signum: int, frame: object) -> None:  # noqa: ARG001
+    raise _Terminated
 
 
 def _serve(address: str | None, path: Path) -> tuple[LivePage | None, Served | None]:

@@ -85,8 +85,15 @@ class OpcUaRecorder:
         self.names: list[str] = []
         self.origin: dt.datetime | None = None
         self.last_stamp: dict[str, str] = {}
-        if self._sidecar.is_file():
+        self._resumed = self._sidecar.is_file()
+        if self._resumed:
             saved = json.loads(self._sidecar.read_text(encoding="utf-8"))
+            if saved.get("url") != url or list(saved.get("nodes", [])) != self.nodes:
+                msg = (
+                    f"{self.log} was recorded from {saved.get('url')} nodes {', '.join(saved.get('nodes', []))}; to "
+                    "record other nodes or another server, name another log with --record"
+                )
+                raise InputError(msg)
             self.names = list(saved["names"])
             self.origin = None if saved["origin"] is None else dt.datetime.fromisoformat(saved["origin"])
             self.last_stamp = dict(saved["last_stamp"])
@@ -116,6 +123,7 @@ class OpcUaRecorder:
                     node.read_display_name().Text or node_id for node, node_id in zip(nodes, self.nodes, strict=True)
                 ]
             self._index = {node.nodeid.to_string(): i for i, node in enumerate(nodes)}
+            self._changes.lost = False
             subscription = client.create_subscription(PUBLISHING_MS, self._changes)
             subscription.subscribe_data_change(nodes, queuesize=QUEUE_SIZE)
         except Exception as exc:
@@ -125,7 +133,8 @@ class OpcUaRecorder:
         return client
 
     def close(self) -> None:
-        """Close the connection (the next fetch opens it again)."""
+        """Write the changes received so far, and close the connection (the next fetch opens it again)."""
+        self._write(self._changes.drain(self._index))
         if self._client is not None:
             _close(self._client)
             self._client = None
@@ -144,6 +153,8 @@ class OpcUaRecorder:
             if self._client is None:
                 self._client = self._connect()
             self._client.get_node(SERVER_TIME).read_value()  # a dropped connection shows here
+            if self._changes.lost:
+                raise ConnectionError("the subscription's status changed")
         except InputError:
             raise
         except Exception as exc:  # noqa: BLE001 - asyncua raises many kinds for a lost server
@@ -154,8 +165,15 @@ class OpcUaRecorder:
             self._unreachable = True
             return notes
         if self._unreachable:
-            notes.append(f"the OPC UA server at {self.url} answers again")
+            notes.append(
+                f"the OPC UA server at {self.url} answers again; the values it published meanwhile are not recorded"
+            )
             self._unreachable = False
+        elif self._resumed:
+            notes.append(
+                f"recording {self.url} again: the values it published while the watch was stopped are not recorded"
+            )
+        self._resumed = False
         self._write(self._changes.drain(self._index))
         return notes
 
@@ -201,6 +219,10 @@ class _Changes:
 
     def __init__(self) -> None:
         self._queue: queue.SimpleQueue[tuple[str, Any]] = queue.SimpleQueue()
+        self.lost = False
+
+    def status_change_notification(self, status: Any) -> None:  # noqa: ANN401, ARG002
+        self.lost = True  # the server ends or times out the subscription: subscribe again
 
     def datachange_notification(self, node: Any, val: Any, data: Any) -> None:  # noqa: ANN401, ARG002
         self._queue.put((node.nodeid.to_string(), data.monitored_item.Value))
