@@ -81,6 +81,8 @@ def test_a_stopped_and_restarted_agent_loses_and_doubles_no_sample(agent_server,
     np.testing.assert_allclose(recorded.temperature_C[:, 0], SPINDLE, atol=1e-9)
     np.testing.assert_allclose(recorded.temperature_C[:, 1], BEARING, atol=1e-9)
     assert recorded.sensors == ("Spindle", "Bearing")
+    with pytest.raises(InputError, match="was recorded from .* device VMC1; to record another agent or device"):
+        MTConnectRecorder(server.url, log, device="VMC2")
 
 
 def test_an_answer_cut_at_the_count_is_not_written_in_part(agent_server, tmp_path, monkeypatch):

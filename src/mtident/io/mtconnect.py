@@ -274,6 +274,12 @@ class MTConnectRecorder:
 
     def _load(self) -> None:
         saved = json.loads(self._sidecar.read_text(encoding="utf-8"))
+        if saved.get("url") != self.url or saved.get("device") != self.device:
+            msg = (
+                f"{self.log} was recorded from {saved.get('url')} device {saved.get('device')}; to record another "
+                "agent or device, name another log with --record"
+            )
+            raise InputError(msg)
         self.columns = dict(saved["columns"])
         self.instance_id = saved["instance_id"]
         self.next_sequence = saved["next_sequence"]
