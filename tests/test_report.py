@@ -7,6 +7,7 @@ from click.testing import CliRunner
 from test_watch import T, csv_text, first_order, noisy, one_mode_reference
 
 from mtident.cli import main
+from mtident.report.test_report import reading_gaps
 from mtident.thermal.reference import save_reference
 
 
@@ -65,6 +66,19 @@ def test_a_test_that_cannot_stop_is_reported_with_the_reason(tmp_path):
     assert stdout.endswith("no stop within the log\n")
     page = out.read_text(encoding="utf-8")
     assert "No stop within the log (to 89 min)" in page and "Why not yet:" in page and "still fits" in page
+
+
+def test_stretches_without_readings_are_said(tmp_path):
+    # a recorder stopped from minute 40 to 70: the report says so
+    t = np.concatenate([np.arange(0.0, 41.0), np.arange(70.0, 120.0)])
+    log = tmp_path / "gappy.csv"
+    log.write_text(csv_text(t, {"S": noisy(first_order(t), 24)}))
+    out = tmp_path / "gappy.html"
+    code, _, err = report(str(log), "-o", str(out))
+    assert code == 0, err
+    assert "to t = 119 min; none from 40 min to 70 min</dd>" in out.read_text(encoding="utf-8")
+    assert reading_gaps(np.arange(10.0)) == ()
+    assert reading_gaps(np.array([0.0, 1.0, 2.0, 9.0, 10.0])) == ((2.0, 9.0),)
 
 
 def test_report_refuses_what_it_cannot_write_or_read(tmp_path):

@@ -31,7 +31,7 @@ from mtident.report.plots import plot_monitor
 from mtident.thermal.monitor import MonitorSettings, assumptions, minutes
 from mtident.thermal.session import WatchSession
 
-__all__ = ["SensorLine", "WarmupReport", "build_report", "write_html", "write_pdf"]
+__all__ = ["SensorLine", "WarmupReport", "build_report", "reading_gaps", "write_html", "write_pdf"]
 
 
 @dataclass(frozen=True)
@@ -99,6 +99,8 @@ class WarmupReport:
         How the room entered the answer.
     samples, sampling_interval_min, log_end_min
         The log's readings: how many, how often, and the last one's time.
+    gaps : tuple of (float, float)
+        Stretches without readings longer than ``GAP_INTERVALS`` sampling intervals: (from, to), min.
     decision : str
         "stop" or "continue".
     stop_time_min : float
@@ -124,6 +126,7 @@ class WarmupReport:
     samples: int
     sampling_interval_min: float
     log_end_min: float
+    gaps: tuple[tuple[float, float], ...]
     decision: str
     stop_time_min: float
     reason: str | None
@@ -139,6 +142,8 @@ class WarmupReport:
     created: str
 
 
+# a stretch without readings longer than this many sampling intervals is said in the report
+GAP_INTERVALS = 5.0
 METHOD = (
     "Each sensor's readings from the start of its warm-up are fitted with sums of up to four exponential modes "
     "(variable projection, a global search over the time constants). The interval of the steady-state "
@@ -192,6 +197,7 @@ def build_report(session: WatchSession, progress: Callable[[WatchSession], None]
         samples=len(time_min),
         sampling_interval_min=float(np.median(np.diff(time_min))) if len(time_min) > 1 else math.nan,
         log_end_min=float(time_min[-1]) if len(time_min) else math.nan,
+        gaps=reading_gaps(time_min),
         decision=str(outcome["decision"]),
         stop_time_min=state.stop_time_min if state.stopped else math.nan,
         reason=outcome["reason"] if isinstance(outcome["reason"], str) else None,
@@ -423,10 +429,38 @@ def _verdict(report: WarmupReport) -> str:
     )
 
 
+def reading_gaps(time_min: np.ndarray) -> tuple[tuple[float, float], ...]:
+    """Stretches of the log without readings longer than ``GAP_INTERVALS`` times its usual
+    sampling interval (a logger or a recorder stopped, a server away): (from, to) in minutes.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        The readings' times (min).
+
+    Returns
+    -------
+    tuple of (float, float)
+    """
+    if len(time_min) < 3:
+        return ()
+    steps = np.diff(time_min)
+    long = np.flatnonzero(steps > GAP_INTERVALS * float(np.median(steps)))
+    return tuple((float(time_min[k]), float(time_min[k + 1])) for k in long)
+
+
+def _gaps(report: WarmupReport) -> str:
+    if not report.gaps:
+        return ""
+    spans = ", ".join(f"{minutes(a)} to {minutes(b)}" for a, b in report.gaps)
+    return f" No readings from {spans}."
+
+
 def _setup(report: WarmupReport) -> str:
     return (
         f"Log: {report.source}. {len(report.lines)} sensor(s), {report.samples} readings every "
-        f"{_fmt(report.sampling_interval_min)} min to t = {minutes(report.log_end_min)}. Room {report.room}."
+        f"{_fmt(report.sampling_interval_min)} min to t = {minutes(report.log_end_min)}.{_gaps(report)} "
+        f"Room {report.room}."
     )
 
 
