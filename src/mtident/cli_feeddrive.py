@@ -32,7 +32,7 @@ params_option = click.option(
     "--params",
     "params_path",
     type=click.Path(dir_okay=False),
-    help="TOML parameter file (seed 004 Table 1 names, SI units); default: the shipped set.",
+    help="TOML parameter file (Nguyen-Quoc et al. Table 1 names, SI units); default: the shipped set.",
 )
 
 
@@ -41,7 +41,7 @@ params_option = click.option(
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def modes_command(params_path: str | None, as_json: bool) -> None:
-    """Natural frequencies, mode shapes and damping ratios (seed 004 Eq. 3)."""
+    """Natural frequencies, mode shapes and damping ratios (Nguyen-Quoc et al. Eq. 3)."""
     result = modes(load_parameters(params_path))
     if as_json:
         print_json(
@@ -202,7 +202,7 @@ def simulate_command(
     "--truth",
     "truth_path",
     type=click.Path(dir_okay=False),
-    help="TOML true parameters (simulated data): adds the error table (seed 004 Table 3).",
+    help="TOML true parameters (simulated data): adds the error table (Nguyen-Quoc et al. Table 3).",
 )
 @click.option(
     "--measured",
@@ -286,7 +286,7 @@ def identify_command(
             row += [f"{getattr(truth, name):.5g}", f"{summary['error_percent'][name]:.3g}"]  # type: ignore[index]
         table.add_row(*row)
     Console(width=max(Console().width, 100)).print(table)
-    corr = Table(title="Correlation of estimated and measured responses (seed 004 Table 2)")
+    corr = Table(title="Correlation of estimated and measured responses (Nguyen-Quoc et al. Table 2)")
     corr.add_column("response")
     corr.add_column("r", justify="right")
     for name, r in result.correlation.items():
@@ -305,7 +305,7 @@ def identify_command(
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def params_command(params_path: str | None, template: bool, out_path: str | None, as_json: bool) -> None:
-    """The parameter names, units and values (default: seed 004's Table 1 with the corrected β)."""
+    """The parameter names, units and values (default: Nguyen-Quoc et al.'s Table 1 with the corrected β)."""
     params = load_parameters(params_path)
     if template:
         text = parameter_template(params)

@@ -527,7 +527,7 @@ def min_time_command(
     plot_path: str | None,
     as_json: bool,
 ) -> None:
-    """Find the minimal identification time (seed 000 §2.4): RMSE against L for several sampling periods."""
+    """Find the minimal identification time (Xia et al. 2014 §2.4): RMSE against L for several sampling periods."""
     periods = _float_list(sampling_periods, "--sampling-periods")
     candidates = None
     if windows:

@@ -1,4 +1,4 @@
-"""Ball-screw feed drive (seed 004): parameters, modes, RK4 response, UKF identification, test planning."""
+"""Ball-screw feed drive (Nguyen-Quoc et al.): parameters, modes, RK4 response, UKF identification, test planning."""
 
 from mtident.feeddrive.identify import FeedDriveIdentification, default_guess, identify_feed_drive
 from mtident.feeddrive.model import Excitation

@@ -2,7 +2,7 @@
 loops over a record of :mod:`mtident.feeddrive.information` (sensitivities for the open-loop check,
 the filter's covariance recursion for the test plan).
 
-It runs exactly the standard UKF of :mod:`mtident.ukf` (seed 000 Eqs 5-20:
+It runs exactly the standard UKF of :mod:`mtident.ukf` (Xia et al. 2014 Eqs 5-20:
 propagated sigma points, additive Q and R, P⁺ = P⁻ − K Py Kᵀ) on the augmented
 feed-drive state, with the transition integrated by classical RK4 sub-steps.
 The generic engine spends ~0.5 ms a step in numpy call overhead for a 16-state,

@@ -1,6 +1,6 @@
-"""Joint state/parameter estimation of the feed drive with a UKF (seed 004 §2.3, §3.2).
+"""Joint state/parameter estimation of the feed drive with a UKF (Nguyen-Quoc et al. §2.3, §3.2).
 
-Augmented state (seed 004 Eq. 37): the 8 physical states and the 8 identified
+Augmented state (Nguyen-Quoc et al. Eq. 37): the 8 physical states and the 8 identified
 parameters K1..K4, Bt, Bb, Qb, Qm. Differences from the paper (DESIGN.md errata):
 
 * The transition integrates the same ODE as the simulator — classical RK4 with
@@ -56,7 +56,7 @@ __all__ = [
     "filter_substeps",
 ]
 
-# Which responses are measured: all 12 (seed 004), or what a machine usually has:
+# Which responses are measured: all 12 (Nguyen-Quoc et al.), or what a machine usually has:
 # table acceleration (accelerometer), motor angle and velocity (encoder).
 MEASUREMENT_SETS = {
     "all": tuple(range(12)),
@@ -81,7 +81,7 @@ DISTANCE_LIMIT = 26.1
 # (they start near rest) and on the parameters (a guess within a factor e^±1 at 2σ), and the random
 # walks that let the states absorb small model errors and the parameters drift slowly. The walk on
 # the states also forgets the slow decay that carries the guideway and bearing damping (Bt, Bb): a
-# hundred times smaller, it pins them from seed 004's impulse, but the filter then states intervals
+# hundred times smaller, it pins them from Nguyen-Quoc et al.'s impulse, but the filter then states intervals
 # that miss the truth by several standard deviations under a sweep, a step or a multisine.
 STATE_PRIOR_VAR = 1e-4
 PRIOR_SD_LOG = 0.5
@@ -375,7 +375,8 @@ class _FilterSetup:
 def _filter_setup(
     preset: str, response: Response, idx: FloatArray, reference: FloatArray, scale: FloatArray, noise_fraction: float
 ) -> _FilterSetup:
-    """The default (scaled states, log-parameters, broad prior) or the paper's settings (seed 004 Eqs 40-44)."""
+    """The default (scaled states, log-parameters, broad prior) or the paper's settings (Nguyen-Quoc et al.
+    Eqs 40-44)."""
     n = 16
     if preset == "paper":
         sigma = MerweScaledSigmaPoints(0.5, 2.0, 3.0)
@@ -486,7 +487,7 @@ def identify_feed_drive(
     noise_fraction : float
         Measurement noise standard deviation as a fraction of each response's RMS.
     preset : {"default", "paper"}
-        ``paper``: seed 004's α = 1/2, β = 2, κ = 3, Q = 1e-4·I, R = 1e-9·I and
+        ``paper``: Nguyen-Quoc et al.'s α = 1/2, β = 2, κ = 3, Q = 1e-4·I, R = 1e-9·I and
         P₀ of Eq. 44 (zero variance on the parameters), in unscaled SI units.
     substeps : int, optional
         RK4 sub-steps per sample in the transition (default: :func:`filter_substeps`).
@@ -524,7 +525,9 @@ def identify_feed_drive(
     scaled = _scaled_problem(response, guess, indices, preset, noise_fraction, substeps, h)
     notes = _one_frequency_note(response.forces, h)
     if preset == "paper":
-        notes.append("paper preset: α = 1/2, β = 2, κ = 3 give a negative centre weight W0m = -2.368 (seed 004 Eq. 41)")
+        notes.append(
+            "paper preset: α = 1/2, β = 2, κ = 3 give a negative centre weight W0m = -2.368 (Nguyen-Quoc et al. Eq. 41)"
+        )
     ys = response.values[:, scaled.idx] / scaled.out_scale
     if engine == "compiled":
         means, variances, final_cov, failed = _run_compiled(scaled, ys, response.forces)

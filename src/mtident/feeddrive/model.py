@@ -1,4 +1,4 @@
-"""First-order form of the feed-drive model (seed 004 Eqs 5-9), inputs, and classical RK4.
+"""First-order form of the feed-drive model (Nguyen-Quoc et al. Eqs 5-9), inputs, and classical RK4.
 
 State X = [x_t, x_b, θ_b, θ_m, ẋ_t, ẋ_b, θ̇_b, θ̇_m]; Ẋ = A X + [0; M⁻¹F(t)] with
 A = [[0, I], [−M⁻¹K, −M⁻¹C]]. (Eq. 8 prints +M⁻¹K: a sign slip.)
@@ -127,7 +127,7 @@ class Excitation:
     Parameters
     ----------
     kind : {"impulse", "step", "sine", "sweep", "prbs", "multisine"}
-        impulse: ``amplitude`` for the first sample only (seed 004 §3.1);
+        impulse: ``amplitude`` for the first sample only (Nguyen-Quoc et al. §3.1);
         step: ``amplitude`` from ``start_s`` on; sine: amplitude·sin(2πft);
         sweep: a linear chirp from ``frequency_Hz`` to ``frequency_end_Hz`` over the record;
         prbs: ±amplitude from a maximal-length binary sequence clocked at ``frequency_end_Hz``

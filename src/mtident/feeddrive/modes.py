@@ -1,4 +1,4 @@
-"""Modes of the feed drive: |K − ω²M| = 0 (seed 004 Eq. 3)."""
+"""Modes of the feed drive: |K − ω²M| = 0 (Nguyen-Quoc et al. Eq. 3)."""
 
 from __future__ import annotations
 
@@ -53,7 +53,7 @@ def modes(p: FeedDriveParameters) -> Modes:
     return Modes(omega / (2.0 * np.pi), shapes, modal_damping / (2.0 * omega), bool(np.all(eigenvalues > 0)))
 
 
-# Samples per period of the highest mode the filter needs. Seed 004 (§3.1) samples at 5-20 times
+# Samples per period of the highest mode the filter needs. Nguyen-Quoc et al. (§3.1) samples at 5-20 times
 # the highest natural frequency. Below that the sigma points, which spread the stiffnesses over the
 # prior's range, put the highest mode near or past the Nyquist frequency; the filter then settles
 # with intervals that miss the truth by tens of standard deviations, or diverges.

@@ -1,4 +1,4 @@
-"""Ball-screw feed drive parameters (seed 004, Table 1) and the matrices of Eq. 2.
+"""Ball-screw feed drive parameters (Nguyen-Quoc et al., Table 1) and the matrices of Eq. 2.
 
 Parameter files are TOML with Table 1's names in SI units (DESIGN.md)::
 
@@ -49,7 +49,7 @@ __all__ = [
 
 PRINTED_BETA = 2.55e-3
 COORDINATES = ("table", "screw", "screw_rotation", "motor_rotation")
-# The parameters the UKF estimates (seed 004 Eq. 37, state x9..x16).
+# The parameters the UKF estimates (Nguyen-Quoc et al. Eq. 37, state x9..x16).
 IDENTIFIED = ("K1", "K2", "K3", "K4", "Bt", "Bb", "Qb", "Qm")
 UNITS = {
     "Mt": "kg",
@@ -66,7 +66,7 @@ UNITS = {
     "Qm": "N m s/rad",
     "Qb": "N m s/rad",
 }
-# What each parameter is (seed 004, Table 1).
+# What each parameter is (Nguyen-Quoc et al., Table 1).
 DESCRIPTIONS = {
     "Mt": "mass of the working table",
     "Mb": "mass of the ball screw",
@@ -88,7 +88,7 @@ DESCRIPTIONS = {
 class FeedDriveParameters:
     """The 4-DOF lumped model of a ball-screw feed drive, SI units.
 
-    Defaults: seed 004 Table 1 with the corrected β = 0.01/(2π) m/rad.
+    Defaults: Nguyen-Quoc et al. Table 1 with the corrected β = 0.01/(2π) m/rad.
 
     Parameters
     ----------
@@ -247,7 +247,8 @@ def validate(p: FeedDriveParameters) -> FeedDriveParameters:
         hint = ""
         if abs(p.beta - PRINTED_BETA) < 1e-9:
             hint = (
-                " (β = 2.55e-3 is the value printed in seed 004's Table 1; β = lead/(2π) = 0.01/(2π) ≈ 1.5915e-3 "
+                " (β = 2.55e-3 is the value printed in Nguyen-Quoc et al.'s Table 1; β = lead/(2π) = 0.01/(2π) "
+                "≈ 1.5915e-3 "
                 "m/rad reproduces the paper's frequencies)"
             )
         msg = (
@@ -279,8 +280,9 @@ def parameter_template(p: FeedDriveParameters | None = None) -> str:
     p = p or FeedDriveParameters()
     shipped = FeedDriveParameters()
     lines = [
-        "# Ball-screw feed drive parameters, SI units (names of seed 004, Table 1).",
-        "# Values: " + ("the shipped set (seed 004's Table 1, β corrected)." if p == shipped else "as given."),
+        "# Ball-screw feed drive parameters, SI units (names of Nguyen-Quoc et al., Table 1).",
+        "# Values: "
+        + ("the shipped set (Nguyen-Quoc et al.'s Table 1, β corrected)." if p == shipped else "as given."),
         "# Delete a line to keep the shipped value. mtident identifies K1-K4, Bt, Bb, Qb and Qm;",
         "# Mt, Mb, Jm, Jb and beta are taken as known.",
         "",

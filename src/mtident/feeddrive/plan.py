@@ -323,7 +323,7 @@ def plan_tests(
 
     Examples
     --------
-    Seed 004's impulse at 1 % noise leaves the guideway damping Bt barely known; with sensors a
+    Nguyen-Quoc et al.'s impulse at 1 % noise leaves the guideway damping Bt barely known; with sensors a
     hundred times finer, 2 s of it identify all eight:
 
     >>> tests = candidate_tests(FeedDriveParameters(), kinds=("impulse",), coordinates=(0,), durations_s=(0.5, 2.0))

@@ -1,4 +1,4 @@
-"""Vibration response of the feed drive by classical RK4 (seed 004 §2.2, Eqs 10-14 corrected)."""
+"""Vibration response of the feed drive by classical RK4 (Nguyen-Quoc et al. §2.2, Eqs 10-14 corrected)."""
 
 from __future__ import annotations
 
@@ -141,9 +141,9 @@ def simulate(
     ----------
     p : FeedDriveParameters
     excitation : Excitation
-        Default: 20 N on the table for one sample (seed 004 §3.1).
+        Default: 20 N on the table for one sample (Nguyen-Quoc et al. §3.1).
     sample_rate_Hz, duration_s : float
-        Default 10 kHz for 2 s, as seed 004.
+        Default 10 kHz for 2 s, as in Nguyen-Quoc et al.
     noise_fraction : float
         White measurement noise with standard deviation ``noise_fraction`` × the
         RMS of each response (needs ``rng``).

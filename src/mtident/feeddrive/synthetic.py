@@ -1,6 +1,6 @@
 """Random feed drives for benchmarks and property tests: drives the project never saw.
 
-Masses, inertias, lead, stiffnesses and damping are drawn log-uniformly around seed 004's Table 1
+Masses, inertias, lead, stiffnesses and damping are drawn log-uniformly around Nguyen-Quoc et al.'s Table 1
 over the ranges of machine-tool feed drives (a 5-200 kg table, a 5-32 mm lead); the stiffnesses
 are drawn so that K is positive definite (K2 > K1, K3 > K4 + β²K1, see :func:`~.params.validate`).
 Randomness comes only from the ``np.random.Generator`` passed in.

@@ -95,7 +95,7 @@ def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 -
 
 def plot_identification(result: Identification | RobustIdentification, path: str | Path | None = None) -> Path | Figure:
     """Measured and predicted temperature per sensor, with the 95 % band, the
-    identification time, T∞ and the predicted equilibrium time (seed 000 Figs 6-8).
+    identification time, T∞ and the predicted equilibrium time (Xia et al. 2014 Figs 6-8).
 
     Parameters
     ----------
@@ -147,7 +147,7 @@ def plot_identification(result: Identification | RobustIdentification, path: str
 
 
 def plot_min_time(result: MinTimeResult, path: str | Path | None = None) -> Path | Figure:
-    """RMSE against identification time for each sampling period (seed 000 Figs 5 and 9).
+    """RMSE against identification time for each sampling period (Xia et al. 2014 Figs 5 and 9).
 
     Parameters
     ----------
@@ -242,7 +242,7 @@ def plot_responses(
     path: str | Path | None = None,
     modes_Hz=None,  # noqa: ANN001 - feeddrive.Response, (4,) Hz
 ) -> Path | Figure:
-    """Displacements, velocities and accelerations of the four coordinates (seed 004 Figs 2-4), readable
+    """Displacements, velocities and accelerations of the four coordinates (Nguyen-Quoc et al. Figs 2-4), readable
     at any length: the first periods of the lowest mode sample by sample, and the spectrum of the
     whole record per coordinate with the natural frequencies ``modes_Hz`` (Hz) marked where given.
 
@@ -287,7 +287,7 @@ def plot_responses(
 
 
 def plot_feed_drive_identification(result, response, path: str | Path | None = None, truth=None) -> Path | Figure:  # noqa: ANN001
-    """Measured, filtered and open-loop model responses over the first periods (seed 004 Figs 5-7), the
+    """Measured, filtered and open-loop model responses over the first periods (Nguyen-Quoc et al. Figs 5-7), the
     spectra of measured vs model responses, and parameter convergence with ±2σ (Figs 8-9).
 
     The filtered responses follow the data whatever the parameters; the open-loop model (the set the

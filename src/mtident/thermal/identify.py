@@ -1,4 +1,4 @@
-"""Identify, then predict (seed 000 §2.1 end and §2.4; seed 001 §1.5).
+"""Identify, then predict (Xia et al. 2014 §2.1 end and §2.4; Yu et al. 2019 §1.5).
 
 Filter the measurements up to the identification time L, then predict to the end
 of the record (or a horizon). All sensors of a log are filtered as one batch.
@@ -79,7 +79,7 @@ class Identification:
     equilibrium_time_min : ndarray, shape (S,)
         Predicted time to 95 % of the total rise, from the start of the log.
     rmse_C : ndarray, shape (S,)
-        Seed 000 Eq. 33 over all measured samples.
+        Xia et al. 2014 Eq. 33 over all measured samples.
     fit_chi2, fit_autocorr : ndarray, shape (S,)
         Residual test of the first-order model inside the window.
     fits : ndarray of bool, shape (S,)
@@ -210,7 +210,7 @@ def sensor_notes(notes: tuple[str, ...], sensor: str) -> list[str]:
 
 
 def rmse(estimate: FloatArray, measured: FloatArray) -> FloatArray:
-    """Seed 000 Eq. 33: sqrt(Σ(Tₑ − Tₒ)²/(M − 1)) over the finite samples, per column."""
+    """Xia et al. 2014 Eq. 33: sqrt(Σ(Tₑ − Tₒ)²/(M − 1)) over the finite samples, per column."""
     diff = estimate - measured
     ok = np.isfinite(diff)
     count = ok.sum(axis=0)
@@ -461,7 +461,7 @@ def identify(
         Predict to this time (default: the end of the log, or 4 time constants
         beyond the window if that is later).
     pseudo_measurement_seed : int, optional
-        Predict as seed 000 Eqs 21-22 do, feeding noisy pseudo-measurements to
+        Predict as Xia et al. 2014 Eqs 21-22 do, feeding noisy pseudo-measurements to
         the filter after L, from a generator with this seed. Default: the
         deterministic forecast of the mean with its covariance.
     ambient_C : ndarray, shape (N,), optional
@@ -827,7 +827,7 @@ def _predict_after_window(
             GaussianState(carry.mean, carry.covariance()), transition, carry.process_cov, len(dts), normal
         )
         return mean, predicted.cov[:, :, 0, 0]
-    # Seed 000 Eqs 21-22: sₖ = f(x̂ₖ₋₁) + q·randn, yₖ = h(sₖ) + r·randn, then a normal UKF update.
+    # Xia et al. 2014 Eqs 21-22: sₖ = f(x̂ₖ₋₁) + q·randn, yₖ = h(sₖ) + r·randn, then a normal UKF update.
     rng = np.random.default_rng(seed)
     q_sd = np.sqrt(np.diagonal(carry.process_cov, axis1=-2, axis2=-1))
     r_sd = np.sqrt(carry.emission_cov[..., 0, 0])

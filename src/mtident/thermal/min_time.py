@@ -1,4 +1,4 @@
-"""Minimal identification time (seed 000 §2.4 and Fig. 2; seed 001 §1.5 steps 1-5).
+"""Minimal identification time (Xia et al. 2014 §2.4 and Fig. 2; Yu et al. 2019 §1.5 steps 1-5).
 
 For every candidate identification time L and every sampling period M, identify
 with the data up to L, predict to M, and take the RMSE (Eq. 33) against the
@@ -169,7 +169,7 @@ def minimal_identification_time(
         For "data", each filter is initialised from the first samples of the
         shortest window, so every L starts from the same prior.
     periods_min : list of float
-        Sampling periods M (default 35, 40, 45, 50 as seed 000).
+        Sampling periods M (default 35, 40, 45, 50 as Xia et al. 2014).
     windows_min : list of float
         Candidate L (default every sample time from 5 min to the longest period).
     ambient_C : ndarray, shape (N,), optional

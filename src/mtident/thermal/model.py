@@ -1,4 +1,4 @@
-"""The first-order temperature-rise model (seed 000 Eqs 29-32, seed 001 Eq. 37).
+"""The first-order temperature-rise model (Xia et al. 2014 Eqs 29-32, Yu et al. 2019 Eq. 37).
 
 T(t) = T∞ + (T₀ − T∞)·e^(−λt). As a state-space model with x = [T, λ, T∞]:
 Tₖ = T∞ + (Tₖ₋₁ − T∞)·e^(−λΔtₖ), λ and T∞ constant, y = T. Any sampling

@@ -49,7 +49,7 @@ class RobustIdentification:
     estimates : tuple of SensorEstimate
     assumptions : tuple of Assumptions
     rmse_C : ndarray, shape (S,)
-        Seed 000 Eq. 33 of the best model over every measured reading.
+        Xia et al. 2014 Eq. 33 of the best model over every measured reading.
     measured_final_C, measured_equilibrium_time_min : ndarray, shape (S,)
         From the log itself where it reached equilibrium, else NaN.
     notes : tuple of str

@@ -54,10 +54,10 @@ class ThermalTuning:
     emission_cov : ndarray, shape (S, 1, 1)
         R₀ (°C²).
     threshold_C : float or ndarray, shape (S,)
-        C of the adaptive law (H in seed 001).
+        C of the adaptive law (H in Yu et al. 2019).
     redraw : bool
-        Redraw measurement sigma points (seed 001 Eq. 8; exact Kalman filter on
-        linear models) or reuse the propagated ones (seed 000).
+        Redraw measurement sigma points (Yu et al. 2019 Eq. 8; exact Kalman filter on
+        linear models) or reuse the propagated ones (Xia et al. 2014).
     parametrisation : {"rate", "slope"}
         State [T, λ, T∞] as the papers, or [T, s, λ] (see
         :func:`~mtident.thermal.model.slope_transition`).
@@ -143,9 +143,9 @@ def tuning_from_data(time_min: FloatArray, values: FloatArray, start_min: float 
 def preset_tuning(preset: str, n_sensors: int) -> ThermalTuning:
     """The papers' settings, exactly.
 
-    ``xia2014`` (seed 000 §3.1): x₀ = [10, 0.01, 30], P₀ = diag(0.5², 0.1², 0.1²),
+    ``xia2014`` (Xia et al. 2014 §3.1): x₀ = [10, 0.01, 30], P₀ = diag(0.5², 0.1², 0.1²),
     Q₀ = 0.001²·I, R₀ = 0.001², C = 1e-4, propagated sigma points.
-    ``yu2019`` (seed 001 §2.1): x₀ = [10, 0.01, 30], P₀ = diag(0.25, 0.01, 0.01),
+    ``yu2019`` (Yu et al. 2019 §2.1): x₀ = [10, 0.01, 30], P₀ = diag(0.25, 0.01, 0.01),
     Q₀ = 1e-6·I, R₀ = 1e-6, H = 1e-4, redrawn sigma points (Eq. 8).
     """
     if preset not in ("xia2014", "yu2019"):

@@ -1,9 +1,9 @@
 """Adaptation rules that plug into the UKF step.
 
-* :class:`FadingFactor` — the fading factor of Yu et al. 2019 (seed 001 Eqs 15-22),
+* :class:`FadingFactor` — the fading factor of Yu et al. 2019 (Yu et al. 2019 Eqs 15-22),
   and with ``normalisation`` the residual-normalised factor of Eqs 23-29.
-* :class:`AdaptiveLaw` — the Q/R adaptive law of Xia et al. 2014 (seed 000 §2.2,
-  Fig. 1; seed 001 §1.3).
+* :class:`AdaptiveLaw` — the Q/R adaptive law of Xia et al. 2014 (Xia et al. 2014 §2.2,
+  Fig. 1; Yu et al. 2019 §1.3).
 
 Both are frozen settings; the state they need (the residual memory Vₖ, the
 current Q and R) travels in the filter carry, never inside these objects.
@@ -22,7 +22,7 @@ __all__ = ["FadingFactor", "AdaptiveLaw", "residual_memory", "fading_value", "no
 
 @dataclass(frozen=True, slots=True)
 class FadingFactor:
-    """Fading factor αₖ applied to the gain, Kₖ = αₖ Pxy Py⁻¹ (seed 001 Eq. 12).
+    """Fading factor αₖ applied to the gain, Kₖ = αₖ Pxy Py⁻¹ (Yu et al. 2019 Eq. 12).
 
     Vₖ = (ξ Vₖ₋₁ + εₖεₖᵀ)/(1 + ξ) with V₀ = ε₀ε₀ᵀ (Eq. 22), Nₖ = Vₖ − ρRₖ and
     αₖ = max(1, tr Nₖ / tr(S_y S_yᵀ)) (Eqs 18, 21).
@@ -30,9 +30,9 @@ class FadingFactor:
     Parameters
     ----------
     forgetting : float
-        ξ, default 0.95 (seed 001 §1.2).
+        ξ, default 0.95 (Yu et al. 2019 §1.2).
     weakening : float
-        ρ, default 3 (seed 001 §1.2, after He et al. 2018).
+        ρ, default 3 (Yu et al. 2019 §1.2, after He et al. 2018).
     normalisation : ndarray, shape (m,), optional
         λ of Eqs 23-29: residuals are divided by it before Vₖ is formed. Build it
         with :func:`normalisation_from_reference`. For m = 1, Eq. 29 gives λ = 1
@@ -45,7 +45,7 @@ class FadingFactor:
         and combined with the adaptive law the filter diverges (seen on warm-up
         data started 1 °C off).
     form : {"gain", "covariance"}
-        "gain" multiplies the gain by α as seed 001 Eq. 12 writes it. "covariance"
+        "gain" multiplies the gain by α as Yu et al. 2019 Eq. 12 writes it. "covariance"
         multiplies the predicted covariance P⁻ by α before the gain is formed, as
         strong-tracking filters do (Zhou & Frank 1996): the gain then grows
         towards, never past, the measurement and P stays positive definite for
@@ -58,7 +58,7 @@ class FadingFactor:
     compares like with like; for m = 1 this changes nothing.
 
     The covariance update with a faded gain uses the form valid for any gain,
-    P⁺ = P⁻ − K Pxyᵀ − Pxy Kᵀ + K Py Kᵀ = P⁻ − (2α − α²) Pxy Py⁻¹ Pxyᵀ. Seed 001
+    P⁺ = P⁻ − K Pxyᵀ − Pxy Kᵀ + K Py Kᵀ = P⁻ − (2α − α²) Pxy Py⁻¹ Pxyᵀ. Yu et al. 2019
     Eq. 13 (P⁺ = P⁻ − K Py Kᵀ) equals it only for α = 1 and makes P indefinite
     for large α.
     """
@@ -71,7 +71,7 @@ class FadingFactor:
 
 
 def normalisation_from_reference(reference_output: FloatArray) -> FloatArray:
-    """λⱼ = y₀ⱼ √(m / Σ y₀ᵢ²) (seed 001 Eq. 29) from prior knowledge of the outputs.
+    """λⱼ = y₀ⱼ √(m / Σ y₀ᵢ²) (Yu et al. 2019 Eq. 29) from prior knowledge of the outputs.
 
     Parameters
     ----------
@@ -187,11 +187,11 @@ class AdaptiveLaw:
     Parameters
     ----------
     threshold : float or ndarray, shape (...)
-        C (seed 000: 1e-4 °C; seed 001 calls it H), one per filter if an array.
+        C (Xia et al. 2014: 1e-4 °C; Yu et al. 2019 calls it H), one per filter if an array.
     q_increase, q_decrease : float
-        coff > 1 and 0 < coff < 1 (seed 000: 10 and 0.1).
+        coff > 1 and 0 < coff < 1 (Xia et al. 2014: 10 and 0.1).
     r_step_fraction : float
-        R_step / R (seed 000: 1/100).
+        R_step / R (Xia et al. 2014: 1/100).
     max_search_steps : int
         Bound on the R search.
     """

@@ -64,14 +64,14 @@ class FilterConfig:
     sigma_points : MerweScaledSigmaPoints
         The sigma-point scheme (α, β, κ).
     square_root : bool
-        Carry the Cholesky factor instead of P (seed 001 Eqs 2-13).
+        Carry the Cholesky factor instead of P (Yu et al. 2019 Eqs 2-13).
     redraw : bool
-        Draw the measurement sigma points anew from the prior (seed 001 Eq. 8)
-        instead of reusing the propagated points (seed 000, filterpy).
+        Draw the measurement sigma points anew from the prior (Yu et al. 2019 Eq. 8)
+        instead of reusing the propagated points (Xia et al. 2014, filterpy).
     fading : FadingFactor, optional
-        Fading factor on the gain (seed 001 Eqs 15-29).
+        Fading factor on the gain (Yu et al. 2019 Eqs 15-29).
     adaptive_law : AdaptiveLaw, optional
-        Q/R adaptive law (seed 000 §2.2). Scalar measurements only.
+        Q/R adaptive law (Xia et al. 2014 §2.2). Scalar measurements only.
     name : str
         Named in error messages.
     """
@@ -253,7 +253,7 @@ def _condition(
     config: FilterConfig,
     weights: SigmaWeights,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Posterior mean and covariance (or factor) for gain K = α Pxy Py⁻¹ (Eqs 18-20, seed 001 Eqs 12-13).
+    """Posterior mean and covariance (or factor) for gain K = α Pxy Py⁻¹ (Eqs 18-20, Yu et al. 2019 Eqs 12-13).
 
     With a fading factor in the "covariance" form, α scales P⁻ (and so Pxy and
     the sigma-point part of Py) instead of the gain.
@@ -565,7 +565,7 @@ def run_filter(
     Examples
     --------
     A random walk seen directly. With redrawn measurement points the UKF is the
-    Kalman filter (gain 2/3); seed 000's propagated points leave Q out of the
+    Kalman filter (gain 2/3); Xia et al. 2014's propagated points leave Q out of the
     innovation covariance (gain 1/2), which only matters where Q is not small.
 
     >>> x0 = GaussianState(np.zeros(1), np.eye(1))

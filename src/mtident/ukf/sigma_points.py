@@ -2,7 +2,7 @@
 
 Convention: the matrix square root is the *lower* Cholesky factor ``L`` with
 ``P = L Lᵀ``; the sigma points are ``x ± columns of sqrt(n + λ)·L``. These are
-the rows of the upper factor ``U = Lᵀ``, which is what seed 000 calls "the ith
+the rows of the upper factor ``U = Lᵀ``, which is what Xia et al. 2014 calls "the ith
 row of the matrix square root" and what filterpy's ``MerweScaledSigmaPoints``
 uses, so both give the same points.
 """
@@ -51,7 +51,7 @@ class MerweScaledSigmaPoints:
     Parameters
     ----------
     alpha : float
-        Spread of the points around the mean (seed 000: "a small positive value").
+        Spread of the points around the mean (Xia et al. 2014: "a small positive value").
     beta : float
         Prior knowledge of the distribution; 2 is optimal for a Gaussian.
     kappa : float
@@ -60,7 +60,7 @@ class MerweScaledSigmaPoints:
     Notes
     -----
     The default α = 1, β = 2, κ = 0 puts the points at ``x ± sqrt(n P)``, as
-    seed 001 Eq. 3 writes them, with W₀⁽ᵐ⁾ = 0 and W₀⁽ᶜ⁾ = 2. Seed 004 uses
+    Yu et al. 2019 Eq. 3 writes them, with W₀⁽ᵐ⁾ = 0 and W₀⁽ᶜ⁾ = 2. Nguyen-Quoc et al. use
     α = 1/2, β = 2, κ = 3 for n = 16, which gives W₀⁽ᵐ⁾ ≈ −2.37: a negative centre
     weight is allowed but warned about (:class:`NegativeWeightWarning`),
     because with a negative W₀⁽ᶜ⁾ the predicted covariance can lose positive

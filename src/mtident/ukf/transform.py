@@ -1,6 +1,6 @@
 """The unscented transform through the transition and the measurement models.
 
-Dense form (seed 000 Eqs 8-17, as filterpy) and square-root form (seed 001
+Dense form (Xia et al. 2014 Eqs 8-17, as filterpy) and square-root form (Yu et al. 2019
 Eqs 7 and 10; van der Merwe & Wan 2001): the weighted deviations are
 triangularised by QR together with √Q (or √R) and the centre point is added by a
 rank-1 Cholesky update or downdate, with the sign of W₀⁽ᶜ⁾.
@@ -153,8 +153,8 @@ def measurement_moments(
     """Measurement update moments (Eqs 14-17).
 
     With ``redraw=False`` the measurement sigma points are the propagated points
-    (seed 000, filterpy). With ``redraw=True`` they are drawn anew from the
-    predicted mean and covariance (seed 001 Eq. 8), which lets Q reach the gain.
+    (Xia et al. 2014, filterpy). With ``redraw=True`` they are drawn anew from the
+    predicted mean and covariance (Yu et al. 2019 Eq. 8), which lets Q reach the gain.
 
     Parameters
     ----------
