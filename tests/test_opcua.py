@@ -33,7 +33,8 @@ class Machine:
     """An OPC UA server with two temperature nodes, started and stopped on one port; started again,
     its nodes hold their last values, as a controller's would."""
 
-    def __init__(self) -> None:
+    def __init__(self, history: bool = True) -> None:
+        self.history = history
         self.url = f"opc.tcp://127.0.0.1:{_free_port()}/mtident/"
         self.server: Server | None = None
         self.variables: list = []
@@ -50,8 +51,13 @@ class Machine:
         ]
         server.start()
         self.server = server
-        if self.last is not None:
-            self.publish(*self.last)
+        # the nodes hold the last values published (a fresh machine: the minute before the test), then
+        # the server keeps their values (in memory, lost with it)
+        last = self.last
+        self.publish(*(last or (-1.0, (20.0, 20.0))))
+        self.last = last
+        if self.history:
+            server.tloop.post(server.aio_obj.historize_node_data_change([v.aio_obj for v in self.variables]))
 
     def stop(self) -> None:
         assert self.server is not None
@@ -110,9 +116,10 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     assert len(notes) == 1 and "does not answer" in notes[0]
     assert recorder.fetch() == []
     machine.start()  # subscribed again, the nodes' values of now (minute 9) are not written again
-    said = settle(recorder, 10)
+    said = settle(recorder, 10)  # a server started again has no history of its outage: nothing to read
     assert said == [
-        f"the OPC UA server at {machine.url} answers again; the values it published meanwhile are not recorded"
+        f"the OPC UA server at {machine.url} answers again: 0 reading(s) it published while it could not be reached "
+        "read from its history"
     ]
     for k in range(10, 15):
         machine.publish(float(k), (20 + k / 10, 21 + k / 10))
@@ -123,7 +130,7 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     machine.publish(15.0, (21.5, 22.5))
     published.append(15)
     assert settle(again, 16) == [
-        f"recording {machine.url} again: the values it published while the watch was stopped are not recorded"
+        f"recording {machine.url} again: 1 reading(s) it published while the watch was stopped read from its history"
     ]
     machine.publish(16.0, (21.6, 22.6))  # received, not yet fetched: written when the watch closes
     published.append(16)
@@ -144,6 +151,37 @@ def test_a_bad_status_is_a_missing_reading(machine, tmp_path):
     recorder.close()
     lines = (tmp_path / "bad.csv").read_text().splitlines()
     assert lines == ["time_min,T1,T2", "0.000000,20,21", "1.000000,,"]
+
+
+@pytest.mark.parametrize("history", [True, False])
+def test_values_published_while_the_watch_was_stopped_come_from_the_servers_history(tmp_path, history):
+    machine = Machine(history)
+    machine.start()
+    try:
+        log = tmp_path / "opc.csv"
+        recorder = OpcUaRecorder(machine.url, log, NODES)
+        machine.publish(0.0, (20.0, 21.0))
+        settle(recorder, 1)
+        recorder.close()  # the watch stopped
+        for k in range(1, 6):
+            machine.publish(float(k), (20 + k / 10, 21 + k / 10))
+        time.sleep(1.0)  # the server's history takes each change at its own sampling
+        again = OpcUaRecorder(machine.url, log, NODES)
+        said = settle(again, 6 if history else 2)
+        again.close()
+    finally:
+        machine.stop()
+    if history:
+        assert said == [
+            f"recording {machine.url} again: 5 reading(s) it published while the watch was stopped read from its history"
+        ]
+        np.testing.assert_allclose(read_temperature_log(log).time_min, range(6))
+    else:  # only the value of now
+        assert said == [
+            f"recording {machine.url} again: the values it published while the watch was stopped are not recorded "
+            "(it keeps no history of the nodes)"
+        ]
+        assert [line.split(",")[0] for line in log.read_text().splitlines()[1:]] == ["0.000000", "5.000000"]
 
 
 def test_a_record_of_other_nodes_is_not_resumed(machine, tmp_path):

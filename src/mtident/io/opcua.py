@@ -4,8 +4,10 @@ The :class:`OpcUaRecorder` subscribes to each node's data changes (with the serv
 stamps, every change the server samples queued, not only the last of a publishing interval) and
 writes them at each fetch, in time order, one row per time stamp. A subscription made again after
 a dropped connection starts with each node's value of now, written only where it is newer than
-the last written: nothing twice. A bad status code is a missing reading. Changes while the server
-cannot be reached are not seen (the server keeps no history the recorder asks for).
+the last written: nothing twice. A bad status code is a missing reading. The values a node took
+while the watch was stopped or the server could not be reached are read from the server's history
+(HistoryRead) where it keeps one for the node; where it does not, they are not recorded, and the
+recorder says so.
 
 Every row goes to a CSV log (``time_min`` from the first value, one column per node, named by its
 display name), which the watch follows like any logger's file, so the test can be replayed from
@@ -149,9 +151,11 @@ class OpcUaRecorder:
             What the user should hear of: the server unreachable (once per outage) or back again.
         """
         notes: list[str] = []
+        backlog: list[tuple[int, Any]] | None = []
         try:
             if self._client is None:
                 self._client = self._connect()
+                backlog = self._history()
             self._client.get_node(SERVER_TIME).read_value()  # a dropped connection shows here
             if self._changes.lost:
                 raise ConnectionError("the subscription's status changed")
@@ -164,18 +168,42 @@ class OpcUaRecorder:
                 notes.append(f"the OPC UA server at {self.url} does not answer ({type(exc).__name__}); trying again")
             self._unreachable = True
             return notes
-        if self._unreachable:
-            notes.append(
-                f"the OPC UA server at {self.url} answers again; the values it published meanwhile are not recorded"
+        if self._unreachable or self._resumed:
+            again = (
+                f"the OPC UA server at {self.url} answers again" if self._unreachable else f"recording {self.url} again"
             )
-            self._unreachable = False
-        elif self._resumed:
+            meanwhile = "while it could not be reached" if self._unreachable else "while the watch was stopped"
             notes.append(
-                f"recording {self.url} again: the values it published while the watch was stopped are not recorded"
+                f"{again}: the values it published {meanwhile} are not recorded (it keeps no history of the nodes)"
+                if backlog is None
+                else f"{again}: {_readings(backlog)} reading(s) it published {meanwhile} read from its history"
             )
-        self._resumed = False
-        self._write(self._changes.drain(self._index))
+            self._unreachable = self._resumed = False
+        self._write((backlog or []) + self._changes.drain(self._index))
         return notes
+
+    def _history(self) -> list[tuple[int, Any]] | None:
+        """The values each node took since the last one written, from the server's history (a
+        watch stopped, a connection lost); None where the server keeps no history of the nodes."""
+        from asyncua import ua
+
+        backlog: list[tuple[int, Any]] = []
+        now = dt.datetime.now(dt.UTC) + dt.timedelta(days=1)
+        for i, node_id in enumerate(self.nodes):
+            last = self.last_stamp.get(node_id)
+            if last is None:
+                continue
+            node = self._client.get_node(node_id)
+            start = dt.datetime.fromisoformat(last) + dt.timedelta(microseconds=1)
+            try:
+                access = node.read_attribute(ua.AttributeIds.AccessLevel).Value.Value
+                if not int(access) & ua.AccessLevel.HistoryRead.mask:
+                    return None
+                values = node.read_raw_history(start, now, 0, False)
+            except Exception:  # noqa: BLE001 - BadHistoryOperationUnsupported and its kind
+                return None
+            backlog.extend((i, value) for value in values)
+        return backlog
 
     def _write(self, changes: list[tuple[int, Any]]) -> None:
         """Append the changes not written yet, one row per source time stamp, in time order."""
@@ -211,6 +239,11 @@ class OpcUaRecorder:
             out.flush()
             os.fsync(out.fileno())
         self._save()
+
+
+def _readings(changes: list[tuple[int, Any]]) -> int:
+    """How many rows ``changes`` make: their distinct source time stamps."""
+    return len({value.SourceTimestamp or value.ServerTimestamp for _, value in changes})
 
 
 class _Changes:
