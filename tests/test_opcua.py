@@ -184,12 +184,30 @@ def test_values_published_while_the_watch_was_stopped_come_from_the_servers_hist
         assert [line.split(",")[0] for line in log.read_text().splitlines()[1:]] == ["0.000000", "5.000000"]
 
 
+def test_changes_are_written_in_time_order_whatever_the_order_received(tmp_path):
+    # a value of a later time received first (history and subscription interleave) does not hide
+    # the earlier ones
+    from asyncua import ua
+
+    recorder = OpcUaRecorder("opc.tcp://127.0.0.1:1/", tmp_path / "opc.csv", NODES)
+    recorder.names = ["T1", "T2"]
+
+    def change(minute: float, value: float) -> ua.DataValue:
+        stamp = START + dt.timedelta(minutes=minute)
+        return ua.DataValue(ua.Variant(value, ua.VariantType.Double), SourceTimestamp=stamp)
+
+    recorder._write([(0, change(5.0, 25.0)), (0, change(0.0, 20.0)), (1, change(0.0, 30.0)), (0, change(2.0, 22.0))])
+    lines = (tmp_path / "opc.csv").read_text().splitlines()
+    assert lines == ["time_min,T1,T2", "0.000000,20,30", "2.000000,22,", "5.000000,25,"]
+
+
 def test_a_record_of_other_nodes_is_not_resumed(machine, tmp_path):
     log = tmp_path / "opc.csv"
     recorder = OpcUaRecorder(machine.url, log, NODES)
     machine.publish(0.0, (20.0, 21.0))
     settle(recorder, 1)
     recorder.close()
+    assert OpcUaRecorder(machine.url, log, NODES[::-1]).nodes == NODES  # the same nodes: the log's order
     with pytest.raises(InputError, match="was recorded from .* nodes ns=2;s=Spindle.T1, ns=2;s=Spindle.T2; to record"):
         OpcUaRecorder(machine.url, log, NODES[:1])
 

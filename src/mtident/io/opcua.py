@@ -90,7 +90,9 @@ class OpcUaRecorder:
         self._resumed = self._sidecar.is_file()
         if self._resumed:
             saved = json.loads(self._sidecar.read_text(encoding="utf-8"))
-            if saved.get("url") != url or list(saved.get("nodes", [])) != self.nodes:
+            if saved.get("url") == url and sorted(saved.get("nodes", [])) == sorted(self.nodes):
+                self.nodes = list(saved["nodes"])  # the log's columns keep their order
+            else:
                 msg = (
                     f"{self.log} was recorded from {saved.get('url')} nodes {', '.join(saved.get('nodes', []))}; to "
                     "record other nodes or another server, name another log with --record"
@@ -208,11 +210,9 @@ class OpcUaRecorder:
     def _write(self, changes: list[tuple[int, Any]]) -> None:
         """Append the changes not written yet, one row per source time stamp, in time order."""
         rows: dict[dt.datetime, dict[int, float]] = {}
-        for i, value in changes:
-            stamp = value.SourceTimestamp or value.ServerTimestamp
-            if stamp is None:
-                continue
-            stamp = stamp if stamp.tzinfo else stamp.replace(tzinfo=dt.UTC)
+        stamped = [(stamp, i, value) for i, value in changes if (stamp := _stamp(value)) is not None]
+        # in time order, whatever the order received (history and subscription interleave)
+        for stamp, i, value in sorted(stamped, key=lambda c: (c[0], c[1])):
             last = self.last_stamp.get(self.nodes[i])
             if last is not None and stamp <= dt.datetime.fromisoformat(last):
                 continue  # written before: a subscription made again starts with the value of now
@@ -239,6 +239,14 @@ class OpcUaRecorder:
             out.flush()
             os.fsync(out.fileno())
         self._save()
+
+
+def _stamp(value: Any) -> dt.datetime | None:  # noqa: ANN401 - asyncua's DataValue
+    """A value's source time stamp (else the server's), as an aware UTC time."""
+    stamp = value.SourceTimestamp or value.ServerTimestamp
+    if stamp is None:
+        return None
+    return stamp if stamp.tzinfo else stamp.replace(tzinfo=dt.UTC)
 
 
 def _readings(changes: list[tuple[int, Any]]) -> int:
