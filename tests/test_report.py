@@ -81,6 +81,13 @@ def test_stretches_without_readings_are_said(tmp_path):
     assert reading_gaps(np.array([0.0, 1.0, 2.0, 9.0, 10.0])) == ((2.0, 9.0),)
 
 
+def test_the_report_leaves_a_watchs_state_file_alone(tmp_path):
+    log, _ = logged_test(tmp_path)
+    code, _, err = report(str(log), "-o", str(tmp_path / "r.html"))
+    assert code == 0, err
+    assert not (tmp_path / "run.csv.watch-state.npz").exists()
+
+
 def test_report_refuses_what_it_cannot_write_or_read(tmp_path):
     log, _ = logged_test(tmp_path)
     code, _, err = report(str(log), "-o", str(tmp_path / "report.docx"))

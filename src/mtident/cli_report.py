@@ -75,6 +75,7 @@ def report_command(
         time_col=time_col,
         time_unit=time_unit,
         state_path=state_file(file, path, state_path),
+        persist=False,  # a watch may still follow this log: its state file is its own
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)

@@ -135,6 +135,9 @@ class WatchSession:
         How to read the time column.
     state_path : Path, optional
         The state file (default: beside the log, :func:`default_state_path`).
+    persist : bool
+        Write the state file after each poll (False: read it to start from, never write it, as a
+        report of a log that a watch may still follow does).
     resume : bool
         Resume from the state file where it belongs to this log and these settings.
 
@@ -156,8 +159,10 @@ class WatchSession:
         time_unit: str | None = None,
         state_path: Path | None = None,
         resume: bool = True,
+        persist: bool = True,
     ) -> None:
         self.path = Path(log)
+        self.persist = persist
         self.settings = settings
         self.state_path = Path(state_path) if state_path is not None else default_state_path(self.path)
         self.notes: list[str] = []
@@ -254,7 +259,8 @@ class WatchSession:
             events.extend(said)
             if progress is not None:
                 progress(self)
-        self.save()
+        if self.persist:
+            self.save()
         return events
 
     def _new_state(self, columns: list[str]) -> MonitorState:
