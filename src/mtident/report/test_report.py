@@ -13,6 +13,7 @@ from __future__ import annotations
 import base64
 import datetime as dt
 import io
+import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -101,6 +102,9 @@ class WarmupReport:
         The log's readings: how many, how often, and the last one's time.
     gaps : tuple of (float, float)
         Stretches without readings longer than ``GAP_INTERVALS`` sampling intervals: (from, to), min.
+    recorded_from : str or None
+        Where a watch recorded the log from (an MTConnect agent's device, an OPC UA server's
+        nodes) and its first reading's time, from the recorder's sidecar file; None for a logger's file.
     decision : str
         "stop" or "continue".
     stop_time_min : float
@@ -127,6 +131,7 @@ class WarmupReport:
     sampling_interval_min: float
     log_end_min: float
     gaps: tuple[tuple[float, float], ...]
+    recorded_from: str | None
     decision: str
     stop_time_min: float
     reason: str | None
@@ -198,6 +203,7 @@ def build_report(session: WatchSession, progress: Callable[[WatchSession], None]
         sampling_interval_min=float(np.median(np.diff(time_min))) if len(time_min) > 1 else math.nan,
         log_end_min=float(time_min[-1]) if len(time_min) else math.nan,
         gaps=reading_gaps(time_min),
+        recorded_from=_recorded_from(session.path),
         decision=str(outcome["decision"]),
         stop_time_min=state.stop_time_min if state.stopped else math.nan,
         reason=outcome["reason"] if isinstance(outcome["reason"], str) else None,
@@ -449,6 +455,23 @@ def reading_gaps(time_min: np.ndarray) -> tuple[tuple[float, float], ...]:
     return tuple((float(time_min[k]), float(time_min[k + 1])) for k in long)
 
 
+def _recorded_from(log: Path) -> str | None:
+    """The source a watch recorded ``log`` from, in words, from its recorder's sidecar (None where
+    there is none, or it cannot be read)."""
+    for suffix, what in ((".opcua.json", "nodes"), (".mtconnect.json", "device")):
+        sidecar = log.with_name(log.name + suffix)
+        if not sidecar.is_file():
+            continue
+        try:
+            saved = json.loads(sidecar.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return None
+        named = ", ".join(saved.get("nodes", [])) if what == "nodes" else str(saved.get("device") or "all devices")
+        start = f"; t = 0 is {saved['origin']}" if saved.get("origin") else ""
+        return f"{saved.get('url')} ({what} {named}){start}"
+    return None
+
+
 def _gaps(report: WarmupReport) -> str:
     if not report.gaps:
         return ""
@@ -458,7 +481,9 @@ def _gaps(report: WarmupReport) -> str:
 
 def _setup(report: WarmupReport) -> str:
     return (
-        f"Log: {report.source}. {len(report.lines)} sensor(s), {report.samples} readings every "
+        f"Log: {report.source}"
+        f"{'' if report.recorded_from is None else f', recorded from {report.recorded_from}'}. "
+        f"{len(report.lines)} sensor(s), {report.samples} readings every "
         f"{_fmt(report.sampling_interval_min)} min to t = {minutes(report.log_end_min)}.{_gaps(report)} "
         f"Room {report.room}."
     )
