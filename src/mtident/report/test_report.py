@@ -458,7 +458,9 @@ def reading_gaps(time_min: np.ndarray) -> tuple[tuple[float, float], ...]:
 def _recorded_from(log: Path) -> str | None:
     """The source a watch recorded ``log`` from, in words, from its recorder's sidecar (None where
     there is none, or it cannot be read)."""
-    for suffix, what in ((".opcua.json", "nodes"), (".mtconnect.json", "device")):
+    from mtident.io import mtconnect, opcua
+
+    for suffix, what in ((opcua.SIDECAR_SUFFIX, "nodes"), (mtconnect.SIDECAR_SUFFIX, "device")):
         sidecar = log.with_name(log.name + suffix)
         if not sidecar.is_file():
             continue

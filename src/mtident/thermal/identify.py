@@ -54,6 +54,7 @@ __all__ = [
     "model_check",
     "first_order_suffices",
     "measured_equilibrium",
+    "window_samples",
     "Z95",
 ]
 
@@ -683,6 +684,34 @@ def _say_undetermined(
     )
 
 
+def window_samples(log: TemperatureLog, window_min: float) -> int:
+    """How many samples the first ``window_min`` minutes hold, at least ``MIN_WINDOW_SAMPLES``.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    window_min : float
+        The identification window (min).
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InputError
+        Fewer samples than an identification needs.
+    """
+    n = log.window(window_min)
+    if n < MIN_WINDOW_SAMPLES:
+        msg = (
+            f"{log.source}: only {n} samples in the first {window_min:g} min; the identification needs at least "
+            f"{MIN_WINDOW_SAMPLES} (use a longer `window_min`)"
+        )
+        raise InputError(msg)
+    return n
+
+
 def _identify(
     log: TemperatureLog,
     window_min: float,
@@ -692,13 +721,7 @@ def _identify(
     pseudo_measurement_seed: int | None,
     room_rate: FloatArray | None = None,
 ) -> Identification:
-    n_window = log.window(window_min)
-    if n_window < MIN_WINDOW_SAMPLES:
-        msg = (
-            f"{log.source}: only {n_window} samples in the first {window_min:g} min; the identification "
-            f"needs at least {MIN_WINDOW_SAMPLES} (use a longer `window_min`)"
-        )
-        raise InputError(msg)
+    n_window = window_samples(log, window_min)
     t = log.time_min
     y = log.temperature_C
     tw = t[:n_window]

@@ -506,9 +506,15 @@ def _reference_bounds(family: ModeFamily, fast_lo: float, extra: int) -> FloatAr
     ref = np.asarray(family.reference_min, dtype=float)
     box = np.asarray(family.reference_box, dtype=float)
     bounds = np.column_stack([ref * (1 - box), ref * (1 + box)])
-    ceiling = float(bounds[np.argmax(ref), 0])
+    ceiling = _free_ceiling(family)
     fast = np.tile([min(fast_lo, ceiling), ceiling], (extra, 1))
     return np.concatenate([bounds, fast]) if extra else bounds
+
+
+def _free_ceiling(family: ModeFamily) -> float:
+    """The slowest a reference family's free mode may be: the slowest box's lower end."""
+    k = int(np.argmax(np.asarray(family.reference_min)))
+    return float(family.reference_min[k] * (1 - family.reference_box[k]))  # type: ignore[index]
 
 
 def _reference_grid_fits(problem: _Problem, points: int = 7) -> list[_Fits]:
@@ -520,7 +526,7 @@ def _reference_grid_fits(problem: _Problem, points: int = 7) -> list[_Fits]:
     axes = [np.geomspace(lo, hi, points) for lo, hi in bounds]
     boxed = np.array(np.meshgrid(*[np.arange(points) + points * n for n in range(len(axes))], indexing="ij"))
     boxed = boxed.reshape(len(axes), -1).T
-    ceiling = float(bounds[int(np.argmax(np.asarray(family.reference_min))), 0])
+    ceiling = _free_ceiling(family)
     fast = (
         np.geomspace(fast_lo, ceiling, max(2, int(np.ceil(np.log(ceiling / fast_lo) / np.log(_MAX_GRID_RATIO))) + 1))
         if ceiling > fast_lo

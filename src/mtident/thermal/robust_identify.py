@@ -17,7 +17,7 @@ from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
-from mtident.thermal.identify import MIN_WINDOW_SAMPLES, measured_equilibrium, rmse
+from mtident.thermal.identify import measured_equilibrium, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference
 from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, describe_assumptions, estimate_sensor
@@ -203,13 +203,7 @@ def identify_robust(
     if not (np.isfinite(window_min) and window_min > 0):
         msg = f"window_min must be a positive number of minutes, not {window_min!r}"
         raise InputError(msg)
-    n = log.window(window_min)
-    if n < MIN_WINDOW_SAMPLES:
-        msg = (
-            f"{log.source}: only {n} samples in the first {window_min:g} min; the identification needs at least "
-            f"{MIN_WINDOW_SAMPLES} (a longer window)"
-        )
-        raise InputError(msg)
+    n = window_samples(log, window_min)
     t, y = log.time_min, log.temperature_C
     if room_C is not None and len(room_C) != len(t):
         msg = f"the room sensor has {len(room_C)} readings for {len(t)} samples"
