@@ -76,9 +76,21 @@ def _said_as_options(value: Any) -> Any:
 
 
 class OptionConsole(Console):
-    """A rich Console that says the library's parameters as the command line's options."""
+    """A rich Console that says the library's parameters as the command line's options.
+
+    It takes the keyword arguments of ``rich.console.Console``.
+    """
 
     def print(self, *objects: Any, **kwargs: Any) -> None:
+        """Print as a rich Console does, each string with the library's parameters said as options.
+
+        Parameters
+        ----------
+        *objects
+            What to print; a string goes through :func:`as_options` first.
+        **kwargs
+            Passed on to ``rich.console.Console.print``.
+        """
         super().print(*(as_options(o) if isinstance(o, str) else o for o in objects), **kwargs)
 
 
@@ -96,7 +108,11 @@ def print_json(payload: dict[str, Any]) -> None:
 
 
 class FiniteFloatRange(click.FloatRange):
-    """click.FloatRange that also refuses nan and ±inf (a NaN tolerance would silently never stop)."""
+    """click.FloatRange that also refuses nan and ±inf (a NaN tolerance would silently never stop).
+
+    It takes the arguments of ``click.FloatRange``: ``min``, ``max``, ``min_open``, ``max_open``
+    and ``clamp``.
+    """
 
     name = "finite float"
 
@@ -105,6 +121,25 @@ class FiniteFloatRange(click.FloatRange):
         return "" if self.min is None and self.max is None else super()._describe_range()
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        """The option's number, checked against the range and for being finite.
+
+        Parameters
+        ----------
+        value : object
+            The option's value as given.
+        param : click.Parameter or None
+            The option, for the message.
+        ctx : click.Context or None
+
+        Returns
+        -------
+        float
+
+        Raises
+        ------
+        click.BadParameter
+            Not a number, outside the range, NaN or infinite.
+        """
         number = super().convert(value, param, ctx)
         if not math.isfinite(number):
             self.fail(f"{value!r} is not a finite number", param, ctx)
@@ -113,12 +148,40 @@ class FiniteFloatRange(click.FloatRange):
 
 class OutputPath(click.ParamType):
     """A file to write: its folder exists and is writable, and it is no folder (checked before
-    the work, so that a mistyped folder does not end a long run in an error)."""
+    the work, so that a mistyped folder does not end a long run in an error).
+
+    Attributes
+    ----------
+    name : str
+        The type's name in the help.
+    example : str
+        A file name, for the message where a folder is given.
+    """
 
     name = "file"
     example = "out.csv"  # a file name in the message for a folder given
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        """The file to write, checked before the work begins.
+
+        Parameters
+        ----------
+        value : object
+            The option's value as given (a path).
+        param : click.Parameter or None
+            The option, for the message.
+        ctx : click.Context or None
+
+        Returns
+        -------
+        str
+            The path.
+
+        Raises
+        ------
+        click.BadParameter
+            A folder, or a file whose folder does not exist or is not writable.
+        """
         import os
         from pathlib import Path
 
@@ -136,12 +199,40 @@ class OutputPath(click.ParamType):
 class PicturePath(OutputPath):
     """A --plot file: an :class:`OutputPath` whose suffix is a format matplotlib writes (a mistyped
     folder used to end a long replay in an errno message about a temporary file, and 'fit.svg'
-    was written as a PNG)."""
+    was written as a PNG).
+
+    Attributes
+    ----------
+    name : str
+        The type's name in the help.
+    example : str
+        A file name, for the message where a folder is given.
+    """
 
     name = "picture"
     example = "plot.png"
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        """The picture file to write, checked as an :class:`OutputPath` and for its suffix.
+
+        Parameters
+        ----------
+        value : object
+            The option's value as given (a path).
+        param : click.Parameter or None
+            The option, for the message.
+        ctx : click.Context or None
+
+        Returns
+        -------
+        str
+            The path.
+
+        Raises
+        ------
+        click.BadParameter
+            What :class:`OutputPath` refuses, or a suffix of a format matplotlib does not write.
+        """
         from pathlib import Path
 
         from mtident.report.plots import picture_format
@@ -200,10 +291,32 @@ class LazyGroup(click.Group):
         self.commands_module = commands_module
 
     def list_commands(self, ctx: click.Context) -> list[str]:
+        """The group's command names, its module imported first.
+
+        Parameters
+        ----------
+        ctx : click.Context
+
+        Returns
+        -------
+        list of str
+        """
         importlib.import_module(self.commands_module)  # registers its commands on this group
         return super().list_commands(ctx)
 
     def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        """The command named ``cmd_name``, its module imported first.
+
+        Parameters
+        ----------
+        ctx : click.Context
+        cmd_name : str
+
+        Returns
+        -------
+        click.Command or None
+            None where the group has no such command.
+        """
         importlib.import_module(self.commands_module)
         return super().get_command(ctx, cmd_name)
 

@@ -41,7 +41,17 @@ params_option = click.option(
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def modes_command(params_path: str | None, as_json: bool) -> None:
-    """Natural frequencies, mode shapes and damping ratios (Nguyen-Quoc et al. Eq. 3)."""
+    """Natural frequencies, mode shapes and damping ratios (Nguyen-Quoc et al. Eq. 3).
+
+    \f
+
+    Parameters
+    ----------
+    params_path : str or None
+        --params: a TOML parameter file (default: the shipped set).
+    as_json : bool
+        --json.
+    """
     result = modes(load_parameters(params_path))
     if as_json:
         print_json(
@@ -153,7 +163,40 @@ def simulate_command(
     out_path: str,
     plot_path: str | None,
 ) -> None:
-    """Simulate the vibration response by classical RK4 and write it as CSV."""
+    """Simulate the vibration response by classical RK4 and write it as CSV.
+
+    \f
+
+    Parameters
+    ----------
+    params_path : str or None
+        --params: a TOML parameter file (default: the shipped set).
+    duration_s : float
+        --duration (s).
+    sample_rate_Hz : float
+        --fs (Hz).
+    amplitude : float
+        --impulse: the force amplitude (N or N m).
+    kind : str
+        --excitation.
+    coordinate : str
+        --on: the coordinate the force acts on.
+    frequency_Hz, frequency_end_Hz : float
+        --frequency and --frequency-end (Hz).
+    noise_fraction : float
+        --noise: a fraction of each response's RMS.
+    seed : int
+        --seed.
+    out_path : str
+        --out: the CSV to write.
+    plot_path : str or None
+        --plot.
+
+    Raises
+    ------
+    InputError
+        Fewer than 10 samples, or an excitation above half the sampling rate.
+    """
     samples = int(np.floor(duration_s * sample_rate_Hz + 1e-9)) + 1
     if samples < 10:
         msg = (
@@ -244,7 +287,27 @@ def identify_command(
     plot_path: str | None,
     as_json: bool,
 ) -> None:
-    """Estimate stiffness and damping from a response CSV (time_s, forces, responses)."""
+    """Estimate stiffness and damping from a response CSV (time_s, forces, responses).
+
+    \f
+
+    Parameters
+    ----------
+    file : str
+        FILE: a response CSV.
+    guess_path, truth_path : str or None
+        --params-guess and --truth: TOML parameter files.
+    measured : str
+        --measured: which responses are used.
+    noise_fraction : float
+        --noise: a fraction of each response's RMS.
+    preset : str
+        --preset.
+    plot_path : str or None
+        --plot.
+    as_json : bool
+        --json.
+    """
     response = read_response(file)
     guess = load_parameters(guess_path) if guess_path else default_guess()
     truth = load_parameters(truth_path) if truth_path else None
@@ -305,7 +368,21 @@ def identify_command(
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def params_command(params_path: str | None, template: bool, out_path: str | None, as_json: bool) -> None:
-    """The parameter names, units and values (default: Nguyen-Quoc et al.'s Table 1 with the corrected β)."""
+    """The parameter names, units and values (default: Nguyen-Quoc et al.'s Table 1 with the corrected β).
+
+    \f
+
+    Parameters
+    ----------
+    params_path : str or None
+        --params: a TOML parameter file (default: the shipped set).
+    template : bool
+        --template.
+    out_path : str or None
+        --out: where to write the template (default: stdout).
+    as_json : bool
+        --json.
+    """
     params = load_parameters(params_path)
     if template:
         text = parameter_template(params)
@@ -392,7 +469,36 @@ def plan_command(
     as_json: bool,
 ) -> None:
     """Which test identifies all eight parameters: the expected standard deviations for candidate
-    excitations, from the Fisher information of the model at the guess, and the cheapest that does."""
+    excitations, from the Fisher information of the model at the guess, and the cheapest that does.
+
+    \f
+
+    Parameters
+    ----------
+    guess_path : str or None
+        --params-guess: a TOML parameter file (default: the shipped set).
+    kinds : tuple of str
+        --excitation (empty: every kind).
+    places : tuple of str
+        --on (empty: table force and motor torque).
+    durations : str
+        --durations: seconds, comma-separated.
+    rates : str
+        --fs: sampling rates (Hz), comma-separated.
+    measured : str
+        --measured.
+    noise_fraction : float
+        --noise: a fraction of each response's RMS.
+    target : float
+        --target: a fraction of each parameter's value.
+    as_json : bool
+        --json.
+
+    Raises
+    ------
+    InputError
+        --durations or --fs not comma-separated positive numbers.
+    """
     guess = load_parameters(guess_path)
     candidates = candidate_tests(
         guess,

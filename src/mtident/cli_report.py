@@ -56,6 +56,40 @@ def report_command(
     rest of the log where the log runs on, the warnings, what the answer assumes, the method and
     the software version. The decision is the one `thermal watch` reaches with the same options;
     where a watch of this log left its state file, the report starts from it.
+
+    \f
+
+    Parameters
+    ----------
+    file : str
+        FILE: a log, or a shipped log's @-name.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit : str or None
+        --time-col and --time-unit.
+    tolerance_C : float
+        --tolerance (°C).
+    decision_level : float
+        --confidence.
+    max_tau_min : float
+        --max-time-constant (min).
+    reference_path : str or None
+        --reference.
+    free_fast_modes : int
+        --free-fast-modes.
+    ambient_col : str or None
+        --ambient: the room sensor's column.
+    room_wander : float
+        --room-wander (°C in an hour).
+    output_path : str
+        -o: the report, .html or .pdf.
+    state_path : str or None
+        --state: a watch's state file to start from.
+
+    Raises
+    ------
+    InputError
+        An -o that is not .html or .pdf, or no such log.
     """
     output = Path(output_path)
     if output.suffix.lower() not in REPORT_FORMATS:

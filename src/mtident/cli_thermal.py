@@ -28,7 +28,17 @@ stderr = OptionConsole(stderr=True, soft_wrap=True)
 
 
 def log_path(file: str) -> Path:
-    """FILE as given, or the shipped log it names (@sample, @sample-room)."""
+    """FILE as given, or the shipped log it names (@sample, @sample-room).
+
+    Parameters
+    ----------
+    file : str
+        The FILE argument: a path, or a shipped log's @-name.
+
+    Returns
+    -------
+    Path
+    """
     return sample_log_path(file) if file in SAMPLES else Path(file)
 
 
@@ -37,6 +47,18 @@ def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
 
     An entry that is a column of the log as it stands is one name, commas and
     all ("Temp, Spindel", as some loggers name their channels).
+
+    Parameters
+    ----------
+    sensors : tuple of str
+        The --sensor values as given.
+    path : Path
+        The log: a --sensor value that names one of its columns is one name, commas and all.
+
+    Returns
+    -------
+    list of str
+        The names in the order given.
     """
     from mtident.io.dialect import header_names
 
@@ -46,6 +68,28 @@ def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
 
 
 def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None) -> TemperatureLog:
+    """The log FILE names, read as the options say; its notes said on stderr.
+
+    Parameters
+    ----------
+    file : str
+        The FILE argument: a path, or a shipped log's @-name.
+    sensors : tuple of str
+        The --sensor values (empty: all).
+    time_col : str or None
+        The --time-col option.
+    time_unit : str or None
+        The --time-unit option.
+
+    Returns
+    -------
+    TemperatureLog
+
+    Raises
+    ------
+    InputError
+        A log that cannot be read as asked.
+    """
     path = log_path(file)
     log = read_temperature_log(
         path, time_col=time_col, time_unit=time_unit, sensors=asked_sensors(sensors, path) or None
@@ -58,7 +102,33 @@ def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_uni
 def load_log_with_room(
     file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, room_col: str | None
 ) -> tuple[TemperatureLog, np.ndarray | None]:
-    """The log's sensors, and the room column split off from them when one is named."""
+    """The log's sensors, and the room column split off from them when one is named.
+
+    Parameters
+    ----------
+    file : str
+        The FILE argument: a path, or a shipped log's @-name.
+    sensors : tuple of str
+        The --sensor values (empty: all).
+    time_col : str or None
+        The --time-col option.
+    time_unit : str or None
+        The --time-unit option.
+    room_col : str or None
+        The --ambient option: the room sensor's column; None without one.
+
+    Returns
+    -------
+    log : TemperatureLog
+        The sensors, without the room column.
+    room : ndarray, shape (N,) or None
+        The room column's readings (°C).
+
+    Raises
+    ------
+    InputError
+        A log that cannot be read as asked, or no sensor column besides the room column.
+    """
     if room_col is None:
         log = load_log(file, sensors, time_col, time_unit)
         _say_room_candidates(log.sensors, "identified as a machine sensor")
@@ -89,6 +159,18 @@ def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str) ->
 
 
 def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
+    """Add a log's argument and options to a command: FILE, --sensor, --time-col and --time-unit.
+
+    Parameters
+    ----------
+    func : callable
+        The command's callback.
+
+    Returns
+    -------
+    callable
+        ``func`` with the argument and the options.
+    """
     func = click.option(
         "--time-unit",
         type=click.Choice(list(TIME_UNITS)),
@@ -136,6 +218,17 @@ def _fmt(value: object, digits: int = 2) -> str:
 
 
 def reference_option(func):  # noqa: ANN001,ANN201 - click decorator
+    """Add the --reference option (a reference run's file) to a command.
+
+    Parameters
+    ----------
+    func : callable
+        The command's callback.
+
+    Returns
+    -------
+    callable
+    """
     return click.option(
         "--reference",
         "reference_path",
@@ -147,6 +240,17 @@ def reference_option(func):  # noqa: ANN001,ANN201 - click decorator
 
 
 def free_fast_option(func):  # noqa: ANN001,ANN201 - click decorator
+    """Add the --free-fast-modes option to a command.
+
+    Parameters
+    ----------
+    func : callable
+        The command's callback.
+
+    Returns
+    -------
+    callable
+    """
     return click.option(
         "--free-fast-modes",
         "free_fast_modes",
@@ -161,6 +265,17 @@ def free_fast_option(func):  # noqa: ANN001,ANN201 - click decorator
 
 
 def max_time_constant_option(func):  # noqa: ANN001,ANN201 - click decorator
+    """Add the --max-time-constant option (min) to a command.
+
+    Parameters
+    ----------
+    func : callable
+        The command's callback.
+
+    Returns
+    -------
+    callable
+    """
     return click.option(
         "--max-time-constant",
         "max_tau_min",
@@ -174,7 +289,22 @@ def max_time_constant_option(func):  # noqa: ANN001,ANN201 - click decorator
 
 
 def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineReference or None
-    """The reference run named by --reference, read (None where none is given)."""
+    """The reference run named by --reference, read (None where none is given).
+
+    Parameters
+    ----------
+    reference_path : str or None
+        The --reference option: a file, or a shipped reference's @-name.
+
+    Returns
+    -------
+    MachineReference or None
+
+    Raises
+    ------
+    InputError
+        No such file, or a file that is no reference.
+    """
     if reference_path is None:
         return None
     from mtident.thermal.reference import load_reference
@@ -288,6 +418,46 @@ def identify_command(
     FILE is a CSV log (time column, one column per sensor), or @sample for the
     10-sensor warm-up shipped with mtident (@sample-room: the same with a room
     sensor column "room", for --ambient room).
+
+    \f
+
+    Parameters
+    ----------
+    file : str
+        FILE: a log, or a shipped log's @-name.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit : str or None
+        --time-col and --time-unit.
+    window_min : float
+        --window: the identification time L (min).
+    method : str
+        --method.
+    preset : str
+        --preset (first-order filters only).
+    max_tau_min : float
+        --max-time-constant (min).
+    reference_path : str or None
+        --reference.
+    free_fast_modes : int
+        --free-fast-modes.
+    room_wander : float
+        --room-wander (°C in an hour).
+    horizon_min : float or None
+        --horizon (min).
+    pseudo_seed : int or None
+        --pseudo-seed (first-order filters only).
+    ambient_col : str or None
+        --ambient: the room sensor's column.
+    plot_path, curve_path : str or None
+        --plot and --curve: the picture and the CSV to write.
+    as_json : bool
+        --json.
+
+    Raises
+    ------
+    InputError
+        Options that do not go together, or a log that cannot be read (said as a one-line error).
     """
     log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
     if method == ROBUST_METHOD:
@@ -421,6 +591,30 @@ def learn_command(
     The time constants belong to the machine's structure, not to the load: a later test of the
     same machine, with --reference, searches them only near these (never as exact), and may
     stop far earlier. A later test that does not follow them is said to (a changed machine).
+
+    \f
+
+    Parameters
+    ----------
+    file : str
+        FILE: a log, or a shipped log's @-name.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit : str or None
+        --time-col and --time-unit.
+    ambient_col : str or None
+        --ambient: the room sensor's column.
+    max_tau_min : float
+        --max-time-constant (min).
+    output_path : str
+        -o: the reference file to write.
+    as_json : bool
+        --json.
+
+    Raises
+    ------
+    InputError
+        A log that cannot be read, or no sensor whose modes could be learnt.
     """
     from mtident.thermal.reference import learn_reference, save_reference
     from mtident.thermal.robust import RobustSettings
@@ -527,7 +721,36 @@ def min_time_command(
     plot_path: str | None,
     as_json: bool,
 ) -> None:
-    """Find the minimal identification time (Xia et al. 2014 §2.4): RMSE against L for several sampling periods."""
+    """Find the minimal identification time (Xia et al. 2014 §2.4): RMSE against L for several sampling periods.
+
+    \f
+
+    Parameters
+    ----------
+    file : str
+        FILE: a log, or a shipped log's @-name.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit : str or None
+        --time-col and --time-unit.
+    sampling_periods : str
+        --sampling-periods: minutes, comma-separated.
+    windows : str or None
+        --windows: START:STOP[:STEP] minutes.
+    method, preset : str
+        --method and --preset.
+    ambient_col : str or None
+        --ambient: the room sensor's column.
+    plot_path : str or None
+        --plot.
+    as_json : bool
+        --json.
+
+    Raises
+    ------
+    InputError
+        --sampling-periods or --windows not as asked, or a log that cannot be read.
+    """
     periods = _float_list(sampling_periods, "--sampling-periods")
     candidates = None
     if windows:
@@ -600,6 +823,19 @@ def inspect_command(
     sensor's unit and readings, and every column left out with the reason.
 
     For a logger's own export, before trusting what identify or watch make of it.
+
+    \f
+
+    Parameters
+    ----------
+    file : str
+        FILE: a log, or a shipped log's @-name.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit : str or None
+        --time-col and --time-unit.
+    as_json : bool
+        --json.
     """
     from mtident.io.describe import describe_log
 

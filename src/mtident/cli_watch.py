@@ -52,7 +52,19 @@ _SAID = ("note", "warning", "ready", "not ready", "stop")
 
 
 def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
-    """The options of the stop decision, shared by watch and report."""
+    """The options of the stop decision, shared by watch and report.
+
+    Parameters
+    ----------
+    func : callable
+        The command's callback.
+
+    Returns
+    -------
+    callable
+        ``func`` with --tolerance, --confidence, --max-time-constant, --reference,
+        --free-fast-modes, --ambient and --room-wander.
+    """
     options = [
         click.option(
             "--tolerance",
@@ -102,13 +114,29 @@ def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
 
 
 class Recorder(Protocol):
-    """A network source recorded to the CSV log the watch follows."""
+    """A network source recorded to the CSV log the watch follows.
+
+    Attributes
+    ----------
+    log : Path
+        The CSV log the readings are written to.
+    """
 
     log: Path
 
-    def fetch(self) -> list[str]: ...
+    def fetch(self) -> list[str]:
+        """Write the readings received since the last fetch to the log.
 
-    def close(self) -> None: ...
+        Returns
+        -------
+        list of str
+            What the user should hear of (the source unreachable, or back again).
+        """
+        ...
+
+    def close(self) -> None:
+        """Write what is left to the log, and close the connection."""
+        ...
 
 
 def network_recorder(
@@ -121,7 +149,37 @@ def network_recorder(
     replay: bool,
 ) -> Recorder | None:
     """The recorder of an MTConnect agent (http:// or https://) or an OPC UA server (opc.tcp://)
-    where FILE is one, else None; a source's options refused for a file."""
+    where FILE is one, else None; a source's options refused for a file.
+
+    Parameters
+    ----------
+    file : str
+        FILE: a log, an MTConnect agent's URL (http:// or https://) or an OPC UA server's
+        (opc.tcp://).
+    device : str or None
+        --device: the MTConnect device's name.
+    nodes : tuple of str
+        --node: the OPC UA nodes to record.
+    items : tuple of str
+        --item: MTConnect data items as ID=NAME.
+    record_path : str or None
+        --record: the CSV to write (default: DEVICE.csv or HOST.csv in the current folder).
+    from_buffer_start : bool
+        --from-buffer-start.
+    replay : bool
+        --replay.
+
+    Returns
+    -------
+    Recorder or None
+        None for a log file.
+
+    Raises
+    ------
+    InputError
+        An option of one kind of source given for another or for a file, --replay with a source,
+        or an --item that is not ID=NAME.
+    """
     is_agent, is_server = file.startswith(("http://", "https://")), file.startswith("opc.tcp://")
     given = {
         "--device": device,
@@ -172,7 +230,21 @@ def network_recorder(
 
 def state_file(file: str, path: Path, given: str | None) -> Path:
     """The state file: the one given, else beside the log; for a shipped sample, in the current
-    folder (not inside the installed package)."""
+    folder (not inside the installed package).
+
+    Parameters
+    ----------
+    file : str
+        FILE as given.
+    path : Path
+        The log.
+    given : str or None
+        The --state option.
+
+    Returns
+    -------
+    Path
+    """
     if given:
         return Path(given)
     return Path.cwd() / default_state_path(path).name if file in SAMPLES else default_state_path(path)
@@ -187,7 +259,34 @@ def monitor_settings(
     ambient_col: str | None,
     room_wander: float,
 ) -> MonitorSettings:
-    """The decision's settings from the options of :func:`decision_options`."""
+    """The decision's settings from the options of :func:`decision_options`.
+
+    Parameters
+    ----------
+    tolerance_C : float
+        --tolerance (°C).
+    decision_level : float
+        --confidence.
+    max_tau_min : float
+        --max-time-constant (min).
+    reference_path : str or None
+        --reference.
+    free_fast_modes : int
+        --free-fast-modes.
+    ambient_col : str or None
+        --ambient: the room sensor's column.
+    room_wander : float
+        --room-wander (°C in an hour).
+
+    Returns
+    -------
+    MonitorSettings
+
+    Raises
+    ------
+    InputError
+        A reference file that cannot be read.
+    """
     return MonitorSettings(
         tolerance_C=tolerance_C,
         decision_level=decision_level,
@@ -311,6 +410,65 @@ def watch_command(
     two checks in a row. The test may stop when every sensor may. Until then the answer says
     the interval, what sets its ends, and when the stop is expected. A killed monitor resumes
     from its state file.
+
+    \f
+
+    Parameters
+    ----------
+    file : str
+        FILE: a log, a shipped log's @-name, an MTConnect agent's URL or an OPC UA server's.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit : str or None
+        --time-col and --time-unit.
+    tolerance_C : float
+        --tolerance (°C).
+    decision_level : float
+        --confidence.
+    max_tau_min : float
+        --max-time-constant (min).
+    reference_path : str or None
+        --reference.
+    free_fast_modes : int
+        --free-fast-modes.
+    ambient_col : str or None
+        --ambient: the room sensor's column.
+    room_wander : float
+        --room-wander (°C in an hour).
+    replay, resume : bool
+        --replay and --resume.
+    state_path : str or None
+        --state.
+    poll_s : float
+        --poll (s).
+    timeout_s : float or None
+        --timeout (s).
+    plot_path : str or None
+        --plot.
+    as_json : bool
+        --json.
+    device : str or None
+        --device (MTConnect).
+    nodes : tuple of str
+        --node (OPC UA).
+    items : tuple of str
+        --item (MTConnect).
+    record_path : str or None
+        --record.
+    from_buffer_start : bool
+        --from-buffer-start (MTConnect).
+    serve_address : str or None
+        --serve: HOST:PORT of the live page.
+    hold, bin_s : float or None
+        Hidden options no longer used: said and ignored.
+    room_coupling : str or None
+        A hidden option no longer used: said and ignored.
+
+    Raises
+    ------
+    InputError
+        --replay of a missing log, a log without data rows, or a source's options that do not fit
+        FILE.
     """
     for name, given in (("--hold", hold), ("--bin", bin_s), ("--room-coupling", room_coupling)):
         if given is not None:

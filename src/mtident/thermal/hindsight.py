@@ -30,7 +30,28 @@ _ROOM_AROUND_STOP_MIN = 5.0
 @dataclass(frozen=True, slots=True)
 class Hindsight:
     """Per sensor: T∞ at the stop (NaN: left out of the decision), where the log settled (NaN: not at
-    equilibrium by its end), and the difference."""
+    equilibrium by its end), and the difference.
+
+    Attributes
+    ----------
+    sensors : tuple of str
+        The sensors, in the log's order.
+    stop_time_min : float
+        The stop (min).
+    log_end_min : float
+        The time of the log's last sample (min).
+    steady_state_C : ndarray, shape (S,)
+        T∞ at the stop (°C), NaN for a sensor left out of the decision.
+    settled_C : ndarray, shape (S,)
+        Where the log settled (°C, :func:`~mtident.thermal.identify.measured_equilibrium`), NaN
+        where it was not at equilibrium by its end.
+    measured_equilibrium_time_min : ndarray, shape (S,)
+        When the log reached 95 % of its total rise (min), NaN where it did not settle.
+    room_shift_C : float
+        The room's move from the stop to the log's end (°C), added to T∞; 0 without a room sensor.
+    tolerance_C : float
+        The decision's tolerance (°C).
+    """
 
     sensors: tuple[str, ...]
     stop_time_min: float
@@ -66,22 +87,45 @@ class Hindsight:
 
     @property
     def error_C(self) -> FloatArray:
-        """T∞ at the stop, moved with the room, minus where the log settled."""
+        """T∞ at the stop, moved with the room, minus where the log settled.
+
+        Returns
+        -------
+        ndarray, shape (S,)
+            The error (°C), NaN where T∞ or the settled temperature is NaN.
+        """
         return self.steady_state_C + self.room_shift_C - self.settled_C
 
     @property
     def checked(self) -> np.ndarray:
-        """The sensors with something to check: in the decision, and settled by the log's end."""
+        """The sensors with something to check: in the decision, and settled by the log's end.
+
+        Returns
+        -------
+        ndarray of bool, shape (S,)
+        """
         return np.isfinite(self.error_C)
 
     @property
     def within(self) -> np.ndarray:
-        """Whether each sensor's T∞ was within the tolerance of where it settled (False where it did not settle)."""
+        """Whether each sensor's T∞ was within the tolerance of where it settled (False where it did not settle).
+
+        Returns
+        -------
+        ndarray of bool, shape (S,)
+        """
         with np.errstate(invalid="ignore"):
             return np.abs(self.error_C) <= self.tolerance_C
 
     def to_dict(self) -> dict[str, object]:
-        """Plain JSON types (None where not known)."""
+        """Plain JSON types (None where not known).
+
+        Returns
+        -------
+        dict
+            The stop, the log's end, the room's shift and one entry per sensor: its T∞, where it
+            settled, the error, the measured equilibrium time and whether it was within the tolerance.
+        """
 
         return {
             "stop_time_min": self.stop_time_min,

@@ -72,8 +72,12 @@ class Identification:
     method, preset : str
     window_min : float
         Identification time L actually used (time of the last sample ≤ L).
+    n_window : int
+        The number of samples in the window.
     time_min : ndarray, shape (N,)
         The log's sample times, then the forecast horizon beyond it.
+    measured_C : ndarray, shape (N, S)
+        The log's readings at ``time_min``, NaN past the log's end.
     curve_C, curve_sd_C : ndarray, shape (N, S)
         Estimated temperature (filtered up to L, predicted after) and its standard deviation.
     steady_state_C, steady_state_sd_C, rate_per_min, rate_sd_per_min, start_C : ndarray, shape (S,)
@@ -141,7 +145,14 @@ class Identification:
         """The measured and modelled curve of every sensor with its 95 % band, a row per time: for
         a report or a spreadsheet. ``part`` says whether the row is in the identification window
         (the filtered curve) or after it (the prediction); a time past the log's end has no
-        measured value."""
+        measured value.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``time_min``, ``part`` ("window" or "prediction") and per sensor ``NAME_measured_C``,
+            ``NAME_model_C``, ``NAME_low95_C`` and ``NAME_high95_C`` (°C).
+        """
         import pandas as pd
 
         half = self.quantile * self.curve_sd_C
@@ -157,17 +168,42 @@ class Identification:
         return pd.DataFrame(columns)
 
     def band_C(self) -> tuple[FloatArray, FloatArray]:
-        """The curve's 95 % band, low and high, each (N, S)."""
+        """The curve's 95 % band, low and high, each (N, S).
+
+        Returns
+        -------
+        low, high : ndarray, shape (N, S)
+            The band's ends (°C).
+        """
         half = self.quantile * self.curve_sd_C
         return self.curve_C - half, self.curve_C + half
 
     def steady_state_ci95(self) -> FloatArray:
-        """(S, 2) 95 % interval of T∞."""
+        """(S, 2) 95 % interval of T∞.
+
+        Returns
+        -------
+        ndarray, shape (S, 2)
+            The low and high end of each sensor's interval (°C).
+        """
         half = self.quantile * self.steady_state_sd_C
         return np.column_stack([self.steady_state_C - half, self.steady_state_C + half])
 
     def summary(self, index: int) -> dict[str, object]:
-        """The contract's JSON object for one sensor (DESIGN.md), plus extras."""
+        """The contract's JSON object for one sensor (DESIGN.md), plus extras.
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position in ``sensors``.
+
+        Returns
+        -------
+        dict
+            JSON types: T∞ with its interval, λ, the time constant, the equilibrium time, the RMSE, the
+            model check, the sensor's warnings and what the answer assumes; None where a value is not
+            finite.
+        """
         lo, hi = self.steady_state_ci95()[index]
         rate = float(self.rate_per_min[index])
         name = self.sensors[index]
@@ -206,12 +242,38 @@ FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
 
 
 def sensor_notes(notes: tuple[str, ...], sensor: str) -> list[str]:
-    """The notes that name ``sensor`` (as 'NAME' or NAME:), and those that name no sensor of a list."""
+    """The notes that name ``sensor`` (as 'NAME' or NAME:), and those that name no sensor of a list.
+
+    Parameters
+    ----------
+    notes : tuple of str
+        A log's or an identification's notes.
+    sensor : str
+        The sensor's name.
+
+    Returns
+    -------
+    list of str
+        The notes that name ``sensor``, in their order.
+    """
     return [n for n in notes if repr(sensor) in n or n.startswith(f"{sensor}:")]
 
 
 def rmse(estimate: FloatArray, measured: FloatArray) -> FloatArray:
-    """Xia et al. 2014 Eq. 33: sqrt(Σ(Tₑ − Tₒ)²/(M − 1)) over the finite samples, per column."""
+    """Xia et al. 2014 Eq. 33: sqrt(Σ(Tₑ − Tₒ)²/(M − 1)) over the finite samples, per column.
+
+    Parameters
+    ----------
+    estimate : ndarray, shape (N, S)
+        The identified or predicted temperatures (°C).
+    measured : ndarray, shape (N, S)
+        The measured temperatures (°C, NaN: missing).
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The RMSE (°C) over the samples where both are finite.
+    """
     diff = estimate - measured
     ok = np.isfinite(diff)
     count = ok.sum(axis=0)
@@ -252,6 +314,20 @@ def first_order_suffices(time_min: FloatArray, values: FloatArray, level: float 
     False when the ramp term is significant at ``level`` — the signature of a
     slow mode (or drift) that a first-order model would average away. Needs no
     noise level.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    values : ndarray, shape (N,)
+        One sensor's readings (°C), all finite.
+    level : float, optional
+        The test's confidence level.
+
+    Returns
+    -------
+    bool
+        True where the ramp term is not significant at ``level``.
     """
     rss_null = _best_rss(time_min, values, with_drift=False)
     rss_alt = _best_rss(time_min, values, with_drift=True)
@@ -314,6 +390,22 @@ def measured_equilibrium(time_min: FloatArray, values: FloatArray) -> tuple[Floa
     The final temperature is the median of the last 10 samples; the log counts as
     having reached equilibrium when its last quarter rose by less than 5 % of the
     total rise. Otherwise NaN.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: missing).
+
+    Returns
+    -------
+    final_C : ndarray, shape (S,)
+        The final temperature (°C), NaN where the log did not reach equilibrium or a sensor has
+        fewer than 40 valid readings.
+    equilibrium_time_min : ndarray, shape (S,)
+        The time (min, on ``time_min``) at which the smoothed readings first reach 95 % of the
+        rise, NaN where the final temperature is NaN.
     """
     finals, times = [], []
     n = len(time_min)
@@ -357,6 +449,28 @@ def filter_window(
     :func:`~mtident.thermal.model.slope_transition`). Returns the filter record
     and the per-step mean (N, S, 3) and covariance (N, S, 3, 3) of [T, λ, T∞]
     whatever the parametrisation.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: a missing measurement).
+    config : FilterConfig
+        The UKF variant (:func:`~mtident.thermal.settings.filter_config`).
+    tuning : ThermalTuning
+        Initial state and covariances, and the parametrisation.
+    room_rate : ndarray, shape (N,), optional
+        The room's rate over each step (°C/min). None: a steady room.
+
+    Returns
+    -------
+    record : FilterRecord
+        The filter's record, in the tuning's parametrisation.
+    mean : ndarray, shape (N, S, 3)
+        [T, λ, T∞] after each sample (°C, 1/min, °C).
+    cov : ndarray, shape (N, S, 3, 3)
+        Their covariance.
     """
     dts = np.diff(time_min, prepend=time_min[0])
     record = run_filter(
@@ -404,7 +518,29 @@ def _curve_with_room(time_min: FloatArray, values: FloatArray, room_rate: FloatA
 
 
 def room_input(log: TemperatureLog, ambient_C: FloatArray | None, method: str, preset: str) -> FloatArray | None:
-    """The room's rate over each step of ``log`` from a room sensor, checked; None without one."""
+    """The room's rate over each step of ``log`` from a room sensor, checked; None without one.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    ambient_C : ndarray, shape (N,) or None
+        A room sensor's readings (°C) at the log's sample times; None without one.
+    method : str
+        The identification method.
+    preset : str
+        The tuning preset.
+
+    Returns
+    -------
+    ndarray, shape (N,) or None
+        The room's rate over each step (°C/min, :func:`room_rates`).
+
+    Raises
+    ------
+    InputError
+        A room sensor with the "lsq" method or a paper's preset, or with another number of readings
+        than the log has samples.
+    """
     if ambient_C is None:
         return None
     if method == "lsq" or preset != "data":
@@ -424,6 +560,18 @@ def room_rates(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
 
     The first step (Δt = 0) has rate 0. A room sensor with no valid reading
     gives rate 0 throughout (the room is taken as steady).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    room_C : ndarray, shape (N,)
+        The room sensor's readings (°C, NaN: missing).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The room's rate over the step to each sample (°C/min).
     """
     t = np.asarray(time_min, dtype=float)
     a = np.asarray(room_C, dtype=float)

@@ -28,7 +28,17 @@ __all__ = [
 
 @dataclass(frozen=True, slots=True)
 class LeastSquaresFit:
-    """Estimates [T₀, λ, T∞] per sensor (S, 3), their covariance (S, 3, 3) and residual σ (S,)."""
+    """Estimates [T₀, λ, T∞] per sensor (S, 3), their covariance (S, 3, 3) and residual σ (S,).
+
+    Attributes
+    ----------
+    params : ndarray, shape (S, 3)
+        [T₀, λ, T∞] per sensor (°C, 1/min, °C), T₀ at ``time_min`` = 0.
+    cov : ndarray, shape (S, 3, 3)
+        Their covariance; 1e12 on the diagonal where the fit gave none (not identified).
+    residual_sigma : ndarray, shape (S,)
+        The residuals' standard deviation (°C), with N − 3 degrees of freedom.
+    """
 
     params: FloatArray
     cov: FloatArray
@@ -48,6 +58,12 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
         NaN samples are left out.
     guess : ndarray, shape (S, 3)
         Starting point [T₀, λ, T∞].
+
+    Returns
+    -------
+    LeastSquaresFit
+        A sensor with fewer than three valid samples, or whose fit does not converge, keeps its
+        starting point, with 1e12 on its covariance's diagonal.
     """
     from scipy.optimize import OptimizeWarning, curve_fit  # here, not at the top: it costs ~0.3 s of start-up
 
@@ -122,7 +138,20 @@ def cramer_rao_bound(
 
 
 def rise_threshold(sigma: FloatArray, min_rise_C: float = 0.1) -> FloatArray:
-    """A change that is a rise, not noise: ``min_rise_C``, or 6σ if larger."""
+    """A change that is a rise, not noise: ``min_rise_C``, or 6σ if larger.
+
+    Parameters
+    ----------
+    sigma : ndarray, shape (S,)
+        Noise level per sensor (°C).
+    min_rise_C : float, optional
+        The smallest change taken as a rise (°C).
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The threshold per sensor (°C).
+    """
     return np.maximum(min_rise_C, 6.0 * np.asarray(sigma))
 
 
@@ -140,6 +169,23 @@ def flat_lead(
     default 10 min leaves those to :func:`first_order_onset`'s lag rule, which fits
     them better than a cut at the last flat sample (at L = 28 min a 5-min rule
     sent four of the sample's ten T∞ off by 15 to 40 °C).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: missing).
+    sigma : ndarray, shape (S,)
+        Noise level per sensor (°C).
+    min_rise_C : float, optional
+        The smallest departure from the first level taken as a rise (°C).
+    min_flat_min : float, optional
+        How long a sensor must stay at its first level to be a late warm-up (min).
+
+    Returns
+    -------
+    ndarray of int, shape (S,)
     """
     t = np.asarray(time_min, dtype=float)
     y = np.asarray(values, dtype=float)
@@ -160,14 +206,39 @@ def flat_lead(
 def late_onset(time_min: FloatArray, values: FloatArray, sigma: FloatArray) -> IntArray:
     """Per sensor, the sample a late warm-up is fitted from: its last flat sample
     (:func:`flat_lead`), 0 for a warm-up from the log's start and for a sensor that
-    never rises (it has no rise to fit from)."""
+    never rises (it has no rise to fit from).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: missing).
+    sigma : ndarray, shape (S,)
+        Noise level per sensor (°C).
+
+    Returns
+    -------
+    ndarray of int, shape (S,)
+    """
     last_flat = flat_lead(time_min, values, sigma)
     return np.where(last_flat < len(time_min), last_flat, 0)
 
 
 def first_level(values: FloatArray) -> FloatArray:
     """Per sensor, the level a late warm-up holds before its rise: the median of the
-    valid ones among its first three samples (NaN for a sensor with none)."""
+    valid ones among its first three samples (NaN for a sensor with none).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: missing).
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The level (°C).
+    """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a sensor without a valid first sample
         return np.nanmedian(np.asarray(values, dtype=float)[:3], axis=0)
@@ -189,6 +260,20 @@ def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: f
     its first sample. Leaving out a few samples of a true first-order curve by
     mistake costs little (no bias, slightly wider intervals); keeping a flat
     start costs a bias, so the thresholds are low.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        The window's sample times (min).
+    values : ndarray, shape (N, S)
+        The window's readings (°C, NaN: missing).
+    lead_fraction : float, optional
+        The share of the window whose leading samples may be left out.
+
+    Returns
+    -------
+    ndarray of int, shape (S,)
+        The index of the first sample to fit from; all 0 for a window too short to judge.
 
     Examples
     --------

@@ -47,6 +47,8 @@ class MinTimeResult:
     Attributes
     ----------
     sensors : tuple of str
+    method : str
+        The filter or "lsq".
     windows_min : ndarray, shape (W,)
         Candidate identification times L.
     periods_min : ndarray, shape (P,)
@@ -61,6 +63,9 @@ class MinTimeResult:
         the L with the smallest summed relative RMSE is reported.
     measuring_time_min : float
         The longest sampling period: the test had to run this long to choose.
+    rise_begins_min : ndarray, shape (S,), optional
+        Where a warm-up that began after the log starts its rise (min), NaN for one that rose
+        from the log's start (data tuning only).
     """
 
     sensors: tuple[str, ...]
@@ -86,7 +91,18 @@ class MinTimeResult:
 
     def warnings(self, index: int) -> list[str]:
         """What the criterion's answer for one sensor does not say: a best L at the end of every
-        sampling period (more data simply fit better), RMSEs that explode, periods that disagree."""
+        sampling period (more data simply fit better), RMSEs that explode, periods that disagree.
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position in ``sensors``.
+
+        Returns
+        -------
+        list of str
+            Empty where there is nothing to say.
+        """
         name = self.sensors[index]
         said = []
         step = float(np.median(np.diff(self.windows_min))) if len(self.windows_min) > 1 else 1.0
@@ -119,7 +135,19 @@ class MinTimeResult:
         return said
 
     def summary(self, index: int) -> dict[str, object]:
-        """The contract's JSON object for one sensor, with its verdict and what it assumes."""
+        """The contract's JSON object for one sensor, with its verdict and what it assumes.
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position in ``sensors``.
+
+        Returns
+        -------
+        dict
+            JSON types: the minimal L, each sampling period's RMSE curve and best L, whether the periods
+            agree, the measuring time needed, the warnings and what the answer assumes.
+        """
         table = {}
         for p, period in enumerate(self.periods_min):
             rows = [
@@ -177,6 +205,10 @@ def minimal_identification_time(
         up to L and in the prediction after it (the measured room is a known
         input, so the RMSE judges the model, not the room). UKF methods with the
         data tuning only.
+
+    Returns
+    -------
+    MinTimeResult
 
     Raises
     ------

@@ -24,7 +24,22 @@ _DIFF_STEP = 1e-6
 @njit(cache=True)
 def lag_rows(room: FloatArray, time_min: FloatArray, tau: FloatArray) -> FloatArray:  # pragma: no cover - compiled
     """A first-order lag of each time constant in ``tau`` (k,) applied to ``room`` (B,) taken as
-    piecewise linear between its times, from a machine at the room's first level: (k, B)."""
+    piecewise linear between its times, from a machine at the room's first level: (k, B).
+
+    Parameters
+    ----------
+    room : ndarray, shape (B,)
+        The room's readings (°C).
+    time_min : ndarray, shape (B,)
+        Their times (min), increasing.
+    tau : ndarray, shape (k,)
+        Time constants (min).
+
+    Returns
+    -------
+    ndarray, shape (k, B)
+        Each lag's temperature (°C) at ``time_min``.
+    """
     k, n = tau.shape[0], room.shape[0]
     out = np.empty((k, n))
     for j in range(k):

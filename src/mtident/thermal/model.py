@@ -34,6 +34,18 @@ EQUILIBRIUM_FRACTION = 0.95
 def rise_transition(points: FloatArray, dt_min: FloatArray | float) -> FloatArray:
     """Propagate states (..., 3) = [T, λ, T∞] over ``dt_min`` minutes (broadcast to ...).
 
+    Parameters
+    ----------
+    points : ndarray, shape (..., 3)
+        States [T, λ, T∞] (°C, 1/min, °C).
+    dt_min : float or ndarray
+        The step (min), broadcast against ``points[..., 0]``.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The states after the step.
+
     Examples
     --------
     >>> rise_transition(np.array([20.0, 0.1, 30.0]), 10.0).round(4).tolist()
@@ -60,6 +72,20 @@ def slope_transition(points: FloatArray, dt_min: FloatArray | float, room_rate: 
     sₖ = r + (sₖ₋₁ − r)e^(−λΔt), Tₖ = Tₖ₋₁ + rΔt + (sₖ₋₁ − r)(1 − e^(−λΔt))/λ,
     and T + s/λ stays the steady state at the room's current level.
 
+    Parameters
+    ----------
+    points : ndarray, shape (..., 3)
+        States [T, s, λ] (°C, °C/min, 1/min).
+    dt_min : float or ndarray
+        The step (min), broadcast against ``points[..., 0]``.
+    room_rate : float or ndarray, optional
+        The room's rate over the step (°C/min); 0 for a steady room.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The states after the step.
+
     Examples
     --------
     >>> slope_transition(np.array([20.0, 1.0, 0.1]), 10.0).round(4).tolist()
@@ -82,6 +108,22 @@ def heat_balance_path(state: FloatArray, start: IntArray, dt_min: FloatArray, ro
     Each state holds until its ``start`` index (broadcast to ``state.shape[:-1]``)
     and moves on from there, step k covering ``dt_min[k]`` with the room's rate
     ``room_rate[k]``: the heat balance with the measured room as its input.
+
+    Parameters
+    ----------
+    state : ndarray, shape (..., 3)
+        States [T, s, λ] (°C, °C/min, 1/min).
+    start : ndarray of int
+        The step each state holds until, broadcast to ``state.shape[:-1]``.
+    dt_min : ndarray, shape (N,)
+        Each step's length (min).
+    room_rate : ndarray, shape (N,)
+        The room's rate over each step (°C/min).
+
+    Returns
+    -------
+    ndarray, shape (N, ...)
+        T after each step (°C).
     """
     path = np.empty((len(dt_min), *state.shape[:-1]))
     for k in range(len(dt_min)):
@@ -92,7 +134,17 @@ def heat_balance_path(state: FloatArray, start: IntArray, dt_min: FloatArray, ro
 
 
 def transition_for(parametrisation: str):  # noqa: ANN201 - returns one of the two transitions
-    """The transition of a parametrisation ("rate" or "slope")."""
+    """The transition of a parametrisation ("rate" or "slope").
+
+    Parameters
+    ----------
+    parametrisation : {"rate", "slope"}
+
+    Returns
+    -------
+    callable
+        :func:`rise_transition` for "rate", else :func:`slope_transition`.
+    """
     return rise_transition if parametrisation == "rate" else slope_transition
 
 
@@ -101,6 +153,21 @@ def to_physical(mean: FloatArray, cov: FloatArray, parametrisation: str) -> tupl
 
     For "slope", T∞ = T + s/λ and the covariance is propagated to first order
     (J P Jᵀ).
+
+    Parameters
+    ----------
+    mean : ndarray, shape (..., 3)
+        The state's mean in ``parametrisation``.
+    cov : ndarray, shape (..., 3, 3)
+        Its covariance.
+    parametrisation : {"rate", "slope"}
+        "rate": [T, λ, T∞], returned as given; "slope": [T, s, λ].
+
+    Returns
+    -------
+    mean : ndarray, shape (..., 3)
+        [T, λ, T∞] (°C, 1/min, °C).
+    cov : ndarray, shape (..., 3, 3)
     """
     if parametrisation == "rate":
         return mean, cov
@@ -118,15 +185,53 @@ def to_physical(mean: FloatArray, cov: FloatArray, parametrisation: str) -> tupl
 
 
 def observe_temperature(points: FloatArray) -> FloatArray:
-    """y = T (Eq. 32): (..., 3) → (..., 1)."""
+    """y = T (Eq. 32): (..., 3) → (..., 1).
+
+    Parameters
+    ----------
+    points : ndarray, shape (..., 3)
+        States, T (°C) first.
+
+    Returns
+    -------
+    ndarray, shape (..., 1)
+    """
     return points[..., :1]
 
 
 def rise_curve(time_min: FloatArray, start_C: FloatArray, rate_per_min: FloatArray, steady_C: FloatArray) -> FloatArray:
-    """T(t) = T∞ + (T₀ − T∞)e^(−λt), broadcast."""
+    """T(t) = T∞ + (T₀ − T∞)e^(−λt), broadcast.
+
+    Parameters
+    ----------
+    time_min : ndarray
+        Time since T₀ (min).
+    start_C : ndarray
+        T₀ (°C).
+    rate_per_min : ndarray
+        λ (1/min).
+    steady_C : ndarray
+        T∞ (°C).
+
+    Returns
+    -------
+    ndarray
+        T(t) (°C), in the inputs' broadcast shape.
+    """
     return steady_C + (start_C - steady_C) * np.exp(-rate_per_min * time_min)
 
 
 def equilibrium_time(rate_per_min: FloatArray) -> FloatArray:
-    """Time to 95 % of the total rise of a first-order curve: ln(20)/λ."""
+    """Time to 95 % of the total rise of a first-order curve: ln(20)/λ.
+
+    Parameters
+    ----------
+    rate_per_min : ndarray
+        λ (1/min).
+
+    Returns
+    -------
+    ndarray
+        The time from the curve's start (min).
+    """
     return np.log(1.0 / (1.0 - EQUILIBRIUM_FRACTION)) / rate_per_min

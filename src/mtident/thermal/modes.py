@@ -135,7 +135,13 @@ class ModeFamily:
     free_fast: int = 0
 
     def without_reference(self) -> ModeFamily:
-        """The same family without the reference's boxes."""
+        """The same family without the reference's boxes.
+
+        Returns
+        -------
+        ModeFamily
+            The same largest time constant and number of modes, with no reference.
+        """
         return ModeFamily(self.max_time_constant_min, self.max_modes)
 
 
@@ -164,7 +170,18 @@ class Binned:
         return len(self.time_min)
 
     def since(self, start_min: float) -> Binned:
-        """The bins from ``start_min`` on."""
+        """The bins from ``start_min`` on.
+
+        Parameters
+        ----------
+        start_min : float
+            Minutes since the log began.
+
+        Returns
+        -------
+        Binned
+            The bins whose mean time is at or after ``start_min``.
+        """
         keep = self.time_min >= start_min - 1e-9
         room = None if self.room_C is None else self.room_C[keep]
         return Binned(self.time_min[keep], self.value_C[keep], self.count[keep], room)
@@ -172,7 +189,15 @@ class Binned:
 
 @dataclass(frozen=True)
 class Mode:
-    """One exponential mode: ``amplitude_C·e^(−t/time_constant_min)``."""
+    """One exponential mode: ``amplitude_C·e^(−t/time_constant_min)``.
+
+    Attributes
+    ----------
+    time_constant_min : float
+        The mode's time constant τ (min).
+    amplitude_C : float
+        Its value at the fit's origin (°C): the model is T∞ + Σ a·e^(−(t − origin)/τ).
+    """
 
     time_constant_min: float
     amplitude_C: float
@@ -181,13 +206,26 @@ class Mode:
 @dataclass(frozen=True)
 class IntervalEnd:
     """The model that sets one end of an interval: its modes, with the amplitudes they take
-    at that end."""
+    at that end.
+
+    Attributes
+    ----------
+    steady_C : float
+        T∞ of this model (°C): the interval's end it sets.
+    modes : tuple of Mode
+        Its modes, with the amplitudes they take at that end.
+    """
 
     steady_C: float
     modes: tuple[Mode, ...]
 
     def slowest(self) -> Mode | None:
-        """The slowest mode of this model (None for a model without a mode)."""
+        """The slowest mode of this model (None for a model without a mode).
+
+        Returns
+        -------
+        Mode or None
+        """
         return max(self.modes, key=lambda m: (m.time_constant_min, abs(m.amplitude_C)), default=None)
 
 
@@ -252,18 +290,49 @@ class SteadyState:
     room_gains: tuple[float, ...] = ()
 
     def half_width(self, level: float) -> float:
-        """The larger distance from T∞ to an end of the interval at ``level``."""
+        """The larger distance from T∞ to an end of the interval at ``level``.
+
+        Parameters
+        ----------
+        level : float
+            A confidence level of ``interval_C``.
+
+        Returns
+        -------
+        float
+            The half-width (°C); infinite where the interval is.
+        """
         lo, hi = self.interval_C[level]
         return max(self.steady_C - lo, hi - self.steady_C)
 
     def slowest_time_constant_min(self) -> float:
-        """The best model's slowest time constant (NaN for a model without a mode)."""
+        """The best model's slowest time constant (NaN for a model without a mode).
+
+        Returns
+        -------
+        float
+            The time constant (min).
+        """
         return max((m.time_constant_min for m in self.modes), default=float("nan"))
 
 
 def bin_index(time_min: FloatArray, fraction: float = BIN_FRACTION, origin_min: float = BIN_ORIGIN_MIN) -> FloatArray:
     """The bin each time falls into (minutes since the log began): bins a fixed fraction of the
     elapsed time wide, so that the same reading always falls into the same bin, live or not.
+
+    Parameters
+    ----------
+    time_min : ndarray
+        Minutes since the log began (a negative time counts as 0).
+    fraction : float, optional
+        A bin's width as a fraction of its time plus ``origin_min``.
+    origin_min : float, optional
+        The time scale of the first bins (min): near t = 0 a bin is ``fraction * origin_min`` wide.
+
+    Returns
+    -------
+    ndarray
+        The bin numbers, as floats, in the shape of ``time_min``.
 
     Examples
     --------

@@ -79,6 +79,12 @@ class MonitorSettings:
         A reference run of the same machine.
     room_sensor : str, optional
         The room sensor's name, where one is used.
+
+    Raises
+    ------
+    InputError
+        A tolerance, level, number of checks, check spacing, largest time constant or room wander
+        outside its range.
     """
 
     tolerance_C: float = 0.2
@@ -120,25 +126,61 @@ class MonitorSettings:
 
     @property
     def levels(self) -> tuple[float, ...]:
+        """The levels the intervals are computed at: the report's (95 %) and the decision's.
+
+        Returns
+        -------
+        tuple of float
+        """
         return (REPORT_LEVEL, self.decision_level)
 
 
 @dataclass(frozen=True)
 class Readings:
-    """Every reading so far: times (N,), the sensors' readings (N, S) and the room's (N,)."""
+    """Every reading so far: times (N,), the sensors' readings (N, S) and the room's (N,).
+
+    Attributes
+    ----------
+    time_min : ndarray, shape (N,)
+        Minutes since the log began, increasing.
+    values_C : ndarray, shape (N, S)
+        The sensors' readings (°C, NaN: missing).
+    room_C : ndarray, shape (N,), optional
+        The room sensor's readings (°C); None without a room sensor.
+    """
 
     time_min: FloatArray
     values_C: FloatArray
     room_C: FloatArray | None = None
 
     def append(self, time_min: FloatArray, values_C: FloatArray, room_C: FloatArray | None) -> Readings:
-        """These readings with more after them."""
+        """These readings with more after them.
+
+        Parameters
+        ----------
+        time_min : ndarray, shape (n,)
+            The new times (min), after the last one.
+        values_C : ndarray, shape (n, S)
+            The sensors' new readings (°C, NaN: missing).
+        room_C : ndarray, shape (n,) or None
+            The room's new readings (°C); None without a room sensor.
+
+        Returns
+        -------
+        Readings
+        """
         room = None if self.room_C is None or room_C is None else np.concatenate([self.room_C, room_C])
         return Readings(np.concatenate([self.time_min, time_min]), np.concatenate([self.values_C, values_C]), room)
 
     @property
     def latest_min(self) -> float:
-        """The time of the last reading (NaN before the first)."""
+        """The time of the last reading (NaN before the first).
+
+        Returns
+        -------
+        float
+            The time (min).
+        """
         return float(self.time_min[-1]) if len(self.time_min) else math.nan
 
 
@@ -150,6 +192,44 @@ class SensorCheck:
     ``status`` is one of "collecting", "no data", "no rise", "undetermined", "narrowing",
     "confirming", "may stop", "misfit", "off reference", "too coarse" (readings in steps no finer than the
     tolerance).
+
+    Attributes
+    ----------
+    sensor : str
+    status : str
+    checked_min : float
+        When it was last checked (min), NaN before its first check.
+    next_check_min : float
+        When its next check falls due (min).
+    passes : int
+    ready_since_min : float
+        The check from which it may stop (min), NaN while it may not.
+    steady_C : float
+        T∞ (°C), NaN without a fit.
+    low95_C, high95_C : float
+        T∞'s 95 % interval (°C), infinite without one.
+    low_C, high_C : float
+        T∞'s interval at the decision's level (°C), infinite without one.
+    equilibrium_time_min : float
+        When the best model stays within 5 % of its total rise from T∞ (min, from the log's start),
+        NaN without a fit.
+    origin_min : float
+        Where its warm-up begins (min).
+    modes : tuple of (float, float)
+        The best model's modes: time constant (min) and amplitude (°C).
+    noise_C : float
+        The readings' noise (°C, per reading).
+    rise_C : float
+        How far it has moved from its first level (°C).
+    model_ok : bool
+        The data do not contradict the model, and T∞ is determined.
+    reference_used : bool
+        The reference run's time constants were used.
+    warnings : tuple of str
+    ends : str
+        In words, what sets the interval's ends (or why its readings are too coarse).
+    room_level_C : float
+        The room's last level (°C), NaN without a room sensor.
     """
 
     sensor: str
@@ -176,20 +256,44 @@ class SensorCheck:
 
     @property
     def half_width_C(self) -> float:
-        """The larger distance from T∞ to an end of the decision's interval."""
+        """The larger distance from T∞ to an end of the decision's interval.
+
+        Returns
+        -------
+        float
+            The half-width (°C), infinite without T∞.
+        """
         return (
             max(self.steady_C - self.low_C, self.high_C - self.steady_C) if math.isfinite(self.steady_C) else math.inf
         )
 
     @property
     def may_stop(self) -> bool:
+        """Whether this sensor may stop (its status is "may stop").
+
+        Returns
+        -------
+        bool
+        """
         return self.status == "may stop"
 
 
 @dataclass(frozen=True)
 class MonitorState:
     """Everything the monitor knows: the readings, each sensor's latest check, the decision, and
-    the warnings already said (each said once per sensor)."""
+    the warnings already said (each said once per sensor).
+
+    Attributes
+    ----------
+    sensors : tuple of str
+    readings : Readings
+    checks : tuple of SensorCheck
+        One per sensor, in the order of ``sensors``.
+    stop_time_min : float
+        When the test may stop (min), NaN until then.
+    said : tuple of str
+        The warnings already said, one entry per sensor and kind of warning.
+    """
 
     sensors: tuple[str, ...]
     readings: Readings
@@ -199,6 +303,12 @@ class MonitorState:
 
     @property
     def stopped(self) -> bool:
+        """Whether the test may stop (``stop_time_min`` is set).
+
+        Returns
+        -------
+        bool
+        """
         return math.isfinite(self.stop_time_min)
 
     def __repr__(self) -> str:
@@ -214,7 +324,18 @@ class MonitorState:
 @dataclass(frozen=True)
 class Event:
     """Something the monitor has to say: ``kind`` is "check", "ready", "not ready", "stop",
-    "warning" or "note"."""
+    "warning" or "note".
+
+    Attributes
+    ----------
+    kind : str
+    time_min : float
+        When it was said (min, on the log's clock).
+    text : str
+        What to say.
+    sensor : str or None
+        The sensor it is about; None for the whole test.
+    """
 
     kind: str
     time_min: float
@@ -260,6 +381,11 @@ def new_state(sensors: tuple[str, ...] | list[str], with_room: bool = False) -> 
     Returns
     -------
     MonitorState
+
+    Raises
+    ------
+    InputError
+        No sensor names.
     """
     names = tuple(sensors)
     if not names:

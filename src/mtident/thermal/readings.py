@@ -32,7 +32,18 @@ DISPLAY_STEPS_C = np.array(
 
 
 def on_display_steps(values: FloatArray) -> np.ndarray:
-    """(..., S, len(DISPLAY_STEPS_C)): whether each reading is a whole multiple of each step (NaN: yes)."""
+    """(..., S, len(DISPLAY_STEPS_C)): whether each reading is a whole multiple of each step (NaN: yes).
+
+    Parameters
+    ----------
+    values : ndarray, shape (..., S)
+        Readings (°C, NaN: missing).
+
+    Returns
+    -------
+    ndarray of bool, shape (..., S, K)
+        One entry per step of ``DISPLAY_STEPS_C`` (K steps, coarsest first).
+    """
     multiples = np.asarray(values, dtype=float)[..., None] / DISPLAY_STEPS_C
     with np.errstate(invalid="ignore"):
         return ~(np.abs(multiples - np.round(multiples)) >= 1e-6)
@@ -40,7 +51,20 @@ def on_display_steps(values: FloatArray) -> np.ndarray:
 
 def step_from_grid(on_grid: np.ndarray, spread: FloatArray) -> FloatArray:
     """Per sensor, the coarsest step every reading is a multiple of and the readings span at least
-    twice (a flat ``20.0`` is not a 1 °C display); 0 where there is none."""
+    twice (a flat ``20.0`` is not a 1 °C display); 0 where there is none.
+
+    Parameters
+    ----------
+    on_grid : ndarray of bool, shape (S, K)
+        Whether every reading of a sensor is a whole multiple of each step of ``DISPLAY_STEPS_C``.
+    spread : ndarray, shape (S,)
+        Each sensor's highest reading less its lowest (°C).
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The step (°C).
+    """
     usable = on_grid & (np.asarray(spread, dtype=float)[:, None] >= 2.0 * DISPLAY_STEPS_C - 1e-9)
     return np.where(usable.any(axis=1), DISPLAY_STEPS_C[np.argmax(usable, axis=1)], 0.0)
 
@@ -53,12 +77,28 @@ def display_resolution(values: FloatArray) -> FloatArray:
     Parameters
     ----------
     values : ndarray, shape (N, S)
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The step (°C).
     """
     return step_from_grid(np.asarray(on_display_steps(values).all(axis=0)), np.nan_to_num(reading_range(values)))
 
 
 def reading_range(values: FloatArray) -> FloatArray:
-    """Per sensor, the highest valid reading less the lowest (NaN for a column without one)."""
+    """Per sensor, the highest valid reading less the lowest (NaN for a column without one).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: missing).
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The range (°C).
+    """
     y = np.asarray(values, dtype=float)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a column without a valid reading
@@ -91,6 +131,12 @@ def noise_sigma(values: FloatArray, time_min: FloatArray | None = None) -> Float
     values : ndarray, shape (N, S)
     time_min : ndarray, shape (N,), optional
         The readings' times; without them the readings are taken as evenly spaced.
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The noise's standard deviation per reading (°C), at least the display step's q/√12; 0.05 °C
+        for a sensor with fewer than seven valid readings.
     """
     out = []
     y_all = np.asarray(values, dtype=float)

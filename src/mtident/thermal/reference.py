@@ -56,6 +56,7 @@ class MachineReference:
     room : str
         How the room was taken when learning.
     sensors : dict of str to SensorModes
+        Each sensor's modes, by its name.
     """
 
     source: str
@@ -65,11 +66,33 @@ class MachineReference:
     sensors: dict[str, SensorModes]
 
     def modes(self, sensor: str) -> SensorModes | None:
-        """The modes of ``sensor`` (None if the reference does not know it)."""
+        """The modes of ``sensor`` (None if the reference does not know it).
+
+        Parameters
+        ----------
+        sensor : str
+            The sensor's name.
+
+        Returns
+        -------
+        SensorModes or None
+        """
         return self.sensors.get(sensor)
 
     def describe(self, sensor: str) -> str:
-        """One line for the answer's assumptions."""
+        """One line for the answer's assumptions.
+
+        Parameters
+        ----------
+        sensor : str
+            The sensor's name.
+
+        Returns
+        -------
+        str
+            The log it was learnt from, the date and the sensor's time constants with their boxes, or
+            that it has no modes for the sensor.
+        """
         modes = self.sensors.get(sensor)
         if modes is None:
             return f"{self.source}: no modes for this sensor"

@@ -119,7 +119,19 @@ class SensorModes:
 
 @dataclass(frozen=True)
 class Assumptions:
-    """What an interval rests on, said with every answer."""
+    """What an interval rests on, said with every answer.
+
+    Attributes
+    ----------
+    max_time_constant_min : float
+        The largest time constant searched (min).
+    room : str
+        How the room enters the answer, in words.
+    reference : str or None
+        The reference run's modes and how they are used, in words; None without a reference.
+    model : str
+        The models the interval covers, in words.
+    """
 
     max_time_constant_min: float
     room: str
@@ -127,7 +139,13 @@ class Assumptions:
     model: str = "a sum of up to four exponential modes"
 
     def to_dict(self) -> dict[str, object]:
-        """The JSON object of the contract's ``assumptions``."""
+        """The JSON object of the contract's ``assumptions``.
+
+        Returns
+        -------
+        dict
+            ``model``, ``max_time_constant_min``, ``room`` and ``reference``.
+        """
         return {
             "model": self.model,
             "max_time_constant_min": self.max_time_constant_min,
@@ -185,11 +203,28 @@ class SensorEstimate:
 
     @property
     def steady_C(self) -> float:
-        """T∞ of the best-fitting model (NaN without a fit)."""
+        """T∞ of the best-fitting model (NaN without a fit).
+
+        Returns
+        -------
+        float
+            T∞ (°C).
+        """
         return float("nan") if self.fit is None else self.fit.steady_C
 
     def half_width(self, level: float) -> float:
-        """The larger distance from T∞ to an end of the interval at ``level`` (inf without one)."""
+        """The larger distance from T∞ to an end of the interval at ``level`` (inf without one).
+
+        Parameters
+        ----------
+        level : float
+            A confidence level of ``interval_C``.
+
+        Returns
+        -------
+        float
+            The half-width (°C).
+        """
         if self.fit is None:
             return float("inf")
         lo, hi = self.interval_C[level]
@@ -197,7 +232,19 @@ class SensorEstimate:
 
     def what_sets_the_ends(self, level: float) -> str:
         """In words, the models that set the interval's ends: "a mode of about 280 min with
-        −0.8 °C still fits"."""
+        −0.8 °C still fits".
+
+        Parameters
+        ----------
+        level : float
+            A confidence level of ``interval_C``.
+
+        Returns
+        -------
+        str
+            One phrase per end whose model has a mode; "too few readings for a model" without a fit at
+            ``level``.
+        """
         if self.fit is None or level not in self.fit.ends:
             return "too few readings for a model"
         words = []
@@ -212,13 +259,37 @@ class SensorEstimate:
 
 
 def sampling_interval_min(time_min: FloatArray) -> float:
-    """The log's usual sampling interval (the median step; 1 min for fewer than two readings)."""
+    """The log's usual sampling interval (the median step; 1 min for fewer than two readings).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+
+    Returns
+    -------
+    float
+        The interval (min).
+    """
     t = np.asarray(time_min, dtype=float)
     return float(np.median(np.diff(t))) if len(t) > 1 else 1.0
 
 
 def rise_threshold_C(noise_C: float, rounding_C: float) -> float:
-    """A move from the first level that is a rise, not noise: 6σ, or three rounding steps."""
+    """A move from the first level that is a rise, not noise: 6σ, or three rounding steps.
+
+    Parameters
+    ----------
+    noise_C : float
+        The readings' noise (°C, per reading).
+    rounding_C : float
+        The step the readings come in (°C; 0 where none).
+
+    Returns
+    -------
+    float
+        The threshold (°C).
+    """
     return max(6.0 * noise_C, 3.0 * rounding_C, 1e-6)
 
 
@@ -386,14 +457,41 @@ def _modal_fit(
 
 def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
     """How many free modes faster than a reference's a test may add (the total at most
-    ``settings.max_modes``, and at most ``settings.free_fast_modes``)."""
+    ``settings.max_modes``, and at most ``settings.free_fast_modes``).
+
+    Parameters
+    ----------
+    reference : SensorModes
+        The sensor's modes from the reference run.
+    settings : RobustSettings
+
+    Returns
+    -------
+    int
+    """
     return max(0, min(settings.free_fast_modes, settings.max_modes - len(reference.time_constants_min)))
 
 
 def describe_assumptions(
     settings: RobustSettings, room_sensor: str | None, reference: MachineReference | None, sensor: str
 ) -> Assumptions:
-    """What a sensor's interval rests on, in words."""
+    """What a sensor's interval rests on, in words.
+
+    Parameters
+    ----------
+    settings : RobustSettings
+        The largest time constant, the room's wander and the free fast modes allowed.
+    room_sensor : str or None
+        The room sensor's name; None without one.
+    reference : MachineReference or None
+        A reference run of the same machine.
+    sensor : str
+        The sensor whose reference modes are described.
+
+    Returns
+    -------
+    Assumptions
+    """
     if room_sensor is not None:
         room = f"measured by {room_sensor!r}, an input of every mode; T∞ at the room's last level"
     elif settings.room_wander_C_per_h > 0:
@@ -575,6 +673,16 @@ def quantisation_step(values: FloatArray) -> float:
     multiples of it (a 10-bit converter's 0.32 °C, off any decimal grid a display step would
     show).
 
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        One sensor's readings (°C, NaN: missing).
+
+    Returns
+    -------
+    float
+        The step (°C).
+
     Examples
     --------
     >>> round(quantisation_step(22.84 + 0.3223 * np.array([0, 0, 1, 1, 2, 2, 2, 4, 5, 5, 6, 6])), 4)
@@ -603,6 +711,8 @@ def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: i
     ----------
     values : ndarray, shape (N,)
     noise_C, rounding_C : float
+    half_window : int, optional
+        Neighbours on each side of a reading.
 
     Returns
     -------

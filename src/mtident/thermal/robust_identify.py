@@ -41,6 +41,8 @@ class RobustIdentification:
     sensors : tuple of str
     window_min : float
         Identification time actually used (the last reading at or before the asked one).
+    n_window : int
+        The number of readings in the window.
     time_min : ndarray, shape (N,)
         The log's times, then the prediction's beyond it.
     measured_C, curve_C, band_low_C, band_high_C : ndarray, shape (N, S)
@@ -53,6 +55,8 @@ class RobustIdentification:
     measured_final_C, measured_equilibrium_time_min : ndarray, shape (S,)
         From the log itself where it reached equilibrium, else NaN.
     notes : tuple of str
+    method, preset : str
+        Always "robust" and "data" (the names :class:`~mtident.thermal.identify.Identification` also has).
     """
 
     sensors: tuple[str, ...]
@@ -74,22 +78,54 @@ class RobustIdentification:
 
     @property
     def steady_state_C(self) -> FloatArray:
+        """T∞ of each sensor's best-fitting model (NaN without a fit).
+
+        Returns
+        -------
+        ndarray, shape (S,)
+            T∞ (°C).
+        """
         return np.array([e.steady_C for e in self.estimates])
 
     @property
     def equilibrium_time_min(self) -> FloatArray:
+        """When each sensor's best model stays within 5 % of its total rise from T∞ (NaN without a fit).
+
+        Returns
+        -------
+        ndarray, shape (S,)
+            The time (min, from the log's start).
+        """
         return np.array([np.nan if e.fit is None else e.fit.equilibrium_time_min for e in self.estimates])
 
     @property
     def model_ok(self) -> np.ndarray:
+        """Whether each sensor's answer is trusted: a fit the data do not contradict, with T∞ determined.
+
+        Returns
+        -------
+        ndarray of bool, shape (S,)
+        """
         return np.array([e.model_ok for e in self.estimates])
 
     def steady_state_ci95(self) -> FloatArray:
-        """(S, 2) 95 % interval of T∞ over every model the data cannot exclude."""
+        """(S, 2) 95 % interval of T∞ over every model the data cannot exclude.
+
+        Returns
+        -------
+        ndarray, shape (S, 2)
+            The low and high end of each sensor's interval (°C), infinite without a fit.
+        """
         return np.array([e.interval_C.get(REPORT_LEVEL, (-np.inf, np.inf)) for e in self.estimates], dtype=float)
 
     def band_C(self) -> tuple[FloatArray, FloatArray]:
-        """The curve's 95 % band, low and high, each (N, S)."""
+        """The curve's 95 % band, low and high, each (N, S).
+
+        Returns
+        -------
+        low, high : ndarray, shape (N, S)
+            The band's ends (°C).
+        """
         return self.band_low_C, self.band_high_C
 
     def __repr__(self) -> str:
@@ -100,7 +136,14 @@ class RobustIdentification:
         return "\n".join(lines)
 
     def curve_frame(self) -> pd.DataFrame:
-        """The measured and modelled curve of every sensor with its 95 % band, a row per time."""
+        """The measured and modelled curve of every sensor with its 95 % band, a row per time.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``time_min``, ``part`` ("window" or "prediction") and per sensor ``NAME_measured_C``,
+            ``NAME_model_C``, ``NAME_low95_C`` and ``NAME_high95_C`` (°C).
+        """
         import pandas as pd
 
         columns: dict[str, object] = {
@@ -115,7 +158,20 @@ class RobustIdentification:
         return pd.DataFrame(columns)
 
     def summary(self, index: int) -> dict[str, object]:
-        """The contract's JSON object for one sensor, with its verdict and assumptions."""
+        """The contract's JSON object for one sensor, with its verdict and assumptions.
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position in ``sensors``.
+
+        Returns
+        -------
+        dict
+            JSON types: T∞ with its 95 % interval and its interval at the highest level computed, the
+            slowest time constant, the equilibrium time, the RMSE, ``model_ok``, the warnings, the
+            assumptions and the best model's modes; None where a value is not finite.
+        """
         e = self.estimates[index]
         fit = e.fit
         lo, hi = self.steady_state_ci95()[index]

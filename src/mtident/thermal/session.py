@@ -48,7 +48,22 @@ FEED_ROWS = 250
 @dataclass(frozen=True)
 class SavedWatch:
     """What the state file holds: which log and settings it belongs to, where the follower is,
-    and the monitor's state."""
+    and the monitor's state.
+
+    Attributes
+    ----------
+    log : str
+        The log's absolute path.
+    fingerprint : str
+        The SHA-256 of the log's first bytes (:func:`log_fingerprint`).
+    fingerprint_bytes : int
+        How many bytes the fingerprint covers.
+    settings_key : str
+        The settings, the sensors and how the time column is read, as JSON text.
+    position : str
+        The follower's position in the log, as JSON text.
+    monitor : MonitorState
+    """
 
     log: str
     fingerprint: str
@@ -147,6 +162,10 @@ class WatchSession:
         What the session found on opening (a state resumed, or one not resumed and why).
     last_rows : int
         Rows read by the last poll.
+    state : MonitorState or None
+        The monitor's state; None before the log's header is read.
+    state_path : Path
+        The state file.
     """
 
     def __init__(
@@ -218,11 +237,22 @@ class WatchSession:
 
     @property
     def sensors(self) -> tuple[str, ...]:
-        """The sensors watched (empty before the log's header is read)."""
+        """The sensors watched (empty before the log's header is read).
+
+        Returns
+        -------
+        tuple of str
+        """
         return () if self.state is None else self.state.sensors
 
     @property
     def stopped(self) -> bool:
+        """Whether the monitor has decided that the test may stop (False before the first reading).
+
+        Returns
+        -------
+        bool
+        """
         return self.state is not None and self.state.stopped
 
     def poll(self, progress: Callable[[WatchSession], None] | None = None) -> list[Event]:
@@ -237,6 +267,11 @@ class WatchSession:
         -------
         list of Event
             The follower's notes and warnings, then the monitor's events.
+
+        Raises
+        ------
+        InputError
+            The log has no sensor column besides the room sensor's.
         """
         rows = self.follower.poll()
         self.last_rows = len(rows.time_min)
@@ -274,13 +309,34 @@ class WatchSession:
     # -- answers -----------------------------------------------------------------------------
 
     def expected_stops(self) -> dict[str, float]:
-        """Each sensor's expected stop on its best model's course (NaN: not foreseeable)."""
+        """Each sensor's expected stop on its best model's course (NaN: not foreseeable).
+
+        Returns
+        -------
+        dict of str to float
+            Per sensor, the expected stop (min); empty before the log's header is read.
+        """
         if self.state is None:
             return {}
         return {name: expected_stop(self.state, self.settings, s) for s, name in enumerate(self.state.sensors)}
 
     def result(self, with_forecast: bool = True) -> dict[str, object]:
-        """The contract's JSON object (:func:`~mtident.thermal.monitor.result`)."""
+        """The contract's JSON object (:func:`~mtident.thermal.monitor.result`).
+
+        Parameters
+        ----------
+        with_forecast : bool, optional
+            Add each sensor's expected stop while the test has not stopped (a forecast per sensor).
+
+        Returns
+        -------
+        dict
+
+        Raises
+        ------
+        InputError
+            No data rows yet, or no log file.
+        """
         if self.state is None:
             msg = f"{self.path}: no data rows" if self.path.is_file() else f"{self.path}: no such file"
             raise InputError(msg)
@@ -290,7 +346,17 @@ class WatchSession:
     def hindsight(self, whole: tuple[FloatArray, FloatArray, FloatArray | None] | None = None) -> Hindsight | None:
         """The decision against where the log settled, for a log that runs on past the stop (read
         again whole, unless ``whole`` is :meth:`whole_log` already read); None before a decision
-        or where the log ends at it."""
+        or where the log ends at it.
+
+        Parameters
+        ----------
+        whole : tuple of (ndarray, ndarray, ndarray or None), optional
+            The whole log as :meth:`whole_log` returns it; default: read it again.
+
+        Returns
+        -------
+        Hindsight or None
+        """
         state = self.state
         if state is None or not state.stopped:
             return None
@@ -304,7 +370,17 @@ class WatchSession:
 
     def whole_log(self) -> tuple[FloatArray, FloatArray, FloatArray | None]:
         """The watched sensors' readings (T, S) over the whole log, read again, and the room's
-        (None without a room sensor); empty before the log's header is read."""
+        (None without a room sensor); empty before the log's header is read.
+
+        Returns
+        -------
+        time_min : ndarray, shape (T,)
+            Sample times (min).
+        values : ndarray, shape (T, S)
+            The watched sensors' readings (°C, NaN: missing).
+        room_C : ndarray, shape (T,) or None
+            The room sensor's readings (°C).
+        """
         if self.state is None:
             return np.empty(0), np.empty((0, 0)), None
         room = self.settings.room_sensor

@@ -73,7 +73,24 @@ class ThermalTuning:
 
 
 def filter_config(method: str, tuning: ThermalTuning) -> FilterConfig:
-    """The UKF variant a method name stands for."""
+    """The UKF variant a method name stands for.
+
+    Parameters
+    ----------
+    method : {"ukf", "aukf", "fukf", "afukf"}
+    tuning : ThermalTuning
+        Its adaptive law's threshold, whether sigma points are redrawn, and its parametrisation
+        ("slope" runs in square-root form).
+
+    Returns
+    -------
+    FilterConfig
+
+    Raises
+    ------
+    InputError
+        ``method`` is not one of the filters.
+    """
     law = AdaptiveLaw(threshold=tuning.threshold_C, q_increase=10.0, q_decrease=0.1, r_step_fraction=0.01)
     # The data-driven tuning lets R be as small as the data's noise (1e-9 °C on a noise-free
     # curve), where P⁻ − K Py Kᵀ cancels to rounding: it runs in square-root form.
@@ -111,6 +128,20 @@ def tuning_from_data(time_min: FloatArray, values: FloatArray, start_min: float 
     right and the filter is a recursive Bayesian estimator of s and λ, whose
     intervals the Monte Carlo study shows to be calibrated; the adaptive filters
     adapt Q and R from there, with the adaptive law's threshold C = 2σ.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        The window's sample times (min).
+    values : ndarray, shape (N, S)
+        The window's readings (°C, NaN: missing or left out).
+    start_min : float, optional
+        The time the initial state is for (min); default: the window's first time.
+
+    Returns
+    -------
+    ThermalTuning
+        In the "slope" parametrisation.
     """
     start, rate, steady = quick_estimate(time_min, values)
     sigma = noise_sigma(values, time_min)
@@ -147,6 +178,22 @@ def preset_tuning(preset: str, n_sensors: int) -> ThermalTuning:
     Q₀ = 0.001²·I, R₀ = 0.001², C = 1e-4, propagated sigma points.
     ``yu2019`` (Yu et al. 2019 §2.1): x₀ = [10, 0.01, 30], P₀ = diag(0.25, 0.01, 0.01),
     Q₀ = 1e-6·I, R₀ = 1e-6, H = 1e-4, redrawn sigma points (Eq. 8).
+
+    Parameters
+    ----------
+    preset : {"xia2014", "yu2019"}
+    n_sensors : int
+        The number of sensors, each tuned alike.
+
+    Returns
+    -------
+    ThermalTuning
+        In the "rate" parametrisation.
+
+    Raises
+    ------
+    InputError
+        ``preset`` is not one of the papers'.
     """
     if preset not in ("xia2014", "yu2019"):
         msg = f"preset {preset!r} is not one of: {', '.join(PRESETS)}"

@@ -117,7 +117,13 @@ class Machine:
 
     @property
     def structural_time_constants_min(self) -> tuple[float, ...]:
-        """The structure's time constants without the sensor lag, sorted descending."""
+        """The structure's time constants without the sensor lag, sorted descending.
+
+        Returns
+        -------
+        tuple of float
+            The time constants (min).
+        """
         return tuple(self.structure.get("time_constants_min", self.time_constants_min))
 
 
@@ -172,12 +178,24 @@ class WarmUp:
 
     @property
     def rise_C(self) -> float:
-        """Total rise of the run in its starting room: steady_C[0] − start_C."""
+        """Total rise of the run in its starting room: steady_C[0] − start_C.
+
+        Returns
+        -------
+        float
+            The rise (°C).
+        """
         return float(self.steady_C[0] - self.start_C)
 
     @property
     def duration_min(self) -> float:
-        """Time of the last sample."""
+        """Time of the last sample.
+
+        Returns
+        -------
+        float
+            The time (min).
+        """
         return float(self.time_min[-1])
 
     def __repr__(self) -> str:
@@ -313,6 +331,11 @@ def room_temperature(time_min: FloatArray, room_start_C: float, room_drift: Mapp
     Returns
     -------
     ndarray, shape (N,)
+
+    Raises
+    ------
+    InputError
+        ``room_drift`` with an unknown key, or a ``period_min`` that is not positive.
     """
     t = np.asarray(time_min, dtype=float)
     if room_drift is None:
@@ -558,6 +581,13 @@ def random_machine(
     Returns
     -------
     Machine
+
+    Raises
+    ------
+    InputError
+        An unknown ``kind``, time constant limits not in 0 < min < max, a network's ``nodes``
+        outside 1-4, or a negative ``sensor_lag_min`` or one within 2 % of a structural time
+        constant.
     """
     if kind is None:
         kind = str(rng.choice(KINDS, p=KIND_WEIGHTS))
@@ -727,6 +757,13 @@ def simulate(
     Returns
     -------
     WarmUp
+
+    Raises
+    ------
+    InputError
+        A non-positive ``interval_min`` or ``duration_min``, a negative ``noise_C`` or
+        ``rounding_C``, a ``dropout`` outside [0, 1), a ``warm_start`` outside [0, 1), an unknown
+        ``warm_profile``, a ``warm_power`` too low to reach the warm start, or a bad ``room_drift``.
     """
     if not (interval_min > 0 and noise_C >= 0 and rounding_C >= 0 and 0 <= dropout < 1):
         raise InputError("need interval_min > 0, noise_C ≥ 0, rounding_C ≥ 0, 0 ≤ dropout < 1")
@@ -930,6 +967,11 @@ def reference_run(machine: Machine, rng: np.random.Generator, **kw: Any) -> Warm
     -------
     WarmUp
         ``settings["reference"]`` is True.
+
+    Raises
+    ------
+    InputError
+        A non-zero ``warm_start`` (a reference run starts cold), or what :func:`simulate` refuses.
     """
     base = float(kw.pop("base_power", 1.0))
     power = float(kw.pop("power", rng.uniform(0.6, 1.4) * base))
@@ -1037,6 +1079,11 @@ def load_real_curves(folder: Path) -> list[RealCurve]:
     -------
     list of RealCurve
         Sorted by file name, then column.
+
+    Raises
+    ------
+    InputError
+        A CSV without a time column.
     """
     curves = []
     for path in sorted(Path(folder).glob("*.csv")):
