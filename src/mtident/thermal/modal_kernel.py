@@ -1,10 +1,12 @@
-"""One sum-of-modes fit and its slopes in log τ, compiled with numba (the hot loop of the
-refinement in :mod:`mtident.thermal.modes`, called some thousand times per estimate).
+"""The compiled hot loops of :mod:`mtident.thermal.modes` (numba): one sum-of-modes fit and its
+slopes in log τ, the objectives a refinement minimises and a quasi-Newton search over them, the
+grid's batched normal equations, and the choice of leading models of different basins.
 
-The same arithmetic as ``modes._fit`` and ``modes._fit_with_slopes`` for one model: the
-design matrix (the constant, each mode's e^(−u/τ), with a room each mode's lag of the room
-less the room), the penalised normal equations solved in normalised form, and the exact
-variable-projection slopes of the residual sum of squares, of T∞ and of its variance.
+:func:`fit_one` is the same arithmetic as ``modes._fit`` for one model: the design matrix (the
+constant, each mode's e^(−u/τ), with a room each mode's lag of the room less the room), the
+penalised normal equations solved in normalised form, and the exact variable-projection slopes
+of the residual sum of squares, of T∞ and of its variance. Compiled whole, a refinement costs
+the fits and not the interpreter between them.
 """
 
 from __future__ import annotations
@@ -14,7 +16,18 @@ from numba import njit
 
 from mtident._typing import FloatArray
 
-__all__ = ["fit_one", "lag_rows"]
+__all__ = [
+    "APART_PENALTY",
+    "EDGE_PENALTY",
+    "END_OBJECTIVE",
+    "RSS_OBJECTIVE",
+    "fit_one",
+    "lag_rows",
+    "leading_rows",
+    "objective_and_gradient",
+    "refine_log_tau",
+    "solve_selected",
+]
 
 # the same ridge as modes._JITTER, and the room columns' forward-difference step
 _JITTER = 1e-11
@@ -150,3 +163,334 @@ def fit_one(
         d_steady[j] = d_theta[0]
         d_var[j] = -(g0 @ (d_gram @ g0))
     return rss, theta, inverse[0, 0], g0, d_rss, d_steady, d_var
+
+
+# the objectives :func:`refine_log_tau` minimises (see ``modes._RssObjective``/``_EndObjective``)
+RSS_OBJECTIVE = 0
+END_OBJECTIVE = 1
+# beyond the threshold, a profile's end search is pushed back this many times more steeply than
+# T∞'s own reach at the best fit: a search crossing the edge returns
+EDGE_PENALTY = 1e3
+# the weight of the penalty that keeps two modes' time constants apart
+APART_PENALTY = 1e4
+# L-BFGS-B's default stopping rules: a relative decrease below factr·eps, a projected gradient
+# below pgtol
+_FTOL = 1e7 * np.finfo(np.float64).eps
+_PGTOL = 1e-5
+_ARMIJO = 1e-4
+_HALVINGS = 30
+_PASSES = 4
+_DOUBLINGS = 8
+
+
+@njit(cache=True)
+def objective_and_gradient(
+    inputs: tuple,
+    log_tau: FloatArray,
+    penalty: FloatArray,
+    objective: tuple,
+) -> tuple[float, FloatArray]:  # pragma: no cover - compiled
+    """One model's objective and its gradient in log τ, as ``modes._refine`` minimises it.
+
+    Parameters
+    ----------
+    inputs : tuple
+        The arrays :func:`fit_one` takes before ``log_tau`` (u, time_min, weight, target, room).
+    log_tau : ndarray, shape (k,)
+    penalty : ndarray, shape (p,)
+    objective : tuple
+        (kind, threshold, sign, gap, log_mode_ratio): ``RSS_OBJECTIVE`` or ``END_OBJECTIVE`` with
+        the end's threshold, direction and gap; with ``log_mode_ratio`` > 0 the penalty that keeps
+        any two modes at least that far apart (log).
+
+    Returns
+    -------
+    value : float
+    gradient : ndarray, shape (k,)
+        Not-a-number slopes as zero, infinite ones as the largest float (as ``numpy.nan_to_num``).
+    """
+    u, time_min, weight, target, room = inputs
+    kind, threshold, sign, gap, log_mode_ratio = objective
+    rss, theta, var, _, d_rss, d_steady, d_var = fit_one(u, time_min, weight, target, room, log_tau, penalty)
+    k = log_tau.shape[0]
+    if kind == RSS_OBJECTIVE:
+        value = rss
+        gradient = d_rss.copy()
+    else:
+        slack = threshold - rss
+        var = max(var, 1e-300)
+        if slack >= 0:
+            root = max(np.sqrt(slack * var), 1e-300)
+            value = -sign * theta[0] - root
+            gradient = -sign * d_steady - (-d_rss * var + slack * d_var) / (2.0 * root)
+        else:
+            reach = np.sqrt(var * gap)
+            d_reach = d_var * gap / (2.0 * reach)
+            value = -sign * theta[0] - EDGE_PENALTY * reach * slack / gap
+            gradient = -sign * d_steady - EDGE_PENALTY * (d_reach * slack - reach * d_rss) / gap
+    if log_mode_ratio > 0 and k > 1:
+        order = np.argsort(log_tau)
+        j = 0
+        for n in range(1, k - 1):
+            if log_tau[order[n + 1]] - log_tau[order[n]] < log_tau[order[j + 1]] - log_tau[order[j]]:
+                j = n
+        excess = log_mode_ratio - (log_tau[order[j + 1]] - log_tau[order[j]])
+        if excess > 0:
+            value += APART_PENALTY * excess * excess
+            gradient[order[j + 1]] -= 2.0 * APART_PENALTY * excess
+            gradient[order[j]] += 2.0 * APART_PENALTY * excess
+    for j in range(k):
+        if np.isnan(gradient[j]):
+            gradient[j] = 0.0
+        elif np.isinf(gradient[j]):
+            gradient[j] = np.finfo(np.float64).max if gradient[j] > 0 else -np.finfo(np.float64).max
+    return value, gradient
+
+
+@njit(cache=True)
+def refine_log_tau(
+    inputs: tuple,
+    start: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+    penalty: FloatArray,
+    objective: tuple,
+    max_iterations: int,
+    max_evaluations: int,
+) -> FloatArray:  # pragma: no cover - compiled
+    """The log time constants that minimise :func:`objective_and_gradient` within the bounds,
+    from ``start``: a projected quasi-Newton search (BFGS on the free variables, a backtracking
+    line search along the projected path) with L-BFGS-B's default stopping rules. Compiled whole,
+    so that each step costs the fit and not the interpreter.
+
+    Parameters
+    ----------
+    inputs, penalty, objective
+        As :func:`objective_and_gradient`.
+    start, lower, upper : ndarray, shape (k,)
+        The first point and the bounds (log τ).
+    max_iterations, max_evaluations : int
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        The best point found.
+    """
+    x = np.minimum(np.maximum(start, lower), upper)
+    f, g = objective_and_gradient(inputs, x, penalty, objective)
+    evaluations = 1
+    # a kink (the end objective's edge) spoils the curvature learnt before it: start afresh from
+    # where a pass ended, while passes still gain
+    for _ in range(_PASSES):
+        before = f
+        x, f, g, spent = _quasi_newton_pass(
+            inputs, x, f, g, lower, upper, penalty, objective, max_iterations, max_evaluations - evaluations
+        )
+        evaluations += spent
+        if evaluations >= max_evaluations or before - f <= _FTOL * max(abs(f), abs(before), 1.0):
+            break
+    return x
+
+
+@njit(cache=True)
+def _quasi_newton_pass(
+    inputs: tuple,
+    x: FloatArray,
+    f: float,
+    g: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+    penalty: FloatArray,
+    objective: tuple,
+    max_iterations: int,
+    max_evaluations: int,
+) -> tuple[FloatArray, float, FloatArray, int]:  # pragma: no cover - compiled
+    """One pass of :func:`refine_log_tau`'s search from ``x`` (value ``f``, gradient ``g``), the
+    curvature learnt afresh: the point it ends at, its value and gradient, and the evaluations it
+    spent."""
+    k = x.shape[0]
+    evaluations = 0
+    h = np.eye(k)
+    for iteration in range(max_iterations):
+        projected = x - np.minimum(np.maximum(x - g, lower), upper)
+        if np.max(np.abs(projected)) <= _PGTOL:
+            break
+        active = ((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0))
+        direction = -(h @ g)
+        for j in range(k):
+            if active[j]:
+                direction[j] = 0.0
+        slope = np.dot(g, direction)
+        if not slope < 0:
+            h = np.eye(k)
+            direction = -g.copy()
+            for j in range(k):
+                if active[j]:
+                    direction[j] = 0.0
+            slope = np.dot(g, direction)
+            if not slope < 0:
+                break
+        if iteration == 0 or not np.all(np.isfinite(direction)):
+            # the first step, with no curvature yet, moves at most one unit (a factor e in τ)
+            size = np.sqrt(np.dot(direction, direction))
+            if size > 1.0:
+                direction = direction / size
+        step = 1.0
+        accepted = False
+        for _ in range(_HALVINGS):
+            trial = np.minimum(np.maximum(x + step * direction, lower), upper)
+            f_trial, g_trial = objective_and_gradient(inputs, trial, penalty, objective)
+            evaluations += 1
+            if np.isfinite(f_trial) and f_trial <= f + _ARMIJO * np.dot(g, trial - x):
+                accepted = True
+                break
+            if evaluations >= max_evaluations:
+                break
+            step *= 0.5
+        if not accepted:
+            break
+        if step == 1.0:
+            # a whole step taken at once: along a long ridge, go on while it keeps paying
+            for _ in range(_DOUBLINGS):
+                if evaluations >= max_evaluations:
+                    break
+                further = np.minimum(np.maximum(x + 2.0 * step * direction, lower), upper)
+                if np.all(further == trial):
+                    break
+                f_further, g_further = objective_and_gradient(inputs, further, penalty, objective)
+                evaluations += 1
+                if not (np.isfinite(f_further) and f_further < f_trial):
+                    break
+                step, trial, f_trial, g_trial = 2.0 * step, further, f_further, g_further
+        s = trial - x
+        y = g_trial - g
+        decrease = f - f_trial
+        x, f, g = trial, f_trial, g_trial
+        sy = np.dot(s, y)
+        if sy > 1e-10 * np.sqrt(np.dot(s, s) * np.dot(y, y)):
+            rho = 1.0 / sy
+            v = np.eye(k) - rho * np.outer(s, y)
+            h = v @ h @ v.T + rho * np.outer(s, s)
+        if decrease <= _FTOL * max(abs(f), abs(f + decrease), 1.0) or evaluations >= max_evaluations:
+            break
+    return x, f, g, evaluations
+
+
+@njit(cache=True)
+def leading_rows(
+    values: FloatArray, log_tau: FloatArray, modes: np.ndarray, count: int, apart_log: float
+) -> np.ndarray:  # pragma: no cover - compiled
+    """The rows of the ``count`` lowest finite ``values``, lowest first; with ``apart_log`` > 0,
+    each of a different basin: a row whose log time constants all lie within ``apart_log`` of a
+    row already taken of as many modes is passed over.
+
+    Parameters
+    ----------
+    values : ndarray, shape (T,)
+    log_tau : ndarray, shape (T, K)
+        Each row's log time constants, its first ``modes[row]`` entries used.
+    modes : ndarray of int, shape (T,)
+    count : int
+    apart_log : float
+
+    Returns
+    -------
+    ndarray of int
+        The rows taken; ties go to the earlier row.
+    """
+    order = np.argsort(values, kind="mergesort")
+    taken = np.empty(min(count, values.shape[0]), dtype=np.int64)
+    n_taken = 0
+    for row in order:
+        if n_taken >= count or not np.isfinite(values[row]):
+            break
+        same_basin = False
+        if apart_log > 0:
+            for t in range(n_taken):
+                other = taken[t]
+                if modes[other] != modes[row]:
+                    continue
+                close = True
+                for j in range(modes[row]):
+                    if abs(log_tau[row, j] - log_tau[other, j]) > apart_log:
+                        close = False
+                        break
+                if close:
+                    same_basin = True
+                    break
+        if not same_basin:
+            taken[n_taken] = row
+            n_taken += 1
+    return taken[:n_taken]
+
+
+@njit(cache=True)
+def solve_selected(
+    gram: FloatArray, rhs: FloatArray, columns: np.ndarray, yy: float, penalty: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:  # pragma: no cover - compiled
+    """Penalised normal equations of many models that each use some columns of a shared Gram
+    matrix, solved in normalised form (Gaussian elimination with partial pivoting).
+
+    Parameters
+    ----------
+    gram : ndarray, shape (S, P, P)
+        Per set, the weighted Gram matrix of every column.
+    rhs : ndarray, shape (S, P)
+        Per set, the columns' weighted products with the readings.
+    columns : ndarray of int, shape (T, p)
+        Each model's columns.
+    yy : float
+        The readings' weighted sum of squares.
+    penalty : ndarray, shape (p,)
+        The priors' weights on the model's parameters.
+
+    Returns
+    -------
+    rss : ndarray, shape (S·T,)
+    theta : ndarray, shape (S·T, p)
+    first_column : ndarray, shape (S·T, p)
+        G⁻¹e₀ per model (its first entry the variance factor of T∞).
+    """
+    sets, models, p = gram.shape[0], columns.shape[0], columns.shape[1]
+    rss = np.empty(sets * models)
+    theta = np.empty((sets * models, p))
+    first_column = np.empty((sets * models, p))
+    a = np.empty((p, p + 2))
+    scale = np.empty(p)
+    for s in range(sets):
+        for t in range(models):
+            row = s * models + t
+            for i in range(p):
+                scale[i] = np.sqrt(max(gram[s, columns[t, i], columns[t, i]] + penalty[i], 1e-300))
+            for i in range(p):
+                for j in range(p):
+                    a[i, j] = gram[s, columns[t, i], columns[t, j]] / (scale[i] * scale[j])
+                a[i, i] += penalty[i] / (scale[i] * scale[i]) + _JITTER
+                a[i, p] = rhs[s, columns[t, i]] / scale[i]
+                a[i, p + 1] = 0.0
+            a[0, p + 1] = 1.0 / scale[0]
+            for c in range(p):
+                pivot = c
+                for i in range(c + 1, p):
+                    if abs(a[i, c]) > abs(a[pivot, c]):
+                        pivot = i
+                if pivot != c:
+                    for j in range(c, p + 2):
+                        a[c, j], a[pivot, j] = a[pivot, j], a[c, j]
+                for i in range(c + 1, p):
+                    factor = a[i, c] / a[c, c]
+                    for j in range(c, p + 2):
+                        a[i, j] -= factor * a[c, j]
+            for c in range(p - 1, -1, -1):
+                for r in (p, p + 1):
+                    value = a[c, r]
+                    for j in range(c + 1, p):
+                        value -= a[c, j] * a[j, r]
+                    a[c, r] = value / a[c, c]
+            fitted = 0.0
+            for i in range(p):
+                theta[row, i] = a[i, p] / scale[i]
+                first_column[row, i] = a[i, p + 1] / scale[i]
+                fitted += rhs[s, columns[t, i]] * theta[row, i]
+            rss[row] = yy - fitted
+    return rss, theta, first_column
