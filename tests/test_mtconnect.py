@@ -152,3 +152,8 @@ def test_watch_follows_an_agent_and_decides_as_the_replay_of_its_record(agent_se
     assert [s["steady_state_C"] for s in again["sensors"]] == [s["steady_state_C"] for s in decided["sensors"]]
     refused = CliRunner().invoke(main, ["thermal", "watch", server.url, "--replay"], catch_exceptions=False)
     assert refused.exit_code == 2 and "--replay replays a log file" in refused.stderr
+    other_device = CliRunner().invoke(
+        main, ["thermal", "watch", server.url, "--device", "VMC2", "--record", str(record)], catch_exceptions=False
+    )
+    assert other_device.exit_code == 2
+    assert "was recorded from" in other_device.stderr and "record to another log (--record FILE)" in other_device.stderr

@@ -7,13 +7,14 @@ tables, a picture and the contract's JSON.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import signal
 import sys
 import threading
 import time
 import urllib.parse
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
@@ -217,7 +218,8 @@ def network_recorder(
 
         # the recorder says when the server does not answer; asyncua's own tracebacks of it are noise here
         logging.getLogger("asyncua").setLevel(logging.CRITICAL)
-        return OpcUaRecorder(file, log, list(nodes))
+        with _record_hint():
+            return OpcUaRecorder(file, log, list(nodes))
     mapping = {}
     for item in items:
         key, sep, name = item.partition("=")
@@ -225,7 +227,17 @@ def network_recorder(
             msg = f"--item {item!r}: expected ID=NAME (a data item's id or name, and the sensor's name)"
             raise InputError(msg)
         mapping[key.strip()] = name.strip()
-    return MTConnectRecorder(file, log, device, mapping or None, from_buffer_start=from_buffer_start)
+    with _record_hint():
+        return MTConnectRecorder(file, log, device, mapping or None, from_buffer_start=from_buffer_start)
+
+
+@contextlib.contextmanager
+def _record_hint() -> Iterator[None]:
+    """A recorder's refusal to resume a log with the option that names another."""
+    try:
+        yield
+    except InputError as error:
+        raise InputError(f"{error} (--record FILE)") from None
 
 
 def state_file(file: str, path: Path, given: str | None) -> Path:

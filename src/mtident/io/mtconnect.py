@@ -277,7 +277,7 @@ class MTConnectRecorder:
         if saved.get("url") != self.url or saved.get("device") != self.device:
             msg = (
                 f"{self.log} was recorded from {saved.get('url')} device {saved.get('device')}; to record another "
-                "agent or device, name another log with --record"
+                "agent or device, record to another log"
             )
             raise InputError(msg)
         self.columns = dict(saved["columns"])

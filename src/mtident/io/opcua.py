@@ -95,7 +95,7 @@ class OpcUaRecorder:
             else:
                 msg = (
                     f"{self.log} was recorded from {saved.get('url')} nodes {', '.join(saved.get('nodes', []))}; to "
-                    "record other nodes or another server, name another log with --record"
+                    "record other nodes or another server, record to another log"
                 )
                 raise InputError(msg)
             self.names = list(saved["names"])
