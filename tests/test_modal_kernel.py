@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import mtident.thermal.modes as modes_module
 from mtident.thermal.modal_kernel import (
     END_OBJECTIVE,
     RSS_OBJECTIVE,
@@ -110,7 +111,7 @@ def _leading_reference(values, log_tau, modes, count, apart):  # noqa: ANN001, A
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_the_leading_models_of_different_basins_are_those_of_the_plain_rule(seed):
+def test_the_leading_models_of_different_basins_are_those_of_the_plain_rule(seed, monkeypatch):
     rng = np.random.default_rng(seed)
     rows = 400
     modes = rng.integers(1, 4, rows)
@@ -118,6 +119,12 @@ def test_the_leading_models_of_different_basins_are_those_of_the_plain_rule(seed
     values = rng.normal(size=rows)
     values[rng.random(rows) < 0.1] = np.inf
     values[:20] = values[20:40]  # ties go to the earlier row
+    values[40:60] = values[60]
     for count, apart in ((5, 0.0), (30, 0.5), (400, 0.2)):
-        got = leading_rows(values, log_tau, modes, count, apart)
-        assert list(got) == _leading_reference(values, log_tau, modes, count, apart)
+        expected = _leading_reference(values, log_tau, modes, count, apart)
+        got, exhausted = leading_rows(values, np.argsort(values, kind="stable"), np.inf, log_tau, modes, count, apart)
+        assert list(got) == expected and not exhausted  # every row scanned, or the infinite ones reached
+        # scanned from the lowest few rows, more where those run out (ties at the cut included)
+        for scan in (1, 7, 64):
+            monkeypatch.setattr(modes_module, "_LEADING_SCAN", scan)
+            assert list(modes_module._leading_rows(values, log_tau, modes, count, apart)) == expected

@@ -378,15 +378,27 @@ def _quasi_newton_pass(
 
 @njit(cache=True)
 def leading_rows(
-    values: FloatArray, log_tau: FloatArray, modes: np.ndarray, count: int, apart_log: float
-) -> np.ndarray:  # pragma: no cover - compiled
-    """The rows of the ``count`` lowest finite ``values``, lowest first; with ``apart_log`` > 0,
-    each of a different basin: a row whose log time constants all lie within ``apart_log`` of a
-    row already taken of as many modes is passed over.
+    values: FloatArray,
+    order: np.ndarray,
+    boundary: float,
+    log_tau: FloatArray,
+    modes: np.ndarray,
+    count: int,
+    apart_log: float,
+) -> tuple[np.ndarray, bool]:  # pragma: no cover - compiled
+    """The rows of the ``count`` lowest finite ``values``, lowest first, scanned in ``order`` (rows
+    by value, ties by row); with ``apart_log`` > 0, each of a different basin: a row whose log
+    time constants all lie within ``apart_log`` of a row already taken of as many modes is passed
+    over.
 
     Parameters
     ----------
     values : ndarray, shape (T,)
+    order : ndarray of int, shape (M,)
+        The M lowest rows in order (M ≤ T).
+    boundary : float
+        The value of the rows left out of ``order`` that are tied with its last (infinite where
+        ``order`` holds every row): the scan stops at it.
     log_tau : ndarray, shape (T, K)
         Each row's log time constants, its first ``modes[row]`` entries used.
     modes : ndarray of int, shape (T,)
@@ -395,15 +407,19 @@ def leading_rows(
 
     Returns
     -------
-    ndarray of int
-        The rows taken; ties go to the earlier row.
+    rows : ndarray of int
+        The rows taken.
+    exhausted : bool
+        Whether the scan reached the end of ``order`` or ``boundary`` still short of ``count``: a
+        longer ``order`` may take more.
     """
-    order = np.argsort(values, kind="mergesort")
-    taken = np.empty(min(count, values.shape[0]), dtype=np.int64)
+    taken = np.empty(min(count, order.shape[0]), dtype=np.int64)
     n_taken = 0
     for row in order:
         if n_taken >= count or not np.isfinite(values[row]):
-            break
+            return taken[:n_taken], False
+        if values[row] >= boundary:
+            return taken[:n_taken], True
         same_basin = False
         if apart_log > 0:
             for t in range(n_taken):
@@ -421,7 +437,7 @@ def leading_rows(
         if not same_basin:
             taken[n_taken] = row
             n_taken += 1
-    return taken[:n_taken]
+    return taken[:n_taken], n_taken < count
 
 
 @njit(cache=True)

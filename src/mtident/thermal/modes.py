@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from itertools import combinations
 from typing import Any
 
@@ -105,6 +105,8 @@ _POLISHED = 3
 _MAXITER = 100
 _MAXFUN = 300
 _LATTICE_ROUNDS = 4
+# the leading models are looked for among this many lowest first
+_LEADING_SCAN = 2048
 # with a tolerance to meet, the grid's hull alone answers where it is this many times wider
 _ROUGH_MARGIN = 2.0
 _MAX_CORRELATION_FACTOR = 25.0
@@ -477,6 +479,11 @@ class _Fits:
     direction: FloatArray  # (T, p) (XᵀWX + P)⁻¹e₀: how the parameters follow T∞ along the profile
     theta: FloatArray  # (T, p)
 
+    @cached_property
+    def log_tau(self) -> FloatArray:
+        """log τ (T, k), computed once: the leading models are chosen from it many times."""
+        return np.log(self.tau)
+
     def take(self, i: int) -> _Fits:
         """The i-th model alone."""
         s = slice(i, i + 1)
@@ -735,14 +742,31 @@ def _leading(
         [np.where(np.isfinite(v := np.asarray(objective(fits), dtype=float)), v, np.inf) for fits in candidates]
     )
     widest = max(fits.tau.shape[1] for fits in candidates)
-    log_tau = np.concatenate(
-        [np.pad(np.log(fits.tau), ((0, 0), (0, widest - fits.tau.shape[1]))) for fits in candidates]
-    )
+    log_tau = np.concatenate([np.pad(fits.log_tau, ((0, 0), (0, widest - fits.tau.shape[1]))) for fits in candidates])
     modes = np.concatenate([np.full(len(fits.tau), fits.tau.shape[1]) for fits in candidates])
     starts = np.cumsum([0] + [len(fits.tau) for fits in candidates])
-    rows = leading_rows(values, log_tau, modes, count, apart_log)
+    rows = _leading_rows(values, log_tau, modes, count, apart_log)
     batches = np.searchsorted(starts, rows, side="right") - 1
     return [(candidates[b], int(r - starts[b])) for b, r in zip(batches, rows, strict=True)]
+
+
+def _leading_rows(values: FloatArray, log_tau: FloatArray, modes: IntArray, count: int, apart_log: float) -> IntArray:
+    """:func:`~mtident.thermal.modal_kernel.leading_rows` over the lowest rows only, more where
+    those run out (sorting every row of a large grid would cost more than the scan)."""
+    scanned = min(len(values), _LEADING_SCAN)
+    while True:
+        boundary = np.inf
+        if scanned < len(values):
+            lowest = np.argpartition(values, scanned - 1)[:scanned]
+            order = lowest[np.lexsort((lowest, values[lowest]))]
+            # rows tied with the last one taken in may have been left out before it
+            boundary = float(values[order[-1]])
+        else:
+            order = np.argsort(values, kind="stable")
+        rows, exhausted = leading_rows(values, order, boundary, log_tau, modes, count, apart_log)
+        if not exhausted or scanned == len(values):
+            return rows
+        scanned = min(len(values), 4 * scanned)
 
 
 # ---------------------------------------------------------------------------------------------
