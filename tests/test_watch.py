@@ -25,7 +25,7 @@ from mtident.exceptions import InputError
 from mtident.io.follow import LogFollower
 from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
-from mtident.thermal.reference import MachineReference
+from mtident.thermal.reference import MachineReference, save_reference
 from mtident.thermal.robust import RobustSettings, SensorModes
 from mtident.thermal.session import SavedWatch, WatchSession, default_state_path
 
@@ -410,8 +410,6 @@ def test_watch_replay_json_says_the_decision_what_it_assumes_and_checks_it(tmp_p
     log = tmp_path / "run.csv"
     log.write_text(csv_text(T, {"A": noisy(first_order(T), 13), "B": noisy(first_order(T, steady=29.0), 14)}))
     reference = tmp_path / "machine.toml"
-    from mtident.thermal.reference import save_reference
-
     save_reference(one_mode_reference("A", "B"), reference)
     code, out, err = run(
         "thermal",
@@ -600,3 +598,19 @@ def test_readings_in_steps_as_coarse_as_the_tolerance_never_stop_within_it():
     reason = str(result(state, MonitorSettings(reference=one_mode_reference("S"), robust=fast))["reason"])
     assert "its readings come in steps of 0.32 °C, no finer than the tolerance" in reason
     assert replay({"S": y}, reference=one_mode_reference("S"), robust=fast, tolerance_C=0.4).stopped
+
+
+def test_watch_says_each_sensors_reference_and_when_each_became_ready(tmp_path):
+    log = tmp_path / "two.csv"
+    log.write_text(csv_text(T, {"S": noisy(first_order(T), 1), "B": noisy(first_order(T), 2)}))
+    reference = tmp_path / "machine.toml"
+    save_reference(one_mode_reference("S"), reference)
+    code, out, err = run(
+        "thermal", "watch", str(log), "--replay", "--reference", str(reference), "--free-fast-modes", "0"
+    )
+    assert code == 0, err
+    text = " ".join(out.split())
+    assert f"reference for S: reference.csv (2026-11-24): τ {PAPER_TAU:.3g} min ±10%" in text
+    assert "reference for B: reference.csv: no modes for this sensor" in text
+    ready = [line for line in err.splitlines() if "S: may stop" in line]
+    assert ready and re.match(r"mtident: t = [\d.]+ min: S: may stop, T∞ ", ready[0]), ready

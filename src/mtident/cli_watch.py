@@ -666,7 +666,8 @@ def _say(events: list[Event]) -> None:
     for event in events:
         if event.kind in _SAID:
             prefix = "warning: " if event.kind == "warning" else "note: " if event.kind == "note" else ""
-            stderr.print(f"mtident: {prefix}{event.text}", highlight=False)
+            when = f"t = {minutes(event.time_min)}: " if math.isfinite(event.time_min) else ""
+            stderr.print(f"mtident: {prefix}{when}{event.text}", highlight=False)
 
 
 def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live: bool) -> None:
@@ -688,10 +689,13 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     assert state is not None
     said = assumptions(session.settings, state.sensors[0])
     console.print(
-        f"Assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
-        + (f"; reference {said.reference}" if said.reference else ""),
+        f"Assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}",
         highlight=False,
     )
+    if session.settings.reference is not None:
+        # each sensor has its own modes in the reference, or none, or doubtful ones
+        for name in state.sensors:
+            console.print(f"  reference for {name}: {assumptions(session.settings, name).reference}", highlight=False)
     if state.stopped:
         saved = outcome.get("time_saved_min")
         gain = f"; {saved:.0f} min before the predicted equilibrium" if isinstance(saved, float) and saved > 0 else ""
