@@ -206,6 +206,8 @@ def _column_layout(column: str) -> _ColumnLayout:
         return {"overflow": "fold", "min_width": 14, "max_width": 32}
     if column == "status":  # words: wrapped at a space when the table is too wide
         return {"min_width": 9}
+    if column.endswith("interval"):  # "low to high": wrapped after "to" in a narrow terminal
+        return {"min_width": 8}
     return {"no_wrap": True}
 
 

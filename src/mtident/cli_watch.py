@@ -717,12 +717,15 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
 
 
 def _status_table(session: WatchSession, path: Path) -> Table:
-    """Per sensor: the latest reading, T∞ with its 95 % interval and the decision's, t_eq, status."""
+    """Per sensor: the latest reading (°C), when it was last checked (min: a sensor is checked when
+    it falls due, not at every reading), T∞ with its 95 % interval and the decision's, t_eq,
+    status."""
     state = session.state
     where = "before the first sample" if state is None else f"at t = {minutes(state.readings.latest_min)}"
-    table = Table(title=f"{path.name}: {where}")
+    table = Table(title=f"{path.name}: {where} (temperatures in °C, times in min)")
     level = f"{session.settings.decision_level:.0%}"
-    for column in ("sensor", "latest (°C)", "T∞ (°C)", "95 % interval", f"{level} interval", "t_eq (min)", "status"):
+    columns = ("sensor", "latest", "checked", "T∞", "95 % interval", f"{level} interval", "t_eq")
+    for column in (*columns, "status"):
         table.add_column(
             column, justify="left" if column in ("sensor", "status") else "right", **_column_layout(column)
         )
@@ -745,6 +748,7 @@ def _status_table(session: WatchSession, path: Path) -> Table:
         table.add_row(
             check.sensor,
             _fmt(latest),
+            _fmt(check.checked_min, 0),
             _fmt(check.steady_C),
             f"{_fmt(check.low95_C)} to {_fmt(check.high95_C)}",
             f"{_fmt(check.low_C)} to {_fmt(check.high_C)}",
