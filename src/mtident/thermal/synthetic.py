@@ -1,6 +1,6 @@
 """Synthetic warm-ups for benchmarks and property tests, and the real curves beside the project.
 
-The population is the one of issue 19's evidence list and of the stopping-rule study
+The population is the one of the safe-stops benchmark and of the stopping-rule study
 (``../shared/research/stop-rules.md``): linear thermal structures seen at one sensor,
 
 * ``"network"``: a lumped RC network of 1-4 nodes, A = −C⁻¹G with G a weighted Laplacian of
