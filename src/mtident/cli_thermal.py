@@ -219,75 +219,36 @@ def _fmt(value: object, digits: int = 2) -> str:
     return str(value)
 
 
-def reference_option(func):  # noqa: ANN001,ANN201 - click decorator
-    """Add the --reference option (a reference run's file) to a command.
-
-    Parameters
-    ----------
-    func : callable
-        The command's callback.
-
-    Returns
-    -------
-    callable
-    """
-    return click.option(
-        "--reference",
-        "reference_path",
-        type=click.Path(dir_okay=False),
-        help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are "
-        "searched only near those it learnt, "
-        "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
-    )(func)
-
-
-def free_fast_option(func):  # noqa: ANN001,ANN201 - click decorator
-    """Add the --free-fast-modes option to a command.
-
-    Parameters
-    ----------
-    func : callable
-        The command's callback.
-
-    Returns
-    -------
-    callable
-    """
-    return click.option(
-        "--free-fast-modes",
-        "free_fast_modes",
-        type=click.IntRange(0, MAX_FREE_FAST),
-        default=MAX_FREE_FAST,
-        show_default=True,
-        help="With --reference: how many free modes faster than the reference's slowest a test may add (a "
-        "reference run can miss a mode). "
-        "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, "
-        "which the answer states.",
-    )(func)
-
-
-def max_time_constant_option(func):  # noqa: ANN001,ANN201 - click decorator
-    """Add the --max-time-constant option (min) to a command.
-
-    Parameters
-    ----------
-    func : callable
-        The command's callback.
-
-    Returns
-    -------
-    callable
-    """
-    return click.option(
-        "--max-time-constant",
-        "max_tau_min",
-        type=FiniteFloatRange(min=1.0),
-        default=DEFAULT_MAX_TIME_CONSTANT_MIN,
-        show_default=True,
-        help="The slowest thermal mode the machine may have (min). The interval covers every mode up to this that the "
-        "data cannot exclude: "
-        "a machine's bed or column warms with 1-5 h time constants.",
-    )(func)
+# options several commands share (click decorators)
+reference_option = click.option(
+    "--reference",
+    "reference_path",
+    type=click.Path(dir_okay=False),
+    help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are "
+    "searched only near those it learnt, "
+    "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
+)
+free_fast_option = click.option(
+    "--free-fast-modes",
+    "free_fast_modes",
+    type=click.IntRange(0, MAX_FREE_FAST),
+    default=MAX_FREE_FAST,
+    show_default=True,
+    help="With --reference: how many free modes faster than the reference's slowest a test may add (a "
+    "reference run can miss a mode). "
+    "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, "
+    "which the answer states.",
+)
+max_time_constant_option = click.option(
+    "--max-time-constant",
+    "max_tau_min",
+    type=FiniteFloatRange(min=1.0),
+    default=DEFAULT_MAX_TIME_CONSTANT_MIN,
+    show_default=True,
+    help="The slowest thermal mode the machine may have (min). The interval covers every mode up to this that the "
+    "data cannot exclude: "
+    "a machine's bed or column warms with 1-5 h time constants.",
+)
 
 
 def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineReference or None
