@@ -584,3 +584,26 @@ def test_binary_sequences_are_maximal_length():
         # the autocorrelation of a maximal-length sequence is −1 off zero lag
         circular = np.array([bits @ np.roll(bits, k) for k in range(1, length)])
         np.testing.assert_array_equal(circular, -1.0)
+
+
+@pytest.mark.parametrize(
+    ("kind", "swept"),
+    [("sweep", True), ("multisine", True), ("prbs", False), ("impulse", False), ("step", False), ("sine", False)],
+)
+def test_a_swept_excitation_is_said_to_bias_damping(kind, swept):
+    """Sweeps and Schroeder multisines (a periodic chirp) gave biased damping in simulation: the
+    identification says so, from the force alone; the other excitations are not called sweeps."""
+    from mtident.feeddrive.identify import _sweep_note
+
+    h = 1e-4
+    forces = Excitation(kind).forces(np.arange(0.0, 0.3, h))
+    said = _sweep_note(forces, h)
+    assert bool(said) is swept
+    if swept:
+        assert said[0].startswith("the excitation sweeps through its band (F_t_N from about ")
+        assert "biased beyond their own intervals" in said[0]
+    if kind == "sweep":
+        record = simulate(
+            FeedDriveParameters(), Excitation(kind), duration_s=0.3, noise_fraction=0.01, rng=np.random.default_rng(5)
+        )
+        assert identify_feed_drive(record, default_guess()).notes[0] == said[0]
