@@ -676,11 +676,10 @@ def _refine(problem: _Problem, fits: _Fits, i: int, objective: _RssObjective | _
     profile's end lies on a thin ridge of the time constants where the data pin them down, which
     a search on a grid or along the axes misses.
 
-    The best fit is searched by a compiled quasi-Newton method (on the benchmark's warm-ups it
-    finds a better fit than L-BFGS-B more often than a worse one, at a fraction of the cost); an
-    end of the hull by L-BFGS-B, whose line search follows the end objective's kinked ridge
-    further than the compiled one (on the same warm-ups the compiled search stopped short more
-    often than L-BFGS-B), with the compiled objective."""
+    The best fit is searched by a compiled quasi-Newton method, with no interpreter between its
+    steps; an end of the hull by L-BFGS-B over the compiled objective, because its line search
+    follows the end objective's kinked ridge further than the compiled search does (the
+    comparison is in the documentation's measured results, Speed)."""
     k = fits.tau.shape[1]
     bounds = np.log(problem.bounds(k))
     apart = (problem.family.reference_min is None or problem.family.free_fast > 0) and k > 1
