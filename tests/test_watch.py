@@ -455,6 +455,14 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
     assert "Not yet: keep the test running." in text and "still fits" in text
     assert "Ways on: continue the test, or give a reference run of this machine" in text
     assert "Assumes: a sum of up to four exponential modes, time constants up to 300 min" in text
+    # the ends named in words are the interval's own (widened for the room's wander alike)
+    code, out, err = run("thermal", "watch", str(log), "--replay", "--room-wander", "0.5")
+    assert code == 0, err
+    text = " ".join(out.split())
+    said = re.search(
+        r"interval (-?[\d.]+) to (-?[\d.]+) °C, wider than .*?low end (-?[\d.]+) °C.*?high end (-?[\d.]+) °C", text
+    )
+    assert said and said.group(1) == said.group(3) and said.group(2) == said.group(4), text
 
 
 def test_watch_old_options_are_taken_with_a_note(tmp_path):

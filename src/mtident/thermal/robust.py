@@ -248,11 +248,14 @@ class SensorEstimate:
         if self.fit is None or level not in self.fit.ends:
             return "too few readings for a model"
         words = []
-        for end, label in zip(self.fit.ends[level], ("low", "high"), strict=True):
+        # each end as the interval states it (widened for the room's wander where it is not
+        # measured), so that the sentence and the interval beside it agree
+        ends = zip(self.fit.ends[level], ("low", "high"), self.interval_C[level], strict=True)
+        for end, label, value in ends:
             slowest = end.slowest()
             if slowest is not None:
                 words.append(
-                    f"{label} end {end.steady_C:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min with "
+                    f"{label} end {value:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min with "
                     f"{slowest.amplitude_C:+.2f} °C still fits"
                 )
         return "; ".join(words)
