@@ -625,3 +625,16 @@ def test_watch_says_each_sensors_reference_and_when_each_became_ready(tmp_path):
     assert re.search(r"│ S +│ +[\d.]+ │ +\d+ │", out), out
     ready = [line for line in err.splitlines() if "S: may stop" in line]
     assert ready and re.match(r"mtident: t = [\d.]+ min: S: may stop, T∞ ", ready[0]), ready
+
+
+def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsys):
+    from mtident.cli_watch import _print_hindsight
+    from mtident.thermal.hindsight import Hindsight
+
+    hindsight = Hindsight(("T1",), 233.0, 400.0, np.array([30.50]), np.array([30.40]), np.array([258.0]), 0.05, 0.2)
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "the room moved +0.05 °C after the stop, added to T∞ at the stop" in text
+    assert "T∞ at stop +0.05 (°C)" in text
+    # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
+    assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +258 │", text), text
