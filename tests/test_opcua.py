@@ -13,7 +13,7 @@ import pytest
 pytest.importorskip("asyncua", reason="the OPC UA source needs the asyncua package (mtident[opcua])")
 
 from asyncua import ua  # noqa: E402
-from asyncua.sync import Server  # noqa: E402
+from asyncua.sync import Server, ThreadLoop  # noqa: E402
 
 from mtident.exceptions import InputError  # noqa: E402
 from mtident.io.logs import read_temperature_log  # noqa: E402
@@ -41,7 +41,10 @@ class Machine:
         self.last: tuple[float, tuple[float, float]] | None = None
 
     def start(self) -> None:
-        server = Server()
+        loop = ThreadLoop()
+        loop.daemon = True  # a test that fails mid-way leaves no thread that keeps pytest alive
+        loop.start()
+        server = Server(tloop=loop)
         server.set_endpoint(self.url)
         idx = server.register_namespace("urn:mtident:test")
         assert idx == 2
@@ -61,8 +64,26 @@ class Machine:
 
     def stop(self) -> None:
         assert self.server is not None
+        # the server's clock task sleeps a second between ticks, and its stop waits for the tick
+        iserver = self.server.aio_obj.iserver
+        clock, iserver.time_task = iserver.time_task, None
+        if clock is not None:
+            self.server.tloop.loop.call_soon_threadsafe(clock.cancel)
         self.server.stop()
+        self.server.tloop.stop()
         self.server = None
+
+    def historized(self, minute: float, timeout_s: float = 10.0) -> None:
+        """Wait until the server's history holds every node's value of ``minute`` (it takes each
+        change at its own sampling, a moment after the write)."""
+        stamp = START + dt.timedelta(minutes=minute)
+        deadline = time.monotonic() + timeout_s
+        while True:
+            held = [v.read_raw_history(stamp, stamp + dt.timedelta(seconds=1), 0, False) for v in self.variables]
+            if all(held):
+                return
+            assert time.monotonic() < deadline, f"the server's history never took minute {minute}"
+            time.sleep(0.05)
 
     def publish(self, minute: float, values: tuple[float, float], good: bool = True) -> None:
         self.last = (minute, values)
@@ -88,6 +109,19 @@ def settle(recorder: OpcUaRecorder, rows: int, timeout_s: float = 10.0) -> list[
             assert written == rows, (written, rows)
             return said
         time.sleep(0.05)
+
+
+def change(minute: float, value: float) -> ua.DataValue:
+    """A node's good value of the test's ``minute``, stamped by its source."""
+    stamp = START + dt.timedelta(minutes=minute)
+    return ua.DataValue(ua.Variant(value, ua.VariantType.Double), SourceTimestamp=stamp)
+
+
+def _offline_recorder(tmp_path) -> OpcUaRecorder:  # noqa: ANN001
+    """A recorder of the two nodes that is given its changes by hand, never connected."""
+    recorder = OpcUaRecorder("opc.tcp://127.0.0.1:1/", tmp_path / "opc.csv", NODES)
+    recorder.names = ["T1", "T2"]
+    return recorder
 
 
 @pytest.fixture
@@ -129,6 +163,7 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     again = OpcUaRecorder(machine.url, log, NODES)  # a watch started again goes on from its sidecar
     machine.publish(15.0, (21.5, 22.5))
     published.append(15)
+    machine.historized(15.0)
     assert settle(again, 16) == [
         f"recording {machine.url} again: 1 reading(s) it published while the watch was stopped read from its history"
     ]
@@ -165,7 +200,8 @@ def test_values_published_while_the_watch_was_stopped_come_from_the_servers_hist
         recorder.close()  # the watch stopped
         for k in range(1, 6):
             machine.publish(float(k), (20 + k / 10, 21 + k / 10))
-        time.sleep(1.0)  # the server's history takes each change at its own sampling
+        if history:
+            machine.historized(5.0)
         again = OpcUaRecorder(machine.url, log, NODES)
         said = settle(again, 6 if history else 2)
         again.close()
@@ -187,18 +223,25 @@ def test_values_published_while_the_watch_was_stopped_come_from_the_servers_hist
 def test_changes_are_written_in_time_order_whatever_the_order_received(tmp_path):
     # a value of a later time received first (history and subscription interleave) does not hide
     # the earlier ones
-    from asyncua import ua
-
-    recorder = OpcUaRecorder("opc.tcp://127.0.0.1:1/", tmp_path / "opc.csv", NODES)
-    recorder.names = ["T1", "T2"]
-
-    def change(minute: float, value: float) -> ua.DataValue:
-        stamp = START + dt.timedelta(minutes=minute)
-        return ua.DataValue(ua.Variant(value, ua.VariantType.Double), SourceTimestamp=stamp)
-
+    recorder = _offline_recorder(tmp_path)
     recorder._write([(0, change(5.0, 25.0)), (0, change(0.0, 20.0)), (1, change(0.0, 30.0)), (0, change(2.0, 22.0))])
     lines = (tmp_path / "opc.csv").read_text().splitlines()
-    assert lines == ["time_min,T1,T2", "0.000000,20,30", "2.000000,22,", "5.000000,25,"]
+    assert lines == ["time_min,T1,T2", "0.000000,20,30", "2.000000,22,"]  # minute 5 waits for T2
+    recorder._write([], final=True)
+    lines = (tmp_path / "opc.csv").read_text().splitlines()
+    assert lines[-1] == "5.000000,25,"
+
+
+def test_a_row_waits_for_every_nodes_value_of_its_time(tmp_path):
+    # each node's change arrives on its own (from the history of one, the subscription of the
+    # other): the newest row is written once both are in, not without the later one
+    recorder = _offline_recorder(tmp_path)
+    recorder._write([(0, change(0.0, 20.0)), (1, change(0.0, 30.0)), (1, change(1.0, 31.0))])
+    assert (tmp_path / "opc.csv").read_text().splitlines() == ["time_min,T1,T2", "0.000000,20,30"]
+    recorder._write([(0, change(1.0, 21.0))])
+    assert (tmp_path / "opc.csv").read_text().splitlines()[-1] == "1.000000,21,31"
+    recorder._write([(1, change(2.0, 32.0)), (0, change(3.0, 23.0))])  # a newer time: minute 2 has all it will get
+    assert (tmp_path / "opc.csv").read_text().splitlines()[-1] == "2.000000,,32"
 
 
 def test_a_record_of_other_nodes_is_not_resumed(machine, tmp_path):

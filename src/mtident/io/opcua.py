@@ -36,23 +36,32 @@ PUBLISHING_MS = 200.0
 QUEUE_SIZE = 1000
 # The server's clock (Server.ServerStatus.CurrentTime), read at each fetch to see a dropped connection.
 SERVER_TIME = "i=2258"
+# How many request timeouts a call to the client may wait before it is given up.
+SYNC_WAITS = 4
 
 
-def _client_class() -> Any:  # noqa: ANN401 - asyncua's sync Client, imported when needed
+def _new_client(url: str, timeout_s: float) -> Any:  # noqa: ANN401 - asyncua's sync Client
+    """A client whose event loop runs in a daemon thread: a connection that hangs never keeps the
+    watch's process alive at its end, and no call waits longer than a few of its timeouts."""
     try:
-        from asyncua.sync import Client
+        from asyncua.sync import Client, ThreadLoop
     except ImportError as exc:
         msg = "reading an OPC UA server needs the asyncua package: pip install 'mtident[opcua]'"
         raise InputError(msg) from exc
-    return Client
+    loop = ThreadLoop(timeout=SYNC_WAITS * timeout_s)
+    loop.daemon = True
+    loop.start()
+    return Client(url, timeout=timeout_s, tloop=loop)
 
 
 def _close(client: Any) -> None:  # noqa: ANN401
     """Disconnect, and stop the client's event-loop thread even where the connection is gone."""
     try:
         client.disconnect()
-    except Exception:  # noqa: BLE001 - a connection already gone; disconnect stops the loop all the same
+    except Exception:  # noqa: BLE001 - a connection already gone; the loop is stopped all the same
         pass
+    finally:
+        client.tloop.stop()
 
 
 class OpcUaRecorder:
@@ -82,6 +91,7 @@ class OpcUaRecorder:
         self._client: Any = None
         self._unreachable = False
         self._changes = _Changes()
+        self._pending: dict[dt.datetime, dict[int, float]] = {}
         self._index: dict[str, int] = {}
         self._sidecar = self.log.with_name(self.log.name + SIDECAR_SUFFIX)
         self.names: list[str] = []
@@ -114,7 +124,7 @@ class OpcUaRecorder:
         save_position(self._sidecar, saved)
 
     def _connect(self) -> Any:  # noqa: ANN401
-        client = _client_class()(self.url, timeout=self.timeout_s)
+        client = _new_client(self.url, self.timeout_s)
         try:
             client.connect()
         except Exception:
@@ -138,7 +148,7 @@ class OpcUaRecorder:
 
     def close(self) -> None:
         """Write the changes received so far, and close the connection (the next fetch opens it again)."""
-        self._write(self._changes.drain(self._index))
+        self._write(self._changes.drain(self._index), final=True)
         if self._client is not None:
             _close(self._client)
             self._client = None
@@ -207,32 +217,48 @@ class OpcUaRecorder:
             backlog.extend((i, value) for value in values)
         return backlog
 
-    def _write(self, changes: list[tuple[int, Any]]) -> None:
-        """Append the changes not written yet, one row per source time stamp, in time order."""
-        rows: dict[dt.datetime, dict[int, float]] = {}
-        stamped = [(stamp, i, value) for i, value in changes if (stamp := _stamp(value)) is not None]
+    def _write(self, changes: list[tuple[int, Any]], *, final: bool = False) -> None:
+        """Append the rows not written yet, one per source time stamp, in time order.
+
+        A server sends each node's change on its own, so the newest time stamp's row waits until
+        every node has a value for it, a newer time stamp arrives, or the recorder closes
+        (``final``): a row written early would lose the values of that time arriving later.
+        """
         # in time order, whatever the order received (history and subscription interleave)
-        for stamp, i, value in sorted(stamped, key=lambda c: (c[0], c[1])):
+        stamped = sorted(
+            ((stamp, i, value) for i, value in changes if (stamp := _stamp(value)) is not None),
+            key=lambda c: (c[0], c[1]),
+        )
+        for stamp, i, value in stamped:
             last = self.last_stamp.get(self.nodes[i])
             if last is not None and stamp <= dt.datetime.fromisoformat(last):
                 continue  # written before: a subscription made again starts with the value of now
-            self.last_stamp[self.nodes[i]] = stamp.isoformat()
             good = value.StatusCode is None or value.StatusCode.is_good()
             number = value.Value.Value if value.Value is not None else None
-            rows.setdefault(stamp, {})[i] = float(number) if good and isinstance(number, int | float) else math.nan
-        if not rows:
-            return
+            self._pending.setdefault(stamp, {})[i] = (
+                float(number) if good and isinstance(number, int | float) else math.nan
+            )
+        newest = max(self._pending, default=None)
+        ready = sorted(
+            stamp for stamp, row in self._pending.items() if final or stamp != newest or len(row) == len(self.nodes)
+        )
+        if ready:
+            self._append({stamp: self._pending.pop(stamp) for stamp in ready})
+
+    def _append(self, rows: dict[dt.datetime, dict[int, float]]) -> None:
+        """Write ``rows`` (in time order) to the log, and each node's last time stamp to the sidecar."""
         if self.origin is None:
             self.origin = min(rows)
         new = not self.log.is_file() or self.log.stat().st_size == 0
         with self.log.open("a", encoding="utf-8", newline="") as out:
             if new:
                 out.write("time_min," + ",".join(quoted(name) for name in self.names) + "\n")
-            for stamp in sorted(rows):
+            for stamp, row in rows.items():
+                for i in row:
+                    self.last_stamp[self.nodes[i]] = stamp.isoformat()
                 t = (stamp - self.origin).total_seconds() / 60.0
                 if t <= self.last_time_min:
                     continue  # a server clock that went back: the log's times must increase
-                row = rows[stamp]
                 cells = ("" if i not in row or math.isnan(row[i]) else f"{row[i]:g}" for i in range(len(self.nodes)))
                 out.write(f"{t:.6f}," + ",".join(cells) + "\n")
                 self.last_time_min = t
