@@ -607,3 +607,55 @@ def test_a_swept_excitation_is_said_to_bias_damping(kind, swept):
             FeedDriveParameters(), Excitation(kind), duration_s=0.3, noise_fraction=0.01, rng=np.random.default_rng(5)
         )
         assert identify_feed_drive(record, default_guess()).notes[0] == said[0]
+
+
+def test_the_open_loop_refinement_recovers_a_noiseless_drive_from_a_biased_start():
+    """Output-error maximum likelihood from a start 30 % off in damping and 0.1 % in stiffness: a
+    record with (almost) no noise is fitted to the truth, the initial state (rest) with it."""
+    from mtident.feeddrive.refine import refine_open_loop
+
+    truth = FeedDriveParameters()
+    record = simulate(truth, Excitation("sweep", frequency_Hz=100.0), duration_s=0.5, method="exact")
+    start = truth.with_identified(truth.identified() * np.array([1.001, 0.999, 1.001, 0.999, 1.3, 0.7, 1.3, 0.7]))
+    noise = 1e-6 * np.sqrt(np.mean(record.values**2, axis=0))
+    fit = refine_open_loop(start, record.forces, 1e-4, tuple(range(12)), record.values, noise)
+    assert fit.converged
+    np.testing.assert_allclose(fit.parameters.identified(), truth.identified(), rtol=1e-6)
+    np.testing.assert_allclose(fit.start, 0.0, atol=1e-9)
+    np.testing.assert_array_less(fit.misfit, 0.01)
+
+
+def test_on_a_sweep_the_refined_damping_holds_its_interval_where_the_filters_did_not():
+    """A 4-s sweep at 1 % noise (seed 110): the filter's Bt is 56 % low, many of its standard
+    deviations; refined open loop, every parameter lies within three of the refined ones."""
+    truth = FeedDriveParameters()
+    record = simulate(truth, Excitation("sweep", frequency_Hz=100.0), duration_s=4.0, noise_fraction=0.01,
+                      rng=np.random.default_rng(110))  # fmt: skip
+    filtered = identify_feed_drive(record, check=False)
+    refined = identify_feed_drive(record, refine=True)
+    true = truth.identified()
+    assert abs(filtered.parameters[4] - true[4]) > 3 * filtered.parameters_std[4]
+    np.testing.assert_array_less(np.abs(refined.parameters - true), 3 * refined.parameters_std)
+    np.testing.assert_array_less(refined.parameters_std, filtered.parameters_std)
+    np.testing.assert_array_equal(refined.filter_parameters, filtered.parameters)
+    summary = refined.summary()
+    assert summary["refined"] is True and summary["reproduces_record"] is True
+    assert summary["filter_parameters"]["Bt"] == pytest.approx(filtered.parameters[4])
+    assert any(note.startswith("refined open loop (the whole record fitted") for note in refined.notes)
+    assert any("the refined ones were not in simulation" in note for note in refined.notes)
+
+
+def test_a_refinement_that_does_not_fit_the_record_is_not_kept(tmp_path):
+    """Noise ten times the stated: no set fits within it, so the filter's estimate stands and the
+    note says why; the CLI refines by default and shows the filter's column only where it did."""
+    record = simulate(FeedDriveParameters(), duration_s=0.3, noise_fraction=0.01, rng=np.random.default_rng(3))
+    result = identify_feed_drive(record, noise_fraction=0.001, refine=True)
+    assert result.filter_parameters is None and result.summary()["refined"] is False
+    assert any(note.startswith("the open-loop refinement does not fit the record") for note in result.notes)
+    csv = tmp_path / "r.csv"
+    write_response(record, csv)
+    tables = [CliRunner().invoke(main, ["feeddrive", "identify", str(csv), *flag]) for flag in ([], ["--no-refine"])]
+    assert [t.exit_code for t in tables] == [0, 0]
+    headers = [t.stdout.splitlines()[2].replace("┃", " ").split() for t in tables]
+    assert headers[0][:4] == ["parameter", "guess", "filter", "estimate"]
+    assert headers[1][:3] == ["parameter", "guess", "estimate"]

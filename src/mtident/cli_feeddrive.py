@@ -267,6 +267,16 @@ def simulate_command(
 )
 @click.option("--preset", type=click.Choice(["default", "paper"]), default="default", show_default=True)
 @click.option(
+    "--refine/--no-refine",
+    default=True,
+    show_default=True,
+    help=(
+        "Refine the filter's estimate by fitting the whole record open loop (output-error maximum likelihood): "
+        "unbiased where the filter is not (sweeps, multisines) and as precise as the record allows; kept only where "
+        "it fits the record within the noise."
+    ),
+)
+@click.option(
     "--plot",
     "plot_path",
     type=PicturePath(),
@@ -284,6 +294,7 @@ def identify_command(
     measured: str,
     noise_fraction: float,
     preset: str,
+    refine: bool,
     plot_path: str | None,
     as_json: bool,
 ) -> None:
@@ -303,6 +314,8 @@ def identify_command(
         --noise: a fraction of each response's RMS.
     preset : str
         --preset.
+    refine : bool
+        --refine.
     plot_path : str or None
         --plot.
     as_json : bool
@@ -320,6 +333,7 @@ def identify_command(
             noise_fraction,
             preset,
             progress=lambda k, n: status.update(f"filtering: {k}/{n} samples"),
+            refine=refine,
         )
     for note in result.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
@@ -339,12 +353,15 @@ def identify_command(
         print_json(summary)
         return
     table = Table(title=f"{Path(file).name}: feed-drive parameters ({preset}, measured: {measured})")
-    for column in ("parameter", "guess", "estimate", "± 2σ", "identified", *(("true", "error %") if truth else ())):
+    filtered = result.filter_parameters
+    columns = ("parameter", "guess", *(("filter",) if filtered is not None else ()), "estimate", "± 2σ", "identified")
+    for column in (*columns, *(("true", "error %") if truth else ())):
         table.add_column(column, justify="right")
     for i, name in enumerate(IDENTIFIED):
         known = "yes" if result.identifiable[i] else "[yellow]no[/]"
         estimate, half_width = f"{result.parameters[i]:.5g}", f"{2 * result.parameters_std[i]:.2g}"
-        row = [name, f"{getattr(guess, name):.5g}", estimate, half_width, known]
+        row = [name, f"{getattr(guess, name):.5g}", *((f"{filtered[i]:.5g}",) if filtered is not None else ())]
+        row += [estimate, half_width, known]
         if truth:
             row += [f"{getattr(truth, name):.5g}", f"{summary['error_percent'][name]:.3g}"]  # type: ignore[index]
         table.add_row(*row)

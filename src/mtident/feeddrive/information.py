@@ -29,6 +29,8 @@ __all__ = [
     "response_moments",
     "filter_covariance",
     "closest_consistent",
+    "gauss_newton_step",
+    "stable_log_values",
 ]
 
 
@@ -255,23 +257,14 @@ def closest_consistent(
     """
     weight = 1.0 / np.asarray(noise, dtype=float) ** 2
     # a direction of zero variance (the paper preset) is held, not freed, by a floor on the variance
-    prior = np.linalg.inv(covariance_log + 1e-12 * np.eye(8))
+    prior: FloatArray = np.linalg.inv(covariance_log + 1e-12 * np.eye(8)).astype(float)
     reference = np.log(estimate.identified())
     shift, start = np.zeros(8), np.zeros(8)
     tolerance = 0.1 * np.sqrt(np.diag(covariance_log) + 1e-12)
     for _ in range(max_passes):
         moments = response_moments(estimate.with_identified(np.exp(reference + shift)), forces, h, idx, data, start)
-        hessian = np.einsum("rij,r->ij", moments.gram, weight)
-        gradient = moments.cross.T @ weight
-        hessian[:8, :8] += prior
-        gradient[:8] -= prior @ shift
-        # stiffness and damping move the responses by amounts 1e10 apart: solve in units where every
-        # unknown's curvature is 1, or the least-squares cut-off drops the damping directions
-        unit = 1.0 / np.sqrt(np.maximum(np.diag(hessian), 1e-300))
-        step = np.zeros(16)
-        if np.all(np.isfinite(hessian)) and np.all(np.isfinite(gradient)):
-            step = unit * np.linalg.lstsq(hessian * np.outer(unit, unit), gradient * unit, rcond=1e-12)[0]
-        if not _valid(estimate, reference + shift + step[:8]):
+        step, _ = gauss_newton_step(moments, weight, prior, shift)
+        if not stable_log_values(estimate, reference + shift + step[:8]):
             step = np.zeros_like(step)  # stay at the last stable set: its misfit is the one reported
         left = moments.residual - 2.0 * moments.cross @ step + np.einsum("i,rij,j->r", step, moments.gram, step)
         shift, start = shift + step[:8], start + step[8:]
@@ -281,8 +274,65 @@ def closest_consistent(
     return Consistency(misfit, float(shift @ prior @ shift), shift, start)
 
 
-def _valid(estimate: FeedDriveParameters, log_values: FloatArray) -> bool:
-    """Whether the identified parameters e^``log_values`` give a finite, stable model."""
+def gauss_newton_step(
+    moments: Moments,
+    weight: FloatArray,
+    prior: FloatArray | None = None,
+    shift: FloatArray | None = None,
+    damping: float = 0.0,
+) -> tuple[FloatArray, FloatArray]:
+    """The Gauss-Newton step of the log-parameters and the initial state from ``moments``, and the
+    Hessian it solves.
+
+    Parameters
+    ----------
+    moments : Moments
+        Of the record at the current point, with data (P unknowns: the 8 log-parameters, then the
+        initial state's 8).
+    weight : ndarray, shape (R,)
+        1/σ² of each response.
+    prior : ndarray, shape (8, 8), optional
+        Inverse covariance holding the log-parameters to where ``shift`` is measured from.
+    shift : ndarray, shape (8,), optional
+        The log-parameters' distance from the prior's centre.
+    damping : float
+        Marquardt's damping λ: the step solves (H + λ diag H) δ = g (0: Gauss-Newton's).
+
+    Returns
+    -------
+    step : ndarray, shape (P,)
+        Zero where the moments are not finite.
+    hessian : ndarray, shape (P, P)
+    """
+    hessian = np.einsum("rij,r->ij", moments.gram, weight)
+    gradient = moments.cross.T @ weight
+    if prior is not None and shift is not None:
+        hessian[:8, :8] += prior
+        gradient[:8] -= prior @ shift
+    # stiffness and damping move the responses by amounts 1e10 apart: solve in units where every
+    # unknown's curvature is 1, or the least-squares cut-off drops the damping directions
+    unit = 1.0 / np.sqrt(np.maximum(np.diag(hessian), 1e-300))
+    step = np.zeros(len(gradient))
+    if np.all(np.isfinite(hessian)) and np.all(np.isfinite(gradient)):
+        scaled = hessian * np.outer(unit, unit) + damping * np.eye(len(unit))
+        step = unit * np.linalg.lstsq(scaled, gradient * unit, rcond=1e-12)[0]
+    return step, hessian
+
+
+def stable_log_values(estimate: FeedDriveParameters, log_values: FloatArray) -> bool:
+    """Whether the identified parameters e^``log_values`` give a finite, stable model.
+
+    Parameters
+    ----------
+    estimate : FeedDriveParameters
+        Its masses, inertias and β are kept.
+    log_values : ndarray, shape (8,)
+        ln K1..K4, Bt, Bb, Qb, Qm.
+
+    Returns
+    -------
+    bool
+    """
     if not np.all(np.abs(log_values) < 700):  # beyond, e^z is not a float
         return False
     values = np.exp(log_values)

@@ -1,0 +1,156 @@
+"""The filter's estimate refined open loop: the output-error (maximum-likelihood) fit of the record.
+
+The joint filter settles each mode's damping while the excitation passes it, from a broad prior;
+an excitation that passes each mode once (a sweep, a multisine with Schroeder's phases) leaves
+those early, biased values in place. Fitting the whole record open loop from the filter's estimate
+(the responses' noise-free simulation under the measured forces against the data, the initial
+state free) uses every sample alike and is the maximum-likelihood estimate for white measurement
+noise. Its covariance is the inverse Gauss-Newton Hessian: the Fisher information of the record.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+
+import numpy as np
+
+from mtident._typing import FloatArray
+from mtident.feeddrive.information import Moments, gauss_newton_step, response_moments, stable_log_values
+from mtident.feeddrive.params import FeedDriveParameters
+
+__all__ = ["OpenLoopFit", "refine_open_loop"]
+
+# Marquardt's damping (in units where every unknown's curvature is 1): where the search starts (a
+# Gauss-Newton step at once runs along the weakly curved damping directions to e^-13 of Bt, where
+# the data no longer see it), how it is raised after a step that raises the
+# misfit and lowered after one that lowers it, and where the search gives up (no step lowers it).
+_DAMPING_START = 1.0
+_DAMPING_UP, _DAMPING_DOWN = 10.0, 0.3
+_DAMPING_MAX = 1e8
+# The largest change of a log-parameter in one step: the responses are nearly linear in a damping,
+# not in its log, and a step to e^-13 of it (where the data no longer see it) stalls the search.
+_MAX_LOG_STEP = 0.3
+
+
+@dataclass(frozen=True, slots=True)
+class OpenLoopFit:
+    """The record fitted open loop.
+
+    Attributes
+    ----------
+    parameters : FeedDriveParameters
+        The fitted set.
+    covariance_log : ndarray, shape (8, 8)
+        Covariance of its log-parameters (the inverse Fisher information, widened by the misfit
+        where the residuals exceed the assumed noise).
+    misfit : ndarray, shape (R,)
+        RMS residual of each measured response in units of its assumed noise.
+    start : ndarray, shape (8,)
+        The fitted initial state.
+    converged : bool
+        The last step moved every log-parameter by less than a hundredth of its standard deviation.
+    passes : int
+        Passes over the record.
+    """
+
+    parameters: FeedDriveParameters
+    covariance_log: FloatArray
+    misfit: FloatArray
+    start: FloatArray
+    converged: bool
+    passes: int
+
+
+def refine_open_loop(
+    estimate: FeedDriveParameters,
+    forces: FloatArray,
+    h: float,
+    idx: tuple[int, ...],
+    data: FloatArray,
+    noise: FloatArray,
+    max_passes: int = 40,
+) -> OpenLoopFit:
+    """Fit the log-parameters and the initial state to the record open loop, from ``estimate``:
+    minimise ‖(y − ŷ)/σ‖² by Levenberg-Marquardt.
+
+    Parameters
+    ----------
+    estimate : FeedDriveParameters
+        The start (the filter's estimate); masses, inertias and β are kept.
+    forces : ndarray, shape (N, 4)
+        Generalized forces, held over each sample.
+    h : float
+        Sampling interval (s).
+    idx : tuple of int
+        The measured responses (indices into ``RESPONSE_COLUMNS``).
+    data : ndarray, shape (N, len(idx))
+        The measured responses (NaN where missing).
+    noise : ndarray, shape (len(idx),)
+        Assumed noise standard deviation of each response.
+    max_passes : int
+        Passes over the record at most (one per step tried).
+
+    Returns
+    -------
+    OpenLoopFit
+    """
+    weight = 1.0 / np.asarray(noise, dtype=float) ** 2
+    log_values, start = np.log(estimate.identified()), np.zeros(8)
+
+    def moments_at(values: FloatArray, initial: FloatArray) -> Moments:
+        return response_moments(estimate.with_identified(np.exp(values)), forces, h, idx, data, initial)
+
+    moments = moments_at(log_values, start)
+    log_values, start, moments, passes, converged = _search(
+        moments_at, partial(stable_log_values, estimate), moments, weight, log_values, start, max_passes
+    )
+    _, hessian = gauss_newton_step(moments, weight)
+    misfit = np.sqrt(moments.residual * weight / np.maximum(moments.count, 1.0))
+    widening = max(1.0, float(np.max(misfit)) ** 2)
+    covariance = widening * _inverse(hessian)[:8, :8]
+    return OpenLoopFit(
+        parameters=estimate.with_identified(np.exp(log_values)),
+        covariance_log=covariance,
+        misfit=misfit,
+        start=start,
+        converged=converged,
+        passes=passes,
+    )
+
+
+def _search(
+    moments_at: Callable[[FloatArray, FloatArray], Moments],
+    stable: Callable[[FloatArray], bool],
+    moments: Moments,
+    weight: FloatArray,
+    log_values: FloatArray,
+    start: FloatArray,
+    max_passes: int,
+) -> tuple[FloatArray, FloatArray, Moments, int, bool]:
+    """Levenberg-Marquardt over the 8 log-parameters and the 8 initial states; the point reached,
+    its moments, the passes over the record (one more than the steps tried) and whether it settled."""
+    passes, damping = 1, _DAMPING_START
+    while passes <= max_passes and damping < _DAMPING_MAX:
+        step, hessian = gauss_newton_step(moments, weight, damping=damping)
+        step *= min(1.0, _MAX_LOG_STEP / max(float(np.max(np.abs(step[:8]))), 1e-300))
+        values = log_values + step[:8]
+        trial = moments_at(values, start + step[8:]) if stable(values) else None
+        passes += 1
+        if trial is None or float(trial.residual @ weight) > float(moments.residual @ weight):
+            damping *= _DAMPING_UP
+            continue
+        log_values, start, moments = values, start + step[8:], trial
+        damping *= _DAMPING_DOWN
+        sd = np.sqrt(np.maximum(np.diag(_inverse(hessian)), 0.0))
+        if np.all(np.abs(step) <= 0.01 * sd):
+            return log_values, start, moments, passes, True
+    return log_values, start, moments, passes, False
+
+
+def _inverse(hessian: FloatArray) -> FloatArray:
+    """The (pseudo-)inverse of a Hessian whose diagonal spans many decades, taken where every
+    unknown's curvature is 1."""
+    unit = 1.0 / np.sqrt(np.maximum(np.diag(hessian), 1e-300))
+    return np.linalg.pinv(hessian * np.outer(unit, unit), rcond=1e-12) * np.outer(unit, unit)
