@@ -105,7 +105,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
     type=FiniteFloatRange(),
     default=20.0,
     show_default=True,
-    help="Force amplitude (N or N m).",
+    help="Force amplitude (N or N m), of every excitation.",
 )
 @click.option("--excitation", "kind", type=click.Choice(EXCITATION_KINDS), default="impulse", show_default=True)
 @click.option(
@@ -122,7 +122,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
     type=FiniteFloatRange(min=0),
     default=100.0,
     show_default=True,
-    help="Sine frequency, or sweep start (Hz).",
+    help="Sine frequency, or the start of a sweep's or multisine's band (Hz).",
 )
 @click.option(
     "--frequency-end",
@@ -130,7 +130,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
     type=FiniteFloatRange(min=0),
     default=2000.0,
     show_default=True,
-    help="Sweep end (Hz).",
+    help="The end of a sweep's or multisine's band, or a binary sequence's (prbs) clock (Hz).",
 )
 @click.option(
     "--noise",
@@ -474,6 +474,12 @@ def _positive_list(text: str, option: str, example: str) -> tuple[float, ...]:
     show_default=True,
     help="Identified: the stated ±2σ within this fraction of the value.",
 )
+@click.option(
+    "--refine/--no-refine",
+    default=True,
+    show_default=True,
+    help="Predict the estimate refined open loop, as identify gives it by default (--no-refine: the filter's own).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def plan_command(
@@ -485,6 +491,7 @@ def plan_command(
     measured: str,
     noise_fraction: float,
     target: float,
+    refine: bool,
     as_json: bool,
 ) -> None:
     """Which test identifies all eight parameters: the expected standard deviations for candidate
@@ -510,6 +517,8 @@ def plan_command(
         --noise: a fraction of each response's RMS.
     target : float
         --target: a fraction of each parameter's value.
+    refine : bool
+        --refine.
     as_json : bool
         --json.
 
@@ -528,7 +537,7 @@ def plan_command(
         measured,
     )
     with stderr.status(f"predicting {len(candidates)} tests…"):
-        plan = plan_tests(guess, candidates, noise_fraction, target)
+        plan = plan_tests(guess, candidates, noise_fraction, target, refine=refine)
     if as_json:
         print_json(plan.summary())
         return
@@ -536,10 +545,12 @@ def plan_command(
 
 
 def _print_plan(plan: ExcitationPlan, measured: str) -> None:
-    table = Table(
-        title=f"Stated ±2σ (%) after each test; repeated tests scatter less (--json); "
-        f"measured: {measured}, noise {plan.noise_fraction:g}"
+    whose = (
+        "the refined estimate's stated ±2σ (%) after each test"
+        if plan.refine
+        else "the filter's stated ±2σ (%) after each test; repeated tests scatter less (--json)"
     )
+    table = Table(title=f"{whose[0].upper()}{whose[1:]}; measured: {measured}, noise {plan.noise_fraction:g}")
     table.add_column("test")
     for name in IDENTIFIED:
         table.add_column(name, justify="right")
@@ -576,6 +587,6 @@ def _print_plan(plan: ExcitationPlan, measured: str) -> None:
     )
     stderr.print(
         f"mtident: no candidate identifies all eight {within}; never within it: {', '.join(never) or 'none'}"
-        f"{closest}; longer --durations, finer sensors (--noise) or another --measured set may",
+        f"{closest}; longer --durations, finer sensors (--noise) or another --measured set may identify them",
         highlight=False,
     )

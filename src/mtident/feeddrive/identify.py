@@ -515,15 +515,25 @@ def _divergence(step: int, time_s: float, guess: FeedDriveParameters, noise_frac
     )
 
 
-def _parameter_notes(final_sd_log: FloatArray, prior_sd_log: float) -> list[str]:
-    """A note for each parameter the record barely informs."""
-    return [
-        f"{name}: the data barely inform it (standard deviation {100 * sd:.0f} % after the record, "
-        f"prior {100 * prior_sd_log:.0f} %); treat its estimate as the guess, not a measurement; "
-        "a test plan (plan_tests) says which test, if any, would identify it"
-        for name, sd in zip(IDENTIFIED, final_sd_log, strict=True)
-        if 2 * sd > IDENTIFIED_WITHIN
-    ]
+def _parameter_notes(final_sd_log: FloatArray, prior_sd_log: float | None) -> list[str]:
+    """A note for each parameter the record leaves beyond ±``IDENTIFIED_WITHIN`` (2σ): against the
+    filter's prior where it has one (``prior_sd_log``), else (a refined estimate) as it is."""
+    said = []
+    for name, sd in zip(IDENTIFIED, final_sd_log, strict=True):
+        if 2 * sd <= IDENTIFIED_WITHIN:
+            continue
+        if prior_sd_log is None:
+            said.append(
+                f"{name}: not identified (±{200 * sd:.2g} % at 2σ, beyond ±{100 * IDENTIFIED_WITHIN:g} %); a test plan "
+                "says which test, if any, would identify it"
+            )
+        else:
+            said.append(
+                f"{name}: the data barely inform it (standard deviation {100 * sd:.0f} % after the record, prior "
+                f"{100 * prior_sd_log:.0f} %); treat its estimate as the guess, not a measurement; a test plan says "
+                "which test, if any, would identify it"
+            )
+    return said
 
 
 def identify_feed_drive(
@@ -591,7 +601,11 @@ def identify_feed_drive(
     h = float(response.time_s[1] - response.time_s[0])
     problem = sampling_problem(guess, 1.0 / h, "the guess")
     if problem:
-        raise InputError(f"{problem}; sample faster, or give a guess whose highest mode is within reach")
+        msg = (
+            f"{problem}; sample faster (the filter follows the guess's modes: where they are far above the "
+            "drive's, check the guess)"
+        )
+        raise InputError(msg)
     scaled = _scaled_problem(response, guess, indices, preset, noise_fraction, substeps, h)
     notes = _one_frequency_note(response.forces, h) or _sweep_note(response.forces, h)
     if preset == "paper":
@@ -842,7 +856,7 @@ def _refined(
         consistency=check,
         notes=(
             *_refined_notes(notes, response.forces, scaled.h),
-            *_parameter_notes(sd_log, filtered.prior_sd_log),
+            *_parameter_notes(sd_log, None),
             said,
         ),
         filter_parameters=filtered.parameters,

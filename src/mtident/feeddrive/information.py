@@ -28,6 +28,8 @@ __all__ = [
     "sensitivity_system",
     "response_moments",
     "filter_covariance",
+    "fisher_covariance",
+    "scaled_inverse",
     "closest_consistent",
     "gauss_newton_step",
     "stable_log_values",
@@ -192,6 +194,67 @@ def filter_covariance(
     scale = np.where(rms > 0, rms, 1.0)
     stated, scatter = covariance_recursion(step, forces, rows, scale[:8], scale[list(idx)], noise)
     return stated[8:, 8:], scatter[8:, 8:]
+
+
+def fisher_covariance(
+    p: FeedDriveParameters,
+    forces: FloatArray,
+    h: float,
+    idx: tuple[int, ...],
+    noise_fraction: float,
+    system: SensitivitySystem | None = None,
+) -> FloatArray:
+    """The inverse Fisher information of the log-parameters for a record of the responses ``idx``
+    of a drive with parameters ``p`` under ``forces``, from rest, with white noise of
+    ``noise_fraction`` of each response's RMS, the initial state unknown: the covariance an
+    efficient estimate of the record alone has, and the one the open-loop refinement states
+    (:mod:`mtident.feeddrive.refine`).
+
+    Parameters
+    ----------
+    p : FeedDriveParameters
+    forces : ndarray, shape (N, 4)
+    h : float
+        Sampling interval (s).
+    idx : tuple of int
+        The measured responses (indices into ``RESPONSE_COLUMNS``).
+    noise_fraction : float
+        Measurement noise standard deviation as a fraction of each response's RMS.
+    system : SensitivitySystem, optional
+        :func:`sensitivity_system` of the same ``p``, ``h`` and ``idx``, to share among records.
+
+    Returns
+    -------
+    ndarray, shape (8, 8)
+    """
+    from mtident.feeddrive.fast import response_moments as run
+
+    step, rows = system or sensitivity_system(p, h, idx)
+    forces = np.asarray(forces, dtype=float)
+    no_data = np.full((len(forces), len(idx)), np.nan)
+    # the initial state is fitted with the parameters, as the refinement does: an impulse's record
+    # starts in its ring-down, and a free start takes some of the information
+    gram, _, _, power = run(step, np.zeros(8), forces, rows, no_data, True)
+    variance = noise_fraction**2 * power / len(forces)
+    information = np.einsum("rij,r->ij", gram, 1.0 / np.where(variance > 0, variance, np.inf))
+    return scaled_inverse(information)[:8, :8]
+
+
+def scaled_inverse(matrix: FloatArray) -> FloatArray:
+    """The (pseudo-)inverse of an information matrix whose diagonal spans many decades (stiffness
+    and damping move the responses by amounts 1e10 apart), taken where every diagonal element is 1.
+
+    Parameters
+    ----------
+    matrix : ndarray, shape (P, P)
+        Symmetric, positive semi-definite.
+
+    Returns
+    -------
+    ndarray, shape (P, P)
+    """
+    unit = 1.0 / np.sqrt(np.maximum(np.diag(matrix), 1e-300))
+    return np.asarray(np.linalg.pinv(matrix * np.outer(unit, unit), rcond=1e-12) * np.outer(unit, unit), dtype=float)
 
 
 @dataclass(frozen=True, slots=True)

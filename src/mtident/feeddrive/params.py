@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from mtident._typing import FloatArray
-from mtident.exceptions import InputError, UnstableModelError
+from mtident.exceptions import InputError, MtidentError, UnstableModelError
 
 __all__ = [
     "FeedDriveParameters",
@@ -347,4 +347,7 @@ def load_parameters(path: str | Path | None, base: FeedDriveParameters | None = 
             msg = f"{path}: parameter {name} = {value!r} is not a number"
             raise InputError(msg)
         values[name] = float(value)
-    return validate(replace(params, **values))
+    try:
+        return validate(replace(params, **values))
+    except MtidentError as exc:  # the same kind, said with the file it came from
+        raise type(exc)(f"{path}: {exc}") from exc

@@ -27,7 +27,7 @@ import numpy as np
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.feeddrive.identify import IDENTIFIED_WITHIN, MEASUREMENT_SETS, filter_noise
-from mtident.feeddrive.information import SensitivitySystem, filter_covariance, sensitivity_system
+from mtident.feeddrive.information import SensitivitySystem, filter_covariance, fisher_covariance, sensitivity_system
 from mtident.feeddrive.model import Excitation
 from mtident.feeddrive.modes import modes, sampling_problem
 from mtident.feeddrive.params import COORDINATES, IDENTIFIED, FeedDriveParameters, validate
@@ -150,6 +150,8 @@ class ExcitationPlan:
     lengthened : PlanPrediction or None
         Where no candidate identified all eight: the most informative broadband one run longer
         (also the last of ``predictions``, and the recommended one where it identifies all).
+    refine : bool
+        The predictions are of the estimate refined open loop (else of the filter's own).
     """
 
     guess: FeedDriveParameters
@@ -159,6 +161,7 @@ class ExcitationPlan:
     recommended: PlanPrediction | None
     closest: PlanPrediction | None
     lengthened: PlanPrediction | None = None
+    refine: bool = True
 
     def summary(self) -> dict[str, object]:
         """A JSON-ready dict: every candidate's expected standard deviations (relative) and the recommendation."""
@@ -180,6 +183,7 @@ class ExcitationPlan:
             }
 
         return {
+            "predicts": "refined" if self.refine else "filter",
             "target_2sd_relative": self.target,
             "noise_fraction": self.noise_fraction,
             "recommended": None if self.recommended is None else one(self.recommended),
@@ -258,8 +262,9 @@ def predict_test(
     noise_fraction: float = 0.01,
     target: float = IDENTIFIED_WITHIN,
     system: SensitivitySystem | None = None,
+    refine: bool = True,
 ) -> PlanPrediction:
-    """The expected standard deviations after ``candidate``, for the filter started at ``guess``.
+    """The expected standard deviations after ``candidate``, for the identification started at ``guess``.
 
     Parameters
     ----------
@@ -271,6 +276,10 @@ def predict_test(
         Half-width of the ±2σ interval, relative, that counts as identified.
     system : SensitivitySystem, optional
         The guess's sensitivity system at the candidate's sampling and responses (shared among candidates).
+    refine : bool
+        Predict the estimate refined open loop (the inverse Fisher information of the record, which
+        it states; as ``identify_feed_drive(refine=True)`` and the CLI's default), else the filter's
+        own (its prior and process noise included).
 
     Returns
     -------
@@ -279,13 +288,17 @@ def predict_test(
     h = 1.0 / candidate.sample_rate_Hz
     count = int(round(candidate.duration_s * candidate.sample_rate_Hz)) + 1
     forces = candidate.excitation.forces(np.arange(count, dtype=np.float64) * h)
-    noise = filter_noise(noise_fraction, len(candidate.measured))
-    stated, scatter = filter_covariance(guess, forces, h, candidate.measured, noise, system)
-    stated_std = np.sqrt(np.diag(stated))
+    if refine:
+        stated = scatter = fisher_covariance(guess, forces, h, candidate.measured, noise_fraction, system)
+    else:
+        noise = filter_noise(noise_fraction, len(candidate.measured))
+        stated, scatter = filter_covariance(guess, forces, h, candidate.measured, noise, system)
+    stated_std = np.sqrt(np.maximum(np.diag(stated), 0.0))
     reason = sampling_problem(guess, candidate.sample_rate_Hz, "the guess")
-    if reason is None:
+    if reason is None and (not refine or candidate.excitation.kind == "sine"):
         reason = NOT_RECOMMENDED.get(candidate.excitation.kind)
-    return PlanPrediction(candidate, stated_std, np.sqrt(np.diag(scatter)), 2 * stated_std <= target, reason)
+    expected_std = np.sqrt(np.maximum(np.diag(scatter), 0.0))
+    return PlanPrediction(candidate, stated_std, expected_std, 2 * stated_std <= target, reason)
 
 
 def plan_tests(
@@ -294,6 +307,7 @@ def plan_tests(
     noise_fraction: float = 0.01,
     target: float = IDENTIFIED_WITHIN,
     lengthen: bool = True,
+    refine: bool = True,
 ) -> ExcitationPlan:
     """Predict every candidate and recommend the cheapest that identifies all eight parameters.
 
@@ -316,6 +330,10 @@ def plan_tests(
         (:attr:`ExcitationPlan.lengthened`):
         held through the record, its information grows with the duration, so a longer run of it
         is the cheapest way on (its prediction is computed, not extrapolated).
+    refine : bool
+        Predict the estimate refined open loop (default, as the CLI's ``identify``), else the
+        filter's own; sweeps and multisines are recommended only for a refined estimate (the
+        filter's damping from them was biased in simulation).
 
     Returns
     -------
@@ -323,17 +341,22 @@ def plan_tests(
 
     Examples
     --------
-    Nguyen-Quoc et al.'s impulse at 1 % noise leaves the guideway damping Bt barely known; with sensors a
-    hundred times finer, 2 s of it identify all eight:
+    For the filter alone, Nguyen-Quoc et al.'s impulse at 1 % noise leaves the guideway damping Bt barely
+    known; with sensors a hundred times finer, 2 s of it identify all eight:
 
     >>> tests = candidate_tests(FeedDriveParameters(), kinds=("impulse",), coordinates=(0,), durations_s=(0.5, 2.0))
-    >>> plan = plan_tests(FeedDriveParameters(), tests)
+    >>> plan = plan_tests(FeedDriveParameters(), tests, refine=False)
     >>> [round(200 * p.stated_std_log[IDENTIFIED.index("Bt")]) for p in plan.predictions]  # Bt's ±2σ, %
     [72, 46]
     >>> print(plan.recommended)
     None
-    >>> plan_tests(FeedDriveParameters(), tests, noise_fraction=1e-4).recommended.candidate.label
+    >>> plan_tests(FeedDriveParameters(), tests, noise_fraction=1e-4, refine=False).recommended.candidate.label
     'impulse, table force, 2 s at 10000 Hz'
+
+    Refined open loop, the record's information is all kept: half a second of it is enough.
+
+    >>> plan_tests(FeedDriveParameters(), tests).recommended.candidate.label
+    'impulse, table force, 0.5 s at 10000 Hz'
     """
     guess = validate(guess)
     if not (0 < target < 10 and noise_fraction > 0):
@@ -352,19 +375,19 @@ def plan_tests(
         key = (c.sample_rate_Hz, c.measured)
         systems.setdefault(key, sensitivity_system(guess, 1.0 / c.sample_rate_Hz, c.measured))
     predictions = tuple(
-        predict_test(guess, c, noise_fraction, target, systems[(c.sample_rate_Hz, c.measured)])
+        predict_test(guess, c, noise_fraction, target, systems[(c.sample_rate_Hz, c.measured)], refine)
         for c in sorted(chosen, key=cost)
     )
     recommended = next((p for p in predictions if p.identifies_all), None)
     longer = None
     if recommended is None and lengthen:
-        longer = _lengthened(guess, predictions, noise_fraction, target, systems)
+        longer = _lengthened(guess, predictions, noise_fraction, target, systems, refine)
         if longer is not None:
             predictions, recommended = (*predictions, longer), longer if longer.identifies_all else None
     allowed = [p for p in predictions if p.reason is None]
     # min keeps the first of equals: the cheapest
     closest = recommended or (min(allowed, key=lambda p: float(np.max(p.stated_std_log))) if allowed else None)
-    return ExcitationPlan(guess, target, noise_fraction, predictions, recommended, closest, longer)
+    return ExcitationPlan(guess, target, noise_fraction, predictions, recommended, closest, longer, refine)
 
 
 def _lengthened(
@@ -373,6 +396,7 @@ def _lengthened(
     noise_fraction: float,
     target: float,
     systems: dict[tuple[float, tuple[int, ...]], SensitivitySystem],
+    refine: bool,
 ) -> PlanPrediction | None:
     """The most informative broadband candidate run long enough to identify all eight, predicted at
     that duration. The information of an excitation held through the record grows about linearly
@@ -393,7 +417,8 @@ def _lengthened(
         if duration <= c.duration_s:
             break
         longer = CandidateTest(c.excitation, duration, c.sample_rate_Hz, c.measured)
-        last = longest = predict_test(guess, longer, noise_fraction, target, systems[(c.sample_rate_Hz, c.measured)])
+        system = systems[(c.sample_rate_Hz, c.measured)]
+        last = longest = predict_test(guess, longer, noise_fraction, target, system, refine)
         if last.identifies_all:
             break
     return longest

@@ -17,7 +17,13 @@ from functools import partial
 import numpy as np
 
 from mtident._typing import FloatArray
-from mtident.feeddrive.information import Moments, gauss_newton_step, response_moments, stable_log_values
+from mtident.feeddrive.information import (
+    Moments,
+    gauss_newton_step,
+    response_moments,
+    scaled_inverse,
+    stable_log_values,
+)
 from mtident.feeddrive.params import FeedDriveParameters
 
 __all__ = ["OpenLoopFit", "refine_open_loop"]
@@ -109,7 +115,7 @@ def refine_open_loop(
     _, hessian = gauss_newton_step(moments, weight)
     misfit = np.sqrt(moments.residual * weight / np.maximum(moments.count, 1.0))
     widening = max(1.0, float(np.max(misfit)) ** 2)
-    covariance = widening * _inverse(hessian)[:8, :8]
+    covariance = widening * scaled_inverse(hessian)[:8, :8]
     return OpenLoopFit(
         parameters=estimate.with_identified(np.exp(log_values)),
         covariance_log=covariance,
@@ -143,14 +149,7 @@ def _search(
             continue
         log_values, start, moments = values, start + step[8:], trial
         damping *= _DAMPING_DOWN
-        sd = np.sqrt(np.maximum(np.diag(_inverse(hessian)), 0.0))
+        sd = np.sqrt(np.maximum(np.diag(scaled_inverse(hessian)), 0.0))
         if np.all(np.abs(step) <= 0.01 * sd):
             return log_values, start, moments, passes, True
     return log_values, start, moments, passes, False
-
-
-def _inverse(hessian: FloatArray) -> FloatArray:
-    """The (pseudo-)inverse of a Hessian whose diagonal spans many decades, taken where every
-    unknown's curvature is 1."""
-    unit = 1.0 / np.sqrt(np.maximum(np.diag(hessian), 1e-300))
-    return np.linalg.pinv(hessian * np.outer(unit, unit), rcond=1e-12) * np.outer(unit, unit)

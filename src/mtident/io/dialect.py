@@ -610,6 +610,8 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         )
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         msg = f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})"
+        if _looks_like_toml(head):
+            msg = f"{path}: a TOML file (name = value lines), not a CSV file of readings; give the CSV log here"
         raise InputError(msg) from exc
     frame.columns = [str(c).removeprefix("\ufeff") for c in frame.columns]  # UTF-16's byte-order mark
     if dialect.names:  # by position: pandas has renamed a repeated name ("Date/Time.1"), left as it is
@@ -692,3 +694,12 @@ def _decodes(data: bytes, encoding: str = "utf-8-sig") -> bool:
     except UnicodeDecodeError:
         return False
     return True
+
+
+def _looks_like_toml(head: bytes) -> bool:
+    """Whether most of the lines that are not comments are ``name = value`` (a parameter file given
+    where a log belongs)."""
+    lines = [line.strip() for line in head.decode("utf-8", "replace").splitlines()]
+    lines = [line for line in lines if line and not line.startswith("#")]
+    assigned = [line for line in lines if re.match(r"^[A-Za-z_][\w.-]*\s*=", line)]
+    return len(lines) > 0 and len(assigned) >= 0.8 * len(lines)

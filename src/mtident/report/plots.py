@@ -47,12 +47,13 @@ def picture_format(path: str | Path) -> str:
     return suffix
 
 
-def _save(fig: Figure, path: str | Path | None, dpi: int = 110) -> Path | Figure:
-    """Lay out; write atomically (a watcher may be reading the old picture), or return the figure without a path.
+def _save(fig: Figure, path: str | Path | None, dpi: int = 110, top: float = 1.0) -> Path | Figure:
+    """Lay out (the axes below ``top``, a fraction of the height, where a title goes above them);
+    write atomically (a watcher may be reading the old picture), or return the figure without a path.
 
     The format follows the suffix (``fit.svg`` is an SVG; the temporary file's own suffix
     used to make every picture a PNG)."""
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, top))
     if path is None:
         return fig
     out = Path(path)
@@ -343,20 +344,33 @@ def plot_feed_drive_identification(result, response, path: str | Path | None = N
     _draw_spectra(axes[3], result.time_s, measured, model, frequencies)
     stride = max(1, len(result.time_s) // _PANEL_POINTS)
     th = result.time_s[::stride]
+    refined = result.filter_parameters is not None
     for j, ax in enumerate(axes[4:].ravel()):
         mean, sd = result.history[::stride, j], result.history_std[::stride, j]
-        ax.plot(th, mean, color="tab:blue", lw=1)
+        ax.plot(th, mean, color="tab:blue", lw=1, label="filter ±2σ")
         ax.fill_between(th, mean - 2 * sd, mean + 2 * sd, color="tab:blue", alpha=0.2, lw=0)
+        value, half = result.parameters[j], 2 * result.parameters_std[j]
+        if refined:  # the answer given: the whole record fitted, drawn over it
+            ax.axhline(value, color="tab:red", lw=1, label="refined ±2σ")
+            ax.axhspan(value - half, value + half, color="tab:red", alpha=0.2, lw=0)
         if truth is not None:
-            ax.axhline(getattr(truth, IDENTIFIED[j]), color="k", ls="--", lw=1)
+            ax.axhline(getattr(truth, IDENTIFIED[j]), color="k", ls="--", lw=1, label="true")
         settled = slice(len(th) // 20, None)  # the start, from the guess, would flatten the rest
-        low, high = np.min((mean - 2 * sd)[settled]), np.max((mean + 2 * sd)[settled])
+        low = min(np.min((mean - 2 * sd)[settled]), value - half)
+        high = max(np.max((mean + 2 * sd)[settled]), value + half)
         if np.isfinite(low) and np.isfinite(high) and high > low:
             ax.set_ylim(low - 0.2 * (high - low), high + 0.2 * (high - low))
+        ax.ticklabel_format(axis="y", useOffset=False)  # an offset label overlaps the title
         ax.set_title(f"{IDENTIFIED[j]} ({'identified' if result.identifiable[j] else 'not identified'})", fontsize=9)
         ax.set_xlabel("time (s)")
         ax.grid(alpha=0.3)
-    return _save(fig, path, 90)
+    axes[4, 0].legend(fontsize=7)
+    fig.suptitle(
+        f"Responses over the first {t[-1]:.0f} ms of {result.time_s[-1]:.3g} s (rows 1-3), their spectra (row 4), "
+        "the parameters over the record (rows 5-6)",
+        fontsize=11,
+    )
+    return _save(fig, path, 90, top=0.985)
 
 
 def plot_monitor(
