@@ -831,6 +831,11 @@ def _refined(
         noise_fraction * scaled.scale[scaled.idx],
     )
     worst = float(np.max(fit.misfit))
+    if not fit.converged:
+        return None, (
+            f"the open-loop refinement did not settle within {fit.passes} passes over the record (misfit up to "
+            f"{worst:.2f}× the assumed noise): the filter's estimate is given"
+        )
     if worst > MISFIT_LIMIT:
         column = filtered.measured_columns[int(np.argmax(fit.misfit))]
         return None, (
@@ -842,8 +847,8 @@ def _refined(
     values = fit.parameters.identified()
     moved = np.abs(np.log(values / filtered.parameters)) / sd_log
     said = (
-        f"refined open loop (the whole record fitted from the filter's estimate, {fit.passes} passes"
-        f"{'' if fit.converged else ', stopped before it settled'}): the filter's estimate was up to "
+        f"refined open loop (the whole record fitted from the filter's estimate, {fit.passes} passes): the "
+        "filter's estimate was up to "
         f"{moved.max():.1f} of the refined standard deviations away ({IDENTIFIED[int(np.argmax(moved))]})"
     )
     check = Consistency(fit.misfit, 0.0, np.zeros(8), fit.start)

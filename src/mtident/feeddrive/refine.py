@@ -38,6 +38,9 @@ _DAMPING_MAX = 1e8
 # The largest change of a log-parameter in one step: the responses are nearly linear in a damping,
 # not in its log, and a step to e^-13 of it (where the data no longer see it) stalls the search.
 _MAX_LOG_STEP = 0.3
+# Settled: the Gauss-Newton step from the point moves no unknown by more than this many of its
+# standard deviations.
+_SETTLED = 0.05
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,7 +59,8 @@ class OpenLoopFit:
     start : ndarray, shape (8,)
         The fitted initial state.
     converged : bool
-        The last step moved every log-parameter by less than a hundredth of its standard deviation.
+        The Gauss-Newton step from the point reached moves no unknown by more than ``_SETTLED`` of
+        its standard deviation: the minimum. An unsettled fit is not an estimate.
     passes : int
         Passes over the record.
     """
@@ -76,7 +80,7 @@ def refine_open_loop(
     idx: tuple[int, ...],
     data: FloatArray,
     noise: FloatArray,
-    max_passes: int = 40,
+    max_passes: int = 100,
 ) -> OpenLoopFit:
     """Fit the log-parameters and the initial state to the record open loop, from ``estimate``:
     minimise ‖(y − ŷ)/σ‖² by Levenberg-Marquardt.
@@ -138,7 +142,7 @@ def _search(
     """Levenberg-Marquardt over the 8 log-parameters and the 8 initial states; the point reached,
     its moments, the passes over the record (one more than the steps tried) and whether it settled."""
     passes, damping = 1, _DAMPING_START
-    while passes <= max_passes and damping < _DAMPING_MAX:
+    while passes < max_passes and damping < _DAMPING_MAX:
         step, hessian = gauss_newton_step(moments, weight, damping=damping)
         step *= min(1.0, _MAX_LOG_STEP / max(float(np.max(np.abs(step[:8]))), 1e-300))
         values = log_values + step[:8]
@@ -149,7 +153,10 @@ def _search(
             continue
         log_values, start, moments = values, start + step[8:], trial
         damping *= _DAMPING_DOWN
+        # settled where the undamped (Gauss-Newton) step from here is negligible: a damped step is
+        # small wherever the damping is large, also far from the minimum
+        newton, hessian = gauss_newton_step(moments, weight)
         sd = np.sqrt(np.maximum(np.diag(scaled_inverse(hessian)), 0.0))
-        if np.all(np.abs(step) <= 0.01 * sd):
+        if np.all(np.abs(newton) <= _SETTLED * sd):
             return log_values, start, moments, passes, True
     return log_values, start, moments, passes, False
