@@ -325,7 +325,8 @@ def identify_command(
     guess = load_parameters(guess_path) if guess_path else default_guess()
     truth = load_parameters(truth_path) if truth_path else None
     steps = len(response.time_s)
-    with stderr.status(f"filtering {steps} samples…") as status:
+    compiling = "the first run after installing also compiles the filter"
+    with stderr.status(f"filtering {steps} samples… ({compiling})") as status:
         result = identify_feed_drive(
             response,
             guess,
@@ -358,11 +359,12 @@ def identify_command(
     filtered = result.filter_parameters
     columns = ("parameter", "guess", *(("filter",) if filtered is not None else ()), "estimate", "± 2σ", "identified")
     for column in (*columns, *(("true", "error %") if truth else ())):
-        table.add_column(column, justify="right")
+        table.add_column(column, justify="right", no_wrap=column == "parameter")
     for i, name in enumerate(IDENTIFIED):
         known = "yes" if result.identifiable[i] else "[yellow]no[/]"
         estimate, half_width = f"{result.parameters[i]:.5g}", f"{2 * result.parameters_std[i]:.2g}"
-        row = [name, f"{getattr(guess, name):.5g}", *((f"{filtered[i]:.5g}",) if filtered is not None else ())]
+        row = [f"{name} ({UNITS[name]})", f"{getattr(guess, name):.5g}"]
+        row += [f"{filtered[i]:.5g}"] if filtered is not None else []
         row += [estimate, half_width, known]
         if truth:
             row += [f"{getattr(truth, name):.5g}", f"{summary['error_percent'][name]:.3g}"]  # type: ignore[index]
