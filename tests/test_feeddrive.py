@@ -552,8 +552,8 @@ def test_the_plan_predicts_what_the_refinement_states_and_a_short_impulse_identi
     (benchmarks) the scatter was 0.80-1.18 of it. Sweeps are recommended only for a refined estimate."""
     truth = FeedDriveParameters()
     tests = candidate_tests(truth, kinds=("impulse", "sweep", "sine"), coordinates=(0,), durations_s=(0.25, 0.5))
-    plan = plan_tests(truth, tests)
-    assert plan.summary()["predicts"] == "refined" and plan_tests(truth, tests, refine=False).refine is False
+    plan = plan_tests(truth, tests, refine=True)
+    assert plan.summary()["predicts"] == "refined" and plan_tests(truth, tests).refine is False
     assert plan.recommended.candidate.label == "impulse, table force, 0.5 s at 10000 Hz"
     for refine, allowed in ((True, [True, True]), (False, [False, False])):  # the filter's sweeps were biased
         predictions = plan_tests(truth, tests, refine=refine).predictions

@@ -161,7 +161,7 @@ class ExcitationPlan:
     recommended: PlanPrediction | None
     closest: PlanPrediction | None
     lengthened: PlanPrediction | None = None
-    refine: bool = True
+    refine: bool = False
 
     def summary(self) -> dict[str, object]:
         """A JSON-ready dict: every candidate's expected standard deviations (relative) and the recommendation."""
@@ -262,7 +262,7 @@ def predict_test(
     noise_fraction: float = 0.01,
     target: float = IDENTIFIED_WITHIN,
     system: SensitivitySystem | None = None,
-    refine: bool = True,
+    refine: bool = False,
 ) -> PlanPrediction:
     """The expected standard deviations after ``candidate``, for the identification started at ``guess``.
 
@@ -278,8 +278,8 @@ def predict_test(
         The guess's sensitivity system at the candidate's sampling and responses (shared among candidates).
     refine : bool
         Predict the estimate refined open loop (the inverse Fisher information of the record, which
-        it states; as ``identify_feed_drive(refine=True)`` and the CLI's default), else the filter's
-        own (its prior and process noise included).
+        it states; as ``identify_feed_drive(refine=True)`` gives it, the CLI's default), else the
+        filter's own (its prior and process noise included; the default, as for ``identify_feed_drive``).
 
     Returns
     -------
@@ -307,7 +307,7 @@ def plan_tests(
     noise_fraction: float = 0.01,
     target: float = IDENTIFIED_WITHIN,
     lengthen: bool = True,
-    refine: bool = True,
+    refine: bool = False,
 ) -> ExcitationPlan:
     """Predict every candidate and recommend the cheapest that identifies all eight parameters.
 
@@ -331,9 +331,10 @@ def plan_tests(
         held through the record, its information grows with the duration, so a longer run of it
         is the cheapest way on (its prediction is computed, not extrapolated).
     refine : bool
-        Predict the estimate refined open loop (default, as the CLI's ``identify``), else the
-        filter's own; sweeps and multisines are recommended only for a refined estimate (the
-        filter's damping from them was biased in simulation).
+        Predict the estimate refined open loop (as ``identify_feed_drive(refine=True)`` and the
+        CLI's ``identify`` give it; the CLI's ``plan`` default), else the filter's own; sweeps and
+        multisines are recommended only for a refined estimate (the filter's damping from them was
+        biased in simulation).
 
     Returns
     -------
@@ -345,17 +346,17 @@ def plan_tests(
     known; with sensors a hundred times finer, 2 s of it identify all eight:
 
     >>> tests = candidate_tests(FeedDriveParameters(), kinds=("impulse",), coordinates=(0,), durations_s=(0.5, 2.0))
-    >>> plan = plan_tests(FeedDriveParameters(), tests, refine=False)
+    >>> plan = plan_tests(FeedDriveParameters(), tests)
     >>> [round(200 * p.stated_std_log[IDENTIFIED.index("Bt")]) for p in plan.predictions]  # Bt's ±2σ, %
     [72, 46]
     >>> print(plan.recommended)
     None
-    >>> plan_tests(FeedDriveParameters(), tests, noise_fraction=1e-4, refine=False).recommended.candidate.label
+    >>> plan_tests(FeedDriveParameters(), tests, noise_fraction=1e-4).recommended.candidate.label
     'impulse, table force, 2 s at 10000 Hz'
 
     Refined open loop, the record's information is all kept: half a second of it is enough.
 
-    >>> plan_tests(FeedDriveParameters(), tests).recommended.candidate.label
+    >>> plan_tests(FeedDriveParameters(), tests, refine=True).recommended.candidate.label
     'impulse, table force, 0.5 s at 10000 Hz'
     """
     guess = validate(guess)
