@@ -3,13 +3,20 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
-import numpy as np
-import pytest
-from hypothesis import settings
+# One BLAS thread per test process: the suite runs a process per core (pytest-xdist), and a
+# multithreaded BLAS in each of them oversubscribes the cores and slows the suite a lot. Set
+# before numpy is first imported, so that the workers inherit it.
+for _threads in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_threads, "1")
 
-from mtident.io.logs import TemperatureLog
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
+
+from mtident.io.logs import TemperatureLog  # noqa: E402
 
 # The property tests draw the same examples on every run, so that CI cannot go red by chance on
 # a clean clone; MTIDENT_HYPOTHESIS=explore draws new ones (a hunt found a sensor back from a
