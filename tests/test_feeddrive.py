@@ -639,8 +639,13 @@ def test_the_open_loop_refinement_recovers_a_noiseless_drive_from_a_biased_start
     record = simulate(truth, Excitation("sweep", frequency_Hz=100.0), duration_s=0.5, method="exact")
     start = truth.with_identified(truth.identified() * np.array([1.001, 0.999, 1.001, 0.999, 1.3, 0.7, 1.3, 0.7]))
     noise = 1e-6 * np.sqrt(np.mean(record.values**2, axis=0))
-    fit = refine_open_loop(start, record.forces, 1e-4, tuple(range(12)), record.values, noise)
+    said: list[tuple[int, int]] = []
+    fit = refine_open_loop(
+        start, record.forces, 1e-4, tuple(range(12)), record.values, noise, progress=lambda k, n: said.append((k, n))
+    )
     assert fit.converged
+    assert [k for k, _ in said] == list(range(1, len(said) + 1)) and {n for _, n in said} == {100}
+    assert 1 < len(said) <= fit.passes
     np.testing.assert_allclose(fit.parameters.identified(), truth.identified(), rtol=1e-6)
     np.testing.assert_allclose(fit.start, 0.0, atol=1e-9)
     np.testing.assert_array_less(fit.misfit, 0.01)

@@ -335,6 +335,9 @@ def identify_command(
             preset,
             progress=lambda k, n: status.update(f"filtering: {k}/{n} samples"),
             refine=refine,
+            refine_progress=lambda k, n: status.update(
+                f"refining open loop: pass {k} over the {steps} samples (at most {n})"
+            ),
         )
     for note in result.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)

@@ -547,6 +547,7 @@ def identify_feed_drive(
     engine: str = "compiled",
     check: bool = True,
     refine: bool = False,
+    refine_progress: Callable[[int, int], None] | None = None,
 ) -> FeedDriveIdentification:
     """Estimate states, stiffness and damping from a measured response.
 
@@ -579,6 +580,8 @@ def identify_feed_drive(
         likelihood, :mod:`mtident.feeddrive.refine`): unbiased where the filter is not (sweeps and
         multisines) and as precise as the record allows. Kept only where it fits the record within
         the noise; the filter's estimate stays in ``filter_parameters``. Not for the paper preset.
+    refine_progress : callable, optional
+        ``refine_progress(passes, max_passes)`` after each of the refinement's passes over the record.
 
     Returns
     -------
@@ -631,7 +634,7 @@ def identify_feed_drive(
     if not (refine and scaled.setup.log_form):
         return _identification(scaled, response, run, notes, check, noise_fraction, preset)
     filtered = _identification(scaled, response, run, list(notes), False, noise_fraction, preset)
-    refined, said = _refined(filtered, scaled, response, noise_fraction, notes)
+    refined, said = _refined(filtered, scaled, response, noise_fraction, notes, refine_progress)
     return refined or _identification(scaled, response, run, [*notes, said], check, noise_fraction, preset)
 
 
@@ -818,6 +821,7 @@ def _refined(
     response: Response,
     noise_fraction: float,
     notes: list[str],
+    progress: Callable[[int, int], None] | None,
 ) -> tuple[FeedDriveIdentification | None, str]:
     """The filter's result with its estimate refined open loop, and what to say of it; None where
     the refinement does not fit the record within the noise (the filter's estimate then stands)."""
@@ -829,6 +833,7 @@ def _refined(
         idx,
         response.values[:, scaled.idx],
         noise_fraction * scaled.scale[scaled.idx],
+        progress=progress,
     )
     worst = float(np.max(fit.misfit))
     if not fit.converged:

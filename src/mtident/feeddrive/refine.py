@@ -81,6 +81,7 @@ def refine_open_loop(
     data: FloatArray,
     noise: FloatArray,
     max_passes: int = 100,
+    progress: Callable[[int, int], None] | None = None,
 ) -> OpenLoopFit:
     """Fit the log-parameters and the initial state to the record open loop, from ``estimate``:
     minimise ‖(y − ŷ)/σ‖² by Levenberg-Marquardt.
@@ -101,6 +102,9 @@ def refine_open_loop(
         Assumed noise standard deviation of each response.
     max_passes : int
         Passes over the record at most (one per step tried).
+    progress : callable, optional
+        ``progress(passes, max_passes)`` after each pass over the record (a long record takes
+        seconds a pass).
 
     Returns
     -------
@@ -109,8 +113,15 @@ def refine_open_loop(
     weight = 1.0 / np.asarray(noise, dtype=float) ** 2
     log_values, start = np.log(estimate.identified()), np.zeros(8)
 
+    passes_made = 0
+
     def moments_at(values: FloatArray, initial: FloatArray) -> Moments:
-        return response_moments(estimate.with_identified(np.exp(values)), forces, h, idx, data, initial)
+        nonlocal passes_made
+        moments = response_moments(estimate.with_identified(np.exp(values)), forces, h, idx, data, initial)
+        passes_made += 1
+        if progress is not None:
+            progress(passes_made, max_passes)
+        return moments
 
     moments = moments_at(log_values, start)
     log_values, start, moments, passes, converged = _search(
