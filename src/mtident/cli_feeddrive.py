@@ -344,7 +344,7 @@ def identify_command(
     if not result.identifiable.all() and preset == "default":
         hint = "`mtident feeddrive plan --params-guess FILE` says which test would identify every parameter"
         stderr.print(f"mtident: hint: {hint}", highlight=False)
-    if result.filter_parameters is None and any(note.startswith("the excitation sweeps") for note in result.notes):
+    if not refine and any(note.startswith("the excitation sweeps") for note in result.notes):
         stderr.print("mtident: hint: --refine fits the record open loop, unbiased on such records", highlight=False)
     if result.reproduces_record() is False:
         hint = f"--noise sets the assumed noise ({noise_fraction:g} of each response's RMS)"
