@@ -581,7 +581,7 @@ def identify_feed_drive(
         multisines) and as precise as the record allows. Kept only where it fits the record within
         the noise; the filter's estimate stays in ``filter_parameters``. Not for the paper preset.
     refine_progress : callable, optional
-        ``refine_progress(passes, max_passes)`` after each of the refinement's passes over the record.
+        ``refine_progress(passes, max_passes)`` as each of the refinement's passes over the record begins.
 
     Returns
     -------
@@ -630,12 +630,15 @@ def identify_feed_drive(
         )
     if failed >= 0:
         raise _divergence(failed, float(response.time_s[failed]), guess, noise_fraction)
-    run = (means, variances, final_cov)
-    if not (refine and scaled.setup.log_form):
-        return _identification(scaled, response, run, notes, check, noise_fraction, preset)
-    filtered = _identification(scaled, response, run, list(notes), False, noise_fraction, preset)
-    refined, said = _refined(filtered, scaled, response, noise_fraction, notes, refine_progress)
-    return refined or _identification(scaled, response, run, [*notes, said], check, noise_fraction, preset)
+    result = _identification(scaled, response, (means, variances, final_cov), notes, preset)
+    if not scaled.setup.log_form:  # the paper preset keeps its guess (zero prior variance): nothing to refine or check
+        return result
+    if refine:
+        refined, said = _refined(result, scaled, response, noise_fraction, notes, refine_progress)
+        if refined is not None:
+            return refined
+        result = replace(result, notes=(*result.notes, said))
+    return _checked(result, scaled, response, noise_fraction) if check else result
 
 
 @dataclass(frozen=True)
@@ -757,12 +760,9 @@ def _identification(
     response: Response,
     run: tuple[FloatArray, FloatArray, FloatArray],
     notes: list[str],
-    check: bool,
-    noise_fraction: float,
     preset: str,
 ) -> FeedDriveIdentification:
-    """The result from the filter's run: parameters and their intervals, the estimated responses,
-    and (with ``check``) the open-loop check of the estimate against the record."""
+    """The result from the filter's run: parameters and their intervals, and the estimated responses."""
     means, variances, final_cov = run
     setup, idx = scaled.setup, scaled.idx
     param_hist = scaled.to_params(means)
@@ -779,23 +779,7 @@ def _identification(
     covariance_log = (
         final_cov[8:, 8:] if setup.log_form else final_cov[8:, 8:] / np.outer(param_hist[-1], param_hist[-1])
     )
-    if setup.log_form:
-        notes.extend(_parameter_notes(final_sd_log, setup.prior_sd_log))
-    consistency = None
-    columns = tuple(RESPONSE_COLUMNS[i] for i in idx)
-    if check and setup.log_form:  # the paper preset keeps its guess (zero prior variance): nothing to check
-        estimate = scaled.guess.with_identified(param_hist[-1])
-        noise = noise_fraction * scaled.scale[idx]
-        consistency = closest_consistent(
-            estimate,
-            covariance_log,
-            response.forces,
-            scaled.h,
-            tuple(int(i) for i in idx),
-            response.values[:, idx],
-            noise,
-        )
-        notes.extend(_consistency_notes(consistency, columns))
+    said = _parameter_notes(final_sd_log, setup.prior_sd_log) if setup.log_form else []
     return FeedDriveIdentification(
         time_s=response.time_s,
         parameters=param_hist[-1],
@@ -806,13 +790,30 @@ def _identification(
         history_std=hist_sd,
         estimated=estimated,
         correlation=correlation,
-        measured_columns=columns,
+        measured_columns=tuple(RESPONSE_COLUMNS[i] for i in idx),
         guess=scaled.guess,
         preset=preset,
-        notes=tuple(notes),
+        notes=(*notes, *said),
         covariance_log=covariance_log,
-        consistency=consistency,
+        consistency=None,
     )
+
+
+def _checked(
+    result: FeedDriveIdentification, scaled: _ScaledProblem, response: Response, noise_fraction: float
+) -> FeedDriveIdentification:
+    """``result`` with the open-loop check of its estimate against the record, and its note."""
+    consistency = closest_consistent(
+        result.guess.with_identified(result.parameters),
+        result.covariance_log,
+        response.forces,
+        scaled.h,
+        tuple(int(i) for i in scaled.idx),
+        response.values[:, scaled.idx],
+        noise_fraction * scaled.scale[scaled.idx],
+    )
+    notes = (*result.notes, *_consistency_notes(consistency, result.measured_columns))
+    return replace(result, consistency=consistency, notes=notes)
 
 
 def _refined(
@@ -824,7 +825,8 @@ def _refined(
     progress: Callable[[int, int], None] | None,
 ) -> tuple[FeedDriveIdentification | None, str]:
     """The filter's result with its estimate refined open loop, and what to say of it; None where
-    the refinement does not fit the record within the noise (the filter's estimate then stands)."""
+    the refinement did not settle or does not fit the record within the noise (the filter's
+    estimate then stands)."""
     idx = tuple(int(i) for i in scaled.idx)
     fit = refine_open_loop(
         filtered.guess.with_identified(filtered.parameters),

@@ -253,8 +253,15 @@ def scaled_inverse(matrix: FloatArray) -> FloatArray:
     -------
     ndarray, shape (P, P)
     """
-    unit = 1.0 / np.sqrt(np.maximum(np.diag(matrix), 1e-300))
+    unit = _unit_scale(matrix)
     return np.asarray(np.linalg.pinv(matrix * np.outer(unit, unit), rcond=1e-12) * np.outer(unit, unit), dtype=float)
+
+
+def _unit_scale(matrix: FloatArray) -> FloatArray:
+    """The scale of each unknown that makes its curvature (the matrix's diagonal) 1: stiffness and
+    damping move the responses by amounts 1e10 apart, and a least-squares or pseudo-inverse
+    cut-off in the raw units drops the damping directions."""
+    return np.asarray(1.0 / np.sqrt(np.maximum(np.diag(matrix), 1e-300)), dtype=float)
 
 
 @dataclass(frozen=True, slots=True)
@@ -372,9 +379,7 @@ def gauss_newton_step(
     if prior is not None and shift is not None:
         hessian[:8, :8] += prior
         gradient[:8] -= prior @ shift
-    # stiffness and damping move the responses by amounts 1e10 apart: solve in units where every
-    # unknown's curvature is 1, or the least-squares cut-off drops the damping directions
-    unit = 1.0 / np.sqrt(np.maximum(np.diag(hessian), 1e-300))
+    unit = _unit_scale(hessian)
     step = np.zeros(len(gradient))
     if np.all(np.isfinite(hessian)) and np.all(np.isfinite(gradient)):
         scaled = hessian * np.outer(unit, unit) + damping * np.eye(len(unit))

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
@@ -103,7 +102,7 @@ def refine_open_loop(
     max_passes : int
         Passes over the record at most (one per step tried).
     progress : callable, optional
-        ``progress(passes, max_passes)`` after each pass over the record (a long record takes
+        ``progress(passes, max_passes)`` as each pass over the record begins (a long record takes
         seconds a pass).
 
     Returns
@@ -112,21 +111,33 @@ def refine_open_loop(
     """
     weight = 1.0 / np.asarray(noise, dtype=float) ** 2
     log_values, start = np.log(estimate.identified()), np.zeros(8)
-
-    passes_made = 0
+    passes = 0
 
     def moments_at(values: FloatArray, initial: FloatArray) -> Moments:
-        nonlocal passes_made
-        moments = response_moments(estimate.with_identified(np.exp(values)), forces, h, idx, data, initial)
-        passes_made += 1
+        nonlocal passes
+        passes += 1
         if progress is not None:
-            progress(passes_made, max_passes)
-        return moments
+            progress(passes, max_passes)
+        return response_moments(estimate.with_identified(np.exp(values)), forces, h, idx, data, initial)
 
     moments = moments_at(log_values, start)
-    log_values, start, moments, passes, converged = _search(
-        moments_at, partial(stable_log_values, estimate), moments, weight, log_values, start, max_passes
-    )
+    converged, damping = False, _DAMPING_START
+    while not converged and passes < max_passes and damping < _DAMPING_MAX:
+        step, _ = gauss_newton_step(moments, weight, damping=damping)
+        step *= min(1.0, _MAX_LOG_STEP / max(float(np.max(np.abs(step[:8]))), 1e-300))
+        values = log_values + step[:8]
+        trial = moments_at(values, start + step[8:]) if stable_log_values(estimate, values) else None
+        if trial is None or float(trial.residual @ weight) > float(moments.residual @ weight):
+            damping *= _DAMPING_UP
+            continue
+        log_values, start, moments = values, start + step[8:], trial
+        damping *= _DAMPING_DOWN
+        # settled where the undamped (Gauss-Newton) step from here is negligible: a damped step is
+        # small wherever the damping is large, also far from the minimum
+        newton, hessian = gauss_newton_step(moments, weight)
+        converged = bool(
+            np.all(np.abs(newton) <= _SETTLED * np.sqrt(np.maximum(np.diag(scaled_inverse(hessian)), 0.0)))
+        )
     _, hessian = gauss_newton_step(moments, weight)
     misfit = np.sqrt(moments.residual * weight / np.maximum(moments.count, 1.0))
     widening = max(1.0, float(np.max(misfit)) ** 2)
@@ -139,35 +150,3 @@ def refine_open_loop(
         converged=converged,
         passes=passes,
     )
-
-
-def _search(
-    moments_at: Callable[[FloatArray, FloatArray], Moments],
-    stable: Callable[[FloatArray], bool],
-    moments: Moments,
-    weight: FloatArray,
-    log_values: FloatArray,
-    start: FloatArray,
-    max_passes: int,
-) -> tuple[FloatArray, FloatArray, Moments, int, bool]:
-    """Levenberg-Marquardt over the 8 log-parameters and the 8 initial states; the point reached,
-    its moments, the passes over the record (one more than the steps tried) and whether it settled."""
-    passes, damping = 1, _DAMPING_START
-    while passes < max_passes and damping < _DAMPING_MAX:
-        step, hessian = gauss_newton_step(moments, weight, damping=damping)
-        step *= min(1.0, _MAX_LOG_STEP / max(float(np.max(np.abs(step[:8]))), 1e-300))
-        values = log_values + step[:8]
-        trial = moments_at(values, start + step[8:]) if stable(values) else None
-        passes += 1
-        if trial is None or float(trial.residual @ weight) > float(moments.residual @ weight):
-            damping *= _DAMPING_UP
-            continue
-        log_values, start, moments = values, start + step[8:], trial
-        damping *= _DAMPING_DOWN
-        # settled where the undamped (Gauss-Newton) step from here is negligible: a damped step is
-        # small wherever the damping is large, also far from the minimum
-        newton, hessian = gauss_newton_step(moments, weight)
-        sd = np.sqrt(np.maximum(np.diag(scaled_inverse(hessian)), 0.0))
-        if np.all(np.abs(newton) <= _SETTLED * sd):
-            return log_values, start, moments, passes, True
-    return log_values, start, moments, passes, False

@@ -174,7 +174,6 @@ class OpcUaRecorder:
         except InputError:
             raise
         except Exception as exc:  # noqa: BLE001 - asyncua raises many kinds for a lost server
-            self._write(self._changes.drain(self._index))
             self.close()
             if not self._unreachable:
                 notes.append(f"the OPC UA server at {self.url} does not answer ({type(exc).__name__}); trying again")
