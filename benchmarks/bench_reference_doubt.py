@@ -31,7 +31,7 @@ THRESHOLDS_C = (0.1, 0.2, 0.3, 0.5)
 
 def _half_width(t: np.ndarray, y: np.ndarray, modes: int) -> float:
     """The 95 % half-width of T∞ of a run fitted with up to ``modes`` modes."""
-    estimate = estimate_sensor("S", t, y, None, RobustSettings(max_modes=modes))
+    estimate = estimate_sensor("S", t, y, None, RobustSettings(max_modes=modes, more_modes_when_used=False))
     lo, hi = estimate.interval_C[0.95]
     return float((hi - lo) / 2)
 

@@ -133,6 +133,16 @@ def machine():  # noqa: ANN201
         m.stop()
 
 
+@pytest.fixture(scope="module")
+def running_machine():  # noqa: ANN201
+    """One server for the tests that neither stop it nor read its history (a start takes seconds);
+    each publishes the values it records before it connects."""
+    m = Machine()
+    m.start()
+    yield m
+    m.stop()
+
+
 def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path):
     log = tmp_path / "opc.csv"
     recorder = OpcUaRecorder(machine.url, log, NODES)
@@ -177,11 +187,11 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     assert recorded.sensors == ("T1", "T2")
 
 
-def test_a_bad_status_is_a_missing_reading(machine, tmp_path):
-    recorder = OpcUaRecorder(machine.url, tmp_path / "bad.csv", NODES)
-    machine.publish(0.0, (20.0, 21.0))
+def test_a_bad_status_is_a_missing_reading(running_machine, tmp_path):
+    recorder = OpcUaRecorder(running_machine.url, tmp_path / "bad.csv", NODES)
+    running_machine.publish(0.0, (20.0, 21.0))
     settle(recorder, 1)
-    machine.publish(1.0, (99.0, 99.0), good=False)
+    running_machine.publish(1.0, (99.0, 99.0), good=False)
     settle(recorder, 2)
     recorder.close()
     lines = (tmp_path / "bad.csv").read_text().splitlines()
@@ -244,25 +254,25 @@ def test_a_row_waits_for_every_nodes_value_of_its_time(tmp_path):
     assert (tmp_path / "opc.csv").read_text().splitlines()[-1] == "2.000000,,32"
 
 
-def test_a_record_of_other_nodes_is_not_resumed(machine, tmp_path):
+def test_a_record_of_other_nodes_is_not_resumed(running_machine, tmp_path):
     log = tmp_path / "opc.csv"
-    recorder = OpcUaRecorder(machine.url, log, NODES)
-    machine.publish(0.0, (20.0, 21.0))
+    recorder = OpcUaRecorder(running_machine.url, log, NODES)
+    running_machine.publish(0.0, (20.0, 21.0))
     settle(recorder, 1)
     recorder.close()
-    assert OpcUaRecorder(machine.url, log, NODES[::-1]).nodes == NODES  # the same nodes: the log's order
+    assert OpcUaRecorder(running_machine.url, log, NODES[::-1]).nodes == NODES  # the same nodes: the log's order
     with pytest.raises(InputError, match="was recorded from .* nodes ns=2;s=Spindle.T1, ns=2;s=Spindle.T2; to record"):
-        OpcUaRecorder(machine.url, log, NODES[:1])
+        OpcUaRecorder(running_machine.url, log, NODES[:1])
 
 
-def test_unknown_nodes_and_no_nodes_are_refused(machine, tmp_path):
+def test_unknown_nodes_and_no_nodes_are_refused(running_machine, tmp_path):
     with pytest.raises(InputError, match="name the nodes to record"):
-        OpcUaRecorder(machine.url, tmp_path / "x.csv", [])
+        OpcUaRecorder(running_machine.url, tmp_path / "x.csv", [])
     with pytest.raises(InputError, match="cannot read the nodes ns=2;s=Nowhere"):
-        OpcUaRecorder(machine.url, tmp_path / "y.csv", ["ns=2;s=Nowhere"]).fetch()
+        OpcUaRecorder(running_machine.url, tmp_path / "y.csv", ["ns=2;s=Nowhere"]).fetch()
 
 
-def test_watch_follows_a_server_and_refuses_its_options_for_a_file(machine, tmp_path):
+def test_watch_follows_a_server_and_refuses_its_options_for_a_file(running_machine, tmp_path):
     import json
 
     from click.testing import CliRunner
@@ -270,12 +280,12 @@ def test_watch_follows_a_server_and_refuses_its_options_for_a_file(machine, tmp_
     from mtident.cli import main
 
     for k in range(5):
-        machine.publish(float(k), (20 + k / 10, 21 + k / 10))
+        running_machine.publish(float(k), (20 + k / 10, 21 + k / 10))
     record = tmp_path / "opc.csv"
-    args = ["thermal", "watch", machine.url, "--node", NODES[0], "--node", NODES[1], "--record", str(record)]
+    args = ["thermal", "watch", running_machine.url, "--node", NODES[0], "--node", NODES[1], "--record", str(record)]
     out = CliRunner().invoke(main, [*args, "--poll", "0.05", "--timeout", "1", "--json"], catch_exceptions=False)
     assert out.exit_code == 0, out.stderr
-    assert f"recording {machine.url} to {record}" in out.stderr
+    assert f"recording {running_machine.url} to {record}" in out.stderr
     assert json.loads(out.stdout)["decision"] == "continue"
     # a subscription starts with the values of now: the server's last, at minute 4
     assert record.read_text().splitlines() == ["time_min,T1,T2", "0.000000,20.4,21.4"]

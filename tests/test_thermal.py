@@ -748,3 +748,40 @@ def test_a_room_sensor_does_not_move_the_equilibrium_time_or_the_start():
     truth = 227.4  # 3 e^(-t/15) + 5 e^(-t/90) falls to 0.4 °C
     assert abs(alone.fit.equilibrium_time_min - truth) < 3 and abs(with_room.fit.equilibrium_time_min - truth) < 3
     assert abs(with_room.fit.start_C - 20.0) < 0.05
+
+
+def _five_mode_warm_up() -> tuple[np.ndarray, np.ndarray]:
+    """Five modes, read every minute to 90 min with little noise; T∞ 25 °C."""
+    t = np.arange(0.0, 91.0)
+    taus = np.array([0.8, 3.0, 10.0, 35.0, 120.0])
+    amplitudes = np.array([1.5, -2.0, -3.0, -3.0, -2.5])
+    y = 25.0 + (amplitudes * np.exp(-t[:, None] / taus)).sum(axis=1)
+    return t, np.round(y + 0.005 * np.random.default_rng(1).standard_normal(len(t)), 3)
+
+
+def test_a_warm_up_using_every_mode_the_family_allows_is_covered_by_more():
+    """The best four modes of five miss T∞ by 0.46 °C, and the hull over four modes alone excluded
+    the truth (24.41 to 24.68 °C for 25.0). Where the last mode is needed beyond chance the
+    interval covers more modes, and says so."""
+    from mtident.thermal.robust import RobustSettings, estimate_sensor
+
+    t, y = _five_mode_warm_up()
+    estimate = estimate_sensor("S", t, y, None, RobustSettings())
+    low, high = estimate.interval_C[0.95]
+    assert estimate.steady_C < 24.6
+    assert low <= 25.0 <= high
+    assert "modes-saturated" in estimate.warning_codes
+    assert any("all 4 modes" in w and "covers up to 5" in w for w in estimate.warnings)
+
+
+def test_readings_that_use_every_mode_searched_are_not_trusted(monkeypatch):
+    """Where even the largest family searched is used to its last mode, the interval may exclude
+    the truth: ``model_ok`` is false and the warning says why."""
+    from mtident.thermal import robust
+
+    monkeypatch.setattr(robust, "MAX_MODES_WHEN_SATURATED", 4)
+    t, y = _five_mode_warm_up()
+    estimate = robust.estimate_sensor("S", t, y, None, robust.RobustSettings())
+    assert not estimate.model_ok
+    assert "modes-unresolved" in estimate.warning_codes and "modes-saturated" not in estimate.warning_codes
+    assert any("no family searched here holds them" in w for w in estimate.warnings)

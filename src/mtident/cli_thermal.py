@@ -298,7 +298,8 @@ def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineRe
     type=click.Choice(IDENTIFY_METHODS),
     default=DEFAULT_METHOD,
     show_default=True,
-    help="robust: sums of up to four exponential modes, with an interval over every model the data cannot exclude. "
+    help="robust: sums of up to four exponential modes (six where the readings use all four), with an interval "
+    "over every model the data cannot exclude. "
     "The papers' first-order filters (their interval assumes a first-order machine): ukf, aukf (Xia 2014), fukf, "
     "afukf (Yu 2019), or lsq (least squares).",
 )

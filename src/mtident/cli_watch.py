@@ -416,11 +416,12 @@ def watch_command(
 ) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
-    Each sensor's readings so far are fitted with sums of up to four exponential modes; a
-    sensor may stop when every model the data cannot exclude (modes up to --max-time-constant,
-    or near a reference run's) puts its steady-state temperature T∞ within the tolerance, at
-    two checks in a row. The test may stop when every sensor may. Until then the answer says
-    the interval, what sets its ends, and when the stop is expected. A killed monitor resumes
+    Each sensor's readings so far are fitted with sums of up to four exponential modes (six where
+    the readings use all four); a sensor may stop when every model the data cannot exclude
+    (modes up to --max-time-constant, or near a reference run's) puts its steady-state
+    temperature T∞ within the tolerance, at two checks in a row. The test may stop when every
+    sensor may. Until then the answer says the interval, what sets its ends, and when the stop
+    is expected. A killed monitor resumes
     from its state file.
 
     \f

@@ -75,7 +75,18 @@ _PAGE = jinja2.Environment(
 
 
 def app(page: LivePage) -> Starlette:
-    """The Starlette app of the page (read-only: GET only)."""
+    """The Starlette app of the page (read-only: GET only).
+
+    Parameters
+    ----------
+    page : LivePage
+        The answer and picture the page serves; the monitor publishes to it.
+
+    Returns
+    -------
+    Starlette
+        The app: the page, its answer as JSON, its picture and a stream of answers.
+    """
 
     async def index(request: Request) -> HTMLResponse:
         # the answer so far in the page itself: it reads without its script, which only updates it

@@ -650,9 +650,25 @@ def binary_kind(head: bytes) -> str | None:
 def workbook_as_csv(file: Path, path: str | Path) -> bytes:
     """The first sheet of an Excel workbook that holds a table (rows that begin like data rows;
     a logger's "Details" sheet before its data is passed over) as the CSV text a logger would have
-    written (UTF-8), so that it is read like one: preamble, header, units row, time stamps and
-    all. Dates and times of day become ISO 8601 text, empty cells empty. InputError for an old
-    .xls workbook or one that does not open."""
+    written, so that it is read like one: preamble, header, units row, time stamps and all.
+
+    Parameters
+    ----------
+    file : Path
+        The workbook (.xlsx).
+    path : str or Path
+        Its name as the user gave it, for the messages.
+
+    Returns
+    -------
+    bytes
+        UTF-8 CSV text; dates and times of day as ISO 8601 text, empty cells empty.
+
+    Raises
+    ------
+    InputError
+        An old .xls workbook, or one that does not open.
+    """
     import pandas as pd
 
     with file.open("rb") as handle:

@@ -531,7 +531,21 @@ def _clock_column(frame: pd.DataFrame, header: str) -> str | None:
 def as_temperature_log(log: object, caller: str) -> TemperatureLog:
     """``log`` as a :class:`TemperatureLog`: a DataFrame is read (and checked) like a CSV file.
 
-    Anything else is an :class:`InputError` that says what ``caller`` takes.
+    Parameters
+    ----------
+    log : TemperatureLog or pandas.DataFrame
+        The readings.
+    caller : str
+        The function the log was given to, for the message.
+
+    Returns
+    -------
+    TemperatureLog
+
+    Raises
+    ------
+    InputError
+        Anything else, saying what ``caller`` takes.
     """
     if isinstance(log, TemperatureLog):
         return log

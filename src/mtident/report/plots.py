@@ -32,8 +32,23 @@ __all__ = [
 
 
 def picture_format(path: str | Path) -> str:
-    """The format a picture is written in: its suffix (``png`` without one); ValueError naming
-    the formats matplotlib writes if it writes none such."""
+    """The format a picture is written in: its suffix (``png`` without one).
+
+    Parameters
+    ----------
+    path : str or Path
+        The picture's file name.
+
+    Returns
+    -------
+    str
+        The format, as matplotlib names it (``png``, ``svg``, ``pdf``, ...).
+
+    Raises
+    ------
+    ValueError
+        Naming the formats matplotlib writes, where it writes none such.
+    """
     from matplotlib.backend_bases import FigureCanvasBase
 
     suffix = Path(path).suffix.lower().lstrip(".") or "png"

@@ -151,7 +151,8 @@ class WarmupReport:
 GAP_INTERVALS = 5.0
 METHOD = (
     "Each sensor's readings from the start of its warm-up are fitted with sums of up to four exponential modes "
-    "(variable projection, a global search over the time constants). The interval of the steady-state "
+    "(six where the readings use all four; variable projection, a global search over the time constants). "
+    "The interval of the steady-state "
     "temperature T∞ covers every such model the readings cannot exclude, up to the largest time constant "
     "assumed. A sensor may stop when its interval at the decision's confidence lies within the tolerance of its "
     "T∞ at two checks in a row; the test may stop when every sensor may."
@@ -357,7 +358,18 @@ def write_pdf(report: WarmupReport, path: str | Path) -> Path:
 
 
 def summary_page(report: WarmupReport) -> Figure:
-    """The report's first page as a figure: the verdict, the setup, the table, the assumptions."""
+    """The report's first page as a figure: the verdict, the setup, the table, the assumptions.
+
+    Parameters
+    ----------
+    report : WarmupReport
+        The test's answer, as the report gives it.
+
+    Returns
+    -------
+    Figure
+        An A4 page.
+    """
     fig = Figure(figsize=_A4_INCHES)
     y = 0.95
     fig.text(0.07, y, f"Warm-up test: {Path(report.source).name}", fontsize=16, weight="bold")

@@ -183,7 +183,11 @@ def _learn_sensor(
             values,
             room_C,
             RobustSettings(
-                settings.max_time_constant_min, settings.room_wander_C_per_h, settings.levels, max_modes=count
+                settings.max_time_constant_min,
+                settings.room_wander_C_per_h,
+                settings.levels,
+                max_modes=count,
+                more_modes_when_used=False,
             ),
         )
         fit = estimate.fit

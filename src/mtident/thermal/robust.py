@@ -62,6 +62,9 @@ DISAGREEMENT_LEVEL = 0.99
 EDGE_SHARE = 0.005
 # the likelihood-ratio test runs where the boxed interval is within this many tolerances
 DECISION_MARGIN = 2.0
+# Where the readings use every mode of the family beyond chance, one more is allowed, up to this
+# many (a fit of six modes costs about ten of four).
+MAX_MODES_WHEN_SATURATED = 6
 MIN_BINS = 8
 
 
@@ -80,6 +83,10 @@ class RobustSettings:
         Confidence levels of the intervals computed (the report's and the decision's).
     max_modes : int
         At most this many modes.
+    more_modes_when_used : bool
+        Where the readings use all ``max_modes`` beyond chance, cover more, up to
+        ``MAX_MODES_WHEN_SATURATED`` (False: exactly the family asked for, as a reference run's
+        fit of a given number of modes wants).
     free_fast_modes : int
         With a reference: at most this many free modes faster than its slowest box (below or
         between its other boxes), which a reference run can miss (0 assumes the reference holds
@@ -91,6 +98,7 @@ class RobustSettings:
     levels: tuple[float, ...] = (0.95, 0.99)
     max_modes: int = 4
     free_fast_modes: int = MAX_FREE_FAST
+    more_modes_when_used: bool = True
 
 
 @dataclass(frozen=True)
@@ -136,7 +144,7 @@ class Assumptions:
     max_time_constant_min: float
     room: str
     reference: str | None = None
-    model: str = "a sum of up to four exponential modes"
+    model: str = "a sum of up to four exponential modes (six where the readings use all four)"
 
     def to_dict(self) -> dict[str, object]:
         """The JSON object of the contract's ``assumptions``.
@@ -439,11 +447,7 @@ def _modal_fit(
         )
         # the free fit costs most of a check: where the boxed answer is far from any decision, the
         # cheap tests alone decide whether to use it
-        far = (
-            refine_within is not None
-            and fit.determined
-            and fit.half_width(max(settings.levels)) > DECISION_MARGIN * refine_within
-        )
+        far = fit.determined and not _near_decision(fit, settings, refine_within)
         why = _disagreement(binned, noise, interval, fit, family, likelihood_ratio=not far)
         if why is None:
             return fit, True
@@ -453,9 +457,54 @@ def _modal_fit(
             "machine changed, "
             "or did the reference run miss a mode? The answer does not use the reference",
         )
-    return fit_steady_state(
+    fit = fit_steady_state(
         binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels, refine_within=refine_within
-    ), False
+    )
+    used = family.max_modes
+    while settings.more_modes_when_used and _near_decision(fit, settings, refine_within) and _last_mode_needed(fit):
+        if family.max_modes >= MAX_MODES_WHEN_SATURATED:
+            notes.add(
+                "modes-unresolved",
+                f"the readings use all {family.max_modes} modes beyond chance: no family searched here holds them, and "
+                "the interval may be too narrow",
+            )
+            break
+        # every mode the family allows is used beyond chance: the readings may hold more, and a hull
+        # over a family that cannot hold the truth can exclude it (a conduction body's sensor near the
+        # heat: four modes spent on its first minutes' transient left its slow rise out)
+        family = replace(family, max_modes=family.max_modes + 1)
+        fit = fit_steady_state(
+            binned,
+            noise_C=noise,
+            interval_min=interval,
+            family=family,
+            levels=settings.levels,
+            refine_within=refine_within,
+        )
+    if family.max_modes > used:
+        notes.add(
+            "modes-saturated",
+            f"the readings use all {used} modes beyond chance: the interval covers up to {family.max_modes}",
+        )
+    return fit, False
+
+
+def _near_decision(fit: SteadyState, settings: RobustSettings, refine_within: float | None) -> bool:
+    """Whether a fit's interval may be near a decision: always without a tolerance to meet, else
+    where it is within ``DECISION_MARGIN`` tolerances (a wider family only widens it further)."""
+    if refine_within is None:
+        return True
+    return fit.determined and fit.half_width(max(settings.levels)) <= DECISION_MARGIN * refine_within
+
+
+def _last_mode_needed(fit: SteadyState) -> bool:
+    """Whether the family's largest number of modes fits better than one mode fewer beyond chance
+    (χ² on 2 degrees of freedom at ``DISAGREEMENT_LEVEL``)."""
+    most = fit.family.max_modes
+    if not fit.determined or most not in fit.fits or most - 1 not in fit.fits:
+        return False
+    statistic = (fit.fits[most - 1] - fit.fits[most]) / fit.noise_C**2
+    return statistic > float(chdtri(2, 1.0 - DISAGREEMENT_LEVEL))
 
 
 def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
@@ -636,7 +685,7 @@ def _verdict(
     notes: _Notes,
 ) -> bool:
     """``model_ok`` of one fitted sensor; its warnings go to ``notes``."""
-    ok = fit.determined
+    ok = fit.determined and "modes-unresolved" not in notes.codes
     if onset_min is not None:
         notes.add(
             "late-start",
