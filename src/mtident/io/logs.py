@@ -644,6 +644,54 @@ def read_temperature_log(
         cells, time not increasing or duplicated, too few samples, too many bad
         samples in a sensor.
     """
+    frame, dialect, source, first_row = _as_frame(path)
+    notes: list[str] = [renamed] if (renamed := dialect.renaming()) else []
+    first_cells = [str(v) for v in frame.iloc[0]] if len(frame) else []
+    header, counter, time_notes = choose_time_column([str(c) for c in frame.columns], first_cells, dialect, time_col)
+    notes.extend(time_notes)
+    if header not in frame.columns:
+        msg = f"{source}: no time column {header!r}; the columns are: {', '.join(frame.columns)}"
+        raise InputError(msg)
+    if len(frame) < min_samples:
+        msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
+        raise InputError(msg)
+    clock = _clock_column(frame, header)
+    at = millisecond_column(list(frame.columns), list(frame.columns).index(clock or header))
+    milliseconds = None if at is None else str(frame.columns[at])
+    sub_second = None if milliseconds is None else _sub_second_min(frame, milliseconds, source, first_row)
+    left_out = (header, clock, milliseconds, frame.columns[0] if counter else None)
+    available = [c for c in frame.columns if c not in left_out]
+    missing_names = [n for n in sensors or [] if n not in available]
+    if missing_names:
+        msg = missing_column(source, missing_names[0], available)
+        raise InputError(msg)
+    if not sensors:
+        available = _sensor_candidates(frame, available, notes)
+    sensors, unit_notes = temperature_columns(list(sensors) if sensors else available, bool(sensors), dialect, source)
+    notes.extend(unit_notes)
+    keep = _rows_with_readings(frame, header, sensors)
+    if not keep.all():
+        notes.append(
+            f"left out {int((~keep).sum())} row(s) without a reading at the end or at a repeated time (a logger's "
+            "events: coupler, host connected, end of file)"
+        )
+        frame = frame[keep]
+        sub_second = None if sub_second is None else sub_second[keep]
+    time_min = _time_min(frame, header, clock, time_unit, dialect, source, first_row, sub_second, notes)
+    columns = [_sensor_readings(frame, name, dialect, source, first_row, notes) for name in sensors]
+    return TemperatureLog(
+        time_min,
+        tuple(sensors),
+        np.column_stack(columns),
+        tuple(notes),
+        source,
+        header if clock is None else f"{header} + {clock}",
+    )
+
+
+def _as_frame(path: str | Path | pd.DataFrame) -> tuple[pd.DataFrame, CsvDialect, str, int]:
+    """The log as a table with stripped column names, its dialect, its name for the messages and
+    the row number a message gives its first data row."""
     import pandas as pd  # here, not at import: 0.4 s of start-up that `watch` does not need
 
     first_row = 1  # in messages, a CSV file's first data line is its row 2 (after the header)
@@ -667,66 +715,55 @@ def read_temperature_log(
             f"columns: {', '.join(frame.columns)}"
         )
         raise InputError(msg)
-    notes: list[str] = [renamed] if (renamed := dialect.renaming()) else []
-    first_cells = [str(v) for v in frame.iloc[0]] if len(frame) else []
-    header, counter, time_notes = choose_time_column([str(c) for c in frame.columns], first_cells, dialect, time_col)
-    notes.extend(time_notes)
-    if header not in frame.columns:
-        msg = f"{source}: no time column {header!r}; the columns are: {', '.join(frame.columns)}"
-        raise InputError(msg)
-    if len(frame) < min_samples:
-        msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
-        raise InputError(msg)
-    clock = _clock_column(frame, header)
-    at = millisecond_column(list(frame.columns), list(frame.columns).index(clock or header))
-    milliseconds = None if at is None else str(frame.columns[at])
-    sub_second = None
-    if milliseconds is not None:
-        sub_second = pd.to_numeric(frame[milliseconds], errors="coerce").to_numpy(dtype=float)
-        if np.isnan(sub_second).any():
-            row = int(np.isnan(sub_second).argmax())
-            msg = (
-                f"{source}: millisecond column {milliseconds!r}, row {row + first_row}: "
-                f"{_cell(frame[milliseconds].iloc[row])} is not a number"
-            )
-            raise InputError(msg)
-        sub_second = sub_second / 60_000.0
-    left_out = (header, clock, milliseconds, frame.columns[0] if counter else None)
-    available = [c for c in frame.columns if c not in left_out]
-    missing_names = [n for n in sensors or [] if n not in available]
-    if missing_names:
-        msg = missing_column(source, missing_names[0], available)
-        raise InputError(msg)
-    if not sensors:
-        # A column of text alone (a logger's status or comment channel) is no sensor; one asked for
-        # by name is read, and its first text cell named.
-        text_only = [name for name in available if _text_only(frame[name])]
-        if text_only and len(text_only) < len(available):
-            notes.append(f"left out, no numbers in them: {', '.join(text_only)}")
-            available = [name for name in available if name not in text_only]
-        # an event channel that logged nothing (HOBO's "Coupler Detached") is no dead sensor
-        empty = [name for name in available if frame[name].isna().all()]
-        if empty and len(empty) < len(available):
-            notes.append(f"left out, no readings in them: {', '.join(empty)}")
-            available = [name for name in available if name not in empty]
-    sensors, unit_notes = temperature_columns(list(sensors) if sensors else available, bool(sensors), dialect, source)
-    notes.extend(unit_notes)
-    keep = _rows_with_readings(frame, header, sensors)
-    if not keep.all():
-        notes.append(
-            f"left out {int((~keep).sum())} row(s) without a reading at the end or at a repeated time (a logger's "
-            "events: coupler, host connected, end of file)"
+    return frame, dialect, source, first_row
+
+
+def _sub_second_min(frame: pd.DataFrame, column: str, source: str, first_row: int) -> FloatArray:
+    """A logger's millisecond column, in minutes; an error naming its first cell that is no number."""
+    import pandas as pd
+
+    values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+    if np.isnan(values).any():
+        row = int(np.isnan(values).argmax())
+        msg = (
+            f"{source}: millisecond column {column!r}, row {row + first_row}: "
+            f"{_cell(frame[column].iloc[row])} is not a number"
         )
-        frame = frame[keep]
-        sub_second = None if sub_second is None else sub_second[keep]
-    if clock is None:
-        stated = dialect.time_unit(header)
-        time_min, time_notes = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
-        notes.extend(time_notes)
-        numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
-        if numeric and time_unit_assumed(header, time_unit, stated) and time_min[-1] > UNLIKELY_MINUTES:
-            notes.append(seconds_hint(header, float(time_min[-1])))
-    else:  # the date in one column, the time of day in the next: one stamp
+        raise InputError(msg)
+    return values / 60_000.0
+
+
+def _sensor_candidates(frame: pd.DataFrame, available: list[str], notes: list[str]) -> list[str]:
+    """The columns that may be sensors where none were asked for: a column of text alone (a
+    logger's status or comment channel) or one that logged nothing (HOBO's "Coupler Detached") is
+    left out, and said in ``notes``, unless every column is such."""
+    text_only = [name for name in available if _text_only(frame[name])]
+    if text_only and len(text_only) < len(available):
+        notes.append(f"left out, no numbers in them: {', '.join(text_only)}")
+        available = [name for name in available if name not in text_only]
+    empty = [name for name in available if frame[name].isna().all()]
+    if empty and len(empty) < len(available):
+        notes.append(f"left out, no readings in them: {', '.join(empty)}")
+        available = [name for name in available if name not in empty]
+    return available
+
+
+def _time_min(
+    frame: pd.DataFrame,
+    header: str,
+    clock: str | None,
+    time_unit: str | None,
+    dialect: CsvDialect,
+    source: str,
+    first_row: int,
+    sub_second: FloatArray | None,
+    notes: list[str],
+) -> FloatArray:
+    """The log's times in minutes from its time column, or from a date column and the time of day
+    in the next (``clock``); what was assumed goes to ``notes``."""
+    import pandas as pd
+
+    if clock is not None:
         stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
         time_min, time_notes = _parse_time(
             stamps.where(frame[header].notna() & frame[clock].notna()),
@@ -737,13 +774,11 @@ def read_temperature_log(
             sub_second_min=sub_second,
         )
         notes.extend(time_notes)
-
-    columns = [_sensor_readings(frame, name, dialect, source, first_row, notes) for name in sensors]
-    return TemperatureLog(
-        time_min,
-        tuple(sensors),
-        np.column_stack(columns),
-        tuple(notes),
-        source,
-        header if clock is None else f"{header} + {clock}",
-    )
+        return time_min
+    stated = dialect.time_unit(header)
+    time_min, time_notes = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
+    notes.extend(time_notes)
+    numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
+    if numeric and time_unit_assumed(header, time_unit, stated) and time_min[-1] > UNLIKELY_MINUTES:
+        notes.append(seconds_hint(header, float(time_min[-1])))
+    return time_min
