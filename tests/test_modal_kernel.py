@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import mtident.thermal.modes as modes_module
+import mtident.thermal.modal_search as search_module
 from mtident.thermal.modal_kernel import (
     END_OBJECTIVE,
     RSS_OBJECTIVE,
@@ -126,5 +126,5 @@ def test_the_leading_models_of_different_basins_are_those_of_the_plain_rule(seed
         assert list(got) == expected and not exhausted  # every row scanned, or the infinite ones reached
         # scanned from the lowest few rows, more where those run out (ties at the cut included)
         for scan in (1, 7, 64):
-            monkeypatch.setattr(modes_module, "_LEADING_SCAN", scan)
-            assert list(modes_module._leading_rows(values, log_tau, modes, count, apart)) == expected
+            monkeypatch.setattr(search_module, "_LEADING_SCAN", scan)
+            assert list(search_module._leading_rows(values, log_tau, modes, count, apart)) == expected

@@ -2,7 +2,7 @@
 slopes in log τ, the objectives a refinement minimises and a quasi-Newton search over them, the
 grid's batched normal equations, and the choice of leading models of different basins.
 
-:func:`fit_one` is the same arithmetic as ``modes._fit`` for one model: the design matrix (the
+:func:`fit_one` is the same arithmetic as ``modal_search._fit`` for one model: the design matrix (the
 constant, each mode's e^(−u/τ), with a room each mode's lag of the room less the room), the
 penalised normal equations solved in normalised form, and the exact variable-projection slopes
 of the residual sum of squares, of T∞ and of its variance. Compiled whole, a refinement costs
@@ -29,7 +29,7 @@ __all__ = [
     "solve_selected",
 ]
 
-# the same ridge as modes._JITTER, and the room columns' forward-difference step
+# the same ridge as modal_search._JITTER, and the room columns' forward-difference step
 _JITTER = 1e-11
 _DIFF_STEP = 1e-6
 
@@ -165,7 +165,7 @@ def fit_one(
     return rss, theta, inverse[0, 0], g0, d_rss, d_steady, d_var
 
 
-# the objectives :func:`refine_log_tau` minimises (see ``modes._RssObjective``/``_EndObjective``)
+# the objectives :func:`refine_log_tau` minimises (see ``modal_search._RssObjective``/``_EndObjective``)
 RSS_OBJECTIVE = 0
 END_OBJECTIVE = 1
 # beyond the threshold, a profile's end search is pushed back this many times more steeply than
@@ -190,7 +190,7 @@ def objective_and_gradient(
     penalty: FloatArray,
     objective: tuple,
 ) -> tuple[float, FloatArray]:  # pragma: no cover - compiled
-    """One model's objective and its gradient in log τ, as ``modes._refine`` minimises it.
+    """One model's objective and its gradient in log τ, as ``modal_search._refine`` minimises it.
 
     Parameters
     ----------
