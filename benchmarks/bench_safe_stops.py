@@ -221,6 +221,11 @@ def report(paths: list[Path]) -> dict[str, object]:
     return out
 
 
+def _width(value: float) -> str:
+    """A median half-width, or a dash where most intervals were infinite (no median to give)."""
+    return f"{value:.3g}" if np.isfinite(value) else "—"
+
+
 def markdown(summary: dict[str, object]) -> str:
     """The report as Markdown tables: the monitor's stops, then identify's intervals."""
     lines = [
@@ -263,7 +268,7 @@ def markdown(summary: dict[str, object]) -> str:
                 if r:
                     lines.append(
                         f"| {group} | {fraction}·t95 | {method} | {100 * r['covered95']:.1f} % ({r['cases']}) | "
-                        f"{r['median_half_width_C']:.3g} | {r['model_ok']} | {r['missed_with_model_ok']} |"
+                        f"{_width(r['median_half_width_C'])} | {r['model_ok']} | {r['missed_with_model_ok']} |"
                     )
     return "\n".join(lines)
 
