@@ -538,3 +538,14 @@ def test_the_command_line_says_options_where_the_library_names_its_parameters(tm
     seconds.write_text("Time,T1\n" + "".join(f"{s},{20 + s / 7200:.4f}\n" for s in range(0, 7201, 60)))
     info = json.loads(mtident("thermal", "inspect", str(seconds), "--json").stdout)
     assert any("if it is in seconds, give --time-unit s" in note for note in info["notes"])
+
+
+def test_a_window_beyond_the_log_says_that_the_whole_log_was_used(tmp_path):
+    t = np.arange(0.0, 61.0)
+    log = tmp_path / "short.csv"
+    log.write_text("time_min,T1\n" + "".join(f"{a:g},{20 + 6 * (1 - np.exp(-a / 30)):.3f}\n" for a in t))
+    out = mtident("thermal", "identify", str(log), "--window", "90", "--method", "lsq")
+    assert out.returncode == 0, out.stderr
+    assert "the log ends at t = 60 min, before --window 90: identified from all of it" in " ".join(out.stderr.split())
+    within = mtident("thermal", "identify", str(log), "--window", "45", "--method", "lsq")
+    assert "the log ends" not in within.stderr

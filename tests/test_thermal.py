@@ -771,7 +771,7 @@ def test_a_warm_up_using_every_mode_the_family_allows_is_covered_by_more():
     assert estimate.steady_C < 24.6
     assert low <= 25.0 <= high
     assert "modes-saturated" in estimate.warning_codes
-    assert any("all 4 modes" in w and "covers up to 5" in w for w in estimate.warnings)
+    assert any("all 4 modes" in w and "covers sums of up to 5 modes" in w for w in estimate.warnings)
 
 
 def test_readings_that_use_every_mode_searched_are_not_trusted(monkeypatch):
@@ -784,4 +784,4 @@ def test_readings_that_use_every_mode_searched_are_not_trusted(monkeypatch):
     estimate = robust.estimate_sensor("S", t, y, None, robust.RobustSettings())
     assert not estimate.model_ok
     assert "modes-unresolved" in estimate.warning_codes and "modes-saturated" not in estimate.warning_codes
-    assert any("no family searched here holds them" in w for w in estimate.warnings)
+    assert any("no sum of modes searched here holds them" in w for w in estimate.warnings)

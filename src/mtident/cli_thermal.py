@@ -454,6 +454,12 @@ def identify_command(
             "not yet seen moves T∞ beyond it); --method robust covers up to four modes",
             highlight=False,
         )
+    if window_min > result.window_min and result.n_window == len(log.time_min):
+        stderr.print(
+            f"mtident: note: the log ends at t = {result.window_min:g} min, before --window {window_min:g}: identified "
+            "from all of it",
+            highlight=False,
+        )
     for note in result.notes[len(log.notes) :]:
         stderr.print(f"mtident: warning: {note}", highlight=False)
     if plot_path:

@@ -465,8 +465,8 @@ def _modal_fit(
         if family.max_modes >= MAX_MODES_WHEN_SATURATED:
             notes.add(
                 "modes-unresolved",
-                f"the readings use all {family.max_modes} modes beyond chance: no family searched here holds them, and "
-                "the interval may be too narrow",
+                f"the readings use all {family.max_modes} modes beyond chance: no sum of modes searched here holds "
+                "them, and the interval may be too narrow",
             )
             break
         # every mode the family allows is used beyond chance: the readings may hold more, and a hull
@@ -484,7 +484,8 @@ def _modal_fit(
     if family.max_modes > used:
         notes.add(
             "modes-saturated",
-            f"the readings use all {used} modes beyond chance: the interval covers up to {family.max_modes}",
+            f"the readings use all {used} modes beyond chance, so a sum of {used} may not hold them: the interval "
+            f"covers sums of up to {family.max_modes} modes",
         )
     return fit, False
 
