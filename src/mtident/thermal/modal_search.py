@@ -124,8 +124,20 @@ class Problem:
 
 
 def design_columns(problem: Problem, tau: FloatArray) -> FloatArray:
-    """Design matrices (T, B, p) of a batch of models (T, k): the constant, each mode's
-    e^(−t/τ), then with a room each mode's lag of the room less the room."""
+    """Design matrices of a batch of models: the constant, each mode's e^(−t/τ), then with a room
+    each mode's lag of the room less the room.
+
+    Parameters
+    ----------
+    problem : Problem
+    tau : ndarray, shape (T, k)
+        Time constants of T models of k modes (min).
+
+    Returns
+    -------
+    ndarray, shape (T, B, p)
+        Per model, one row per bin and p = 1 + k (+ k with a room) columns.
+    """
     b = problem.binned
     u = b.time_min - problem.origin
     cols = [np.ones(tau.shape[:1] + u.shape)]
@@ -137,8 +149,22 @@ def design_columns(problem: Problem, tau: FloatArray) -> FloatArray:
 
 
 def room_lag(rows: FloatArray, time_min: FloatArray, tau: FloatArray) -> FloatArray:
-    """A first-order lag of time constant ``tau[t]`` applied to each row of ``rows`` (T, B): a
-    room taken as piecewise linear between the bins, from a machine at the room's first level."""
+    """A first-order lag applied to a room taken as piecewise linear between the bins, from a
+    machine at the room's first level.
+
+    Parameters
+    ----------
+    rows : ndarray, shape (T, B)
+        The room at each bin, one row per lag.
+    time_min : ndarray, shape (B,)
+        The bins' times (min).
+    tau : ndarray, shape (T,)
+        Each row's time constant (min).
+
+    Returns
+    -------
+    ndarray, shape (T, B)
+    """
     out = np.empty(rows.shape)
     x = np.array(rows[:, 0], dtype=float)
     out[:, 0] = x
@@ -309,7 +335,17 @@ def _reference_grid_fits(problem: Problem, points: int = 7) -> list[Fits]:
 
 
 def grid_candidates(problem: Problem) -> list[Fits]:
-    """Every model of the family's search grid, fitted."""
+    """Every model of the family's search grid, fitted.
+
+    Parameters
+    ----------
+    problem : Problem
+
+    Returns
+    -------
+    list of Fits
+        One batch per number of modes (or per reference grid).
+    """
     if problem.family.reference_min is not None:
         return _reference_grid_fits(problem)
     return _grid_fits(problem)
@@ -400,7 +436,20 @@ def _closeness(log_tau: FloatArray) -> FloatArray:
 
 
 def best_per_count(problem: Problem, candidates: list[Fits]) -> dict[int, Fits]:
-    """Per number of modes, the best-fitting model, refined off the grid."""
+    """Per number of modes, the best-fitting model, refined off the grid from the leading models
+    of ``candidates``.
+
+    Parameters
+    ----------
+    problem : Problem
+    candidates : list of Fits
+        The grid's models (:func:`grid_candidates`).
+
+    Returns
+    -------
+    dict of int to Fits
+        One model per number of modes.
+    """
     best: dict[int, Fits] = {}
     for k in sorted({f.tau.shape[1] for f in candidates}):
         same = [f for f in candidates if f.tau.shape[1] == k]
@@ -455,8 +504,21 @@ def _leading_rows(values: FloatArray, log_tau: FloatArray, modes: IntArray, coun
 
 
 def profile_bounds(fits: Fits, threshold: float) -> tuple[FloatArray, FloatArray]:
-    """Per model, the lowest and highest T∞ with a fit within ``threshold`` (NaN where the
-    model's best fit is not)."""
+    """Per model, the lowest and highest T∞ whose fit, the time constants held, stays within
+    ``threshold``.
+
+    Parameters
+    ----------
+    fits : Fits
+    threshold : float
+        The largest residual sum of squares allowed.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        The lowest and highest T∞ per model (centred; NaN where the model's best fit is above
+        ``threshold``).
+    """
     slack = threshold - fits.rss
     half = np.sqrt(np.where(slack >= 0, slack, np.nan) * np.maximum(fits.var_steady, 0.0))
     return fits.steady - half, fits.steady + half
@@ -464,7 +526,21 @@ def profile_bounds(fits: Fits, threshold: float) -> tuple[FloatArray, FloatArray
 
 def grid_half_width(candidates: list[Fits], threshold: float, steady: float) -> float:
     """The hull's half-width over the models searched so far (the grid's and the best fits):
-    never wider than the refined hull's."""
+    never wider than the refined hull's.
+
+    Parameters
+    ----------
+    candidates : list of Fits
+    threshold : float
+        The largest residual sum of squares allowed.
+    steady : float
+        The best model's T∞ (centred).
+
+    Returns
+    -------
+    float
+        The larger distance from ``steady`` to an end (°C).
+    """
     ends = [profile_bounds(f, threshold) for f in candidates]
     lo = min((float(np.nanmin(lo, initial=np.inf)) for lo, _ in ends), default=steady)
     hi = max((float(np.nanmax(hi, initial=-np.inf)) for _, hi in ends), default=steady)
@@ -481,10 +557,33 @@ def hull_end(
     refine: bool = True,
     seeds: list[Fits] | None = None,
 ) -> Fits:
-    """The model that sets one end of the hull (``fallback``, the best fit, if none stays within
-    the threshold): the grid's leading models of different basins, each improved by a local
-    search on a shrinking lattice around it (all at once), then the best few refined by
-    L-BFGS-B; unrefined, the grid's leading model; with ``seeds``, those models alone refined."""
+    """The model that sets one end of the hull: the grid's leading models of different basins,
+    each improved by a local search on a shrinking lattice around it (all at once), then the
+    best few refined by L-BFGS-B.
+
+    Parameters
+    ----------
+    problem : Problem
+    candidates : list of Fits
+        The models searched so far.
+    threshold : float
+        The largest residual sum of squares allowed.
+    sign : float
+        −1 for the low end, +1 for the high end.
+    gap : float
+        ``threshold`` less the best fit's residual sum of squares.
+    fallback : Fits
+        The best fit, returned where no model stays within ``threshold``.
+    refine : bool
+        False: the grid's leading model as it is.
+    seeds : list of Fits, optional
+        Refine these models alone (the ends of a wider level's hull).
+
+    Returns
+    -------
+    Fits
+        One model.
+    """
     objective = _EndObjective(threshold, sign, gap)
     if not refine:
         leading = _leading(candidates, objective, 1)
@@ -538,7 +637,23 @@ def _lattice_search(
 
 
 def interval_end(fits: Fits, threshold: float, sign: float, shift: float) -> IntervalEnd:
-    """The model at its furthest T∞ towards ``sign``, with the amplitudes it takes there."""
+    """The model at its furthest T∞ towards ``sign``, with the amplitudes it takes there.
+
+    Parameters
+    ----------
+    fits : Fits
+        One model (:func:`hull_end`).
+    threshold : float
+        The largest residual sum of squares allowed.
+    sign : float
+        −1 for the low end, +1 for the high end.
+    shift : float
+        Added to T∞: the centring, and the room's last level.
+
+    Returns
+    -------
+    IntervalEnd
+    """
     slack = max(threshold - float(fits.rss[0]), 0.0)
     theta = fits.theta[0] + sign * np.sqrt(slack / max(float(fits.var_steady[0]), 1e-300)) * fits.direction[0]
     return IntervalEnd(float(theta[0]) + shift, modes_of(fits, theta))
@@ -547,7 +662,18 @@ def interval_end(fits: Fits, threshold: float, sign: float, shift: float) -> Int
 def correlation_factor(resid: FloatArray) -> float:
     """The residuals' long-run variance over their variance (Bartlett window of the usual
     Newey-West width): how much their correlation (a misfit, a wandering room, rounding held
-    for many readings) widens the variance of anything that varies slowly. At least 1."""
+    for many readings) widens the variance of anything that varies slowly.
+
+    Parameters
+    ----------
+    resid : ndarray, shape (B,)
+        Weighted residuals, in time order.
+
+    Returns
+    -------
+    float
+        At least 1, at most ``_MAX_CORRELATION_FACTOR``.
+    """
     n = len(resid)
     r = resid - resid.mean()
     var = float(np.dot(r, r))
@@ -560,7 +686,19 @@ def correlation_factor(resid: FloatArray) -> float:
 
 
 def choose_count(best_per_count: dict[int, Fits], n: int) -> Fits:
-    """The point estimate's model: the number of modes by BIC."""
+    """The point estimate's model: the number of modes by BIC.
+
+    Parameters
+    ----------
+    best_per_count : dict of int to Fits
+        The best model per number of modes (:func:`best_per_count`).
+    n : int
+        The number of bins.
+
+    Returns
+    -------
+    Fits
+    """
 
     def bic(f: Fits) -> float:
         return n * np.log(max(float(f.rss[0]), 1e-300) / n) + f.n_params * np.log(n)
@@ -569,16 +707,54 @@ def choose_count(best_per_count: dict[int, Fits], n: int) -> Fits:
 
 
 def modes_of(fits: Fits, theta: FloatArray | None = None) -> tuple[Mode, ...]:
+    """The first model's modes.
+
+    Parameters
+    ----------
+    fits : Fits
+    theta : ndarray, optional
+        Its coefficients (default: its best fit's): T∞, the amplitudes, the room gains.
+
+    Returns
+    -------
+    tuple of Mode
+    """
     th = fits.theta[0] if theta is None else theta
     return tuple(Mode(float(tau), float(a)) for tau, a in zip(fits.tau[0], th[1 : 1 + fits.tau.shape[1]], strict=True))
 
 
 def weighted_residuals(problem: Problem, fits: Fits) -> FloatArray:
+    """The first model's residuals per bin, each weighted by the square root of its count.
+
+    Parameters
+    ----------
+    problem : Problem
+    fits : Fits
+
+    Returns
+    -------
+    ndarray, shape (B,)
+    """
     X = design_columns(problem, fits.tau)[0]
     return (problem.target() - X @ fits.theta[0]) * np.sqrt(problem.binned.count)
 
 
 def make_problem(binned: Binned, noise_C: float, interval_min: float, family: ModeFamily) -> Problem:
+    """One sensor's problem: where its modes begin, the centring, the priors and the bounds.
+
+    Parameters
+    ----------
+    binned : Binned
+    noise_C : float
+        The readings' noise (°C per reading).
+    interval_min : float
+        The sampling interval: modes much faster are not searched.
+    family : ModeFamily
+
+    Returns
+    -------
+    Problem
+    """
     y = binned.value_C if binned.room_C is None else binned.value_C - binned.room_C
     spread = max(float(np.ptp(binned.value_C)), 10.0 * noise_C)
     lo = max(0.5 * interval_min, _FASTEST_MIN)
