@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 import os
+import sys
 
 # One BLAS thread per test process: the suite runs a process per core (pytest-xdist), and a
 # multithreaded BLAS in each of them oversubscribes the cores and slows the suite a lot. Set
 # before numpy is first imported, so that the workers inherit it.
 for _threads in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_threads, "1")
+# Bytecode caches on, where the environment turned them off (PYTHONDONTWRITEBYTECODE): without
+# them every worker, and every `python -m mtident` a test starts, compiles the package and the
+# rewritten tests from source again. Caches go to __pycache__, which git ignores.
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+sys.dont_write_bytecode = False
 
 from pathlib import Path  # noqa: E402
 
