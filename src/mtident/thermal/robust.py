@@ -9,6 +9,7 @@ agrees with them), and the verdict a script reads (``model_ok`` and the warnings
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -422,6 +423,17 @@ def _modal_fit(
     """The fit within the reference's boxes where the test follows them, else over every model up
     to the largest time constant; and whether the reference was used."""
     family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
+
+    def fit_of(family: ModeFamily) -> SteadyState:
+        return fit_steady_state(
+            binned,
+            noise_C=noise,
+            interval_min=interval,
+            family=family,
+            levels=settings.levels,
+            refine_within=refine_within,
+        )
+
     if reference is not None and reference.doubt is not None:
         notes.add(
             "reference-doubtful",
@@ -430,20 +442,14 @@ def _modal_fit(
         reference = None
     if reference is not None:
         boxes = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box)
-        boxed = ModeFamily(
-            settings.max_time_constant_min,
-            len(reference.time_constants_min),
-            tuple(reference.time_constants_min),
-            boxes,
-            free_fast=free_fast(reference, settings),
-        )
-        fit = fit_steady_state(
-            binned,
-            noise_C=noise,
-            interval_min=interval,
-            family=boxed,
-            levels=settings.levels,
-            refine_within=refine_within,
+        fit = fit_of(
+            ModeFamily(
+                settings.max_time_constant_min,
+                len(reference.time_constants_min),
+                tuple(reference.time_constants_min),
+                boxes,
+                free_fast=free_fast(reference, settings),
+            )
         )
         # the free fit costs most of a check: where the boxed answer is far from any decision, the
         # cheap tests alone decide whether to use it
@@ -457,9 +463,19 @@ def _modal_fit(
             "machine changed, "
             "or did the reference run miss a mode? The answer does not use the reference",
         )
-    fit = fit_steady_state(
-        binned, noise_C=noise, interval_min=interval, family=family, levels=settings.levels, refine_within=refine_within
-    )
+    return _widened_while_used(fit_of, family, settings, refine_within, notes), False
+
+
+def _widened_while_used(
+    fit_of: Callable[[ModeFamily], SteadyState],
+    family: ModeFamily,
+    settings: RobustSettings,
+    refine_within: float | None,
+    notes: _Notes,
+) -> SteadyState:
+    """The fit over ``family``, with one mode more while the readings use every mode it allows
+    beyond chance (up to ``MAX_MODES_WHEN_SATURATED``), near a decision only; said in ``notes``."""
+    fit = fit_of(family)
     used = family.max_modes
     while settings.more_modes_when_used and _near_decision(fit, settings, refine_within) and _last_mode_needed(fit):
         if family.max_modes >= MAX_MODES_WHEN_SATURATED:
@@ -469,25 +485,17 @@ def _modal_fit(
                 "them, and the interval may be too narrow",
             )
             break
-        # every mode the family allows is used beyond chance: the readings may hold more, and a hull
-        # over a family that cannot hold the truth can exclude it (a conduction body's sensor near the
-        # heat: four modes spent on its first minutes' transient left its slow rise out)
+        # a hull over a family that cannot hold the truth can exclude it (a conduction body's sensor
+        # near the heat: four modes spent on its first minutes' transient left its slow rise out)
         family = replace(family, max_modes=family.max_modes + 1)
-        fit = fit_steady_state(
-            binned,
-            noise_C=noise,
-            interval_min=interval,
-            family=family,
-            levels=settings.levels,
-            refine_within=refine_within,
-        )
+        fit = fit_of(family)
     if family.max_modes > used:
         notes.add(
             "modes-saturated",
             f"the readings use all {used} modes beyond chance, so a sum of {used} may not hold them: the interval "
             f"covers sums of up to {family.max_modes} modes",
         )
-    return fit, False
+    return fit
 
 
 def _near_decision(fit: SteadyState, settings: RobustSettings, refine_within: float | None) -> bool:
