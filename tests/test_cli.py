@@ -398,6 +398,7 @@ def loaded_modules(tmp_path_factory: pytest.TempPathFactory) -> dict[str, bool]:
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.xdist_group("one fresh process")
 def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats(loaded_modules):
     """Start-up: commands load on first use (`mtident --version` took 0.60-0.78 s with every
     command imported, 0.08-0.10 s without), and identify's F quantile comes from
@@ -410,6 +411,7 @@ def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats(loa
     }
 
 
+@pytest.mark.xdist_group("one fresh process")
 def test_watch_of_a_numeric_log_does_not_load_pandas(loaded_modules):
     """pandas costs 0.5 s of start-up; a check for two-column time stamps loaded it for every log
     (watch's replay of the sample: 1.9 s against 1.0 s). The watch is the process's first command."""

@@ -187,6 +187,7 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     assert recorded.sensors == ("T1", "T2")
 
 
+@pytest.mark.xdist_group("one OPC UA server")
 def test_a_bad_status_is_a_missing_reading(running_machine, tmp_path):
     recorder = OpcUaRecorder(running_machine.url, tmp_path / "bad.csv", NODES)
     running_machine.publish(0.0, (20.0, 21.0))
@@ -254,6 +255,7 @@ def test_a_row_waits_for_every_nodes_value_of_its_time(tmp_path):
     assert (tmp_path / "opc.csv").read_text().splitlines()[-1] == "2.000000,,32"
 
 
+@pytest.mark.xdist_group("one OPC UA server")
 def test_a_record_of_other_nodes_is_not_resumed(running_machine, tmp_path):
     log = tmp_path / "opc.csv"
     recorder = OpcUaRecorder(running_machine.url, log, NODES)
@@ -265,6 +267,7 @@ def test_a_record_of_other_nodes_is_not_resumed(running_machine, tmp_path):
         OpcUaRecorder(running_machine.url, log, NODES[:1])
 
 
+@pytest.mark.xdist_group("one OPC UA server")
 def test_unknown_nodes_and_no_nodes_are_refused(running_machine, tmp_path):
     with pytest.raises(InputError, match="name the nodes to record"):
         OpcUaRecorder(running_machine.url, tmp_path / "x.csv", [])
@@ -272,6 +275,7 @@ def test_unknown_nodes_and_no_nodes_are_refused(running_machine, tmp_path):
         OpcUaRecorder(running_machine.url, tmp_path / "y.csv", ["ns=2;s=Nowhere"]).fetch()
 
 
+@pytest.mark.xdist_group("one OPC UA server")
 def test_watch_follows_a_server_and_refuses_its_options_for_a_file(running_machine, tmp_path):
     import json
 
