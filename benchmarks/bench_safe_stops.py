@@ -120,14 +120,16 @@ def _identify_at(warm, fraction: float, reference) -> dict[str, object]:  # noqa
     return out
 
 
-def run_case(seed: int, without_reference_only: bool = False) -> dict[str, object]:
+def run_case(seed: int, only: str | None = None) -> dict[str, object]:
+    """One case; ``only`` ("without" or "with") replays the monitor without or with a learnt
+    reference alone, and skips ``identify``."""
     rng = np.random.default_rng(seed)
     warm = random_warmup(rng)
     machine = warm.machine
     taus, amplitudes = modal_amplitudes(machine, warm)
     share = float(np.max(np.abs(amplitudes)) / max(np.sum(np.abs(amplitudes)), 1e-12))
     reference = None
-    if not without_reference_only:
+    if only != "without":
         ref_run = reference_run(machine, np.random.default_rng(seed + 10_000_000))
         with np.errstate(all="ignore"):
             learnt, _ = learn_reference(_log(ref_run.time_min, ref_run.reading_C, "reference"))
@@ -146,9 +148,9 @@ def run_case(seed: int, without_reference_only: bool = False) -> dict[str, objec
         "reference_taus": None if reference is None else list(reference.sensors["S"].time_constants_min),
         "true_taus": [float(t) for t in taus[:4]],
     }
-    case["without_reference"] = _replay(warm, None)
+    case["without_reference"] = _replay(warm, None) if only != "with" else None
     case["with_reference"] = _replay(warm, reference) if reference is not None else None
-    if without_reference_only:
+    if only is not None:
         return case
     for fraction in FRACTIONS:
         case[f"identify_{fraction}"] = _identify_at(warm, fraction, None)
@@ -284,6 +286,9 @@ def main() -> None:
     parser.add_argument(
         "--without-reference-only", action="store_true", help="replay the monitor without a reference alone"
     )
+    parser.add_argument(
+        "--with-reference-only", action="store_true", help="replay the monitor with a learnt reference alone"
+    )
     args = parser.parse_args()
     if args.report:
         summary = report(args.report)
@@ -302,7 +307,9 @@ def main() -> None:
     ]
     for seed in seeds:
         started = time.perf_counter()
-        case = run_case(seed, args.without_reference_only)
+        case = run_case(
+            seed, "without" if args.without_reference_only else "with" if args.with_reference_only else None
+        )
         case["case_seconds"] = time.perf_counter() - started
         with args.out.open("a") as out:
             out.write(json.dumps(case, default=float) + "\n")

@@ -55,6 +55,30 @@ def test_a_run_stopped_before_equilibrium_is_doubtful_and_not_used_later(tmp_pat
     assert any("did not pin this sensor down" in w for w in estimate.warnings)
 
 
+def test_a_run_that_needs_more_modes_than_it_pins_down_keeps_them_with_wide_boxes():
+    """A four-node chain (53, 16, 13 and 10 min, a fast lag) logged every 5 min: the run pins one
+    mode down (15.4 min ±10 %), but needs three beyond chance. Learnt as one mode, the reference
+    told a later test that nothing was slower than 17 min; the test stopped at 0.45·t95 with its
+    99 % interval 0.18 °C above the truth. Kept with the box its run leaves it, the slow mode
+    reaches 53 min, and the same readings' interval covers the truth."""
+    from mtident.thermal.synthetic import random_warmup, reference_run
+
+    warm = random_warmup(np.random.default_rng(8353))
+    run = reference_run(warm.machine, np.random.default_rng(8353 + 10_000_000))
+    with np.errstate(all="ignore"):
+        reference, warnings = learn_reference(make_log(run.time_min, {"S": run.reading_C}))
+    modes = reference.sensors["S"]
+    assert modes.doubt is None and len(modes.time_constants_min) == 3
+    slowest = max(t * (1 + b) for t, b in zip(modes.time_constants_min, modes.box, strict=True))
+    assert slowest > 50.0
+    assert len(warnings) == 1 and "the run needs 3 modes beyond chance but pins down only 1" in warnings[0]
+    stop = int(np.searchsorted(warm.time_min, 22.8))
+    estimate = estimate_sensor("S", warm.time_min[:stop], warm.reading_C[:stop], reference=modes)
+    lo, hi = estimate.interval_C[0.99]
+    truth = float(warm.steady_C[stop - 1])
+    assert estimate.reference_used and lo <= truth <= hi and hi - lo > 0.4  # no stop yet at ±0.2 °C
+
+
 def test_the_reference_file_round_trips(complete_run, tmp_path):
     reference, _ = complete_run
     save_reference(reference, tmp_path / "machine.toml")
@@ -83,7 +107,9 @@ def test_a_free_mode_between_the_reference_boxes_is_allowed():
         ("not toml [", "not a reference file mtident can read"),
         ("source = 'x'\n", "no [sensors.NAME] tables"),
         ("[sensors.S]\ntime_constants_min = [-1.0]\nbox = [0.1]\n", "expected time_constants_min"),
-        ("[sensors.S]\ntime_constants_min = [10.0, 20.0]\nbox = [0.1]\n", "as many positive fractions"),
+        ("[sensors.S]\ntime_constants_min = [10.0, 20.0]\nbox = [0.1]\n", "as many fractions between 0 and 1"),
+        # a box of 1 or more would reach down to a time constant of 0 or below
+        ("[sensors.S]\ntime_constants_min = [10.0]\nbox = [1.0]\n", "as many fractions between 0 and 1"),
     ],
 )
 def test_a_bad_reference_file_is_refused_with_what_is_wrong(tmp_path, text, message):

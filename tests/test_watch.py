@@ -384,7 +384,7 @@ def test_the_state_file_lives_beside_the_log_and_a_replay_starts_afresh(tmp_path
 def test_a_different_log_copied_over_the_same_path_is_not_resumed(tmp_path):
     log = tmp_path / "run.csv"
     log.write_text(csv_text(T[:180], {"S": noisy(first_order(T[:180]), 10)}))
-    options = MonitorSettings(reference=one_mode_reference("S"))
+    options = BATCHED_SETTINGS  # stops by about 70 min
     session = WatchSession(log, options)
     session.poll()
     assert session.stopped

@@ -308,12 +308,18 @@ def _free_ceiling(family: ModeFamily) -> float:
 
 def _reference_grid_fits(problem: Problem, points: int = 7) -> list[Fits]:
     """Every model on grids over the reference's boxes, one batch per number of free modes, fitted
-    from one Gram matrix: ``points`` time constants across each box, and the free modes on a
-    log grid below the slowest box."""
+    from one Gram matrix: ``points`` time constants across each box (more across a box wider
+    than the free grid's steps), and the free modes on a log grid below the slowest box."""
     family, fast_lo = problem.family, problem.tau_bounds[0]
     bounds = _reference_bounds(family, fast_lo, 0)
-    axes = [np.geomspace(lo, hi, points) for lo, hi in bounds]
-    boxed = np.array(np.meshgrid(*[np.arange(points) + points * n for n in range(len(axes))], indexing="ij"))
+    # a wide box (a mode its run could not pin down) as finely as the free grid
+    axes = [
+        np.geomspace(lo, hi, max(points, int(np.ceil(np.log(hi / lo) / np.log(_MAX_GRID_RATIO))) + 1))
+        for lo, hi in bounds
+    ]
+    sizes = [len(axis) for axis in axes]
+    offsets = np.cumsum([0, *sizes])
+    boxed = np.array(np.meshgrid(*[np.arange(size) + offsets[n] for n, size in enumerate(sizes)], indexing="ij"))
     boxed = boxed.reshape(len(axes), -1).T
     ceiling = _free_ceiling(family)
     fast = (
@@ -327,7 +333,7 @@ def _reference_grid_fits(problem: Problem, points: int = 7) -> list[Fits]:
         combos = _grid_tuples(len(fast), extra, apart)
         if not len(combos):
             break
-        combos = combos + points * len(axes)
+        combos = combos + offsets[-1]
         index_sets.append(
             np.concatenate([np.repeat(boxed, len(combos), axis=0), np.tile(combos, (len(boxed), 1))], axis=1)
         )

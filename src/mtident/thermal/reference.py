@@ -16,19 +16,27 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.special import chdtri
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
-from mtident.thermal.modes import bin_samples, log_time_constant_sd
-from mtident.thermal.robust import MIN_REFERENCE_BOX, RobustSettings, SensorEstimate, SensorModes, estimate_sensor
+from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
+from mtident.thermal.robust import (
+    DISAGREEMENT_LEVEL,
+    MIN_REFERENCE_BOX,
+    RobustSettings,
+    SensorEstimate,
+    SensorModes,
+    estimate_sensor,
+)
 
 __all__ = ["MachineReference", "learn_reference", "save_reference", "load_reference"]
 
-# A reference's box is three standard deviations of its time constant (at least ±10 %, at most
-# ±60 %: wider than that the reference no longer shortens a test).
+# A reference's box is three standard deviations of its log time constant either side (at least
+# ±10 %, at most a factor of 100); a mode counts as pinned down within 0.15 (about ±15 %) at one.
 BOX_SDS = 3.0
-MAX_BOX = 0.6
+MAX_BOX_REACH = math.log(100.0)
 MAX_MODE_SD = 0.15
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
 # the usual tolerance of a later test.
@@ -130,13 +138,16 @@ def learn_reference(
         if learnt is None:
             warnings.append(f"{name}: left out of the reference (no model fits its readings)")
             continue
-        estimate, box = learnt
-        fit = estimate.fit
-        assert fit is not None
+        estimate, centres, boxes, determined = learnt
+        fit = _fit_of(estimate)
         doubt = _doubt(estimate)
-        sensors[name] = SensorModes(
-            tuple(m.time_constant_min for m in fit.modes), box, tuple(m.amplitude_C for m in fit.modes), doubt
-        )
+        sensors[name] = SensorModes(centres, boxes, tuple(m.amplitude_C for m in fit.modes), doubt)
+        if doubt is None and len(fit.modes) > determined:
+            warnings.append(
+                f"{name}: the run needs {len(fit.modes)} modes beyond chance but pins down only {determined}; the "
+                f"others are kept with the wide boxes the run leaves them ({_spans(centres, boxes, determined)}), so "
+                "later tests stop later than with a run that shows every mode"
+            )
         if doubt is not None:
             warnings.append(
                 f"{name}: {doubt}. Later tests will not use this sensor's modes: learn from a run that reaches "
@@ -171,12 +182,17 @@ def _doubt(estimate: SensorEstimate) -> str | None:
 
 def _learn_sensor(
     name: str, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: RobustSettings
-) -> tuple[SensorEstimate, tuple[float, ...]] | None:
-    """The sensor's modes and their boxes: the most modes whose time constants the run determines
-    (each within ±``MAX_MODE_SD`` at one standard deviation). A mode the run cannot pin down is
-    no property of the machine to carry into later tests; without it a later test's residuals
-    show the misfit and its interval widens."""
-    for count in range(3, 0, -1):
+) -> tuple[SensorEstimate, tuple[float, ...], tuple[float, ...], int] | None:
+    """The sensor's modes, their boxes' centres and widths, and how many of them the run pins
+    down. The modes: the most whose time constants the run determines (each within
+    ±``MAX_MODE_SD`` at one standard deviation), and then one more while the run needs it beyond
+    chance (up to three). A mode the run needs but cannot pin down stays, with the wide box its
+    uncertainty gives: left out, it would tell a later test that no mode lies beyond the others'
+    boxes, which the run itself contradicts (a slow mode of a fifth of a degree, learnt away,
+    stopped a test 0.4 °C low)."""
+    estimates: dict[int, SensorEstimate] = {}
+    sds: dict[int, FloatArray] = {}
+    for count in range(1, 4):
         estimate = estimate_sensor(
             name,
             time_min,
@@ -191,16 +207,53 @@ def _learn_sensor(
             ),
         )
         fit = estimate.fit
-        if fit is None or not fit.modes:
-            return None
-        if len(fit.modes) < count:
-            continue
+        if fit is None or len(fit.modes) < count:
+            break
         first = int(np.searchsorted(time_min, fit.origin_min))
         binned = bin_samples(time_min[first:], values[first:], None if room_C is None else room_C[first:])
-        sds = log_time_constant_sd(binned, fit)
-        if max(sds) <= MAX_MODE_SD or count == 1:
-            return estimate, tuple(float(min(max(BOX_SDS * sd, MIN_REFERENCE_BOX), MAX_BOX)) for sd in sds)
-    return None
+        estimates[count], sds[count] = estimate, np.asarray(log_time_constant_sd(binned, fit), dtype=float)
+    if not estimates:
+        return None
+    determined = max((c for c in estimates if np.max(sds[c]) <= MAX_MODE_SD), default=1)
+    count = max(determined, _modes_needed(_fit_of(estimates[max(estimates)])))
+    taus = [m.time_constant_min for m in _fit_of(estimates[count]).modes]
+    centres, boxes = zip(
+        *(_box(tau, float(sd), settings.max_time_constant_min) for tau, sd in zip(taus, sds[count], strict=True)),
+        strict=True,
+    )
+    return estimates[count], centres, boxes, determined
+
+
+def _spans(centres: tuple[float, ...], boxes: tuple[float, ...], skip: int) -> str:
+    """The widest boxes, as ranges of minutes."""
+    order = sorted(range(len(boxes)), key=lambda k: boxes[k])[skip:]
+    return ", ".join(f"{centres[k] * (1 - boxes[k]):.3g}-{centres[k] * (1 + boxes[k]):.3g} min" for k in order)
+
+
+def _modes_needed(fit: SteadyState) -> int:
+    """The most modes that fit the run better than one mode fewer beyond chance (χ² on 2 degrees
+    of freedom at ``DISAGREEMENT_LEVEL``, on the noise of the fit with the most modes: a fit with
+    too few has correlated residuals, and its noise hides what the next mode explains)."""
+    quantile = float(chdtri(2, 1.0 - DISAGREEMENT_LEVEL))
+    gains = {k: (fit.fits[k - 1] - fit.fits[k]) / fit.noise_C**2 for k in fit.fits if k - 1 in fit.fits}
+    return max((k for k, gain in gains.items() if gain > quantile), default=1)
+
+
+def _fit_of(estimate: SensorEstimate) -> SteadyState:
+    assert estimate.fit is not None
+    return estimate.fit
+
+
+def _box(tau: float, log_sd: float, max_time_constant_min: float) -> tuple[float, float]:
+    """A time constant's box, as its centre and half-width (relative): ``BOX_SDS`` standard
+    deviations of log τ either side (at least ±``MIN_REFERENCE_BOX``, at most up to the largest
+    time constant searched), symmetric in log τ, since a poorly determined time constant is
+    uncertain by a factor, not by a number of minutes."""
+    reach = min(BOX_SDS * log_sd, MAX_BOX_REACH) if np.isfinite(log_sd) else MAX_BOX_REACH
+    if reach <= MIN_REFERENCE_BOX:
+        return tau, MIN_REFERENCE_BOX
+    low, high = tau * math.exp(-reach), max(min(tau * math.exp(reach), max_time_constant_min), tau)
+    return (low + high) / 2.0, (high - low) / (high + low)
 
 
 def save_reference(reference: MachineReference, path: str | Path) -> None:
@@ -276,10 +329,11 @@ def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
     )
     ok = isinstance(taus, list) and isinstance(boxes, list) and 0 < len(taus) <= 3 and len(boxes) == len(taus)
     ok = ok and all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in [*taus, *boxes])  # type: ignore[misc]
+    ok = ok and all(v < 1 for v in boxes)  # type: ignore[union-attr]
     if not ok:
         msg = (
             f"{path}: sensor {name!r}: expected time_constants_min = [1 to 3 positive minutes] and box = [as many "
-            f"positive fractions]; found {entry!r}"
+            f"fractions between 0 and 1]; found {entry!r}"
         )
         raise InputError(msg)
     assert isinstance(taus, list) and isinstance(boxes, list) and isinstance(entry, dict)
