@@ -375,7 +375,7 @@ def test_plots_leave_the_users_matplotlib_alone_and_return_a_figure_without_a_pa
     assert out.stdout.split() == ["svg", "Figure", "2"]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def loaded_modules(tmp_path_factory: pytest.TempPathFactory) -> dict[str, bool]:
     """One fresh process (an interpreter's start-up costs 1-2 s) runs `thermal watch --replay` of a
     numeric log, then `thermal identify` of the sample with the default method, and says after each

@@ -133,7 +133,7 @@ def machine():  # noqa: ANN201
         m.stop()
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def running_machine():  # noqa: ANN201
     """One server for the tests that neither stop it nor read its history (a start takes seconds);
     each publishes the values it records before it connects."""

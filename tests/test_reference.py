@@ -19,13 +19,14 @@ def two_mode(t: np.ndarray, slow_amplitude: float = -6.0) -> np.ndarray:
     return 20.0 + 10.0 + slow_amplitude * np.exp(-t / 60.0) - (10.0 + slow_amplitude) * np.exp(-t / 8.0)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def complete_run() -> tuple[MachineReference, list[str]]:
     t = np.arange(0.0, 480.0, 1.0)
     y = two_mode(t) + np.random.default_rng(1).normal(0.0, 0.01, t.size)
     return learn_reference(make_log(t, {"S": np.round(y, 2)}))
 
 
+@pytest.mark.xdist_group("one complete reference run")
 def test_a_complete_run_pins_down_both_modes(complete_run):
     reference, warnings = complete_run
     modes = reference.sensors["S"]
@@ -79,6 +80,7 @@ def test_a_run_that_needs_more_modes_than_it_pins_down_keeps_them_with_wide_boxe
     assert estimate.reference_used and lo <= truth <= hi and hi - lo > 0.4  # no stop yet at ±0.2 °C
 
 
+@pytest.mark.xdist_group("one complete reference run")
 def test_the_reference_file_round_trips(complete_run, tmp_path):
     reference, _ = complete_run
     save_reference(reference, tmp_path / "machine.toml")

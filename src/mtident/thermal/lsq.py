@@ -90,7 +90,6 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
                         p0=start,
                         bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]),
                         max_nfev=2000,
-                        jac=_rise_jacobian,
                     )
             except RuntimeError:  # no convergence within max_nfev
                 pass
@@ -101,13 +100,6 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
         resid = y - rise_curve(t, *p)
         sigmas.append(np.sqrt(np.sum(resid**2) / max(len(y) - 3, 1)))
     return LeastSquaresFit(np.array(params), np.array(covs), np.array(sigmas))
-
-
-def _rise_jacobian(time_min: FloatArray, start_C: float, rate_per_min: float, steady_C: float) -> FloatArray:
-    """∂T/∂[T₀, λ, T∞] at each time (N, 3): exact, where curve_fit's finite differences cost a
-    model call per parameter at every step."""
-    decay = np.exp(-rate_per_min * time_min)
-    return np.column_stack([decay, -(start_C - steady_C) * time_min * decay, 1.0 - decay])
 
 
 def cramer_rao_bound(
