@@ -235,7 +235,7 @@ free_fast_option = click.option(
     default=MAX_FREE_FAST,
     show_default=True,
     help="With --reference: how many free modes faster than the reference's slowest a test may add (a "
-    "reference run can miss a mode). "
+    "reference run can miss a mode; one more where the readings use them all). "
     "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, "
     "which the answer states.",
 )

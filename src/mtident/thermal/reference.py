@@ -127,8 +127,8 @@ def learn_reference(
     -------
     MachineReference
     list of str
-        Warnings: sensors left out (no fit), a log that did not reach equilibrium (its slowest
-        mode is then uncertain and its box wide).
+        Warnings: sensors left out (no fit), sensors not pinned down (a log that did not reach
+        equilibrium), modes the run needs but cannot pin down (kept with wide boxes).
     """
     settings = settings or RobustSettings()
     sensors: dict[str, SensorModes] = {}
@@ -172,7 +172,7 @@ def _doubt(estimate: SensorEstimate) -> str | None:
     if not estimate.model_ok:
         assert estimate.fit is not None
         return (
-            f"the {len(estimate.fit.modes)} mode(s) the run pins down do not describe it (residuals "
+            f"the {len(estimate.fit.modes)} mode(s) learnt do not describe it (residuals "
             f"{estimate.fit.correlation_factor:.1f}x as correlated as noise)"
         )
     if (hi - lo) / 2 > PINNED_HALF_WIDTH_C:
@@ -185,8 +185,8 @@ def _learn_sensor(
 ) -> tuple[SensorEstimate, tuple[float, ...], tuple[float, ...], int] | None:
     """The sensor's modes, their boxes' centres and widths, and how many of them the run pins
     down. The modes: the most whose time constants the run determines (each within
-    ±``MAX_MODE_SD`` at one standard deviation), and then one more while the run needs it beyond
-    chance (up to three). A mode the run needs but cannot pin down stays, with the wide box its
+    ±``MAX_MODE_SD`` at one standard deviation), or more where the run needs more beyond chance
+    (up to three). A mode the run needs but cannot pin down stays, with the wide box its
     uncertainty gives: left out, it would tell a later test that no mode lies beyond the others'
     boxes, which the run itself contradicts (a slow mode of a fifth of a degree, learnt away,
     stopped a test 0.4 °C low)."""
