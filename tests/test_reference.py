@@ -173,3 +173,25 @@ def test_a_slower_mode_than_the_references_rejects_it():
     estimate = estimate_sensor("S", t, y, reference=reference, noise_C=0.01)
     assert not estimate.reference_used
     assert "reference-disagrees" in estimate.warning_codes
+
+
+def test_a_sensor_the_reference_does_not_know_is_said_in_identify_and_watch(tmp_path):
+    """A logger's export named the column 'Spindle T1' where the reference run had 'T1': the answer
+    went on without the reference, said only in its assumptions."""
+    from mtident.thermal.monitor import MonitorSettings
+    from mtident.thermal.robust_identify import identify_robust
+    from mtident.thermal.session import WatchSession
+
+    t = np.arange(0.0, 61.0)
+    y = np.round(two_mode(t) + np.random.default_rng(3).normal(0.0, 0.01, t.size), 2)
+    reference = MachineReference("run.csv", "2026-11-25", 300.0, "not measured", {"T1": SensorModes((60.0,), (0.1,))})
+    said = "the reference (run.csv) has no modes for 'Spindle T1': it is answered without it (the reference knows 'T1'"
+    result = identify_robust(make_log(t, {"Spindle T1": y}), 60.0, reference=reference)
+    assert any(note.startswith(said) for note in result.notes)
+    assert not any(
+        "no modes" in note for note in identify_robust(make_log(t, {"T1": y}), 60.0, reference=reference).notes
+    )
+    log = tmp_path / "log.csv"
+    log.write_text("time_min,Spindle T1\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
+    events = WatchSession(log, MonitorSettings(reference=reference), persist=False).poll()
+    assert [e.kind for e in events if e.text.startswith(said)] == ["warning"]

@@ -31,7 +31,7 @@ from mtident.thermal.robust import (
     estimate_sensor,
 )
 
-__all__ = ["MachineReference", "learn_reference", "save_reference", "load_reference"]
+__all__ = ["MachineReference", "learn_reference", "save_reference", "load_reference", "sensors_unknown"]
 
 # A reference's box is three standard deviations of its log time constant either side (at least
 # ±10 %, at most a factor of 100); a mode counts as pinned down within 0.15 (about ±15 %) at one.
@@ -110,6 +110,31 @@ class MachineReference:
         return f"{self.source} ({self.learnt_on}): τ {parts}"
 
 
+def sensors_unknown(reference: MachineReference, sensors: tuple[str, ...]) -> str | None:
+    """A note where the reference has no modes for some of ``sensors``, or None: a column renamed
+    since the reference run (a logger's export adds its channel's label) is answered without its
+    modes, and only its assumptions would say so.
+
+    Parameters
+    ----------
+    reference : MachineReference
+    sensors : tuple of str
+        The log's sensors.
+
+    Returns
+    -------
+    str or None
+    """
+    missing = [name for name in sensors if name not in reference.sensors]
+    if not missing:
+        return None
+    return (
+        f"the reference ({reference.source}) has no modes for {', '.join(repr(n) for n in missing)}: "
+        f"{'they are' if len(missing) > 1 else 'it is'} answered without it (the reference knows "
+        f"{', '.join(repr(n) for n in reference.sensors)}; a renamed column keeps its modes only under its old name)"
+    )
+
+
 def learn_reference(
     log: TemperatureLog, room_C: FloatArray | None = None, settings: RobustSettings | None = None
 ) -> tuple[MachineReference, list[str]]:
@@ -166,14 +191,17 @@ def learn_reference(
 
 
 def _doubt(estimate: SensorEstimate) -> str | None:
-    """Why a reference run did not pin a sensor down, or None: its modes misfit the run, or its own
-    steady state is left wider than ``PINNED_HALF_WIDTH_C``."""
-    lo, hi = estimate.interval_C[min(estimate.interval_C)]
+    """Why a reference run did not pin a sensor down, or None: its modes misfit the run, or its
+    readings leave its own steady state wider than ``PINNED_HALF_WIDTH_C``. The readings' interval,
+    without the unmeasured room's wander: the wander is the future room's, which a later test
+    meets with its own readings, and with it every run whose slowest mode exceeds an hour was
+    doubted, however complete."""
+    fit = _fit_of(estimate)
+    lo, hi = fit.interval_C[min(fit.interval_C)]
     if not estimate.model_ok:
-        assert estimate.fit is not None
         return (
-            f"the {len(estimate.fit.modes)} mode(s) learnt do not describe it (residuals "
-            f"{estimate.fit.correlation_factor:.1f}x as correlated as noise)"
+            f"the {len(fit.modes)} mode(s) learnt do not describe it (residuals "
+            f"{fit.correlation_factor:.1f}x as correlated as noise)"
         )
     if (hi - lo) / 2 > PINNED_HALF_WIDTH_C:
         return f"the run leaves its steady state between {lo:.2f} and {hi:.2f} °C (95 %)"

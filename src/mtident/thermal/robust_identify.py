@@ -19,7 +19,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import measured_equilibrium, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
-from mtident.thermal.reference import MachineReference
+from mtident.thermal.reference import MachineReference, sensors_unknown
 from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, describe_assumptions, estimate_sensor
 
 if TYPE_CHECKING:
@@ -295,7 +295,9 @@ def identify_robust(
         rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
-        notes=tuple(log.notes) + tuple(w for e in estimates for w in e.warnings),
+        notes=tuple(log.notes)
+        + tuple(note for note in [None if reference is None else sensors_unknown(reference, log.sensors)] if note)
+        + tuple(w for e in estimates for w in e.warnings),
     )
 
 

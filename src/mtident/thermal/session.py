@@ -35,6 +35,7 @@ from mtident.thermal.monitor import (
     new_state,
     result,
 )
+from mtident.thermal.reference import sensors_unknown
 
 __all__ = ["SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
 
@@ -279,6 +280,9 @@ class WatchSession:
         events += [Event("warning", np.nan, text) for text in rows.warnings]
         if self.state is None and self.follower.sensors:
             self.state = self._new_state(self.follower.sensors)
+            reference = self.settings.reference
+            unknown = None if reference is None else sensors_unknown(reference, self.sensors)
+            events += [Event("warning", np.nan, unknown)] if unknown else []
         if self.state is None or not len(rows.time_min):
             return events
         values, room = (
