@@ -536,7 +536,7 @@ def _free_widened_while_used(
         # reference's, and two faster still): two free modes left a hull 0.22 °C off the truth
         family = replace(family, free_fast=family.free_fast + 1)
         fit = fit_of(family)
-    if family.free_fast > used:
+    if family.free_fast > used and unheld is None:  # else the answer goes on without the reference
         notes.add(
             "modes-saturated",
             f"the readings use all {used} free modes faster than the reference's beyond chance: the interval "
