@@ -423,6 +423,8 @@ def test_watch_replay_json_says_the_decision_what_it_assumes_and_checks_it(tmp_p
         "--json",
         "--reference",
         str(reference),
+        "--free-fast-modes",
+        "0",
         "--plot",
         str(tmp_path / "w.png"),
     )
@@ -439,8 +441,9 @@ def test_watch_replay_json_says_the_decision_what_it_assumes_and_checks_it(tmp_p
         "sensors",
         "decision",
     }
-    assert data["decision"] == "stop" and data["stop_time_min"] <= 0.85 * PAPER_T95 and data["reason"] is None
+    assert data["decision"] == "stop" and data["stop_time_min"] <= 0.45 * PAPER_T95 and data["reason"] is None
     assert data["assumptions"]["max_time_constant_min"] == 300.0 and "reference.csv" in data["assumptions"]["reference"]
+    assert "no mode faster than these (assumed)" in data["assumptions"]["reference"]
     assert "random walk of 0.05 °C in an hour" in data["assumptions"]["room"]
     for sensor, truth in zip(data["sensors"], (26.7, 29.0), strict=True):
         assert sensor["model_ok"] and sensor["reference_used"] and abs(sensor["steady_state_C"] - truth) < 0.2
