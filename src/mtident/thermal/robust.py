@@ -445,24 +445,33 @@ def _modal_fit(
         )
         reference = None
     if reference is not None:
-        boxes = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box)
-        fit, unheld = _free_widened_while_used(
+        boxes, asked = tuple(max(b, MIN_REFERENCE_BOX) for b in reference.box), free_fast(reference, settings)
+        fit, unheld = _widened_while_used(
             fit_of,
             ModeFamily(
                 settings.max_time_constant_min,
                 len(reference.time_constants_min),
                 tuple(reference.time_constants_min),
                 boxes,
-                free_fast=free_fast(reference, settings),
+                free_fast=asked,
             ),
             settings,
             refine_within,
-            notes,
         )
+        if fit.family.free_fast > asked and not unheld:
+            notes.add(
+                "modes-saturated",
+                f"the readings use all {asked} free modes faster than the reference's beyond chance: the interval "
+                f"allows {fit.family.free_fast}",
+            )
         # the free fit costs most of a check: where the boxed answer is far from any decision, the
         # cheap tests alone decide whether to use it
         far = fit.determined and not _near_decision(fit, settings, refine_within)
-        why = unheld or _disagreement(binned, noise, interval, fit, family, likelihood_ratio=not far)
+        why = (
+            f"the readings use all {fit.family.free_fast} free modes faster than its modes beyond chance"
+            if unheld
+            else _disagreement(binned, noise, interval, fit, family, likelihood_ratio=not far)
+        )
         if why is None:
             return fit, True
         notes.add(
@@ -471,7 +480,20 @@ def _modal_fit(
             "machine changed, "
             "or did the reference run miss a mode? The answer does not use the reference",
         )
-    return _widened_while_used(fit_of, family, settings, refine_within, notes), False
+    fit, unheld = _widened_while_used(fit_of, family, settings, refine_within)
+    if unheld:
+        notes.add(
+            "modes-unresolved",
+            f"the readings use all {fit.family.max_modes} modes beyond chance: no sum of modes searched here holds "
+            "them, and the interval may be too narrow",
+        )
+    if fit.family.max_modes > family.max_modes:
+        notes.add(
+            "modes-saturated",
+            f"the readings use all {family.max_modes} modes beyond chance, so a sum of {family.max_modes} may not hold "
+            f"them: the interval covers sums of up to {fit.family.max_modes} modes",
+        )
+    return fit, False
 
 
 def _widened_while_used(
@@ -479,70 +501,33 @@ def _widened_while_used(
     family: ModeFamily,
     settings: RobustSettings,
     refine_within: float | None,
-    notes: _Notes,
-) -> SteadyState:
-    """The fit over ``family``, with one mode more while the readings use every mode it allows
-    beyond chance (up to ``MAX_MODES_WHEN_SATURATED``), near a decision only; said in ``notes``."""
-    fit = fit_of(family)
-    used = family.max_modes
-    while settings.more_modes_when_used and _near_decision(fit, settings, refine_within) and _last_mode_needed(fit):
-        if family.max_modes >= MAX_MODES_WHEN_SATURATED:
-            notes.add(
-                "modes-unresolved",
-                f"the readings use all {family.max_modes} modes beyond chance: no sum of modes searched here holds "
-                "them, and the interval may be too narrow",
-            )
-            break
-        # a hull over a family that cannot hold the truth can exclude it (a conduction body's sensor
-        # near the heat: four modes spent on its first minutes' transient left its slow rise out)
-        family = replace(family, max_modes=family.max_modes + 1)
-        fit = fit_of(family)
-    if family.max_modes > used:
-        notes.add(
-            "modes-saturated",
-            f"the readings use all {used} modes beyond chance, so a sum of {used} may not hold them: the interval "
-            f"covers sums of up to {family.max_modes} modes",
-        )
-    return fit
+) -> tuple[SteadyState, bool]:
+    """The fit over ``family``, with one mode more (with a reference, one free mode more) while the
+    readings use every mode it allows beyond chance, near a decision only; and whether they still
+    do at the most searched (``MAX_MODES_WHEN_SATURATED`` modes, ``MAX_FREE_WHEN_SATURATED`` free
+    ones). A reference family of no free modes (the reference said to hold every mode) stays so.
 
-
-def _free_widened_while_used(
-    fit_of: Callable[[ModeFamily], SteadyState],
-    family: ModeFamily,
-    settings: RobustSettings,
-    refine_within: float | None,
-    notes: _Notes,
-) -> tuple[SteadyState, str | None]:
-    """The fit over a reference family, with one free mode more while the readings use every free
-    mode it allows beyond chance (near a decision only), said in ``notes``; and, where they still
-    do at ``MAX_FREE_WHEN_SATURATED`` (or ``MAX_MODES_WHEN_SATURATED`` modes in all), why the
-    reference's family does not hold them. A family of no free modes (the reference said to hold
-    every mode) stays so."""
+    A hull over a family that cannot hold the truth can exclude it: a conduction body's sensor near
+    the heat (four modes spent on its first minutes' transient left its slow rise out), and one
+    far from it with a reference (its lag and the body's second mode, both faster than the
+    reference's, and two faster still: two free modes left the hull 0.22 °C off the truth)."""
     fit = fit_of(family)
-    used, unheld = family.free_fast, None
+    boxed = family.reference_min is not None
     while (
         settings.more_modes_when_used
-        and family.free_fast > 0
+        and (family.free_fast > 0 or not boxed)
         and _near_decision(fit, settings, refine_within)
         and _last_mode_needed(fit)
     ):
-        if (
-            family.free_fast >= MAX_FREE_WHEN_SATURATED
-            or family.max_modes + family.free_fast >= MAX_MODES_WHEN_SATURATED
-        ):
-            unheld = f"the readings use all {family.free_fast} free modes faster than its modes beyond chance"
-            break
-        # a conduction body's far sensor (its lag and the body's second mode, both faster than the
-        # reference's, and two faster still): two free modes left a hull 0.22 °C off the truth
-        family = replace(family, free_fast=family.free_fast + 1)
-        fit = fit_of(family)
-    if family.free_fast > used and unheld is None:  # else the answer goes on without the reference
-        notes.add(
-            "modes-saturated",
-            f"the readings use all {used} free modes faster than the reference's beyond chance: the interval "
-            f"allows {family.free_fast}",
+        if _mode_count(family) >= MAX_MODES_WHEN_SATURATED or family.free_fast >= MAX_FREE_WHEN_SATURATED:
+            return fit, True
+        family = (
+            replace(family, free_fast=family.free_fast + 1)
+            if boxed
+            else replace(family, max_modes=family.max_modes + 1)
         )
-    return fit, unheld
+        fit = fit_of(family)
+    return fit, False
 
 
 def _near_decision(fit: SteadyState, settings: RobustSettings, refine_within: float | None) -> bool:
@@ -557,11 +542,16 @@ def _last_mode_needed(fit: SteadyState) -> bool:
     """Whether the family's largest number of modes (with a reference, its boxes and free modes)
     fits better than one mode fewer beyond chance (χ² on 2 degrees of freedom at
     ``DISAGREEMENT_LEVEL``)."""
-    most = fit.family.max_modes + (fit.family.free_fast if fit.family.reference_min is not None else 0)
+    most = _mode_count(fit.family)
     if not fit.determined or most not in fit.fits or most - 1 not in fit.fits:
         return False
     statistic = (fit.fits[most - 1] - fit.fits[most]) / fit.noise_C**2
     return statistic > float(chdtri(2, 1.0 - DISAGREEMENT_LEVEL))
+
+
+def _mode_count(family: ModeFamily) -> int:
+    """The most modes a family's model has (with a reference, its boxes and its free modes)."""
+    return family.max_modes + (family.free_fast if family.reference_min is not None else 0)
 
 
 def free_fast(reference: SensorModes, settings: RobustSettings) -> int:

@@ -271,6 +271,7 @@ def identify_robust(
         )
         for s, name in enumerate(log.sensors)
     )
+    unknown = None if reference is None else sensors_unknown(reference, log.sensors)
     times = _prediction_times(t, n, estimates, horizon_min)
     room_all = None if room_C is None else np.concatenate([room_C, np.full(len(times) - len(t), np.nan)])[: len(times)]
     curve, low, high = (np.full((len(times), len(estimates)), np.nan) for _ in range(3))
@@ -295,9 +296,7 @@ def identify_robust(
         rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
-        notes=tuple(log.notes)
-        + tuple(note for note in [None if reference is None else sensors_unknown(reference, log.sensors)] if note)
-        + tuple(w for e in estimates for w in e.warnings),
+        notes=(*log.notes, *([unknown] if unknown else []), *(w for e in estimates for w in e.warnings)),
     )
 
 

@@ -282,7 +282,8 @@ class WatchSession:
             self.state = self._new_state(self.follower.sensors)
             reference = self.settings.reference
             unknown = None if reference is None else sensors_unknown(reference, self.sensors)
-            events += [Event("warning", np.nan, unknown)] if unknown else []
+            if unknown:
+                events.append(Event("warning", np.nan, unknown))
         if self.state is None or not len(rows.time_min):
             return events
         values, room = (
