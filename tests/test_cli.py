@@ -492,12 +492,12 @@ def test_watch_replays_a_workbook(tmp_path):
     import numpy as np
     import pandas as pd
 
-    t = np.arange(0.0, 400.0)
+    t = np.arange(0.0, 160.0)
     book = tmp_path / "warmup.xlsx"
     pd.DataFrame(
         {
             "Time": pd.date_range("2026-11-22 08:00", periods=len(t), freq="1min"),
-            "Spindle (°C)": 26.7 - 8.8 * np.exp(-0.016 * t),
+            "Spindle (°C)": 26.7 - 8.8 * np.exp(-0.04 * t),
         }
     ).to_excel(book, index=False)
     out = mtident(

@@ -81,23 +81,17 @@ def test_stretches_without_readings_are_said(tmp_path):
     assert reading_gaps(np.array([0.0, 1.0, 2.0, 9.0, 10.0])) == ((2.0, 9.0),)
 
 
-def test_a_recorded_log_says_where_it_was_recorded_from(tmp_path):
-    log, _ = logged_test(tmp_path)
+def test_a_recorded_log_says_where_it_was_recorded_from_and_its_state_file_is_left_alone(tmp_path):
+    log, reference = logged_test(tmp_path)
     (tmp_path / "run.csv.opcua.json").write_text(
         '{"url": "opc.tcp://vmc1:4840", "nodes": ["ns=2;s=A", "ns=2;s=B"], "names": ["A", "B"], '
         '"origin": "2026-11-24T08:00:00+00:00", "last_stamp": {}}'
     )
-    code, _, err = report(str(log), "-o", str(tmp_path / "r.html"))
+    code, _, err = report(str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(tmp_path / "r.html"))
     assert code == 0, err
     assert "recorded from opc.tcp://vmc1:4840 (nodes ns=2;s=A, ns=2;s=B); t = 0 is 2026-11-24T08:00:00+00:00</dd>" in (
         tmp_path / "r.html"
     ).read_text(encoding="utf-8")
-
-
-def test_the_report_leaves_a_watchs_state_file_alone(tmp_path):
-    log, _ = logged_test(tmp_path)
-    code, _, err = report(str(log), "-o", str(tmp_path / "r.html"))
-    assert code == 0, err
     assert not (tmp_path / "run.csv.watch-state.npz").exists()
 
 
