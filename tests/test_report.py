@@ -87,7 +87,9 @@ def test_a_recorded_log_says_where_it_was_recorded_from_and_its_state_file_is_le
         '{"url": "opc.tcp://vmc1:4840", "nodes": ["ns=2;s=A", "ns=2;s=B"], "names": ["A", "B"], '
         '"origin": "2026-11-24T08:00:00+00:00", "last_stamp": {}}'
     )
-    code, _, err = report(str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(tmp_path / "r.html"))
+    code, _, err = report(
+        str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(tmp_path / "r.html")
+    )
     assert code == 0, err
     assert "recorded from opc.tcp://vmc1:4840 (nodes ns=2;s=A, ns=2;s=B); t = 0 is 2026-11-24T08:00:00+00:00</dd>" in (
         tmp_path / "r.html"
