@@ -206,7 +206,7 @@ def test_a_reference_said_to_hold_every_mode_stops_as_early_as_the_papers_filter
         assert state.stopped and state.stop_time_min <= 0.41 * PAPER_T95, state.stop_time_min
         assert abs(check.steady_C - 26.7) < 0.2 and check.low_C <= 26.7 <= check.high_C
     assert "no mode faster than these (assumed)" in str(assumptions(settings, "S").reference)
-    assert "up to 2 free mode(s) faster than the slowest of these" in str(
+    assert "up to 2 free modes faster than the slowest of these" in str(
         assumptions(MonitorSettings(reference=one_mode_reference("S")), "S").reference
     )
 

@@ -24,6 +24,7 @@ from mtident.thermal.modal_kernel import (
     EDGE_PENALTY,
     END_OBJECTIVE,
     RSS_OBJECTIVE,
+    lag_rows,
     leading_rows,
     objective_and_gradient,
     refine_log_tau,
@@ -143,37 +144,33 @@ def design_columns(problem: Problem, tau: FloatArray) -> FloatArray:
     cols = [np.ones(tau.shape[:1] + u.shape)]
     cols.extend(np.exp(-u / tau[:, k, None]) for k in range(tau.shape[1]))
     if b.room_C is not None:
-        room = np.broadcast_to(b.room_C, cols[0].shape)
-        cols.extend(room_lag(room, b.time_min, tau[:, k]) - b.room_C for k in range(tau.shape[1]))
+        cols.extend(room_lag(b.room_C, b.time_min, tau[:, k]) - b.room_C for k in range(tau.shape[1]))
     return np.stack(cols, axis=-1)
 
 
-def room_lag(rows: FloatArray, time_min: FloatArray, tau: FloatArray) -> FloatArray:
-    """A first-order lag applied to a room taken as piecewise linear between the bins, from a
-    machine at the room's first level.
+def room_lag(room: FloatArray, time_min: FloatArray, tau: FloatArray) -> FloatArray:
+    """A first-order lag of each time constant applied to a room taken as piecewise linear between
+    the bins, from a machine at the room's first level (compiled: the lags of every model a
+    search tries cost most of a check with a room sensor where the interpreter runs the loop).
 
     Parameters
     ----------
-    rows : ndarray, shape (T, B)
-        The room at each bin, one row per lag.
+    room : ndarray, shape (B,)
+        The room at each bin.
     time_min : ndarray, shape (B,)
         The bins' times (min).
     tau : ndarray, shape (T,)
-        Each row's time constant (min).
+        The time constants (min).
 
     Returns
     -------
     ndarray, shape (T, B)
     """
-    out = np.empty(rows.shape)
-    x = np.array(rows[:, 0], dtype=float)
-    out[:, 0] = x
-    for i in range(1, rows.shape[1]):
-        dt = time_min[i] - time_min[i - 1]
-        slope = (rows[:, i] - rows[:, i - 1]) / dt
-        x = rows[:, i] - slope * tau + (x - rows[:, i - 1] + slope * tau) * np.exp(-dt / tau)
-        out[:, i] = x
-    return out
+    return lag_rows(
+        np.ascontiguousarray(room, dtype=float),
+        np.ascontiguousarray(time_min, dtype=float),
+        np.ascontiguousarray(tau, dtype=float).reshape(-1),
+    )
 
 
 @dataclass(frozen=True)
@@ -264,7 +261,7 @@ def _gram_fits(problem: Problem, tau: FloatArray, index_sets: list[IntArray]) ->
     u = b.time_min - problem.origin
     basis = [np.ones((sets, len(b), 1)), np.exp(-u[None, :, None] / tau[:, None, :])]
     if b.room_C is not None:
-        lags = room_lag(np.broadcast_to(b.room_C, (sets * m, len(b))), b.time_min, tau.reshape(-1)) - b.room_C
+        lags = room_lag(b.room_C, b.time_min, tau.reshape(-1)) - b.room_C
         basis.append(np.swapaxes(lags.reshape(sets, m, len(b)), 1, 2))
     X = np.concatenate(basis, axis=2)
     w, y = b.count, problem.target()

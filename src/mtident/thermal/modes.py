@@ -326,7 +326,7 @@ def fitted_curve(
     after = t >= fit.origin_min
     if fit.room_gains and after.sum() > 1:
         taus = np.array([m.time_constant_min for m in fit.modes])
-        lagged = room_lag(np.broadcast_to(room[after], (len(taus), int(after.sum()))), t[after], taus)
+        lagged = room_lag(room[after], t[after], taus)
         curve[after] += np.asarray(fit.room_gains) @ (lagged - room[after])
     return curve
 

@@ -461,14 +461,14 @@ def _modal_fit(
         if fit.family.free_fast > asked and not unheld:
             notes.add(
                 "modes-saturated",
-                f"the readings use all {asked} free modes faster than the reference's beyond chance: the interval "
+                f"the readings use {_every_free(asked)} faster than the reference's beyond chance, so the interval "
                 f"allows {fit.family.free_fast}",
             )
         # the free fit costs most of a check: where the boxed answer is far from any decision, the
         # cheap tests alone decide whether to use it
         far = fit.determined and not _near_decision(fit, settings, refine_within)
         why = (
-            f"the readings use all {fit.family.free_fast} free modes faster than its modes beyond chance"
+            f"the readings use {_every_free(fit.family.free_fast)} faster than its modes beyond chance"
             if unheld
             else _disagreement(binned, noise, interval, fit, family, likelihood_ratio=not far)
         )
@@ -608,7 +608,8 @@ def describe_assumptions(
         )
     extra = free_fast(modes, settings)
     faster = (
-        f"up to {extra} free mode(s) faster than the slowest of these"
+        f"up to {extra} free mode{'s' if extra > 1 else ''} faster than the slowest of these"
+        + (f" ({settings.max_modes} modes in all)" if extra < settings.free_fast_modes else "")
         if extra
         else "no mode faster than these (assumed)"
     )
@@ -670,6 +671,10 @@ def _slowest_box_opened(family: ModeFamily) -> ModeFamily:
     low, high = taus[k] * (1.0 - boxes[k]), max(family.max_time_constant_min, taus[k] * (1.0 + boxes[k]))
     taus[k], boxes[k] = (low + high) / 2.0, (high - low) / (high + low)
     return replace(family, reference_min=tuple(taus), reference_box=tuple(boxes))
+
+
+def _every_free(count: int) -> str:
+    return "the one free mode" if count == 1 else f"all {count} free modes"
 
 
 def _taus(taus: tuple[float, ...]) -> str:
