@@ -23,6 +23,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
 from mtident.thermal.robust import (
+    DEFAULT_MAX_MODES,
     DISAGREEMENT_LEVEL,
     MIN_REFERENCE_BOX,
     RobustSettings,
@@ -214,13 +215,14 @@ def _learn_sensor(
     """The sensor's modes, their boxes' centres and widths, and how many of them the run pins
     down. The modes: the most whose time constants the run determines (each within
     ±``MAX_MODE_SD`` at one standard deviation), or more where the run needs more beyond chance
-    (up to three). A mode the run needs but cannot pin down stays, with the wide box its
-    uncertainty gives: left out, it would tell a later test that no mode lies beyond the others'
-    boxes, which the run itself contradicts (a slow mode of a fifth of a degree, learnt away,
-    stopped a test 0.4 °C low)."""
+    (up to the family's most, four: a sensor's lag and three modes, fitted with three, bent all
+    three time constants and left the slowest unpinned). A mode the run needs but cannot pin
+    down stays, with the wide box its uncertainty gives: left out, it would tell a later test that
+    no mode lies beyond the others' boxes, which the run itself contradicts (a slow mode of a
+    fifth of a degree, learnt away, stopped a test 0.4 °C low)."""
     estimates: dict[int, SensorEstimate] = {}
     sds: dict[int, FloatArray] = {}
-    for count in range(1, 4):
+    for count in range(1, settings.max_modes + 1):
         estimate = estimate_sensor(
             name,
             time_min,
@@ -355,13 +357,14 @@ def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
         if isinstance(entry, dict) and isinstance(taus, list)
         else None
     )
-    ok = isinstance(taus, list) and isinstance(boxes, list) and 0 < len(taus) <= 3 and len(boxes) == len(taus)
+    ok = isinstance(taus, list) and isinstance(boxes, list) and len(boxes) == len(taus)
+    ok = ok and 0 < len(taus) <= DEFAULT_MAX_MODES  # type: ignore[arg-type]
     ok = ok and all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in [*taus, *boxes])  # type: ignore[misc]
     ok = ok and all(v < 1 for v in boxes)  # type: ignore[union-attr]
     if not ok:
         msg = (
-            f"{path}: sensor {name!r}: expected time_constants_min = [1 to 3 positive minutes] and box = [as many "
-            f"fractions between 0 and 1]; found {entry!r}"
+            f"{path}: sensor {name!r}: expected time_constants_min = [1 to {DEFAULT_MAX_MODES} positive minutes] and "
+            f"box = [as many fractions between 0 and 1]; found {entry!r}"
         )
         raise InputError(msg)
     assert isinstance(taus, list) and isinstance(boxes, list) and isinstance(entry, dict)

@@ -66,6 +66,8 @@ DECISION_MARGIN = 2.0
 # Where the readings use every mode of the family beyond chance, one more is allowed, up to this
 # many (a fit of six modes costs about ten of four).
 MAX_MODES_WHEN_SATURATED = 6
+# the modes searched without widening, and the most a reference run keeps
+DEFAULT_MAX_MODES = 4
 # With a reference, where the readings use every free mode beyond chance, one more is allowed, up
 # to this many (each multiplies the reference grid by the free grid's size).
 MAX_FREE_WHEN_SATURATED = 3
@@ -101,7 +103,7 @@ class RobustSettings:
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
     room_wander_C_per_h: float = 0.05
     levels: tuple[float, ...] = (0.95, 0.99)
-    max_modes: int = 4
+    max_modes: int = DEFAULT_MAX_MODES
     free_fast_modes: int = MAX_FREE_FAST
     more_modes_when_used: bool = True
 
@@ -607,12 +609,14 @@ def describe_assumptions(
             settings.max_time_constant_min, room, f"{reference.describe(sensor)}; not used: {modes.doubt}"
         )
     extra = free_fast(modes, settings)
-    faster = (
-        f"up to {extra} free mode{'s' if extra > 1 else ''} faster than the slowest of these"
-        + (f" ({settings.max_modes} modes in all)" if extra < settings.free_fast_modes else "")
-        if extra
-        else "no mode faster than these (assumed)"
-    )
+    if extra:
+        faster = f"up to {extra} free mode{'s' if extra > 1 else ''} faster than the slowest of these" + (
+            f" ({settings.max_modes} modes in all)" if extra < settings.free_fast_modes else ""
+        )
+    elif settings.free_fast_modes:
+        faster = f"no free mode besides these ({settings.max_modes} modes in all)"
+    else:
+        faster = "no mode faster than these (assumed)"
     return Assumptions(settings.max_time_constant_min, room, f"{reference.describe(sensor)}; {faster}")
 
 
