@@ -638,6 +638,23 @@ def test_watch_says_each_sensors_reference_and_when_each_became_ready(tmp_path):
     assert ready and re.match(r"mtident: t = [\d.]+ min: S: may stop, T∞ ", ready[0]), ready
 
 
+def test_the_hindsight_moves_t_inf_with_the_room_as_the_sensor_follows_it():
+    """A room falling 0.4 °C over the five hours after a stop: a sensor of one 60-min mode follows
+    it 0.08 °C behind, so the room's whole move would call a stop at the exact T∞ 0.08 °C off."""
+    from mtident.thermal.hindsight import check_decision
+    from mtident.thermal.modal_search import room_lag
+
+    t = np.arange(0.0, 601.0)
+    room = np.where(t < 300.0, 20.0, 20.0 - 0.4 * (t - 300.0) / 300.0)
+    sensor = room_lag(room, t, np.array([60.0]))[0] + 8.0 * (1.0 - np.exp(-t / 60.0))
+    values = sensor[:, None]
+    followed = check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.2, room, [((60.0, -8.0),)])
+    whole = check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.2, room)
+    assert abs(followed.error_C[0]) < 0.005 and whole.error_C[0] < -0.07
+    assert followed.room_shift_C == whole.room_shift_C and abs(whole.room_shift_C + 0.4) < 0.01
+    assert followed.to_dict()["sensors"][0]["room_shift_C"] == pytest.approx(-0.4 + 0.08, abs=0.01)
+
+
 def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsys):
     from mtident.cli_watch import _print_hindsight
     from mtident.thermal.hindsight import Hindsight
@@ -645,7 +662,7 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     hindsight = Hindsight(("T1",), 233.0, 400.0, np.array([30.50]), np.array([30.40]), np.array([258.0]), 0.05, 0.2)
     _print_hindsight(hindsight)
     text = " ".join(capsys.readouterr().out.split())
-    assert "the room moved +0.05 °C after the stop, added to T∞ at the stop" in text
-    assert "T∞ at stop +0.05 (°C)" in text
+    assert "the room moved +0.05 °C after the stop, added to T∞ at the stop as each sensor follows it" in text
+    assert "T∞ at stop + room (°C)" in text
     # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
     assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +258 │", text), text

@@ -769,10 +769,14 @@ def _plot(session: WatchSession, plot_path: str) -> None:
 def _print_hindsight(hindsight: Hindsight) -> None:
     """The table of the decision against the rest of the log, and what it comes to."""
     shift = hindsight.room_shift_C
-    room = f"; the room moved {shift:+.2f} °C after the stop, added to T∞ at the stop" if shift else ""
+    room = (
+        f"; the room moved {shift:+.2f} °C after the stop, added to T∞ at the stop as each sensor follows it"
+        if shift
+        else ""
+    )
     table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}")
     # with the room's move added in the column itself, the difference is the next two columns'
-    stop_column = f"T∞ at stop {shift:+.2f} (°C)" if shift else "T∞ at stop (°C)"
+    stop_column = "T∞ at stop + room (°C)" if shift else "T∞ at stop (°C)"
     for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "95 % rise at (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     settled = hindsight.checked
@@ -783,7 +787,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             shown = f"[yellow]{shown}[/]"
         table.add_row(
             name,
-            _fmt(float(hindsight.steady_state_C[i]) + shift),
+            _fmt(float(hindsight.steady_state_C[i] + hindsight.shift_C[i])),
             _fmt(float(hindsight.settled_C[i])),
             shown,
             _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0),

@@ -6,13 +6,18 @@ T∞ at the stop against the temperature the log settled to
 (:func:`~mtident.thermal.identify.measured_equilibrium`: the median of its last
 10 samples, where its last quarter rose by less than 5 % of the whole rise).
 With a room sensor the room may have moved between the stop and the log's end;
-T∞ follows the room one to one, so the room's move is added to the T∞ of the
-stop (the sensors lag a room move by their time constant, so a move in the last
-hour is only partly in the log's end).
+T∞ follows the room one to one, but a sensor follows a move of the room through
+its modes, so a move in the last hours is only partly in the log's end: the move
+added to each sensor's T∞ at the stop is the room lagged by each of its modes at
+the stop, weighted by their shares of its rise (the room's own move where the
+modes are not known). Taken whole, a room that falls slowly after the stop
+makes a right stop look wrong by the part of the fall the sensor has not yet
+followed.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,6 +25,7 @@ import numpy as np
 from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.thermal.identify import measured_equilibrium
+from mtident.thermal.modal_search import room_lag
 
 __all__ = ["Hindsight", "check_decision"]
 
@@ -48,9 +54,12 @@ class Hindsight:
     measured_equilibrium_time_min : ndarray, shape (S,)
         When the log reached 95 % of its total rise (min), NaN where it did not settle.
     room_shift_C : float
-        The room's move from the stop to the log's end (°C), added to T∞; 0 without a room sensor.
+        The room's move from the stop to the log's end (°C); 0 without a room sensor.
     tolerance_C : float
         The decision's tolerance (°C).
+    sensor_shift_C : ndarray, shape (S,), optional
+        The room's move as each sensor follows it by the log's end (°C), added to its T∞
+        (default: the room's move for every sensor).
     """
 
     sensors: tuple[str, ...]
@@ -61,6 +70,19 @@ class Hindsight:
     measured_equilibrium_time_min: FloatArray
     room_shift_C: float
     tolerance_C: float
+    sensor_shift_C: FloatArray | None = None
+
+    @property
+    def shift_C(self) -> FloatArray:
+        """The room's move added to each sensor's T∞ (°C).
+
+        Returns
+        -------
+        ndarray, shape (S,)
+        """
+        if self.sensor_shift_C is not None:
+            return np.asarray(self.sensor_shift_C, dtype=float)
+        return np.full(len(self.sensors), self.room_shift_C)
 
     def __repr__(self) -> str:
         # a notebook shows the verdict, not the arrays
@@ -87,14 +109,14 @@ class Hindsight:
 
     @property
     def error_C(self) -> FloatArray:
-        """T∞ at the stop, moved with the room, minus where the log settled.
+        """T∞ at the stop, moved with the room as the sensor follows it, minus where the log settled.
 
         Returns
         -------
         ndarray, shape (S,)
             The error (°C), NaN where T∞ or the settled temperature is NaN.
         """
-        return self.steady_state_C + self.room_shift_C - self.settled_C
+        return self.steady_state_C + self.shift_C - self.settled_C
 
     @property
     def checked(self) -> np.ndarray:
@@ -123,9 +145,11 @@ class Hindsight:
         Returns
         -------
         dict
-            The stop, the log's end, the room's shift and one entry per sensor: its T∞, where it
-            settled, the error, the measured equilibrium time and whether it was within the tolerance.
+            The stop, the log's end, the room's shift and one entry per sensor: its T∞, the room's
+            shift as it follows it, where it settled, the error, the measured equilibrium time and
+            whether it was within the tolerance.
         """
+        shift = self.shift_C
 
         return {
             "stop_time_min": self.stop_time_min,
@@ -135,6 +159,7 @@ class Hindsight:
                 {
                     "sensor": name,
                     "steady_state_C": finite_or_none(self.steady_state_C[i]),
+                    "room_shift_C": finite_or_none(shift[i]),
                     "settled_C": finite_or_none(self.settled_C[i]),
                     "error_C": finite_or_none(self.error_C[i]),
                     "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[i]),
@@ -153,6 +178,7 @@ def check_decision(
     values: FloatArray,
     tolerance_C: float,
     room_C: FloatArray | None = None,
+    modes: Sequence[tuple[tuple[float, float], ...]] | None = None,
 ) -> Hindsight:
     """Compare T∞ at the stop (one per sensor, NaN for one left out) with where the whole log settled.
 
@@ -173,6 +199,9 @@ def check_decision(
         The room sensor's readings (°C): its move from the stop (the median within 5 min of it)
         to the log's end (the median of its last 10 valid readings) is added to T∞. No shift
         where it has fewer than 10 valid readings or none within 5 min of the stop.
+    modes : sequence of tuples of (time constant, amplitude), optional
+        Each sensor's modes at the stop: the room's move reaches it through them, weighted by
+        their shares of its rise (without them, or for a sensor with none, whole).
 
     Returns
     -------
@@ -185,6 +214,9 @@ def check_decision(
         near = valid & (np.abs(time_min - stop_time_min) <= _ROOM_AROUND_STOP_MIN)
         if near.any() and valid.sum() >= 10:
             shift = float(np.median(room_C[valid][-10:]) - np.median(room_C[near]))
+    followed = None
+    if shift and modes is not None and room_C is not None:
+        followed = np.array([_followed_shift(time_min, room_C, stop_time_min, m, shift) for m in modes])
     return Hindsight(
         sensors=tuple(sensors),
         stop_time_min=float(stop_time_min),
@@ -194,4 +226,21 @@ def check_decision(
         measured_equilibrium_time_min=equilibrium,
         room_shift_C=shift,
         tolerance_C=float(tolerance_C),
+        sensor_shift_C=followed,
     )
+
+
+def _followed_shift(
+    time_min: FloatArray, room_C: FloatArray, stop_time_min: float, modes: tuple[tuple[float, float], ...], whole: float
+) -> float:
+    """The room's move from the stop to the log's end as a sensor of these modes follows it: the
+    room lagged by each mode, weighted by the mode's share of the rise (``whole`` without modes)."""
+    weights = np.abs(np.array([a for _, a in modes], dtype=float))
+    if not len(modes) or not weights.sum() > 0:
+        return whole
+    valid = np.isfinite(room_C)
+    times, first = np.unique(time_min[valid], return_index=True)
+    lagged = room_lag(room_C[valid][first], times, np.array([tau for tau, _ in modes], dtype=float))
+    at_stop = lagged[:, max(int(np.searchsorted(times, stop_time_min, side="right")) - 1, 0)]
+    at_end = np.median(lagged[:, -10:], axis=1)
+    return float(weights @ (at_end - at_stop) / weights.sum())

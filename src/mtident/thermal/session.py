@@ -370,7 +370,14 @@ class WatchSession:
             return None
         steady = np.array([c.steady_C for c in state.checks])
         return check_decision(
-            state.sensors, steady, state.stop_time_min, time_min, values, self.settings.tolerance_C, room_C
+            state.sensors,
+            steady,
+            state.stop_time_min,
+            time_min,
+            values,
+            self.settings.tolerance_C,
+            room_C,
+            [c.modes for c in state.checks],
         )
 
     def whole_log(self) -> tuple[FloatArray, FloatArray, FloatArray | None]:
