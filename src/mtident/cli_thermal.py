@@ -383,6 +383,10 @@ def identify_command(
     10-sensor warm-up shipped with mtident (@sample-room: the same with a room
     sensor column "room", for --ambient room).
 
+    The table's RMSE is the predicted curve's against every reading of the
+    log (Xia et al. 2014, Eq. 33): where the log runs past the window, it
+    measures the prediction.
+
     \f
 
     Parameters
