@@ -793,8 +793,21 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0),
         )
     OptionConsole(width=max(OptionConsole().width, 100)).print(table)
+    reached = hindsight.measured_equilibrium_time_min[np.isfinite(hindsight.measured_equilibrium_time_min)]
+    timing = ""
+    if len(reached):
+        saved = float(reached.max()) - hindsight.stop_time_min
+        timing = f"the log reached 95 % of its rise by t = {minutes(float(reached.max()))}, " + (
+            f"{minutes(saved)} after the stop"
+            if saved > 0
+            else f"{minutes(-saved)} before the stop: the rule saved no time on this log"
+        )
     if not settled.any():
-        OptionConsole().print("The log ends before its sensors settled: nothing to check the decision against.")
+        OptionConsole().print(
+            f"The log ends before its sensors settled to within half the tolerance ({hindsight.tolerance_C / 2:g} °C "
+            "over its last quarter): nothing to check the decision against" + (f"; {timing}." if timing else "."),
+            highlight=False,
+        )
         return
     beyond = [
         name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok
@@ -813,15 +826,10 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             "of T∞ at the stop"
         )
     )
-    reached = float(np.nanmax(hindsight.measured_equilibrium_time_min[settled]))
-    saved = reached - hindsight.stop_time_min
-    timing = f"the log reached 95 % of its rise by t = {minutes(reached)}, " + (
-        f"{minutes(saved)} after the stop"
-        if saved > 0
-        else f"{minutes(-saved)} before the stop: the rule saved no time on this log"
-    )
     not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
-    OptionConsole().print(f"{verdict[0].upper()}{verdict[1:]}; {timing}{not_settled}.", highlight=False)
+    OptionConsole().print(
+        f"{verdict[0].upper()}{verdict[1:]}" + (f"; {timing}" if timing else "") + f"{not_settled}.", highlight=False
+    )
 
 
 class _Nothing:

@@ -4,12 +4,14 @@ A replay of a log that ran on past the stop (an old warm-up that ran to
 equilibrium) can check the rule on the engineer's own machine: each sensor's
 T∞ at the stop against the temperature the log settled to
 (:func:`~mtident.thermal.identify.measured_equilibrium`: the median of its last
-10 samples, where its last quarter rose by less than 5 % of the whole rise).
+10 samples, where its last quarter rose by less than 5 % of the whole rise and
+by less than half the tolerance).
 With a room sensor the room may have moved between the stop and the log's end;
 T∞ follows the room one to one, but a sensor follows a move of the room through
 its modes, so a move in the last hours is only partly in the log's end: the move
-added to each sensor's T∞ at the stop is the room lagged by each of its modes at
-the stop, weighted by their shares of its rise (the room's own move where the
+added to each sensor's T∞ at the stop is from the room's level at the stop (which
+T∞ holds) to the room lagged by each of the sensor's modes at the stop, weighted
+by their shares of its rise, at the log's end (the room's own move where the
 modes are not known). Taken whole, a room that falls slowly after the stop
 makes a right stop look wrong by the part of the fall the sensor has not yet
 followed.
@@ -50,9 +52,11 @@ class Hindsight:
         T∞ at the stop (°C), NaN for a sensor left out of the decision.
     settled_C : ndarray, shape (S,)
         Where the log settled (°C, :func:`~mtident.thermal.identify.measured_equilibrium`), NaN
-        where it was not at equilibrium by its end.
+        where it was not at equilibrium by its end, or its last quarter still moved by half the
+        tolerance or more.
     measured_equilibrium_time_min : ndarray, shape (S,)
-        When the log reached 95 % of its total rise (min), NaN where it did not settle.
+        When the log reached 95 % of its total rise (min), NaN where its last quarter rose by 5 %
+        of the rise or more.
     room_shift_C : float
         The room's move from the stop to the log's end (°C); 0 without a room sensor.
     tolerance_C : float
@@ -207,16 +211,19 @@ def check_decision(
     -------
     Hindsight
     """
-    settled, equilibrium = measured_equilibrium(time_min, values)
-    shift = 0.0
+    # a sensor still moving by half the tolerance is not settled to the precision the check needs,
+    # though when it made 95 % of its rise is still read
+    settled, _ = measured_equilibrium(time_min, values, tolerance_C / 2.0)
+    _, equilibrium = measured_equilibrium(time_min, values)
+    shift, followed = 0.0, None
     if room_C is not None:
         valid = np.isfinite(room_C)
         near = valid & (np.abs(time_min - stop_time_min) <= _ROOM_AROUND_STOP_MIN)
         if near.any() and valid.sum() >= 10:
-            shift = float(np.median(room_C[valid][-10:]) - np.median(room_C[near]))
-    followed = None
-    if shift and modes is not None and room_C is not None:
-        followed = np.array([_followed_shift(time_min, room_C, stop_time_min, m, shift) for m in modes])
+            at_stop = float(np.median(room_C[near]))
+            shift = float(np.median(room_C[valid][-10:])) - at_stop
+            if modes is not None:
+                followed = np.array([_followed_shift(time_min, room_C, at_stop, m, shift) for m in modes])
     return Hindsight(
         sensors=tuple(sensors),
         stop_time_min=float(stop_time_min),
@@ -231,16 +238,19 @@ def check_decision(
 
 
 def _followed_shift(
-    time_min: FloatArray, room_C: FloatArray, stop_time_min: float, modes: tuple[tuple[float, float], ...], whole: float
+    time_min: FloatArray,
+    room_C: FloatArray,
+    room_at_stop_C: float,
+    modes: tuple[tuple[float, float], ...],
+    whole: float,
 ) -> float:
-    """The room's move from the stop to the log's end as a sensor of these modes follows it: the
-    room lagged by each mode, weighted by the mode's share of the rise (``whole`` without modes)."""
+    """The room's move from its level at the stop (which T∞ at the stop already holds) to where a
+    sensor of these modes has followed it by the log's end: the room lagged by each mode,
+    weighted by the mode's share of the rise (``whole`` without modes)."""
     weights = np.abs(np.array([a for _, a in modes], dtype=float))
     if not len(modes) or not weights.sum() > 0:
         return whole
     valid = np.isfinite(room_C)
     times, first = np.unique(time_min[valid], return_index=True)
     lagged = room_lag(room_C[valid][first], times, np.array([tau for tau, _ in modes], dtype=float))
-    at_stop = lagged[:, max(int(np.searchsorted(times, stop_time_min, side="right")) - 1, 0)]
-    at_end = np.median(lagged[:, -10:], axis=1)
-    return float(weights @ (at_end - at_stop) / weights.sum())
+    return float(weights @ np.median(lagged[:, -10:], axis=1) / weights.sum()) - room_at_stop_C

@@ -6,6 +6,7 @@ of the record (or a horizon). All sensors of a log are filtered as one batch.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -384,12 +385,14 @@ def model_check(
     return np.array(chi2), np.array(corr), np.array(fits)
 
 
-def measured_equilibrium(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray]:
+def measured_equilibrium(
+    time_min: FloatArray, values: FloatArray, max_late_move_C: float = math.inf
+) -> tuple[FloatArray, FloatArray]:
     """Final temperature and 95 %-rise time read off a log that ran to equilibrium.
 
     The final temperature is the median of the last 10 samples; the log counts as
     having reached equilibrium when its last quarter rose by less than 5 % of the
-    total rise. Otherwise NaN.
+    total rise (and less than ``max_late_move_C``). Otherwise NaN.
 
     Parameters
     ----------
@@ -397,6 +400,9 @@ def measured_equilibrium(time_min: FloatArray, values: FloatArray) -> tuple[Floa
         Sample times (min).
     values : ndarray, shape (N, S)
         Readings (°C, NaN: missing).
+    max_late_move_C : float
+        The most the last quarter may move (°C), where a comparison needs the final
+        temperature to that precision.
 
     Returns
     -------
@@ -421,7 +427,7 @@ def measured_equilibrium(time_min: FloatArray, values: FloatArray) -> tuple[Floa
         quarter = max(n // 4, 5)
         late_rise = float(np.median(y[-5:]) - np.median(y[-quarter : -quarter + 5]))
         rise = final - start
-        if rise == 0 or abs(late_rise) > 0.05 * abs(rise):
+        if rise == 0 or abs(late_rise) > min(0.05 * abs(rise), max_late_move_C):
             finals.append(np.nan)
             times.append(np.nan)
             continue
