@@ -21,8 +21,15 @@ __all__ = [
     "on_display_steps",
     "quick_estimate",
     "reading_range",
+    "smoothed_room",
     "step_from_grid",
 ]
+
+# A room sensor's readings are averaged over this window (min) before they drive the modes: the
+# room moves over minutes to hours, and its sensor's own noise, fed raw as an input of every mode,
+# is fitted as if the machine followed it (a noisy room read every second collapsed a test's
+# interval around a wrong T∞).
+ROOM_SMOOTHING_MIN = 1.0
 
 # Display steps a logger rounds to, coarsest first: decimal ones, and the binary ones of digital
 # sensors (a DS18B20 reads in steps of 1/16 °C at 12 bits, 1/2 °C at 9 bits).
@@ -253,3 +260,33 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
         steady = seg_y[0] - amplitude * m[0]
     steady = np.where(np.isfinite(steady), steady, seg_y[2])
     return start, rate, steady
+
+
+def smoothed_room(time_min: FloatArray, room_C: FloatArray, window_min: float = ROOM_SMOOTHING_MIN) -> FloatArray:
+    """A room sensor's readings averaged over a centred window: its noise out, its drift kept.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min), increasing.
+    room_C : ndarray, shape (N,)
+        The room's readings (°C, NaN: missing).
+    window_min : float
+        The window's width (min); readings further apart than this are left as they are.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The mean of the valid readings within ``window_min / 2`` of each time (NaN where the
+        reading itself is missing).
+    """
+    t = np.asarray(time_min, dtype=float)
+    room = np.asarray(room_C, dtype=float)
+    valid = np.isfinite(room)
+    sums = np.concatenate([[0.0], np.cumsum(np.where(valid, room, 0.0))])
+    counts = np.concatenate([[0], np.cumsum(valid)])
+    lo = np.searchsorted(t, t - window_min / 2.0, side="left")
+    hi = np.searchsorted(t, t + window_min / 2.0, side="right")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = (sums[hi] - sums[lo]) / (counts[hi] - counts[lo])
+    return np.where(valid, mean, np.nan)

@@ -22,6 +22,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
+from mtident.thermal.readings import smoothed_room
 from mtident.thermal.robust import (
     DEFAULT_MAX_MODES,
     DISAGREEMENT_LEVEL,
@@ -240,7 +241,8 @@ def _learn_sensor(
         if fit is None or len(fit.modes) < count:
             break
         first = int(np.searchsorted(time_min, fit.origin_min))
-        binned = bin_samples(time_min[first:], values[first:], None if room_C is None else room_C[first:])
+        room = None if room_C is None else smoothed_room(time_min, room_C)[first:]
+        binned = bin_samples(time_min[first:], values[first:], room)
         estimates[count], sds[count] = estimate, np.asarray(log_time_constant_sd(binned, fit), dtype=float)
     if not estimates:
         return None

@@ -27,7 +27,7 @@ from mtident.thermal.modes import (
     bin_samples,
     fit_steady_state,
 )
-from mtident.thermal.readings import display_resolution, noise_sigma
+from mtident.thermal.readings import display_resolution, noise_sigma, smoothed_room
 
 if TYPE_CHECKING:
     from mtident.thermal.reference import MachineReference
@@ -387,7 +387,8 @@ def estimate_sensor(
         )
     lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
     onset = lead if lead < len(t) else 0
-    binned = bin_samples(t[onset:], y[onset:], None if room_C is None else np.asarray(room_C, dtype=float)[onset:])
+    room = None if room_C is None else smoothed_room(t, np.asarray(room_C, dtype=float))[onset:]
+    binned = bin_samples(t[onset:], y[onset:], room)
     if len(binned) < MIN_BINS:
         return _without_fit(
             sensor,
