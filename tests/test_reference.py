@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -194,6 +195,32 @@ def test_a_sensor_the_reference_does_not_know_is_said_in_identify_and_watch(tmp_
     log = tmp_path / "log.csv"
     log.write_text("time_min,Spindle T1\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
     events = WatchSession(log, MonitorSettings(reference=reference), persist=False).poll()
+    assert [e.kind for e in events if e.text.startswith(said)] == ["warning"]
+
+
+def test_a_reference_learnt_with_a_room_sensor_used_without_one_is_said(tmp_path):
+    """A new user learnt the reference with the room's column and watched the test without it:
+    nothing said that the answer then rests on the room's stated wander."""
+    from mtident.thermal.monitor import MonitorSettings
+    from mtident.thermal.reference import room_unlike
+    from mtident.thermal.robust_identify import identify_robust
+    from mtident.thermal.session import WatchSession
+
+    t = np.arange(0.0, 61.0)
+    y = np.round(two_mode(t) + np.random.default_rng(3).normal(0.0, 0.01, t.size), 2)
+    modes = {"T1": SensorModes((60.0,), (0.1,))}
+    with_room = MachineReference("run.csv", "2026-11-25", 300.0, "a room sensor, an input of every mode", modes)
+    said = "the reference (run.csv) was learnt with a room sensor, and this test has none"
+    assert room_unlike(with_room, with_room=True) is None
+    assert room_unlike(replace(with_room, room="not measured"), with_room=False) is None
+    result = identify_robust(make_log(t, {"T1": y}), 60.0, reference=with_room)
+    assert sum(note.startswith(said) for note in result.notes) == 1
+    room = np.full(t.size, 20.0)
+    quiet = identify_robust(make_log(t, {"T1": y}), 60.0, room_C=room, reference=with_room, room_sensor="room")
+    assert not any(note.startswith(said) for note in quiet.notes)
+    log = tmp_path / "log.csv"
+    log.write_text("time_min,T1\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
+    events = WatchSession(log, MonitorSettings(reference=with_room), persist=False).poll()
     assert [e.kind for e in events if e.text.startswith(said)] == ["warning"]
 
 

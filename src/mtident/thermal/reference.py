@@ -33,13 +33,21 @@ from mtident.thermal.robust import (
     estimate_sensor,
 )
 
-__all__ = ["MachineReference", "learn_reference", "save_reference", "load_reference", "sensors_unknown"]
+__all__ = [
+    "MachineReference",
+    "learn_reference",
+    "load_reference",
+    "room_unlike",
+    "save_reference",
+    "sensors_unknown",
+]
 
 # A reference's box is three standard deviations of its log time constant either side (at least
 # ±10 %, at most a factor of 100); a mode counts as pinned down within 0.15 (about ±15 %) at one.
 BOX_SDS = 3.0
 MAX_BOX_REACH = math.log(100.0)
 MAX_MODE_SD = 0.15
+_ROOM_MEASURED = "a room sensor, an input of every mode"
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
 # the usual tolerance of a later test.
 PINNED_HALF_WIDTH_C = 0.1
@@ -137,6 +145,29 @@ def sensors_unknown(reference: MachineReference, sensors: tuple[str, ...]) -> st
     )
 
 
+def room_unlike(reference: MachineReference, with_room: bool) -> str | None:
+    """A note where the reference was learnt with a room sensor and this test has none, or None:
+    its modes are the machine's either way, but the test's answer then rests on the room's stated
+    wander, and a room that drifts may take it off the reference.
+
+    Parameters
+    ----------
+    reference : MachineReference
+    with_room : bool
+        Whether this test has a room sensor.
+
+    Returns
+    -------
+    str or None
+    """
+    if with_room or reference.room != _ROOM_MEASURED:
+        return None
+    return (
+        f"the reference ({reference.source}) was learnt with a room sensor, and this test has none: its answer "
+        "assumes the room's stated wander; the room's column, where it was logged, keeps a drifting room out"
+    )
+
+
 def learn_reference(
     log: TemperatureLog, room_C: FloatArray | None = None, settings: RobustSettings | None = None
 ) -> tuple[MachineReference, list[str]]:
@@ -186,7 +217,7 @@ def learn_reference(
                 f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the "
                 "machine may have a slower one (raise `max_time_constant_min`)"
             )
-    room = "a room sensor, an input of every mode" if room_C is not None else "not measured"
+    room = _ROOM_MEASURED if room_C is not None else "not measured"
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors
     ), warnings

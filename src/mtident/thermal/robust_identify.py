@@ -19,7 +19,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import measured_equilibrium, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
-from mtident.thermal.reference import MachineReference, sensors_unknown
+from mtident.thermal.reference import MachineReference, room_unlike, sensors_unknown
 from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, describe_assumptions, estimate_sensor
 
 if TYPE_CHECKING:
@@ -271,7 +271,11 @@ def identify_robust(
         )
         for s, name in enumerate(log.sensors)
     )
-    unknown = None if reference is None else sensors_unknown(reference, log.sensors)
+    unknown = (
+        []
+        if reference is None
+        else [sensors_unknown(reference, log.sensors), room_unlike(reference, room_C is not None)]
+    )
     times = _prediction_times(t, n, estimates, horizon_min)
     room_all = None if room_C is None else np.concatenate([room_C, np.full(len(times) - len(t), np.nan)])[: len(times)]
     curve, low, high = (np.full((len(times), len(estimates)), np.nan) for _ in range(3))
@@ -296,7 +300,7 @@ def identify_robust(
         rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
-        notes=(*log.notes, *([unknown] if unknown else []), *(w for e in estimates for w in e.warnings)),
+        notes=(*log.notes, *(note for note in unknown if note), *(w for e in estimates for w in e.warnings)),
     )
 
 

@@ -35,7 +35,7 @@ from mtident.thermal.monitor import (
     new_state,
     result,
 )
-from mtident.thermal.reference import sensors_unknown
+from mtident.thermal.reference import room_unlike, sensors_unknown
 
 __all__ = ["SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
 
@@ -281,9 +281,12 @@ class WatchSession:
         if self.state is None and self.follower.sensors:
             self.state = self._new_state(self.follower.sensors)
             reference = self.settings.reference
-            unknown = None if reference is None else sensors_unknown(reference, self.sensors)
-            if unknown:
-                events.append(Event("warning", np.nan, unknown))
+            if reference is not None:
+                notes = (
+                    sensors_unknown(reference, self.sensors),
+                    room_unlike(reference, bool(self.settings.room_sensor)),
+                )
+                events.extend(Event("warning", np.nan, note) for note in notes if note)
         if self.state is None or not len(rows.time_min):
             return events
         values, room = (
