@@ -535,7 +535,9 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
             time.sleep(0.05)
         with open(live, "a") as out_file:
             out_file.write("".join(lines[20:40]))
-        time.sleep(1.0)
+        # killed once it has saved some of the new rows (the state file is replaced whole)
+        while time.monotonic() < deadline and load_dataclass(state, SavedWatch).monitor.readings.latest_min < 20:
+            time.sleep(0.05)
     finally:
         proc.send_signal(signal.SIGKILL)
         proc.wait()
