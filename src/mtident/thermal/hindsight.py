@@ -55,8 +55,7 @@ class Hindsight:
         where it was not at equilibrium by its end, or its last quarter still moved by half the
         tolerance or more.
     measured_equilibrium_time_min : ndarray, shape (S,)
-        When the log reached 95 % of its total rise (min), NaN where its last quarter rose by 5 %
-        of the rise or more.
+        When the log reached 95 % of its total rise (min), NaN where it did not settle.
     room_shift_C : float
         The room's move from the stop to the log's end (°C); 0 without a room sensor.
     tolerance_C : float
@@ -211,10 +210,8 @@ def check_decision(
     -------
     Hindsight
     """
-    # a sensor still moving by half the tolerance is not settled to the precision the check needs,
-    # though when it made 95 % of its rise is still read
-    settled, _ = measured_equilibrium(time_min, values, tolerance_C / 2.0)
-    _, equilibrium = measured_equilibrium(time_min, values)
+    # a sensor still moving by half the tolerance is not settled to the precision the check needs
+    settled, equilibrium = measured_equilibrium(time_min, values, tolerance_C / 2.0)
     shift, followed = 0.0, None
     if room_C is not None:
         valid = np.isfinite(room_C)

@@ -392,7 +392,9 @@ def measured_equilibrium(
 
     The final temperature is the median of the last 10 samples; the log counts as
     having reached equilibrium when its last quarter rose by less than 5 % of the
-    total rise (and less than ``max_late_move_C``). Otherwise NaN.
+    total rise and less than ``max_late_move_C``. Otherwise NaN. A log still moving
+    within those bounds gives a final temperature, and a 95 %-rise time, short of
+    where it settles: the papers' "measured" values, read off the end of a test.
 
     Parameters
     ----------
@@ -401,8 +403,7 @@ def measured_equilibrium(
     values : ndarray, shape (N, S)
         Readings (°C, NaN: missing).
     max_late_move_C : float
-        The most the last quarter may move (°C), where a comparison needs the final
-        temperature to that precision.
+        The most the last quarter may move (°C).
 
     Returns
     -------
