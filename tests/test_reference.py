@@ -274,3 +274,21 @@ def test_a_room_is_averaged_over_a_minute_keeping_its_drift_and_its_gaps():
     assert np.nanstd(smooth - drift) < 0.04 / 5.0 and abs(np.nanmean(smooth - drift)) < 0.002
     coarse = np.arange(0.0, 60.0, 2.0)  # readings further apart than the window are left alone
     np.testing.assert_allclose(smoothed_room(coarse, np.sin(coarse)), np.sin(coarse), rtol=0, atol=1e-12)
+
+
+def test_identify_says_each_sensors_reference(tmp_path):
+    """The table's assumptions gave the first sensor's reference as if it were every sensor's."""
+    t = np.arange(0.0, 61.0)
+    rng = np.random.default_rng(4)
+    columns = {name: np.round(two_mode(t) + rng.normal(0.0, 0.01, t.size), 2) for name in ("A", "B")}
+    log = tmp_path / "log.csv"
+    log.write_text(
+        "time_min,A,B\n" + "".join(f"{a:g},{b:.2f},{c:.2f}\n" for a, b, c in zip(t, *columns.values(), strict=True))
+    )
+    modes = {"A": SensorModes((60.0,), (0.1,)), "B": SensorModes((45.0, 6.0), (0.1, 0.1))}
+    save_reference(MachineReference("run.csv", "2026-11-25", 300.0, "not measured", modes), tmp_path / "m.toml")
+    out = mtident("thermal", "identify", str(log), "--window", "60", "--reference", str(tmp_path / "m.toml"))
+    assert out.returncode == 0, out.stderr
+    text = " ".join(out.stdout.split())
+    assert "reference for A: run.csv (2026-11-25): τ 60 min ±10%" in text
+    assert "reference for B: run.csv (2026-11-25): τ 45 min ±10%, 6 min ±10%" in text

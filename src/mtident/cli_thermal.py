@@ -524,9 +524,14 @@ def _identify_table(
     if method == ROBUST_METHOD:
         console.print(
             f"Assumes: {assumed['model']}, time constants up to {assumed['max_time_constant_min']:g} min; room "
-            f"{assumed['room']}" + (f"; reference {assumed['reference']}" if assumed["reference"] else "") + ".",
+            f"{assumed['room']}.",
             highlight=False,
         )
+        for d in summaries:
+            said = d["assumptions"]
+            assert isinstance(said, dict)
+            if said["reference"]:
+                console.print(f"  reference for {d['sensor']}: {said['reference']}", highlight=False)
     else:
         console.print(f"Assumes: {assumed['model']}.", highlight=False)
 

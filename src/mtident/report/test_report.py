@@ -191,8 +191,10 @@ def build_report(session: WatchSession, progress: Callable[[WatchSession], None]
     )
     said = assumptions(settings, state.sensors[0])
     assumed = f"{said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
-    if said.reference:
-        assumed += f"; reference {said.reference}"
+    for sensor in state.sensors:
+        reference = assumptions(settings, sensor).reference
+        if reference:
+            assumed += f"; reference for {sensor}: {reference}"
     figure = plot_monitor(state, settings)
     assert isinstance(figure, Figure)
     if state.stopped:
