@@ -677,3 +677,19 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     assert "T∞ at stop + room (°C)" in text
     # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
     assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +258 │", text), text
+
+
+def test_an_interval_without_bounds_is_said_so_not_as_infinities():
+    """A new user's events read "interval -inf to inf °C"."""
+    from dataclasses import replace as changed
+
+    from mtident.thermal.monitor import SensorCheck, _check_events, _reason
+    from mtident.thermal.robust import estimate_sensor
+
+    estimate = estimate_sensor("S", np.arange(10.0), np.zeros(10))
+    before = SensorCheck("S")
+    after = changed(before, status="narrowing", steady_C=30.0, low_C=-np.inf, high_C=np.inf, ends="a slow mode")
+    (event,) = _check_events(before, after, estimate, set(), 10.0)
+    assert event.text == "S: narrowing, T∞ 30.00 °C, interval not yet bounded"
+    reason = _reason([after], MonitorSettings())
+    assert "99% interval not yet bounded, wider than ±0.2 °C" in reason and "inf" not in reason

@@ -660,9 +660,10 @@ def _check_events(
             events.append(Event("warning", now, text, after.sensor))
     if after.status != before.status:
         kind = "ready" if after.may_stop else "not ready" if before.may_stop else "check"
+        bounded = math.isfinite(after.low_C) and math.isfinite(after.high_C)
         text = (
-            f"{after.sensor}: {after.status}, T∞ {after.steady_C:.2f} °C, interval {after.low_C:.2f} to "
-            f"{after.high_C:.2f} °C"
+            f"{after.sensor}: {after.status}, T∞ {after.steady_C:.2f} °C, "
+            + (f"interval {after.low_C:.2f} to {after.high_C:.2f} °C" if bounded else "interval not yet bounded")
             if math.isfinite(after.steady_C)
             else f"{after.sensor}: {after.status}"
         )
@@ -845,9 +846,14 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
                 "by half a step, which no interval shows; give a tolerance above the step"
             )
         else:
+            bounds = (
+                f"interval {c.low_C:.2f} to {c.high_C:.2f} °C"
+                if math.isfinite(c.low_C) and math.isfinite(c.high_C)
+                else "interval not yet bounded"
+            )
             parts.append(
-                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} interval {c.low_C:.2f} to "
-                f"{c.high_C:.2f} °C, wider than ±{settings.tolerance_C:g} °C ({c.ends})"
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} {bounds}, wider than "
+                f"±{settings.tolerance_C:g} °C ({c.ends})"
             )
     ways = "continue the test" + (
         "" if settings.reference is not None else ", or give a reference run of this machine (mtident thermal learn)"
