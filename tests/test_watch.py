@@ -294,6 +294,19 @@ def test_the_decision_does_not_depend_on_how_the_readings_are_batched(cuts):
 
 
 @pytest.mark.xdist_group("one whole monitor run")
+def test_the_decision_does_not_depend_on_the_last_bits_of_the_times():
+    """The same log's times read from the file and followed live differed by 1e-9 min, and that
+    decided whether the reading a check fell due on was due: a new user's replay and API run
+    stopped half a minute apart."""
+    whole = monitored_whole()
+    jitter = np.where(np.arange(BATCHED_T.size) % 2, 3e-9, -3e-9)
+    state, _ = monitor_step(new_state(["S"]), BATCHED_T + jitter, BATCHED_Y, None, BATCHED_SETTINGS)
+    assert abs(state.stop_time_min - whole.stop_time_min) < 1e-8
+    assert [c.status for c in state.checks] == [c.status for c in whole.checks]
+    assert abs(state.checks[0].checked_min - whole.checks[0].checked_min) < 1e-8
+
+
+@pytest.mark.xdist_group("one whole monitor run")
 def test_the_state_saved_and_loaded_decides_alike(tmp_path):
     t, y = BATCHED_T, BATCHED_Y
     options = BATCHED_SETTINGS

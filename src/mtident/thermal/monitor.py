@@ -54,6 +54,9 @@ __all__ = [
     "sensor_estimate",
 ]
 
+# a check falls due this little before its time (min): 60 µs, far below any logging interval
+_DUE_SLACK_MIN = 1e-6
+
 # the interval's level for the report and for the decision
 REPORT_LEVEL = 0.95
 
@@ -637,15 +640,20 @@ def _next_check(
 ) -> float:
     """When to check the sensor again: after the next reading while it confirms a first pass; else
     after a share of the time since its warm-up began, which grows with how far its interval is
-    from the tolerance (a sensor that may stop, waiting for the others, at the shortest share)."""
+    from the tolerance (a sensor that may stop, waiting for the others, at the shortest share).
+    A reading within ``_DUE_SLACK_MIN`` before that counts as at it: the next reading lies one
+    step on, and the same log's times read from a file and followed live differ in their last
+    bits, which decided whether that reading was due."""
     step = sampling_interval_min(readings.time_min)
     if estimate.fit is None or 0 < passes < settings.consecutive_checks:
-        return now + step
-    if passes:
-        return now + max(step, settings.check_spacing * (now - estimate.onset_min))
-    ratio = estimate.half_width(settings.decision_level) / settings.tolerance_C
-    factor = 1.0 if ratio <= 1.5 else 2.0 if ratio <= 5.0 else 4.0
-    return now + max(step, settings.check_spacing * factor * (now - estimate.onset_min))
+        wait = step
+    elif passes:
+        wait = max(step, settings.check_spacing * (now - estimate.onset_min))
+    else:
+        ratio = estimate.half_width(settings.decision_level) / settings.tolerance_C
+        factor = 1.0 if ratio <= 1.5 else 2.0 if ratio <= 5.0 else 4.0
+        wait = max(step, settings.check_spacing * factor * (now - estimate.onset_min))
+    return now + wait - _DUE_SLACK_MIN
 
 
 def _check_events(
