@@ -292,3 +292,19 @@ def test_identify_says_each_sensors_reference(tmp_path):
     text = " ".join(out.stdout.split())
     assert "reference for A: run.csv (2026-11-25): τ 60 min ±10%" in text
     assert "reference for B: run.csv (2026-11-25): τ 45 min ±10%, 6 min ±10%" in text
+
+
+def test_a_reference_said_to_hold_every_mode_names_a_lag_it_did_not_keep():
+    """A new user's lagged sensor, its reference said to hold every mode, was refused with 'has the
+    machine changed?': with no free mode, a lag the reference run did not keep is enough."""
+    from mtident.thermal.robust import RobustSettings
+
+    t = np.arange(0.0, 120.0, 1.0 / 6.0)
+    y = 30.0 - 8.0 * np.exp(-t / 60.0) + 1.5 * np.exp(-t / 2.0)
+    y = np.round(y + np.random.default_rng(6).normal(0.0, 0.01, t.size), 2)
+    reference = SensorModes((60.0,), (0.1,))
+    said = RobustSettings(free_fast_modes=0)
+    estimate = estimate_sensor("S", t, y, settings=said, reference=reference)
+    assert not estimate.reference_used
+    assert any("a sensor lag or a small fast mode it did not keep is enough" in w for w in estimate.warnings)
+    assert estimate_sensor("S", t, y, reference=reference).reference_used

@@ -477,11 +477,16 @@ def _modal_fit(
         )
         if why is None:
             return fit, True
+        missed = (
+            "or did the reference run miss a mode (with no free mode allowed, a sensor lag or a small fast mode it "
+            "did not keep is enough)?"
+            if settings.free_fast_modes == 0
+            else "or did the reference run miss a mode?"
+        )
         notes.add(
             "reference-disagrees",
             f"this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; {why}): has the "
-            "machine changed, "
-            "or did the reference run miss a mode? The answer does not use the reference",
+            f"machine changed, {missed} The answer does not use the reference",
         )
     fit, unheld = _widened_while_used(fit_of, family, settings, refine_within)
     if unheld:
