@@ -551,3 +551,17 @@ def test_a_window_beyond_the_log_says_that_the_whole_log_was_used(tmp_path):
     assert "the log ends at t = 60 min, before --window 90: identified from all of it" in " ".join(out.stderr.split())
     within = mtident("thermal", "identify", str(log), "--window", "45", "--method", "lsq")
     assert "the log ends" not in within.stderr
+
+
+def test_identify_marks_a_measured_level_the_log_had_not_settled_to(tmp_path):
+    """A new user's log, still rising 0.2 °C in its last hour, showed its last level as the
+    "measured" T∞ beside the prediction, 0.21 °C short of where it settled."""
+    t = np.arange(0.0, 241.0)
+    for tau, settled in ((60.0, False), (20.0, True)):
+        y = 30.0 - 8.0 * np.exp(-t / tau) + np.random.default_rng(7).normal(0.0, 0.01, t.size)
+        log = tmp_path / f"tau{tau:g}.csv"
+        log.write_text("time_min,S\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
+        data = json.loads(mtident("thermal", "identify", str(log), "--window", "60", "--json").stdout)
+        assert data["measured_final_C"] is not None and data["measured_settled"] is settled
+        table = mtident("thermal", "identify", str(log), "--window", "60").stdout
+        assert ("had not settled" in table) is not settled

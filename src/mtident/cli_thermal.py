@@ -507,6 +507,7 @@ def _identify_table(
             "—"
             if d["measured_final_C"] is None
             else f"{d['measured_final_C']:.2f} / {_fmt(d['measured_equilibrium_time_min'], 0)}"
+            + (" *" if d.get("measured_settled") is False else "")
         )
         table.add_row(
             str(d["sensor"]),
@@ -519,6 +520,12 @@ def _identify_table(
         )
     console = OptionConsole(width=max(OptionConsole().width, 100))
     console.print(table)
+    if any(d.get("measured_settled") is False for d in summaries):
+        console.print(
+            "* the log's last quarter still moved 0.1 °C or more: it had not settled, and its last level and "
+            "95 %-rise time are short of where it settles.",
+            highlight=False,
+        )
     assumed = summaries[0]["assumptions"]
     assert isinstance(assumed, dict)
     if method == ROBUST_METHOD:

@@ -57,6 +57,9 @@ class RobustIdentification:
     notes : tuple of str
     method, preset : str
         Always "robust" and "data" (the names :class:`~mtident.thermal.identify.Identification` also has).
+    measured_settled : ndarray of bool, shape (S,)
+        Whether the log's last quarter moved less than ``SETTLED_MOVE_C``: where not, the
+        measured values (the papers' 5 % rule) are short of where the sensor settles.
     """
 
     sensors: tuple[str, ...]
@@ -75,6 +78,7 @@ class RobustIdentification:
     notes: tuple[str, ...]
     method: str = "robust"
     preset: str = "data"
+    measured_settled: np.ndarray | None = None
 
     @property
     def steady_state_C(self) -> FloatArray:
@@ -198,6 +202,9 @@ class RobustIdentification:
             "model": _model_dict(e),
             "measured_final_C": finite_or_none(self.measured_final_C[index]),
             "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[index]),
+            "measured_settled": None
+            if self.measured_settled is None or not np.isfinite(self.measured_final_C[index])
+            else bool(self.measured_settled[index]),
         }
 
 
@@ -215,6 +222,11 @@ def _model_dict(e: SensorEstimate) -> dict[str, object]:
         "reference_used": e.reference_used,
         "spikes_left_out": e.spikes,
     }
+
+
+# a log counts as settled to the tolerance's precision where its last quarter moved less than this
+# (°C), half the default tolerance
+SETTLED_MOVE_C = 0.1
 
 
 def identify_robust(
@@ -286,6 +298,7 @@ def identify_robust(
     measured[: min(len(t), len(times))] = y[: len(times)]
     in_log = times <= t[-1] + 1e-9
     final, equilibrium = measured_equilibrium(t, y)
+    settled = np.isfinite(measured_equilibrium(t, y, SETTLED_MOVE_C)[0])
     return RobustIdentification(
         sensors=log.sensors,
         window_min=float(t[n - 1]),
@@ -300,6 +313,7 @@ def identify_robust(
         rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
+        measured_settled=settled,
         notes=(*log.notes, *(note for note in unknown if note), *(w for e in estimates for w in e.warnings)),
     )
 
