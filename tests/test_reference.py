@@ -202,7 +202,7 @@ def test_a_reference_learnt_with_a_room_sensor_used_without_one_is_said(tmp_path
     """A new user learnt the reference with the room's column and watched the test without it:
     nothing said that the answer then rests on the room's stated wander."""
     from mtident.thermal.monitor import MonitorSettings
-    from mtident.thermal.reference import room_unlike
+    from mtident.thermal.reference import reference_notes
     from mtident.thermal.robust_identify import identify_robust
     from mtident.thermal.session import WatchSession
 
@@ -211,8 +211,8 @@ def test_a_reference_learnt_with_a_room_sensor_used_without_one_is_said(tmp_path
     modes = {"T1": SensorModes((60.0,), (0.1,))}
     with_room = MachineReference("run.csv", "2026-11-25", 300.0, "a room sensor, an input of every mode", modes)
     said = "the reference (run.csv) was learnt with a room sensor, and this test has none"
-    assert room_unlike(with_room, with_room=True) is None
-    assert room_unlike(replace(with_room, room="not measured"), with_room=False) is None
+    assert reference_notes(with_room, ("T1",), with_room=True) == []
+    assert reference_notes(replace(with_room, room="not measured"), ("T1",), with_room=False) == []
     result = identify_robust(make_log(t, {"T1": y}), 60.0, reference=with_room)
     assert sum(note.startswith(said) for note in result.notes) == 1
     room = np.full(t.size, 20.0)

@@ -33,20 +33,14 @@ from mtident.thermal.robust import (
     estimate_sensor,
 )
 
-__all__ = [
-    "MachineReference",
-    "learn_reference",
-    "load_reference",
-    "room_unlike",
-    "save_reference",
-    "sensors_unknown",
-]
+__all__ = ["MachineReference", "learn_reference", "load_reference", "reference_notes", "save_reference"]
 
 # A reference's box is three standard deviations of its log time constant either side (at least
 # ±10 %, at most a factor of 100); a mode counts as pinned down within 0.15 (about ±15 %) at one.
 BOX_SDS = 3.0
 MAX_BOX_REACH = math.log(100.0)
 MAX_MODE_SD = 0.15
+# how a reference learnt with a room sensor says so in its file
 _ROOM_MEASURED = "a room sensor, an input of every mode"
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
 # the usual tolerance of a later test.
@@ -120,52 +114,41 @@ class MachineReference:
         return f"{self.source} ({self.learnt_on}): τ {parts}"
 
 
-def sensors_unknown(reference: MachineReference, sensors: tuple[str, ...]) -> str | None:
-    """A note where the reference has no modes for some of ``sensors``, or None: a column renamed
-    since the reference run (a logger's export adds its channel's label) is answered without its
-    modes, and only its assumptions would say so.
+def reference_notes(reference: MachineReference, sensors: tuple[str, ...], with_room: bool) -> list[str]:
+    """What a test should be told of how its reference fits it: sensors of its log the reference
+    has no modes for (a column renamed since the reference run is answered without its modes, and
+    only its assumptions would say so), and a reference learnt with a room sensor used by a test
+    without one (its modes are the machine's either way, but the answer then rests on the room's
+    stated wander, and a room that drifts may take it off the reference).
 
     Parameters
     ----------
     reference : MachineReference
     sensors : tuple of str
         The log's sensors.
-
-    Returns
-    -------
-    str or None
-    """
-    missing = [name for name in sensors if name not in reference.sensors]
-    if not missing:
-        return None
-    return (
-        f"the reference ({reference.source}) has no modes for {', '.join(repr(n) for n in missing)}: "
-        f"{'they are' if len(missing) > 1 else 'it is'} answered without it (the reference knows "
-        f"{', '.join(repr(n) for n in reference.sensors)}; a renamed column keeps its modes only under its old name)"
-    )
-
-
-def room_unlike(reference: MachineReference, with_room: bool) -> str | None:
-    """A note where the reference was learnt with a room sensor and this test has none, or None:
-    its modes are the machine's either way, but the test's answer then rests on the room's stated
-    wander, and a room that drifts may take it off the reference.
-
-    Parameters
-    ----------
-    reference : MachineReference
     with_room : bool
         Whether this test has a room sensor.
 
     Returns
     -------
-    str or None
+    list of str
+        The notes, none where the reference fits.
     """
-    if with_room or reference.room != _ROOM_MEASURED:
-        return None
-    return (
-        f"the reference ({reference.source}) was learnt with a room sensor, and this test has none: its answer "
-        "assumes the room's stated wander; the room's column, where it was logged, keeps a drifting room out"
-    )
+    notes = []
+    missing = [name for name in sensors if name not in reference.sensors]
+    if missing:
+        notes.append(
+            f"the reference ({reference.source}) has no modes for {', '.join(repr(n) for n in missing)}: "
+            f"{'they are' if len(missing) > 1 else 'it is'} answered without it (the reference knows "
+            f"{', '.join(repr(n) for n in reference.sensors)}; a renamed column keeps its modes only under its old "
+            "name)"
+        )
+    if not with_room and reference.room == _ROOM_MEASURED:
+        notes.append(
+            f"the reference ({reference.source}) was learnt with a room sensor, and this test has none: its answer "
+            "assumes the room's stated wander; the room's column, where it was logged, keeps a drifting room out"
+        )
+    return notes
 
 
 def learn_reference(

@@ -19,7 +19,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import measured_equilibrium, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
-from mtident.thermal.reference import MachineReference, room_unlike, sensors_unknown
+from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, describe_assumptions, estimate_sensor
 
 if TYPE_CHECKING:
@@ -30,6 +30,9 @@ __all__ = ["RobustIdentification", "identify_robust"]
 REPORT_LEVEL = 0.95
 # the prediction runs this many of the slowest mode's time constants past the window, at least
 HORIZON_TIME_CONSTANTS = 4.0
+# a log counts as settled to the tolerance's precision where its last quarter moved less than this
+# (°C), half the default tolerance
+SETTLED_MOVE_C = 0.1
 
 
 @dataclass(frozen=True)
@@ -224,11 +227,6 @@ def _model_dict(e: SensorEstimate) -> dict[str, object]:
     }
 
 
-# a log counts as settled to the tolerance's precision where its last quarter moved less than this
-# (°C), half the default tolerance
-SETTLED_MOVE_C = 0.1
-
-
 def identify_robust(
     log: TemperatureLog,
     window_min: float,
@@ -283,11 +281,7 @@ def identify_robust(
         )
         for s, name in enumerate(log.sensors)
     )
-    unknown = (
-        []
-        if reference is None
-        else [sensors_unknown(reference, log.sensors), room_unlike(reference, room_C is not None)]
-    )
+    unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None)
     times = _prediction_times(t, n, estimates, horizon_min)
     room_all = None if room_C is None else np.concatenate([room_C, np.full(len(times) - len(t), np.nan)])[: len(times)]
     curve, low, high = (np.full((len(times), len(estimates)), np.nan) for _ in range(3))
@@ -314,7 +308,7 @@ def identify_robust(
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
         measured_settled=settled,
-        notes=(*log.notes, *(note for note in unknown if note), *(w for e in estimates for w in e.warnings)),
+        notes=(*log.notes, *unfit, *(w for e in estimates for w in e.warnings)),
     )
 
 

@@ -35,7 +35,7 @@ from mtident.thermal.monitor import (
     new_state,
     result,
 )
-from mtident.thermal.reference import room_unlike, sensors_unknown
+from mtident.thermal.reference import reference_notes
 
 __all__ = ["SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
 
@@ -282,11 +282,8 @@ class WatchSession:
             self.state = self._new_state(self.follower.sensors)
             reference = self.settings.reference
             if reference is not None:
-                notes = (
-                    sensors_unknown(reference, self.sensors),
-                    room_unlike(reference, bool(self.settings.room_sensor)),
-                )
-                events.extend(Event("warning", np.nan, note) for note in notes if note)
+                notes = reference_notes(reference, self.sensors, bool(self.settings.room_sensor))
+                events.extend(Event("warning", np.nan, note) for note in notes)
         if self.state is None or not len(rows.time_min):
             return events
         values, room = (
