@@ -220,7 +220,9 @@ def check_decision(
             at_stop = float(np.median(room_C[near]))
             shift = float(np.median(room_C[valid][-10:])) - at_stop
             if modes is not None:
-                followed = np.array([_followed_shift(time_min, room_C, at_stop, m, shift) for m in modes])
+                times, first = np.unique(time_min[valid], return_index=True)
+                room = room_C[valid][first]
+                followed = np.array([_followed_shift(times, room, at_stop, m, shift) for m in modes])
     return Hindsight(
         sensors=tuple(sensors),
         stop_time_min=float(stop_time_min),
@@ -242,12 +244,10 @@ def _followed_shift(
     whole: float,
 ) -> float:
     """The room's move from its level at the stop (which T∞ at the stop already holds) to where a
-    sensor of these modes has followed it by the log's end: the room lagged by each mode,
-    weighted by the mode's share of the rise (``whole`` without modes)."""
+    sensor of these modes has followed it by the log's end: the room (valid readings at distinct
+    times) lagged by each mode, weighted by the mode's share of the rise (``whole`` without modes)."""
     weights = np.abs(np.array([a for _, a in modes], dtype=float))
     if not len(modes) or not weights.sum() > 0:
         return whole
-    valid = np.isfinite(room_C)
-    times, first = np.unique(time_min[valid], return_index=True)
-    lagged = room_lag(room_C[valid][first], times, np.array([tau for tau, _ in modes], dtype=float))
+    lagged = room_lag(room_C, time_min, np.array([tau for tau, _ in modes], dtype=float))
     return float(weights @ np.median(lagged[:, -10:], axis=1) / weights.sum()) - room_at_stop_C
