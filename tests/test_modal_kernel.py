@@ -122,12 +122,14 @@ def test_the_leading_models_of_different_basins_are_those_of_the_plain_rule(seed
     values[40:60] = values[60]
     for count, apart in ((5, 0.0), (30, 0.5), (400, 0.2)):
         expected = _leading_reference(values, log_tau, modes, count, apart)
-        got, exhausted = leading_rows(values, np.argsort(values, kind="stable"), np.inf, log_tau, modes, count, apart)
+        order = np.argsort(values, kind="stable")
+        got, exhausted = leading_rows(values, order, np.inf, log_tau[order], modes[order], count, apart)
         assert list(got) == expected and not exhausted  # every row scanned, or the infinite ones reached
         # scanned from the lowest few rows, more where those run out (ties at the cut included)
         for scan in (1, 7, 64):
             monkeypatch.setattr(search_module, "_LEADING_SCAN", scan)
-            assert list(search_module._leading_rows(values, log_tau, modes, count, apart)) == expected
+            scanned = search_module._leading_rows(values, lambda rows: (log_tau[rows], modes[rows]), count, apart)
+            assert list(scanned) == expected
 
 
 def test_the_room_lag_is_the_exact_lag_of_a_room_that_ramps_at_uneven_steps():

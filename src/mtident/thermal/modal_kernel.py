@@ -21,6 +21,7 @@ __all__ = [
     "EDGE_PENALTY",
     "END_OBJECTIVE",
     "RSS_OBJECTIVE",
+    "end_values",
     "fit_one",
     "lag_rows",
     "leading_rows",
@@ -377,6 +378,36 @@ def _quasi_newton_pass(
 
 
 @njit(cache=True)
+def end_values(
+    rss: FloatArray, var_steady: FloatArray, steady: FloatArray, threshold: float, sign: float, gap: float
+) -> FloatArray:  # pragma: no cover - compiled
+    """``modal_search._EndObjective`` over a batch of fits, row by row in one pass (the grid's
+    batches are scanned for their leading models at every level and end, and the interpreter's
+    temporaries cost more than the arithmetic).
+
+    Parameters
+    ----------
+    rss, var_steady, steady : ndarray, shape (T,)
+        The fits' residual sums of squares, T∞ variance factors and T∞.
+    threshold, sign, gap : float
+        As ``modal_search._EndObjective``.
+
+    Returns
+    -------
+    ndarray, shape (T,)
+    """
+    values = np.empty(rss.shape[0])
+    for row in range(rss.shape[0]):
+        slack = threshold - rss[row]
+        var = max(var_steady[row], 0.0)
+        if slack >= 0:
+            values[row] = -sign * steady[row] - np.sqrt(slack * var)
+        else:
+            values[row] = -sign * steady[row] - EDGE_PENALTY * np.sqrt(var * gap) * slack / gap
+    return values
+
+
+@njit(cache=True)
 def leading_rows(
     values: FloatArray,
     order: np.ndarray,
@@ -399,9 +430,10 @@ def leading_rows(
     boundary : float
         The value of the rows left out of ``order`` that are tied with its last (infinite where
         ``order`` holds every row): the scan stops at it.
-    log_tau : ndarray, shape (T, K)
-        Each row's log time constants, its first ``modes[row]`` entries used.
-    modes : ndarray of int, shape (T,)
+    log_tau : ndarray, shape (M, K)
+        The log time constants of each row of ``order``, in its order, the first ``modes[i]``
+        entries used.
+    modes : ndarray of int, shape (M,)
     count : int
     apart_log : float
 
@@ -415,29 +447,30 @@ def leading_rows(
     """
     taken = np.empty(min(count, order.shape[0]), dtype=np.int64)
     n_taken = 0
-    for row in order:
+    for i in range(order.shape[0]):
+        row = order[i]
         if n_taken >= count or not np.isfinite(values[row]):
-            return taken[:n_taken], False
+            return order[taken[:n_taken]], False
         if values[row] >= boundary:
-            return taken[:n_taken], True
+            return order[taken[:n_taken]], True
         same_basin = False
         if apart_log > 0:
             for t in range(n_taken):
                 other = taken[t]
-                if modes[other] != modes[row]:
+                if modes[other] != modes[i]:
                     continue
                 close = True
-                for j in range(modes[row]):
-                    if abs(log_tau[row, j] - log_tau[other, j]) > apart_log:
+                for j in range(modes[i]):
+                    if abs(log_tau[i, j] - log_tau[other, j]) > apart_log:
                         close = False
                         break
                 if close:
                     same_basin = True
                     break
         if not same_basin:
-            taken[n_taken] = row
+            taken[n_taken] = i
             n_taken += 1
-    return taken[:n_taken], n_taken < count
+    return order[taken[:n_taken]], n_taken < count
 
 
 @njit(cache=True)

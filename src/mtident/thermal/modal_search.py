@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import lru_cache
 from itertools import combinations
 
 import numpy as np
@@ -21,9 +21,9 @@ from scipy.optimize import minimize
 from mtident._typing import FloatArray, IntArray
 from mtident.thermal.modal_kernel import (
     APART_PENALTY,
-    EDGE_PENALTY,
     END_OBJECTIVE,
     RSS_OBJECTIVE,
+    end_values,
     lag_rows,
     leading_rows,
     objective_and_gradient,
@@ -183,11 +183,6 @@ class Fits:
     var_steady: FloatArray  # (T,) [(XᵀWX + P)⁻¹]₀₀
     direction: FloatArray  # (T, p) (XᵀWX + P)⁻¹e₀: how the parameters follow T∞ along the profile
     theta: FloatArray  # (T, p)
-
-    @cached_property
-    def log_tau(self) -> FloatArray:
-        """log τ (T, k), computed once: the leading models are chosen from it many times."""
-        return np.log(self.tau)
 
     def take(self, i: int) -> Fits:
         """The i-th model alone."""
@@ -380,11 +375,7 @@ class _EndObjective:
         self.threshold, self.sign, self.gap = threshold, sign, gap
 
     def __call__(self, fits: Fits) -> FloatArray:
-        slack = self.threshold - fits.rss
-        var = np.maximum(fits.var_steady, 0.0)
-        reach = np.sqrt(var * self.gap)
-        inside = -self.sign * fits.steady - np.sqrt(np.maximum(slack, 0.0) * var)
-        return np.where(slack >= 0, inside, -self.sign * fits.steady - EDGE_PENALTY * reach * slack / self.gap)
+        return end_values(fits.rss, fits.var_steady, fits.steady, self.threshold, self.sign, self.gap)
 
     def compiled(self, log_mode_ratio: float) -> tuple[float, float, float, float, float]:
         """The objective as :func:`~mtident.thermal.modal_kernel.refine_log_tau` takes it."""
@@ -474,16 +465,33 @@ def _leading(
     values = np.concatenate(
         [np.where(np.isfinite(v := np.asarray(objective(fits), dtype=float)), v, np.inf) for fits in candidates]
     )
-    widest = max(fits.tau.shape[1] for fits in candidates)
-    log_tau = np.concatenate([np.pad(fits.log_tau, ((0, 0), (0, widest - fits.tau.shape[1]))) for fits in candidates])
-    modes = np.concatenate([np.full(len(fits.tau), fits.tau.shape[1]) for fits in candidates])
     starts = np.cumsum([0] + [len(fits.tau) for fits in candidates])
-    rows = _leading_rows(values, log_tau, modes, count, apart_log)
+    rows = _leading_rows(values, lambda order: _log_tau_of(candidates, starts, order), count, apart_log)
     batches = np.searchsorted(starts, rows, side="right") - 1
     return [(candidates[b], int(r - starts[b])) for b, r in zip(batches, rows, strict=True)]
 
 
-def _leading_rows(values: FloatArray, log_tau: FloatArray, modes: IntArray, count: int, apart_log: float) -> IntArray:
+def _log_tau_of(candidates: list[Fits], starts: IntArray, rows: IntArray) -> tuple[FloatArray, IntArray]:
+    """The log time constants (padded with zeros to the widest batch's) and the number of modes
+    of the given rows of the batches laid end to end: only the rows a scan reaches, because a
+    grid's logarithms cost more than the scan."""
+    batches = np.searchsorted(starts, rows, side="right") - 1
+    log_tau = np.zeros((len(rows), max(fits.tau.shape[1] for fits in candidates)))
+    modes = np.empty(len(rows), dtype=np.int64)
+    for b in np.unique(batches):
+        here = batches == b
+        k = candidates[b].tau.shape[1]
+        log_tau[here, :k] = np.log(candidates[b].tau[rows[here] - starts[b]])
+        modes[here] = k
+    return log_tau, modes
+
+
+def _leading_rows(
+    values: FloatArray,
+    log_tau_of: Callable[[IntArray], tuple[FloatArray, IntArray]],
+    count: int,
+    apart_log: float,
+) -> IntArray:
     """:func:`~mtident.thermal.modal_kernel.leading_rows` over the lowest rows only, more where
     those run out (sorting every row of a large grid would cost more than the scan)."""
     scanned = min(len(values), _LEADING_SCAN)
@@ -496,6 +504,7 @@ def _leading_rows(values: FloatArray, log_tau: FloatArray, modes: IntArray, coun
             boundary = float(values[order[-1]])
         else:
             order = np.argsort(values, kind="stable")
+        log_tau, modes = log_tau_of(order)
         rows, exhausted = leading_rows(values, order, boundary, log_tau, modes, count, apart_log)
         if not exhausted or scanned == len(values):
             return rows
