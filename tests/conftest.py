@@ -314,3 +314,13 @@ def logger_dialects(t: np.ndarray, columns: dict[str, np.ndarray]) -> dict[str, 
             )
         ).encode(),
     }
+
+
+# The modules whose tests wait on servers, browsers and processes they start run first: the two
+# workers of pytest-xdist take tests in the order collected, and one of those last held the
+# other worker idle for seconds at the end.
+_FIRST_MODULES = ("test_web.py", "test_opcua.py", "test_mtconnect.py")
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    items.sort(key=lambda item: item.path.name not in _FIRST_MODULES)

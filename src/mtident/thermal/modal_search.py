@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
-from itertools import combinations
+from itertools import chain, combinations
 
 import numpy as np
 from scipy.optimize import minimize
@@ -235,9 +235,15 @@ def _fit(problem: Problem, tau: FloatArray) -> Fits:
 
 @lru_cache(maxsize=64)
 def _grid_tuples(m: int, k: int, apart: int) -> IntArray:
-    """Indices (T, k) of k grid time constants, increasing, at least ``apart`` steps apart."""
-    combos = [c for c in combinations(range(m), k) if all(b - a >= apart for a, b in zip(c, c[1:], strict=False))]
-    return np.array(combos, dtype=int).reshape(-1, k)
+    """Indices (T, k) of k grid time constants, increasing, at least ``apart`` steps apart, in
+    lexicographic order: the combinations of a grid shorter by the steps the gaps take up, each
+    index moved on by the gaps before it (filtering every combination costs a second of a check
+    on a fine grid)."""
+    gaps = (k - 1) * (max(apart, 1) - 1)
+    if m - gaps < k:
+        return np.empty((0, k), dtype=int)
+    flat = np.fromiter(chain.from_iterable(combinations(range(m - gaps), k)), dtype=int)
+    return flat.reshape(-1, k) + np.arange(k) * (max(apart, 1) - 1)
 
 
 def _grid_taus(problem: Problem) -> FloatArray:
