@@ -488,6 +488,47 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
     assert said and said.group(1) == said.group(3) and said.group(2) == said.group(4), text
 
 
+def _checked_state(steady: float, low: float, high: float, slowest: float, room_level: float = float("nan")):  # noqa: ANN202
+    """A one-sensor state checked once: T∞, its decision interval, the best model's slowest mode."""
+    state = new_state(["S"])
+    check = replace(
+        state.checks[0],
+        status="narrowing",
+        steady_C=steady,
+        low_C=low,
+        high_C=high,
+        modes=((slowest, -6.0), (20.0, -2.0)),
+        room_level_C=room_level,
+    )
+    return replace(state, checks=(check,))
+
+
+def test_a_sensor_only_the_assumed_room_wander_keeps_from_stopping_is_told_to_log_the_room():
+    """A new user's machine (slowest mode 158 min) with no room column never stopped in 15 h, told
+    to continue the test: the wander of 0.05 °C in an hour over 158 min alone is ±0.20 °C at 99 %."""
+    settings = MonitorSettings()
+    # its readings alone pin T∞ to ±0.05 °C; the wander over 199 min adds ±0.23 °C in quadrature
+    bound = result(_checked_state(28.0, 27.76, 28.24, 199.0), settings)
+    assert bound["room_bound_sensors"] == ["S"]
+    reason = str(bound["reason"])
+    assert "the readings alone pin T∞ within ±0.05 °C" in reason and "moves T∞ ±0.23 °C at 99%" in reason
+    assert "no longer test narrows that" in reason and "continue the test" not in reason
+    assert "Ways on: for S, log the room beside the sensors" in reason
+    # still far from the tolerance: more readings may still find a faster slowest mode
+    early = result(_checked_state(28.0, 25.0, 31.0, 199.0), settings)
+    assert early["room_bound_sensors"] == [] and "continue the test" in str(early["reason"])
+    assert "for S, also log the room" in str(early["reason"])
+    # a slowest mode of 100 min: the wander alone (±0.17 °C) is within the tolerance
+    fast = result(_checked_state(28.0, 27.76, 28.24, 100.0), settings)
+    assert fast["room_bound_sensors"] == [] and "wander" not in str(fast["reason"])
+    # a measured room, or a room said to be steady, has no wander
+    measured = result(_checked_state(28.0, 27.76, 28.24, 199.0, room_level=22.0), settings)
+    steady = result(
+        _checked_state(28.0, 27.76, 28.24, 199.0), replace(settings, robust=RobustSettings(room_wander_C_per_h=0.0))
+    )
+    assert measured["room_bound_sensors"] == steady["room_bound_sensors"] == []
+
+
 def test_watch_old_options_are_taken_with_a_note(tmp_path):
     log = tmp_path / "run.csv"
     log.write_text(csv_text(T[:20], {"S": noisy(first_order(T[:20]), 16)}))

@@ -706,8 +706,19 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
         if hindsight is not None:
             _print_hindsight(hindsight)
         return
-    console.print("[bold yellow]Not yet: keep the test running.[/]")
-    console.print(str(outcome["reason"]), highlight=False)
+    bound = outcome.get("room_bound_sensors")
+    if isinstance(bound, list) and bound:
+        console.print(
+            f"[bold yellow]Not yet, and a longer test does not bring {', '.join(map(str, bound))} within the "
+            "tolerance.[/]"
+        )
+        console.print(str(outcome["reason"]), highlight=False)
+        console.print(
+            "(--ambient COLUMN names the room sensor's column; --room-wander states the room's wander in °C an hour)"
+        )
+    else:
+        console.print("[bold yellow]Not yet: keep the test running.[/]")
+        console.print(str(outcome["reason"]), highlight=False)
     expected = outcome.get("expected_stop_time_min")
     if isinstance(expected, float):
         console.print(

@@ -35,6 +35,7 @@ from mtident.thermal.robust import (
     SensorEstimate,
     describe_assumptions,
     estimate_sensor,
+    room_wander_half_width,
     sampling_interval_min,
 )
 
@@ -820,6 +821,7 @@ def result(
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
         reason=None if stopped else _reason([c for c in state.checks if not c.may_stop], settings),
+        room_bound_sensors=[] if stopped else [c.sensor for c in state.checks if _room_bound(c, settings)],
         last_time_min=finite_or_none(state.readings.latest_min),
         tolerance_C=settings.tolerance_C,
         decision_level=settings.decision_level,
@@ -861,12 +863,60 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
             )
             parts.append(
                 f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} {bounds}, wider than "
-                f"±{settings.tolerance_C:g} °C ({c.ends})"
+                f"±{settings.tolerance_C:g} °C ({c.ends})" + _room_bound_clause(c, settings)
             )
-    ways = "continue the test" + (
-        "" if settings.reference is not None else ", or give a reference run of this machine (mtident thermal learn)"
+    learn = ", or give a reference run of this machine (mtident thermal learn)"
+    ways = "continue the test" + ("" if settings.reference is not None else learn)
+    room = (
+        "log the room beside the sensors and name it as the room sensor, or state a smaller room wander if the room "
+        "is steadier than assumed (0 for a steady room)"
     )
+    bound = [c.sensor for c in waiting if _room_bound(c, settings)]
+    slow = [c.sensor for c in waiting if _room_wander_C(c, settings) > 0 and c.sensor not in bound]
+    if bound:
+        others = len(bound) < len(waiting)
+        ways = f"for {', '.join(bound)}, {room}" + (f"; for the others, {ways}" if others else "")
+    elif slow:
+        ways += f"; for {', '.join(slow)}, also {room}"
     return "; ".join(parts) + f". Ways on: {ways}."
+
+
+def _room_bound_clause(check: SensorCheck, settings: MonitorSettings) -> str:
+    wander = _room_wander_C(check, settings)
+    if wander == 0:
+        return ""
+    assumed = (
+        f"the room's unmeasured wander alone, as assumed ({settings.robust.room_wander_C_per_h:g} °C in an hour over "
+        f"its slowest mode's {max(tau for tau, _ in check.modes):.0f} min), moves T∞ ±{wander:.2f} °C at "
+        f"{settings.decision_level:.0%}"
+    )
+    if _room_bound(check, settings):
+        alone = _readings_half_width(check, wander)
+        return f"; the readings alone pin T∞ within ±{alone:.2f} °C, but {assumed}: no longer test narrows that"
+    return f"; where its slowest mode stays as slow, {assumed}, more than the tolerance"
+
+
+def _room_wander_C(check: SensorCheck, settings: MonitorSettings) -> float:
+    """The half-width the unmeasured room's assumed wander alone gives the sensor's T∞ at the
+    decision's level (on its best model's slowest mode), where that alone is wider than the
+    tolerance; else 0."""
+    if not check.modes or not math.isfinite(check.steady_C) or math.isfinite(check.room_level_C):
+        return 0.0
+    slowest = max(tau for tau, _ in check.modes)
+    wander = room_wander_half_width(slowest, settings.decision_level, settings.robust)
+    return wander if wander > settings.tolerance_C else 0.0
+
+
+def _readings_half_width(check: SensorCheck, wander: float) -> float:
+    """The decision interval's half-width less the room's wander (added in quadrature)."""
+    return math.sqrt(max(check.half_width_C**2 - wander**2, 0.0))
+
+
+def _room_bound(check: SensorCheck, settings: MonitorSettings) -> bool:
+    """Whether only the unmeasured room's assumed wander keeps the sensor from the tolerance: its
+    readings alone pin T∞ within it, the wander alone does not. No longer test helps."""
+    wander = _room_wander_C(check, settings)
+    return wander > 0 and _readings_half_width(check, wander) <= settings.tolerance_C
 
 
 def _sensor_summary(c: SensorCheck, settings: MonitorSettings, expected: float | None) -> dict[str, object]:

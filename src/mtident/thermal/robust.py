@@ -40,6 +40,7 @@ __all__ = [
     "describe_assumptions",
     "estimate_sensor",
     "rise_threshold_C",
+    "room_wander_half_width",
     "sampling_interval_min",
     "quantisation_step",
     "spikes",
@@ -699,16 +700,38 @@ def _with_room_wander(
     steady state at the room's level with it."""
     if room_measured or settings.room_wander_C_per_h <= 0 or not fit.determined:
         return dict(fit.interval_C)
-    memory = min(fit.slowest_time_constant_min(), settings.max_time_constant_min)
-    sd = settings.room_wander_C_per_h * np.sqrt(max(memory, 0.0) / 60.0)
     out = {}
     for q, (lo, hi) in fit.interval_C.items():
-        extra = float(ndtri(0.5 + q / 2.0)) * sd
+        extra = room_wander_half_width(fit.slowest_time_constant_min(), q, settings)
         out[q] = (
             fit.steady_C - float(np.hypot(fit.steady_C - lo, extra)),
             fit.steady_C + float(np.hypot(hi - fit.steady_C, extra)),
         )
     return out
+
+
+def room_wander_half_width(slowest_time_constant_min: float, level: float, settings: RobustSettings) -> float:
+    """How far the unmeasured room's stated wander alone moves T∞ at ``level``: its random walk
+    over the slowest mode's time constant (at most the largest allowed). The readings cannot
+    narrow it: where it is wider than a tolerance, no longer test meets that tolerance.
+
+    Parameters
+    ----------
+    slowest_time_constant_min : float
+        The sensor's slowest mode (min).
+    level : float
+        The interval's level (0.95, 0.99).
+    settings : RobustSettings
+        The room's wander and the largest time constant.
+
+    Returns
+    -------
+    float
+        The half-width (°C) the wander alone adds in quadrature; 0 where no wander is assumed.
+    """
+    memory = min(slowest_time_constant_min, settings.max_time_constant_min)
+    sd = settings.room_wander_C_per_h * np.sqrt(max(memory, 0.0) / 60.0)
+    return float(ndtri(0.5 + level / 2.0)) * sd
 
 
 def _nested(intervals: dict[float, tuple[float, float]]) -> dict[float, tuple[float, float]]:
