@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from mtident.exceptions import InputError
 from mtident.io import read_temperature_log
 from mtident.thermal import METHODS, identify, minimal_identification_time
-from mtident.thermal.identify import MIN_WINDOW_SAMPLES, Z95, rmse
+from mtident.thermal.identify import MIN_WINDOW_SAMPLES, Z95, measured_equilibrium, rmse
 from mtident.thermal.lsq import cramer_rao_bound, first_order_onset
 from mtident.thermal.model import rise_transition, slope_transition, to_physical
 from mtident.thermal.readings import display_resolution, noise_sigma, quick_estimate
@@ -795,3 +795,16 @@ def test_readings_that_use_every_mode_searched_are_not_trusted(monkeypatch):
     assert not estimate.model_ok
     assert "modes-unresolved" in estimate.warning_codes and "modes-saturated" not in estimate.warning_codes
     assert any("no sum of modes searched here holds them" in w for w in estimate.warnings)
+
+
+def test_a_log_settled_in_display_steps_counts_as_settled_and_one_still_rising_does_not():
+    """A new user's sensor in 0.1 °C steps, within 0.05 °C of where it settled for the last quarter
+    of its log, was called 'not settled by the log's end': medians of five readings, a quarter
+    apart, sat a whole step apart on 2 of these 20 noise draws."""
+    t = np.arange(0.0, 901.0)
+    draws = [np.random.default_rng(seed).normal(0.0, 0.03, t.size) for seed in range(20)]
+    settled = np.column_stack([np.round(23.84 - 2.0 * np.exp(-t / 150.0) + noise, 1) for noise in draws])
+    final, _ = measured_equilibrium(t, settled, max_late_move_C=0.1)
+    assert np.all(np.abs(final - 23.84) < 0.1)  # within a step of the truth, none NaN
+    rising = np.round(23.84 - 2.0 * np.exp(-t / 400.0) + draws[0], 1)  # 0.2 °C in its last quarter
+    assert np.isnan(measured_equilibrium(t, rising[:, None], max_late_move_C=0.1)[0][0])

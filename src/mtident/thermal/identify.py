@@ -392,7 +392,8 @@ def measured_equilibrium(
 
     The final temperature is the median of the last 10 samples; the log counts as
     having reached equilibrium when its last quarter rose by less than 5 % of the
-    total rise and less than ``max_late_move_C``. Otherwise NaN. A log still moving
+    total rise and less than ``max_late_move_C`` (the mean of its last sixteenth against that of
+    the sixteenth a quarter before its end). Otherwise NaN. A log still moving
     within those bounds gives a final temperature, and a 95 %-rise time, short of
     where it settles: the papers' "measured" values, read off the end of a test.
 
@@ -426,7 +427,10 @@ def measured_equilibrium(
         start = float(np.median(y[:3]))
         final = float(np.median(y[-10:]))
         quarter = max(n // 4, 5)
-        late_rise = float(np.median(y[-5:]) - np.median(y[-quarter : -quarter + 5]))
+        # means over a quarter of the quarter, not medians of five: readings in display steps
+        # (0.1 °C) and a little noise put five-reading medians a whole step apart on a settled log
+        span = max(quarter // 4, 5)
+        late_rise = float(np.mean(y[-span:]) - np.mean(y[-quarter : -quarter + span]))
         rise = final - start
         if rise == 0 or abs(late_rise) > min(0.05 * abs(rise), max_late_move_C):
             finals.append(np.nan)
