@@ -773,6 +773,20 @@ def test_a_date_and_a_time_of_day_in_two_columns_are_one_stamp(write_csv):
         read_temperature_log(write_csv(text.replace("01.03.2026;23:51:00", "01.03.2026;")))
 
 
+def test_a_room_column_splits_off_as_the_room_and_a_log_of_the_room_alone_is_refused():
+    """The Python guide's way to pass a room sensor (a new user left it among the sensors, and
+    every sensor of the reference learnt from that log was doubtful)."""
+    log = read_temperature_log("@sample-room", sensors=["T1", "room", "T2"])
+    sensors, room = log.split_room("room")
+    assert sensors.sensors == ("T1", "T2")
+    np.testing.assert_array_equal(room, log.temperature_C[:, 1])
+    np.testing.assert_array_equal(sensors.temperature_C, log.temperature_C[:, [0, 2]])
+    with pytest.raises(InputError, match="no sensor column 'Raum'"):
+        log.split_room("Raum")
+    with pytest.raises(InputError, match="no sensor column left besides the room column 'room'"):
+        log.select(["room"]).split_room("room")
+
+
 def test_the_shipped_logs_by_name():
     from mtident.io import sample_log_path
 

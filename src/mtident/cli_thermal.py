@@ -136,12 +136,8 @@ def load_log_with_room(
     asked = asked_sensors(sensors, log_path(file))
     # only the asked-for columns and the room are read: a dead column elsewhere does not matter
     every = load_log(file, tuple(dict.fromkeys([*asked, room_col])) if asked else (), time_col, time_unit)
-    room = every.select([room_col]).temperature_C[:, 0]
-    names = [name for name in asked or list(every.sensors) if name != room_col]
-    if not names:
-        msg = f"{every.source}: no sensor column left besides the room column {room_col!r}"
-        raise InputError(msg)
-    return every.select(names), room
+    log, room = every.split_room(room_col)
+    return log.select([name for name in asked if name != room_col] or None), room
 
 
 def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str) -> None:

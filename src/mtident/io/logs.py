@@ -145,6 +145,35 @@ class TemperatureLog:
             self.time_min, tuple(names), self.temperature_C[:, idx], self.notes, self.source, self.time_column
         )
 
+    def split_room(self, room: str) -> tuple[TemperatureLog, FloatArray]:
+        """The sensors without the room sensor's column, and that column's readings: the room is
+        an input of every sensor's modes, not a sensor (``identify_robust``, ``learn_reference``
+        and ``monitor_step`` take it apart).
+
+        Parameters
+        ----------
+        room : str
+            The room sensor's column.
+
+        Returns
+        -------
+        sensors : TemperatureLog
+            The log without the room column.
+        room_C : ndarray, shape (N,)
+            The room's readings (°C, NaN where missing).
+
+        Raises
+        ------
+        InputError
+            No such column, or no sensor column besides it.
+        """
+        room_C = self.select([room]).temperature_C[:, 0]
+        names = [name for name in self.sensors if name != room]
+        if not names:
+            msg = f"{self.source}: no sensor column left besides the room column {room!r}"
+            raise InputError(msg)
+        return self.select(names), room_C
+
     def window(self, minutes: float) -> int:
         """Number of samples with time ≤ ``minutes``."""
         return int(np.searchsorted(self.time_min, minutes + 1e-9, side="right"))
