@@ -650,6 +650,34 @@ def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path, stop,
     assert sorted(p.name for p in tmp_path.iterdir()) == ["live-state.npz", "live.csv"]  # no stray temporary file
 
 
+def test_ctrl_c_inside_compiled_code_is_an_interruption_not_a_traceback(tmp_path, monkeypatch):
+    """Ctrl-C that lands while a compiled kernel runs reaches Python as that call's SystemError,
+    the KeyboardInterrupt chained to it: a newcomer's Ctrl-C 8 s into a replay printed numba's
+    traceback and exit code 1. Any other SystemError is still raised."""
+    log = tmp_path / "live.csv"
+    log.write_text(csv_text(T[:30], {"A": noisy(first_order(T[:30]), 19)}))
+    polls = []
+
+    def poll(session, redraw=None):  # noqa: ANN001, ANN202
+        polls.append(session)
+        if len(polls) == 1:
+            return original(session, redraw)
+        raise SystemError("<numba function> returned a result with an exception set") from KeyboardInterrupt()
+
+    original = WatchSession.poll
+    monkeypatch.setattr(WatchSession, "poll", poll)
+    code, out, err = run("thermal", "watch", str(log), "--json", "--poll", "0.05", "--timeout", "5")
+    assert code == 130 and "interrupted (Ctrl-C) at t = 29 min" in err
+    assert json.loads(out)["last_time_min"] == 29.0
+
+    def broken(session, redraw=None):  # noqa: ANN001, ANN202
+        raise SystemError("a fault of our own")
+
+    monkeypatch.setattr(WatchSession, "poll", broken)
+    with pytest.raises(SystemError, match="a fault of our own"):
+        run("thermal", "watch", str(log), "--replay")
+
+
 def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, _, err = run("thermal", "watch", "later.csv", "--poll", "0.05", "--timeout", "0.3")

@@ -603,19 +603,29 @@ def _follow(
                     return False
                 time.sleep(poll_s)
     except KeyboardInterrupt as stop:
-        how = "terminated (SIGTERM)" if isinstance(stop, _Terminated) else "interrupted (Ctrl-C)"
-        where = (
-            "before the first sample"
-            if session.state is None
-            else f"at t = {minutes(session.state.readings.latest_min)}"
-        )
-        kept = (
-            f"the state is in {session.state_path}; the same command resumes from there"
-            if session.state_path.is_file()
-            else "nothing was saved"
-        )
-        stderr.print(f"mtident: {how} {where}; {kept}", highlight=False)
-        return True
+        return _say_interrupted(stop, session)
+    except SystemError as error:
+        # Ctrl-C that lands while compiled code runs surfaces as the SystemError of the call it
+        # interrupted, the KeyboardInterrupt chained to it
+        stop = error.__cause__ or error.__context__
+        if not isinstance(stop, KeyboardInterrupt):
+            raise
+        return _say_interrupted(stop, session)
+
+
+def _say_interrupted(stop: KeyboardInterrupt, session: WatchSession) -> bool:
+    """Where the watch was stopped, and what it kept; True (interrupted)."""
+    how = "terminated (SIGTERM)" if isinstance(stop, _Terminated) else "interrupted (Ctrl-C)"
+    where = (
+        "before the first sample" if session.state is None else f"at t = {minutes(session.state.readings.latest_min)}"
+    )
+    kept = (
+        f"the state is in {session.state_path}; the same command resumes from there"
+        if session.state_path.is_file()
+        else "nothing was saved"
+    )
+    stderr.print(f"mtident: {how} {where}; {kept}", highlight=False)
+    return True
 
 
 class _Terminated(KeyboardInterrupt):
