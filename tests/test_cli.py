@@ -565,3 +565,23 @@ def test_identify_marks_a_measured_level_the_log_had_not_settled_to(tmp_path):
         assert data["measured_final_C"] is not None and data["measured_settled"] is settled
         table = mtident("thermal", "identify", str(log), "--window", "60").stdout
         assert ("had not settled" in table) is not settled
+
+
+def test_ctrl_c_inside_compiled_code_aborts_like_ctrl_c_and_other_system_errors_pass(monkeypatch):
+    """A Ctrl-C that reaches Python from compiled code is the interrupted call's SystemError: it
+    aborts as Ctrl-C does, without numba's traceback."""
+    import mtident.cli_thermal as cli_thermal
+
+    def interrupted(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        raise SystemError("<numba function> returned a result with an exception set") from KeyboardInterrupt()
+
+    monkeypatch.setattr(cli_thermal, "identify", interrupted)
+    out = mtident("thermal", "identify", "@sample", "--sensor", "T1", "--method", "ukf")
+    assert out.returncode == 1 and "Aborted!" in out.stderr and "Traceback" not in out.stderr
+
+    def broken(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        raise SystemError("a fault of our own")
+
+    monkeypatch.setattr(cli_thermal, "identify", broken)
+    with pytest.raises(SystemError, match="a fault of our own"):
+        mtident("thermal", "identify", "@sample", "--sensor", "T1", "--method", "ukf")

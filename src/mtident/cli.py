@@ -258,7 +258,8 @@ def user_errors(func: F) -> F:
     callable
         ``func`` wrapped: an ``MtidentError`` or ``OSError`` it raises is printed as
         ``mtident: error: <message>`` on stderr (parameters said as options) and the process exits
-        with code 2; any other exception passes through.
+        with code 2; a Ctrl-C that reached compiled code (a SystemError carrying the
+        KeyboardInterrupt) is a Ctrl-C again; any other exception passes through.
     """
 
     @wraps(func)
@@ -268,6 +269,11 @@ def user_errors(func: F) -> F:
         except (MtidentError, OSError) as exc:
             click.echo(f"mtident: error: {as_options(str(exc))}", err=True)
             sys.exit(2)
+        except SystemError as exc:
+            # Ctrl-C while compiled code runs: the interrupted call's SystemError carries it
+            if isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
+                raise KeyboardInterrupt from None
+            raise
 
     return wrapper  # type: ignore[return-value]
 
