@@ -330,7 +330,7 @@ class LazyGroup(click.Group):
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="mtident")
 def main() -> None:
-    """Machine-tool identification with unscented Kalman filters."""
+    """When a machine tool's warm-up test can stop, and a ball-screw feed drive's stiffness and damping."""
 
 
 @main.group(cls=LazyGroup, commands_module="mtident.cli_thermal")

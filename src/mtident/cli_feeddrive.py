@@ -265,7 +265,14 @@ def simulate_command(
     show_default=True,
     help="Measurement noise, fraction of each response's RMS.",
 )
-@click.option("--preset", type=click.Choice(["default", "paper"]), default="default", show_default=True)
+@click.option(
+    "--preset",
+    type=click.Choice(["default", "paper"]),
+    default="default",
+    show_default=True,
+    help="paper: Nguyen-Quoc et al.'s filter settings and zero variance on the parameters, so the estimate stays "
+    "at --params-guess (give the true values to reproduce the paper); for comparison only.",
+)
 @click.option(
     "--refine/--no-refine",
     default=True,

@@ -674,8 +674,21 @@ def _float_list(text: str, option: str) -> list[float]:
         "longest period)."
     ),
 )
-@click.option("--method", type=click.Choice(METHODS), default="aukf", show_default=True)
-@click.option("--preset", type=click.Choice(PRESETS), default="data", show_default=True)
+@click.option(
+    "--method",
+    type=click.Choice(METHODS),
+    default="aukf",
+    show_default=True,
+    help="The first-order filter (or least squares, lsq) fitted in every window, as in Xia et al. 2014 and "
+    "Yu et al. 2019.",
+)
+@click.option(
+    "--preset",
+    type=click.Choice(PRESETS),
+    default="data",
+    show_default=True,
+    help="Initial values and tuning from the data, or a paper's exactly.",
+)
 @click.option(
     "--ambient",
     "ambient_col",

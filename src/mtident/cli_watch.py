@@ -2,7 +2,7 @@
 
 A renderer over :class:`~mtident.thermal.session.WatchSession`: the session follows the log,
 feeds the monitor and keeps the state file; this module turns its events and answers into lines,
-tables, a picture and the contract's JSON.
+tables, a picture and the JSON answer.
 """
 
 from __future__ import annotations
@@ -346,7 +346,7 @@ def monitor_settings(
     "--json",
     "as_json",
     is_flag=True,
-    help="Print the contract's JSON object when the decision is reached (or the log ends).",
+    help="Print one JSON object when the decision is reached (or the log ends); its keys are in the docs' JSON page.",
 )
 @click.option("--device", metavar="NAME", help="MTConnect (FILE is the agent, http://host:5000): the device's name.")
 @click.option(

@@ -1,7 +1,7 @@
 """Joint state/parameter estimation of the feed drive with a UKF (Nguyen-Quoc et al. §2.3, §3.2).
 
 Augmented state (Nguyen-Quoc et al. Eq. 37): the 8 physical states and the 8 identified
-parameters K1..K4, Bt, Bb, Qb, Qm. Differences from the paper (DESIGN.md errata):
+parameters K1..K4, Bt, Bb, Qb, Qm. Differences from the paper (the documentation's Theory page):
 
 * The transition integrates the same ODE as the simulator — classical RK4 with
   sub-steps, the input held over each sample — not Eq. 39's garbled Euler step.
@@ -155,7 +155,7 @@ class FeedDriveIdentification:
 
     @property
     def parameters_sd(self) -> FloatArray:
-        """Alias of ``parameters_std`` (its name before the contract's was used)."""
+        """Alias of ``parameters_std`` (its name before ``parameters_std`` was used)."""
         return self.parameters_std
 
     def __repr__(self) -> str:
@@ -203,9 +203,9 @@ class FeedDriveIdentification:
         return run_responses(fitted, phi, gamma, start, response.forces)
 
     def summary(self, truth: FeedDriveParameters | None = None) -> dict[str, object]:
-        """The contract's JSON object (DESIGN.md: parameters, parameters_std, correlation), plus extras.
+        """The JSON object (parameters, parameters_std, correlation), plus extras.
 
-        ``parameters_sd`` repeats ``parameters_std`` for scripts written before the contract's name was used.
+        ``parameters_sd`` repeats ``parameters_std`` for scripts written before that name was used.
         """
         std = {n: float(v) for n, v in zip(IDENTIFIED, self.parameters_std, strict=True)}
         out: dict[str, object] = {

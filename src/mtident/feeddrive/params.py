@@ -1,6 +1,6 @@
 """Ball-screw feed drive parameters (Nguyen-Quoc et al., Table 1) and the matrices of Eq. 2.
 
-Parameter files are TOML with Table 1's names in SI units (DESIGN.md)::
+Parameter files are TOML with Table 1's names in SI units::
 
     Mt = 15.0          # table mass, kg
     Mb = 2.56          # screw mass, kg
@@ -17,8 +17,8 @@ Parameter files are TOML with Table 1's names in SI units (DESIGN.md)::
     Qb = 0.002         # support-bearing rotational damping, N m s/rad
 
 β is printed in Table 1 as 2.55e-3 "Nm/rad"; it is the lead/(2π) in m/rad, and
-the printed value makes K indefinite (DESIGN.md, errata). The default uses
-β = 0.01/(2π), which reproduces the paper's frequencies.
+the printed value makes K indefinite (the documentation's Theory page). The default
+uses β = 0.01/(2π), which reproduces the paper's frequencies.
 """
 
 from __future__ import annotations

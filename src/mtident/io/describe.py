@@ -1,6 +1,6 @@
 """How mtident reads a log file: its dialect, its time, its sensors, and what it left out.
 
-A test engineer's log rarely looks like the contract's plain CSV; before trusting
+A test engineer's log rarely looks like a plain CSV of minutes and sensors; before trusting
 an identification from it, one wants to see how it was read (``mtident thermal
 inspect``): which line was taken for the header, what the time column is and
 how long a step is, each sensor's unit and readings, and every column left out

@@ -134,7 +134,7 @@ def _saved_dialect(saved: dict[str, Any] | list[Any]) -> CsvDialect:
 
 @dataclass
 class LogFollower:
-    """Tail a CSV temperature log (DESIGN.md contract: time column, one column per sensor).
+    """Tail a CSV temperature log (a time column, one column per sensor).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Temperature logs: CSV with one time column and one column per sensor (DESIGN.md contract).
+"""Temperature logs: CSV with one time column and one column per sensor.
 
 The time column is the first one unless ``time_col`` names another. Its unit is
 minutes unless ``time_unit`` says otherwise or the header ends in ``_s``,

@@ -1,4 +1,4 @@
-"""Thermal test acceleration: identify a warm-up from its first minutes (seeds 000, 001)."""
+"""Thermal test acceleration: identify a warm-up from its first minutes (Xia et al. 2014; Yu et al. 2019)."""
 
 from mtident.thermal.identify import Identification, identify, rmse
 from mtident.thermal.min_time import MinTimeResult, minimal_identification_time

@@ -191,7 +191,7 @@ class Identification:
         return np.column_stack([self.steady_state_C - half, self.steady_state_C + half])
 
     def summary(self, index: int) -> dict[str, object]:
-        """The contract's JSON object for one sensor (DESIGN.md), plus extras.
+        """The JSON object of one sensor (the documentation's JSON page), plus extras.
 
         Parameters
         ----------

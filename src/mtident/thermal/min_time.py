@@ -135,7 +135,7 @@ class MinTimeResult:
         return said
 
     def summary(self, index: int) -> dict[str, object]:
-        """The contract's JSON object for one sensor, with its verdict and what it assumes.
+        """The JSON object for one sensor, with its verdict and what it assumes.
 
         Parameters
         ----------

@@ -781,7 +781,7 @@ def assumptions(settings: MonitorSettings, sensor: str) -> Assumptions:
 def result(
     state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None
 ) -> dict[str, object]:
-    """The contract's JSON object: the decision, the single-sensor keys of the sensor the test
+    """The JSON answer: the decision, the single-sensor keys of the sensor the test
     waits for (the slowest to equilibrium once stopped, the widest interval before), and per
     sensor its answer, verdict and assumptions; ``expected``: each sensor's expected stop, where
     the caller has it.

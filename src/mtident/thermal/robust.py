@@ -155,7 +155,7 @@ class Assumptions:
     model: str = "a sum of up to four exponential modes (six where the readings use all four)"
 
     def to_dict(self) -> dict[str, object]:
-        """The JSON object of the contract's ``assumptions``.
+        """The JSON object of the answer's ``assumptions``.
 
         Returns
         -------

@@ -165,7 +165,7 @@ class RobustIdentification:
         return pd.DataFrame(columns)
 
     def summary(self, index: int) -> dict[str, object]:
-        """The contract's JSON object for one sensor, with its verdict and assumptions.
+        """The JSON object for one sensor, with its verdict and assumptions.
 
         Parameters
         ----------

@@ -326,7 +326,7 @@ class WatchSession:
         return {name: expected_stop(self.state, self.settings, s) for s, name in enumerate(self.state.sensors)}
 
     def result(self, with_forecast: bool = True) -> dict[str, object]:
-        """The contract's JSON object (:func:`~mtident.thermal.monitor.result`).
+        """The JSON answer (:func:`~mtident.thermal.monitor.result`).
 
         Parameters
         ----------

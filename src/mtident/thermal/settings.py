@@ -1,6 +1,6 @@
 """Identification methods, their tuning, the papers' presets and the data-driven default.
 
-Methods (DESIGN.md contract): ``ukf`` (normal UKF), ``aukf`` (adaptive law of
+Methods (the names the CLI and the JSON use): ``ukf`` (normal UKF), ``aukf`` (adaptive law of
 Xia 2014), ``fukf`` (fading UKF of Yu 2019 Eqs 15-22), ``afukf`` (modified
 adaptive fading UKF of Yu 2019: square-root UKF + normalised fading factor +
 adaptive law) and ``lsq`` (batch least squares, the baseline).
