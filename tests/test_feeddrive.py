@@ -313,6 +313,23 @@ def test_a_response_time_printed_with_few_digits_is_the_even_grid(tmp_path):
         read_response(tmp_path / "gap.csv")
 
 
+def test_the_table_marks_an_estimate_whose_intervals_do_not_hold(tmp_path):
+    """A newcomer's sweep was identified 'yes' for every stiffness and friction while the notes said
+    the estimate does not reproduce the record: the table now says the intervals do not hold."""
+    sine = simulate(
+        FeedDriveParameters(),
+        Excitation("sine", frequency_Hz=100.0),
+        duration_s=0.3,
+        noise_fraction=0.01,
+        rng=np.random.default_rng(3),
+    )
+    path = write_response(sine, tmp_path / "sine.csv")
+    out = CliRunner().invoke(main, ["feeddrive", "identify", str(path), "--no-refine"], catch_exceptions=False)
+    assert out.exit_code == 0
+    assert "does not reproduce the record: its ± 2σ do not hold" in out.stdout
+    assert "doubtful" in out.stdout and " yes " not in out.stdout
+
+
 def test_an_estimate_that_does_not_reproduce_the_record_is_said():
     """Under a 100 Hz sine (the first mode is at 103.9 Hz) the filter settles on a wrong set (K3, K4 tens
     of standard deviations off) with every correlation 0.99999. No parameter set its intervals allow

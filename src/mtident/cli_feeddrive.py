@@ -365,13 +365,17 @@ def identify_command(
     if as_json:
         print_json(summary)
         return
-    table = Table(title=f"{Path(file).name}: feed-drive parameters ({preset}, measured: {measured})")
+    held = result.reproduces_record() is not False
+    table = Table(
+        title=f"{Path(file).name}: feed-drive parameters ({preset}, measured: {measured})",
+        caption=None if held else "[bold yellow]The estimate does not reproduce the record: its ± 2σ do not hold.[/]",
+    )
     filtered = result.filter_parameters
     columns = ("parameter", "guess", *(("filter",) if filtered is not None else ()), "estimate", "± 2σ", "identified")
     for column in (*columns, *(("true", "error %") if truth else ())):
         table.add_column(column, justify="right", no_wrap=column == "parameter")
     for i, name in enumerate(IDENTIFIED):
-        known = "yes" if result.identifiable[i] else "[yellow]no[/]"
+        known = ("yes" if held else "[yellow]doubtful[/]") if result.identifiable[i] else "[yellow]no[/]"
         estimate, half_width = f"{result.parameters[i]:.5g}", f"{2 * result.parameters_std[i]:.2g}"
         row = [f"{name} ({UNITS[name]})", f"{getattr(guess, name):.5g}"]
         row += [f"{filtered[i]:.5g}"] if filtered is not None else []
