@@ -755,7 +755,10 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     hindsight = Hindsight(("T1",), 233.0, 400.0, np.array([30.50]), np.array([30.40]), np.array([258.0]), 0.05, 0.2)
     _print_hindsight(hindsight)
     text = " ".join(capsys.readouterr().out.split())
-    assert "the room moved +0.05 °C after the stop, added to T∞ at the stop as each sensor follows it" in text
+    assert (
+        "the room moved +0.05 °C from the stop to the end; each sensor follows its course through its modes, +0.05 °C "
+        "added to T∞ at the stop" in text
+    )
     assert "T∞ at stop + room (°C)" in text
     # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
     assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +258 │", text), text

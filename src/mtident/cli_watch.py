@@ -687,8 +687,8 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     hindsight = session.hindsight() if replay else None
     if hindsight is not None:
         stderr.print(
-            f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)}: checking the decision against "
-            "where it settled",
+            f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)}: comparing the decision with how "
+            "it went on",
             highlight=False,
         )
     if as_json:
@@ -787,12 +787,20 @@ def _plot(session: WatchSession, plot_path: str) -> None:
     plot_monitor(session.state, session.settings, plot_path)
 
 
+def _span(values: np.ndarray) -> str:
+    """``+0.06 to +0.07``, or one value where they round alike."""
+    low, high = f"{float(values.min()):+.2f}", f"{float(values.max()):+.2f}"
+    return low if low == high else f"{low} to {high}"
+
+
 def _print_hindsight(hindsight: Hindsight) -> None:
     """The table of the decision against the rest of the log, and what it comes to."""
     shift = hindsight.room_shift_C
+    added = hindsight.shift_C[np.isfinite(hindsight.shift_C)]
     room = (
-        f"; the room moved {shift:+.2f} °C after the stop, added to T∞ at the stop as each sensor follows it"
-        if shift
+        f"; the room moved {shift:+.2f} °C from the stop to the end; each sensor follows its course through "
+        f"its modes, {_span(added)} °C added to T∞ at the stop"
+        if shift and len(added)
         else ""
     )
     table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}")
