@@ -808,3 +808,15 @@ def test_a_log_settled_in_display_steps_counts_as_settled_and_one_still_rising_d
     assert np.all(np.abs(final - 23.84) < 0.1)  # within a step of the truth, none NaN
     rising = np.round(23.84 - 2.0 * np.exp(-t / 400.0) + draws[0], 1)  # 0.2 °C in its last quarter
     assert np.isnan(measured_equilibrium(t, rising[:, None], max_late_move_C=0.1)[0][0])
+
+
+def test_a_sensor_with_no_curve_has_no_rmse_not_a_perfect_one():
+    """identify showed an RMSE of 0.000 beside a sensor with no rise (no curve): read as a perfect fit."""
+    measured = np.array([[20.0, 20.0], [20.1, 21.0], [20.0, 22.0]])
+    curve = np.array([[np.nan, 20.0], [np.nan, 21.1], [np.nan, 21.9]])
+    got = rmse(curve, measured)
+    assert np.isnan(got[0]) and got[1] == pytest.approx(np.sqrt(0.02 / 2))
+    t = np.arange(0.0, 61.0)
+    flat = 20.0 + 0.02 * np.random.default_rng(0).standard_normal(len(t))
+    result = identify(make_log(t, {"flat": flat, "heating": first_order(t)}), 30.0)
+    assert np.isnan(result.rmse_C[0]) and result.summary(0)["rmse_C"] is None

@@ -273,12 +273,14 @@ def rmse(estimate: FloatArray, measured: FloatArray) -> FloatArray:
     Returns
     -------
     ndarray, shape (S,)
-        The RMSE (°C) over the samples where both are finite.
+        The RMSE (°C) over the samples where both are finite; NaN where there is none (a sensor
+        with no curve: an RMSE of 0 read as a perfect fit).
     """
     diff = estimate - measured
     ok = np.isfinite(diff)
     count = ok.sum(axis=0)
-    return np.sqrt(np.where(ok, diff**2, 0.0).sum(axis=0) / np.maximum(count - 1, 1))
+    sums = np.where(ok, diff**2, 0.0).sum(axis=0)
+    return np.where(count > 0, np.sqrt(sums / np.maximum(count - 1, 1)), np.nan)
 
 
 def _profile_rss(time_min: FloatArray, values: FloatArray, rates: FloatArray, with_drift: bool) -> FloatArray:
