@@ -94,6 +94,23 @@ class OptionConsole(Console):
         super().print(*(as_options(o) if isinstance(o, str) else o for o in objects), **kwargs)
 
 
+def table_console(min_width: int = 100) -> OptionConsole:
+    """A console for a table: as wide as the terminal and at least ``min_width``; writing to a
+    file or a pipe, 200 columns (rich takes 80 there, and cut a table's last columns off).
+
+    Parameters
+    ----------
+    min_width : int
+        The narrowest the table is laid out (a narrower terminal wraps its lines).
+
+    Returns
+    -------
+    OptionConsole
+    """
+    probe = OptionConsole()
+    return OptionConsole(width=max(probe.width, min_width, 0 if probe.is_terminal else 200))
+
+
 def print_json(payload: dict[str, Any]) -> None:
     """Exactly one JSON object on stdout (the library's parameters said as options).
 

@@ -9,7 +9,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, OutputPath, PicturePath, feeddrive, print_json, user_errors
+from mtident.cli import FiniteFloatRange, OutputPath, PicturePath, feeddrive, print_json, table_console, user_errors
 from mtident.exceptions import InputError
 from mtident.feeddrive import (
     IDENTIFIED,
@@ -78,7 +78,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
             f"{result.damping_ratios[j]:.2e}",
             *[f"{v:+.3g}" for v in result.shapes[:, j]],
         )
-    Console(width=max(Console().width, 100)).print(table)
+    table_console().print(table)
 
 
 @feeddrive.command("simulate")
@@ -383,7 +383,7 @@ def identify_command(
         if truth:
             row += [f"{getattr(truth, name):.5g}", f"{summary['error_percent'][name]:.3g}"]  # type: ignore[index]
         table.add_row(*row)
-    Console(width=max(Console().width, 100)).print(table)
+    table_console().print(table)
     corr = Table(title="Correlation of estimated and measured responses (Nguyen-Quoc et al. Table 2)")
     corr.add_column("response")
     corr.add_column("r", justify="right")
@@ -435,7 +435,7 @@ def params_command(params_path: str | None, template: bool, out_path: str | None
         table.add_column(column)
     for name, value in params.as_dict().items():
         table.add_row(name, f"{value:.6g}", UNITS[name], DESCRIPTIONS[name], "yes" if name in IDENTIFIED else "known")
-    Console(width=max(Console().width, 100)).print(table)
+    table_console().print(table)
 
 
 def _positive_list(text: str, option: str, example: str) -> tuple[float, ...]:
@@ -577,7 +577,7 @@ def _print_plan(plan: ExcitationPlan, measured: str) -> None:
         ]
         label = p.candidate.label + (f" [dim]({p.reason.split(':')[0]})[/]" if p.reason else "")
         table.add_row(("[bold]" + label + "[/]") if p is plan.recommended else label, *cells)
-    Console(width=max(Console().width, 140)).print(table)
+    table_console(140).print(table)
     within = f"within ±{100 * plan.target:g} %"
     if plan.recommended is not None and plan.recommended is plan.lengthened:
         stderr.print(

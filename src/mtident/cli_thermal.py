@@ -11,7 +11,16 @@ import click
 import numpy as np
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, OptionConsole, OutputPath, PicturePath, print_json, thermal, user_errors
+from mtident.cli import (
+    FiniteFloatRange,
+    OptionConsole,
+    OutputPath,
+    PicturePath,
+    print_json,
+    table_console,
+    thermal,
+    user_errors,
+)
 from mtident.exceptions import InputError
 from mtident.io.columns import room_named
 from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
@@ -514,7 +523,7 @@ def _identify_table(
             "yes" if d["model_ok"] else "[yellow]no[/]",
             measured,
         )
-    console = OptionConsole(width=max(OptionConsole().width, 100))
+    console = table_console()
     console.print(table)
     if any(d.get("measured_settled") is False for d in summaries):
         console.print(
@@ -646,7 +655,7 @@ def learn_command(
     for name, m in reference.sensors.items():
         taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(m.time_constants_min, m.box, strict=True))
         table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), "no" if m.doubt else "yes")
-    OptionConsole(width=max(OptionConsole().width, 100)).print(table)
+    table_console().print(table)
 
 
 def _float_list(text: str, option: str) -> list[float]:
@@ -804,7 +813,7 @@ def min_time_command(
             *best,
             "yes" if d["periods_agree"] else "[yellow]no[/]",
         )
-    OptionConsole(width=max(OptionConsole().width, 100)).print(table)
+    table_console().print(table)
 
 
 @thermal.command("inspect")

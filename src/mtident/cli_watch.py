@@ -22,7 +22,7 @@ import click
 import numpy as np
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, OptionConsole, OutputPath, PicturePath, print_json, user_errors
+from mtident.cli import FiniteFloatRange, OptionConsole, OutputPath, PicturePath, print_json, table_console, user_errors
 from mtident.cli_thermal import (
     _column_layout,
     _fmt,
@@ -607,10 +607,10 @@ def _follow(
     except SystemError as error:
         # Ctrl-C that lands while compiled code runs surfaces as the SystemError of the call it
         # interrupted, the KeyboardInterrupt chained to it
-        stop = error.__cause__ or error.__context__
-        if not isinstance(stop, KeyboardInterrupt):
+        interrupt = error.__cause__ or error.__context__
+        if not isinstance(interrupt, KeyboardInterrupt):
             raise
-        return _say_interrupted(stop, session)
+        return _say_interrupted(interrupt, session)
 
 
 def _say_interrupted(stop: KeyboardInterrupt, session: WatchSession) -> bool:
@@ -694,7 +694,7 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     if as_json:
         print_json(outcome if hindsight is None else {**outcome, "hindsight": hindsight.to_dict()})
         return
-    console = OptionConsole(width=max(OptionConsole().width, 100))
+    console = table_console()
     console.print(_status_table(session, path))
     state = session.state
     assert state is not None
@@ -821,7 +821,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             shown,
             _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0),
         )
-    OptionConsole(width=max(OptionConsole().width, 100)).print(table)
+    table_console().print(table)
     reached = hindsight.measured_equilibrium_time_min[np.isfinite(hindsight.measured_equilibrium_time_min)]
     timing = ""
     if len(reached):
