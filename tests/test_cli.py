@@ -485,6 +485,9 @@ def test_inspect_shows_how_a_logger_export_is_read(tmp_path):
     assert json.loads(mtident("thermal", "inspect", str(begun), "--json").stdout)["time"]["samples"] == 1
     missing = mtident("thermal", "inspect", str(tmp_path / "nope.csv"))
     assert missing.returncode == 2 and "no such file" in missing.stderr and "Traceback" not in missing.stderr
+    # a column named as a room sensor is pointed out, as identify and watch do
+    room = mtident("thermal", "inspect", "@sample-room").stderr
+    assert "'room' is named as a room sensor and read as a sensor column" in " ".join(room.split())
 
 
 def test_watch_replays_a_workbook(tmp_path):

@@ -894,6 +894,7 @@ def inspect_command(
     assert isinstance(notes, list)
     for note in notes:
         console.print(f"note: {note}", highlight=False)
+    _say_room_candidates([str(d["sensor"]) for d in sensor_rows], "read as a sensor column")
 
 
 from mtident import cli_watch  # noqa: E402,F401 - registers `thermal watch` and `thermal report` on the group
