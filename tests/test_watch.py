@@ -513,11 +513,11 @@ def test_a_sensor_only_the_assumed_room_wander_keeps_from_stopping_is_told_to_lo
     reason = str(bound["reason"])
     assert "the readings alone pin T∞ within ±0.05 °C" in reason and "moves T∞ ±0.23 °C at 99%" in reason
     assert "no longer test narrows that" in reason and "continue the test" not in reason
-    assert "Ways on: for S, log the room beside the sensors" in reason
+    assert "Ways on: for S, state a smaller room wander" in reason and "log the room beside the sensors" in reason
     # still far from the tolerance: more readings may still find a faster slowest mode
     early = result(_checked_state(28.0, 25.0, 31.0, 199.0), settings)
     assert early["room_bound_sensors"] == [] and "continue the test" in str(early["reason"])
-    assert "for S, also log the room" in str(early["reason"])
+    assert "for S, also state a smaller room wander" in str(early["reason"])
     # a slowest mode of 100 min: the wander alone (±0.17 °C) is within the tolerance
     fast = result(_checked_state(28.0, 27.76, 28.24, 100.0), settings)
     assert fast["room_bound_sensors"] == [] and "wander" not in str(fast["reason"])

@@ -422,7 +422,9 @@ def _validated(
     with_room = state.readings.room_C is not None
     if with_room != (room_C is not None):
         msg = "room_C: this monitor was started " + (
-            "with a room sensor; give its readings" if with_room else "without a room sensor; give none"
+            "with a room sensor; give its readings"
+            if with_room
+            else "without a room sensor; give none, or start it with new_state(sensors, with_room=True)"
         )
         raise InputError(msg)
     room = None if room_C is None else np.atleast_1d(np.asarray(room_C, dtype=float))
@@ -868,8 +870,9 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
     learn = ", or give a reference run of this machine (mtident thermal learn)"
     ways = "continue the test" + ("" if settings.reference is not None else learn)
     room = (
-        "log the room beside the sensors and name it as the room sensor, or state a smaller room wander if the room "
-        "is steadier than assumed (0 for a steady room)"
+        "state a smaller room wander if the room is steadier than assumed (0 for a steady room), or log the room "
+        "beside the sensors and name it as the room sensor (the fit then follows the room instead of assuming it; "
+        "without a reference run, a slow mode may still keep the interval open)"
     )
     bound = [c.sensor for c in waiting if _room_bound(c, settings)]
     slow = [c.sensor for c in waiting if _room_wander_C(c, settings) > 0 and c.sensor not in bound]
