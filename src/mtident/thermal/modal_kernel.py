@@ -473,7 +473,9 @@ def leading_rows(
     return order[taken[:n_taken]], n_taken < count
 
 
-@njit(cache=True)
+# numpy's error model: no zero-division check on every division (each divisor is a scale of at
+# least 1e-150 or a pivot of a positive-definite matrix plus a ridge), the same numbers
+@njit(cache=True, error_model="numpy")
 def solve_selected(
     gram: FloatArray, rhs: FloatArray, columns: np.ndarray, yy: float, penalty: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray]:  # pragma: no cover - compiled
