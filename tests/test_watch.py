@@ -483,7 +483,8 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
     assert code == 0, err
     text = " ".join(out.split())
     said = re.search(
-        r"interval (-?[\d.]+) to (-?[\d.]+) °C, wider than .*?low end (-?[\d.]+) °C.*?high end (-?[\d.]+) °C", text
+        r"interval (-?[\d.]+) to (-?[\d.]+) °C, reaching beyond .*?low end (-?[\d.]+) °C.*?high end (-?[\d.]+) °C",
+        text,
     )
     assert said and said.group(1) == said.group(3) and said.group(2) == said.group(4), text
 
@@ -777,4 +778,4 @@ def test_an_interval_without_bounds_is_said_so_not_as_infinities():
     (event,) = _check_events(before, after, estimate, set(), 10.0)
     assert event.text == "S: narrowing, T∞ 30.00 °C, interval not yet bounded"
     reason = _reason([after], MonitorSettings())
-    assert "99% interval not yet bounded, wider than ±0.2 °C" in reason and "inf" not in reason
+    assert "99% interval not yet bounded, reaching beyond ±0.2 °C of T∞" in reason and "inf" not in reason

@@ -864,8 +864,8 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
                 else "interval not yet bounded"
             )
             parts.append(
-                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} {bounds}, wider than "
-                f"±{settings.tolerance_C:g} °C ({c.ends})" + _room_bound_clause(c, settings)
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} {bounds}, reaching beyond "
+                f"±{settings.tolerance_C:g} °C of T∞ ({c.ends})" + _room_bound_clause(c, settings)
             )
     learn = ", or give a reference run of this machine (mtident thermal learn)"
     ways = "continue the test" + ("" if settings.reference is not None else learn)
