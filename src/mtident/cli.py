@@ -287,12 +287,28 @@ def user_errors(func: F) -> F:
             click.echo(f"mtident: error: {as_options(str(exc))}", err=True)
             sys.exit(2)
         except SystemError as exc:
-            # Ctrl-C while compiled code runs: the interrupted call's SystemError carries it
-            if isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
+            if carried_interrupt(exc) is not None:
                 raise KeyboardInterrupt from None
             raise
 
     return wrapper  # type: ignore[return-value]
+
+
+def carried_interrupt(error: SystemError) -> KeyboardInterrupt | None:
+    """The Ctrl-C a ``SystemError`` carries: one that lands while compiled code runs reaches
+    Python as the interrupted call's SystemError, the KeyboardInterrupt chained to it.
+
+    Parameters
+    ----------
+    error : SystemError
+
+    Returns
+    -------
+    KeyboardInterrupt or None
+        None where the error carries no Ctrl-C (a fault of its own).
+    """
+    cause = error.__cause__ or error.__context__
+    return cause if isinstance(cause, KeyboardInterrupt) else None
 
 
 class LazyGroup(click.Group):

@@ -244,6 +244,13 @@ free_fast_option = click.option(
     "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, "
     "which the answer states.",
 )
+preset_option = click.option(
+    "--preset",
+    type=click.Choice(PRESETS),
+    default="data",
+    show_default=True,
+    help="First-order filters: initial values and tuning from the data, or a paper's exactly.",
+)
 max_time_constant_option = click.option(
     "--max-time-constant",
     "max_tau_min",
@@ -308,13 +315,7 @@ def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineRe
     "The papers' first-order filters (their interval assumes a first-order machine): ukf, aukf (Xia 2014), fukf, "
     "afukf (Yu 2019), or lsq (least squares).",
 )
-@click.option(
-    "--preset",
-    type=click.Choice(PRESETS),
-    default="data",
-    show_default=True,
-    help="First-order filters: initial values and tuning from the data, or a paper's exactly.",
-)
+@preset_option
 @max_time_constant_option
 @reference_option
 @free_fast_option
@@ -691,13 +692,7 @@ def _float_list(text: str, option: str) -> list[float]:
     help="The first-order filter (or least squares, lsq) fitted in every window, as in Xia et al. 2014 and "
     "Yu et al. 2019.",
 )
-@click.option(
-    "--preset",
-    type=click.Choice(PRESETS),
-    default="data",
-    show_default=True,
-    help="Initial values and tuning from the data, or a paper's exactly.",
-)
+@preset_option
 @click.option(
     "--ambient",
     "ambient_col",

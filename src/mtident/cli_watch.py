@@ -22,7 +22,16 @@ import click
 import numpy as np
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, OptionConsole, OutputPath, PicturePath, print_json, table_console, user_errors
+from mtident.cli import (
+    FiniteFloatRange,
+    OptionConsole,
+    OutputPath,
+    PicturePath,
+    carried_interrupt,
+    print_json,
+    table_console,
+    user_errors,
+)
 from mtident.cli_thermal import (
     _column_layout,
     _fmt,
@@ -605,10 +614,8 @@ def _follow(
     except KeyboardInterrupt as stop:
         return _say_interrupted(stop, session)
     except SystemError as error:
-        # Ctrl-C that lands while compiled code runs surfaces as the SystemError of the call it
-        # interrupted, the KeyboardInterrupt chained to it
-        interrupt = error.__cause__ or error.__context__
-        if not isinstance(interrupt, KeyboardInterrupt):
+        interrupt = carried_interrupt(error)
+        if interrupt is None:
             raise
         return _say_interrupted(interrupt, session)
 
