@@ -426,13 +426,57 @@ def sample_log():
 
 
 def test_min_time_by_least_squares_fits_every_window_of_the_sample():
-    """curve_fit given the rise's exact Jacobian left windows of the sample unfitted (their RMSE
-    the starting guess's, 18.9 °C here, against at most 0.21 °C by finite differences)."""
+    """A fit that stops at its starting guess shows here: curve_fit given the rise's exact Jacobian
+    left windows of the sample at the guess's RMSE, 18.9 °C, against at most 0.21 °C fitted."""
     windows = [10.0, 14.0, 18.0, 22.0, 26.0, 30.0]
     result = minimal_identification_time(
         sample_log().select(["T1", "T2"]), "lsq", periods_min=[35.0], windows_min=windows
     )
     assert np.isfinite(result.rmse_C).all() and np.nanmax(result.rmse_C) < 0.5
+
+
+def test_the_least_squares_fit_is_never_worse_than_scipys_curve_fit():
+    """The profiled fit against the peer on every early window of the sample's ten sensors: never
+    a larger residual sum of squares, and a smaller one where curve_fit stopped short."""
+    from scipy.optimize import curve_fit
+
+    from mtident.thermal.lsq import fit_rise
+    from mtident.thermal.model import rise_curve
+
+    log = sample_log()
+    shorter = 0
+    for n in range(8, 48, 4):
+        t, y = log.time_min[:n], log.temperature_C[:n]
+        guess = np.column_stack(quick_estimate(t, y))
+        ours = fit_rise(t, y, guess).params
+        for s in range(y.shape[1]):
+            start = [guess[s, 0], float(np.clip(guess[s, 1], 1e-5, 9.0)), guess[s, 2]]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                peer, _ = curve_fit(
+                    rise_curve,
+                    t,
+                    y[:, s],
+                    p0=start,
+                    bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]),
+                    max_nfev=2000,
+                )
+            rss_ours = float(np.sum((y[:, s] - rise_curve(t, *ours[s])) ** 2))
+            rss_peer = float(np.sum((y[:, s] - rise_curve(t, *peer)) ** 2))
+            assert rss_ours <= rss_peer * (1 + 1e-9)
+            shorter += rss_ours < rss_peer * (1 - 1e-6)
+    assert shorter > 0
+
+
+def test_a_least_squares_fit_of_a_straight_rise_is_not_identified_rather_than_certain():
+    """λ at its lower bound (the window a straight line): its column is T∞'s, and the fit says it is
+    not identified instead of the zero variance a pseudo-inverse gives that direction."""
+    from mtident.thermal.lsq import fit_rise
+
+    t = np.arange(0.0, 20.0)
+    line = 18.0 + 0.05 * t + 0.001 * np.random.default_rng(3).standard_normal(len(t))
+    fit = fit_rise(t, line[:, None], np.array([[18.0, 0.01, 30.0]]))
+    assert fit.cov[0, 2, 2] >= 1e12 and fit.residual_sigma[0] < 0.002
 
 
 def test_a_window_that_does_not_determine_the_steady_state_is_said():

@@ -13,6 +13,11 @@ from mtident.thermal.model import rise_curve
 
 # how often a true first-order curve is taken for a lagged one: 2.5σ on each of 3 leading samples
 _LAG_FALSE_FLAG = 3 * 2 * float(ndtr(-2.5))
+# λ's range (1/min): from a rise too slow to tell from a line in any window to one over within seconds
+_RATE_BOUNDS = (1e-6, 10.0)
+# points of the log-λ grid the profile is searched on before Brent's method refines it (a step of
+# 7 % in λ: an exponential's profile has one minimum per basin much wider than that)
+_RATE_GRID = 241
 
 __all__ = [
     "LeastSquaresFit",
@@ -46,10 +51,14 @@ class LeastSquaresFit:
 
 
 def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> LeastSquaresFit:
-    """Fit T(t) = T∞ + (T₀ − T∞)e^(−λt) to each column of ``values`` with scipy's curve_fit.
+    """Fit T(t) = T∞ + (T₀ − T∞)e^(−λt) to each column of ``values`` by least squares.
 
-    The covariance is curve_fit's, scaled by the residual variance
-    (``absolute_sigma=False``), so it needs no noise level from the user.
+    The fit is separable: for a given λ, T₀ and T∞ are a straight-line regression on 1 − e^(−λt),
+    so the residual sum of squares is profiled over λ alone, searched on a log grid over the
+    bounds and refined by Brent's method around the grid's best (no start to be trapped near, and
+    no interpreter between the linear parameters). The covariance is the Gauss-Newton one at
+    the optimum, scaled by the residual variance (as scipy's ``curve_fit`` with
+    ``absolute_sigma=False``), so it needs no noise level from the user.
 
     Parameters
     ----------
@@ -57,42 +66,24 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
     values : ndarray, shape (N, S)
         NaN samples are left out.
     guess : ndarray, shape (S, 3)
-        Starting point [T₀, λ, T∞].
+        [T₀, λ, T∞] kept by a sensor that cannot be fitted.
 
     Returns
     -------
     LeastSquaresFit
-        A sensor with fewer than three valid samples, or whose fit does not converge, keeps its
-        starting point, with 1e12 on its covariance's diagonal.
+        A sensor with fewer than three valid samples keeps ``guess`` (its level where that is not
+        finite), with 1e12 on its covariance's diagonal; so does any fit whose covariance is
+        not finite (three samples, or a flat window).
     """
-    from scipy.optimize import OptimizeWarning, curve_fit  # here, not at the top: it costs ~0.3 s of start-up
-
     params, covs, sigmas = [], [], []
     for s in range(values.shape[1]):
         ok = np.isfinite(values[:, s])
         t, y = time_min[ok], values[ok, s]
-        # A flat window (a sensor that never heats) gives a guess with λ ≤ 0 or NaN, which
-        # curve_fit refuses; start such a fit inside the bounds instead.
         start = np.asarray(guess[s], dtype=float).copy()
         level = float(np.mean(y)) if y.size else 0.0
         start[[0, 2]] = np.where(np.isfinite(start[[0, 2]]), start[[0, 2]], level)
-        start[1] = np.clip(start[1], 1e-5, 9.0) if np.isfinite(start[1]) else 0.01
-        p, c = start, np.full((3, 3), np.inf)  # no fit: the guess, not identified
-        if y.size >= 3:
-            try:
-                with warnings.catch_warnings():
-                    # no covariance for a flat window: reported as unbounded below
-                    warnings.simplefilter("ignore", OptimizeWarning)
-                    p, c = curve_fit(
-                        rise_curve,
-                        t,
-                        y,
-                        p0=start,
-                        bounds=([-np.inf, 1e-6, -np.inf], [np.inf, 10.0, np.inf]),
-                        max_nfev=2000,
-                    )
-            except RuntimeError:  # no convergence within max_nfev
-                pass
+        start[1] = np.clip(start[1], _RATE_BOUNDS[0], _RATE_BOUNDS[1]) if np.isfinite(start[1]) else 0.01
+        p, c = _profiled_fit(t, y) if y.size >= 3 else (start, np.full((3, 3), np.inf))
         if not np.all(np.isfinite(c)):
             c = np.diag(np.full(3, 1e12))
         params.append(p)
@@ -100,6 +91,51 @@ def fit_rise(time_min: FloatArray, values: FloatArray, guess: FloatArray) -> Lea
         resid = y - rise_curve(t, *p)
         sigmas.append(np.sqrt(np.sum(resid**2) / max(len(y) - 3, 1)))
     return LeastSquaresFit(np.array(params), np.array(covs), np.array(sigmas))
+
+
+def _line_on_rise(time_min: FloatArray, values: FloatArray, log_rate: FloatArray) -> tuple[FloatArray, ...]:
+    """For each log λ (G,): the regression of the values on u = 1 − e^(−λt): T₀ (the value at u = 0),
+    T∞ − T₀ (the slope) and the residual sum of squares."""
+    u = -np.expm1(-np.exp(log_rate)[:, None] * time_min[None, :])  # (G, N)
+    du = u - u.mean(axis=1, keepdims=True)
+    dy = values - values.mean()
+    suu = np.einsum("gn,gn->g", du, du)
+    suy = du @ dy
+    slope = np.where(suu > 0, suy / np.where(suu > 0, suu, 1.0), 0.0)
+    start = values.mean() - slope * u.mean(axis=1)
+    rss = np.maximum(float(dy @ dy) - slope * suy, 0.0)
+    return start, slope, rss
+
+
+def _profiled_fit(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """[T₀, λ, T∞] at the least residual sum of squares over λ within the bounds, and their
+    covariance (infinite where the Jacobian is rank-deficient beyond what a pseudo-inverse drops,
+    or with no residual degree of freedom)."""
+    from scipy.optimize import minimize_scalar  # here, not at the top: it costs ~0.3 s of start-up
+
+    lower, upper = np.log(_RATE_BOUNDS)
+    grid = np.linspace(lower, upper, _RATE_GRID)
+    best = int(np.argmin(_line_on_rise(time_min, values, grid)[2]))
+    bracket = (grid[max(best - 1, 0)], grid[min(best + 1, len(grid) - 1)])
+    found = minimize_scalar(
+        lambda phi: float(_line_on_rise(time_min, values, np.array([phi]))[2][0]),
+        bounds=bracket,
+        method="bounded",
+        options={"xatol": 1e-10},
+    )
+    log_rate = float(found.x) if found.fun <= _line_on_rise(time_min, values, grid[[best]])[2][0] else grid[best]
+    start, slope, rss = (float(a[0]) for a in _line_on_rise(time_min, values, np.array([log_rate])))
+    rate = float(np.exp(log_rate))
+    params = np.array([start, rate, start + slope])
+    decay = np.exp(-rate * time_min)
+    jac = np.column_stack([decay, slope * time_min * decay, 1.0 - decay])
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    dof = len(values) - 3
+    if dof <= 0 or sv[-1] <= np.finfo(float).eps * max(jac.shape) * sv[0]:
+        # a direction the window does not determine (λ at a bound, where its column is another's):
+        # not identified, rather than the zero variance a pseudo-inverse would give that direction
+        return params, np.full((3, 3), np.inf)
+    return params, (vt.T / sv**2) @ vt * rss / dof
 
 
 def cramer_rao_bound(
