@@ -436,8 +436,9 @@ def test_min_time_by_least_squares_fits_every_window_of_the_sample():
 
 
 def test_the_least_squares_fit_is_never_worse_than_scipys_curve_fit():
-    """The profiled fit against the peer on every early window of the sample's ten sensors: never
-    a larger residual sum of squares, and a smaller one where curve_fit stopped short."""
+    """The profiled fit against the peer on early windows of the sample's ten sensors: never a
+    larger residual sum of squares, and a smaller one where curve_fit stopped short (the benchmark
+    compares all 530 windows of 8-60 readings)."""
     from scipy.optimize import curve_fit
 
     from mtident.thermal.lsq import fit_rise
@@ -445,7 +446,7 @@ def test_the_least_squares_fit_is_never_worse_than_scipys_curve_fit():
 
     log = sample_log()
     shorter = 0
-    for n in range(8, 48, 4):
+    for n in (24, 44):
         t, y = log.time_min[:n], log.temperature_C[:n]
         guess = np.column_stack(quick_estimate(t, y))
         ours = fit_rise(t, y, guess).params
