@@ -736,7 +736,7 @@ def test_the_hindsight_moves_t_inf_with_the_room_as_the_sensor_follows_it():
     # a tolerance of 0.5 °C: a sensor still following the room by 0.2 °C in the log's last quarter
     # is not settled to the precision of 0.2
     followed = check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.5, room, [((60.0, -8.0),)])
-    whole = check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.5, room)
+    whole = check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.5, room, None, 60.0)
     assert np.isnan(check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.2, room).error_C[0])
     assert abs(followed.error_C[0]) < 0.005 and whole.error_C[0] < -0.07
     assert followed.room_shift_C == whole.room_shift_C and abs(whole.room_shift_C + 0.4) < 0.01
@@ -747,6 +747,27 @@ def test_the_hindsight_moves_t_inf_with_the_room_as_the_sensor_follows_it():
     sensor = room_lag(room, t, np.array([60.0]))[0] + 8.0 * (1.0 - np.exp(-t / 60.0))
     caught_up = check_decision(("S",), np.array([28.4]), 300.0, t, sensor[:, None], 0.2, room, [((60.0, -8.0),)])
     assert abs(caught_up.error_C[0]) < 0.005
+
+
+def test_a_log_still_rising_at_the_pace_of_a_slow_mode_is_not_called_settled():
+    """A newcomer's spindle (modes of 6, 45 and 180 min) logged for 6 h: its last quarter moved
+    0.09 °C, under half the tolerance, but 0.2 °C was still to come, and a right stop (0.03 °C
+    off the truth) was called 0.25 °C beyond the tolerance. At the pace of its 180-min mode it is
+    not settled; the same log run on to 15 h is, and the stop is within the tolerance."""
+    from mtident.thermal.hindsight import check_decision
+
+    modes = ((6.0, -5.6), (45.0, -3.7), (180.0, -1.0))
+    for end, settled in ((360.0, False), (900.0, True)):
+        t = np.arange(0.0, end + 1.0, 1.0 / 3.0)
+        truth = 30.5 + sum(a * np.exp(-t / tau) for tau, a in modes)
+        values = noisy(truth, 23)[:, None]
+        check = check_decision(("spindle",), np.array([30.53]), 274.0, t, values, 0.2, None, [modes])
+        assert np.isfinite(check.settled_C[0]) == settled
+        assert not settled or abs(check.error_C[0]) < 0.1
+        # without the stop's modes, the largest time constant allowed (300 min) sets the pace
+        assert np.isnan(check_decision(("spindle",), np.array([30.53]), 274.0, t, values, 0.2).settled_C[0]) or (
+            end == 900.0
+        )
 
 
 def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsys):

@@ -528,8 +528,9 @@ def _identify_table(
     console.print(table)
     if any(d.get("measured_settled") is False for d in summaries):
         console.print(
-            "* the log's last quarter still moved 0.1 °C or more: it had not settled, and its last level and "
-            "95 %-rise time are short of where it settles.",
+            "* the log's last quarter still moved 0.1 °C or more, or enough to leave more than 0.05 °C to come "
+            "with a mode as slow as the largest time constant: it may not have settled, and its last level and "
+            "95 %-rise time may be short of where it settles.",
             highlight=False,
         )
     assumed = summaries[0]["assumptions"]

@@ -5,7 +5,8 @@ equilibrium) can check the rule on the engineer's own machine: each sensor's
 T∞ at the stop against the temperature the log settled to
 (:func:`~mtident.thermal.identify.measured_equilibrium`: the median of its last
 10 samples, where its last quarter rose by less than 5 % of the whole rise and
-by less than half the tolerance).
+by less than half the tolerance, and where no more than a quarter of the tolerance is still to
+come at the pace of the sensor's slowest mode at the stop).
 With a room sensor the room may have moved between the stop and the log's end;
 T∞ follows the room one to one, but a sensor follows a move of the room through
 its modes, so a move in the last hours is only partly in the log's end: the move
@@ -28,6 +29,7 @@ from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.thermal.identify import measured_equilibrium
 from mtident.thermal.modal_search import room_lag
+from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 
 __all__ = ["Hindsight", "check_decision"]
 
@@ -182,6 +184,7 @@ def check_decision(
     tolerance_C: float,
     room_C: FloatArray | None = None,
     modes: Sequence[tuple[tuple[float, float], ...]] | None = None,
+    max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN,
 ) -> Hindsight:
     """Compare T∞ at the stop (one per sensor, NaN for one left out) with where the whole log settled.
 
@@ -205,13 +208,24 @@ def check_decision(
     modes : sequence of tuples of (time constant, amplitude), optional
         Each sensor's modes at the stop: the room's move reaches it through them, weighted by
         their shares of its rise (without them, or for a sensor with none, whole).
+    max_time_constant_min : float
+        The slowest mode allowed (min), for a sensor whose modes are not given. A sensor counts
+        as settled where the rise still to come at the pace of its slowest mode (its late move m
+        over Δ minutes leaves m / (e^(Δ/τ) − 1)) is at most a quarter of the tolerance.
 
     Returns
     -------
     Hindsight
     """
-    # a sensor still moving by half the tolerance is not settled to the precision the check needs
-    settled, equilibrium = measured_equilibrium(time_min, values, tolerance_C / 2.0)
+    # a sensor still moving by half the tolerance, or with more than a quarter of it still to come
+    # at the pace of its slowest mode, is not settled to the precision the check needs
+    slowest = [
+        min(max((tau for tau, _ in m), default=max_time_constant_min), max_time_constant_min)
+        for m in (modes if modes is not None else [()] * len(sensors))
+    ]
+    settled, equilibrium = measured_equilibrium(
+        time_min, values, tolerance_C / 2.0, tolerance_C / 4.0, np.array(slowest, dtype=float)
+    )
     shift, followed = 0.0, None
     if room_C is not None:
         valid = np.isfinite(room_C)

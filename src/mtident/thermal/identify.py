@@ -18,6 +18,7 @@ from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
+from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 from mtident.thermal.model import (
     EQUILIBRIUM_FRACTION,
     equilibrium_time,
@@ -388,16 +389,25 @@ def model_check(
 
 
 def measured_equilibrium(
-    time_min: FloatArray, values: FloatArray, max_late_move_C: float = math.inf
+    time_min: FloatArray,
+    values: FloatArray,
+    max_late_move_C: float = math.inf,
+    max_remaining_C: float = math.inf,
+    slowest_mode_min: float | FloatArray = DEFAULT_MAX_TIME_CONSTANT_MIN,
 ) -> tuple[FloatArray, FloatArray]:
     """Final temperature and 95 %-rise time read off a log that ran to equilibrium.
 
     The final temperature is the median of the last 10 samples; the log counts as
     having reached equilibrium when its last quarter rose by less than 5 % of the
     total rise and less than ``max_late_move_C`` (the mean of its last sixteenth against that of
-    the sixteenth a quarter before its end). Otherwise NaN. A log still moving
+    the sixteenth a quarter before its end), and when the rise still to come that this late move
+    allows is at most ``max_remaining_C``. Otherwise NaN. A log still moving
     within those bounds gives a final temperature, and a 95 %-rise time, short of
     where it settles: the papers' "measured" values, read off the end of a test.
+
+    The rise still to come is bounded by a mode as slow as ``slowest_mode_min``: a move m
+    over Δ minutes of such a mode leaves m / (e^(Δ/τ) − 1) to come. A small late move is not
+    settled by itself: a 180-min mode moves 0.09 °C in 68 min with 0.2 °C still to come.
 
     Parameters
     ----------
@@ -407,6 +417,11 @@ def measured_equilibrium(
         Readings (°C, NaN: missing).
     max_late_move_C : float
         The most the last quarter may move (°C).
+    max_remaining_C : float
+        The most the rise still to come may be (°C).
+    slowest_mode_min : float or ndarray, shape (S,)
+        The slowest mode the rise still to come is bounded with (min), one for every sensor or
+        each its own.
 
     Returns
     -------
@@ -419,7 +434,8 @@ def measured_equilibrium(
     """
     finals, times = [], []
     n = len(time_min)
-    for col in values.T:
+    slowest = np.broadcast_to(np.asarray(slowest_mode_min, dtype=float), (values.shape[1],))
+    for col, tau in zip(values.T, slowest, strict=True):
         ok = np.isfinite(col)
         t, y = time_min[ok], col[ok]
         if len(y) < 40:
@@ -433,8 +449,13 @@ def measured_equilibrium(
         # (0.1 °C) and a little noise put five-reading medians a whole step apart on a settled log
         span = max(quarter // 4, 5)
         late_rise = float(np.mean(y[-span:]) - np.mean(y[-quarter : -quarter + span]))
+        apart = float(np.mean(t[-span:]) - np.mean(t[-quarter : -quarter + span]))
+        # the move less two of its standard errors: noise alone does not make a settled log move
+        noise = 2.0 * math.sqrt(float(np.var(y[-span:]) + np.var(y[-quarter : -quarter + span])) / span)
+        pace = float(tau) if math.isfinite(tau) and tau > 0 else DEFAULT_MAX_TIME_CONSTANT_MIN
+        to_come = max(abs(late_rise) - noise, 0.0) / max(math.expm1(apart / pace), 1e-12)
         rise = final - start
-        if rise == 0 or abs(late_rise) > min(0.05 * abs(rise), max_late_move_C):
+        if rise == 0 or abs(late_rise) > min(0.05 * abs(rise), max_late_move_C) or to_come > max_remaining_C:
             finals.append(np.nan)
             times.append(np.nan)
             continue

@@ -787,7 +787,8 @@ def _verdict(
         )
     level = min(intervals)
     lo, hi = intervals[level]
-    if not np.isfinite(hi - lo) or (hi - lo) / 2 > max(rise, threshold):
+    # an interval as wide as the whole rise so far does not say where the sensor settles
+    if not np.isfinite(hi - lo) or hi - lo > max(rise, threshold):
         ok = False
         notes.add(
             "undetermined",

@@ -61,8 +61,9 @@ class RobustIdentification:
     method, preset : str
         Always "robust" and "data" (the names :class:`~mtident.thermal.identify.Identification` also has).
     measured_settled : ndarray of bool, shape (S,)
-        Whether the log's last quarter moved less than ``SETTLED_MOVE_C``: where not, the
-        measured values (the papers' 5 % rule) are short of where the sensor settles.
+        Whether the log's last quarter moved less than ``SETTLED_MOVE_C``, with at most half that
+        still to come at the pace of a mode as slow as the largest time constant allowed: where
+        not, the measured values (the papers' 5 % rule) may be short of where the sensor settles.
     """
 
     sensors: tuple[str, ...]
@@ -292,7 +293,9 @@ def identify_robust(
     measured[: min(len(t), len(times))] = y[: len(times)]
     in_log = times <= t[-1] + 1e-9
     final, equilibrium = measured_equilibrium(t, y)
-    settled = np.isfinite(measured_equilibrium(t, y, SETTLED_MOVE_C)[0])
+    # the window's fit may not know the log's slowest mode: the largest allowed sets the pace
+    slowest = settings.max_time_constant_min
+    settled = np.isfinite(measured_equilibrium(t, y, SETTLED_MOVE_C, SETTLED_MOVE_C / 2.0, slowest)[0])
     return RobustIdentification(
         sensors=log.sensors,
         window_min=float(t[n - 1]),

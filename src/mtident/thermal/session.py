@@ -378,6 +378,7 @@ class WatchSession:
             self.settings.tolerance_C,
             room_C,
             [c.modes for c in state.checks],
+            self.settings.robust.max_time_constant_min,
         )
 
     def whole_log(self) -> tuple[FloatArray, FloatArray, FloatArray | None]:
