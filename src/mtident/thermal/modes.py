@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from scipy.special import stdtrit
 
+from mtident._threads import one_blas_thread
 from mtident._typing import FloatArray
 from mtident.thermal.modal_search import (
     Fits,
@@ -132,7 +133,11 @@ def fit_steady_state(
     >>> round(fit.steady_C, 1), len(fit.modes)
     (26.7, 1)
     """
-    problem = make_problem(binned, noise_C, interval_min, family)
+    with one_blas_thread():
+        return _fit_steady_state(make_problem(binned, noise_C, interval_min, family), levels, refine_within)
+
+
+def _fit_steady_state(problem: Problem, levels: tuple[float, ...], refine_within: float | None) -> SteadyState:
     candidates = grid_candidates(problem)
     if refine_within is not None:
         # the grid alone, where its hull is far wider than asked: no refinement (most of the
@@ -215,17 +220,19 @@ def _steady_state(
             if widest_refined is None:
                 widest_refined = grid_half_width(candidates, threshold, float(chosen.steady[0])) <= refine_within
             refine_level = widest_refined
-        # with a tolerance the widest level's hull misses, a narrower level is polished from the
-        # wider level's end models alone (the same ridges set both): a report's interval while the
-        # decision waits; searched in full once the decision may be near
+        # a narrower level's end is polished from the wider level's end model too (the same ridges
+        # set both, and a reference family's one start can miss their basin); with a tolerance the
+        # widest level's hull misses, from that model alone: a report's interval while the decision
+        # waits, searched in full once the decision may be near
         near = (
             refine_within is None
             or not intervals
             or max(steady - intervals[max(intervals)][0], intervals[max(intervals)][1] - steady) <= refine_within
         )
-        seeds = None if near else list(ends_models)
-        low = hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level, seeds)
-        high = hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level, seeds)
+        seeds = [ends_models[0]] if intervals else None
+        low = hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level, seeds, not near)
+        seeds = [ends_models[1]] if intervals else None
+        high = hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level, seeds, not near)
         ends_models = (low, high)
         lo = min(float(profile_bounds(low, threshold)[0][0]) + shift, steady)
         hi = max(float(profile_bounds(high, threshold)[1][0]) + shift, steady)
@@ -265,7 +272,8 @@ def best_fit(
     correlation_factor : float
     """
     problem = make_problem(binned, noise_C, interval_min, family)
-    best = min(best_per_count(problem, grid_candidates(problem)).values(), key=lambda f: float(f.rss[0]))
+    with one_blas_thread():
+        best = min(best_per_count(problem, grid_candidates(problem)).values(), key=lambda f: float(f.rss[0]))
     return float(best.rss[0]), best.n_params, correlation_factor(weighted_residuals(problem, best))
 
 
