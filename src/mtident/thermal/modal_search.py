@@ -53,6 +53,11 @@ _CANDIDATES = 3
 # opposite sign sets an end, and the grid's few leading models all lie in one basin)
 _END_STARTS = 30
 _POLISHED = 3
+# Within a reference's boxes fewer basins, but not one: free fast modes between and below the
+# boxes make several, and the hull's end often lies in another than the best fit's (the search
+# compared with one from many more starts is in the documentation's measured results)
+_END_STARTS_REFERENCE = 10
+_POLISHED_REFERENCE = 3
 # a refinement's iterations and evaluations: the few that wander along a ridge's edge end here
 _MAXITER = 100
 _MAXFUN = 300
@@ -108,11 +113,11 @@ class Problem:
         """How many models of different basins each end of the hull starts from: an end often lies
         on a thin ridge of slow modes with large amplitudes of opposite sign, which the grid's
         leading few models, all in one basin, miss."""
-        return _END_STARTS if self.family.reference_min is None else 1
+        return _END_STARTS if self.family.reference_min is None else _END_STARTS_REFERENCE
 
     def polished(self) -> int:
         """How many of the lattice search's best models each end polishes by L-BFGS-B."""
-        return _POLISHED if self.family.reference_min is None else 1
+        return _POLISHED if self.family.reference_min is None else _POLISHED_REFERENCE
 
     def basin_log(self) -> float:
         """Models closer than this in every log time constant are taken as of one basin."""
@@ -574,6 +579,7 @@ def hull_end(
     fallback: Fits,
     refine: bool = True,
     seeds: list[Fits] | None = None,
+    seeds_only: bool = False,
 ) -> Fits:
     """The model that sets one end of the hull: the grid's leading models of different basins,
     each improved by a local search on a shrinking lattice around it (all at once), then the
@@ -595,7 +601,10 @@ def hull_end(
     refine : bool
         False: the grid's leading model as it is.
     seeds : list of Fits, optional
-        Refine these models alone (the ends of a wider level's hull).
+        Models refined besides the search's (the ends of a wider level's hull: the same ridges
+        set both, and the search's few starts can miss the basin they lie in).
+    seeds_only : bool
+        Refine ``seeds`` alone, without a search of ``candidates``.
 
     Returns
     -------
@@ -606,15 +615,14 @@ def hull_end(
     if not refine:
         leading = _leading(candidates, objective, 1)
         return fallback if not leading else leading[0][0].take(leading[0][1])
-    if seeds is not None:
-        polish = [(f, 0) for f in seeds]
-    else:
+    polish = [(f, 0) for f in seeds or []]
+    if not seeds_only:
         starts = _leading(candidates, objective, problem.end_starts(), problem.basin_log())
         improved = [
             _lattice_search(problem, [f.take(i) for f, i in starts if f.tau.shape[1] == k], objective)
             for k in {f.tau.shape[1] for f, _ in starts}
         ]
-        polish = _leading(improved, objective, problem.polished(), problem.basin_log())
+        polish += _leading(improved, objective, problem.polished(), problem.basin_log())
     best, best_value = None, np.inf
     for fits, i in polish:
         refined = _refine(problem, fits, i, objective)
