@@ -27,7 +27,7 @@ from mtident.io.follow import LogFollower
 from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
 from mtident.thermal.reference import MachineReference, save_reference
-from mtident.thermal.robust import RobustSettings, SensorModes
+from mtident.thermal.robust import RobustSettings, SensorModes, estimate_sensor
 from mtident.thermal.session import SavedWatch, WatchSession, default_state_path
 
 T = np.arange(0.0, 401.0)
@@ -701,6 +701,24 @@ def test_readings_in_steps_as_coarse_as_the_tolerance_never_stop_within_it():
     reason = str(result(state, MonitorSettings(reference=one_mode_reference("S"), robust=fast))["reason"])
     assert "its readings come in steps of 0.32 °C, no finer than the tolerance" in reason
     assert replay({"S": y}, reference=one_mode_reference("S"), robust=fast, tolerance_C=0.4).stopped
+
+
+def test_a_converters_first_step_is_no_rise_and_no_settled_fast_mode():
+    """A pair of nodes (218 and 35 min) read through 0.32 °C steps every 30 s: by 27 min the
+    readings had changed once, from 18.56 to 18.88 °C; taken for a settled fast mode with the
+    decimal display's 0.01 °C noise, T∞ was 18.88 ± 0.16 °C at 99 % and the test stopped, 8.75 °C
+    below where the sensor settles. Until the readings change often enough to show their step,
+    the smallest change is their step: one step is no rise, and the monitor waits."""
+    from mtident.thermal.synthetic import random_warmup
+
+    warm = random_warmup(np.random.default_rng(13433))
+    assert warm.rounding_C == pytest.approx(0.32) and warm.room_C is None
+    n = int(np.searchsorted(warm.time_min, 27.0, side="right"))
+    estimate = estimate_sensor("S", warm.time_min[:n], warm.reading_C[:n])
+    assert estimate.status == "no rise" and "readings in steps of 0.32 °C" in estimate.warnings[0]
+    n = int(np.searchsorted(warm.time_min, 150.0, side="right"))
+    state = replay({"S": warm.reading_C[:n]}, warm.time_min[:n])
+    assert not state.stopped and state.checks[0].status == "too coarse"
 
 
 def test_watch_says_each_sensors_reference_and_when_each_became_ready(tmp_path):

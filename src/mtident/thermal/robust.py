@@ -383,8 +383,9 @@ def estimate_sensor(
             noise,
             float(t[0]),
             settings,
-            f"no rise above its noise yet ({rise:.3g} °C from its first level, noise {noise:.2g} °C): no warm-up to "
-            "identify",
+            f"no rise above its noise yet ({rise:.3g} °C from its first level, noise {noise:.2g} °C"
+            + (f", readings in steps of {rounding:.2g} °C" if rounding > 0 else "")
+            + "): no warm-up to identify",
         )
     lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
     onset = lead if lead < len(t) else 0
@@ -810,7 +811,9 @@ def quantisation_step(values: FloatArray) -> float:
     """The step a converter's quantisation puts between readings (0 where none is seen): the
     smallest common change between successive readings, where nearly all changes are whole
     multiples of it (a 10-bit converter's 0.32 °C, off any decimal grid a display step would
-    show).
+    show). Where the readings have changed fewer than five times, the smallest change: as far as
+    they tell, they may move in steps that large (a converter's two levels, 0.32 °C apart, read as
+    a settled fast mode, would put T∞ on the upper level within ±0.16 °C).
 
     Parameters
     ----------
@@ -828,11 +831,13 @@ def quantisation_step(values: FloatArray) -> float:
     0.3223
     >>> quantisation_step(np.array([20.0, 20.013, 20.031, 20.04, 20.052, 20.071, 20.079, 20.102]))
     0.0
+    >>> round(quantisation_step(np.array([18.56, 18.56, 18.56, 18.88, 18.88, 18.88])), 2)
+    0.32
     """
     changes = np.abs(np.diff(np.asarray(values, dtype=float)))
     changes = changes[np.isfinite(changes) & (changes > 1e-9)]
     if len(changes) < 5:
-        return 0.0
+        return float(changes.min()) if len(changes) else 0.0
     step = float(np.percentile(changes, 5))
     multiples = changes / step
     if np.mean(np.abs(multiples - np.round(multiples)) < 0.05) < 0.8:
