@@ -288,6 +288,24 @@ def test_the_hull_within_a_reference_reaches_as_far_as_a_search_from_many_starts
         assert far_hi - far_lo > 0.5 and lo - far_lo < 0.01 and far_hi - hi < 0.01
 
 
+def test_the_hull_within_a_reference_reaches_an_end_along_a_boxs_edge():
+    """A four-node chain (56, 18 and two 3-min modes behind a 1-min lag) with its learnt reference
+    of four modes at 76.2 min: a model near the truth (its 18-min mode at its box's lower edge) fits
+    within the 99 % threshold, but the hull's low end was searched from models at least two grid
+    steps apart, which boxes of ±10-20 % do not hold, and stopped at 33.12 °C; the monitor stopped
+    there 0.21 °C off the truth (33.04)."""
+    from mtident.thermal.synthetic import random_warmup, reference_run
+
+    warm = random_warmup(np.random.default_rng(13096))
+    run = reference_run(warm.machine, np.random.default_rng(13096 + 10_000_000))
+    learnt, _ = learn_reference(make_log(run.time_min, {"S": run.reading_C}))
+    n = int(np.searchsorted(warm.time_min, 76.2, side="right"))
+    estimate = estimate_sensor("S", warm.time_min[:n], warm.reading_C[:n], reference=learnt.sensors["S"])
+    low, high = estimate.interval_C[0.99]
+    assert estimate.reference_used and estimate.model_ok
+    assert low <= warm.steady_C[n - 1] <= high and abs(warm.steady_C[n - 1] - 33.04) < 0.01
+
+
 def test_a_room_is_averaged_over_a_minute_keeping_its_drift_and_its_gaps():
     from mtident.thermal.readings import smoothed_room
 
