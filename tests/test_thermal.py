@@ -879,3 +879,27 @@ def test_a_sensor_with_no_curve_has_no_rmse_not_a_perfect_one():
     flat = 20.0 + 0.02 * np.random.default_rng(0).standard_normal(len(t))
     result = identify(make_log(t, {"flat": flat, "heating": first_order(t)}), 30.0)
     assert np.isnan(result.rmse_C[0]) and result.summary(0)["rmse_C"] is None
+
+
+def test_a_fragile_95_percent_interval_is_not_trusted_by_identify():
+    """A four-node chain (107, 37, 27 and 3 min) at half its t95, the room logged: the 95 %
+    interval, 31.72 to 32.12 °C, missed the truth (32.47) with model_ok true, while models with a
+    300-min mode fitting nearly as well reached 27.5 to 33.1 °C at 99 %, 14 times as wide where a
+    regular likelihood gives 1.3. Such an interval is fragile, said, and not trusted; the monitor's
+    decision, made at the wider level, is not judged by it."""
+    from mtident.thermal.robust import estimate_sensor, with_fragility
+    from mtident.thermal.robust_identify import identify_robust
+    from mtident.thermal.synthetic import random_warmup
+
+    warm = random_warmup(np.random.default_rng(13451))
+    window = 0.5 * warm.t95_min
+    log = make_log(warm.time_min, {"S": warm.reading_C})
+    found = identify_robust(log, window, warm.room_C, room_sensor="room")
+    (lo, hi), truth = found.steady_state_ci95()[0], warm.steady_C[np.searchsorted(warm.time_min, window, "right") - 1]
+    wide_lo, wide_hi = found.estimates[0].interval_C[0.99]
+    assert not lo <= truth <= hi and wide_lo <= truth <= wide_hi and wide_hi - wide_lo > 3.0 * (hi - lo)
+    assert not found.model_ok[0] and "fragile" in found.estimates[0].warning_codes
+    assert "is fragile" in found.summary(0)["warnings"][-1]
+    n = int(np.searchsorted(warm.time_min, window, side="right"))
+    regular = estimate_sensor("S", warm.time_min[: n + 600], warm.reading_C[: n + 600], warm.room_C[: n + 600])
+    assert with_fragility(regular) is regular

@@ -44,6 +44,7 @@ __all__ = [
     "sampling_interval_min",
     "quantisation_step",
     "spikes",
+    "with_fragility",
 ]
 
 # A reference's time constant is never taken as known better than ±10 %: the study of stopping
@@ -73,6 +74,10 @@ DEFAULT_MAX_MODES = 4
 # to this many (each multiplies the reference grid by the free grid's size).
 MAX_FREE_WHEN_SATURATED = 3
 MIN_BINS = 8
+# A regular likelihood's 99 % interval is 1.3 times as wide as its 95 % one. Far wider, the fit is
+# nearly as good over a long valley of models between the two levels (slow modes the readings
+# barely exclude), and whether the narrower interval covers rests on the χ² calibration alone.
+FRAGILE_RATIO = 3.0
 
 
 @dataclass(frozen=True)
@@ -193,8 +198,8 @@ class SensorEstimate:
     warnings : tuple of str
     warning_codes : tuple of str
         What each warning is about, one word each ("late-start", "spikes", "misfit",
-        "undetermined", "reference-disagrees", "reference-doubtful", "too-few-readings", "no-data", "no-rise"): to
-        say each once.
+        "undetermined", "fragile", "reference-disagrees", "reference-doubtful", "too-few-readings", "no-data",
+        "no-rise"): to say each once.
     reference_used : bool
         The reference's time constants were used (the test agrees with them).
     spikes : int
@@ -796,6 +801,38 @@ def _verdict(
             f"T∞ not determined yet ({level:.0%} interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)",
         )
     return ok
+
+
+def with_fragility(estimate: SensorEstimate) -> SensorEstimate:
+    """The estimate, not trusted where its narrowest interval is fragile: the widest level's
+    interval more than ``FRAGILE_RATIO`` times as wide. A report reads the narrowest interval; a
+    decision made at the widest level rests on that level alone and needs no such verdict.
+
+    Parameters
+    ----------
+    estimate : SensorEstimate
+
+    Returns
+    -------
+    SensorEstimate
+        ``estimate`` itself, or a copy with ``model_ok`` False and the warning added.
+    """
+    if estimate.fit is None or len(estimate.interval_C) < 2:
+        return estimate
+    level, widest = min(estimate.interval_C), max(estimate.interval_C)
+    (lo, hi), (wide_lo, wide_hi) = estimate.interval_C[level], estimate.interval_C[widest]
+    if not (np.isfinite(wide_hi - wide_lo) and wide_hi - wide_lo > FRAGILE_RATIO * (hi - lo)):
+        return estimate
+    text = (
+        f"{estimate.sensor}: the {level:.0%} interval ({lo:.2f} to {hi:.2f} °C) is fragile: models fitting nearly "
+        f"as well reach {wide_lo:.2f} to {wide_hi:.2f} °C at {widest:.0%}"
+    )
+    return replace(
+        estimate,
+        model_ok=False,
+        warnings=(*estimate.warnings, text),
+        warning_codes=(*estimate.warning_codes, "fragile"),
+    )
 
 
 def _without_fit(

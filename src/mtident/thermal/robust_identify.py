@@ -20,7 +20,14 @@ from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import measured_equilibrium, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_notes
-from mtident.thermal.robust import Assumptions, RobustSettings, SensorEstimate, describe_assumptions, estimate_sensor
+from mtident.thermal.robust import (
+    Assumptions,
+    RobustSettings,
+    SensorEstimate,
+    describe_assumptions,
+    estimate_sensor,
+    with_fragility,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -277,8 +284,10 @@ def identify_robust(
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
     estimates = tuple(
-        estimate_sensor(
-            name, t[:n], y[:n, s], room_window, settings, None if reference is None else reference.modes(name)
+        with_fragility(
+            estimate_sensor(
+                name, t[:n], y[:n, s], room_window, settings, None if reference is None else reference.modes(name)
+            )
         )
         for s, name in enumerate(log.sensors)
     )
