@@ -306,6 +306,35 @@ def test_the_hull_within_a_reference_reaches_an_end_along_a_boxs_edge():
     assert low <= warm.steady_C[n - 1] <= high and abs(warm.steady_C[n - 1] - 33.04) < 0.01
 
 
+def test_a_hull_end_never_stops_short_of_a_model_already_within_the_threshold():
+    """A pair of nodes (219 and 12 min) with its one-mode reference and a room sensor, at half its
+    t95: the best two-mode model sat just within the 99 % threshold, its own profile reaching below
+    the estimate, but the end's local search from it wandered just beyond the threshold and was
+    discarded; the 99 % interval's low end was the estimate itself (26.637 °C) and missed the
+    truth (26.636). The 95 % search had found 26.603, and the 95 % interval was narrowed to the
+    99 % one's instead of the 99 % one widened."""
+    from mtident.thermal.synthetic import random_warmup, reference_run
+
+    warm = random_warmup(np.random.default_rng(15258))
+    run = reference_run(warm.machine, np.random.default_rng(15258 + 10_000_000))
+    learnt, _ = learn_reference(make_log(run.time_min, {"S": run.reading_C}))
+    n = int(np.searchsorted(warm.time_min, 0.5 * warm.t95_min, side="right"))
+    estimate = estimate_sensor(
+        "S", warm.time_min[:n], warm.reading_C[:n], warm.room_C[:n], reference=learnt.sensors["S"]
+    )
+    (low95, high95), (low99, high99) = estimate.interval_C[0.95], estimate.interval_C[0.99]
+    assert estimate.reference_used and low99 <= low95 < estimate.steady_C - 0.02
+    assert low99 <= warm.steady_C[n - 1] <= high99 and high95 <= high99
+
+
+def test_a_higher_levels_interval_is_widened_to_hold_a_lower_ones():
+    from mtident.thermal.robust import _nested
+
+    assert _nested({0.95: (1.0, 3.0), 0.99: (1.5, 2.5)}) == {0.95: (1.0, 3.0), 0.99: (1.0, 3.0)}
+    assert _nested({0.95: (-np.inf, 3.0), 0.99: (0.0, 4.0)}) == {0.95: (0.0, 3.0), 0.99: (0.0, 4.0)}
+    assert _nested({0.95: (1.0, 2.0), 0.99: (0.5, 2.5)}) == {0.95: (1.0, 2.0), 0.99: (0.5, 2.5)}
+
+
 def test_a_room_is_averaged_over_a_minute_keeping_its_drift_and_its_gaps():
     from mtident.thermal.readings import smoothed_room
 

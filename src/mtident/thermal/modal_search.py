@@ -600,9 +600,9 @@ def hull_end(
     gap : float
         ``threshold`` less the best fit's residual sum of squares.
     fallback : Fits
-        The best fit, returned where no model stays within ``threshold``.
+        The best fit, returned where no model found reaches further.
     refine : bool
-        False: the grid's leading model as it is.
+        False: the furthest model of ``candidates`` as it is.
     seeds : list of Fits, optional
         Models refined besides the search's (the ends of a wider level's hull: the same ridges
         set both, and the search's few starts can miss the basin they lie in).
@@ -615,9 +615,12 @@ def hull_end(
         One model.
     """
     objective = _EndObjective(threshold, sign, gap)
+    # the furthest any model searched so far reaches within the threshold (the best fit's own
+    # profile at least): a local search from there can wander just beyond the threshold and be
+    # discarded, so the end found is never short of it
+    best = _furthest_within([*candidates, fallback], objective, threshold)
     if not refine:
-        leading = _leading(candidates, objective, 1)
-        return fallback if not leading else leading[0][0].take(leading[0][1])
+        return best
     polish = [(f, 0) for f in seeds or []]
     if not seeds_only:
         starts = _leading(candidates, objective, problem.end_starts(), problem.basin_log())
@@ -626,7 +629,7 @@ def hull_end(
             for k in {f.tau.shape[1] for f, _ in starts}
         ]
         polish += _leading(improved, objective, problem.polished(), problem.basin_log())
-    best, best_value = None, np.inf
+    best_value = float(objective(best)[0])
     for fits, i in polish:
         refined = _refine(problem, fits, i, objective)
         if refined.rss[0] > threshold:
@@ -634,7 +637,18 @@ def hull_end(
         value = float(objective(refined)[0])
         if value < best_value:
             best, best_value = refined, value
-    return fallback if best is None else best
+    return best
+
+
+def _furthest_within(candidates: list[Fits], objective: _EndObjective, threshold: float) -> Fits:
+    """The model of ``candidates`` (the last one within ``threshold``) that reaches furthest
+    towards the objective's end among those within ``threshold``."""
+    best, best_value = candidates[-1].take(0), np.inf
+    for fits in candidates:
+        values = np.where(fits.rss <= threshold, objective(fits), np.inf)
+        if len(values) and (i := int(np.argmin(values))) is not None and values[i] < best_value:
+            best, best_value = fits.take(i), float(values[i])
+    return best
 
 
 def _lattice_search(

@@ -741,12 +741,21 @@ def room_wander_half_width(slowest_time_constant_min: float, level: float, setti
 
 
 def _nested(intervals: dict[float, tuple[float, float]]) -> dict[float, tuple[float, float]]:
-    """The intervals with each level's inside every higher level's: a lower level's end the
-    search left open (infinite) is bounded by the higher level's end."""
-    out: dict[float, tuple[float, float]] = {}
+    """The intervals with each level's inside every higher level's: a higher level reaches at
+    least as far as a lower level's finite end (each level's search is its own, and one that
+    stopped short is widened, never the other narrowed), and a lower level's end the search left
+    open (infinite) is bounded by the higher level's end."""
+    out = dict(intervals)
+    levels = sorted(intervals)
+    for lower, higher in zip(levels, levels[1:], strict=False):
+        (lo, hi), (outer_lo, outer_hi) = out[lower], out[higher]
+        out[higher] = (
+            min(outer_lo, lo) if np.isfinite(lo) else outer_lo,
+            max(outer_hi, hi) if np.isfinite(hi) else outer_hi,
+        )
     outer = (-np.inf, np.inf)
-    for q in sorted(intervals, reverse=True):
-        lo, hi = intervals[q]
+    for q in reversed(levels):
+        lo, hi = out[q]
         out[q] = outer = (max(lo, outer[0]), min(hi, outer[1]))
     return dict(sorted(out.items()))
 
