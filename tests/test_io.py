@@ -1308,3 +1308,42 @@ def test_a_column_named_with_another_case_or_a_slip_is_pointed_to(write_csv):
         read_temperature_log(path, sensors=["Spindel"])
     with pytest.raises(InputError, match=r"no sensor column 'T9'; the log has"):
         read_temperature_log(path, sensors=["T9"])
+
+
+def test_a_time_column_in_hours_read_as_minutes_gets_a_hint(write_csv, tmp_path):
+    """A 14-h log in hours under a plain 't' header read as 14 minutes at a reading every 0.5 s:
+    identify gave a 3-min t_eq, trusted, and watch flipped between 'may stop' and 'undetermined',
+    with no word on the unit."""
+    from mtident.io.follow import LogFollower
+
+    text = "t,T1\n" + "".join(f"{k / 120:.5f},{20 + 8 * (1 - np.exp(-k / 120)):.2f}\n" for k in range(1681))
+    log = read_temperature_log(write_csv(text))
+    assert any("runs only to 14 min with a reading every 0.5 s" in n and "time_unit='h'" in n for n in log.notes)
+    assert not any("read as minutes" in n for n in read_temperature_log(write_csv(text), time_unit="h").notes)
+    short = "t,T1\n" + "".join(f"{k / 120:.5f},{20 + k / 100:.2f}\n" for k in range(50))
+    assert not any("read as minutes" in n for n in read_temperature_log(write_csv(short)).notes)
+    live = tmp_path / "live.csv"
+    live.write_text(text)
+    follower = LogFollower(live)
+    assert sum("time_unit='h'" in w for w in follower.poll().warnings) == 1
+
+
+def test_a_loggers_placeholder_is_a_missing_reading_said_by_the_file_reader_and_the_follower(write_csv, tmp_path):
+    """'---' in a cell (a common logger placeholder) stopped the run ("'---' is not a number"),
+    and watch skipped empty and open-circuit readings without the note identify gives."""
+    from mtident.io.follow import LogFollower
+
+    rows = "".join(
+        f"{k};{'---' if k == 5 else 'n/a' if k == 8 else f'{20 + k / 10:.2f}'.replace('.', ',')}\n" for k in range(30)
+    )
+    path = write_csv("time_min;A\n" + rows)
+    log = read_temperature_log(path)
+    assert log.notes == ("sensor 'A': skipped 2 empty/NaN sample(s) (rows 7, 10)",)
+    assert np.isnan(log.temperature_C[[5, 8], 0]).all()
+    said = LogFollower(Path(path)).poll().notes
+    assert "sensor 'A': skipped 2 empty, unreadable or open-circuit reading(s) (the first at t = 5 min)" in said
+
+
+def test_a_folder_given_as_a_log_is_said_to_be_a_folder(tmp_path):
+    with pytest.raises(InputError, match=r": a folder, not a log file$"):
+        read_temperature_log(tmp_path)

@@ -149,16 +149,17 @@ def load_log_with_room(
     return log.select([name for name in asked if name != room_col] or None), room
 
 
-def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str) -> None:
+def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str, commands: str = "") -> None:
     """A note on columns named as a room sensor when no --ambient was given: the room is then an
-    assumption (steady, or wandering by --room-wander), and a drifting one biases T∞."""
+    assumption (steady, or wandering by --room-wander), and a drifting one biases T∞. ``commands``
+    names the commands that take --ambient where the caller is not one of them."""
     rooms = [name for name in sensors if room_named(name)]
     if rooms and len(rooms) < len(sensors):
         stderr.print(
             f"mtident: note: {', '.join(repr(r) for r in rooms)} {'is' if len(rooms) == 1 else 'are'} named as a room "
             f"sensor and {taken_as}; "
-            f"if it measures the room, --ambient {shlex.quote(rooms[0])} makes it the input of each sensor's heat "
-            "balance (a drifting room then stays out of T∞)",
+            f"if it measures the room, --ambient {shlex.quote(rooms[0])}{commands} makes it the input of each "
+            "sensor's heat balance (a drifting room then stays out of T∞)",
             highlight=False,
         )
 
@@ -890,7 +891,9 @@ def inspect_command(
     assert isinstance(notes, list)
     for note in notes:
         console.print(f"note: {note}", highlight=False)
-    _say_room_candidates([str(d["sensor"]) for d in sensor_rows], "read as a sensor column")
+    _say_room_candidates(
+        [str(d["sensor"]) for d in sensor_rows], "read as a sensor column", " (with identify, watch, learn or report)"
+    )
 
 
 from mtident import cli_watch  # noqa: E402,F401 - registers `thermal watch` and `thermal report` on the group

@@ -571,7 +571,7 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
 
     file = Path(path)
     if not file.is_file():
-        msg = f"{path}: no such file"
+        msg = f"{path}: a folder, not a log file" if file.is_dir() else f"{path}: no such file"
         raise InputError(msg)
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)

@@ -46,6 +46,7 @@ from mtident.io.logs import (
     OPEN_CIRCUIT_HIGH_C,
     OPEN_CIRCUIT_LOW_C,
     UNLIKELY_MINUTES,
+    hours_hint,
     names_a_date,
     seconds_hint,
     serial_date_hint,
@@ -205,6 +206,9 @@ class LogFollower:
     # numeric time column (looked up on every row, it cost an eighth of a 28,800-row replay)
     _time_scale: tuple[float, bool] | None = field(default=None, repr=False, compare=False)
     _last_stamp: str | None = field(default=None, repr=False, compare=False)  # the last row's time cell, for a note
+    _first_time: float | None = field(default=None, repr=False, compare=False)  # for the hint of a column in hours
+    _rows_taken: int = field(default=0, repr=False, compare=False)
+    _hours_said: bool = field(default=False, repr=False, compare=False)
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -520,9 +524,23 @@ class LogFollower:
             previous_raw = raw
             times.append(t)
             rows.append(self._row_values(line, conversions))
-        return Rows(
-            np.array(times), np.array(rows).reshape(len(rows), len(self.sensors or [])), tuple(warnings), tuple(notes)
-        )
+        values = np.array(rows).reshape(len(rows), len(self.sensors or []))
+        notes.extend(_skipped_notes(self.sensors or [], np.array(times), values))
+        self._hint_hours(times, warnings)
+        return Rows(np.array(times), values, tuple(warnings), tuple(notes))
+
+    def _hint_hours(self, times: list[float], warnings: list[str]) -> None:
+        """Once, where a numeric time column read as minutes for want of a unit looks like hours."""
+        if not times or self._hours_said or self._time_scale is None or not self._time_scale[1]:
+            return
+        if self._first_time is None:
+            self._first_time = times[0]
+        self._rows_taken += len(times)
+        assert self.header is not None
+        hint = hours_hint(self.header[self.columns[0]], times[-1] - self._first_time, self._rows_taken)
+        if hint is not None:
+            warnings.append(f"{self.path}: {hint}")
+            self._hours_said = True
 
     def _new_lines(self, warnings: list[str], notes: list[str]) -> tuple[list[str], bool] | None:
         """The complete data lines written since the last poll, and whether the log was truncated or
@@ -626,3 +644,16 @@ class LogFollower:
                 value = np.nan
             values.append(value if OPEN_CIRCUIT_LOW_C <= value <= OPEN_CIRCUIT_HIGH_C else np.nan)
         return values
+
+
+def _skipped_notes(sensors: list[str], time_min: FloatArray, values: FloatArray) -> list[str]:
+    """A note per sensor with readings left out (empty, not a number, or an open circuit's)."""
+    notes = []
+    for name, column in zip(sensors, values.T, strict=True):
+        missing = np.flatnonzero(np.isnan(column))
+        if len(missing):
+            notes.append(
+                f"sensor {name!r}: skipped {len(missing)} empty, unreadable or open-circuit reading(s) (the first at "
+                f"t = {time_min[missing[0]]:g} min)"
+            )
+    return notes

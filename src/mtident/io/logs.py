@@ -62,10 +62,12 @@ __all__ = [
     "sample_log_path",
     "SAMPLES",
     "time_unit_assumed",
+    "hours_hint",
     "seconds_hint",
     "serial_date_hint",
     "serial_date_note",
     "names_a_date",
+    "HOURS_HINT_SAMPLES",
     "UNLIKELY_MINUTES",
     "OPEN_CIRCUIT_HIGH_C",
     "OPEN_CIRCUIT_LOW_C",
@@ -91,6 +93,9 @@ OPEN_CIRCUIT_TEXT = (
     "+++++",
     "-----",
 )
+# What loggers and spreadsheets write in place of a reading they do not have (a dropped sample,
+# a channel between scans): missing, like an empty cell.
+MISSING_TEXT = ("-", "--", "---", "n/a", "na", "#n/a", "#na", "null", "none", "nan")
 # Above this share of bad samples a sensor is refused rather than bridged.
 MAX_BAD_FRACTION = 0.1
 TIME_UNITS = {"ms": 1.0 / 60_000.0, "s": 1.0 / 60.0, "min": 1.0, "h": 60.0, "d": 1440.0}
@@ -259,6 +264,8 @@ def time_unit_factor(header: str, time_unit: str | None, stated: str | None = No
 # A warm-up is hours long: a time column read as minutes (no unit given anywhere) that runs past two
 # days is more likely seconds.
 UNLIKELY_MINUTES = 2 * 1440.0
+# readings enough to tell a log in hours read as minutes (:func:`hours_hint`)
+HOURS_HINT_SAMPLES = 100
 
 
 def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) -> bool:
@@ -377,6 +384,39 @@ def seconds_hint(header: str, span_min: float) -> str:
     return (
         f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`) and runs to "
         f"{span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give `time_unit='s'`"
+    )
+
+
+def hours_hint(header: str, span_min: float, samples: int) -> str | None:
+    """What a reader says when a time column read as minutes, for want of a stated unit, holds at
+    least ``HOURS_HINT_SAMPLES`` readings over at most an hour, a second or less apart: a warm-up
+    logged so densely for so short a time is more likely a column in hours. None otherwise.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+    span_min : float
+        The last time read (min).
+    samples : int
+        How many readings that span holds.
+
+    Returns
+    -------
+    str or None
+        The note, suggesting ``time_unit='h'``.
+
+    Examples
+    --------
+    >>> hours_hint("t", 14.0, 1681) is not None, hours_hint("t", 14.0, 15) is None
+    (True, True)
+    """
+    if samples < HOURS_HINT_SAMPLES or span_min > 60.0 or span_min / (samples - 1) > 1.0 / 60.0:
+        return None
+    return (
+        f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`) and runs only "
+        f"to {span_min:g} min with a reading every {60.0 * span_min / (samples - 1):.2g} s: if it is in hours, give "
+        "`time_unit='h'`"
     )
 
 
@@ -608,7 +648,8 @@ def _sensor_readings(
     values = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
     text = raw.astype(str).str.strip().str.lower()
     marked_open = text.isin(OPEN_CIRCUIT_TEXT).to_numpy()
-    non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~text.isin(["nan", ""]).to_numpy() & ~marked_open
+    marked_missing = text.isin([*MISSING_TEXT, ""]).to_numpy()
+    non_numeric = np.isnan(values) & raw.notna().to_numpy() & ~marked_missing & ~marked_open
     if np.any(non_numeric):
         row = int(np.argmax(non_numeric))
         msg = f"{source}: sensor {name!r}, row {row + first_row}: {_cell(raw.iloc[row])} is not a number"
@@ -738,6 +779,9 @@ def _as_frame(path: str | Path | pd.DataFrame) -> tuple[pd.DataFrame, CsvDialect
     frame.columns = [str(c).strip() for c in frame.columns]
     if isinstance(path, pd.DataFrame):  # a CSV file's header was checked by read_csv, before pandas renamed a repeat
         check_unique_names(list(frame.columns), source)
+    if frame.shape[0] == 0 and not isinstance(path, pd.DataFrame):
+        msg = f"{source}: no data rows, only a header or a logger's preamble (is the test still to start?)"
+        raise InputError(msg)
     if frame.shape[1] < 2:
         msg = (
             f"{source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found "
@@ -808,6 +852,10 @@ def _time_min(
     time_min, time_notes = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
     notes.extend(time_notes)
     numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
-    if numeric and time_unit_assumed(header, time_unit, stated) and time_min[-1] > UNLIKELY_MINUTES:
-        notes.append(seconds_hint(header, float(time_min[-1])))
+    if numeric and time_unit_assumed(header, time_unit, stated):
+        span = float(time_min[-1] - time_min[0])
+        if time_min[-1] > UNLIKELY_MINUTES:
+            notes.append(seconds_hint(header, float(time_min[-1])))
+        elif (hint := hours_hint(header, span, len(time_min))) is not None:
+            notes.append(hint)
     return time_min
