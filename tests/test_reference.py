@@ -198,6 +198,24 @@ def test_a_sensor_the_reference_does_not_know_is_said_in_identify_and_watch(tmp_
     assert [e.kind for e in events if e.text.startswith(said)] == ["warning"]
 
 
+def test_a_reference_that_learnt_the_room_as_a_machine_sensor_is_said():
+    """A newcomer learnt the reference without naming the room's column, so T_Raum was learnt as
+    a machine sensor; watching with T_Raum as the room sensor then said nothing."""
+    from mtident.thermal.reference import reference_notes
+    from mtident.thermal.robust_identify import identify_robust
+
+    t = np.arange(0.0, 61.0)
+    y = np.round(two_mode(t) + np.random.default_rng(3).normal(0.0, 0.01, t.size), 2)
+    modes = {"T1": SensorModes((60.0,), (0.1,)), "T_Raum": SensorModes((200.0,), (0.5,))}
+    learnt = MachineReference("run.csv", "2026-11-27", 300.0, "not measured", modes)
+    said = "the reference (run.csv) learnt 'T_Raum', this test's room sensor, as a machine sensor"
+    assert reference_notes(learnt, ("T1",), True, "T_Raum")[0].startswith(said)
+    assert reference_notes(learnt, ("T1",), True, "room") == []
+    room = np.full(t.size, 20.0)
+    result = identify_robust(make_log(t, {"T1": y}), 60.0, room_C=room, reference=learnt, room_sensor="T_Raum")
+    assert sum(note.startswith(said) for note in result.notes) == 1
+
+
 def test_a_reference_learnt_with_a_room_sensor_used_without_one_is_said(tmp_path):
     """A new user learnt the reference with the room's column and watched the test without it:
     nothing said that the answer then rests on the room's stated wander."""

@@ -814,7 +814,10 @@ def test_an_interval_without_bounds_is_said_so_not_as_infinities():
     estimate = estimate_sensor("S", np.arange(10.0), np.zeros(10))
     before = SensorCheck("S")
     after = changed(before, status="narrowing", steady_C=30.0, low_C=-np.inf, high_C=np.inf, ends="a slow mode")
-    (event,) = _check_events(before, after, estimate, set(), 10.0)
+    (event,) = _check_events(before, after, estimate, set(), 10.0, 0.99)
     assert event.text == "S: narrowing, T∞ 30.00 °C, interval not yet bounded"
+    bounded = changed(after, low_C=29.5, high_C=30.5)
+    (event,) = _check_events(before, bounded, estimate, set(), 10.0, 0.99)
+    assert event.text == "S: narrowing, T∞ 30.00 °C, 99% interval 29.50 to 30.50 °C"
     reason = _reason([after], MonitorSettings())
     assert "99% interval not yet bounded, reaching beyond ±0.2 °C of T∞" in reason and "inf" not in reason

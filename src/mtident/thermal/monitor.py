@@ -491,7 +491,7 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
         if now >= check.next_check_min:
             estimate = sensor_estimate(readings, s, state.sensors[s], settings)
             checks[s] = _checked(check, estimate, now, readings, settings)
-            events.extend(_check_events(check, checks[s], estimate, said, now))
+            events.extend(_check_events(check, checks[s], estimate, said, now, settings.decision_level))
     stop = now if all(c.may_stop for c in checks) else math.nan
     if math.isfinite(stop):
         events.append(
@@ -660,7 +660,7 @@ def _next_check(
 
 
 def _check_events(
-    before: SensorCheck, after: SensorCheck, estimate: SensorEstimate, said: set[str], now: float
+    before: SensorCheck, after: SensorCheck, estimate: SensorEstimate, said: set[str], now: float, level: float
 ) -> list[Event]:
     """What a check has to say: a status that changed, and each kind of warning once."""
     events = []
@@ -674,7 +674,11 @@ def _check_events(
         bounded = math.isfinite(after.low_C) and math.isfinite(after.high_C)
         text = (
             f"{after.sensor}: {after.status}, T∞ {after.steady_C:.2f} °C, "
-            + (f"interval {after.low_C:.2f} to {after.high_C:.2f} °C" if bounded else "interval not yet bounded")
+            + (
+                f"{level:.0%} interval {after.low_C:.2f} to {after.high_C:.2f} °C"
+                if bounded
+                else "interval not yet bounded"
+            )
             if math.isfinite(after.steady_C)
             else f"{after.sensor}: {after.status}"
         )

@@ -114,7 +114,9 @@ class MachineReference:
         return f"{self.source} ({self.learnt_on}): τ {parts}"
 
 
-def reference_notes(reference: MachineReference, sensors: tuple[str, ...], with_room: bool) -> list[str]:
+def reference_notes(
+    reference: MachineReference, sensors: tuple[str, ...], with_room: bool, room_sensor: str | None = None
+) -> list[str]:
     """What a test should be told of how its reference fits it: sensors of its log the reference
     has no modes for (a column renamed since the reference run is answered without its modes, and
     only its assumptions would say so), and a reference learnt with a room sensor used by a test
@@ -128,6 +130,9 @@ def reference_notes(reference: MachineReference, sensors: tuple[str, ...], with_
         The log's sensors.
     with_room : bool
         Whether this test has a room sensor.
+    room_sensor : str, optional
+        Its name: a reference that learnt that column as a machine sensor did not take the room as
+        an input.
 
     Returns
     -------
@@ -147,6 +152,11 @@ def reference_notes(reference: MachineReference, sensors: tuple[str, ...], with_
         notes.append(
             f"the reference ({reference.source}) was learnt with a room sensor, and this test has none: its answer "
             "assumes the room's stated wander; the room's column, where it was logged, keeps a drifting room out"
+        )
+    if room_sensor is not None and room_sensor in reference.sensors:
+        notes.append(
+            f"the reference ({reference.source}) learnt {room_sensor!r}, this test's room sensor, as a machine sensor, "
+            "and the others without the room as an input: learn it again with that column given as the room sensor"
         )
     return notes
 

@@ -291,7 +291,7 @@ def identify_robust(
         )
         for s, name in enumerate(log.sensors)
     )
-    unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None)
+    unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
     times = _prediction_times(t, n, estimates, horizon_min)
     room_all = None if room_C is None else np.concatenate([room_C, np.full(len(times) - len(t), np.nan)])[: len(times)]
     curve, low, high = (np.full((len(times), len(estimates)), np.nan) for _ in range(3))

@@ -282,7 +282,9 @@ class WatchSession:
             self.state = self._new_state(self.follower.sensors)
             reference = self.settings.reference
             if reference is not None:
-                notes = reference_notes(reference, self.sensors, bool(self.settings.room_sensor))
+                notes = reference_notes(
+                    reference, self.sensors, bool(self.settings.room_sensor), self.settings.room_sensor
+                )
                 events.extend(Event("warning", np.nan, note) for note in notes)
         if self.state is None or not len(rows.time_min):
             return events
