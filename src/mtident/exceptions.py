@@ -72,7 +72,20 @@ class CovarianceError(MtidentError, ArithmeticError):
         )
 
     def at(self, step: int, filter_name: str | None) -> CovarianceError:
-        """Return the same error, now naming the step and the filter."""
+        """Return the same error, now naming the step and the filter.
+
+        Parameters
+        ----------
+        step : int
+            Index of the filter step (the measurement, from 0) at which the covariance failed.
+        filter_name : str or None
+            Name of the filter (its ``FilterConfig.name``), or None to name none.
+
+        Returns
+        -------
+        CovarianceError
+            A new error with the same stage, batch index and smallest eigenvalue, whose message names both.
+        """
         return CovarianceError(self.stage, self.batch_index, self.min_eigenvalue, step, filter_name)
 
 

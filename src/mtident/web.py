@@ -51,7 +51,15 @@ class LivePage:
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
     def publish(self, answer: dict[str, object], plot_png: bytes | None = None) -> None:
-        """Show a new answer (the monitor's JSON object), and new curves where given."""
+        """Show a new answer (the monitor's JSON object), and new curves where given.
+
+        Parameters
+        ----------
+        answer : dict of str to object
+            The monitor's answer as a JSON-ready object; it replaces the one shown and raises :attr:`version`.
+        plot_png : bytes or None, optional
+            The curves as a PNG image; ``None`` keeps the picture published before.
+        """
         with self._lock:
             self._answer = answer
             if plot_png is not None:

@@ -174,12 +174,34 @@ class FeedDriveIdentification:
         )
 
     def errors_percent(self, truth: FeedDriveParameters) -> dict[str, float]:
-        """Table 3: 100·|estimate − truth|/truth per parameter."""
+        """Table 3: 100·|estimate − truth|/truth per parameter.
+
+        Parameters
+        ----------
+        truth : FeedDriveParameters
+            The true set (a simulated record's); its K1..K4, Bt, Bb, Qb, Qm are compared.
+
+        Returns
+        -------
+        dict of str to float
+            Name in ``IDENTIFIED`` → relative error of the estimate (%).
+        """
         true = truth.identified()
         return {name: float(100 * abs(v - t) / t) for name, v, t in zip(IDENTIFIED, self.parameters, true, strict=True)}
 
     def covers(self, truth: FeedDriveParameters) -> dict[str, bool]:
-        """Whether ±2σ around each estimate contains the truth."""
+        """Whether ±2σ around each estimate contains the truth.
+
+        Parameters
+        ----------
+        truth : FeedDriveParameters
+            The true set (a simulated record's); its K1..K4, Bt, Bb, Qb, Qm are compared.
+
+        Returns
+        -------
+        dict of str to bool
+            Name in ``IDENTIFIED`` → the true value lies within ±2 ``parameters_std`` of the estimate.
+        """
         true = truth.identified()
         return {
             name: bool(abs(v - t) <= 2 * s)
@@ -193,7 +215,20 @@ class FeedDriveIdentification:
         return bool(np.all(self.consistency.misfit <= MISFIT_LIMIT) and self.consistency.distance <= DISTANCE_LIMIT)
 
     def model_response(self, response: Response) -> FloatArray:
-        """The 12 responses (N, 12) of the set the consistency check fitted, open loop under the record's forces."""
+        """The 12 responses (N, 12) of the set the consistency check fitted, open loop under the record's forces.
+
+        Parameters
+        ----------
+        response : Response
+            The record: its forces (N, N, N m, N m) drive the model, its first two times (s) give the sampling
+            interval.
+
+        Returns
+        -------
+        ndarray, shape (N, 12)
+            The 8 states and the 4 accelerations at each sample (``RESPONSE_COLUMNS``), from the start the check
+            fitted (rest where it was not run).
+        """
         shift = np.zeros(8) if self.consistency is None else self.consistency.parameters_log_shift
         start = np.zeros(8) if self.consistency is None else self.consistency.start
         fitted = self.guess.with_identified(self.parameters * np.exp(shift))
@@ -206,6 +241,19 @@ class FeedDriveIdentification:
         """The JSON object (parameters, parameters_std, correlation), plus extras.
 
         ``parameters_sd`` repeats ``parameters_std`` for scripts written before that name was used.
+
+        Parameters
+        ----------
+        truth : FeedDriveParameters, optional
+            The true set (a simulated record's); given, the errors (:meth:`errors_percent`) and whether the
+            intervals cover it (:meth:`covers`) are added.
+
+        Returns
+        -------
+        dict of str to object
+            JSON-ready: the estimates and standard deviations (SI) by name, identifiability, correlations, the
+            guess, notes, the filter's own estimate where refined, the open-loop misfit where checked, and with
+            ``truth`` "error_percent" and "within_2sd".
         """
         std = {n: float(v) for n, v in zip(IDENTIFIED, self.parameters_std, strict=True)}
         out: dict[str, object] = {

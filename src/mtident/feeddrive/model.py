@@ -159,7 +159,19 @@ class Excitation:
             raise InputError(msg)
 
     def forces(self, time_s: FloatArray) -> FloatArray:
-        """Generalized forces (N, 4) held over each sample starting at ``time_s``."""
+        """Generalized forces (N, 4) held over each sample starting at ``time_s``.
+
+        Parameters
+        ----------
+        time_s : ndarray, shape (N,)
+            Start of each sample (s), increasing and evenly spaced (a multisine takes its interval from the
+            first two).
+
+        Returns
+        -------
+        ndarray, shape (N, 4)
+            F (N, N, N m, N m): the excitation in the column of ``coordinate``, zero in the others.
+        """
         t = np.asarray(time_s, dtype=float)
         value = np.zeros_like(t)
         if self.kind == "impulse":

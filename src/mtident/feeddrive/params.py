@@ -139,7 +139,19 @@ class FeedDriveParameters:
         return np.array([getattr(self, name) for name in IDENTIFIED])
 
     def with_identified(self, values: FloatArray) -> FeedDriveParameters:
-        """A copy with the eight identified parameters replaced."""
+        """A copy with the eight identified parameters replaced.
+
+        Parameters
+        ----------
+        values : ndarray, shape (8,)
+            New values of K1..K4 (N/m, N/m, N m/rad, N m/rad), Bt, Bb (N s/m), Qb, Qm (N m s/rad), in the
+            order of ``IDENTIFIED``.
+
+        Returns
+        -------
+        FeedDriveParameters
+            The same masses, inertias and β with those values (not checked).
+        """
         return replace(self, **{name: float(v) for name, v in zip(IDENTIFIED, values, strict=True)})
 
     def as_dict(self) -> dict[str, float]:

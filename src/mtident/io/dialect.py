@@ -120,11 +120,33 @@ class CsvDialect:
     from_humidity: tuple[str, ...] = ()
 
     def cells(self, line: str) -> list[str]:
-        """The cells of one line (a header), stripped; quotes removed."""
+        """The cells of one line (a header), stripped; quotes removed.
+
+        Parameters
+        ----------
+        line : str
+            One line of the log as text, without its line break.
+
+        Returns
+        -------
+        list of str
+            The cells split at the dialect's delimiter; empty for an empty line.
+        """
         return [cell.strip() for cell in next(csv.reader([line], delimiter=self.delimiter), [])]
 
     def header(self, line: str) -> list[str]:
-        """The columns' names: the header line's cells, or the channels' names under it (``names``)."""
+        """The columns' names: the header line's cells, or the channels' names under it (``names``).
+
+        Parameters
+        ----------
+        line : str
+            The log's header line as text (the line after the preamble), without its line break.
+
+        Returns
+        -------
+        list of str
+            One name per column, as the log's readers name them.
+        """
         return list(self.names) or self.cells(line)
 
     def renaming(self) -> str | None:
@@ -136,19 +158,54 @@ class CsvDialect:
 
     def number(self, cell: str) -> float:
         """A cell as a float under this decimal mark (a unit after it taken off where the log
-        writes one there); ValueError if it is none."""
+        writes one there); ValueError if it is none.
+
+        Parameters
+        ----------
+        cell : str
+            One cell of a data row as written ("17,90" under a decimal comma, "13.1 °C" where the readings
+            carry their unit).
+
+        Returns
+        -------
+        float
+            The cell's value.
+        """
         if self.units_in_cells:
             cell = number_without_unit(cell)
         return float(cell.replace(",", ".") if self.decimal == "," else cell)
 
     def decode(self, data: bytes) -> str:
-        """Bytes of the log, read from a line's start, as text (a byte-order mark dropped)."""
+        """Bytes of the log, read from a line's start, as text (a byte-order mark dropped).
+
+        Parameters
+        ----------
+        data : bytes
+            Bytes of the log in its ``encoding``, beginning at the start of a line.
+
+        Returns
+        -------
+        str
+            The text; bytes the encoding cannot read are replaced by U+FFFD.
+        """
         return data.decode(self.encoding, errors="replace").removeprefix("\ufeff")
 
     def complete_length(self, data: bytes) -> int:
         """How many bytes of ``data`` (read from a line's start) are complete lines: up to the last
         LF, or where there is none, the last CR (a log whose lines end in a lone CR; a CRLF cut
-        after its CR has its line's cells all the same, and the LF is then an empty line)."""
+        after its CR has its line's cells all the same, and the LF is then an empty line).
+
+        Parameters
+        ----------
+        data : bytes
+            Bytes of the log in its ``encoding``, beginning at the start of a line; the last line may be
+            incomplete (a live log being written).
+
+        Returns
+        -------
+        int
+            The number of bytes up to and including the last line break; 0 where no line is complete.
+        """
         for mark in ("\n", "\r"):
             newline = mark.encode(self.encoding.removesuffix("-sig"))
             end = len(data)
@@ -165,7 +222,18 @@ class CsvDialect:
 
     def unit_of(self, column: str) -> str:
         """The column's unit as the log states it under the header, else as its name ends
-        ("Time [s]", "T1 (°F)": a unit this module knows only); "" without one."""
+        ("Time [s]", "T1 (°F)": a unit this module knows only); "" without one.
+
+        Parameters
+        ----------
+        column : str
+            The column's name, as :meth:`header` gives it.
+
+        Returns
+        -------
+        str
+            The unit as written ("min", "°C", "[s]", "%RH"), "s" for LabVIEW's "X_Value", or "".
+        """
         stated = dict(self.units).get(column, "")
         if stated.strip():
             return stated
@@ -177,7 +245,19 @@ class CsvDialect:
         """ "ms", "s", "min", "h" or "d" if the units row or the time column's name states its
         unit, else None. A time column's name may be its unit in words ("Seconds", "Elapsed
         hours", "Time in minutes": read as minutes before, a 6-h test lasted 6 min); a sensor's
-        may not ("T min" is a lowest temperature)."""
+        may not ("T min" is a lowest temperature).
+
+        Parameters
+        ----------
+        column : str
+            The time column's name, as :meth:`header` gives it.
+
+        Returns
+        -------
+        str or None
+            The key of the unit in ``logs.TIME_UNITS`` ("ms", "s", "min", "h" or "d"), or None where the
+            log states none.
+        """
         stated = time_unit_name(self.unit_of(column))
         words = column.split()
         if stated is None and words and words[-1].lower() in _TIME_WORDS:

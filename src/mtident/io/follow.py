@@ -233,7 +233,26 @@ class LogFollower:
 
     @classmethod
     def resume(cls, path: Path, position: dict[str, Any], time_col: str | None, time_unit: str | None) -> LogFollower:
-        """A follower that continues from a saved position."""
+        """A follower that continues from a saved position.
+
+        Parameters
+        ----------
+        path : Path
+            The log being written.
+        position : dict of str to Any
+            What :meth:`position` returned, as the state file keeps it (JSON: tuples as lists); "offset" is
+            needed, a dialect absent (older state files) is taken from the log's head again.
+        time_col : str or None
+            The time column's name, None to find it.
+        time_unit : str or None
+            Unit of a numeric time column ("ms", "s", "min", "h", "d"), None to take it from the log.
+
+        Returns
+        -------
+        LogFollower
+            A follower that reads on from the saved byte offset, with the saved header, time origin, last
+            time and dialect.
+        """
         identity = position.get("identity")
         dialect = position.get("dialect")  # absent in older state files: taken from the head again
         return cls(

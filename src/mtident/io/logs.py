@@ -138,7 +138,19 @@ class TemperatureLog:
         )
 
     def select(self, names: list[str] | None) -> TemperatureLog:
-        """The same log restricted to ``names`` (all sensors if None or ["all"])."""
+        """The same log restricted to ``names`` (all sensors if None or ["all"]).
+
+        Parameters
+        ----------
+        names : list of str or None
+            Sensor columns to keep, in the order wanted; None, [] or ["all"] keeps every sensor. A name
+            that is no sensor column raises InputError.
+
+        Returns
+        -------
+        TemperatureLog
+            The same times, notes and source, with those sensors' columns alone, in the order of ``names``.
+        """
         if not names or names == ["all"]:
             return self
         missing = [n for n in names if n not in self.sensors]
@@ -180,7 +192,18 @@ class TemperatureLog:
         return self.select(names), room_C
 
     def window(self, minutes: float) -> int:
-        """Number of samples with time ≤ ``minutes``."""
+        """Number of samples with time ≤ ``minutes``.
+
+        Parameters
+        ----------
+        minutes : float
+            End of the window (min since the first sample).
+
+        Returns
+        -------
+        int
+            How many of the first samples lie within it: ``time_min[:n]`` is the window.
+        """
         return int(np.searchsorted(self.time_min, minutes + 1e-9, side="right"))
 
 

@@ -100,7 +100,19 @@ class Problem:
 
     def penalty(self, k: int) -> FloatArray:
         """Per column, the prior's weight: nothing on T∞, a weak bound on each amplitude and on
-        each room gain."""
+        each room gain.
+
+        Parameters
+        ----------
+        k : int
+            Number of modes of the models.
+
+        Returns
+        -------
+        ndarray, shape (p,)
+            The diagonal added to XᵀWX, one per design column (p = 1 + k, + k with a room): 0 for T∞,
+            σ² over the amplitude's prior variance for each amplitude, σ² over the room gain's for each gain.
+        """
         room = [self.sigma2 / ROOM_GAIN_SD**2] * k if self.with_room else []
         return np.array([0.0] + [self.sigma2 / self.amplitude_sd**2] * k + room)
 
@@ -127,6 +139,19 @@ class Problem:
         return (2.0 if self.family.reference_min is None else 0.5) * np.log(_MAX_GRID_RATIO)
 
     def bounds(self, k: int) -> FloatArray:
+        """The search's bounds on the time constants of a model of ``k`` modes.
+
+        Parameters
+        ----------
+        k : int
+            Number of modes of the model; with a reference, those beyond its boxes are free fast modes.
+
+        Returns
+        -------
+        ndarray, shape (k, 2)
+            Per mode, the lowest and highest time constant (min): the problem's range, or with a
+            reference its boxes, then the free modes below the slowest box.
+        """
         if self.family.reference_min is not None:
             return _reference_bounds(self.family, self.tau_bounds[0], k - len(self.family.reference_min))
         return np.tile(self.tau_bounds, (k, 1))
@@ -193,7 +218,18 @@ class Fits:
     theta: FloatArray  # (T, p)
 
     def take(self, i: int) -> Fits:
-        """The i-th model alone."""
+        """The i-th model alone.
+
+        Parameters
+        ----------
+        i : int
+            Index of the model in the batch (0 to T − 1).
+
+        Returns
+        -------
+        Fits
+            A batch of that one model (T = 1).
+        """
         s = slice(i, i + 1)
         return Fits(self.tau[s], self.rss[s], self.steady[s], self.var_steady[s], self.direction[s], self.theta[s])
 

@@ -80,7 +80,18 @@ class MerweScaledSigmaPoints:
     kappa: float = 0.0
 
     def weights(self, n: int) -> SigmaWeights:
-        """Weights for a state of dimension ``n`` (Eqs 11-13)."""
+        """Weights for a state of dimension ``n`` (Eqs 11-13).
+
+        Parameters
+        ----------
+        n : int
+            Dimension of the state; ``n + λ`` must be positive.
+
+        Returns
+        -------
+        SigmaWeights
+            The 2n+1 weights W⁽ᵐ⁾ and W⁽ᶜ⁾, and the spread ``sqrt(n + λ)``.
+        """
         lam = self.alpha**2 * (n + self.kappa) - n
         if n + lam <= 0:
             msg = f"sigma points: n + λ = {n + lam:.3g} must be positive (α={self.alpha}, κ={self.kappa}, n={n})"
