@@ -294,9 +294,12 @@ def test_an_hour_back_that_is_no_summer_time_change_is_still_refused(write_csv):
                 _local_clock_log("2026-10-25 02:00:00", 30, 0).replace("25.10.2026 02:31:00", "25.10.2026 02:01:30")
             )
         )
-    # a jump forward at noon stays a gap of an hour
+    # a jump forward at noon stays a gap of an hour, and is said as one
     log = read_temperature_log(write_csv(_local_clock_log("2026-03-29 10:00:00", 120, 1)))
-    assert log.time_min[120] - log.time_min[119] == 61 and not log.notes
+    assert log.time_min[120] - log.time_min[119] == 61
+    assert log.notes == (
+        "a gap of 61 min in the readings after t = 119 min (otherwise a reading every 1 min): the fit bridges it",
+    )
 
 
 def test_a_follower_restarted_after_a_summer_time_change_does_not_count_rows_twice(write_csv):
@@ -1347,3 +1350,21 @@ def test_a_loggers_placeholder_is_a_missing_reading_said_by_the_file_reader_and_
 def test_a_folder_given_as_a_log_is_said_to_be_a_folder(tmp_path):
     with pytest.raises(InputError, match=r": a folder, not a log file$"):
         read_temperature_log(tmp_path)
+
+
+def test_a_gap_in_the_readings_and_a_unit_given_for_time_stamps_are_said(write_csv, tmp_path):
+    """A newcomer's log with 40 minutes missing: inspect still said 'a step of 30 s', and neither
+    identify nor watch mentioned the gap; --time-unit s given for a stamp column was ignored silently."""
+    from mtident.io.follow import LogFollower
+
+    minutes = [m / 2 for m in range(240) if not 120 <= m < 200]
+    text = "time_min,A\n" + "".join(f"{m:g},{20 + m / 100:.3f}\n" for m in minutes)
+    path = write_csv(text)
+    gap = "a gap of 40.5 min in the readings after t = 59.5 min (otherwise a reading every 30 s): the fit bridges it"
+    assert gap in read_temperature_log(path).notes
+    said = LogFollower(Path(path)).poll().notes
+    assert any(n.startswith("a gap of 40.5 min in the readings after t = 59.5 min") for n in said)
+    stamps = "time,A\n" + "".join(f"2026-11-25 08:{m:02d}:00,{20 + m / 100:.2f}\n" for m in range(30))
+    notes = read_temperature_log(write_csv(stamps), time_unit="s").notes
+    assert "time column 'time' holds time stamps: the unit 's' given for it is not used" in notes
+    assert not any("gap" in n or "not used" in n for n in read_temperature_log(write_csv(stamps)).notes)

@@ -43,6 +43,8 @@ from mtident.io.columns import (
 )
 from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
 from mtident.io.logs import (
+    GAP_FACTOR,
+    GAP_MIN_MIN,
     OPEN_CIRCUIT_HIGH_C,
     OPEN_CIRCUIT_LOW_C,
     UNLIKELY_MINUTES,
@@ -537,6 +539,13 @@ class LogFollower:
                 else:
                     previous_raw, previous_cell = raw, cell
                 continue
+            if self.last_time is not None and self.last_step is not None:
+                step = t - self.last_time
+                if step >= max(GAP_FACTOR * self.last_step, GAP_MIN_MIN):
+                    notes.append(
+                        f"a gap of {step:.3g} min in the readings after t = {self.last_time:g} min (the step before: "
+                        f"{self.last_step:.3g} min): the fit bridges it"
+                    )
             self.last_step = None if self.last_time is None else t - self.last_time
             self.last_time = t
             self._last_stamp = previous_cell = cell

@@ -62,6 +62,7 @@ __all__ = [
     "sample_log_path",
     "SAMPLES",
     "time_unit_assumed",
+    "gap_note",
     "hours_hint",
     "seconds_hint",
     "serial_date_hint",
@@ -287,6 +288,9 @@ def time_unit_factor(header: str, time_unit: str | None, stated: str | None = No
 # A warm-up is hours long: a time column read as minutes (no unit given anywhere) that runs past two
 # days is more likely seconds.
 UNLIKELY_MINUTES = 2 * 1440.0
+# a step this many times the usual one, and this long (min), is a gap worth a note (:func:`gap_note`)
+GAP_FACTOR = 10.0
+GAP_MIN_MIN = 5.0
 # readings enough to tell a log in hours read as minutes (:func:`hours_hint`)
 HOURS_HINT_SAMPLES = 100
 
@@ -410,6 +414,38 @@ def seconds_hint(header: str, span_min: float) -> str:
     )
 
 
+def gap_note(time_min: FloatArray) -> str | None:
+    """What a reader says of the longest gap between readings, where it is ``GAP_FACTOR`` times
+    the usual step and at least ``GAP_MIN_MIN`` minutes (a logger paused, a cable pulled): the fit
+    bridges it, and the user should know it did. None otherwise.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min), increasing.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> gap_note(np.r_[np.arange(0.0, 60.0, 0.5), np.arange(100.0, 200.0, 0.5)])
+    'a gap of 40.5 min in the readings after t = 59.5 min (otherwise a reading every 30 s): the fit bridges it'
+    """
+    steps = np.diff(np.asarray(time_min, dtype=float))
+    if len(steps) < 3:
+        return None
+    usual, k = float(np.median(steps)), int(np.argmax(steps))
+    if steps[k] < max(GAP_FACTOR * usual, GAP_MIN_MIN):
+        return None
+    every = f"{60.0 * usual:.3g} s" if usual < 1.0 else f"{usual:.3g} min"
+    return (
+        f"a gap of {steps[k]:.3g} min in the readings after t = {time_min[k]:g} min (otherwise a reading every "
+        f"{every}): the fit bridges it"
+    )
+
+
 def hours_hint(header: str, span_min: float, samples: int) -> str | None:
     """What a reader says when a time column read as minutes, for want of a stated unit, holds at
     least ``HOURS_HINT_SAMPLES`` readings over at most an hour, a second or less apart: a warm-up
@@ -494,6 +530,8 @@ def _parse_time(
             msg = f"{source}: time column {header!r}, row {row + first_row} is empty"
             raise InputError(msg)
         fmt = stamp_format(str(text.iloc[0]))
+        if time_unit is not None:
+            notes.append(f"time column {header!r} holds time stamps: the unit {time_unit!r} given for it is not used")
         # as UTC: stamps with offsets that change (summer time ends during the test) stay in order
         stamps = (
             pd.to_datetime(text, format=fmt, errors="coerce", utc=True)
@@ -771,6 +809,8 @@ def read_temperature_log(
         frame = frame[keep]
         sub_second = None if sub_second is None else sub_second[keep]
     time_min = _time_min(frame, header, clock, time_unit, dialect, source, first_row, sub_second, notes)
+    if (gap := gap_note(time_min)) is not None:
+        notes.append(gap)
     columns = [_sensor_readings(frame, name, dialect, source, first_row, notes) for name in sensors]
     return TemperatureLog(
         time_min,
