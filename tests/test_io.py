@@ -1368,3 +1368,13 @@ def test_a_gap_in_the_readings_and_a_unit_given_for_time_stamps_are_said(write_c
     notes = read_temperature_log(write_csv(stamps), time_unit="s").notes
     assert "time column 'time' holds time stamps: the unit 's' given for it is not used" in notes
     assert not any("gap" in n or "not used" in n for n in read_temperature_log(write_csv(stamps)).notes)
+
+
+def test_a_row_written_twice_is_left_out_and_said(write_csv):
+    """A logger flushing its buffer again wrote a row twice; the run ended with 'duplicate time'.
+    The same time with other readings is still refused."""
+    rows = "".join(f"{k},{20 + k / 10:.2f}\n" for k in range(20))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows.replace("5,20.50\n", "5,20.50\n5,20.50\n")))
+    assert len(log.time_min) == 20 and "left out 1 row(s) repeating an earlier row exactly (rows 8)" in log.notes
+    with pytest.raises(InputError, match="duplicate time"):
+        read_temperature_log(write_csv("time_min,A\n" + rows.replace("5,20.50\n", "5,20.50\n5,20.60\n")))

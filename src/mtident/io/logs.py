@@ -808,6 +808,13 @@ def read_temperature_log(
         )
         frame = frame[keep]
         sub_second = None if sub_second is None else sub_second[keep]
+    repeated = frame.duplicated().to_numpy()
+    if repeated.any():
+        # a logger that writes a row twice (a buffer flushed again): the copy adds nothing
+        rows = ", ".join(str(int(r) + first_row) for r in frame.index[repeated][:5])
+        notes.append(f"left out {int(repeated.sum())} row(s) repeating an earlier row exactly (rows {rows})")
+        frame = frame[~repeated]
+        sub_second = None if sub_second is None else sub_second[~repeated]
     time_min = _time_min(frame, header, clock, time_unit, dialect, source, first_row, sub_second, notes)
     if (gap := gap_note(time_min)) is not None:
         notes.append(gap)
