@@ -821,3 +821,14 @@ def test_an_interval_without_bounds_is_said_so_not_as_infinities():
     assert event.text == "S: narrowing, T∞ 30.00 °C, 99% interval 29.50 to 30.50 °C"
     reason = _reason([after], MonitorSettings())
     assert "99% interval not yet bounded, reaching beyond ±0.2 °C of T∞" in reason and "inf" not in reason
+
+
+def test_watch_says_when_no_expected_stop_was_found(tmp_path):
+    """A newcomer's unfinished run showed 'Expected stop: t ≈ … min' once and, on another log,
+    nothing at all: where no stop is found on the best models' courses, it now says so."""
+    t = np.arange(0.0, 30.0, 0.5)
+    log = tmp_path / "early.csv"
+    log.write_text(csv_text(t, {"S": noisy(20.0 + 8.0 * (1.0 - np.exp(-t / 60.0)), 5)}))
+    code, out, _ = run("thermal", "watch", str(log), "--replay", "--state", str(tmp_path / "s.npz"))
+    assert code == 0 and "Not yet" in out
+    assert "Expected stop: none found on the best models' courses" in out and "Expected stop: t ≈" not in out

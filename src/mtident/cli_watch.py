@@ -743,6 +743,12 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
             "fits moves it later).",
             highlight=False,
         )
+    elif "expected_stop_time_min" in outcome and outcome.get("decision") != "stop":
+        console.print(
+            "Expected stop: none found on the best models' courses (a sensor whose interval does not come within the "
+            "tolerance there, or whose status gives no course to go on: no fit yet, off its reference, a misfit).",
+            highlight=False,
+        )
 
 
 def _status_table(session: WatchSession, path: Path) -> Table:
