@@ -832,3 +832,18 @@ def test_watch_says_when_no_expected_stop_was_found(tmp_path):
     code, out, _ = run("thermal", "watch", str(log), "--replay", "--state", str(tmp_path / "s.npz"))
     assert code == 0 and "Not yet" in out
     assert "Expected stop: none found on the best models' courses" in out and "Expected stop: t ≈" not in out
+
+
+def test_a_session_that_keeps_no_state_says_it_leaves_another_runs_state_file_alone(tmp_path):
+    """The report replays a log with a watch's state file beside it: 'starting afresh (it will be
+    overwritten)' was said, though the report writes no state."""
+    log = tmp_path / "log.csv"
+    log.write_text(csv_text(T[:40], {"S": noisy(first_order(T[:40]), 4)}))
+    first = WatchSession(log, MonitorSettings(tolerance_C=0.3))
+    first.poll()
+    first.save()
+    notes = WatchSession(log, MonitorSettings(tolerance_C=0.2), persist=False).notes
+    assert any("the log is decided from its start (the file is left as it is)" in n for n in notes)
+    assert not any("overwritten" in n for n in notes)
+    said = WatchSession(log, MonitorSettings(tolerance_C=0.2)).notes
+    assert any("starting afresh (it will be overwritten)" in n for n in said)

@@ -202,7 +202,10 @@ class WatchSession:
         try:
             saved = load_dataclass(self.state_path, SavedWatch)
         except StateFileError as exc:
-            self.notes.append(f"the state file {self.state_path} cannot be resumed ({exc}); starting afresh")
+            self.notes.append(
+                f"the state file {self.state_path} cannot be resumed ({exc}); "
+                + ("starting afresh" if self.persist else "the log is decided from its start")
+            )
             return
         differs = []
         if saved.log != str(self.path.resolve()):
@@ -212,10 +215,12 @@ class WatchSession:
         if saved.settings_key != self._key:
             differs.append("other settings or sensors")
         if differs:
-            self.notes.append(
-                f"the state file {self.state_path} was written for {' and '.join(differs)}; starting afresh (it will "
-                "be overwritten)"
+            afresh = (
+                "starting afresh (it will be overwritten)"
+                if self.persist
+                else "the log is decided from its start (the file is left as it is)"
             )
+            self.notes.append(f"the state file {self.state_path} was written for {' and '.join(differs)}; {afresh}")
             return
         self.follower = LogFollower.resume(self.path, json.loads(saved.position), time_col, time_unit)
         self.state = saved.monitor
