@@ -43,11 +43,10 @@ from mtident.io.columns import (
 )
 from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
 from mtident.io.logs import (
-    GAP_FACTOR,
-    GAP_MIN_MIN,
     OPEN_CIRCUIT_HIGH_C,
     OPEN_CIRCUIT_LOW_C,
     UNLIKELY_MINUTES,
+    gap_said,
     hours_hint,
     names_a_date,
     seconds_hint,
@@ -208,8 +207,7 @@ class LogFollower:
     # numeric time column (looked up on every row, it cost an eighth of a 28,800-row replay)
     _time_scale: tuple[float, bool] | None = field(default=None, repr=False, compare=False)
     _last_stamp: str | None = field(default=None, repr=False, compare=False)  # the last row's time cell, for a note
-    _first_time: float | None = field(default=None, repr=False, compare=False)  # for the hint of a column in hours
-    _rows_taken: int = field(default=0, repr=False, compare=False)
+    _rows_taken: int = field(default=0, repr=False, compare=False)  # for the hint of a column in hours
     _hours_said: bool = field(default=False, repr=False, compare=False)
 
     def position(self) -> dict[str, object]:
@@ -540,12 +538,8 @@ class LogFollower:
                     previous_raw, previous_cell = raw, cell
                 continue
             if self.last_time is not None and self.last_step is not None:
-                step = t - self.last_time
-                if step >= max(GAP_FACTOR * self.last_step, GAP_MIN_MIN):
-                    notes.append(
-                        f"a gap of {step:.3g} min in the readings after t = {self.last_time:g} min (the step before: "
-                        f"{self.last_step:.3g} min): the fit bridges it"
-                    )
+                if (gap := gap_said(t - self.last_time, self.last_time, self.last_step)) is not None:
+                    notes.append(gap)
             self.last_step = None if self.last_time is None else t - self.last_time
             self.last_time = t
             self._last_stamp = previous_cell = cell
@@ -561,11 +555,10 @@ class LogFollower:
         """Once, where a numeric time column read as minutes for want of a unit looks like hours."""
         if not times or self._hours_said or self._time_scale is None or not self._time_scale[1]:
             return
-        if self._first_time is None:
-            self._first_time = times[0]
         self._rows_taken += len(times)
         assert self.header is not None
-        hint = hours_hint(self.header[self.columns[0]], times[-1] - self._first_time, self._rows_taken)
+        # times count from the first sample's: the last is the span
+        hint = hours_hint(self.header[self.columns[0]], times[-1], self._rows_taken)
         if hint is not None:
             warnings.append(f"{self.path}: {hint}")
             self._hours_said = True

@@ -63,6 +63,7 @@ __all__ = [
     "SAMPLES",
     "time_unit_assumed",
     "gap_note",
+    "gap_said",
     "hours_hint",
     "seconds_hint",
     "serial_date_hint",
@@ -415,9 +416,8 @@ def seconds_hint(header: str, span_min: float) -> str:
 
 
 def gap_note(time_min: FloatArray) -> str | None:
-    """What a reader says of the longest gap between readings, where it is ``GAP_FACTOR`` times
-    the usual step and at least ``GAP_MIN_MIN`` minutes (a logger paused, a cable pulled): the fit
-    bridges it, and the user should know it did. None otherwise.
+    """What a reader says of the longest gap between readings against their usual (median) step
+    (:func:`gap_said`); None where it is no gap.
 
     Parameters
     ----------
@@ -436,12 +436,33 @@ def gap_note(time_min: FloatArray) -> str | None:
     steps = np.diff(np.asarray(time_min, dtype=float))
     if len(steps) < 3:
         return None
-    usual, k = float(np.median(steps)), int(np.argmax(steps))
-    if steps[k] < max(GAP_FACTOR * usual, GAP_MIN_MIN):
+    k = int(np.argmax(steps))
+    return gap_said(float(steps[k]), float(time_min[k]), float(np.median(steps)))
+
+
+def gap_said(step_min: float, after_min: float, usual_min: float) -> str | None:
+    """What a reader says of a step between readings that is ``GAP_FACTOR`` times the usual one and
+    at least ``GAP_MIN_MIN`` minutes (a logger paused, a cable pulled): the fit bridges it, and the
+    user should know it did. None for a shorter step.
+
+    Parameters
+    ----------
+    step_min : float
+        The step (min).
+    after_min : float
+        The time of the reading before it (min).
+    usual_min : float
+        The usual step between readings (min).
+
+    Returns
+    -------
+    str or None
+    """
+    if step_min < max(GAP_FACTOR * usual_min, GAP_MIN_MIN):
         return None
-    every = f"{60.0 * usual:.3g} s" if usual < 1.0 else f"{usual:.3g} min"
+    every = f"{60.0 * usual_min:.3g} s" if usual_min < 1.0 else f"{usual_min:.3g} min"
     return (
-        f"a gap of {steps[k]:.3g} min in the readings after t = {time_min[k]:g} min (otherwise a reading every "
+        f"a gap of {step_min:.3g} min in the readings after t = {after_min:g} min (otherwise a reading every "
         f"{every}): the fit bridges it"
     )
 

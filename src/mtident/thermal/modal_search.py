@@ -681,8 +681,11 @@ def _furthest_within(candidates: list[Fits], objective: _EndObjective, threshold
     towards the objective's end among those within ``threshold``."""
     best, best_value = candidates[-1].take(0), np.inf
     for fits in candidates:
+        if not len(fits.rss):
+            continue
         values = np.where(fits.rss <= threshold, objective(fits), np.inf)
-        if len(values) and (i := int(np.argmin(values))) is not None and values[i] < best_value:
+        i = int(np.argmin(values))
+        if values[i] < best_value:
             best, best_value = fits.take(i), float(values[i])
     return best
 

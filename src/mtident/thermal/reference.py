@@ -360,13 +360,12 @@ def load_reference(path: str | Path) -> MachineReference:
     try:
         doc = tomllib.loads(p.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        msg = (
-            f"{p}: not a reference file mtident can read (a TOML file written by `learn`; this one: {exc})"
-            if not isinstance(exc, OSError) or p.is_file()
-            else f"{p}: a folder, not a reference file"
-            if p.is_dir()
-            else f"{p}: no such file"
-        )
+        if p.is_dir():
+            msg = f"{p}: a folder, not a reference file"
+        elif not p.exists():
+            msg = f"{p}: no such file"
+        else:
+            msg = f"{p}: not a reference file mtident can read (a TOML file written by `learn`; this one: {exc})"
         raise InputError(msg) from exc
     table = doc.get("sensors")
     if not isinstance(table, dict) or not table:
