@@ -57,6 +57,9 @@ __all__ = [
 
 # a check falls due this little before its time (min): 60 µs, far below any logging interval
 _DUE_SLACK_MIN = 1e-6
+# checks of a sensor far from the tolerance, or waiting for the others, come this many times
+# ``check_spacing`` apart
+_LONGEST_SHARE = 4.0
 
 # the interval's level for the report and for the decision
 REPORT_LEVEL = 0.95
@@ -487,11 +490,21 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
     events: list[Event] = []
     said = set(state.said)
     checks = list(state.checks)
+
+    def check_sensor(s: int) -> None:
+        estimate = sensor_estimate(readings, s, state.sensors[s], settings)
+        before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, settings)
+        events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
+
     for s, check in enumerate(checks):
         if now >= check.next_check_min:
-            estimate = sensor_estimate(readings, s, state.sensors[s], settings)
-            checks[s] = _checked(check, estimate, now, readings, settings)
-            events.extend(_check_events(check, checks[s], estimate, said, now, settings.decision_level))
+            check_sensor(s)
+    if all(c.may_stop for c in checks):
+        # a sensor that may stop waits for the others at a longer spacing: before the test stops,
+        # each is checked again on every reading so far
+        for s, check in enumerate(checks):
+            if check.checked_min < now:
+                check_sensor(s)
     stop = now if all(c.may_stop for c in checks) else math.nan
     if math.isfinite(stop):
         events.append(
@@ -643,7 +656,8 @@ def _next_check(
 ) -> float:
     """When to check the sensor again: after the next reading while it confirms a first pass; else
     after a share of the time since its warm-up began, which grows with how far its interval is
-    from the tolerance (a sensor that may stop, waiting for the others, at the shortest share).
+    from the tolerance (a sensor that may stop, waiting for the others, at the longest share: the
+    test stops only after a check of every sensor on every reading so far).
     A reading within ``_DUE_SLACK_MIN`` before that counts as at it: the next reading lies one
     step on, and the same log's times read from a file and followed live differ in their last
     bits, which decided whether that reading was due."""
@@ -651,10 +665,10 @@ def _next_check(
     if estimate.fit is None or 0 < passes < settings.consecutive_checks:
         wait = step
     elif passes:
-        wait = max(step, settings.check_spacing * (now - estimate.onset_min))
+        wait = max(step, settings.check_spacing * _LONGEST_SHARE * (now - estimate.onset_min))
     else:
         ratio = estimate.half_width(settings.decision_level) / settings.tolerance_C
-        factor = 1.0 if ratio <= 1.5 else 2.0 if ratio <= 5.0 else 4.0
+        factor = 1.0 if ratio <= 1.5 else 2.0 if ratio <= 5.0 else _LONGEST_SHARE
         wait = max(step, settings.check_spacing * factor * (now - estimate.onset_min))
     return now + wait - _DUE_SLACK_MIN
 
