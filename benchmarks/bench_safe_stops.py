@@ -44,7 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.thermal.identify import identify  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state  # noqa: E402
-from mtident.thermal.reference import learn_reference  # noqa: E402
+from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
 from mtident.thermal.robust_identify import identify_robust  # noqa: E402
 from mtident.thermal.synthetic import modal_amplitudes, random_warmup, reference_run  # noqa: E402
 
@@ -58,10 +58,14 @@ def _log(t: np.ndarray, y: np.ndarray, name: str) -> TemperatureLog:
     return TemperatureLog(t, ("S",), y[:, None], (), name)
 
 
-def _replay(warm, reference) -> dict[str, object]:  # noqa: ANN001
+def _replay(warm, reference, **said: object) -> dict[str, object]:  # noqa: ANN001
+    """The monitor replayed on the case; ``said``: MonitorSettings fields besides the defaults."""
     room = warm.room_C
     settings = MonitorSettings(
-        tolerance_C=TOLERANCE_C, reference=reference, room_sensor="room" if room is not None else None
+        tolerance_C=TOLERANCE_C,
+        reference=reference,
+        room_sensor="room" if room is not None else None,
+        **said,  # type: ignore[arg-type]
     )
     state = new_state(["S"], with_room=room is not None)
     started = time.perf_counter()
@@ -120,20 +124,31 @@ def _identify_at(warm, fraction: float, reference) -> dict[str, object]:  # noqa
     return out
 
 
+def learnt_reference(seed: int, machine) -> MachineReference | None:  # noqa: ANN001
+    """The reference learnt from another complete run of the case's machine (at another power),
+    None where it kept no sensor."""
+    ref_run = reference_run(machine, np.random.default_rng(seed + 10_000_000))
+    with np.errstate(all="ignore"):
+        learnt, _ = learn_reference(_log(ref_run.time_min, ref_run.reading_C, "reference"))
+    return learnt if learnt.sensors else None
+
+
+def near_first_order(machine, warm) -> tuple[bool, float]:  # noqa: ANN001
+    """Whether one mode holds at least ``NEAR_FIRST_ORDER_SHARE`` of the rise, and its share."""
+    _, amplitudes = modal_amplitudes(machine, warm)
+    share = float(np.max(np.abs(amplitudes)) / max(np.sum(np.abs(amplitudes)), 1e-12))
+    return share >= NEAR_FIRST_ORDER_SHARE, share
+
+
 def run_case(seed: int, only: str | None = None) -> dict[str, object]:
     """One case; ``only`` ("without" or "with") replays the monitor without or with a learnt
     reference alone, and skips ``identify``."""
     rng = np.random.default_rng(seed)
     warm = random_warmup(rng)
     machine = warm.machine
-    taus, amplitudes = modal_amplitudes(machine, warm)
-    share = float(np.max(np.abs(amplitudes)) / max(np.sum(np.abs(amplitudes)), 1e-12))
-    reference = None
-    if only != "without":
-        ref_run = reference_run(machine, np.random.default_rng(seed + 10_000_000))
-        with np.errstate(all="ignore"):
-            learnt, _ = learn_reference(_log(ref_run.time_min, ref_run.reading_C, "reference"))
-        reference = learnt if learnt.sensors else None
+    taus, _ = modal_amplitudes(machine, warm)
+    near, share = near_first_order(machine, warm)
+    reference = learnt_reference(seed, machine) if only != "without" else None
     case: dict[str, object] = {
         "seed": seed,
         "kind": machine.kind,
@@ -143,7 +158,7 @@ def run_case(seed: int, only: str | None = None) -> dict[str, object]:
         "noise_C": warm.noise_C,
         "rounding_C": warm.rounding_C,
         "room_sensor": warm.room_C is not None,
-        "near_first_order": share >= NEAR_FIRST_ORDER_SHARE,
+        "near_first_order": near,
         "largest_mode_share": share,
         "reference_taus": None if reference is None else list(reference.sensors["S"].time_constants_min),
         "true_taus": [float(t) for t in taus[:4]],
