@@ -57,6 +57,33 @@ def test_a_run_stopped_before_equilibrium_is_doubtful_and_not_used_later(tmp_pat
     assert any("did not pin this sensor down" in w for w in estimate.warnings)
 
 
+def test_a_sparse_run_that_ended_in_a_slow_mode_is_doubtful():
+    """A two-node pair (49 and 2.5 min; the slow mode 7 % of the rise) whose reference run has 13
+    readings, every 5 min to 60 min: its noise, read off the rise, hid the slow mode from the test
+    of modes needed, and the run was learnt as one mode of 2.8 min. A later test (10-s readings)
+    that trusted it stopped at 6.5 min, 0.29 °C low. The run's best fit with one mode more puts
+    a 240-min mode in it and its steady state 0.8 °C higher: it is doubted, and the test does not
+    stop wrongly."""
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
+    from mtident.thermal.synthetic import random_warmup, reference_run
+
+    warm = random_warmup(np.random.default_rng(18024))
+    run = reference_run(warm.machine, np.random.default_rng(18024 + 10_000_000))
+    with np.errstate(all="ignore"):
+        reference, warnings = learn_reference(make_log(run.time_min, {"S": run.reading_C}))
+    doubt = reference.sensors["S"].doubt
+    assert doubt is not None and "slower than those learnt" in doubt and "ended before that mode settled" in doubt
+    assert len(warnings) == 1 and "Later tests will not use this sensor's modes" in warnings[0]
+    settings = MonitorSettings(reference=reference, room_sensor="room")
+    state, _ = monitor_step(
+        new_state(["S"], with_room=True), warm.time_min, warm.reading_C[:, None], warm.room_C, settings
+    )
+    if state.stopped:
+        truth = float(warm.steady_C[int(np.searchsorted(warm.time_min, state.stop_time_min))])
+        assert abs(state.checks[0].steady_C - truth) < 0.2
+    assert not state.checks[0].reference_used
+
+
 def test_a_run_that_needs_more_modes_than_it_pins_down_keeps_them_with_wide_boxes():
     """A four-node chain (53, 16, 13 and 10 min, a fast lag) logged every 5 min: the run pins one
     mode down (15.4 min ±10 %), but needs three beyond chance. Learnt as one mode, the reference
