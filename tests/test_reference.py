@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -205,24 +206,37 @@ def test_a_slower_mode_than_the_references_rejects_it():
 
 def test_a_sensor_the_reference_does_not_know_is_said_in_identify_and_watch(tmp_path):
     """A logger's export named the column 'Spindle T1' where the reference run had 'T1': the answer
-    went on without the reference, said only in its assumptions."""
+    went on without the reference, said only in its assumptions. Where the reference knows none
+    of the log's sensors, it is refused (a newcomer gave another machine's reference and got only
+    a warning)."""
     from mtident.thermal.monitor import MonitorSettings
     from mtident.thermal.robust_identify import identify_robust
     from mtident.thermal.session import WatchSession
 
     t = np.arange(0.0, 61.0)
     y = np.round(two_mode(t) + np.random.default_rng(3).normal(0.0, 0.01, t.size), 2)
-    reference = MachineReference("run.csv", "2026-11-25", 300.0, "not measured", {"T1": SensorModes((60.0,), (0.1,))})
+    modes = {"T1": SensorModes((60.0,), (0.1,)), "T2": SensorModes((60.0,), (0.1,))}
+    reference = MachineReference("run.csv", "2026-11-25", 300.0, "not measured", modes)
     said = "the reference (run.csv) has no modes for 'Spindle T1': it is answered without it (the reference knows 'T1'"
-    result = identify_robust(make_log(t, {"Spindle T1": y}), 60.0, reference=reference)
+    result = identify_robust(make_log(t, {"Spindle T1": y, "T2": y}), 60.0, reference=reference)
     assert any(note.startswith(said) for note in result.notes)
     assert not any(
         "no modes" in note for note in identify_robust(make_log(t, {"T1": y}), 60.0, reference=reference).notes
     )
     log = tmp_path / "log.csv"
-    log.write_text("time_min,Spindle T1\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
+    log.write_text("time_min,Spindle T1,T2\n" + "".join(f"{a:g},{b:.2f},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
     events = WatchSession(log, MonitorSettings(reference=reference), persist=False).poll()
     assert [e.kind for e in events if e.text.startswith(said)] == ["warning"]
+    refused = "--reference run.csv: it has modes for none of this log's sensors ('Spindle T1'); it knows 'T1', 'T2'"
+    with pytest.raises(InputError, match=re.escape(refused)):
+        identify_robust(make_log(t, {"Spindle T1": y}), 60.0, reference=reference)
+    alone = tmp_path / "alone.csv"
+    alone.write_text("time_min,Spindle T1\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
+    with pytest.raises(InputError, match=re.escape(refused)):
+        WatchSession(alone, MonitorSettings(reference=reference), persist=False).poll()
+    save_reference(reference, tmp_path / "machine.toml")
+    out = mtident("thermal", "identify", str(alone), "--window", "60", "--reference", str(tmp_path / "machine.toml"))
+    assert out.returncode == 2 and "it has modes for none of this log's sensors" in out.stderr
 
 
 def test_a_reference_that_learnt_the_room_as_a_machine_sensor_is_said():

@@ -903,3 +903,13 @@ def test_a_fragile_95_percent_interval_is_not_trusted_by_identify():
     n = int(np.searchsorted(warm.time_min, window, side="right"))
     regular = estimate_sensor("S", warm.time_min[: n + 600], warm.reading_C[: n + 600], warm.room_C[: n + 600])
     assert with_fragility(regular) is regular
+
+
+def test_a_robust_answer_printed_in_a_notebook_says_why_it_is_not_trusted():
+    """A newcomer's print(result) said "not trusted (see warnings)" and showed none."""
+    from mtident.thermal.robust_identify import identify_robust
+
+    t = np.arange(0.0, 60.0)
+    y = 20.0 + 5.0 * (1.0 - np.exp(-t / 80.0)) + 0.01 * np.random.default_rng(0).standard_normal(t.size)
+    text = repr(identify_robust(make_log(t, {"S": np.round(y, 2)}), 30.0))
+    assert ", not trusted:\n    - S: T∞ not determined yet (95% interval" in text, text

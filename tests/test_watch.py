@@ -689,6 +689,22 @@ def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypa
     )
 
 
+def test_watch_says_it_is_waiting_for_rows_of_a_log_that_does_not_grow(tmp_path, monkeypatch):
+    """A newcomer gave a finished log without --replay, and the watch waited in silence."""
+    import mtident.cli_watch
+
+    t = np.arange(0.0, 20.0)
+    log = tmp_path / "done.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{20 + a / 10:.2f}\n" for a in t))
+    monkeypatch.setattr(mtident.cli_watch, "_WAITING_HINT_S", 0.1)
+    code, _, err = run(
+        "thermal", "watch", str(log), "--poll", "0.05", "--timeout", "0.5", "--state", str(tmp_path / "s")
+    )
+    said = " ".join(err.split())
+    assert code == 0 and "waiting for new rows: none for 0.1 s (a finished log is replayed with --replay" in said
+    assert said.count("waiting for new rows") == 1
+
+
 def test_readings_in_steps_as_coarse_as_the_tolerance_never_stop_within_it():
     """A 10-bit converter's 0.32 °C steps and hardly any noise: rounding can bias T∞ by half a
     step where the curve flattens within one, which no interval shows (a held-out warm-up stopped
@@ -802,6 +818,27 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     assert "T∞ at stop + room (°C)" in text
     # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
     assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +258 │", text), text
+
+
+def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_not_settle(capsys):
+    """A newcomer's three sensors: the one that settled reached 95 % at 183 min, the test stopped
+    at 270 and the others had not settled by the log's end; the check said "the rule saved no
+    time", though their 95 % times lay beyond the log."""
+    from mtident.cli_watch import _print_hindsight
+    from mtident.thermal.hindsight import Hindsight
+
+    nan = np.nan
+    hindsight = Hindsight(
+        ("front", "rear"), 270.0, 480.0, np.array([32.5, 27.4]), np.array([nan, 27.38]), np.array([nan, 183.0]), 0, 0.2
+    )
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "saved no time" not in text
+    assert "the sensors that settled reached 95 % of the rise they show by t = 183 min" in text
+    assert "whether the rule saved time is not known" in text and "not settled by the log's end: front" in text
+    settled = Hindsight(("rear",), 270.0, 480.0, np.array([27.4]), np.array([27.38]), np.array([183.0]), 0, 0.2)
+    _print_hindsight(settled)
+    assert "on this estimate the rule saved no time" in " ".join(capsys.readouterr().out.split())
 
 
 def test_an_interval_without_bounds_is_said_so_not_as_infinities():

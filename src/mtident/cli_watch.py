@@ -59,6 +59,9 @@ if TYPE_CHECKING:
 
 # events said on stderr as they come (a status change while narrowing is shown in the table)
 _SAID = ("note", "warning", "ready", "not ready", "stop")
+# a watch that has seen no new row for this long says it is waiting, once (a finished log given
+# without --replay otherwise waits in silence)
+_WAITING_HINT_S = 60.0
 
 
 def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
@@ -583,7 +586,7 @@ def _follow(
 
     last_data = time.monotonic()
     last_plot = last_page = 0.0
-    said_room = False
+    said_room = said_waiting = False
     try:
         with Live(console=OptionConsole(), auto_refresh=False, transient=False) if live else _Nothing() as view:
 
@@ -610,6 +613,13 @@ def _follow(
                 if timeout_s is not None and time.monotonic() - last_data > timeout_s:
                     stderr.print(f"mtident: no new row for {timeout_s:g} s; stopping", highlight=False)
                     return False
+                if not said_waiting and time.monotonic() - last_data > _WAITING_HINT_S:
+                    stderr.print(
+                        f"mtident: waiting for new rows: none for {_WAITING_HINT_S:g} s (a finished log is replayed "
+                        "with --replay; Ctrl-C stops, and the same command resumes)",
+                        highlight=False,
+                    )
+                    said_waiting = True
                 time.sleep(poll_s)
     except KeyboardInterrupt as stop:
         return _say_interrupted(stop, session)
@@ -835,19 +845,32 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0),
         )
     table_console().print(table)
-    reached = hindsight.measured_equilibrium_time_min[np.isfinite(hindsight.measured_equilibrium_time_min)]
+    known_times = np.isfinite(hindsight.measured_equilibrium_time_min)
+    reached = hindsight.measured_equilibrium_time_min[known_times]
+    # a sensor that did not settle reaches its 95 % later than the log can tell
+    partly = bool(np.any(~known_times & np.isfinite(hindsight.steady_state_C)))
     timing = ""
     if len(reached):
         saved = float(reached.max()) - hindsight.stop_time_min
         # read off the log's end, which lies a little short of where the sensors settle: the last
         # few per cent of a slow mode's rise take long, so their own 95 % time can be much later
         timing = (
-            f"the log reached 95 % of the rise it shows by t = {minutes(float(reached.max()))} (an earliest "
-            "estimate: its end lies short of where the sensors settle), "
+            (
+                "the sensors that settled reached 95 % of the rise they show"
+                if partly
+                else "the log reached 95 % of the rise it shows"
+            )
+            + f" by t = {minutes(float(reached.max()))} (an earliest "
+            "estimate: the log's end lies short of where they settle), "
             + (
                 f"{minutes(saved)} after the stop"
                 if saved > 0
-                else f"{minutes(-saved)} before the stop: on this estimate the rule saved no time"
+                else f"{minutes(-saved)} before the stop"
+                + (
+                    ", and the others' are later than the log can tell: whether the rule saved time is not known"
+                    if partly
+                    else ": on this estimate the rule saved no time"
+                )
             )
         )
     if not settled.any():

@@ -600,7 +600,8 @@ def _parse_time(
         row = int(np.argmax(steps < 0)) + 1
         msg = (
             f"{source}: time column {header!r}, row {row + first_row}: time goes back ({_cell(column.iloc[row - 1])} "
-            f"then {_cell(column.iloc[row])}); time must increase"
+            f"then {_cell(column.iloc[row])}); time must increase: sort the rows by time, or, after a logger's "
+            "clock was reset, cut the log there and give the part you want"
         )
         raise InputError(msg)
     return values - values[0], notes

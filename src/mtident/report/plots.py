@@ -109,6 +109,13 @@ def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 -
     return fig, flat[:count]
 
 
+def _follows_room(result: Identification | RobustIdentification, s: int) -> bool:
+    """Whether sensor ``s``'s model takes the room as an input (a robust answer with a room sensor)."""
+    estimates = getattr(result, "estimates", ())
+    fit = estimates[s].fit if s < len(estimates) else None
+    return fit is not None and fit.room_level_C is not None
+
+
 def plot_identification(result: Identification | RobustIdentification, path: str | Path | None = None) -> Path | Figure:
     """Measured and predicted temperature per sensor, with the 95 % band, the
     identification time, T∞ and the predicted equilibrium time (Xia et al. 2014 Figs 6-8).
@@ -140,13 +147,23 @@ def plot_identification(result: Identification | RobustIdentification, path: str
         low, high = (edge[:, s] for edge in result.band_C())
         inside = t <= result.window_min + 1e-9
         ax.plot(t[inside], mean[inside], color="tab:blue", lw=1.6, label="fitted")
-        ax.plot(t[~inside], mean[~inside], color="tab:red", lw=1.6, label="predicted")
+        # with a room sensor the course after L follows the room as logged, and T∞ is at the room's
+        # level at L: the two part where the room moved after it
+        follows_room = _follows_room(result, s)
+        ax.plot(
+            t[~inside],
+            mean[~inside],
+            color="tab:red",
+            lw=1.6,
+            label="predicted, with the room as logged" if follows_room else "predicted",
+        )
         finite = np.isfinite(low) & np.isfinite(high) & (high - low < 100)
         ax.fill_between(t[finite], low[finite], high[finite], color="tab:red", alpha=0.18, lw=0, label="95 % band")
         ax.axvline(result.window_min, color="k", ls="--", lw=1, label=f"L = {result.window_min:g} min")
         steady = result.steady_state_C[s]
         if np.isfinite(steady):
-            ax.axhline(steady, color="tab:green", ls=":", lw=1.2, label=f"T∞ = {steady:.2f} °C")
+            where = " (room as at L)" if follows_room else ""
+            ax.axhline(steady, color="tab:green", ls=":", lw=1.2, label=f"T∞ = {steady:.2f} °C{where}")
         eq = result.equilibrium_time_min[s]
         if np.isfinite(eq) and eq < t[-1]:
             ax.axvline(eq, color="tab:green", ls="-.", lw=1, label=f"95 % at {eq:.0f} min")

@@ -33,7 +33,14 @@ from mtident.thermal.robust import (
     estimate_sensor,
 )
 
-__all__ = ["MachineReference", "learn_reference", "load_reference", "reference_notes", "save_reference"]
+__all__ = [
+    "MachineReference",
+    "learn_reference",
+    "load_reference",
+    "reference_notes",
+    "require_known_sensors",
+    "save_reference",
+]
 
 # A reference's box is three standard deviations of its log time constant either side (at least
 # ±10 %, at most a factor of 100); a mode counts as pinned down within 0.15 (about ±15 %) at one.
@@ -112,6 +119,31 @@ class MachineReference:
         if modes.doubt is not None:
             parts += " (doubtful)"
         return f"{self.source} ({self.learnt_on}): τ {parts}"
+
+
+def require_known_sensors(reference: MachineReference, sensors: tuple[str, ...]) -> None:
+    """Refuse a reference that knows none of a log's sensors: it is another machine's, or the
+    log's columns were renamed since, and a test answered without it all through is not what
+    was asked for.
+
+    Parameters
+    ----------
+    reference : MachineReference
+    sensors : tuple of str
+        The log's sensors (without the room's).
+
+    Raises
+    ------
+    InputError
+        No sensor of the log is in the reference.
+    """
+    if sensors and not any(name in reference.sensors for name in sensors):
+        msg = (
+            f"--reference {reference.source}: it has modes for none of this log's sensors "
+            f"({', '.join(repr(n) for n in sensors)}); it knows {', '.join(repr(n) for n in reference.sensors)}. "
+            "Give the reference learnt from this machine, or rename the log's columns to the reference run's"
+        )
+        raise InputError(msg)
 
 
 def reference_notes(
@@ -200,8 +232,13 @@ def learn_reference(
         sensors[name] = SensorModes(centres, boxes, tuple(m.amplitude_C for m in fit.modes), doubt)
         if doubt is None and len(fit.modes) > determined:
             warnings.append(
-                f"{name}: the run needs {len(fit.modes)} modes beyond chance but pins down only {determined}; the "
-                f"others are kept with the wide boxes the run leaves them ({_spans(centres, boxes, determined)}), so "
+                f"{name}: the run needs {len(fit.modes)} modes beyond chance but pins down only {determined}; "
+                + (
+                    "the other is kept with the wide box the run leaves it"
+                    if len(fit.modes) - determined == 1
+                    else "the others are kept with the wide boxes the run leaves them"
+                )
+                + f" ({_spans(centres, boxes, determined)}), so "
                 "later tests stop later than with a run that shows every mode"
             )
         if doubt is not None:

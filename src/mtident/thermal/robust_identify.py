@@ -19,7 +19,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import measured_equilibrium, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
-from mtident.thermal.reference import MachineReference, reference_notes
+from mtident.thermal.reference import MachineReference, reference_notes, require_known_sensors
 from mtident.thermal.robust import (
     Assumptions,
     RobustSettings,
@@ -146,8 +146,10 @@ class RobustIdentification:
     def __repr__(self) -> str:
         lines = [f"RobustIdentification(L = {self.window_min:g} min, {len(self.sensors)} sensor(s))"]
         for e, (lo, hi) in zip(self.estimates, self.steady_state_ci95(), strict=True):
-            verdict = "" if e.model_ok else ", not trusted (see warnings)"
+            verdict = "" if e.model_ok else ", not trusted:"
             lines.append(f"  {e.sensor}: T∞ {e.steady_C:.2f} °C, 95 % interval {lo:.2f} to {hi:.2f} °C{verdict}")
+            # a notebook shows why, not only that
+            lines += [f"    - {warning}" for warning in e.warnings] if not e.model_ok else []
         return "\n".join(lines)
 
     def curve_frame(self) -> pd.DataFrame:
@@ -270,7 +272,7 @@ def identify_robust(
     Raises
     ------
     InputError
-        A window with too few readings.
+        A window with too few readings, or a reference that knows none of the log's sensors.
     """
     log = as_temperature_log(log, "identify")
     settings = settings or RobustSettings()
@@ -283,6 +285,8 @@ def identify_robust(
         msg = f"the room sensor has {len(room_C)} readings for {len(t)} samples"
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
+    if reference is not None:
+        require_known_sensors(reference, log.sensors)
     estimates = tuple(
         with_fragility(
             estimate_sensor(

@@ -35,7 +35,7 @@ from mtident.thermal.monitor import (
     new_state,
     result,
 )
-from mtident.thermal.reference import reference_notes
+from mtident.thermal.reference import reference_notes, require_known_sensors
 
 __all__ = ["SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
 
@@ -277,16 +277,17 @@ class WatchSession:
         Raises
         ------
         InputError
-            The log has no sensor column besides the room sensor's.
+            The log has no sensor column besides the room sensor's, or the reference knows none of its sensors.
         """
         rows = self.follower.poll()
         self.last_rows = len(rows.time_min)
-        events = [Event("note", rows.time_min[0] if len(rows.time_min) else np.nan, text) for text in rows.notes]
+        events = [Event("note", np.nan, text) for text in rows.notes]
         events += [Event("warning", np.nan, text) for text in rows.warnings]
         if self.state is None and self.follower.sensors:
             self.state = self._new_state(self.follower.sensors)
             reference = self.settings.reference
             if reference is not None:
+                require_known_sensors(reference, self.sensors)
                 notes = reference_notes(
                     reference, self.sensors, bool(self.settings.room_sensor), self.settings.room_sensor
                 )
