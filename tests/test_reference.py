@@ -181,6 +181,25 @@ def test_learn_command_writes_the_reference_and_says_its_doubts(tmp_path):
     assert "none of its sensors will be used by later tests (each is doubtful: S)" in out.stderr
 
 
+def test_learn_every_mode_writes_it_and_a_bad_value_is_refused(tmp_path):
+    t = np.arange(0.0, 480.0, 2.0)
+    y = np.round(26.7 - 8.8 * np.exp(-t / 62.5) + np.random.default_rng(4).normal(0.0, 0.02, t.size), 2)
+    log = tmp_path / "full.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
+    out = mtident("thermal", "learn", str(log), "-o", str(tmp_path / "m.toml"), "--every-mode", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["sensors"]["S"]["free_fast_modes"] == 0
+    assert "\nfree_fast_modes = 0\n" in (tmp_path / "m.toml").read_text()
+    assert load_reference(tmp_path / "m.toml").sensors["S"].free_fast_modes == 0
+    plain = mtident("thermal", "learn", str(log), "-o", str(tmp_path / "p.toml"))
+    assert plain.returncode == 0 and "\nfree_fast_modes = " not in (tmp_path / "p.toml").read_text()
+    assert load_reference(tmp_path / "p.toml").sensors["S"].free_fast_modes is None
+    bad = (tmp_path / "m.toml").read_text().replace("\nfree_fast_modes = 0", "\nfree_fast_modes = 5")
+    (tmp_path / "bad.toml").write_text(bad)
+    with pytest.raises(InputError, match="if given, free_fast_modes = 0 to 2; found"):
+        load_reference(tmp_path / "bad.toml")
+
+
 def test_a_poorly_determined_slow_mode_at_its_box_end_keeps_the_reference():
     # the same machine (τ 6, 35 and 150 min) at another power: the slow mode is small and early in
     # the test its time constant drifts to the box's end; no slower one fits better beyond chance

@@ -211,6 +211,21 @@ def test_a_reference_said_to_hold_every_mode_stops_as_early_as_the_papers_filter
     )
 
 
+def test_a_reference_learnt_as_holding_every_mode_stops_as_early_as_the_option_says():
+    """`learn --every-mode` puts the assumption in the reference: a test with the default
+    --free-fast-modes stops as with --free-fast-modes 0 (by 0.41·t95 on these seeds), and says why."""
+    from mtident.thermal.monitor import assumptions
+
+    reference = one_mode_reference("S").holding_every_mode()
+    for seed in (1, 2):
+        state = replay({"S": noisy(first_order(T), seed)}, reference=reference)
+        check = state.checks[0]
+        assert state.stopped and state.stop_time_min <= 0.41 * PAPER_T95, state.stop_time_min
+        assert abs(check.steady_C - 26.7) < 0.2 and check.low_C <= 26.7 <= check.high_C
+    said = str(assumptions(MonitorSettings(reference=reference), "S").reference)
+    assert "no mode faster than these (assumed: the reference says it holds every mode)" in said
+
+
 def test_without_a_reference_a_first_order_machine_stops_late_but_right():
     """Nothing excludes a mode of 300 min until the data do: the honest stop is late."""
     t = np.arange(0.0, 761.0, 4.0)  # every 4 min: stops at 696 min, 3.7·t95 (four modes up to 300 min)

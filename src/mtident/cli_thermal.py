@@ -568,6 +568,14 @@ def _identify_table(
     required=True,
     help="The reference file to write (TOML), for --reference in identify and watch.",
 )
+@click.option(
+    "--every-mode",
+    "every_mode",
+    is_flag=True,
+    help="Say that the modes learnt are every mode of the machine (one learnt, a machine known to be first "
+    "order): later tests then allow no free mode faster than them (--free-fast-modes 0 for these sensors), "
+    "stop earliest, and state the assumption.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def learn_command(
@@ -578,6 +586,7 @@ def learn_command(
     ambient_col: str | None,
     max_tau_min: float,
     output_path: str,
+    every_mode: bool,
     as_json: bool,
 ) -> None:
     """Learn each sensor's thermal modes from FILE, a warm-up that ran to equilibrium.
@@ -602,6 +611,8 @@ def learn_command(
         --max-time-constant (min).
     output_path : str
         -o: the reference file to write.
+    every_mode : bool
+        --every-mode: later tests allow no free mode faster than the modes learnt.
     as_json : bool
         --json.
 
@@ -616,6 +627,8 @@ def learn_command(
     log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
     with stderr.status(f"learning the modes of {len(log.sensors)} sensor(s)…"):
         reference, warnings = learn_reference(log, room, RobustSettings(max_time_constant_min=max_tau_min))
+    if every_mode:
+        reference = reference.holding_every_mode()
     for warning in warnings:
         stderr.print(f"mtident: warning: {warning}", highlight=False)
     if not reference.sensors:
@@ -638,6 +651,7 @@ def learn_command(
                 "box": list(m.box),
                 "amplitudes_C": list(m.amplitudes_C),
                 "doubt": m.doubt,
+                "free_fast_modes": m.free_fast_modes,
             }
             for name, m in reference.sensors.items()
         }

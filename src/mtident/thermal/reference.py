@@ -26,6 +26,7 @@ from mtident.thermal.readings import smoothed_room
 from mtident.thermal.robust import (
     DEFAULT_MAX_MODES,
     DISAGREEMENT_LEVEL,
+    MAX_FREE_FAST,
     MIN_REFERENCE_BOX,
     RobustSettings,
     SensorEstimate,
@@ -56,7 +57,9 @@ _HEADER = """# mtident reference run: each sensor's thermal modes, learnt from a
 # equilibrium. `mtident thermal identify|watch LOG --reference THIS_FILE` searches each sensor's
 # time constants only within ±box of these (relative), with free amplitudes, and says so when a
 # new test does not follow them (a changed machine). A sensor with a `doubt` is not used: the run
-# did not pin it down (delete the line only if you know the run reached equilibrium).
+# did not pin it down (delete the line only if you know the run reached equilibrium). A sensor
+# with `free_fast_modes = 0` (`learn --every-mode`) is said to have no mode faster than these:
+# later tests stop earliest, and state that assumption.
 """
 
 
@@ -119,6 +122,17 @@ class MachineReference:
         if modes.doubt is not None:
             parts += " (doubtful)"
         return f"{self.source} ({self.learnt_on}): τ {parts}"
+
+    def holding_every_mode(self) -> MachineReference:
+        """The same reference, said to hold every mode of the machine: later tests allow no free
+        mode faster than each sensor's (an assumption they state).
+
+        Returns
+        -------
+        MachineReference
+        """
+        sensors = {name: replace(m, free_fast_modes=0) for name, m in self.sensors.items()}
+        return replace(self, sensors=sensors)
 
 
 def require_known_sensors(reference: MachineReference, sensors: tuple[str, ...]) -> None:
@@ -391,6 +405,7 @@ def save_reference(reference: MachineReference, path: str | Path) -> None:
                 "box": list(m.box),
                 "amplitudes_C": list(m.amplitudes_C),
                 **({"doubt": m.doubt} if m.doubt is not None else {}),
+                **({"free_fast_modes": m.free_fast_modes} if m.free_fast_modes is not None else {}),
             }
             for name, m in reference.sensors.items()
         },
@@ -450,10 +465,13 @@ def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
     ok = ok and 0 < len(taus) <= DEFAULT_MAX_MODES  # type: ignore[arg-type]
     ok = ok and all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in [*taus, *boxes])  # type: ignore[misc]
     ok = ok and all(v < 1 for v in boxes)  # type: ignore[union-attr]
+    free = entry.get("free_fast_modes") if isinstance(entry, dict) else None
+    ok = ok and (free is None or (isinstance(free, int) and not isinstance(free, bool) and 0 <= free <= MAX_FREE_FAST))
     if not ok:
         msg = (
-            f"{path}: sensor {name!r}: expected time_constants_min = [1 to {DEFAULT_MAX_MODES} positive minutes] and "
-            f"box = [as many fractions between 0 and 1]; found {entry!r}"
+            f"{path}: sensor {name!r}: expected time_constants_min = [1 to {DEFAULT_MAX_MODES} positive minutes], "
+            f"box = [as many fractions between 0 and 1] and, if given, free_fast_modes = 0 to {MAX_FREE_FAST}; "
+            f"found {entry!r}"
         )
         raise InputError(msg)
     assert isinstance(taus, list) and isinstance(boxes, list) and isinstance(entry, dict)
@@ -462,4 +480,5 @@ def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
         tuple(float(v) for v in boxes),
         tuple(float(v) for v in entry.get("amplitudes_C", [])),
         str(entry["doubt"]) if entry.get("doubt") else None,
+        free,
     )

@@ -133,12 +133,17 @@ class SensorModes:
         modes a misfit), or None. A doubtful sensor's modes are not used by later tests: a run
         that did not reach its equilibrium, or that a few modes do not describe, can miss the very
         mode that sets a later test's steady state.
+    free_fast_modes : int or None
+        The most free modes faster than these a later test allows for this sensor (0: the
+        reference is said to hold every mode, as of a machine known to be first order); None:
+        the test's own setting. A test's smaller setting wins.
     """
 
     time_constants_min: tuple[float, ...]
     box: tuple[float, ...]
     amplitudes_C: tuple[float, ...] = ()
     doubt: str | None = None
+    free_fast_modes: int | None = None
 
 
 @dataclass(frozen=True)
@@ -490,7 +495,7 @@ def _modal_fit(
         missed = (
             "or did the reference run miss a mode (with no free mode allowed, a sensor lag or a small fast mode it "
             "did not keep is enough)?"
-            if settings.free_fast_modes == 0
+            if free_fast(reference, settings) == 0 and len(reference.time_constants_min) < settings.max_modes
             else "or did the reference run miss a mode?"
         )
         notes.add(
@@ -574,7 +579,8 @@ def _mode_count(family: ModeFamily) -> int:
 
 def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
     """How many free modes faster than a reference's a test may add (the total at most
-    ``settings.max_modes``, and at most ``settings.free_fast_modes``).
+    ``settings.max_modes``, and at most ``settings.free_fast_modes`` and the reference's own
+    ``free_fast_modes``).
 
     Parameters
     ----------
@@ -586,7 +592,8 @@ def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
     -------
     int
     """
-    return max(0, min(settings.free_fast_modes, settings.max_modes - len(reference.time_constants_min)))
+    said = settings.free_fast_modes if reference.free_fast_modes is None else reference.free_fast_modes
+    return max(0, min(settings.free_fast_modes, said, settings.max_modes - len(reference.time_constants_min)))
 
 
 def describe_assumptions(
@@ -629,8 +636,10 @@ def describe_assumptions(
         faster = f"up to {extra} free mode{'s' if extra > 1 else ''} faster than the slowest of these" + (
             f" ({settings.max_modes} modes in all)" if extra < settings.free_fast_modes else ""
         )
-    elif settings.free_fast_modes:
+    elif len(modes.time_constants_min) >= settings.max_modes:
         faster = f"no free mode besides these ({settings.max_modes} modes in all)"
+    elif settings.free_fast_modes:
+        faster = "no mode faster than these (assumed: the reference says it holds every mode)"
     else:
         faster = "no mode faster than these (assumed)"
     return Assumptions(settings.max_time_constant_min, room, f"{reference.describe(sensor)}; {faster}")
