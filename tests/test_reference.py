@@ -191,8 +191,11 @@ def test_learn_every_mode_writes_it_and_a_bad_value_is_refused(tmp_path):
     assert json.loads(out.stdout)["sensors"]["S"]["free_fast_modes"] == 0
     assert "\nfree_fast_modes = 0\n" in (tmp_path / "m.toml").read_text()
     assert load_reference(tmp_path / "m.toml").sensors["S"].free_fast_modes == 0
+    shown = mtident("thermal", "learn", str(log), "-o", str(tmp_path / "m.toml"), "--every-mode")
+    assert "no faster mode (--every-mode)" in " ".join(shown.stdout.split())
     plain = mtident("thermal", "learn", str(log), "-o", str(tmp_path / "p.toml"))
     assert plain.returncode == 0 and "\nfree_fast_modes = " not in (tmp_path / "p.toml").read_text()
+    assert "--every-mode" not in plain.stdout
     assert load_reference(tmp_path / "p.toml").sensors["S"].free_fast_modes is None
     bad = (tmp_path / "m.toml").read_text().replace("\nfree_fast_modes = 0", "\nfree_fast_modes = 5")
     (tmp_path / "bad.toml").write_text(bad)
@@ -246,7 +249,7 @@ def test_a_sensor_the_reference_does_not_know_is_said_in_identify_and_watch(tmp_
     log.write_text("time_min,Spindle T1,T2\n" + "".join(f"{a:g},{b:.2f},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
     events = WatchSession(log, MonitorSettings(reference=reference), persist=False).poll()
     assert [e.kind for e in events if e.text.startswith(said)] == ["warning"]
-    refused = "--reference run.csv: it has modes for none of this log's sensors ('Spindle T1'); it knows 'T1', 'T2'"
+    refused = "--reference (learnt from run.csv): it has modes for none of this log's sensors ('Spindle T1'); it knows 'T1', 'T2'"
     with pytest.raises(InputError, match=re.escape(refused)):
         identify_robust(make_log(t, {"Spindle T1": y}), 60.0, reference=reference)
     alone = tmp_path / "alone.csv"

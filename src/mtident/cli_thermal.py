@@ -671,7 +671,8 @@ def learn_command(
         table.add_column(column, justify="left" if column == "sensor" else "right", **_column_layout(column))
     for name, m in reference.sensors.items():
         taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(m.time_constants_min, m.box, strict=True))
-        table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), "no" if m.doubt else "yes")
+        used = "no" if m.doubt else "yes, no faster mode (--every-mode)" if m.free_fast_modes == 0 else "yes"
+        table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), used)
     table_console().print(table)
 
 

@@ -59,7 +59,7 @@ _POLISHED = 6
 # boxes make several, and the hull's end often lies in another than the best fit's (the search
 # compared with one from many more starts is in the documentation's measured results)
 _END_STARTS_REFERENCE = 10
-_POLISHED_REFERENCE = 3
+_POLISHED_REFERENCE = 6
 # a refinement's iterations and evaluations: the few that wander along a ridge's edge end here
 _MAXITER = 100
 _MAXFUN = 300

@@ -864,8 +864,8 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
     for c in waiting:
         if c.status == "no rise":
             parts.append(
-                f"{c.sensor}: no rise above its noise yet (if the test does not heat it, leave it out of the sensors "
-                "watched)"
+                f"{c.sensor}: no rise above its noise yet, which keeps the test from stopping (if the test does not "
+                "heat it, leave it out of the sensors watched; if it is the room's, name it as the room sensor)"
             )
         elif not math.isfinite(c.steady_C):
             parts.append(f"{c.sensor}: {c.status}")

@@ -153,7 +153,7 @@ def require_known_sensors(reference: MachineReference, sensors: tuple[str, ...])
     """
     if sensors and not any(name in reference.sensors for name in sensors):
         msg = (
-            f"--reference {reference.source}: it has modes for none of this log's sensors "
+            f"--reference (learnt from {reference.source}): it has modes for none of this log's sensors "
             f"({', '.join(repr(n) for n in sensors)}); it knows {', '.join(repr(n) for n in reference.sensors)}. "
             "Give the reference learnt from this machine, or rename the log's columns to the reference run's"
         )
@@ -232,8 +232,8 @@ def learn_reference(
     warnings: list[str] = []
     for s, name in enumerate(log.sensors):
         learnt = _learn_sensor(name, log.time_min, log.temperature_C[:, s], room_C, settings)
-        if learnt is None:
-            warnings.append(f"{name}: left out of the reference (no model fits its readings)")
+        if isinstance(learnt, str):
+            warnings.append(f"{name}: left out of the reference ({learnt})")
             continue
         estimate, centres, boxes, determined = learnt
         fit = _fit_of(estimate)
@@ -308,17 +308,19 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
 
 def _learn_sensor(
     name: str, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: RobustSettings
-) -> tuple[SensorEstimate, tuple[float, ...], tuple[float, ...], int] | None:
+) -> tuple[SensorEstimate, tuple[float, ...], tuple[float, ...], int] | str:
     """The sensor's modes, their boxes' centres and widths, and how many of them the run pins
-    down. The modes: the most whose time constants the run determines (each within
-    ±``MAX_MODE_SD`` at one standard deviation), or more where the run needs more beyond chance
-    (up to the family's most, four: a sensor's lag and three modes, fitted with three, bent all
-    three time constants and left the slowest unpinned). A mode the run needs but cannot pin
-    down stays, with the wide box its uncertainty gives: left out, it would tell a later test that
-    no mode lies beyond the others' boxes, which the run itself contradicts (a slow mode of a
-    fifth of a degree, learnt away, stopped a test 0.4 °C low)."""
+    down; where no model fits, why (a room's column given as a sensor does not rise). The modes:
+    the most whose time constants the run determines (each within ±``MAX_MODE_SD`` at one
+    standard deviation), or more where the run needs more beyond chance (up to the family's
+    most, four: a sensor's lag and three modes, fitted with three, bent all three time constants
+    and left the slowest unpinned). A mode the run needs but cannot pin down stays, with the wide
+    box its uncertainty gives: left out, it would tell a later test that no mode lies beyond the
+    others' boxes, which the run itself contradicts (a slow mode of a fifth of a degree, learnt
+    away, stopped a test 0.4 °C low)."""
     estimates: dict[int, SensorEstimate] = {}
     sds: dict[int, FloatArray] = {}
+    why = "no model fits its readings"
     for count in range(1, settings.max_modes + 1):
         estimate = estimate_sensor(
             name,
@@ -334,6 +336,8 @@ def _learn_sensor(
             ),
         )
         fit = estimate.fit
+        if fit is None and estimate.warnings:
+            why = estimate.warnings[0].removeprefix(f"{name}: ")
         if fit is None or len(fit.modes) < count:
             break
         first = int(np.searchsorted(time_min, fit.origin_min))
@@ -341,7 +345,7 @@ def _learn_sensor(
         binned = bin_samples(time_min[first:], values[first:], room)
         estimates[count], sds[count] = estimate, np.asarray(log_time_constant_sd(binned, fit), dtype=float)
     if not estimates:
-        return None
+        return why
     determined = max((c for c in estimates if np.max(sds[c]) <= MAX_MODE_SD), default=1)
     count = max(determined, _modes_needed(_fit_of(estimates[max(estimates)])))
     taus = [m.time_constant_min for m in _fit_of(estimates[count]).modes]

@@ -150,6 +150,16 @@ class RobustIdentification:
             lines.append(f"  {e.sensor}: T∞ {e.steady_C:.2f} °C, 95 % interval {lo:.2f} to {hi:.2f} °C{verdict}")
             # a notebook shows why, not only that
             lines += [f"    - {warning}" for warning in e.warnings] if not e.model_ok else []
+        said = self.assumptions[0] if self.assumptions else None
+        if said is not None:
+            lines.append(
+                f"  assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
+            )
+            lines += [
+                f"  reference for {name}: {a.reference}"
+                for name, a in zip(self.sensors, self.assumptions, strict=True)
+                if a.reference is not None
+            ]
         return "\n".join(lines)
 
     def curve_frame(self) -> pd.DataFrame:
