@@ -83,8 +83,8 @@ def report(paths: list[Path]) -> str:
             paired = [c[name]["stop_min"] / c["default"]["stop_min"] for c in stops if c["default"]["stopped"]]
             lines.append(
                 f"| {name} | {len(stops)} | {int((errors > TOLERANCE_C).sum())} "
-                f"({errors.max(initial=0.0):.3f}) | {covered:.1%} | {np.median(ratio):.2f} | "
-                f"{np.mean(ratio <= 1.5):.0%} | {np.median(paired) if paired else np.nan:.2f} |"
+                f"({errors.max(initial=0.0):.3f}) | {covered * 100:.1f} % | {np.median(ratio):.2f} | "
+                f"{np.mean(ratio <= 1.5) * 100:.0f} % | {np.median(paired) if paired else np.nan:.2f} |"
             )
     return "\n".join(lines)
 

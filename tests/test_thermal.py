@@ -912,7 +912,7 @@ def test_a_robust_answer_printed_in_a_notebook_says_why_it_is_not_trusted():
     t = np.arange(0.0, 60.0)
     y = 20.0 + 5.0 * (1.0 - np.exp(-t / 80.0)) + 0.01 * np.random.default_rng(0).standard_normal(t.size)
     text = repr(identify_robust(make_log(t, {"S": np.round(y, 2)}), 30.0))
-    assert ", not trusted:\n    - S: T∞ not determined yet (95% interval" in text, text
+    assert ", not trusted:\n    - S: T∞ not determined yet (95 % interval" in text, text
     assert "\n  assumes: a sum of up to four exponential modes" in text and "time constants up to 300 min" in text
 
 

@@ -527,7 +527,7 @@ def test_a_sensor_only_the_assumed_room_wander_keeps_from_stopping_is_told_to_lo
     bound = result(_checked_state(28.0, 27.76, 28.24, 199.0), settings)
     assert bound["room_bound_sensors"] == ["S"]
     reason = str(bound["reason"])
-    assert "the readings alone pin T∞ within ±0.05 °C" in reason and "moves T∞ ±0.23 °C at 99%" in reason
+    assert "the readings alone pin T∞ within ±0.05 °C" in reason and "moves T∞ ±0.23 °C at 99 %" in reason
     assert "no longer test narrows that" in reason and "continue the test" not in reason
     assert "Ways on: for S, state a smaller room wander" in reason and "log the room beside the sensors" in reason
     # still far from the tolerance: more readings may still find a faster slowest mode
@@ -870,9 +870,9 @@ def test_an_interval_without_bounds_is_said_so_not_as_infinities():
     assert event.text == "S: narrowing, T∞ 30.00 °C, interval not yet bounded"
     bounded = changed(after, low_C=29.5, high_C=30.5)
     (event,) = _check_events(before, bounded, estimate, set(), 10.0, 0.99)
-    assert event.text == "S: narrowing, T∞ 30.00 °C, 99% interval 29.50 to 30.50 °C"
+    assert event.text == "S: narrowing, T∞ 30.00 °C, 99 % interval 29.50 to 30.50 °C"
     reason = _reason([after], MonitorSettings())
-    assert "99% interval not yet bounded, reaching beyond ±0.2 °C of T∞" in reason and "inf" not in reason
+    assert "99 % interval not yet bounded, reaching beyond ±0.2 °C of T∞" in reason and "inf" not in reason
 
 
 def test_watch_says_when_no_expected_stop_was_found(tmp_path):

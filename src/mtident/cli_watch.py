@@ -768,7 +768,7 @@ def _status_table(session: WatchSession, path: Path) -> Table:
     state = session.state
     where = "before the first sample" if state is None else f"at t = {minutes(state.readings.latest_min)}"
     table = Table(title=f"{path.name}: {where} (temperatures in °C, times in min)")
-    level = f"{session.settings.decision_level:.0%}"
+    level = f"{session.settings.decision_level * 100:g} %"
     columns = ("sensor", "latest", "checked", "T∞", "95 % interval", f"{level} interval", "t_eq")
     for column in (*columns, "status"):
         table.add_column(

@@ -441,11 +441,11 @@ def _verdict(report: WarmupReport) -> str:
     if report.decision == "stop":
         return (
             f"The test could stop at t = {minutes(report.stop_time_min)} (tolerance ±{report.tolerance_C:g} °C at "
-            f"{report.decision_level:.0%})."
+            f"{report.decision_level * 100:g} %)."
         )
     return (
         f"No stop within the log (to {minutes(report.log_end_min)}): tolerance ±{report.tolerance_C:g} °C at "
-        f"{report.decision_level:.0%}."
+        f"{report.decision_level * 100:g} %."
     )
 
 

@@ -511,7 +511,7 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
             Event(
                 "stop",
                 now,
-                f"every sensor's T∞ is within ±{settings.tolerance_C:g} °C at {settings.decision_level:.0%}: the "
+                f"every sensor's T∞ is within ±{settings.tolerance_C:g} °C at {settings.decision_level * 100:g} %: the "
                 f"test can stop at t = {minutes(now)}",
             )
         )
@@ -689,7 +689,7 @@ def _check_events(
         text = (
             f"{after.sensor}: {after.status}, T∞ {after.steady_C:.2f} °C, "
             + (
-                f"{level:.0%} interval {after.low_C:.2f} to {after.high_C:.2f} °C"
+                f"{level * 100:g} % interval {after.low_C:.2f} to {after.high_C:.2f} °C"
                 if bounded
                 else "interval not yet bounded"
             )
@@ -882,7 +882,7 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
                 else "interval not yet bounded"
             )
             parts.append(
-                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level:.0%} {bounds}, reaching beyond "
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level * 100:g} % {bounds}, reaching beyond "
                 f"±{settings.tolerance_C:g} °C of T∞ ({c.ends})" + _room_bound_clause(c, settings)
             )
     learn = ", or give a reference run of this machine (mtident thermal learn)"
@@ -909,7 +909,7 @@ def _room_bound_clause(check: SensorCheck, settings: MonitorSettings) -> str:
     assumed = (
         f"the room's unmeasured wander alone, as assumed ({settings.robust.room_wander_C_per_h:g} °C in an hour over "
         f"its slowest mode's {max(tau for tau, _ in check.modes):.0f} min), moves T∞ ±{wander:.2f} °C at "
-        f"{settings.decision_level:.0%}"
+        f"{settings.decision_level * 100:g} %"
     )
     if _room_bound(check, settings):
         alone = _readings_half_width(check, wander)

@@ -819,7 +819,7 @@ def _verdict(
         ok = False
         notes.add(
             "undetermined",
-            f"T∞ not determined yet ({level:.0%} interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)",
+            f"T∞ not determined yet ({level * 100:g} % interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)",
         )
     return ok
 
@@ -845,8 +845,8 @@ def with_fragility(estimate: SensorEstimate) -> SensorEstimate:
     if not (np.isfinite(wide_hi - wide_lo) and wide_hi - wide_lo > FRAGILE_RATIO * (hi - lo)):
         return estimate
     text = (
-        f"{estimate.sensor}: the {level:.0%} interval ({lo:.2f} to {hi:.2f} °C) is fragile: models fitting nearly "
-        f"as well reach {wide_lo:.2f} to {wide_hi:.2f} °C at {widest:.0%}"
+        f"{estimate.sensor}: the {level * 100:g} % interval ({lo:.2f} to {hi:.2f} °C) is fragile: models fitting "
+        f"nearly as well reach {wide_lo:.2f} to {wide_hi:.2f} °C at {widest * 100:g} %"
     )
     return replace(
         estimate,
