@@ -13,7 +13,6 @@ Run: python benchmarks/bench_assumptions.py --cases 120 --first-seed 17100 --out
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -23,6 +22,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
+from _common import seeded_run_parser, shard_seeds  # noqa: E402
 from bench_safe_stops import TOLERANCE_C, _replay, learnt_reference, near_first_order  # noqa: E402
 
 from mtident.thermal.robust import RobustSettings  # noqa: E402
@@ -90,18 +90,11 @@ def report(paths: list[Path]) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cases", type=int, default=120)
-    parser.add_argument("--first-seed", type=int, default=17100)
-    parser.add_argument("--out", type=Path, default=Path("assumptions.jsonl"))
-    parser.add_argument("--shard", default="1/1", help="K/N: run every N-th case from the K-th")
-    parser.add_argument("--report", type=Path, nargs="+", help="summarise results files and stop")
-    args = parser.parse_args()
+    args = seeded_run_parser(__doc__.splitlines()[0], 120, 17100, "assumptions.jsonl").parse_args()
     if args.report:
         print(report(args.report))
         return
-    k, n = (int(v) for v in args.shard.split("/"))
-    for seed in range(args.first_seed + k - 1, args.first_seed + args.cases, n):
+    for seed in shard_seeds(args):
         case = run_case(seed)
         if case is not None:
             with args.out.open("a") as out:

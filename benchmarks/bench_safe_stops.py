@@ -30,7 +30,6 @@ Run: python benchmarks/bench_safe_stops.py --cases 500 --out results.jsonl [--sh
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -40,6 +39,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+from _common import seeded_run_parser, shard_seeds  # noqa: E402
 
 from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.thermal.identify import identify  # noqa: E402
@@ -291,12 +292,7 @@ def markdown(summary: dict[str, object]) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cases", type=int, default=500)
-    parser.add_argument("--first-seed", type=int, default=FIRST_SEED)
-    parser.add_argument("--out", type=Path, default=Path("safe_stops.jsonl"))
-    parser.add_argument("--shard", default="1/1", help="K/N: run every N-th case from the K-th")
-    parser.add_argument("--report", type=Path, nargs="+", help="summarise results files and stop")
+    parser = seeded_run_parser(__doc__.splitlines()[0], 500, FIRST_SEED, "safe_stops.jsonl")
     parser.add_argument("--markdown", action="store_true", help="with --report: Markdown tables instead of JSON")
     parser.add_argument(
         "--without-reference-only", action="store_true", help="replay the monitor without a reference alone"
@@ -309,17 +305,7 @@ def main() -> None:
         summary = report(args.report)
         print(markdown(summary) if args.markdown else json.dumps(summary, indent=2))
         return
-    k, n = (int(v) for v in args.shard.split("/"))
-    done = (
-        {json.loads(line)["seed"] for line in args.out.read_text().splitlines() if line.strip()}
-        if args.out.exists()
-        else set()
-    )
-    seeds = [
-        s
-        for s in range(args.first_seed, args.first_seed + args.cases)
-        if (s - args.first_seed) % n == k - 1 and s not in done
-    ]
+    seeds = shard_seeds(args)
     for seed in seeds:
         started = time.perf_counter()
         case = run_case(
