@@ -39,7 +39,6 @@ __all__ = [
     "learn_reference",
     "load_reference",
     "reference_notes",
-    "require_known_sensors",
     "save_reference",
 ]
 
@@ -135,39 +134,16 @@ class MachineReference:
         return replace(self, sensors=sensors)
 
 
-def require_known_sensors(reference: MachineReference, sensors: tuple[str, ...]) -> None:
-    """Refuse a reference that knows none of a log's sensors: it is another machine's, or the
-    log's columns were renamed since, and a test answered without it all through is not what
-    was asked for.
-
-    Parameters
-    ----------
-    reference : MachineReference
-    sensors : tuple of str
-        The log's sensors (without the room's).
-
-    Raises
-    ------
-    InputError
-        No sensor of the log is in the reference.
-    """
-    if sensors and not any(name in reference.sensors for name in sensors):
-        msg = (
-            f"--reference (learnt from {reference.source}): it has modes for none of this log's sensors "
-            f"({', '.join(repr(n) for n in sensors)}); it knows {', '.join(repr(n) for n in reference.sensors)}. "
-            "Give the reference learnt from this machine, or rename the log's columns to the reference run's"
-        )
-        raise InputError(msg)
-
-
 def reference_notes(
     reference: MachineReference, sensors: tuple[str, ...], with_room: bool, room_sensor: str | None = None
 ) -> list[str]:
-    """What a test should be told of how its reference fits it: sensors of its log the reference
-    has no modes for (a column renamed since the reference run is answered without its modes, and
-    only its assumptions would say so), and a reference learnt with a room sensor used by a test
-    without one (its modes are the machine's either way, but the answer then rests on the room's
-    stated wander, and a room that drifts may take it off the reference).
+    """What a test should be told of how its reference fits it, or an error where it fits none of
+    the log's sensors (another machine's, or columns renamed since: a test answered without it all
+    through is not what was asked for). The notes: sensors of its log the reference has no modes
+    for (a column renamed since the reference run is answered without its modes, and only its
+    assumptions would say so), and a reference learnt with a room sensor used by a test without
+    one (its modes are the machine's either way, but the answer then rests on the room's stated
+    wander, and a room that drifts may take it off the reference).
 
     Parameters
     ----------
@@ -184,9 +160,21 @@ def reference_notes(
     -------
     list of str
         The notes, none where the reference fits.
+
+    Raises
+    ------
+    InputError
+        The reference has modes for none of the log's sensors.
     """
     notes = []
     missing = [name for name in sensors if name not in reference.sensors]
+    if sensors and len(missing) == len(sensors):
+        msg = (
+            f"--reference (learnt from {reference.source}): it has modes for none of this log's sensors "
+            f"({', '.join(repr(n) for n in sensors)}); it knows {', '.join(repr(n) for n in reference.sensors)}. "
+            "Give the reference learnt from this machine, or rename the log's columns to the reference run's"
+        )
+        raise InputError(msg)
     if missing:
         notes.append(
             f"the reference ({reference.source}) has no modes for {', '.join(repr(n) for n in missing)}: "
@@ -235,14 +223,9 @@ def learn_reference(
         if isinstance(learnt, str):
             warnings.append(f"{name}: left out of the reference ({learnt})")
             continue
-        estimate, centres, boxes, determined = learnt
+        estimate, centres, boxes, determined = learnt.estimate, learnt.centres, learnt.boxes, learnt.determined
         fit = _fit_of(estimate)
-        one_more = replace(settings, max_modes=len(fit.modes) + 1, more_modes_when_used=False)
-        doubt = _doubt(
-            estimate,
-            estimate_sensor(name, log.time_min, log.temperature_C[:, s], room_C, one_more),
-            max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True)),
-        )
+        doubt = _doubt(estimate, learnt.one_more, max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True)))
         sensors[name] = SensorModes(centres, boxes, tuple(m.amplitude_C for m in fit.modes), doubt)
         if doubt is None and len(fit.modes) > determined:
             warnings.append(
@@ -306,11 +289,24 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
     return None
 
 
+@dataclass(frozen=True)
+class _Learnt:
+    """One sensor's learning: the estimate with the modes kept, their boxes' centres and relative
+    half-widths, how many the run pins down, and the fit with one mode more (for the doubt)."""
+
+    estimate: SensorEstimate
+    centres: tuple[float, ...]
+    boxes: tuple[float, ...]
+    determined: int
+    one_more: SensorEstimate
+
+
 def _learn_sensor(
     name: str, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: RobustSettings
-) -> tuple[SensorEstimate, tuple[float, ...], tuple[float, ...], int] | str:
-    """The sensor's modes, their boxes' centres and widths, and how many of them the run pins
-    down; where no model fits, why (a room's column given as a sensor does not rise). The modes:
+) -> _Learnt | str:
+    """The sensor's modes, their boxes' centres and widths, how many of them the run pins down,
+    and the fit with one mode more; where no model fits, why (a room's column given as a sensor
+    does not rise). The modes:
     the most whose time constants the run determines (each within ±``MAX_MODE_SD`` at one
     standard deviation), or more where the run needs more beyond chance (up to the family's
     most, four: a sensor's lag and three modes, fitted with three, bent all three time constants
@@ -318,23 +314,17 @@ def _learn_sensor(
     box its uncertainty gives: left out, it would tell a later test that no mode lies beyond the
     others' boxes, which the run itself contradicts (a slow mode of a fifth of a degree, learnt
     away, stopped a test 0.4 °C low)."""
+
+    def fitted(count: int) -> SensorEstimate:
+        family = replace(settings, max_modes=count, more_modes_when_used=False)
+        return estimate_sensor(name, time_min, values, room_C, family)
+
+    tried: dict[int, SensorEstimate] = {}
     estimates: dict[int, SensorEstimate] = {}
     sds: dict[int, FloatArray] = {}
     why = "no model fits its readings"
     for count in range(1, settings.max_modes + 1):
-        estimate = estimate_sensor(
-            name,
-            time_min,
-            values,
-            room_C,
-            RobustSettings(
-                settings.max_time_constant_min,
-                settings.room_wander_C_per_h,
-                settings.levels,
-                max_modes=count,
-                more_modes_when_used=False,
-            ),
-        )
+        estimate = tried[count] = fitted(count)
         fit = estimate.fit
         if fit is None and estimate.warnings:
             why = estimate.warnings[0].removeprefix(f"{name}: ")
@@ -353,7 +343,8 @@ def _learn_sensor(
         *(_box(tau, float(sd), settings.max_time_constant_min) for tau, sd in zip(taus, sds[count], strict=True)),
         strict=True,
     )
-    return estimates[count], centres, boxes, determined
+    one_more = tried[count + 1] if count + 1 in tried else fitted(count + 1)
+    return _Learnt(estimates[count], centres, boxes, determined, one_more)
 
 
 def _spans(centres: tuple[float, ...], boxes: tuple[float, ...], skip: int) -> str:

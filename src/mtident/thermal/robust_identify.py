@@ -19,7 +19,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import measured_equilibrium, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
-from mtident.thermal.reference import MachineReference, reference_notes, require_known_sensors
+from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import (
     Assumptions,
     RobustSettings,
@@ -295,8 +295,7 @@ def identify_robust(
         msg = f"the room sensor has {len(room_C)} readings for {len(t)} samples"
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
-    if reference is not None:
-        require_known_sensors(reference, log.sensors)
+    unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
     estimates = tuple(
         with_fragility(
             estimate_sensor(
@@ -305,7 +304,6 @@ def identify_robust(
         )
         for s, name in enumerate(log.sensors)
     )
-    unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
     times = _prediction_times(t, n, estimates, horizon_min)
     room_all = None if room_C is None else np.concatenate([room_C, np.full(len(times) - len(t), np.nan)])[: len(times)]
     curve, low, high = (np.full((len(times), len(estimates)), np.nan) for _ in range(3))

@@ -35,7 +35,7 @@ from mtident.thermal.monitor import (
     new_state,
     result,
 )
-from mtident.thermal.reference import reference_notes, require_known_sensors
+from mtident.thermal.reference import reference_notes
 
 __all__ = ["SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
 
@@ -287,7 +287,6 @@ class WatchSession:
             self.state = self._new_state(self.follower.sensors)
             reference = self.settings.reference
             if reference is not None:
-                require_known_sensors(reference, self.sensors)
                 notes = reference_notes(
                     reference, self.sensors, bool(self.settings.room_sensor), self.settings.room_sensor
                 )
