@@ -234,10 +234,13 @@ def _steady_state(
         seeds = [ends_models[1]] if intervals else None
         high = hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level, seeds, not near)
         ends_models = (low, high)
-        lo = min(float(profile_bounds(low, threshold)[0][0]) + shift, steady)
-        hi = max(float(profile_bounds(high, threshold)[1][0]) + shift, steady)
+        low_end, high_end = (low, threshold), (high, threshold)
+        if float(chosen.rss[0]) > threshold:
+            low_end, high_end = _with_own_class(problem, candidates, chosen, gap, refine_level, low_end, high_end)
+        lo = min(float(profile_bounds(*low_end)[0][0]) + shift, steady)
+        hi = max(float(profile_bounds(*high_end)[1][0]) + shift, steady)
         intervals[q] = (lo, hi)
-        ends[q] = (interval_end(low, threshold, -1.0, shift), interval_end(high, threshold, +1.0, shift))
+        ends[q] = (interval_end(*low_end, -1.0, shift), interval_end(*high_end, +1.0, shift))
         refined[q] = refine_level
     t_eq = equilibrium_time(modes, steady, start, problem.origin)
     intervals = {q: intervals[q] for q in levels}
@@ -250,6 +253,33 @@ def _steady_state(
         refined=refined,
         **common,
     )
+
+
+def _with_own_class(
+    problem: Problem,
+    candidates: list[Fits],
+    chosen: Fits,
+    gap: float,
+    refine: bool,
+    low_end: tuple[Fits, float],
+    high_end: tuple[Fits, float],
+) -> tuple[tuple[Fits, float], tuple[Fits, float]]:
+    """Each end widened by the estimate's own number of modes profiled around it, where the fit
+    with the most modes excludes the estimate at this level (BIC keeps fewer modes than the
+    likelihood ratio allows: the extra modes follow structure in the residuals, such as rounding
+    held over many readings, that is not noise). The estimate's own uncertainty then belongs to
+    the interval as much as the models near the most-mode fit; each end is a model with the
+    threshold its side of the hull was searched under."""
+    k = chosen.tau.shape[1]
+    same = [f for f in candidates if f.tau.shape[1] == k]
+    own = float(chosen.rss[0]) + gap
+    own_low = hull_end(problem, same, own, -1.0, gap, chosen, refine)
+    own_high = hull_end(problem, same, own, +1.0, gap, chosen, refine)
+    if profile_bounds(own_low, own)[0][0] < profile_bounds(*low_end)[0][0]:
+        low_end = (own_low, own)
+    if profile_bounds(own_high, own)[1][0] > profile_bounds(*high_end)[1][0]:
+        high_end = (own_high, own)
+    return low_end, high_end
 
 
 def best_fit(
