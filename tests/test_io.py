@@ -820,6 +820,27 @@ def test_a_time_column_in_seconds_read_as_minutes_gets_a_hint(write_csv, tmp_pat
     assert sum("read as minutes" in w for w in warnings) == 1
 
 
+def test_a_time_column_in_seconds_with_a_sparse_step_gets_a_hint_before_two_days(write_csv, tmp_path):
+    """A newcomer's later test in seconds (a reading every 30 s) under a plain 'time' header, cut at
+    20 min as a live log would be: read as 1,200 minutes it looked settled, watch stopped 1.2-1.3 °C
+    low, and the hint on seconds could come only after two days of 'minutes'."""
+    from mtident.io.follow import LogFollower
+
+    text = "time,T1\n" + "".join(f"{s},{20 + 6 * (1 - np.exp(-s / 1800)):.2f}\n" for s in range(0, 1201, 30))
+    log = read_temperature_log(write_csv(text))
+    assert any("a reading every 30 min: if it is in seconds, give `time_unit='s'`" in n for n in log.notes)
+    assert not any("read as minutes" in n for n in read_temperature_log(write_csv(text), time_unit="s").notes)
+    minutes = "time,T1\n" + "".join(f"{m},{20 + m / 100:.2f}\n" for m in range(0, 120, 2))
+    assert not any("read as minutes" in n for n in read_temperature_log(write_csv(minutes)).notes)
+    live = tmp_path / "live.csv"
+    live.write_text(text)
+    follower = LogFollower(live)
+    assert sum("a reading every 30 min" in w for w in follower.poll().warnings) == 1
+    with live.open("a") as more:
+        more.write("".join(f"{s},26.00\n" for s in range(1230, 1500, 30)))
+    assert not any("read as minutes" in w for w in follower.poll().warnings)
+
+
 def test_a_unit_at_the_end_of_a_column_name(write_csv):
     """'Time [s]' was read as minutes (only a _s suffix counted); 'T1 [°F]' as °C. A name whose
     brackets hold no unit ('T2 (spindle)') is a plain °C sensor."""

@@ -916,6 +916,24 @@ def test_a_robust_answer_printed_in_a_notebook_says_why_it_is_not_trusted():
     assert "\n  assumes: a sum of up to four exponential modes" in text and "time constants up to 300 min" in text
 
 
+def test_readings_that_push_against_the_largest_time_constant_are_not_trusted():
+    """A mode of 900 min, three times the largest time constant allowed, read for 600 min: the best
+    fit holds a mode at 300 min, and the interval, which assumes no slower mode, missed the truth.
+    A family reaching further fits better beyond chance, so the answer is not trusted and says
+    why. A mode of 250 min, within the bound, raises no such warning."""
+    from mtident.thermal.robust import estimate_sensor
+
+    rng = np.random.default_rng(7)
+    t = np.arange(0.0, 600.0, 1.0)
+    slow = 30.0 - 10.0 * np.exp(-t / 900.0) + rng.normal(0.0, 0.01, t.size)
+    estimate = estimate_sensor("S", t, slow)
+    assert not estimate.model_ok and "slower-than-allowed" in estimate.warning_codes
+    assert any("raise --max-time-constant" in w and "--time-unit" in w for w in estimate.warnings)
+    within = 30.0 - 10.0 * np.exp(-t / 250.0) + rng.normal(0.0, 0.01, t.size)
+    estimate = estimate_sensor("S", t, within)
+    assert estimate.model_ok and "slower-than-allowed" not in estimate.warning_codes
+
+
 def test_an_estimate_the_most_mode_fit_excludes_keeps_its_own_uncertainty():
     """A held-out single node of 248 min behind a 4.3-min lag, read in 0.05 °C steps every 2 min,
     at a quarter of t95. The fit with four modes follows the rounding held over many readings and

@@ -52,6 +52,7 @@ from mtident.io.logs import (
     seconds_hint,
     serial_date_hint,
     serial_date_note,
+    sparse_hint,
     time_unit_assumed,
     time_unit_factor,
 )
@@ -72,6 +73,9 @@ from mtident.io.stamps import (
 from mtident.io.units import celsius_conversion
 
 __all__ = ["LogFollower", "Rows"]
+
+# the first rows whose usual step tells a column in seconds read as minutes (:func:`sparse_hint`)
+SPARSE_HINT_ROWS = 10
 
 
 @dataclass(frozen=True)
@@ -208,7 +212,8 @@ class LogFollower:
     _time_scale: tuple[float, bool] | None = field(default=None, repr=False, compare=False)
     _last_stamp: str | None = field(default=None, repr=False, compare=False)  # the last row's time cell, for a note
     _rows_taken: int = field(default=0, repr=False, compare=False)  # for the hint of a column in hours
-    _hours_said: bool = field(default=False, repr=False, compare=False)
+    _unit_said: bool = field(default=False, repr=False, compare=False)
+    _first_times: list[float] = field(default_factory=list, repr=False, compare=False)  # for a column in seconds
 
     def position(self) -> dict[str, object]:
         """Everything needed to resume (for the state file)."""
@@ -526,8 +531,10 @@ class LogFollower:
                 and self.time_format is None
                 and self._time_scale is not None
                 and self._time_scale[1]
+                and not self._unit_said
             ):
                 warnings.append(f"{self.path}: {seconds_hint(self.header[self.columns[0]], t)}")
+                self._unit_said = True
             if self.last_time is not None and t <= self.last_time:
                 if not restarted:  # after a restart the old rows come again: expected, not an error
                     warnings.append(
@@ -552,16 +559,19 @@ class LogFollower:
         return Rows(np.array(times), values, tuple(warnings), tuple(notes))
 
     def _hint_hours(self, times: list[float], warnings: list[str]) -> None:
-        """Once, where a numeric time column read as minutes for want of a unit looks like hours."""
-        if not times or self._hours_said or self._time_scale is None or not self._time_scale[1]:
+        """Once (one hint on the unit in all), where a numeric time column read as minutes for want of a
+        unit looks like hours, or like seconds by its usual step."""
+        if not times or self._unit_said or self._time_scale is None or not self._time_scale[1]:
             return
         self._rows_taken += len(times)
         assert self.header is not None
         # times count from the first sample's: the last is the span
-        hint = hours_hint(self.header[self.columns[0]], times[-1], self._rows_taken)
+        header = self.header[self.columns[0]]
+        self._first_times = (self._first_times + times)[:SPARSE_HINT_ROWS]
+        hint = hours_hint(header, times[-1], self._rows_taken) or sparse_hint(header, np.array(self._first_times))
         if hint is not None:
             warnings.append(f"{self.path}: {hint}")
-            self._hours_said = True
+            self._unit_said = True
 
     def _new_lines(self, warnings: list[str], notes: list[str]) -> tuple[list[str], bool] | None:
         """The complete data lines written since the last poll, and whether the log was truncated or

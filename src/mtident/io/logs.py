@@ -66,6 +66,7 @@ __all__ = [
     "gap_said",
     "hours_hint",
     "seconds_hint",
+    "sparse_hint",
     "serial_date_hint",
     "serial_date_note",
     "names_a_date",
@@ -294,6 +295,8 @@ GAP_FACTOR = 10.0
 GAP_MIN_MIN = 5.0
 # readings enough to tell a log in hours read as minutes (:func:`hours_hint`)
 HOURS_HINT_SAMPLES = 100
+# a usual step this long (min), read as minutes for want of a unit, may be seconds (:func:`sparse_hint`)
+SPARSE_HINT_STEP_MIN = 10.0
 
 
 def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) -> bool:
@@ -464,6 +467,41 @@ def gap_said(step_min: float, after_min: float, usual_min: float) -> str | None:
     return (
         f"a gap of {step_min:.3g} min in the readings after t = {after_min:g} min (otherwise a reading every "
         f"{every}): the fit bridges it"
+    )
+
+
+def sparse_hint(header: str, times_min: FloatArray) -> str | None:
+    """What a reader says when a time column read as minutes, for want of a stated unit, has
+    readings a usual ``SPARSE_HINT_STEP_MIN`` or more apart: a warm-up logged every half hour is
+    rare, one logged every 30 s common, and seconds read as minutes stretch the warm-up sixty-fold,
+    so that its first minutes look settled. None otherwise (fewer than three readings too).
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+    times_min : ndarray
+        The times read so far (min).
+
+    Returns
+    -------
+    str or None
+        The note, suggesting ``time_unit='s'``.
+
+    Examples
+    --------
+    >>> sparse_hint("t", np.array([0.0, 30.0, 60.0])) is not None, sparse_hint("t", np.array([0.0, 1.0, 2.0]))
+    (True, None)
+    """
+    if len(times_min) < 3:
+        return None
+    step = float(np.median(np.diff(times_min)))
+    if step < SPARSE_HINT_STEP_MIN:
+        return None
+    return (
+        f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`), a reading "
+        f"every {step:g} min: if it is in seconds, give `time_unit='s'` (read as minutes, a warm-up in seconds looks "
+        "sixty times slower, and settled long before it is)"
     )
 
 
@@ -948,6 +986,6 @@ def _time_min(
         span = float(time_min[-1] - time_min[0])
         if time_min[-1] > UNLIKELY_MINUTES:
             notes.append(seconds_hint(header, float(time_min[-1])))
-        elif (hint := hours_hint(header, span, len(time_min))) is not None:
+        elif (hint := hours_hint(header, span, len(time_min)) or sparse_hint(header, time_min)) is not None:
             notes.append(hint)
     return time_min

@@ -875,6 +875,12 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
                 "T∞ "
                 "by half a step, which no interval shows; give a tolerance above the step"
             )
+        elif not c.model_ok and c.half_width_C <= settings.tolerance_C:
+            parts.append(
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level * 100:g} % interval {c.low_C:.2f} to "
+                f"{c.high_C:.2f} °C, within ±{settings.tolerance_C:g} °C of T∞, but its model is not trusted (its "
+                "warnings say why)"
+            )
         else:
             bounds = (
                 f"interval {c.low_C:.2f} to {c.high_C:.2f} °C"

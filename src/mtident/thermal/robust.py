@@ -63,6 +63,8 @@ MAX_FREE_FAST = 2
 DISAGREEMENT_LEVEL = 0.99
 # a boxed time constant within this share of its box's end is held there by the box, not by the data
 EDGE_SHARE = 0.005
+# how much further than the largest time constant the test of a fit held at it lets a mode reach
+SLOWER_REACH = 10.0
 # With a tolerance to meet, the likelihood-ratio test and the wider families run only where the
 # interval is within this many tolerances: beyond, each could only widen an interval that already
 # fails the decision, and they cost most of a check (the reference's warning comes at the first
@@ -504,6 +506,17 @@ def _modal_fit(
             f"machine changed, {missed} The answer does not use the reference",
         )
     fit, unheld = _widened_while_used(fit_of, family, settings, refine_within)
+    slower = (
+        _slower_than_allowed(binned, noise, interval, fit) if _near_decision(fit, settings, refine_within) else None
+    )
+    if slower is not None:
+        notes.add(
+            "slower-than-allowed",
+            f"its best fit holds a mode at the largest time constant allowed, {family.max_time_constant_min:g} "
+            f"min, and a slower one fits better beyond chance ({slower}): the interval assumes no slower mode. If the "
+            "machine may have one, raise --max-time-constant; if the log's times are not minutes, give their unit "
+            "(--time-unit)",
+        )
     if unheld:
         notes.add(
             "modes-unresolved",
@@ -693,6 +706,17 @@ def _likelihood_ratio(
     return None
 
 
+def _slower_than_allowed(binned: Binned, noise: float, interval: float, fit: SteadyState) -> str | None:
+    """Where the best fit holds its slowest mode at the largest time constant allowed, whether a
+    family reaching ``SLOWER_REACH`` times further fits better beyond chance (the χ² in words), or
+    None. The bound is the interval's stated assumption; readings that push against it, a slower
+    mode than the machine was said to have or a log's seconds read as minutes, contradict it."""
+    if not (fit.determined and fit.slowest_time_constant_min() >= fit.family.max_time_constant_min * (1 - EDGE_SHARE)):
+        return None
+    opened = replace(fit.family, max_time_constant_min=fit.family.max_time_constant_min * SLOWER_REACH)
+    return _likelihood_ratio(binned, noise, interval, fit, opened, 1)
+
+
 def _slowest_box_opened(family: ModeFamily) -> ModeFamily:
     """The reference family with its slowest box reaching up to the largest time constant."""
     taus, boxes = list(family.reference_min or ()), list(family.reference_box)
@@ -797,7 +821,7 @@ def _verdict(
     notes: _Notes,
 ) -> bool:
     """``model_ok`` of one fitted sensor; its warnings go to ``notes``."""
-    ok = fit.determined and "modes-unresolved" not in notes.codes
+    ok = fit.determined and not {"modes-unresolved", "slower-than-allowed"} & set(notes.codes)
     if onset_min is not None:
         notes.add(
             "late-start",
