@@ -841,6 +841,21 @@ def test_a_time_column_in_seconds_with_a_sparse_step_gets_a_hint_before_two_days
     assert not any("read as minutes" in w for w in follower.poll().warnings)
 
 
+def test_a_time_unit_given_against_the_columns_own_is_said(write_csv, tmp_path):
+    """`--time-unit min` on a column named 'time_s' read its seconds as minutes with no word, and
+    watch stopped 1.2 °C low."""
+    from mtident.io.follow import LogFollower
+
+    text = "time_s,T1\n" + "".join(f"{s},{20 + s / 600:.2f}\n" for s in range(0, 600, 30))
+    said = "time column 'time_s' states its unit as s, but `time_unit='min'` reads it in min"
+    assert any(said in n for n in read_temperature_log(write_csv(text), time_unit="min").notes)
+    assert not any("states its unit" in n for n in read_temperature_log(write_csv(text), time_unit="s").notes)
+    assert not any("states its unit" in n for n in read_temperature_log(write_csv(text)).notes)
+    live = tmp_path / "live.csv"
+    live.write_text(text)
+    assert sum(said in n for n in LogFollower(live, time_unit="min").poll().notes) == 1
+
+
 def test_a_unit_at_the_end_of_a_column_name(write_csv):
     """'Time [s]' was read as minutes (only a _s suffix counted); 'T1 [°F]' as °C. A name whose
     brackets hold no unit ('T2 (spindle)') is a plain °C sensor."""

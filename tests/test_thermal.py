@@ -869,6 +869,22 @@ def test_a_log_settled_in_display_steps_counts_as_settled_and_one_still_rising_d
     assert np.isnan(measured_equilibrium(t, rising[:, None], max_late_move_C=0.1)[0][0])
 
 
+def test_a_move_hidden_by_the_display_step_is_not_settled():
+    """A newcomer's column in 0.1 °C steps with little noise, 0.08 °C short of its level at the end
+    of an 8-h log (a slow mode of 300 min): both ends of its last quarter read 23.8, so the check
+    against the rest of the log called it settled at 23.80, 0.1 °C short. One that has settled
+    (its slowest mode 40 min) still counts, and so does the first with noise that dithers its steps
+    (its median, like any log still moving within the bounds, a little short)."""
+    t = np.arange(0.0, 481.0)
+    curve = 23.9 - 3.0 * np.exp(-t / 40.0) - 0.4 * np.exp(-t / 300.0)
+    quiet = np.round(curve + np.random.default_rng(3).normal(0.0, 0.01, t.size), 1)
+    assert np.isnan(measured_equilibrium(t, quiet[:, None], 0.1, 0.05, 300.0)[0][0])
+    settled = np.round(23.9 - 3.0 * np.exp(-t / 40.0) + np.random.default_rng(3).normal(0.0, 0.01, t.size), 1)
+    assert measured_equilibrium(t, settled[:, None], 0.1, 0.05, 40.0)[0][0] == pytest.approx(23.9)
+    dithered = np.round(curve + np.random.default_rng(3).normal(0.0, 0.08, t.size), 1)
+    assert measured_equilibrium(t, dithered[:, None], 0.1, 0.05, 40.0)[0][0] == pytest.approx(23.85, abs=0.06)
+
+
 def test_a_sensor_with_no_curve_has_no_rmse_not_a_perfect_one():
     """identify showed an RMSE of 0.000 beside a sensor with no rise (no curve): read as a perfect fit."""
     measured = np.array([[20.0, 20.0], [20.1, 21.0], [20.0, 22.0]])

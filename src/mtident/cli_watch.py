@@ -877,7 +877,8 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         OptionConsole().print(
             f"The log ends before its sensors settled (moving less than {hindsight.tolerance_C / 2:g} °C over its "
             f"last quarter, with under {hindsight.tolerance_C / 4:g} °C still to come at the pace of its slowest "
-            "mode): nothing to check the decision against" + (f"; {timing}." if timing else "."),
+            "mode, a move its readings' display step could hide counted in): nothing to check the decision against"
+            + (f"; {timing}." if timing else "."),
             highlight=False,
         )
         return

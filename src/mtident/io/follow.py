@@ -55,6 +55,7 @@ from mtident.io.logs import (
     sparse_hint,
     time_unit_assumed,
     time_unit_factor,
+    unit_overridden_note,
 )
 from mtident.io.stamps import (
     CLOCK_DAY_ZERO_MIN,
@@ -409,6 +410,8 @@ class LogFollower:
             time_name = self.header[self.columns[0]]
             if self._time_scale is None:
                 stated = self.dialect.time_unit(time_name)
+                if (overridden := unit_overridden_note(time_name, self.time_unit, stated)) is not None:
+                    notes.append(overridden)
                 self._time_scale = (
                     (MINUTES_PER_DAY, False)
                     if self.serial_days

@@ -67,6 +67,7 @@ __all__ = [
     "hours_hint",
     "seconds_hint",
     "sparse_hint",
+    "unit_overridden_note",
     "serial_date_hint",
     "serial_date_note",
     "names_a_date",
@@ -285,6 +286,38 @@ def time_unit_factor(header: str, time_unit: str | None, stated: str | None = No
         return TIME_UNITS[time_unit]
     unit = _suffix_unit(header) or stated
     return TIME_UNITS[unit] if unit is not None else 1.0
+
+
+def unit_overridden_note(header: str, time_unit: str | None, stated: str | None) -> str | None:
+    """What a reader says when the unit given (``time_unit``) differs from the one the log states
+    for its time column (a suffix of its name, brackets or a units row): the option wins, and a
+    slip in it rescales every time constant. None where they agree or either is missing.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+    time_unit : str or None
+        The unit the user gave.
+    stated : str or None
+        The unit a units row or brackets state, as a key of ``TIME_UNITS``.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> unit_overridden_note("time_s", "min", None) is not None, unit_overridden_note("time_s", "s", None)
+    (True, None)
+    """
+    own = _suffix_unit(header) or stated
+    if time_unit is None or own is None or TIME_UNITS.get(time_unit) == TIME_UNITS[own]:
+        return None
+    return (
+        f"time column {header!r} states its unit as {own}, but `time_unit={time_unit!r}` reads it in {time_unit}: the "
+        "option wins; leave it out if the column's own unit is right"
+    )
 
 
 # A warm-up is hours long: a time column read as minutes (no unit given anywhere) that runs past two
@@ -981,6 +1014,8 @@ def _time_min(
     stated = dialect.time_unit(header)
     time_min, time_notes = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
     notes.extend(time_notes)
+    if (overridden := unit_overridden_note(header, time_unit, stated)) is not None:
+        notes.append(overridden)
     numeric = pd.api.types.is_numeric_dtype(frame[header]) and not pd.api.types.is_timedelta64_dtype(frame[header])
     if numeric and time_unit_assumed(header, time_unit, stated):
         span = float(time_min[-1] - time_min[0])

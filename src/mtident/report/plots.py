@@ -455,8 +455,8 @@ def plot_monitor(
         if np.isfinite(check.low95_C) and np.isfinite(check.high95_C):
             ax.axhspan(check.low95_C, check.high95_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
         if np.isfinite(check.low_C) and np.isfinite(check.high_C):
-            for edge in (check.low_C, check.high_C):
-                ax.axhline(edge, color="tab:green", lw=0.8, ls="--")
+            for k, edge in enumerate((check.low_C, check.high_C)):
+                ax.axhline(edge, color="tab:green", lw=0.8, ls="--", label=None if k else "T∞, decision's level")
         if state.stopped:
             ax.axvline(state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)}")
         elif expected and np.isfinite(expected.get(check.sensor, np.nan)):

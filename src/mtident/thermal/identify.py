@@ -29,7 +29,7 @@ from mtident.thermal.model import (
     to_physical,
     transition_for,
 )
-from mtident.thermal.readings import noise_sigma, reading_range
+from mtident.thermal.readings import display_resolution, noise_sigma, reading_range
 from mtident.thermal.settings import (
     DEFAULT_METHOD,
     IDENTIFY_METHODS,
@@ -452,8 +452,12 @@ def measured_equilibrium(
         apart = float(np.mean(t[-span:]) - np.mean(t[-quarter : -quarter + span]))
         # the move less two of its standard errors: noise alone does not make a settled log move
         noise = 2.0 * math.sqrt(float(np.var(y[-span:]) + np.var(y[-quarter : -quarter + span])) / span)
+        # readings in display steps with too little noise to dither them can hide a move of up to a
+        # step: a log in 0.1 °C steps still 0.1 °C short of its level read as settled
+        step = float(display_resolution(y[:, None])[0])
+        hidden = step if math.sqrt(float(np.var(y[-span:]))) < step / 2.0 else 0.0
         pace = float(tau) if math.isfinite(tau) and tau > 0 else DEFAULT_MAX_TIME_CONSTANT_MIN
-        to_come = max(abs(late_rise) - noise, 0.0) / max(math.expm1(apart / pace), 1e-12)
+        to_come = (max(abs(late_rise) - noise, 0.0) + hidden) / max(math.expm1(apart / pace), 1e-12)
         rise = final - start
         if rise == 0 or abs(late_rise) > min(0.05 * abs(rise), max_late_move_C) or to_come > max_remaining_C:
             finals.append(np.nan)
