@@ -825,6 +825,10 @@ def min_time_command(
             *best,
             "yes" if d["periods_agree"] else "[yellow]no[/]",
         )
+    table.caption = (
+        "minimal L: the window whose relative RMSE, summed over the sampling periods M, is smallest (the papers' "
+        "criterion); where the periods disagree it can differ from every period's own best"
+    )
     table_console().print(table)
 
 
