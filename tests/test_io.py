@@ -1414,3 +1414,31 @@ def test_a_row_written_twice_is_left_out_and_said(write_csv):
     assert len(log.time_min) == 20 and "left out 1 row(s) repeating an earlier row exactly (rows 8)" in log.notes
     with pytest.raises(InputError, match="duplicate time"):
         read_temperature_log(write_csv("time_min,A\n" + rows.replace("5,20.50\n", "5,20.50\n5,20.60\n")))
+
+
+def test_a_log_built_by_hand_is_checked_like_one_read_from_a_file():
+    """A notebook user's TemperatureLog(...) skipped every check: times that went back gave T∞
+    24.17 °C for 26.62 with no word, and a transposed array, a 1-D one, plain lists or a NaN time
+    failed deep inside with IndexError, TypeError or ValueError."""
+    from mtident.io.logs import TemperatureLog
+
+    t = np.arange(0.0, 100.0)
+    y = 20.0 + 6.0 * (1.0 - np.exp(-t / 40.0))
+    log = TemperatureLog(list(t), ["T1"], [[v] for v in y])
+    assert isinstance(log.time_min, np.ndarray) and log.temperature_C.shape == (100, 1) and log.sensors == ("T1",)
+    back = t.copy()
+    back[50] = 40.0
+    with pytest.raises(InputError, match=r"time_min must increase strictly; t\[50\] = 40 min follows t\[49\] = 49 min"):
+        TemperatureLog(back, ("T1",), y[:, None])
+    with pytest.raises(InputError, match=r"shape \(N, S\) = \(100, 1\) .* not \(1, 100\) \(transposed\?\)"):
+        TemperatureLog(t, ("T1",), y[None, :])
+    with pytest.raises(InputError, match=r"not \(100,\)"):
+        TemperatureLog(t, ("T1",), y)
+    nan_time = t.copy()
+    nan_time[3] = np.nan
+    with pytest.raises(InputError, match="non-finite time at row 3"):
+        TemperatureLog(nan_time, ("T1",), y[:, None])
+    with pytest.raises(InputError, match=r"not one string \(for one: \('T1',\)\)"):
+        TemperatureLog(t, "T1", y[:, None])  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="must be numbers"):
+        TemperatureLog(t, ("T1",), [["hot"]] * 100)

@@ -231,7 +231,7 @@ def test_a_sensor_the_reference_does_not_know_is_said_in_identify_and_watch(tmp_
     went on without the reference, said only in its assumptions. Where the reference knows none
     of the log's sensors, it is refused (a newcomer gave another machine's reference and got only
     a warning)."""
-    from mtident.thermal.monitor import MonitorSettings
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
     from mtident.thermal.robust_identify import identify_robust
     from mtident.thermal.session import WatchSession
 
@@ -249,16 +249,21 @@ def test_a_sensor_the_reference_does_not_know_is_said_in_identify_and_watch(tmp_
     log.write_text("time_min,Spindle T1,T2\n" + "".join(f"{a:g},{b:.2f},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
     events = WatchSession(log, MonitorSettings(reference=reference), persist=False).poll()
     assert [e.kind for e in events if e.text.startswith(said)] == ["warning"]
-    refused = "--reference (learnt from run.csv): it has modes for none of this log's sensors ('Spindle T1'); it knows 'T1', 'T2'"
+    refused = (
+        "the reference (learnt from run.csv) has modes for none of this log's sensors ('Spindle T1'); it knows 'T1', "
+        "'T2'"
+    )
     with pytest.raises(InputError, match=re.escape(refused)):
         identify_robust(make_log(t, {"Spindle T1": y}), 60.0, reference=reference)
     alone = tmp_path / "alone.csv"
     alone.write_text("time_min,Spindle T1\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
     with pytest.raises(InputError, match=re.escape(refused)):
         WatchSession(alone, MonitorSettings(reference=reference), persist=False).poll()
+    with pytest.raises(InputError, match=re.escape(refused)):
+        monitor_step(new_state(["Spindle T1"]), t, y[:, None], None, MonitorSettings(reference=reference))
     save_reference(reference, tmp_path / "machine.toml")
     out = mtident("thermal", "identify", str(alone), "--window", "60", "--reference", str(tmp_path / "machine.toml"))
-    assert out.returncode == 2 and "it has modes for none of this log's sensors" in out.stderr
+    assert out.returncode == 2 and "has modes for none of this log's sensors" in out.stderr
 
 
 def test_a_reference_that_learnt_the_room_as_a_machine_sensor_is_said():

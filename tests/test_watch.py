@@ -17,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from conftest import first_order, logger_dialects
+from conftest import first_order, logger_dialects, make_log
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -899,3 +899,22 @@ def test_a_session_that_keeps_no_state_says_it_leaves_another_runs_state_file_al
     assert not any("overwritten" in n for n in notes)
     said = WatchSession(log, MonitorSettings(tolerance_C=0.2)).notes
     assert any("starting afresh (it will be overwritten)" in n for n in said)
+
+
+def test_a_string_of_sensors_and_unnamed_room_readings_are_taken_as_meant():
+    """new_state("T1") made two sensors, "T" and "1", and failed only at the first readings; room
+    readings given without naming the room sensor were used, yet every answer said the room was
+    not measured and assumed to wander."""
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state, result
+    from mtident.thermal.robust_identify import identify_robust
+
+    with pytest.raises(InputError, match=r"not one string \(for one sensor: \['T1'\]\)"):
+        new_state("T1")
+    t = np.arange(0.0, 121.0)
+    room = 20.0 + 0.002 * t
+    y = room + 6.0 * (1.0 - np.exp(-t / 30.0))
+    state, _ = monitor_step(new_state(["T1"], with_room=True), t, y[:, None], room, MonitorSettings())
+    said = result(state, MonitorSettings())["sensors"][0]["assumptions"]["room"]
+    assert said.startswith("measured (the room readings given), an input of every mode")
+    answer = identify_robust(make_log(t, {"T1": y}), 60.0, room)
+    assert answer.assumptions[0].room.startswith("measured (the room readings given)")

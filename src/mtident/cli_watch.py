@@ -715,7 +715,7 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     console.print(_status_table(session, path))
     state = session.state
     assert state is not None
-    said = assumptions(session.settings, state.sensors[0])
+    said = assumptions(session.settings, state.sensors[0], state.readings.room_C is not None)
     console.print(
         f"Assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}",
         highlight=False,

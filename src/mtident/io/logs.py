@@ -133,6 +133,43 @@ class TemperatureLog:
     source: str = ""
     time_column: str = ""
 
+    def __post_init__(self) -> None:
+        # a log built by hand reaches the fits without the readers' checks: times that go back gave
+        # a wrong T∞ with no word, a transposed array an IndexError deep inside
+        if isinstance(self.sensors, str):
+            msg = f"TemperatureLog: sensors must be a sequence of names, not one string (for one: ({self.sensors!r},))"
+            raise InputError(msg)
+        try:
+            time_min = np.asarray(self.time_min, dtype=float)
+            values = np.asarray(self.temperature_C, dtype=float)
+        except (TypeError, ValueError) as exc:
+            msg = f"TemperatureLog: time_min and temperature_C must be numbers ({exc})"
+            raise InputError(msg) from None
+        names = tuple(self.sensors)
+        if time_min.ndim != 1:
+            msg = f"TemperatureLog: time_min must be one-dimensional (N,), not of shape {time_min.shape}"
+            raise InputError(msg)
+        if values.shape != (len(time_min), len(names)):
+            msg = (
+                f"TemperatureLog: temperature_C must have shape (N, S) = ({len(time_min)}, {len(names)}) for "
+                f"{len(time_min)} times and the sensors {', '.join(names) or '(none)'}, not {values.shape}"
+                + (" (transposed?)" if values.shape == (len(names), len(time_min)) else "")
+            )
+            raise InputError(msg)
+        if not np.isfinite(time_min).all():
+            msg = f"TemperatureLog: time_min holds a non-finite time at row {int(np.argmax(~np.isfinite(time_min)))}"
+            raise InputError(msg)
+        if len(time_min) > 1 and (back := np.flatnonzero(np.diff(time_min) <= 0)).size:
+            k = int(back[0]) + 1
+            msg = (
+                f"TemperatureLog: time_min must increase strictly; t[{k}] = {time_min[k]:g} min follows t[{k - 1}] = "
+                f"{time_min[k - 1]:g} min"
+            )
+            raise InputError(msg)
+        object.__setattr__(self, "time_min", time_min)
+        object.__setattr__(self, "temperature_C", values)
+        object.__setattr__(self, "sensors", names)
+
     def __repr__(self) -> str:
         names = ", ".join(self.sensors if len(self.sensors) <= 6 else [*self.sensors[:5], "...", self.sensors[-1]])
         span = f"{self.time_min[0]:g}-{self.time_min[-1]:g} min" if len(self.time_min) else "no samples"

@@ -189,7 +189,7 @@ def build_report(session: WatchSession, progress: Callable[[WatchSession], None]
     lines = tuple(
         _line(summary, state.readings.values_C[:, s], hindsight, s) for s, summary in enumerate(_sensors(outcome))
     )
-    said = assumptions(settings, state.sensors[0])
+    said = assumptions(settings, state.sensors[0], state.readings.room_C is not None)
     assumed = f"{said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
     for sensor in state.sensors:
         reference = assumptions(settings, sensor).reference

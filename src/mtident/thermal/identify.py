@@ -652,11 +652,12 @@ def identify(
         the filter after L, from a generator with this seed. Default: the
         deterministic forecast of the mean with its covariance.
     ambient_C : ndarray, shape (N,), optional
-        A room sensor at the log's sample times. The room becomes the input of
-        each sensor's first-order heat balance (as in the live monitor), so a
-        drifting room does not bend the identified curve; T∞ is then the steady
-        state at the room's level at the end of the window, and the prediction
-        holds the room there. UKF methods with the data tuning only.
+        A room sensor at the log's sample times. The room becomes an input of each
+        sensor's heat balance (of every mode with the default ``"robust"`` method, of the
+        first-order balance with a UKF method and the data tuning; lsq and the papers'
+        presets refuse it), so a drifting room does not bend the identified curve; T∞ is
+        then the steady state at the room's level at the end of the window, and the
+        prediction holds the room there.
 
     Returns
     -------

@@ -28,7 +28,7 @@ from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.thermal.modes import model_curve
-from mtident.thermal.reference import MachineReference
+from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import (
     Assumptions,
     RobustSettings,
@@ -394,6 +394,9 @@ def new_state(sensors: tuple[str, ...] | list[str], with_room: bool = False) -> 
     InputError
         No sensor names.
     """
+    if isinstance(sensors, str):
+        msg = f"sensors: expected a sequence of names, not one string (for one sensor: [{sensors!r}])"
+        raise InputError(msg)
     names = tuple(sensors)
     if not names:
         msg = "sensors: expected at least one sensor name"
@@ -468,6 +471,8 @@ def monitor_step(
         Readings of the wrong shape, or times not after those seen.
     """
     t, y, room = _validated(state, time_min, values, room_C)
+    if settings.reference is not None:
+        reference_notes(settings.reference, state.sensors, room is not None)  # refuses one of another machine
     events: list[Event] = []
     start = 0
     while start < len(t) and not state.stopped:
@@ -780,7 +785,7 @@ def _candidate_times(now: float, horizon: float, origin: float) -> list[float]:
     return out
 
 
-def assumptions(settings: MonitorSettings, sensor: str) -> Assumptions:
+def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = False) -> Assumptions:
     """What a sensor's interval rests on, as the answer says it.
 
     Parameters
@@ -789,13 +794,15 @@ def assumptions(settings: MonitorSettings, sensor: str) -> Assumptions:
         The largest time constant, the room's wander or sensor, and the reference run.
     sensor : str
         The sensor whose reference modes, if any, are described.
+    room_measured : bool
+        The monitor is given the room's readings (named or not by ``settings.room_sensor``).
 
     Returns
     -------
     Assumptions
         The model, the largest time constant (min), how the room entered, and the reference.
     """
-    return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor)
+    return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor, room_measured)
 
 
 def result(
@@ -816,7 +823,11 @@ def result(
     -------
     dict
     """
-    sensors = [_sensor_summary(c, settings, None if expected is None else expected.get(c.sensor)) for c in state.checks]
+    measured = state.readings.room_C is not None
+    sensors = [
+        _sensor_summary(c, settings, None if expected is None else expected.get(c.sensor), measured)
+        for c in state.checks
+    ]
     stopped = state.stopped
     if stopped:
         key = max(
@@ -946,7 +957,9 @@ def _room_bound(check: SensorCheck, settings: MonitorSettings) -> bool:
     return wander > 0 and _readings_half_width(check, wander) <= settings.tolerance_C
 
 
-def _sensor_summary(c: SensorCheck, settings: MonitorSettings, expected: float | None) -> dict[str, object]:
+def _sensor_summary(
+    c: SensorCheck, settings: MonitorSettings, expected: float | None, room_measured: bool
+) -> dict[str, object]:
     return {
         "sensor": c.sensor,
         "status": c.status,
@@ -960,7 +973,7 @@ def _sensor_summary(c: SensorCheck, settings: MonitorSettings, expected: float |
         "model_ok": c.model_ok,
         "warnings": list(c.warnings),
         "interval_ends": c.ends,
-        "assumptions": assumptions(settings, c.sensor).to_dict(),
+        "assumptions": assumptions(settings, c.sensor, room_measured).to_dict(),
         "reference_used": c.reference_used,
         "expected_stop_time_min": None if expected is None else finite_or_none(expected),
     }

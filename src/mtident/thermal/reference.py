@@ -170,7 +170,7 @@ def reference_notes(
     missing = [name for name in sensors if name not in reference.sensors]
     if sensors and len(missing) == len(sensors):
         msg = (
-            f"--reference (learnt from {reference.source}): it has modes for none of this log's sensors "
+            f"the reference (learnt from {reference.source}) has modes for none of this log's sensors "
             f"({', '.join(repr(n) for n in sensors)}); it knows {', '.join(repr(n) for n in reference.sensors)}. "
             "Give the reference learnt from this machine, or rename the log's columns to the reference run's"
         )

@@ -610,7 +610,11 @@ def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
 
 
 def describe_assumptions(
-    settings: RobustSettings, room_sensor: str | None, reference: MachineReference | None, sensor: str
+    settings: RobustSettings,
+    room_sensor: str | None,
+    reference: MachineReference | None,
+    sensor: str,
+    room_measured: bool = False,
 ) -> Assumptions:
     """What a sensor's interval rests on, in words.
 
@@ -624,6 +628,8 @@ def describe_assumptions(
         A reference run of the same machine.
     sensor : str
         The sensor whose reference modes are described.
+    room_measured : bool
+        Room readings were given (under ``room_sensor``'s name, or unnamed).
 
     Returns
     -------
@@ -631,6 +637,8 @@ def describe_assumptions(
     """
     if room_sensor is not None:
         room = f"measured by {room_sensor!r}, an input of every mode; T∞ at the room's last level"
+    elif room_measured:
+        room = "measured (the room readings given), an input of every mode; T∞ at the room's last level"
     elif settings.room_wander_C_per_h > 0:
         room = f"not measured; taken to wander as a random walk of {settings.room_wander_C_per_h:g} °C in an hour"
     else:

@@ -327,7 +327,9 @@ def identify_robust(
         band_low_C=low,
         band_high_C=high,
         estimates=estimates,
-        assumptions=tuple(describe_assumptions(settings, room_sensor, reference, name) for name in log.sensors),
+        assumptions=tuple(
+            describe_assumptions(settings, room_sensor, reference, name, room_C is not None) for name in log.sensors
+        ),
         rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
