@@ -991,3 +991,15 @@ def test_a_slow_mode_at_the_largest_time_constant_is_not_missed_by_the_hull():
     estimate = estimate_sensor("S", warm.time_min[:n], warm.reading_C[:n], reference=reference.sensors["S"])
     lo, hi = estimate.interval_C[0.95]
     assert estimate.reference_used and estimate.model_ok and lo <= truth <= hi, (lo, hi, truth)
+
+
+def test_the_papers_filters_say_whether_the_measured_final_temperature_had_settled():
+    """The first-order summary gave measured_final_C and a measured equilibrium time for a log
+    still rising by 0.4 °C in its last quarter, with no measured_settled flag (the robust summary
+    had one): a script could take them for where the sensor settles."""
+    t = np.arange(0.0, 481.0)
+    y = 20.0 + 20.0 * (1.0 - np.exp(-t / 100.0)) + 0.01 * np.random.default_rng(5).standard_normal(t.size)
+    summary = identify(make_log(t, {"T1": y}), 60.0, "ukf").summary(0)
+    assert summary["measured_final_C"] is not None and summary["measured_settled"] is False
+    flat = 20.0 + 20.0 * (1.0 - np.exp(-t / 30.0)) + 0.01 * np.random.default_rng(5).standard_normal(t.size)
+    assert identify(make_log(t, {"T1": flat}), 60.0, "ukf").summary(0)["measured_settled"] is True

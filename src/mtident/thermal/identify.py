@@ -101,6 +101,11 @@ class Identification:
     measured_final_C, measured_equilibrium_time_min : ndarray, shape (S,)
         From the log itself where it reached equilibrium, else NaN.
     notes : tuple of str
+    quantile : float
+    measured_settled : ndarray of bool, shape (S,), optional
+        Whether the log's last quarter moved less than ``SETTLED_MOVE_C``, with at most half that
+        still to come at the pace of the largest time constant: only then is the measured final
+        temperature where the sensor settles to the tolerance's precision.
     """
 
     sensors: tuple[str, ...]
@@ -128,6 +133,7 @@ class Identification:
     measured_equilibrium_time_min: FloatArray
     notes: tuple[str, ...]
     quantile: float = Z95
+    measured_settled: np.ndarray | None = None
 
     def __repr__(self) -> str:
         # a notebook shows the answer, not ~40 kB of arrays
@@ -231,6 +237,9 @@ class Identification:
             "residual_chi2": finite_or_none(self.fit_chi2[index]),
             "measured_final_C": finite_or_none(self.measured_final_C[index]),
             "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[index]),
+            "measured_settled": None
+            if self.measured_settled is None or not np.isfinite(self.measured_final_C[index])
+            else bool(self.measured_settled[index]),
         }
 
 
@@ -386,6 +395,11 @@ def model_check(
         corr.append(ac)
         fits.append(passes)
     return np.array(chi2), np.array(corr), np.array(fits)
+
+
+# a log counts as settled to the tolerance's precision where its last quarter moved less than this
+# (°C), half the default tolerance
+SETTLED_MOVE_C = 0.1
 
 
 def measured_equilibrium(
@@ -955,6 +969,9 @@ def _identify(
     in_log = times <= t[-1] + 1e-9
     errors = rmse(mean_curve[in_log], y[: int(in_log.sum())])
     final_measured, eq_measured = measured_equilibrium(t, y)
+    settled = np.isfinite(
+        measured_equilibrium(t, y, SETTLED_MOVE_C, SETTLED_MOVE_C / 2.0, DEFAULT_MAX_TIME_CONSTANT_MIN)[0]
+    )
     history, history_sd = course.history, course.history_sd
     rate_sd = np.sqrt(course.final_cov[:, 1, 1])
     return Identification(
@@ -981,6 +998,7 @@ def _identify(
         history_sd=history_sd,
         measured_final_C=final_measured,
         measured_equilibrium_time_min=eq_measured,
+        measured_settled=settled,
         notes=tuple(notes),
         quantile=quantile,
     )

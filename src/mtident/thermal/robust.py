@@ -368,7 +368,15 @@ def estimate_sensor(
     valid = np.isfinite(y) if room_C is None else np.isfinite(y) & np.isfinite(room_C)
     if not valid.any():
         return _without_fit(
-            sensor, "no data", 0.0, 0.0, float(t[0]) if len(t) else 0.0, settings, "no valid reading yet"
+            sensor,
+            "no data",
+            0.0,
+            0.0,
+            float(t[0]) if len(t) else 0.0,
+            settings,
+            "no valid reading yet"
+            if not np.isfinite(y).any()
+            else "no reading yet with a valid room reading beside it",
         )
     rounding = max(float(display_resolution(y[:, None])[0]), quantisation_step(y))
     noise = max(float(noise_sigma(y[:, None], t)[0]), rounding / np.sqrt(12.0)) if noise_C is None else noise_C

@@ -17,7 +17,7 @@ from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
-from mtident.thermal.identify import measured_equilibrium, rmse, window_samples
+from mtident.thermal.identify import SETTLED_MOVE_C, measured_equilibrium, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import (
@@ -37,9 +37,6 @@ __all__ = ["RobustIdentification", "identify_robust"]
 REPORT_LEVEL = 0.95
 # the prediction runs this many of the slowest mode's time constants past the window, at least
 HORIZON_TIME_CONSTANTS = 4.0
-# a log counts as settled to the tolerance's precision where its last quarter moved less than this
-# (°C), half the default tolerance
-SETTLED_MOVE_C = 0.1
 
 
 @dataclass(frozen=True)
@@ -160,6 +157,7 @@ class RobustIdentification:
                 for name, a in zip(self.sensors, self.assumptions, strict=True)
                 if a.reference is not None
             ]
+        lines += [f"  note: {note}" for note in self.notes]
         return "\n".join(lines)
 
     def curve_frame(self) -> pd.DataFrame:
