@@ -841,8 +841,8 @@ def _verdict(
     if onset_min is not None:
         notes.add(
             "late-start",
-            f"flat until t = {onset_min:g} min (the warm-up began after the log, or its heat reached this sensor "
-            "only then); the modes are counted from there",
+            f"flat until t = {onset_min:g} min, within its noise (the warm-up began after the log, or its heat "
+            "reached this sensor only then); the modes are counted from there",
         )
     if fit.correlation_factor > MISFIT_FACTOR:
         ok = False
