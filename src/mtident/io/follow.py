@@ -558,10 +558,10 @@ class LogFollower:
             rows.append(self._row_values(line, conversions))
         values = np.array(rows).reshape(len(rows), len(self.sensors or []))
         notes.extend(_skipped_notes(self.sensors or [], np.array(times), values))
-        self._hint_hours(times, warnings)
+        self._hint_unit(times, warnings)
         return Rows(np.array(times), values, tuple(warnings), tuple(notes))
 
-    def _hint_hours(self, times: list[float], warnings: list[str]) -> None:
+    def _hint_unit(self, times: list[float], warnings: list[str]) -> None:
         """Once (one hint on the unit in all), where a numeric time column read as minutes for want of a
         unit looks like hours, or like seconds by its usual step."""
         if not times or self._unit_said or self._time_scale is None or not self._time_scale[1]:

@@ -466,6 +466,10 @@ def serial_date_hint(header: str, first: float, step: float) -> str | None:
     )
 
 
+def _read_as_minutes(header: str) -> str:
+    return f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`)"
+
+
 def seconds_hint(header: str, span_min: float) -> str:
     """What a reader says when a time column read as minutes, for want of a stated unit, runs past two
     days (``UNLIKELY_MINUTES``): a warm-up is hours long, so the column is more likely seconds.
@@ -483,8 +487,8 @@ def seconds_hint(header: str, span_min: float) -> str:
         The note, suggesting ``time_unit='s'``.
     """
     return (
-        f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`) and runs to "
-        f"{span_min:g} min ({span_min / 1440:.1f} days): if it is in seconds, give `time_unit='s'`"
+        f"{_read_as_minutes(header)} and runs to {span_min:g} min ({span_min / 1440:.1f} days): if it is in "
+        "seconds, give `time_unit='s'`"
     )
 
 
@@ -569,8 +573,8 @@ def sparse_hint(header: str, times_min: FloatArray) -> str | None:
     if step < SPARSE_HINT_STEP_MIN:
         return None
     return (
-        f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`), a reading "
-        f"every {step:g} min: if it is in seconds, give `time_unit='s'` (read as minutes, a warm-up in seconds looks "
+        f"{_read_as_minutes(header)}, a reading every {step:g} min: if it is in seconds, give `time_unit='s'` "
+        "(read as minutes, a warm-up in seconds looks "
         "sixty times slower, and settled long before it is)"
     )
 
@@ -602,8 +606,8 @@ def hours_hint(header: str, span_min: float, samples: int) -> str | None:
     if samples < HOURS_HINT_SAMPLES or span_min > 60.0 or span_min / (samples - 1) > 1.0 / 60.0:
         return None
     return (
-        f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`) and runs only "
-        f"to {span_min:g} min with a reading every {60.0 * span_min / (samples - 1):.2g} s: if it is in hours, give "
+        f"{_read_as_minutes(header)} and runs only to {span_min:g} min with a reading every "
+        f"{60.0 * span_min / (samples - 1):.2g} s: if it is in hours, give "
         "`time_unit='h'`"
     )
 

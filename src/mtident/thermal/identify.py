@@ -402,6 +402,33 @@ def model_check(
 SETTLED_MOVE_C = 0.1
 
 
+def measured_and_settled(
+    time_min: FloatArray, values: FloatArray, slowest_mode_min: float
+) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """The papers' measured final temperature and 95 %-rise time (:func:`measured_equilibrium`
+    with its 5 % rule alone), and whether each sensor settled to the tolerance's precision: its last
+    quarter moved less than ``SETTLED_MOVE_C``, with at most half that still to come at the pace of
+    ``slowest_mode_min``.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N, S)
+    slowest_mode_min : float
+        The slowest mode the rise still to come is bounded with (min).
+
+    Returns
+    -------
+    final_C, equilibrium_time_min : ndarray, shape (S,)
+    settled : ndarray of bool, shape (S,)
+    """
+    final, equilibrium = measured_equilibrium(time_min, values)
+    settled = np.isfinite(
+        measured_equilibrium(time_min, values, SETTLED_MOVE_C, SETTLED_MOVE_C / 2.0, slowest_mode_min)[0]
+    )
+    return final, equilibrium, settled
+
+
 def measured_equilibrium(
     time_min: FloatArray,
     values: FloatArray,
@@ -968,10 +995,7 @@ def _identify(
     measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]
     in_log = times <= t[-1] + 1e-9
     errors = rmse(mean_curve[in_log], y[: int(in_log.sum())])
-    final_measured, eq_measured = measured_equilibrium(t, y)
-    settled = np.isfinite(
-        measured_equilibrium(t, y, SETTLED_MOVE_C, SETTLED_MOVE_C / 2.0, DEFAULT_MAX_TIME_CONSTANT_MIN)[0]
-    )
+    final_measured, eq_measured, settled = measured_and_settled(t, y, DEFAULT_MAX_TIME_CONSTANT_MIN)
     history, history_sd = course.history, course.history_sd
     rate_sd = np.sqrt(course.final_cov[:, 1, 1])
     return Identification(

@@ -17,7 +17,7 @@ from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
-from mtident.thermal.identify import SETTLED_MOVE_C, measured_equilibrium, rmse, window_samples
+from mtident.thermal.identify import measured_and_settled, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import (
@@ -311,10 +311,8 @@ def identify_robust(
     measured = np.full((len(times), len(log.sensors)), np.nan)
     measured[: min(len(t), len(times))] = y[: len(times)]
     in_log = times <= t[-1] + 1e-9
-    final, equilibrium = measured_equilibrium(t, y)
     # the window's fit may not know the log's slowest mode: the largest allowed sets the pace
-    slowest = settings.max_time_constant_min
-    settled = np.isfinite(measured_equilibrium(t, y, SETTLED_MOVE_C, SETTLED_MOVE_C / 2.0, slowest)[0])
+    final, equilibrium, settled = measured_and_settled(t, y, settings.max_time_constant_min)
     return RobustIdentification(
         sensors=log.sensors,
         window_min=float(t[n - 1]),
