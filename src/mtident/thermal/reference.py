@@ -263,9 +263,9 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
     modes than the reference's, not slower ones: a sparse run that ended while a small slow mode
     was still rising was learnt as one fast mode (its noise, read off the rise, hid the slow
     mode from the test of modes needed), and a test that trusted it stopped 0.29 °C low. The
-    readings' interval, without the unmeasured room's
-    wander: the wander is the future room's, which a later test meets with its own readings, and
-    with it every run whose slowest mode exceeds an hour was doubted, however complete."""
+    readings' interval, without the unmeasured room's wander: the wander is the future room's,
+    which a later test meets with its own readings, and with it every run whose slowest mode
+    exceeds an hour was doubted, however complete."""
     fit = _fit_of(estimate)
     level = min(fit.interval_C)
     lo, hi = fit.interval_C[level]
