@@ -46,6 +46,7 @@ from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.thermal.identify import identify  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state  # noqa: E402
 from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
+from mtident.thermal.robust import RobustSettings  # noqa: E402
 from mtident.thermal.robust_identify import identify_robust  # noqa: E402
 from mtident.thermal.synthetic import modal_amplitudes, random_warmup, reference_run  # noqa: E402
 
@@ -53,6 +54,13 @@ TOLERANCE_C = 0.2
 FRACTIONS = (0.25, 0.5)
 NEAR_FIRST_ORDER_SHARE = 0.97
 FIRST_SEED = 3000
+# the monitor's replays: the results' key, and the reference column of the report
+STATED = {
+    "without_reference": "none",
+    "with_reference": "learnt",
+    "with_reference_steady_room": "learnt, steady room said",
+    "with_reference_every_mode": "learnt, every mode and steady room said",
+}
 
 
 def _log(t: np.ndarray, y: np.ndarray, name: str) -> TemperatureLog:
@@ -141,9 +149,10 @@ def near_first_order(machine, warm) -> tuple[bool, float]:  # noqa: ANN001
     return share >= NEAR_FIRST_ORDER_SHARE, share
 
 
-def run_case(seed: int, only: str | None = None) -> dict[str, object]:
+def run_case(seed: int, only: str | None = None, stated: bool = False) -> dict[str, object]:
     """One case; ``only`` ("without" or "with") replays the monitor without or with a learnt
-    reference alone, and skips ``identify``."""
+    reference alone, and skips ``identify``; ``stated``: also with the reference under the
+    assumptions a user may state (:data:`STATED`)."""
     rng = np.random.default_rng(seed)
     warm = random_warmup(rng)
     machine = warm.machine
@@ -166,6 +175,11 @@ def run_case(seed: int, only: str | None = None) -> dict[str, object]:
     }
     case["without_reference"] = _replay(warm, None) if only != "with" else None
     case["with_reference"] = _replay(warm, reference) if reference is not None else None
+    if stated and reference is not None:
+        steady = RobustSettings(room_wander_C_per_h=0.0)
+        # a steady room is true of every case without a room sensor; with one, the room is measured
+        case["with_reference_steady_room"] = _replay(warm, reference, robust=steady) if warm.room_C is None else None
+        case["with_reference_every_mode"] = _replay(warm, reference.holding_every_mode(), robust=steady)
     if only is not None:
         return case
     for fraction in FRACTIONS:
@@ -222,10 +236,12 @@ def report(paths: list[Path]) -> dict[str, object]:
     for group, chosen in (
         ("near first order", [c for c in cases if c["near_first_order"]]),
         ("multi-mode", [c for c in cases if not c["near_first_order"]]),
+        ("reference of one mode", [c for c in cases if c["reference_taus"] and len(c["reference_taus"]) == 1]),
+        ("no room sensor", [c for c in cases if not c["room_sensor"]]),
         ("all", cases),
     ):
         block: dict[str, object] = {"cases": len(chosen)}
-        for key in ("without_reference", "with_reference"):
+        for key in STATED:
             block[key] = _summary(chosen, key)
         for fraction in FRACTIONS:
             block[f"identify at {fraction} t95, robust"] = _identify_summary(chosen, f"identify_{fraction}", "robust")
@@ -255,11 +271,13 @@ def markdown(summary: dict[str, object]) -> str:
         "stopped within 1.5·t95 |",
         "|---|---|---|---|---|---|---|",
     ]
-    for group in ("near first order", "multi-mode", "all"):
+    for group in ("near first order", "multi-mode", "reference of one mode", "no room sensor", "all"):
         block = summary[group]
         assert isinstance(block, dict)
-        for key, label in (("without_reference", "none"), ("with_reference", "learnt")):
+        for key, label in STATED.items():
             r = block[key]
+            if not r["cases"]:
+                continue
             worst = "—" if r["worst_error_C"] is None else f"{r['worst_error_C']:.3f}"
             median = (
                 "—"
@@ -300,6 +318,12 @@ def main() -> None:
     parser.add_argument(
         "--with-reference-only", action="store_true", help="replay the monitor with a learnt reference alone"
     )
+    parser.add_argument(
+        "--stated-assumptions",
+        action="store_true",
+        help="also replay with the reference and a steady room said (where the case has no room sensor), and with "
+        "the reference said to hold every mode as well",
+    )
     args = parser.parse_args()
     if args.report:
         summary = report(args.report)
@@ -309,7 +333,9 @@ def main() -> None:
     for seed in seeds:
         started = time.perf_counter()
         case = run_case(
-            seed, "without" if args.without_reference_only else "with" if args.with_reference_only else None
+            seed,
+            "without" if args.without_reference_only else "with" if args.with_reference_only else None,
+            args.stated_assumptions,
         )
         case["case_seconds"] = time.perf_counter() - started
         with args.out.open("a") as out:
