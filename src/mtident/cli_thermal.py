@@ -574,7 +574,8 @@ def _identify_table(
     is_flag=True,
     help="Say that the modes learnt are every mode of the machine (one learnt, a machine known to be first "
     "order): later tests then allow no free mode faster than them (--free-fast-modes 0 for these sensors), "
-    "stop earliest, and state the assumption.",
+    "stop earliest, and state the assumption. Where the run merged or missed a mode, such stops can be wrong "
+    "(docs: limits).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
