@@ -841,6 +841,18 @@ def test_a_time_column_in_seconds_with_a_sparse_step_gets_a_hint_before_two_days
     assert not any("read as minutes" in w for w in follower.poll().warnings)
 
 
+def test_a_whole_log_in_seconds_read_at_once_is_told_by_its_step(tmp_path):
+    """A replay reads the whole log in one poll: its span passed two days before the first rows'
+    step was looked at, so the hint said it "runs to 2900 min (2.0 days)", which a newcomer took
+    for a hint that came only after two days of readings."""
+    from mtident.io.follow import LogFollower
+
+    live = tmp_path / "whole.csv"
+    live.write_text("time,T1\n" + "".join(f"{s},{20 + 6 * (1 - np.exp(-s / 1800)):.2f}\n" for s in range(0, 28801, 20)))
+    hints = [w for w in LogFollower(live).poll().warnings if "read as minutes" in w]
+    assert len(hints) == 1 and "a reading every 20 min: if it is in seconds" in hints[0]
+
+
 def test_a_time_unit_given_against_the_columns_own_is_said(write_csv, tmp_path):
     """`--time-unit min` on a column named 'time_s' read its seconds as minutes with no word, and
     watch stopped 1.2 °C low."""

@@ -192,6 +192,24 @@ def test_a_gap_in_the_first_minutes_is_no_flat_start():
         )
 
 
+@pytest.mark.parametrize("every_min", [10.0, 15.0])
+def test_readings_ten_minutes_apart_rising_from_the_first_are_fitted_from_it(every_min):
+    """Readings 10 min or more apart put the median of the first three on the rise, so the first
+    reading is already off it: that is a warm-up from the start, not a flat lead. Before, the lead
+    ended at reading −1 and every check had one reading ("1 readings since its warm-up began")."""
+    from mtident.thermal.lsq import flat_lead
+    from mtident.thermal.robust import estimate_sensor
+
+    t = np.arange(0.0, 481.0, every_min)
+    y = np.round(20.0 + 8.0 * (1.0 - np.exp(-t / 45.0)) + 0.01 * np.random.default_rng(0).standard_normal(t.size), 2)
+    assert flat_lead(t, y[:, None], np.array([0.01]))[0] == 0
+    estimate = estimate_sensor("S", t, y)
+    assert estimate.status == "estimated" and estimate.onset_min == 0.0
+    assert abs(estimate.steady_C - 28.0) <= 0.05
+    lo, hi = estimate.interval_C[0.95]
+    assert lo <= 28.0 <= hi
+
+
 @pytest.mark.parametrize(("step", "expected"), [(0.1, 0.1), (0.01, 0.01), (1 / 16, 0.0625), (0.5, 0.5), (None, 0.0)])
 def test_display_resolution_is_the_step_the_readings_are_rounded_to(step, expected):
     t = np.arange(0.0, 31.0)
@@ -574,6 +592,19 @@ def test_errors_name_the_problem(call, message):
     t = np.arange(0.0, 60.0)
     with pytest.raises(InputError, match=message):
         call(make_log(t, {"S": first_order(t)}))
+
+
+def test_too_short_a_window_of_a_log_read_as_minutes_names_the_time_unit_too(write_csv):
+    """A log in seconds read as minutes: 90 "min" held 5 readings, and the error said only to use a
+    longer window."""
+    from mtident.io import read_temperature_log
+
+    text = "time,T1\n" + "".join(f"{s},{20 + 6 * (1 - np.exp(-s / 1800)):.2f}\n" for s in range(0, 28801, 20))
+    with pytest.raises(InputError, match=r"use a longer `window_min`, or the time column's unit, `time_unit`"):
+        identify(read_temperature_log(write_csv(text)), 90.0)
+    minutes = "time,T1\n" + "".join(f"{m},{20 + m / 100:.2f}\n" for m in range(0, 120, 5))
+    with pytest.raises(InputError, match=r"use a longer `window_min`\)$"):
+        identify(read_temperature_log(write_csv(minutes)), 20.0)
 
 
 def test_a_flat_start_is_left_out_so_the_interval_still_covers():

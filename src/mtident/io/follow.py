@@ -511,7 +511,8 @@ class LogFollower:
         conversions = np.array(
             [celsius_conversion(self.dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]
         ).reshape(-1, 2)
-        times, rows = [], []
+        times: list[float] = []
+        rows: list[list[float]] = []
         # the previous row's time as the clock wrote it (minutes from the first row) and its cell: a
         # summer-time change is a step between two rows; a log read again from its start after a
         # restart finds its changes again
@@ -536,7 +537,11 @@ class LogFollower:
                 and self._time_scale[1]
                 and not self._unit_said
             ):
-                warnings.append(f"{self.path}: {seconds_hint(self.header[self.columns[0]], t)}")
+                # a log read whole (a replay) gets here before its first rows' step is looked at: that
+                # step, where it tells, says more than the span
+                header = self.header[self.columns[0]]
+                first = np.array((self._first_times + times)[:SPARSE_HINT_ROWS], dtype=float)
+                warnings.append(f"{self.path}: {sparse_hint(header, first) or seconds_hint(header, t)}")
                 self._unit_said = True
             if self.last_time is not None and t <= self.last_time:
                 if not restarted:  # after a restart the old rows come again: expected, not an error

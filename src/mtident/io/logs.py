@@ -62,6 +62,7 @@ __all__ = [
     "sample_log_path",
     "SAMPLES",
     "time_unit_assumed",
+    "unit_doubted",
     "gap_note",
     "gap_said",
     "hours_hint",
@@ -468,6 +469,22 @@ def serial_date_hint(header: str, first: float, step: float) -> str | None:
 
 def _read_as_minutes(header: str) -> str:
     return f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`)"
+
+
+def unit_doubted(log: TemperatureLog) -> bool:
+    """Whether the reader of ``log`` said its time column, read as minutes for want of a unit, may
+    be in another unit (:func:`seconds_hint`, :func:`sparse_hint`, :func:`hours_hint`).
+
+    Parameters
+    ----------
+    log : TemperatureLog
+
+    Returns
+    -------
+    bool
+    """
+    said = _read_as_minutes(log.time_column)
+    return any(note.startswith(said) for note in log.notes)
 
 
 def seconds_hint(header: str, span_min: float) -> str:

@@ -16,7 +16,7 @@ from scipy.special import fdtri, stdtrit
 from mtident._json import finite_or_none
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
-from mtident.io.logs import TemperatureLog, as_temperature_log
+from mtident.io.logs import TemperatureLog, as_temperature_log, unit_doubted
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 from mtident.thermal.model import (
@@ -932,9 +932,10 @@ def window_samples(log: TemperatureLog, window_min: float) -> int:
     """
     n = log.window(window_min)
     if n < MIN_WINDOW_SAMPLES:
+        unit = ", or the time column's unit, `time_unit`: its times were read as minutes" if unit_doubted(log) else ""
         msg = (
             f"{log.source}: only {n} samples in the first {window_min:g} min; the identification needs at least "
-            f"{MIN_WINDOW_SAMPLES} (use a longer `window_min`)"
+            f"{MIN_WINDOW_SAMPLES} (use a longer `window_min`{unit})"
         )
         raise InputError(msg)
     return n

@@ -235,7 +235,9 @@ def flat_lead(
     # by its first departed reading instead, a gap in the log counted as flat minutes (5 missing
     # minutes in the papers' first 10 made a warm-up from the first sample a late one).
     step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-    late = t[np.maximum(first - 1, 0)] + step - t[0] >= min_flat_min
+    # a sensor already off its first three readings' median at its first reading rises from the
+    # start: readings 10 min or more apart put that median on the rise
+    late = (first > 0) & (t[np.maximum(first - 1, 0)] + step - t[0] >= min_flat_min)
     return np.where(~departed.any(axis=0), len(t), np.where(late, first - 1, 0))
 
 
