@@ -174,11 +174,14 @@ def test_learn_command_writes_the_reference_and_says_its_doubts(tmp_path):
     log = tmp_path / "short.csv"
     log.write_text("time_min,S\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
     out = mtident("thermal", "learn", str(log), "-o", str(tmp_path / "m.toml"), "--json")
-    assert out.returncode == 0, out.stderr
+    # every sensor doubtful: the file is written, to be read, but a script must not go on with it
+    assert out.returncode == 1, out.stderr
+    assert (tmp_path / "m.toml").is_file()
     result = json.loads(out.stdout)
     assert result["sensors"]["S"]["doubt"]
     assert "Later tests will not use this sensor's modes" in out.stderr
     assert "none of its sensors will be used by later tests (each is doubtful: S)" in out.stderr
+    assert mtident("thermal", "learn", str(log), "-o", str(tmp_path / "m.toml")).returncode == 1
 
 
 def test_learn_every_mode_writes_it_and_a_bad_value_is_refused(tmp_path):
@@ -467,3 +470,20 @@ def test_a_reference_said_to_hold_every_mode_names_a_lag_it_did_not_keep():
     assert not estimate.reference_used
     assert any("a sensor lag or a small fast mode it did not keep is enough" in w for w in estimate.warnings)
     assert estimate_sensor("S", t, y, reference=reference).reference_used
+
+
+def test_a_doubt_says_why_the_run_did_not_pin_the_sensor_down():
+    """A run whose T∞ was not determined was said to have modes that "do not describe it
+    (residuals 1.0x as correlated as noise)", which contradicts itself; a run that pins its steady
+    state too loosely now says how tightly a reference needs it."""
+    from mtident.io.logs import TemperatureLog
+
+    def doubt(end: float, step: float) -> str:
+        t = np.arange(0.0, end, step)
+        y = np.round(two_mode(t) + np.random.default_rng(3).normal(0.0, 0.02, t.size), 2)
+        reference, _ = learn_reference(TemperatureLog(t, ("S",), y[:, None], (), "run"))
+        return str(reference.sensors["S"].doubt)
+
+    assert doubt(41.0, 5.0).startswith("T∞ not determined yet (95 % interval")
+    assert doubt(90.0, 1.0).startswith("with the modes learnt, the run pins its own steady state down only to ")
+    assert doubt(90.0, 1.0).endswith("(95 %), not to the ±0.1 °C a reference needs")

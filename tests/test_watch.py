@@ -835,6 +835,22 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +258 │", text), text
 
 
+def test_the_hindsight_table_says_a_sensors_late_following_of_the_room_though_the_room_is_back(capsys):
+    """A newcomer's room swung and was back at its level by the log's end: the room's move was 0.00,
+    so the column was called "T∞ at stop" while it showed T∞ plus each sensor's late following of
+    the room (48.93 beside a T∞ of 48.95)."""
+    from mtident.cli_watch import _print_hindsight
+    from mtident.thermal.hindsight import Hindsight
+
+    hindsight = Hindsight(
+        ("T1",), 435.0, 480.0, np.array([48.95]), np.array([np.nan]), np.array([np.nan]), 0.0, 0.2, np.array([-0.02])
+    )
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "T∞ at stop + room (°C)" in text and "-0.02 °C added to T∞ at the stop" in text
+    assert re.search(r"│ T1 +│ +48\.93 │", text), text
+
+
 def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_not_settle(capsys):
     """A newcomer's three sensors: the one that settled reached 95 % at 183 min, the test stopped
     at 270 and the others had not settled by the log's end; the check said "the rule saved no
@@ -918,3 +934,60 @@ def test_a_string_of_sensors_and_unnamed_room_readings_are_taken_as_meant():
     assert said.startswith("measured (the room readings given), an input of every mode")
     answer = identify_robust(make_log(t, {"T1": y}), 60.0, room)
     assert answer.assumptions[0].room.startswith("measured (the room readings given)")
+
+
+def test_a_state_file_from_before_a_field_with_a_default_was_added_loads_with_it(tmp_path):
+    """A check that gained a field (the room gains its picture needs) still resumes a state file
+    written without it; a file that lacks a field with no default, or holds one the class does not
+    have, is refused by name."""
+    from dataclasses import dataclass
+
+    from mtident.persist import StateFileError
+
+    @dataclass(frozen=True)
+    class Before:
+        sensor: str
+        steady_C: float
+
+    @dataclass(frozen=True)
+    class After:
+        sensor: str
+        steady_C: float
+        room_gains: tuple[float, ...] = ()
+
+    @dataclass(frozen=True)
+    class Needs:
+        sensor: str
+        steady_C: float
+        rise_C: float
+
+    save_dataclass(tmp_path / "before.npz", Before("T1", 26.7))
+    assert load_dataclass(tmp_path / "before.npz", After) == After("T1", 26.7, ())
+    with pytest.raises(StateFileError, match="rise_C"):
+        load_dataclass(tmp_path / "before.npz", Needs)
+    save_dataclass(tmp_path / "after.npz", After("T1", 26.7, (0.5,)))
+    with pytest.raises(StateFileError, match="room_gains"):
+        load_dataclass(tmp_path / "after.npz", Before)
+
+
+def test_the_watch_picture_draws_the_model_with_the_room_as_logged():
+    """With a room sensor, the picture drew the best model about the room's last level: a housing
+    in a room that had moved since looked 0.2 °C off its own readings. It now follows the room as
+    logged, as identify's picture does."""
+    from mtident.report.plots import plot_monitor
+
+    t = np.arange(0.0, 241.0)
+    room = 20.0 + 0.4 * np.sin(2.0 * np.pi * t / 300.0)
+    y = np.empty_like(t)
+    y[0] = room[0]
+    for i in range(1, len(t)):  # one node of 40 min heated by 6 °C over its room, a minute a step
+        y[i] = y[i - 1] + (room[i - 1] + 6.0 - y[i - 1]) * (1.0 - np.exp(-1.0 / 40.0))
+    readings = y + 0.01 * np.random.default_rng(3).standard_normal(len(t))
+    settings = MonitorSettings(room_sensor="room")
+    state, _ = monitor_step(new_state(["T1"], with_room=True), t, readings[:, None], room, settings)
+    figure = plot_monitor(state, settings)
+    (line,) = [x for x in figure.axes[0].get_lines() if str(x.get_label()).startswith("best model")]
+    assert line.get_label() == "best model, with the room as logged"
+    drawn_t, drawn = (np.asarray(v, dtype=float) for v in line.get_data())
+    inside = drawn_t <= t[-1]
+    assert np.max(np.abs(drawn[inside] - np.interp(drawn_t[inside], t, y))) < 0.05

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import shlex
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal, TypedDict
 
@@ -31,6 +32,7 @@ from mtident.thermal.robust import MAX_FREE_FAST
 from mtident.thermal.settings import IDENTIFY_METHODS, ROBUST_METHOD
 
 if TYPE_CHECKING:
+    from mtident.thermal.reference import MachineReference
     from mtident.thermal.robust_identify import RobustIdentification
 
 stderr = OptionConsole(stderr=True, soft_wrap=True)
@@ -666,6 +668,7 @@ def learn_command(
                 "warnings": warnings,
             }
         )
+        _exit_if_none_used(reference)
         return
     table = Table(title=f"{log.source}: modes learnt (time constants with their box)")
     for column in ("sensor", "time constants (min)", "amplitudes (°C)", "used by later tests"):
@@ -675,6 +678,14 @@ def learn_command(
         used = "no" if m.doubt else "yes, no faster mode (--every-mode)" if m.free_fast_modes == 0 else "yes"
         table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), used)
     table_console().print(table)
+    _exit_if_none_used(reference)
+
+
+def _exit_if_none_used(reference: MachineReference) -> None:
+    """Status 1 where every sensor is doubtful: a script must not go on to use a reference that
+    teaches nothing (the file is written, to be read)."""
+    if all(m.doubt is not None for m in reference.sensors.values()):
+        sys.exit(1)
 
 
 def _float_list(text: str, option: str) -> list[float]:

@@ -820,15 +820,17 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     """The table of the decision against the rest of the log, and what it comes to."""
     shift = hindsight.room_shift_C
     added = hindsight.shift_C[np.isfinite(hindsight.shift_C)]
+    # a room level again at the end can still have moved the sensors, which follow it late
+    moved = bool(len(added) and np.any(added != 0.0))
     room = (
         f"; the room moved {shift:+.2f} °C from the stop to the end; each sensor follows its course through "
         f"its modes, {_span(added)} °C added to T∞ at the stop"
-        if shift and len(added)
+        if moved
         else ""
     )
     table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}")
     # with the room's move added in the column itself, the difference is the next two columns'
-    stop_column = "T∞ at stop + room (°C)" if shift else "T∞ at stop (°C)"
+    stop_column = "T∞ at stop + room (°C)" if moved else "T∞ at stop (°C)"
     for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "95 % rise at (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     settled = hindsight.checked
@@ -875,10 +877,10 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         )
     if not settled.any():
         OptionConsole().print(
-            f"The log ends before its sensors settled (moving less than {hindsight.tolerance_C / 2:g} °C over its "
-            f"last quarter, with under {hindsight.tolerance_C / 4:g} °C still to come at the pace of its slowest "
-            "mode, a move its readings' display step could hide counted in): nothing to check the decision against"
-            + (f"; {timing}." if timing else "."),
+            f"The log ends before its sensors settled (settled: moving less than {hindsight.tolerance_C / 2:g} °C "
+            f"over the log's last quarter, with under {hindsight.tolerance_C / 4:g} °C still to come at the pace of "
+            "its slowest mode, a move its readings' display step could hide counted in): nothing to check the "
+            "decision against" + (f"; {timing}." if timing else "."),
             highlight=False,
         )
         return

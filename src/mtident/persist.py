@@ -3,8 +3,9 @@
 A state (the live monitor's, say) is a tree of frozen dataclasses, tuples, numbers, strings
 and numpy arrays. It is written as one ``.npz`` file: every array a member of its own, the
 rest a JSON tree that names them. Nothing is kept by hand per class, so a field added to a
-dataclass is saved and loaded with no more code; a file written for other fields is refused
-with the name of the field that does not match.
+dataclass is saved and loaded with no more code. A file written before a field with a default
+was added loads with that default; a file written for other fields is refused with the names
+of the fields that do not match.
 """
 
 from __future__ import annotations
@@ -121,7 +122,13 @@ def _decode(value: Any, hint: Any, arrays: dict[str, np.ndarray], where: str) ->
     if isinstance(hint, type) and dataclasses.is_dataclass(hint):
         hints = typing.get_type_hints(hint)
         names = {f.name for f in dataclasses.fields(hint) if f.init}
-        if not isinstance(value, dict) or set(value) != names:
+        # a field added since the file was written, with a default, takes its default
+        optional = {
+            f.name
+            for f in dataclasses.fields(hint)
+            if f.init and (f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING)
+        }
+        if not isinstance(value, dict) or not names - optional <= set(value) <= names:
             found = sorted(value) if isinstance(value, dict) else type(value).__name__
             msg = f"{where}: the state file holds {found}, {hint.__name__} has {sorted(names)}"
             raise StateFileError(msg)

@@ -405,6 +405,15 @@ def plot_feed_drive_identification(result, response, path: str | Path | None = N
     return _save(fig, path, 90, top=0.985)
 
 
+def _room_on(readings, times: np.ndarray) -> np.ndarray:  # noqa: ANN001 - Readings
+    """The room's readings at ``times``: interpolated, held at the ends (NaN where none is valid)."""
+    room = np.asarray(readings.room_C, dtype=float)
+    valid = np.isfinite(room)
+    if not valid.any():
+        return np.full(times.shape, np.nan)
+    return np.interp(times, readings.time_min[valid], room[valid])
+
+
 def plot_monitor(
     state, settings, path: str | Path | None = None, expected: dict[str, float] | None = None
 ) -> Path | Figure:  # noqa: ANN001 - MonitorState, MonitorSettings
@@ -434,7 +443,7 @@ def plot_monitor(
     ValueError
         ``path``'s suffix is not a picture format matplotlib writes.
     """
-    from mtident.thermal.modes import Mode, model_curve
+    from mtident.thermal.modes import Mode, course_with_room
     from mtident.thermal.monitor import minutes
 
     readings = state.readings
@@ -446,12 +455,20 @@ def plot_monitor(
         if check.modes and np.isfinite(check.steady_C):
             slowest = max(tau for tau, _ in check.modes)
             future = np.linspace(check.origin_min, now + max(3.0 * slowest, 0.5 * now, 30.0), 300)
-            room = 0.0 if np.isnan(check.room_level_C) else check.room_level_C
-            curve = (
-                model_curve(tuple(Mode(t, a) for t, a in check.modes), check.steady_C - room, check.origin_min, future)
-                + room
+            # with a room sensor the model follows the room as logged (held at its last level on)
+            logged = readings.room_C is not None and not np.isnan(check.room_level_C)
+            curve = course_with_room(
+                tuple(Mode(t, a) for t, a in check.modes),
+                check.steady_C,
+                check.origin_min,
+                future,
+                _room_on(readings, future) if logged else None,
+                check.room_level_C if logged else None,
+                check.room_gains,
+                tuple(t for t, _ in check.modes),
             )
-            ax.plot(future, curve, color="tab:red", lw=1.5, label="best model")
+            label = "best model, with the room as logged" if logged else "best model"
+            ax.plot(future, curve, color="tab:red", lw=1.5, label=label)
         if np.isfinite(check.low95_C) and np.isfinite(check.high95_C):
             ax.axhspan(check.low95_C, check.high95_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
         if np.isfinite(check.low_C) and np.isfinite(check.high_C):

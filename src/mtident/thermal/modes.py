@@ -81,6 +81,7 @@ __all__ = [
     "equilibrium_time",
     "fit_steady_state",
     "fitted_curve",
+    "course_with_room",
     "model_curve",
 ]
 
@@ -352,20 +353,65 @@ def fitted_curve(
     -------
     ndarray, shape (N,)
     """
+    return course_with_room(
+        fit.modes if modes is None else modes,
+        fit.steady_C if steady_C is None else steady_C,
+        fit.origin_min,
+        time_min,
+        None if fit.room_level_C is None else room_C,
+        fit.room_level_C,
+        fit.room_gains,
+        tuple(m.time_constant_min for m in fit.modes),
+    )
+
+
+def course_with_room(
+    modes: tuple[Mode, ...],
+    steady_C: float,
+    origin_min: float,
+    time_min: FloatArray,
+    room_C: FloatArray | None = None,
+    room_level_C: float | None = None,
+    room_gains: tuple[float, ...] = (),
+    gain_time_constants_min: tuple[float, ...] = (),
+) -> FloatArray:
+    """A sum of modes' course at ``time_min``, following the room as logged where the fit had a
+    room sensor: T∞ (``steady_C``) is at the room's level ``room_level_C``, the course moves with
+    ``room_C`` (NaN: missing, interpolated; held at its last level after it), and each mode's
+    gain on the room acts through that mode's lag.
+
+    Parameters
+    ----------
+    modes : tuple of Mode
+    steady_C : float
+        T∞ at ``room_level_C`` (°C).
+    origin_min : float
+        Where the modes begin (min).
+    time_min : ndarray, shape (N,)
+    room_C : ndarray, shape (N,), optional
+        The room at ``time_min``; None: no room sensor (a course about T∞ alone).
+    room_level_C : float, optional
+        The room's level T∞ is given at.
+    room_gains : tuple of float
+        Each mode's gain on the room (:attr:`SteadyState.room_gains`).
+    gain_time_constants_min : tuple of float
+        The time constants the gains act through (the best model's).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+    """
     t = np.asarray(time_min, dtype=float)
-    modes = fit.modes if modes is None else modes
-    steady = fit.steady_C if steady_C is None else steady_C
-    if fit.room_level_C is None or room_C is None:
-        return model_curve(modes, steady, fit.origin_min, t)
+    if room_level_C is None or room_C is None:
+        return model_curve(modes, steady_C, origin_min, t)
     room = np.asarray(room_C, dtype=float)
     valid = np.isfinite(room)
-    room = np.interp(t, t[valid], room[valid]) if valid.any() else np.full(t.shape, fit.room_level_C)
-    curve = model_curve(modes, steady - fit.room_level_C, fit.origin_min, t) + room
-    after = t >= fit.origin_min
-    if fit.room_gains and after.sum() > 1:
-        taus = np.array([m.time_constant_min for m in fit.modes])
-        lagged = room_lag(room[after], t[after], taus)
-        curve[after] += np.asarray(fit.room_gains) @ (lagged - room[after])
+    room = np.interp(t, t[valid], room[valid]) if valid.any() else np.full(t.shape, room_level_C)
+    curve = model_curve(modes, steady_C - room_level_C, origin_min, t) + room
+    after = t >= origin_min
+    if room_gains and after.sum() > 1:
+        lagged = room_lag(room[after], t[after], np.asarray(gain_time_constants_min))
+        curve[after] += np.asarray(room_gains) @ (lagged - room[after])
     return curve
 
 

@@ -237,6 +237,8 @@ class SensorCheck:
         In words, what sets the interval's ends (or why its readings are too coarse).
     room_level_C : float
         The room's last level (°C), NaN without a room sensor.
+    room_gains : tuple of float
+        The best model's gain on the room per mode (with a room sensor; its course as logged).
     """
 
     sensor: str
@@ -260,6 +262,7 @@ class SensorCheck:
     warnings: tuple[str, ...] = ()
     ends: str = ""
     room_level_C: float = math.nan
+    room_gains: tuple[float, ...] = ()
 
     @property
     def half_width_C(self) -> float:
@@ -639,6 +642,7 @@ def _checked(
         if resolves_tolerance(estimate, settings)
         else f"its readings come in steps of {estimate.display_step_C:.3g} °C, no finer than the tolerance",
         room_level_C=math.nan if fit is None or fit.room_level_C is None else fit.room_level_C,
+        room_gains=() if fit is None else fit.room_gains,
     )
 
 

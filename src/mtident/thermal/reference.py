@@ -52,6 +52,8 @@ _ROOM_MEASURED = "a room sensor, an input of every mode"
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
 # the usual tolerance of a later test.
 PINNED_HALF_WIDTH_C = 0.1
+# the warnings of an estimate that make it untrusted (model_ok false)
+_UNTRUSTING = frozenset({"misfit", "undetermined", "modes-unresolved", "slower-than-allowed", "fragile"})
 _HEADER = """# mtident reference run: each sensor's thermal modes, learnt from a warm-up that ran to
 # equilibrium. `mtident thermal identify|watch LOG --reference THIS_FILE` searches each sensor's
 # time constants only within ±box of these (relative), with free amplitudes, and says so when a
@@ -270,12 +272,18 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
     level = min(fit.interval_C)
     lo, hi = fit.interval_C[level]
     if not estimate.model_ok:
-        return (
-            f"the {len(fit.modes)} mode(s) learnt do not describe it (residuals "
-            f"{fit.correlation_factor:.1f}x as correlated as noise)"
-        )
+        # the warnings that took the trust away, less the sensor's name each starts with
+        why = [
+            text.split(": ", 1)[-1]
+            for text, code in zip(estimate.warnings, estimate.warning_codes, strict=True)
+            if code in _UNTRUSTING
+        ]
+        return "; ".join(why) or "its model is not trusted"
     if (hi - lo) / 2 > PINNED_HALF_WIDTH_C:
-        return f"the run leaves its steady state between {lo:.2f} and {hi:.2f} °C (95 %)"
+        return (
+            f"with the modes learnt, the run pins its own steady state down only to {lo:.2f}-{hi:.2f} °C (95 %), "
+            f"not to the ±{PINNED_HALF_WIDTH_C:g} °C a reference needs"
+        )
     better = one_more.fit
     if better is None or len(better.modes) <= len(fit.modes):
         return None

@@ -422,7 +422,7 @@ def estimate_sensor(
             noise,
             float(t[onset]),
             settings,
-            f"{len(binned)} readings since its warm-up began: too few for a model",
+            f"{len(binned)} reading{'' if len(binned) == 1 else 's'} since its warm-up began: too few for a model",
         )
     fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes, refine_within)
     intervals = _nested(_with_room_wander(fit, room_C is not None, settings))
@@ -841,8 +841,8 @@ def _verdict(
     if onset_min is not None:
         notes.add(
             "late-start",
-            f"flat until t = {onset_min:g} min, within its noise (the warm-up began after the log, or its heat "
-            "reached this sensor only then); the modes are counted from there",
+            f"flat until t = {round(onset_min, 1):g} min, within its noise (the warm-up began after the log, or its "
+            "heat reached this sensor only then); the modes are counted from there",
         )
     if fit.correlation_factor > MISFIT_FACTOR:
         ok = False
