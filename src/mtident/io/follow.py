@@ -45,16 +45,14 @@ from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialec
 from mtident.io.logs import (
     OPEN_CIRCUIT_HIGH_C,
     OPEN_CIRCUIT_LOW_C,
-    UNLIKELY_MINUTES,
+    SPARSE_HINT_ROWS,
     gap_said,
-    hours_hint,
     names_a_date,
-    seconds_hint,
     serial_date_hint,
     serial_date_note,
-    sparse_hint,
     time_unit_assumed,
     time_unit_factor,
+    unit_hint,
     unit_overridden_note,
 )
 from mtident.io.stamps import (
@@ -74,9 +72,6 @@ from mtident.io.stamps import (
 from mtident.io.units import celsius_conversion
 
 __all__ = ["LogFollower", "Rows"]
-
-# the first rows whose usual step tells a column in seconds read as minutes (:func:`sparse_hint`)
-SPARSE_HINT_ROWS = 10
 
 
 @dataclass(frozen=True)
@@ -530,19 +525,6 @@ class LogFollower:
             if previous_raw is not None:
                 self._follow_clock_change(previous_raw, raw, previous_cell, cell, notes)
             t = raw + self.clock_shift
-            if (
-                t > UNLIKELY_MINUTES >= (self.last_time or 0.0)
-                and self.time_format is None
-                and self._time_scale is not None
-                and self._time_scale[1]
-                and not self._unit_said
-            ):
-                # a log read whole (a replay) gets here before its first rows' step is looked at: that
-                # step, where it tells, says more than the span
-                header = self.header[self.columns[0]]
-                first = np.array((self._first_times + times)[:SPARSE_HINT_ROWS], dtype=float)
-                warnings.append(f"{self.path}: {sparse_hint(header, first) or seconds_hint(header, t)}")
-                self._unit_said = True
             if self.last_time is not None and t <= self.last_time:
                 if not restarted:  # after a restart the old rows come again: expected, not an error
                     warnings.append(
@@ -568,15 +550,14 @@ class LogFollower:
 
     def _hint_unit(self, times: list[float], warnings: list[str]) -> None:
         """Once (one hint on the unit in all), where a numeric time column read as minutes for want of a
-        unit looks like hours, or like seconds by its usual step."""
+        unit looks like seconds or hours (:func:`~mtident.io.logs.unit_hint`)."""
         if not times or self._unit_said or self._time_scale is None or not self._time_scale[1]:
             return
         self._rows_taken += len(times)
         assert self.header is not None
         # times count from the first sample's: the last is the span
-        header = self.header[self.columns[0]]
         self._first_times = (self._first_times + times)[:SPARSE_HINT_ROWS]
-        hint = hours_hint(header, times[-1], self._rows_taken) or sparse_hint(header, np.array(self._first_times))
+        hint = unit_hint(self.header[self.columns[0]], np.array(self._first_times), times[-1], self._rows_taken)
         if hint is not None:
             warnings.append(f"{self.path}: {hint}")
             self._unit_said = True

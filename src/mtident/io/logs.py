@@ -68,6 +68,8 @@ __all__ = [
     "hours_hint",
     "seconds_hint",
     "sparse_hint",
+    "unit_hint",
+    "SPARSE_HINT_ROWS",
     "unit_overridden_note",
     "serial_date_hint",
     "serial_date_note",
@@ -368,6 +370,8 @@ GAP_MIN_MIN = 5.0
 HOURS_HINT_SAMPLES = 100
 # a usual step this long (min), read as minutes for want of a unit, may be seconds (:func:`sparse_hint`)
 SPARSE_HINT_STEP_MIN = 10.0
+# the first readings whose usual step tells a column in seconds read as minutes
+SPARSE_HINT_ROWS = 10
 
 
 def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) -> bool:
@@ -594,6 +598,40 @@ def sparse_hint(header: str, times_min: FloatArray) -> str | None:
         "(read as minutes, a warm-up in seconds looks "
         "sixty times slower, and settled long before it is)"
     )
+
+
+def unit_hint(header: str, first_times_min: FloatArray, last_min: float, samples: int) -> str | None:
+    """The one thing a log follower says of a numeric time column read as minutes for want of a
+    stated unit, or None: its first ``SPARSE_HINT_ROWS`` readings a usual ten minutes or more
+    apart (:func:`sparse_hint`), else a span past two days (:func:`seconds_hint`), else a dense
+    hour (:func:`hours_hint`). The step comes first: live, it tells at once, where the span tells
+    only after two days of readings.
+
+    Parameters
+    ----------
+    header : str
+        The time column's name.
+    first_times_min : ndarray
+        The first ``SPARSE_HINT_ROWS`` times read (min; fewer while fewer were read).
+    last_min : float
+        The last time read (min from the first reading): the span.
+    samples : int
+        How many readings that span holds.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> unit_hint("t", np.array([0.0, 20.0, 40.0]), 2900.0, 146).split(", a reading every")[1][:7]
+    ' 20 min'
+    """
+    if (hint := sparse_hint(header, np.asarray(first_times_min, dtype=float)[:SPARSE_HINT_ROWS])) is not None:
+        return hint
+    if last_min > UNLIKELY_MINUTES:
+        return seconds_hint(header, last_min)
+    return hours_hint(header, last_min, samples)
 
 
 def hours_hint(header: str, span_min: float, samples: int) -> str | None:

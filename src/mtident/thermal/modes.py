@@ -358,7 +358,7 @@ def fitted_curve(
         fit.steady_C if steady_C is None else steady_C,
         fit.origin_min,
         time_min,
-        None if fit.room_level_C is None else room_C,
+        room_C,
         fit.room_level_C,
         fit.room_gains,
         tuple(m.time_constant_min for m in fit.modes),

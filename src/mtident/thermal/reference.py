@@ -28,6 +28,7 @@ from mtident.thermal.robust import (
     DISAGREEMENT_LEVEL,
     MAX_FREE_FAST,
     MIN_REFERENCE_BOX,
+    UNTRUSTING_CODES,
     RobustSettings,
     SensorEstimate,
     SensorModes,
@@ -52,8 +53,6 @@ _ROOM_MEASURED = "a room sensor, an input of every mode"
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
 # the usual tolerance of a later test.
 PINNED_HALF_WIDTH_C = 0.1
-# the warnings of an estimate that make it untrusted (model_ok false)
-_UNTRUSTING = frozenset({"misfit", "undetermined", "modes-unresolved", "slower-than-allowed", "fragile"})
 _HEADER = """# mtident reference run: each sensor's thermal modes, learnt from a warm-up that ran to
 # equilibrium. `mtident thermal identify|watch LOG --reference THIS_FILE` searches each sensor's
 # time constants only within ±box of these (relative), with free amplitudes, and says so when a
@@ -276,7 +275,7 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
         why = [
             text.split(": ", 1)[-1]
             for text, code in zip(estimate.warnings, estimate.warning_codes, strict=True)
-            if code in _UNTRUSTING
+            if code in UNTRUSTING_CODES
         ]
         return "; ".join(why) or "its model is not trusted"
     if (hi - lo) / 2 > PINNED_HALF_WIDTH_C:

@@ -65,6 +65,8 @@ DISAGREEMENT_LEVEL = 0.99
 EDGE_SHARE = 0.005
 # how much further than the largest time constant the test of a fit held at it lets a mode reach
 SLOWER_REACH = 10.0
+# the warnings that make an estimate untrusted (``model_ok`` false)
+UNTRUSTING_CODES = frozenset({"misfit", "undetermined", "modes-unresolved", "slower-than-allowed", "fragile"})
 # With a tolerance to meet, the likelihood-ratio test and the wider families run only where the
 # interval is within this many tolerances: beyond, each could only widen an interval that already
 # fails the decision, and they cost most of a check (the reference's warning comes at the first
@@ -837,7 +839,7 @@ def _verdict(
     notes: _Notes,
 ) -> bool:
     """``model_ok`` of one fitted sensor; its warnings go to ``notes``."""
-    ok = fit.determined and not {"modes-unresolved", "slower-than-allowed"} & set(notes.codes)
+    ok = fit.determined and not UNTRUSTING_CODES & set(notes.codes)
     if onset_min is not None:
         notes.add(
             "late-start",
