@@ -823,7 +823,17 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     from mtident.cli_watch import _print_hindsight
     from mtident.thermal.hindsight import Hindsight
 
-    hindsight = Hindsight(("T1",), 233.0, 400.0, np.array([30.50]), np.array([30.40]), np.array([258.0]), 0.05, 0.2)
+    hindsight = Hindsight(
+        ("T1",),
+        233.0,
+        400.0,
+        np.array([30.50]),
+        np.array([30.40]),
+        np.array([258.0]),
+        0.05,
+        0.2,
+        settle_time_min=np.array([251.0]),
+    )
     _print_hindsight(hindsight)
     text = " ".join(capsys.readouterr().out.split())
     assert (
@@ -832,7 +842,8 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     )
     assert "T∞ at stop + room (°C)" in text
     # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
-    assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +258 │", text), text
+    assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +251 │", text), text
+    assert "stayed within ±0.2 °C of where they settled from t = 251 min: the stop saved 18 min" in text
 
 
 def test_the_hindsight_table_says_a_sensors_late_following_of_the_room_though_the_room_is_back(capsys):
@@ -865,11 +876,23 @@ def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_no
     _print_hindsight(hindsight)
     text = " ".join(capsys.readouterr().out.split())
     assert "saved no time" not in text
-    assert "the sensors that settled reached 95 % of the rise they show by t = 183 min" in text
-    assert "whether the rule saved time is not known" in text and "not settled by the log's end: front" in text
-    settled = Hindsight(("rear",), 270.0, 480.0, np.array([27.4]), np.array([27.38]), np.array([183.0]), 0, 0.2)
+    assert "when every sensor waited for settled within the tolerance is later than the log can tell" in text
+    assert "not settled by the log's end: front" in text
+    settled = Hindsight(
+        ("rear",),
+        270.0,
+        480.0,
+        np.array([27.4]),
+        np.array([27.38]),
+        np.array([183.0]),
+        0,
+        0.2,
+        settle_time_min=np.array([240.0]),
+    )
     _print_hindsight(settled)
-    assert "on this estimate the rule saved no time" in " ".join(capsys.readouterr().out.split())
+    assert "from t = 240 min, 30 min before the stop: the rule saved no time" in " ".join(
+        capsys.readouterr().out.split()
+    )
 
 
 def test_an_interval_without_bounds_is_said_so_not_as_infinities():

@@ -46,6 +46,7 @@ def report_command(
     free_fast_modes: int,
     ambient_col: str | None,
     room_wander: float,
+    wait_for: tuple[str, ...],
     output_path: str,
     state_path: str | None,
 ) -> None:
@@ -81,6 +82,8 @@ def report_command(
         --ambient: the room sensor's column.
     room_wander : float
         --room-wander (°C in an hour).
+    wait_for : tuple of str
+        --wait-for (empty: every sensor).
     output_path : str
         -o: the report, .html or .pdf.
     state_path : str or None
@@ -100,7 +103,7 @@ def report_command(
         msg = f"{path}: no such file"
         raise InputError(msg)
     settings = monitor_settings(
-        tolerance_C, decision_level, max_tau_min, reference_path, free_fast_modes, ambient_col, room_wander
+        tolerance_C, decision_level, max_tau_min, reference_path, free_fast_modes, ambient_col, room_wander, wait_for
     )
     session = WatchSession(
         _workbook_as_replayed_csv(path),

@@ -22,6 +22,7 @@ import click
 import numpy as np
 from rich.table import Table
 
+from mtident._json import finite_or_none
 from mtident.cli import (
     FiniteFloatRange,
     OptionConsole,
@@ -76,7 +77,7 @@ def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
     -------
     callable
         ``func`` with --tolerance, --confidence, --max-time-constant, --reference,
-        --free-fast-modes, --ambient and --room-wander.
+        --free-fast-modes, --ambient, --room-wander and --wait-for.
     """
     options = [
         click.option(
@@ -118,6 +119,16 @@ def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
                 "Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 "
                 "takes the "
                 "room as steady."
+            ),
+        ),
+        click.option(
+            "--wait-for",
+            "wait_for",
+            multiple=True,
+            metavar="NAME",
+            help=(
+                "A sensor the test waits for; repeat (default: every sensor watched). The others are checked and "
+                "reported but do not hold the stop (a slow column sensor in a spindle test)."
             ),
         ),
     ]
@@ -282,6 +293,7 @@ def monitor_settings(
     free_fast_modes: int,
     ambient_col: str | None,
     room_wander: float,
+    wait_for: tuple[str, ...] = (),
 ) -> MonitorSettings:
     """The decision's settings from the options of :func:`decision_options`.
 
@@ -301,6 +313,8 @@ def monitor_settings(
         --ambient: the room sensor's column.
     room_wander : float
         --room-wander (°C in an hour).
+    wait_for : tuple of str
+        --wait-for (empty: every sensor).
 
     Returns
     -------
@@ -319,6 +333,7 @@ def monitor_settings(
         ),
         reference=load_reference_file(reference_path),
         room_sensor=ambient_col,
+        wait_for=tuple(wait_for),
     )
 
 
@@ -409,6 +424,7 @@ def watch_command(
     free_fast_modes: int,
     ambient_col: str | None,
     room_wander: float,
+    wait_for: tuple[str, ...],
     replay: bool,
     resume: bool,
     state_path: str | None,
@@ -460,6 +476,8 @@ def watch_command(
         --ambient: the room sensor's column.
     room_wander : float
         --room-wander (°C in an hour).
+    wait_for : tuple of str
+        --wait-for (empty: every sensor).
     replay, resume : bool
         --replay and --resume.
     state_path : str or None
@@ -512,7 +530,7 @@ def watch_command(
         msg = f"{path}: no such file"
         raise InputError(msg)
     settings = monitor_settings(
-        tolerance_C, decision_level, max_tau_min, reference_path, free_fast_modes, ambient_col, room_wander
+        tolerance_C, decision_level, max_tau_min, reference_path, free_fast_modes, ambient_col, room_wander, wait_for
     )
     followed = _workbook_as_replayed_csv(path) if replay else path
     session = WatchSession(
@@ -703,6 +721,8 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
     outcome = session.result()
     hindsight = session.hindsight() if replay else None
     if hindsight is not None:
+        outcome["time_saved_min"] = hindsight.time_saved_min
+        outcome["settle_time_min"] = finite_or_none(hindsight.test_settle_time_min)
         stderr.print(
             f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)}: comparing the decision with how "
             "it went on",
@@ -726,7 +746,11 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
             console.print(f"  reference for {name}: {assumptions(session.settings, name).reference}", highlight=False)
     if state.stopped:
         saved = outcome.get("time_saved_min")
-        gain = f"; {saved:.0f} min before the predicted equilibrium" if isinstance(saved, float) and saved > 0 else ""
+        gain = (
+            f"; {minutes(saved)} before the readings settled within the tolerance"
+            if isinstance(saved, float) and saved > 0
+            else ""
+        )
         console.print(f"[bold green]The test can stop at t = {minutes(state.stop_time_min)}{gain}.[/]")
         if live:
             console.bell()  # the engineer may be at the other end of the machine
@@ -831,7 +855,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}")
     # with the room's move added in the column itself, the difference is the next two columns'
     stop_column = "T∞ at stop + room (°C)" if moved else "T∞ at stop (°C)"
-    for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "95 % rise at (min)"):
+    for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "settled by (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     settled = hindsight.checked
     for i, name in enumerate(hindsight.sensors):
@@ -844,37 +868,10 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             _fmt(float(hindsight.steady_state_C[i] + hindsight.shift_C[i])),
             _fmt(float(hindsight.settled_C[i])),
             shown,
-            _fmt(float(hindsight.measured_equilibrium_time_min[i]), 0),
+            _fmt(float(hindsight.settle_time_min[i]), 0) if hindsight.settle_time_min is not None else "—",
         )
     table_console().print(table)
-    known_times = np.isfinite(hindsight.measured_equilibrium_time_min)
-    reached = hindsight.measured_equilibrium_time_min[known_times]
-    # a sensor that did not settle reaches its 95 % later than the log can tell
-    partly = bool(np.any(~known_times & np.isfinite(hindsight.steady_state_C)))
-    timing = ""
-    if len(reached):
-        saved = float(reached.max()) - hindsight.stop_time_min
-        # read off the log's end, which lies a little short of where the sensors settle: the last
-        # few per cent of a slow mode's rise take long, so their own 95 % time can be much later
-        timing = (
-            (
-                "the sensors that settled reached 95 % of the rise they show"
-                if partly
-                else "the log reached 95 % of the rise it shows"
-            )
-            + f" by t = {minutes(float(reached.max()))} (an earliest "
-            "estimate: the log's end lies short of where they settle), "
-            + (
-                f"{minutes(saved)} after the stop"
-                if saved > 0
-                else f"{minutes(-saved)} before the stop"
-                + (
-                    ", and the others' are later than the log can tell: whether the rule saved time is not known"
-                    if partly
-                    else ": on this estimate the rule saved no time"
-                )
-            )
-        )
+    timing = _settle_timing(hindsight)
     if not settled.any():
         OptionConsole().print(
             f"The log ends before its sensors settled (settled: moving less than {hindsight.tolerance_C / 2:g} °C "
@@ -905,6 +902,22 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     OptionConsole().print(
         f"{verdict[0].upper()}{verdict[1:]}" + (f"; {timing}" if timing else "") + f"{not_settled}.", highlight=False
     )
+
+
+def _settle_timing(hindsight: Hindsight) -> str:
+    """When the readings settled within the tolerance (t_settle, of the sensors the test waits for),
+    against the stop: the time the rule saved over simply waiting."""
+    settle = hindsight.test_settle_time_min
+    saved = hindsight.time_saved_min
+    if saved is None or not np.isfinite(settle):
+        return "when every sensor waited for settled within the tolerance is later than the log can tell"
+    when = (
+        f"the readings of every sensor waited for stayed within ±{hindsight.tolerance_C:g} °C of where they settled "
+        f"from t = {minutes(settle)}"
+    )
+    if saved > 0:
+        return f"{when}: the stop saved {minutes(saved)} over waiting for that"
+    return f"{when}, {minutes(-saved)} before the stop: the rule saved no time"
 
 
 class _Nothing:

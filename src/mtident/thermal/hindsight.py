@@ -31,10 +31,13 @@ from mtident.thermal.identify import measured_equilibrium
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 
-__all__ = ["Hindsight", "check_decision"]
+__all__ = ["Hindsight", "check_decision", "settle_times"]
 
 # the room at the stop: the median of its readings this close to it (min)
 _ROOM_AROUND_STOP_MIN = 5.0
+# a reading's level for the settle time: the median of this many valid readings centred on it, so
+# that one noisy reading does not count as the sensor leaving its level
+_SETTLE_MEDIAN_READINGS = 5
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,6 +68,11 @@ class Hindsight:
     sensor_shift_C : ndarray, shape (S,), optional
         The room's move as each sensor follows it by the log's end (°C), added to its T∞
         (default: the room's move for every sensor).
+    settle_time_min : ndarray, shape (S,), optional
+        When each sensor's readings came within the tolerance of where they settled, to stay
+        (:func:`settle_times`; NaN where the log did not settle); default: not known.
+    waited : ndarray of bool, shape (S,), optional
+        The sensors the test waits for (default: every one).
     """
 
     sensors: tuple[str, ...]
@@ -76,6 +84,37 @@ class Hindsight:
     room_shift_C: float
     tolerance_C: float
     sensor_shift_C: FloatArray | None = None
+    settle_time_min: FloatArray | None = None
+    waited: np.ndarray | None = None
+
+    @property
+    def test_settle_time_min(self) -> float:
+        """When the readings of every sensor the test waits for had settled within the tolerance
+        (t_settle): the latest of their settle times; NaN where one of them did not settle by the
+        log's end, or the settle times are not known.
+
+        Returns
+        -------
+        float
+            The time (min).
+        """
+        if self.settle_time_min is None:
+            return float("nan")
+        waited = np.ones(len(self.sensors), dtype=bool) if self.waited is None else np.asarray(self.waited, bool)
+        times = np.asarray(self.settle_time_min, dtype=float)[waited]
+        return float(times.max()) if len(times) and np.all(np.isfinite(times)) else float("nan")
+
+    @property
+    def time_saved_min(self) -> float | None:
+        """The time the stop saved against waiting until the readings settled (t_settle less the
+        stop; negative where the stop came later); None where t_settle is not known.
+
+        Returns
+        -------
+        float or None
+        """
+        settle = self.test_settle_time_min
+        return settle - self.stop_time_min if np.isfinite(settle) else None
 
     @property
     def shift_C(self) -> FloatArray:
@@ -156,10 +195,16 @@ class Hindsight:
         """
         shift = self.shift_C
 
+        settle = (
+            np.full(len(self.sensors), np.nan) if self.settle_time_min is None else np.asarray(self.settle_time_min)
+        )
+        waited = np.ones(len(self.sensors), dtype=bool) if self.waited is None else np.asarray(self.waited, bool)
         return {
             "stop_time_min": self.stop_time_min,
             "log_end_min": self.log_end_min,
             "room_shift_C": self.room_shift_C,
+            "settle_time_min": finite_or_none(self.test_settle_time_min),
+            "time_saved_min": self.time_saved_min,
             "sensors": [
                 {
                     "sensor": name,
@@ -169,6 +214,8 @@ class Hindsight:
                     "error_C": finite_or_none(self.error_C[i]),
                     "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[i]),
                     "within_tolerance": bool(self.within[i]) if self.checked[i] else None,
+                    "settle_time_min": finite_or_none(settle[i]),
+                    "waited_for": bool(waited[i]),
                 }
                 for i, name in enumerate(self.sensors)
             ],
@@ -185,6 +232,7 @@ def check_decision(
     room_C: FloatArray | None = None,
     modes: Sequence[tuple[tuple[float, float], ...]] | None = None,
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN,
+    waited: np.ndarray | None = None,
 ) -> Hindsight:
     """Compare T∞ at the stop (one per sensor, NaN for one left out) with where the whole log settled.
 
@@ -247,7 +295,49 @@ def check_decision(
         room_shift_C=shift,
         tolerance_C=float(tolerance_C),
         sensor_shift_C=followed,
+        settle_time_min=settle_times(time_min, values, settled, tolerance_C),
+        waited=None if waited is None else np.asarray(waited, dtype=bool),
     )
+
+
+def settle_times(time_min: FloatArray, values: FloatArray, settled_C: FloatArray, tolerance_C: float) -> FloatArray:
+    """When each sensor's readings came within the tolerance of where they settled and stayed there.
+
+    A reading's level is the median of the few valid readings centred on it, so that noise
+    alone does not count as leaving; the settle time is the first reading after the last level
+    beyond the tolerance (the first reading where none is).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        The log's times (min).
+    values : ndarray, shape (N, S)
+        The readings (°C, NaN: missing).
+    settled_C : ndarray, shape (S,)
+        Where each sensor settled (°C, NaN: it did not).
+    tolerance_C : float
+        The tolerance (°C).
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The settle times (min), NaN where a sensor did not settle.
+    """
+    out = np.full(values.shape[1], np.nan)
+    half = _SETTLE_MEDIAN_READINGS // 2
+    for s in range(values.shape[1]):
+        ok = np.isfinite(values[:, s])
+        if not np.isfinite(settled_C[s]) or ok.sum() < _SETTLE_MEDIAN_READINGS:
+            continue
+        t, y = time_min[ok], values[ok, s]
+        padded = np.pad(y, half, mode="edge")
+        level = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
+        beyond = np.flatnonzero(np.abs(level - settled_C[s]) > tolerance_C)
+        if not len(beyond):
+            out[s] = t[0]
+        elif beyond[-1] + 1 < len(t):
+            out[s] = t[beyond[-1] + 1]
+    return out
 
 
 def _followed_shift(

@@ -86,6 +86,9 @@ class MonitorSettings:
         A reference run of the same machine.
     room_sensor : str, optional
         The room sensor's name, where one is used.
+    wait_for : tuple of str
+        The sensors whose T∞ the test waits for (empty: every sensor watched); the others are
+        checked and reported but do not hold the stop (a slow column sensor in a spindle test).
 
     Raises
     ------
@@ -101,6 +104,20 @@ class MonitorSettings:
     robust: RobustSettings = field(default_factory=RobustSettings)
     reference: MachineReference | None = None
     room_sensor: str | None = None
+    wait_for: tuple[str, ...] = ()
+
+    def waits_for(self, sensor: str) -> bool:
+        """Whether the test waits for ``sensor`` (every sensor, unless ``wait_for`` names some).
+
+        Parameters
+        ----------
+        sensor : str
+
+        Returns
+        -------
+        bool
+        """
+        return not self.wait_for or sensor in self.wait_for
 
     def __post_init__(self) -> None:
         checks = [
@@ -474,6 +491,13 @@ def monitor_step(
         Readings of the wrong shape, or times not after those seen.
     """
     t, y, room = _validated(state, time_min, values, room_C)
+    unknown = [name for name in settings.wait_for if name not in state.sensors]
+    if unknown:
+        msg = (
+            f"the test cannot wait for {', '.join(map(repr, unknown))}: not among the sensors watched "
+            f"({', '.join(state.sensors)})"
+        )
+        raise InputError(msg)
     if settings.reference is not None:
         reference_notes(settings.reference, state.sensors, room is not None)  # refuses one of another machine
     events: list[Event] = []
@@ -504,22 +528,24 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
         before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, settings)
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
 
+    waited = [s for s, name in enumerate(state.sensors) if settings.waits_for(name)]
     for s, check in enumerate(checks):
         if now >= check.next_check_min:
             check_sensor(s)
-    if all(c.may_stop for c in checks):
+    if all(checks[s].may_stop for s in waited):
         # a sensor that may stop waits for the others at a longer spacing: before the test stops,
         # each is checked again on every reading so far
-        for s, check in enumerate(checks):
-            if check.checked_min < now:
+        for s in waited:
+            if checks[s].checked_min < now:
                 check_sensor(s)
-    stop = now if all(c.may_stop for c in checks) else math.nan
+    stop = now if all(checks[s].may_stop for s in waited) else math.nan
     if math.isfinite(stop):
+        which = "every sensor's" if len(waited) == len(checks) else "every sensor waited for has its"
         events.append(
             Event(
                 "stop",
                 now,
-                f"every sensor's T∞ is within ±{settings.tolerance_C:g} °C at {settings.decision_level * 100:g} %: the "
+                f"{which} T∞ within ±{settings.tolerance_C:g} °C at {settings.decision_level * 100:g} %: the "
                 f"test can stop at t = {minutes(now)}",
             )
         )
@@ -833,12 +859,11 @@ def result(
         for c in state.checks
     ]
     stopped = state.stopped
+    waited = [c for c in state.checks if settings.waits_for(c.sensor)]
     if stopped:
-        key = max(
-            state.checks, key=lambda c: c.equilibrium_time_min if math.isfinite(c.equilibrium_time_min) else -math.inf
-        )
+        key = max(waited, key=lambda c: c.equilibrium_time_min if math.isfinite(c.equilibrium_time_min) else -math.inf)
     else:
-        key = max(state.checks, key=lambda c: c.half_width_C)
+        key = max(waited, key=lambda c: c.half_width_C)
     lead = sensors[state.checks.index(key)]
     out: dict[str, object] = {
         k: lead[k]
@@ -855,18 +880,20 @@ def result(
     out.update(
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
-        reason=None if stopped else _reason([c for c in state.checks if not c.may_stop], settings),
-        room_bound_sensors=[] if stopped else [c.sensor for c in state.checks if _room_bound(c, settings)],
+        reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings),
+        room_bound_sensors=[] if stopped else [c.sensor for c in waited if _room_bound(c, settings)],
+        waited_for=[c.sensor for c in waited],
         last_time_min=finite_or_none(state.readings.latest_min),
         tolerance_C=settings.tolerance_C,
         decision_level=settings.decision_level,
         sensors=sensors,
     )
-    t_eq = [c.equilibrium_time_min for c in state.checks if math.isfinite(c.equilibrium_time_min)]
-    if stopped and t_eq:
-        out["time_saved_min"] = max(t_eq) - state.stop_time_min
+    # the time saved is known only in hindsight, against when the readings settled (the session's
+    # hindsight sets it); a predicted 95 %-rise time lies far beyond where they settle within the tolerance
+    out["time_saved_min"] = None
+    out["settle_time_min"] = None
     if expected is not None:
-        values = [expected.get(c.sensor, math.nan) for c in state.checks]
+        values = [expected.get(c.sensor, math.nan) for c in waited]
         out["expected_stop_time_min"] = max(values) if all(math.isfinite(v) for v in values) else None
     return out
 
@@ -966,6 +993,7 @@ def _sensor_summary(
 ) -> dict[str, object]:
     return {
         "sensor": c.sensor,
+        "waited_for": settings.waits_for(c.sensor),
         "status": c.status,
         "may_stop": c.may_stop,
         "checked_at_min": finite_or_none(c.checked_min),

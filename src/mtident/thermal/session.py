@@ -124,6 +124,8 @@ def _settings_key(
 ) -> str:
     """Everything that changes the answer, as text: a state saved with another key is not resumed."""
     fields = dataclasses.asdict(settings)
+    if not settings.wait_for:
+        del fields["wait_for"]  # waiting for every sensor, as before the option: such a state resumes
     fields["reference"] = (
         None
         if settings.reference is None
@@ -386,6 +388,7 @@ class WatchSession:
             room_C,
             [c.modes for c in state.checks],
             self.settings.robust.max_time_constant_min,
+            np.array([self.settings.waits_for(name) for name in state.sensors]),
         )
 
     def whole_log(self) -> tuple[FloatArray, FloatArray, FloatArray | None]:

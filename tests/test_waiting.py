@@ -1,0 +1,115 @@
+"""Which sensors a test waits for, and the time a stop saves against when the readings settle."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from conftest import make_log
+from test_cli import mtident
+from test_reference import two_mode
+
+from mtident.exceptions import InputError
+from mtident.thermal.hindsight import check_decision, settle_times
+from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state, result
+from mtident.thermal.reference import MachineReference, learn_reference, save_reference
+
+
+@pytest.fixture(scope="module")
+def spindle_reference() -> MachineReference:
+    t = np.arange(0.0, 480.0, 1.0)
+    y = two_mode(t) + np.random.default_rng(1).normal(0.0, 0.01, t.size)
+    reference, _ = learn_reference(make_log(t, {"S": np.round(y, 2)}))
+    return reference
+
+
+def spindle_and_column(t: np.ndarray) -> np.ndarray:
+    """A spindle sensor the reference knows (8 and 60 min) and a column sensor of 250 min it does not."""
+    rng = np.random.default_rng(5)
+    spindle = two_mode(t, -4.0) + rng.normal(0.0, 0.01, t.size)
+    column = 20.0 + 8.0 * (1.0 - np.exp(-t / 250.0)) + rng.normal(0.0, 0.01, t.size)
+    return np.round(np.column_stack([spindle, column]), 2)
+
+
+def test_a_sensor_the_test_does_not_wait_for_does_not_hold_the_stop(spindle_reference):
+    t = np.arange(0.0, 240.0, 1.0)
+    values = spindle_and_column(t)
+    every = MonitorSettings(reference=spindle_reference)
+    state, _ = monitor_step(new_state(["S", "column"]), t, values, None, every)
+    assert not state.stopped
+    assert result(state, every)["waited_for"] == ["S", "column"]
+
+    spindle_only = MonitorSettings(reference=spindle_reference, wait_for=("S",))
+    state, events = monitor_step(new_state(["S", "column"]), t, values, None, spindle_only)
+    assert state.stopped and state.stop_time_min < 200.0
+    # the spindle sensor's T∞ is 30 °C; the column's is still open and is reported, not waited for
+    assert abs(state.checks[0].steady_C - 30.0) <= 0.2
+    assert not state.checks[1].may_stop
+    answer = result(state, spindle_only)
+    assert answer["sensor"] == "S" and answer["waited_for"] == ["S"]
+    assert [s["waited_for"] for s in answer["sensors"]] == [True, False]
+    assert "every sensor waited for has its T∞ within ±0.2 °C" in events[-1].text
+
+
+def test_waiting_for_a_sensor_not_watched_is_refused_by_name(spindle_reference):
+    t = np.arange(0.0, 10.0, 1.0)
+    settings = MonitorSettings(reference=spindle_reference, wait_for=("spindle",))
+    with pytest.raises(InputError, match=r"cannot wait for 'spindle': not among the sensors watched \(S, column\)"):
+        monitor_step(new_state(["S", "column"]), t, spindle_and_column(t), None, settings)
+
+
+def test_the_settle_time_is_when_the_readings_stay_within_the_tolerance():
+    # 30 − 10·e^(−t/20) is within 0.2 °C of 30 from t = 20·ln 50 = 78.2 min on
+    t = np.arange(0.0, 300.0, 1.0)
+    y = 30.0 - 10.0 * np.exp(-t / 20.0)
+    noisy = y + np.where(np.arange(t.size) == 150, 0.5, 0.0)  # one spike is no leaving
+    times = settle_times(t, np.column_stack([y, noisy, y]), np.array([30.0, 30.0, np.nan]), 0.2)
+    assert times[0] == 79.0 and times[1] == 79.0 and np.isnan(times[2])
+
+
+def test_the_time_saved_is_against_the_latest_settle_time_of_the_sensors_waited_for():
+    t = np.arange(0.0, 600.0, 1.0)
+    fast = 30.0 - 10.0 * np.exp(-t / 20.0)  # settles at 79 min
+    slow = 28.0 - 8.0 * np.exp(-t / 60.0)  # within 0.2 °C from 60·ln 40 = 221.3 min
+    values = np.column_stack([fast, slow])
+    both = check_decision(("fast", "slow"), np.array([30.0, 28.0]), 150.0, t, values, 0.2)
+    assert both.test_settle_time_min == 222.0 and both.time_saved_min == 72.0
+    fast_only = check_decision(
+        ("fast", "slow"), np.array([30.0, 28.0]), 150.0, t, values, 0.2, waited=np.array([True, False])
+    )
+    assert fast_only.time_saved_min == 79.0 - 150.0
+    answer = fast_only.to_dict()
+    assert answer["settle_time_min"] == 79.0 and answer["time_saved_min"] == -71.0
+    assert [s["waited_for"] for s in answer["sensors"]] == [True, False]
+
+
+def test_watch_says_the_time_saved_against_the_settled_readings_not_a_predicted_equilibrium(
+    tmp_path, spindle_reference
+):
+    t = np.arange(0.0, 480.0, 1.0)
+    values = spindle_and_column(t)
+    log = tmp_path / "test.csv"
+    rows = "\n".join(f"{a:g},{b:.2f},{c:.2f}" for a, (b, c) in zip(t, values, strict=True))
+    log.write_text("time_min,S,column\n" + rows + "\n")
+    save_reference(spindle_reference, tmp_path / "machine.toml")
+    out = mtident(
+        "thermal", "watch", str(log), "--replay", "--json", "--reference", str(tmp_path / "machine.toml"),
+        "--wait-for", "S", "--state", str(tmp_path / "state.npz"),
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    answer = json.loads(out.stdout)
+    assert answer["decision"] == "stop"
+    settle = answer["hindsight"]["settle_time_min"]
+    # the spindle sensor (8 and 60 min, 10 °C, −4 °C slow) is within 0.2 °C of 30 from about 60·ln 20 = 180 min
+    assert 170.0 <= settle <= 190.0
+    assert answer["settle_time_min"] == settle
+    assert answer["time_saved_min"] == pytest.approx(settle - answer["stop_time_min"])
+    text = mtident(
+        "thermal", "watch", str(log), "--replay", "--reference", str(tmp_path / "machine.toml"), "--wait-for", "S",
+        "--state", str(tmp_path / "state2.npz"),
+    ).stdout  # fmt: skip
+    assert answer["time_saved_min"] > 0
+    assert f"{answer['time_saved_min']:.0f} min before the readings settled within the tolerance" in " ".join(
+        text.split()
+    )
