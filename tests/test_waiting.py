@@ -113,3 +113,37 @@ def test_watch_says_the_time_saved_against_the_settled_readings_not_a_predicted_
     assert f"{answer['time_saved_min']:.0f} min before the readings settled within the tolerance" in " ".join(
         text.split()
     )
+
+
+def test_a_reference_names_its_machine_and_a_test_of_another_is_refused(tmp_path, spindle_reference):
+    t = np.arange(0.0, 480.0, 1.0)
+    y = two_mode(t) + np.random.default_rng(1).normal(0.0, 0.01, t.size)
+    run = tmp_path / "run.csv"
+    run.write_text("time_min,S\n" + "\n".join(f"{a:g},{b:.2f}" for a, b in zip(t, y, strict=True)) + "\n")
+    out = mtident(
+        "thermal", "learn", str(run), "-o", str(tmp_path / "vmc.toml"), "--machine", "VMC-1", "--serial", "4711",
+        "--program", "8000 rpm", "--run-date", "2026-11-20", "--json",
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    learnt = json.loads(out.stdout)
+    assert (learnt["machine"], learnt["serial"], learnt["program"], learnt["run_date"]) == (
+        "VMC-1", "4711", "8000 rpm", "2026-11-20",
+    )  # fmt: skip
+    from mtident.thermal.reference import load_reference
+
+    reference = load_reference(tmp_path / "vmc.toml")
+    assert reference.identity == f"machine VMC-1, serial 4711, program 8000 rpm, run on 2026-11-20 ({run})"
+    assert reference.describe("S").startswith("machine VMC-1, serial 4711, program 8000 rpm, run on 2026-11-20: ")
+    test = tmp_path / "test.csv"
+    test.write_text("time_min,S\n" + "\n".join(f"{a:g},{b:.2f}" for a, b in zip(t[:60], y[:60], strict=True)) + "\n")
+    same = mtident("thermal", "identify", str(test), "--reference", str(tmp_path / "vmc.toml"), "--machine", "VMC-1")
+    assert same.returncode == 0, same.stderr
+    other = mtident("thermal", "identify", str(test), "--reference", str(tmp_path / "vmc.toml"), "--machine", "HMC-2")
+    assert other.returncode != 0
+    assert "the reference is of machine 'VMC-1'" in other.stderr and "'HMC-2'" in other.stderr
+    save_reference(spindle_reference, tmp_path / "unnamed.toml")
+    unnamed = mtident(
+        "thermal", "watch", str(test), "--replay", "--reference", str(tmp_path / "unnamed.toml"), "--machine",
+        "VMC-1", "--state", str(tmp_path / "s.npz"),
+    )  # fmt: skip
+    assert unnamed.returncode != 0 and "does not say which machine it is of" in unnamed.stderr

@@ -43,6 +43,7 @@ def report_command(
     decision_level: float,
     max_tau_min: float,
     reference_path: str | None,
+    machine: str | None,
     free_fast_modes: int,
     ambient_col: str | None,
     room_wander: float,
@@ -76,6 +77,8 @@ def report_command(
         --max-time-constant (min).
     reference_path : str or None
         --reference.
+    machine : str or None
+        --machine: the machine the test is of.
     free_fast_modes : int
         --free-fast-modes.
     ambient_col : str or None
@@ -103,7 +106,15 @@ def report_command(
         msg = f"{path}: no such file"
         raise InputError(msg)
     settings = monitor_settings(
-        tolerance_C, decision_level, max_tau_min, reference_path, free_fast_modes, ambient_col, room_wander, wait_for
+        tolerance_C,
+        decision_level,
+        max_tau_min,
+        reference_path,
+        free_fast_modes,
+        ambient_col,
+        room_wander,
+        wait_for,
+        machine,
     )
     session = WatchSession(
         _workbook_as_replayed_csv(path),

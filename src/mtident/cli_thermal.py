@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import shlex
 import sys
@@ -236,6 +237,12 @@ reference_option = click.option(
     "searched only near those it learnt, "
     "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
 )
+machine_option = click.option(
+    "--machine",
+    "machine",
+    metavar="NAME",
+    help="The machine this test is of: a --reference learnt on another (learn --machine) is refused.",
+)
 free_fast_option = click.option(
     "--free-fast-modes",
     "free_fast_modes",
@@ -266,13 +273,15 @@ max_time_constant_option = click.option(
 )
 
 
-def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineReference or None
+def load_reference_file(reference_path: str | None, machine: str | None = None):  # noqa: ANN201 - MachineReference or None
     """The reference run named by --reference, read (None where none is given).
 
     Parameters
     ----------
     reference_path : str or None
         The --reference option: a file, or a shipped reference's @-name.
+    machine : str or None
+        The --machine option: the machine the test says it is of.
 
     Returns
     -------
@@ -281,21 +290,21 @@ def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineRe
     Raises
     ------
     InputError
-        No such file, or a file that is no reference.
+        No such file, a file that is no reference, or a reference of another machine than --machine.
     """
     if reference_path is None:
         return None
     from mtident.thermal.reference import load_reference
 
     if reference_path in SAMPLES:
-        return load_reference(sample_log_path(reference_path))
+        return load_reference(sample_log_path(reference_path)).for_machine(machine)
     if not Path(reference_path).is_file():
         msg = (
             f"--reference {reference_path}: no such file (learn one with `mtident thermal learn FULL_LOG -o "
             f"{Path(reference_path).name}`)"
         )
         raise InputError(msg)
-    return load_reference(reference_path)
+    return load_reference(reference_path).for_machine(machine)
 
 
 @thermal.command("identify")
@@ -321,6 +330,7 @@ def load_reference_file(reference_path: str | None):  # noqa: ANN201 - MachineRe
 @preset_option
 @max_time_constant_option
 @reference_option
+@machine_option
 @free_fast_option
 @click.option(
     "--room-wander",
@@ -377,6 +387,7 @@ def identify_command(
     preset: str,
     max_tau_min: float,
     reference_path: str | None,
+    machine: str | None,
     free_fast_modes: int,
     room_wander: float,
     horizon_min: float | None,
@@ -416,6 +427,8 @@ def identify_command(
         --max-time-constant (min).
     reference_path : str or None
         --reference.
+    machine : str or None
+        --machine: the machine the test is of.
     free_fast_modes : int
         --free-fast-modes.
     room_wander : float
@@ -452,7 +465,7 @@ def identify_command(
         )
         with stderr.status(f"fitting {len(log.sensors)} sensor(s)…"):
             result: Identification | RobustIdentification = identify_robust(
-                log, window_min, room, settings, load_reference_file(reference_path), horizon_min, ambient_col
+                log, window_min, room, settings, load_reference_file(reference_path, machine), horizon_min, ambient_col
             )
     else:
         if reference_path is not None:
@@ -579,6 +592,12 @@ def _identify_table(
     "stop earliest, and state the assumption. Where the run merged or missed a mode, such stops can be wrong "
     "(docs: limits).",
 )
+@click.option(
+    "--machine", metavar="NAME", default="", help="The machine the run is of (a test's --machine is held to it)."
+)
+@click.option("--serial", metavar="TEXT", default="", help="The machine's serial number.")
+@click.option("--program", metavar="TEXT", default="", help="The program or spindle speed the run ran (8000 rpm).")
+@click.option("--run-date", "run_date", metavar="DATE", default="", help="The day the run ran (2026-11-20).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def learn_command(
@@ -590,6 +609,10 @@ def learn_command(
     max_tau_min: float,
     output_path: str,
     every_mode: bool,
+    machine: str,
+    serial: str,
+    program: str,
+    run_date: str,
     as_json: bool,
 ) -> None:
     """Learn each sensor's thermal modes from FILE, a warm-up that ran to equilibrium.
@@ -616,6 +639,8 @@ def learn_command(
         -o: the reference file to write.
     every_mode : bool
         --every-mode: later tests allow no free mode faster than the modes learnt.
+    machine, serial, program, run_date : str
+        --machine, --serial, --program and --run-date: what the run was of, written in the file.
     as_json : bool
         --json.
 
@@ -632,6 +657,7 @@ def learn_command(
         reference, warnings = learn_reference(log, room, RobustSettings(max_time_constant_min=max_tau_min))
     if every_mode:
         reference = reference.holding_every_mode()
+    reference = dataclasses.replace(reference, machine=machine, serial=serial, program=program, run_date=run_date)
     for warning in warnings:
         stderr.print(f"mtident: warning: {warning}", highlight=False)
     if not reference.sensors:
@@ -662,6 +688,10 @@ def learn_command(
             {
                 "reference": str(output_path),
                 "source": reference.source,
+                "machine": reference.machine,
+                "serial": reference.serial,
+                "program": reference.program,
+                "run_date": reference.run_date,
                 "max_time_constant_min": reference.max_time_constant_min,
                 "room": reference.room,
                 "sensors": sensors_out,
@@ -670,7 +700,7 @@ def learn_command(
         )
         _exit_if_none_used(reference)
         return
-    table = Table(title=f"{log.source}: modes learnt (time constants with their box)")
+    table = Table(title=f"{reference.identity}: modes learnt (time constants with their box)")
     for column in ("sensor", "time constants (min)", "amplitudes (°C)", "used by later tests"):
         table.add_column(column, justify="left" if column == "sensor" else "right", **_column_layout(column))
     for name, m in reference.sensors.items():

@@ -42,6 +42,7 @@ from mtident.cli_thermal import (
     load_reference_file,
     log_options,
     log_path,
+    machine_option,
     max_time_constant_option,
     reference_option,
     stderr,
@@ -76,7 +77,7 @@ def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
     Returns
     -------
     callable
-        ``func`` with --tolerance, --confidence, --max-time-constant, --reference,
+        ``func`` with --tolerance, --confidence, --max-time-constant, --reference, --machine,
         --free-fast-modes, --ambient, --room-wander and --wait-for.
     """
     options = [
@@ -98,6 +99,7 @@ def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
         ),
         max_time_constant_option,
         reference_option,
+        machine_option,
         free_fast_option,
         click.option(
             "--ambient",
@@ -294,6 +296,7 @@ def monitor_settings(
     ambient_col: str | None,
     room_wander: float,
     wait_for: tuple[str, ...] = (),
+    machine: str | None = None,
 ) -> MonitorSettings:
     """The decision's settings from the options of :func:`decision_options`.
 
@@ -315,6 +318,8 @@ def monitor_settings(
         --room-wander (°C in an hour).
     wait_for : tuple of str
         --wait-for (empty: every sensor).
+    machine : str or None
+        --machine: the machine the test is of.
 
     Returns
     -------
@@ -331,7 +336,7 @@ def monitor_settings(
         robust=RobustSettings(
             max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
         ),
-        reference=load_reference_file(reference_path),
+        reference=load_reference_file(reference_path, machine),
         room_sensor=ambient_col,
         wait_for=tuple(wait_for),
     )
@@ -421,6 +426,7 @@ def watch_command(
     decision_level: float,
     max_tau_min: float,
     reference_path: str | None,
+    machine: str | None,
     free_fast_modes: int,
     ambient_col: str | None,
     room_wander: float,
@@ -470,6 +476,8 @@ def watch_command(
         --max-time-constant (min).
     reference_path : str or None
         --reference.
+    machine : str or None
+        --machine: the machine the test is of.
     free_fast_modes : int
         --free-fast-modes.
     ambient_col : str or None
@@ -530,7 +538,15 @@ def watch_command(
         msg = f"{path}: no such file"
         raise InputError(msg)
     settings = monitor_settings(
-        tolerance_C, decision_level, max_tau_min, reference_path, free_fast_modes, ambient_col, room_wander, wait_for
+        tolerance_C,
+        decision_level,
+        max_tau_min,
+        reference_path,
+        free_fast_modes,
+        ambient_col,
+        room_wander,
+        wait_for,
+        machine,
     )
     followed = _workbook_as_replayed_csv(path) if replay else path
     session = WatchSession(

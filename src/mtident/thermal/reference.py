@@ -79,6 +79,9 @@ class MachineReference:
         How the room was taken when learning.
     sensors : dict of str to SensorModes
         Each sensor's modes, by its name.
+    machine, serial, program, run_date : str
+        What the run was of, as ``learn`` was told ("" where not said): the machine, its serial
+        number, the program or speed it ran, and the day it ran.
     """
 
     source: str
@@ -86,6 +89,63 @@ class MachineReference:
     max_time_constant_min: float
     room: str
     sensors: dict[str, SensorModes]
+    machine: str = ""
+    serial: str = ""
+    program: str = ""
+    run_date: str = ""
+
+    @property
+    def identity(self) -> str:
+        """What the reference is of, in words: machine, serial, program and the run's day, as far
+        as ``learn`` was told them, else the log it was learnt from.
+
+        Returns
+        -------
+        str
+        """
+        said = self._said()
+        return f"{said} ({self.source})" if said else self.source
+
+    def _said(self) -> str:
+        parts = [
+            f"machine {self.machine}" if self.machine else "",
+            f"serial {self.serial}" if self.serial else "",
+            f"program {self.program}" if self.program else "",
+            f"run on {self.run_date}" if self.run_date else "",
+        ]
+        return ", ".join(p for p in parts if p)
+
+    def for_machine(self, machine: str | None) -> MachineReference:
+        """The reference, checked against the machine a test says it is of.
+
+        Parameters
+        ----------
+        machine : str or None
+            The test's machine (None: not said).
+
+        Returns
+        -------
+        MachineReference
+            Itself.
+
+        Raises
+        ------
+        InputError
+            The reference names another machine, or a machine is said and the reference names none.
+        """
+        if machine is None or machine == self.machine:
+            return self
+        if not self.machine:
+            msg = (
+                f"the reference ({self.source}) does not say which machine it is of, and this test says {machine!r}: "
+                f"learn it again with --machine {machine}, or leave out --machine"
+            )
+        else:
+            msg = (
+                f"the reference is of machine {self.machine!r} ({self.identity}), and this test says it is of "
+                f"{machine!r}: a reference teaches only the machine it was learnt on; give that machine's reference"
+            )
+        raise InputError(msg)
 
     def modes(self, sensor: str) -> SensorModes | None:
         """The modes of ``sensor`` (None if the reference does not know it).
@@ -121,7 +181,8 @@ class MachineReference:
         parts = ", ".join(f"{t:.3g} min ±{b:.0%}" for t, b in zip(modes.time_constants_min, modes.box, strict=True))
         if modes.doubt is not None:
             parts += " (doubtful)"
-        return f"{self.source} ({self.learnt_on}): τ {parts}"
+        said = self._said()
+        return f"{said + ': ' if said else ''}{self.source} ({self.learnt_on}): τ {parts}"
 
     def holding_every_mode(self) -> MachineReference:
         """The same reference, said to hold every mode of the machine: later tests allow no free
@@ -396,7 +457,18 @@ def save_reference(reference: MachineReference, path: str | Path) -> None:
     """
     import tomli_w
 
+    said = {
+        key: value
+        for key, value in (
+            ("machine", reference.machine),
+            ("serial", reference.serial),
+            ("program", reference.program),
+            ("run_date", reference.run_date),
+        )
+        if value
+    }
     doc = {
+        **said,
         "source": reference.source,
         "learnt_on": reference.learnt_on,
         "max_time_constant_min": reference.max_time_constant_min,
@@ -453,6 +525,10 @@ def load_reference(path: str | Path) -> MachineReference:
         float(doc.get("max_time_constant_min", math.nan)),
         str(doc.get("room", "")),
         sensors,
+        machine=str(doc.get("machine", "")),
+        serial=str(doc.get("serial", "")),
+        program=str(doc.get("program", "")),
+        run_date=str(doc.get("run_date", "")),
     )
 
 
