@@ -147,3 +147,29 @@ def test_a_reference_names_its_machine_and_a_test_of_another_is_refused(tmp_path
         "VMC-1", "--state", str(tmp_path / "s.npz"),
     )  # fmt: skip
     assert unnamed.returncode != 0 and "does not say which machine it is of" in unnamed.stderr
+
+
+def test_a_reference_most_sensors_contradict_is_used_for_none():
+    """Another machine's reference (every time constant ×0.45 of this one's): three of four sensors
+    contradict it, and the fourth, which follows it by chance, is answered without it too."""
+    from mtident.thermal.robust import SensorModes
+
+    modes = SensorModes((8.0, 60.0), (0.1, 0.1), (-4.0, -6.0), None)
+    reference = MachineReference("small.csv", "2026-11-20", 300.0, "not measured", {n: modes for n in "ABCD"})
+    t = np.arange(0.0, 120.0, 0.5)
+    rng = np.random.default_rng(3)
+
+    def sensor(fast: float, slow: float) -> np.ndarray:
+        y = 30.0 - 4.0 * np.exp(-t / slow) - 6.0 * np.exp(-t / fast)
+        return np.round(y + rng.normal(0.0, 0.01, t.size), 2)
+
+    values = np.column_stack([sensor(8.0 / 0.45, 60.0 / 0.45)] * 3 + [sensor(8.0, 60.0)])
+    settings = MonitorSettings(reference=reference)
+    state, events = monitor_step(new_state(list("ABCD")), t, values, None, settings)
+    assert state.reference_dropped
+    said = [e.text for e in events if "contradicted by" in e.text]
+    assert len(said) == 1 and "contradicted by 3 of the 4 sensors it knows (A, B, C)" in said[0]
+    assert not any(c.reference_used for c in state.checks)
+    answer = result(state, settings)
+    assert answer["reference_dropped"] is True
+    assert all(s["assumptions"]["reference"] is None for s in answer["sensors"])

@@ -320,6 +320,9 @@ class MonitorState:
         When the test may stop (min), NaN until then.
     said : tuple of str
         The warnings already said, one entry per sensor and kind of warning.
+    reference_dropped : bool
+        Whether the reference was dropped for every sensor, most of those it knows having
+        contradicted it (another machine's, or this one changed).
     """
 
     sensors: tuple[str, ...]
@@ -327,6 +330,7 @@ class MonitorState:
     checks: tuple[SensorCheck, ...]
     stop_time_min: float = math.nan
     said: tuple[str, ...] = ()
+    reference_dropped: bool = False
 
     @property
     def stopped(self) -> bool:
@@ -522,15 +526,35 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
     events: list[Event] = []
     said = set(state.said)
     checks = list(state.checks)
+    dropped = state.reference_dropped
+    used = replace(settings, reference=None) if dropped else settings
 
     def check_sensor(s: int) -> None:
-        estimate = sensor_estimate(readings, s, state.sensors[s], settings)
-        before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, settings)
+        estimate = sensor_estimate(readings, s, state.sensors[s], used)
+        before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used)
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
 
     waited = [s for s, name in enumerate(state.sensors) if settings.waits_for(name)]
     for s, check in enumerate(checks):
         if now >= check.next_check_min:
+            check_sensor(s)
+    contradicting = [] if dropped else _contradicting(checks, settings)
+    if contradicting:
+        # the sensors that follow it are the exception: a reference of another machine fits a few by chance
+        dropped, used = True, replace(settings, reference=None)
+        assert settings.reference is not None
+        events.append(
+            Event(
+                "warning",
+                now,
+                f"the reference ({settings.reference.identity}) is contradicted by {len(contradicting)} of the "
+                f"{_known_count(checks, settings)} sensors it knows ({', '.join(contradicting)}): it is not used for "
+                "any sensor from now on (another machine's reference, or this machine changed since its run; learn "
+                "the reference again)",
+            )
+        )
+        checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
+        for s in range(len(checks)):
             check_sensor(s)
     if all(checks[s].may_stop for s in waited):
         # a sensor that may stop waits for the others at a longer spacing: before the test stops,
@@ -549,7 +573,31 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
                 f"test can stop at t = {minutes(now)}",
             )
         )
-    return MonitorState(state.sensors, readings, tuple(checks), stop, tuple(sorted(said))), events
+    return MonitorState(state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped), events
+
+
+def _reference_known(checks: list[SensorCheck], settings: MonitorSettings) -> list[SensorCheck]:
+    """The checked sensors the reference has trusted modes for."""
+    reference = settings.reference
+    if reference is None:
+        return []
+    return [
+        c
+        for c in checks
+        if math.isfinite(c.steady_C) and (modes := reference.modes(c.sensor)) is not None and modes.doubt is None
+    ]
+
+
+def _known_count(checks: list[SensorCheck], settings: MonitorSettings) -> int:
+    return len(_reference_known(checks, settings))
+
+
+def _contradicting(checks: list[SensorCheck], settings: MonitorSettings) -> list[str]:
+    """The sensors that contradict the reference, where they are most of the two or more it knows
+    (each then answered without it); else none."""
+    known = _reference_known(checks, settings)
+    off = [c.sensor for c in known if not c.reference_used]
+    return off if len(known) >= 2 and 2 * len(off) > len(known) else []
 
 
 def sensor_estimate(
@@ -853,6 +901,8 @@ def result(
     -------
     dict
     """
+    if state.reference_dropped:
+        settings = replace(settings, reference=None)  # the answers rest on no reference: their assumptions say so
     measured = state.readings.room_C is not None
     sensors = [
         _sensor_summary(c, settings, None if expected is None else expected.get(c.sensor), measured)
@@ -883,6 +933,7 @@ def result(
         reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings),
         room_bound_sensors=[] if stopped else [c.sensor for c in waited if _room_bound(c, settings)],
         waited_for=[c.sensor for c in waited],
+        reference_dropped=state.reference_dropped,
         last_time_min=finite_or_none(state.readings.latest_min),
         tolerance_C=settings.tolerance_C,
         decision_level=settings.decision_level,
