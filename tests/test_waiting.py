@@ -173,3 +173,35 @@ def test_a_reference_most_sensors_contradict_is_used_for_none():
     answer = result(state, settings)
     assert answer["reference_dropped"] is True
     assert all(s["assumptions"]["reference"] is None for s in answer["sensors"])
+
+
+def test_learn_splits_a_mode_that_merges_two_of_the_machines_modes():
+    """A new user's machine: 110 and 260 min, learnt at one sensor as one mode of 170 min ±10 % (a box
+    holding neither), while other sensors pin both down. The sensor keeps both, and it is said."""
+    from mtident.thermal.reference import machine_modes, split_merged_modes
+    from mtident.thermal.robust import SensorModes
+
+    sensors = {
+        "bearing": SensorModes((35.0, 110.0, 260.0), (0.1, 0.1, 0.1), (-1.0, -2.0, -3.0)),
+        "sleeve": SensorModes((170.0,), (0.1,), (-5.0,)),
+        "housing": SensorModes((2.0, 108.0, 255.0), (0.5, 0.1, 0.1), (1.0, -2.0, -3.0)),
+    }
+    taus = [round(m.time_constant_min) for m in machine_modes(sensors)]
+    assert taus == [35, 109, 170, 258]  # the lag of ±50 % is no machine mode
+    split, warnings = split_merged_modes(sensors)
+    sleeve = split["sleeve"]
+    assert sleeve.time_constants_min == pytest.approx((109.1, 257.75))
+    # each box holds every sensor's time constant of the mode
+    assert (
+        sleeve.time_constants_min[0] * (1 - sleeve.box[0]) <= 99.0
+        and sleeve.time_constants_min[1] * (1 + sleeve.box[1]) >= 286.0
+    )
+    assert sleeve.amplitudes_C == (-2.5, -2.5)
+    assert split["bearing"] == sensors["bearing"] and split["housing"] == sensors["housing"]
+    assert (
+        len(warnings) == 1
+        and "sleeve: its mode of 170 min (±10%) lies between the machine's modes of 109" in (warnings[0])
+    )
+    # a mode whose box holds a machine mode, or one alone with no machine mode either side, stays
+    alone = {"a": SensorModes((170.0,), (0.1,)), "b": SensorModes((160.0,), (0.1,))}
+    assert split_merged_modes(alone) == (alone, [])

@@ -53,6 +53,12 @@ _ROOM_MEASURED = "a room sensor, an input of every mode"
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
 # the usual tolerance of a later test.
 PINNED_HALF_WIDTH_C = 0.1
+# The machine's modes, pooled over its sensors: pinned modes of several sensors this close (ratio)
+# are one; a sensor's mode that holds none of them in its box, between two of them at most this
+# ratio apart, may be those two merged (a sensor that shows each only a little fits one between).
+_SAME_MODE_RATIO = 1.3
+_PINNED_BOX = 0.3
+_MERGE_SPAN = 4.0
 _HEADER = """# mtident reference run: each sensor's thermal modes, learnt from a warm-up that ran to
 # equilibrium. `mtident thermal identify|watch LOG --reference THIS_FILE` searches each sensor's
 # time constants only within ±box of these (relative), with free amplitudes, and says so when a
@@ -311,10 +317,122 @@ def learn_reference(
                 f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the "
                 "machine may have a slower one (raise `max_time_constant_min`)"
             )
+    sensors, split = split_merged_modes(sensors)
+    warnings.extend(split)
     room = _ROOM_MEASURED if room_C is not None else "not measured"
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors
     ), warnings
+
+
+@dataclass(frozen=True)
+class _MachineMode:
+    """One of the machine's modes, pooled over the sensors that pin it down."""
+
+    time_constant_min: float
+    box: float
+    sensors: frozenset[str]
+
+
+def machine_modes(sensors: dict[str, SensorModes]) -> list[_MachineMode]:
+    """The machine's modes: every trusted sensor's pinned modes (box at most ±30 %), those of
+    several sensors within a ratio of 1.3 taken as one (its box holding every member's).
+
+    Parameters
+    ----------
+    sensors : dict of str to SensorModes
+
+    Returns
+    -------
+    list of _MachineMode
+        Sorted by time constant.
+    """
+    pinned = sorted(
+        (tau, box, name)
+        for name, m in sensors.items()
+        if m.doubt is None
+        for tau, box in zip(m.time_constants_min, m.box, strict=True)
+        if box <= _PINNED_BOX
+    )
+    groups: list[list[tuple[float, float, str]]] = []
+    for member in pinned:
+        if groups and member[0] / groups[-1][-1][0] < _SAME_MODE_RATIO:
+            groups[-1].append(member)
+        else:
+            groups.append([member])
+    out = []
+    for group in groups:
+        low = min(t * (1.0 - b) for t, b, _ in group)
+        high = max(t * (1.0 + b) for t, b, _ in group)
+        out.append(_MachineMode((low + high) / 2.0, (high - low) / (high + low), frozenset(n for _, _, n in group)))
+    return out
+
+
+def split_merged_modes(sensors: dict[str, SensorModes]) -> tuple[dict[str, SensorModes], list[str]]:
+    """Each sensor's modes against the machine's: a mode whose box holds none of the modes other
+    sensors pin down, lying between two of them (at most a factor of four apart) that the sensor's
+    other modes do not hold, may be the two merged (110 and 260 min learnt as one of 170 ±10 %,
+    whose box excludes both): it is replaced by the two, with their boxes, and said.
+
+    Parameters
+    ----------
+    sensors : dict of str to SensorModes
+
+    Returns
+    -------
+    dict of str to SensorModes
+        The sensors, a merged mode split where one was found.
+    list of str
+        One warning per split.
+    """
+    machine = machine_modes(sensors)
+    out, warnings = dict(sensors), []
+    for name, m in sensors.items():
+        if m.doubt is not None:
+            continue
+        others = [mm for mm in machine if mm.sensors - {name}]
+        modes = list(zip(m.time_constants_min, m.box, m.amplitudes_C or (math.nan,) * len(m.box), strict=True))
+        for i, (tau, box, amplitude) in enumerate(modes):
+            held = [mm for mm in others if _holds(tau, box, mm.time_constant_min)]
+            below = [mm for mm in others if mm.time_constant_min < tau * (1.0 - box)]
+            above = [mm for mm in others if mm.time_constant_min > tau * (1.0 + box)]
+            if held or not below or not above or len(modes) + 1 > DEFAULT_MAX_MODES:
+                continue
+            low, high = below[-1], above[0]
+            kept = [
+                t
+                for j, (t, b, _) in enumerate(modes)
+                if j != i
+                for mm in (low, high)
+                if _holds(t, b, mm.time_constant_min)
+            ]
+            if high.time_constant_min / low.time_constant_min > _MERGE_SPAN or kept:
+                continue
+            split = [
+                (low.time_constant_min, low.box, amplitude / 2.0),
+                (high.time_constant_min, high.box, amplitude / 2.0),
+            ]
+            modes = sorted(modes[:i] + split + modes[i + 1 :])
+            out[name] = replace(
+                m,
+                time_constants_min=tuple(t for t, _, _ in modes),
+                box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
+                amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
+            )
+            who = ", ".join(sorted(low.sensors | high.sensors))
+            warnings.append(
+                f"{name}: its mode of {tau:.3g} min (±{box:.0%}) lies between the machine's modes of "
+                f"{low.time_constant_min:.3g} and {high.time_constant_min:.3g} min that other sensors pin down "
+                f"({who}), and its box holds neither: the run may have merged the two into one. Later tests search "
+                f"both ({low.time_constant_min:.3g} ±{max(low.box, MIN_REFERENCE_BOX):.0%}, "
+                f"{high.time_constant_min:.3g} ±{max(high.box, MIN_REFERENCE_BOX):.0%}) for this sensor"
+            )
+            break
+    return out, warnings
+
+
+def _holds(tau: float, box: float, other: float) -> bool:
+    return tau * (1.0 - box) <= other <= tau * (1.0 + box)
 
 
 def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: float) -> str | None:
