@@ -854,8 +854,27 @@ def test_an_interval_wider_than_the_rise_so_far_is_not_trusted():
     curve = 30.5 - 5.6 * np.exp(-t / 6.0) - 3.7 * np.exp(-t / 45.0) - 1.0 * np.exp(-t / 180.0)
     y = np.round(curve + 0.02 * np.random.default_rng(4).standard_normal(len(t)), 2)
     estimate = estimate_sensor("spindle", t, y)
-    lo, hi = estimate.interval_C[0.95]
+    assert estimate.fit is not None
+    lo, hi = estimate.fit.interval_C[0.95]
     assert (hi - lo) / 2 < estimate.rise_C < hi - lo
+    # the models behind that width's lower end came down from above to T∞ (19.5 °C for a sensor at
+    # 29.4): a warm-up does not overshoot, and the interval keeps only what it allows
+    low, high = estimate.interval_C[0.95]
+    assert np.median(y[-5:]) - 0.1 <= low <= 30.5 <= high == pytest.approx(hi, abs=0.01)
+    assert high - low < estimate.rise_C
+
+
+def test_an_interval_wider_than_the_rise_so_far_is_not_trusted_where_physics_does_not_narrow_it():
+    """The same spindle read 300 readings sooner, at 30 min: even with the floor a warm-up that
+    does not overshoot sets, the interval is wider than the rise, and not trusted."""
+    from mtident.thermal.robust import estimate_sensor
+
+    t = np.arange(0.0, 30.0 + 1e-9, 1.0 / 3.0)
+    curve = 30.5 - 5.6 * np.exp(-t / 6.0) - 3.7 * np.exp(-t / 45.0) - 1.0 * np.exp(-t / 180.0)
+    y = np.round(curve + 0.02 * np.random.default_rng(4).standard_normal(len(t)), 2)
+    estimate = estimate_sensor("spindle", t, y)
+    lo, hi = estimate.interval_C[0.95]
+    assert hi - lo > estimate.rise_C
     assert not estimate.model_ok and "undetermined" in estimate.warning_codes and lo <= 30.5 <= hi
 
 

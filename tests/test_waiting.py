@@ -205,3 +205,23 @@ def test_learn_splits_a_mode_that_merges_two_of_the_machines_modes():
     # a mode whose box holds a machine mode, or one alone with no machine mode either side, stays
     alone = {"a": SensorModes((170.0,), (0.1,)), "b": SensorModes((160.0,), (0.1,))}
     assert split_merged_modes(alone) == (alone, [])
+
+
+def test_the_floor_a_warm_up_sets_holds_only_for_a_rising_sensor_and_follows_a_room_that_fell():
+    from mtident.thermal.robust import RobustSettings, estimate_sensor, overshoot_floor_C
+
+    t = np.arange(0.0, 120.0, 1.0)
+    rng = np.random.default_rng(8)
+    rising = 30.0 - 10.0 * np.exp(-t / 40.0) + rng.normal(0.0, 0.01, t.size)
+    estimate = estimate_sensor("S", t, rising, settings=RobustSettings(room_wander_C_per_h=0.0), noise_C=0.01)
+    assert estimate.fit is not None
+    latest = float(np.median(rising[-5:]))
+    floor = overshoot_floor_C(estimate.fit, t, rising, None, 0.01, 0.0)
+    assert floor == pytest.approx(latest - 0.04)
+    assert estimate.interval_C[0.99][0] >= floor
+    # a room that stood 0.3 °C above its latest level lowers the floor by that much
+    room = 20.0 + 0.3 * (t < 60.0)
+    assert overshoot_floor_C(estimate.fit, t, rising, room, 0.01, 0.0) == pytest.approx(latest - 0.34)
+    # a sensor that cooled from a peak (an earlier heating at more power) sets none
+    cooled = np.where(t < 60.0, rising, rising[59] - 0.02 * (t - 59.0))
+    assert overshoot_floor_C(estimate.fit, t, cooled, None, 0.01, 0.0) == -np.inf

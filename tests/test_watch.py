@@ -490,8 +490,8 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
     assert "Not yet: keep the test running." in text and "still fits" in text
     assert "Ways on: continue the test, or give a reference run of this machine" in text
     assert (
-        "Assumes: a sum of up to four exponential modes (six where the readings use all four), time constants up to 300 min"
-        in text
+        "Assumes: a sum of up to four exponential modes (six where the readings use all four), of a warm-up that "
+        "does not overshoot: a rising sensor's T∞ not below its latest readings, time constants up to 300 min" in text
     )
     # the ends named in words are the interval's own (widened for the room's wander alike)
     code, out, err = run("thermal", "watch", str(log), "--replay", "--room-wander", "0.5")

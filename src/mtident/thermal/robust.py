@@ -87,6 +87,12 @@ MIN_BINS = 8
 FRAGILE_RATIO = 3.0
 
 
+# the floor a warm-up that does not overshoot sets on T∞: the median of this many latest readings,
+# less this many times the noise (and the display step)
+_LATEST_READINGS = 5
+_FLOOR_NOISES = 4.0
+
+
 @dataclass(frozen=True)
 class RobustSettings:
     """What the model-robust answer assumes and how sure it must be.
@@ -169,7 +175,10 @@ class Assumptions:
     max_time_constant_min: float
     room: str
     reference: str | None = None
-    model: str = "a sum of up to four exponential modes (six where the readings use all four)"
+    model: str = (
+        "a sum of up to four exponential modes (six where the readings use all four), of a warm-up that does not "
+        "overshoot: a rising sensor's T∞ not below its latest readings"
+    )
 
     def to_dict(self) -> dict[str, object]:
         """The JSON object of the answer's ``assumptions``.
@@ -427,7 +436,9 @@ def estimate_sensor(
             f"{len(binned)} reading{'' if len(binned) == 1 else 's'} since its warm-up began: too few for a model",
         )
     fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes, refine_within)
-    intervals = _nested(_with_room_wander(fit, room_C is not None, settings))
+    floor = overshoot_floor_C(fit, t[onset:], y[onset:], None if room is None else room, noise, rounding)
+    readings = {q: (max(lo, floor), hi) for q, (lo, hi) in fit.interval_C.items()}
+    intervals = _nested(_with_room_wander(fit, readings, room_C is not None, settings))
     ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, notes)
     return SensorEstimate(
         sensor,
@@ -752,16 +763,71 @@ def _taus(taus: tuple[float, ...]) -> str:
     return "τ " + ", ".join(f"{x:.3g}" for x in taus) + " min"
 
 
+def overshoot_floor_C(
+    fit: SteadyState,
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    noise_C: float,
+    rounding_C: float,
+) -> float:
+    """The lowest T∞ a warm-up that does not overshoot allows: its latest level, less the noise
+    and, with a room sensor, the most the room has stood above its latest level since the warm-up
+    began (a passive structure follows a room that fell only late, with a static gain of one).
+
+    With constant heat, every temperature of a structure started at rest, or partly warm and
+    still below its equilibrium, stays at or below its equilibrium (for a conductance network
+    e^(At) is elementwise non-negative; for a continuous body, the maximum principle): a model
+    whose T∞ lies below where the sensor already is describes a curve that came down from above,
+    which such a warm-up cannot make. Where the sensor does not rise to its fit's T∞, or its
+    latest readings lie below its highest by more than the noise (it cooled: an earlier heating
+    at more power, a heat input that fell), nothing is assumed: −inf.
+
+    Parameters
+    ----------
+    fit : SteadyState
+    time_min : ndarray, shape (N,)
+        The times since the warm-up began (min).
+    values : ndarray, shape (N,)
+        The readings since then (°C, NaN: missing).
+    room_C : ndarray, shape (N,), optional
+        The room's (smoothed) readings beside them.
+    noise_C, rounding_C : float
+        The readings' noise and display step (°C).
+
+    Returns
+    -------
+    float
+        The floor (°C), −inf where none holds.
+    """
+    ok = np.isfinite(values) if room_C is None else np.isfinite(values) & np.isfinite(room_C)
+    if ok.sum() < 2 * _LATEST_READINGS or not fit.determined or not np.isfinite(fit.steady_C):
+        return -np.inf
+    y = values[ok]
+    # levels as medians of a few readings, so that one noisy reading neither sets nor breaks the floor
+    levels = np.median(np.lib.stride_tricks.sliding_window_view(y, _LATEST_READINGS), axis=1)
+    latest, highest, first = float(levels[-1]), float(levels.max()), float(levels[0])
+    margin = _FLOOR_NOISES * noise_C + rounding_C
+    heated = fit.steady_C > first and latest > first + margin
+    if not heated or latest < highest - margin:
+        return -np.inf
+    excursion = 0.0
+    if room_C is not None:
+        room = room_C[ok]
+        excursion = max(float(np.max(room)) - float(room[-1]), 0.0)
+    return latest - margin - excursion
+
+
 def _with_room_wander(
-    fit: SteadyState, room_measured: bool, settings: RobustSettings
+    fit: SteadyState, readings: dict[float, tuple[float, float]], room_measured: bool, settings: RobustSettings
 ) -> dict[float, tuple[float, float]]:
-    """The intervals widened by the unmeasured room's wander: the room's random walk over the last
-    slowest-mode time constant (since the warm-up began) is not yet in the readings, and moves the
-    steady state at the room's level with it."""
+    """The intervals the readings give, widened by the unmeasured room's wander: the room's random
+    walk over the last slowest-mode time constant (since the warm-up began) is not yet in the
+    readings, and moves the steady state at the room's level with it."""
     if room_measured or settings.room_wander_C_per_h <= 0 or not fit.determined:
-        return dict(fit.interval_C)
+        return dict(readings)
     out = {}
-    for q, (lo, hi) in fit.interval_C.items():
+    for q, (lo, hi) in readings.items():
         extra = room_wander_half_width(fit.slowest_time_constant_min(), q, settings)
         out[q] = (
             fit.steady_C - float(np.hypot(fit.steady_C - lo, extra)),
