@@ -729,3 +729,33 @@ def test_a_refinement_that_has_not_settled_is_not_kept(monkeypatch):
     result = identify_feed_drive(record, refine=True)
     assert result.filter_parameters is None
     assert any(note.startswith("the open-loop refinement did not settle within 2 passes") for note in result.notes)
+
+
+def test_a_record_whose_every_force_is_zero_is_refused_saying_so(tmp_path):
+    """The only non-zero force column dropped: "the filter diverged ... the guess may be far from
+    the drive", or an exit 0 with Bt -59 % and Bb +219 % "doubtful". Nothing excites the drive."""
+    from dataclasses import replace
+
+    response = simulate(FeedDriveParameters(), duration_s=0.02, noise_fraction=0.01, rng=np.random.default_rng(2))
+    unforced = replace(response, forces=np.zeros_like(response.forces))
+    with pytest.raises(
+        InputError, match=r"every force column is zero \(F_t_N, F_b_N, T_b_Nm, T_m_Nm\): nothing excites the drive"
+    ):
+        identify_feed_drive(unforced)
+    path = write_response(unforced, tmp_path / "unforced.csv")
+    out = run("feeddrive", "identify", str(path))
+    assert out.returncode == 2 and "every force column is zero" in out.stderr and "diverged" not in out.stderr
+
+
+def test_the_first_run_says_it_compiles_the_filter_before_a_silent_minute(tmp_path, monkeypatch):
+    """The first run after installing compiled the filter for 84 s without a word where stderr is
+    no terminal (a spinner shows only on one)."""
+    import mtident.feeddrive.fast as fast
+
+    path = write_response(simulate(FeedDriveParameters(), duration_s=0.005), tmp_path / "r.csv")
+    monkeypatch.setattr(fast, "compiled_cache_ready", lambda: False)
+    out = run("feeddrive", "identify", str(path), "--no-refine")
+    assert out.returncode == 0, out.stderr
+    assert "compiling the filter first (once after installing: about a minute)" in out.stderr.splitlines()[0]
+    monkeypatch.setattr(fast, "compiled_cache_ready", lambda: True)
+    assert "compiling" not in run("feeddrive", "identify", str(path), "--no-refine").stderr

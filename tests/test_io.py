@@ -1454,3 +1454,80 @@ def test_a_log_built_by_hand_is_checked_like_one_read_from_a_file():
         TemperatureLog(t, "T1", y[:, None])  # type: ignore[arg-type]
     with pytest.raises(InputError, match="must be numbers"):
         TemperatureLog(t, ("T1",), [["hot"]] * 100)
+
+
+def test_decimal_commas_in_a_comma_separated_export_are_refused_with_the_reason(write_csv):
+    """A classic broken export: a decimal comma in a comma-separated file splits each reading in
+    two. It was read with one sensor as the integer parts and the next as the decimal parts (a
+    ParserWarning leaked out), and identified as T∞ -4,895 to 7,209 °C."""
+    rows = "".join(f"26.11.2026 07:{m:02d}:00,22,{70 + m},21,{60 + m}\n" for m in range(0, 20, 2))
+    path = write_csv("Zeit,Bearing,Housing\n" + rows)
+    with pytest.raises(
+        InputError,
+        match=r"log\.csv: line 2 has 5 cells where the header has 3 \(Zeit, Bearing, Housing\): "
+        r"'26\.11\.2026 07:00:00,22,70,21,60'; .*likely decimal commas in a comma-separated file: '22,70' is one "
+        r"reading split in two\); export it with ';'",
+    ):
+        read_temperature_log(path)
+
+
+def test_a_row_longer_than_the_header_after_the_first_is_refused_with_the_reason(write_csv):
+    rows = "".join(f"{m},{20 + m / 10:.1f}\n" for m in range(8)) + "8,21.3,5\n"
+    with pytest.raises(InputError, match=r"line 10 has 3 cells where the header has 2 \(time_min, A\)"):
+        read_temperature_log(write_csv("time_min,A\n" + rows))
+
+
+def test_empty_cells_beyond_the_header_are_no_reading_and_read_as_before(write_csv):
+    rows = "".join(f"{m},{20 + m / 10:.1f},,\n" for m in range(8))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows))
+    np.testing.assert_allclose(log.temperature_C[:, 0], 20 + np.arange(8) / 10)
+
+
+def test_a_half_written_last_line_is_left_out_and_said(write_csv):
+    """A log still being written ends in a cut line without its line end; inspect and identify
+    read it as a reading (2.00 °C, trusted); watch leaves it out, and so must the file reader."""
+    rows = "".join(
+        f"26.11.2026 {7 + m // 60:02d}:{m % 60:02d}:00;{22 + m / 10:.2f};{21 + m / 20:.2f}\n" for m in range(0, 40, 2)
+    )
+    path = write_csv(
+        "Zeit;Lager;Gehäuse\n" + rows.replace(".", ",").replace(",11,2026", ".11.2026") + "26.11.2026 07:40:00;29,3"
+    )
+    log = read_temperature_log(path)
+    assert len(log.time_min) == 20
+    assert not np.isnan(log.temperature_C).any()
+    assert any(
+        "left out the last line, '26.11.2026 07:40:00;29,3': it has no line end and 2 of the 3 cells" in note
+        for note in log.notes
+    ), log.notes
+
+
+def test_a_last_line_without_a_line_end_but_complete_is_read(write_csv):
+    rows = "".join(f"{m},{20 + m / 10:.1f},{21 + m / 10:.1f}\n" for m in range(8))
+    log = read_temperature_log(write_csv("time_min,A,B\n" + rows + "8,21.3,22.4"))
+    assert len(log.time_min) == 9 and not any("last line" in note for note in log.notes)
+
+
+def test_a_room_far_outside_a_workshops_range_read_as_celsius_is_said(write_csv):
+    """A log in °F without a unit row: a room at 69 "°C" and a machine at 70-92 were taken as °C
+    without a word (with a °F units row they convert, rightly)."""
+    rows = "".join(f"{m},{70 + 22 * (1 - np.exp(-m / 40)):.2f},{69 + m / 100:.2f}\n" for m in range(0, 60, 2))
+    log = read_temperature_log(write_csv("time_min,spindle,room\n" + rows))
+    said = [note for note in log.notes if "far outside any workshop's range" in note]
+    assert said and "'room' reads 69 to 69.58" in said[0] and "°F" in said[0] and "units row" in said[0], log.notes
+    converted = read_temperature_log(write_csv("time_min,spindle,room\nmin,°F,°F\n" + rows, "stated.csv"))
+    assert not any("workshop" in note for note in converted.notes)
+
+
+def test_every_column_far_above_a_workshops_range_read_as_celsius_is_said(write_csv):
+    rows = "".join(
+        f"{m},{70 + 22 * (1 - np.exp(-m / 40)):.2f},{69 + 9 * (1 - np.exp(-m / 60)):.2f}\n" for m in range(0, 60, 2)
+    )
+    log = read_temperature_log(write_csv("time_min,spindle,housing\n" + rows))
+    assert any("every column reads above 40 °C" in note and "°F" in note for note in log.notes), log.notes
+    warm = "".join(
+        f"{m},{22 + 10 * (1 - np.exp(-m / 40)):.2f},{21 + 4 * (1 - np.exp(-m / 60)):.2f}\n" for m in range(0, 60, 2)
+    )
+    assert not any(
+        "workshop" in note
+        for note in read_temperature_log(write_csv("time_min,spindle,housing\n" + warm, "c.csv")).notes
+    )

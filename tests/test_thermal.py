@@ -1053,3 +1053,47 @@ def test_the_papers_filters_say_whether_the_measured_final_temperature_had_settl
     assert summary["measured_final_C"] is not None and summary["measured_settled"] is False
     flat = 20.0 + 20.0 * (1.0 - np.exp(-t / 30.0)) + 0.01 * np.random.default_rng(5).standard_normal(t.size)
     assert identify(make_log(t, {"T1": flat}), 60.0, "ukf").summary(0)["measured_settled"] is True
+
+
+def _late_and_slow_log(seed: int) -> object:
+    """A front sensor warming from the start; a rear one whose warm-up begins 2.5 min before a
+    30-min window ends; a slow one (time constant 2,000 min) that rises 0.45 °C in the window;
+    readings in 0.1 °C steps."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 181.0)
+
+    def reading(x: np.ndarray) -> np.ndarray:
+        return np.round((x + rng.normal(0.0, 0.02, x.shape)) / 0.1) * 0.1
+
+    return make_log(
+        t,
+        {
+            "front": reading(20 + 10 * (1 - np.exp(-t / 40))),
+            "rear": reading(20 + 8 * (1 - np.exp(-np.clip(t - 27.5, 0.0, None) / 35))),
+            "slow": reading(20 + 30 * (1 - np.exp(-t / 2000))),
+        },
+    )
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_the_papers_filters_do_not_trust_a_fit_on_a_few_minutes_of_rise(method):
+    """`identify --window 30 --method afukf` gave headstock rear T∞ 8,217,125.55 °C, interval
+    -18,059,456 to 34,493,707, model_ok true, while the same run said its warm-up had begun 2.5 min
+    before the window's end."""
+    result = identify(_late_and_slow_log(0), 30.0, method)
+    rear = result.summary(1)
+    assert not rear["model_ok"]
+    assert any("not trusted: its warm-up began" in w and "of rise" in w for w in rear["warnings"]), rear["warnings"]
+    assert result.summary(0)["model_ok"]
+
+
+def test_the_papers_filters_do_not_trust_an_interval_wider_than_physics_allows():
+    """lsq on a sensor that rose 0.45 °C in the window: T∞ 13,120 °C, interval -2,035,000 to
+    2,062,000 °C, model_ok true."""
+    result = identify(_late_and_slow_log(0), 30.0, "lsq")
+    slow = result.summary(2)
+    lo, hi = slow["steady_state_ci95_C"]
+    assert hi - lo > 1000.0  # the absurd answer this guards against
+    assert not slow["model_ok"]
+    assert any("not trusted: the 95 % interval of T∞" in w for w in slow["warnings"]), slow["warnings"]
+    assert result.summary(0)["model_ok"]

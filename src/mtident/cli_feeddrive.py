@@ -105,7 +105,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
     type=FiniteFloatRange(),
     default=20.0,
     show_default=True,
-    help="Force amplitude (N or N m), of every excitation.",
+    help="Force amplitude (N or N m), of every excitation; an impulse holds it for one sample: amplitude / fs.",
 )
 @click.option("--excitation", "kind", type=click.Choice(EXCITATION_KINDS), default="impulse", show_default=True)
 @click.option(
@@ -333,6 +333,14 @@ def identify_command(
     truth = load_parameters(truth_path) if truth_path else None
     steps = len(response.time_s)
     compiling = "the first run after installing also compiles the filter"
+    from mtident.feeddrive import fast
+
+    if not fast.compiled_cache_ready() and not stderr.is_terminal:
+        # a spinner shows on a terminal alone: elsewhere (a pipe, a CI log) a minute passed without a word
+        stderr.print(
+            f"mtident: filtering {steps} samples: compiling the filter first (once after installing: about a minute)",
+            highlight=False,
+        )
     with stderr.status(f"filtering {steps} samples… ({compiling})") as status:
         result = identify_feed_drive(
             response,

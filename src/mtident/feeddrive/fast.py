@@ -18,7 +18,7 @@ from numba import njit
 
 from mtident._typing import FloatArray
 
-__all__ = ["run_feed_drive_ukf", "response_moments", "covariance_recursion"]
+__all__ = ["run_feed_drive_ukf", "response_moments", "covariance_recursion", "compiled_cache_ready"]
 
 
 @njit(cache=True, fastmath=False)
@@ -433,3 +433,23 @@ def covariance_recursion(
         scatter = closed @ scatter @ closed.T + gain @ emission_cov @ gain.T
         scatter = 0.5 * (scatter + scatter.T)
     return cov, scatter
+
+
+def compiled_cache_ready() -> bool:
+    """Whether numba's cache on disk holds the compiled loops (a run then loads them in about a
+    second); False where it does not, or where it cannot be told: the first run after installing
+    compiles them, about a minute that a caller should say before it begins.
+
+    Returns
+    -------
+    bool
+        True where each loop's cache index file exists (numba checks the source's time stamp
+        when it loads it: an index from an older source compiles again, which this does not see).
+    """
+    import os
+
+    loops: tuple[object, ...] = (run_feed_drive_ukf, response_moments, covariance_recursion)
+    # numba's cache is internal: another version may keep it otherwise, and then this says False
+    files = [getattr(getattr(loop, "_cache", None), "_cache_file", None) for loop in loops]
+    paths = [getattr(file, "_index_path", None) for file in files]
+    return all(isinstance(path, str) and os.path.exists(path) for path in paths)

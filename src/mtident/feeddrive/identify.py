@@ -639,11 +639,19 @@ def identify_feed_drive(
     ------
     InputError
         An unknown option, a response the measurement set needs but the record lacks, a dead
-        channel, or a sampling rate too low for the guess's highest mode.
+        channel, every force zero, or a sampling rate too low for the guess's highest mode.
     DivergenceError
         The filter's numbers stopped being finite on a record it accepted.
     """
     guess = validate(guess or default_guess())
+    if not np.any(response.forces):
+        # the filter then follows noise about rest: it diverged, or kept a guess far from the drive
+        msg = (
+            f"every force column is zero ({', '.join(FORCE_COLUMNS)}): nothing excites the drive, so its record "
+            "holds nothing to identify; give the measured force or torque that drove it (a force column a file "
+            "lacks is taken as zero)"
+        )
+        raise InputError(msg)
     indices = _measured_indices(response, measured)
     for option, value, allowed in (("preset", preset, ("default", "paper")), ("engine", engine, ("compiled", "numpy"))):
         if value not in allowed:

@@ -23,6 +23,7 @@ import datetime
 import io
 import math
 import re
+import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -622,16 +623,20 @@ def _header_line(head: bytes, dialect: CsvDialect) -> str:
     return _LINE_BREAK.split(dialect.decode(head))[dialect.preamble_lines]
 
 
-def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
+def read_csv(path: str | Path, notes: list[str] | None = None) -> tuple[pd.DataFrame, CsvDialect]:
     """A whole CSV file as a DataFrame, read in its own dialect; InputError, naming ``path`` as
     given, if it is missing or no CSV.
 
-    An empty column without a name (a delimiter at the end of every line) is dropped.
+    An empty column without a name (a delimiter at the end of every line) is dropped. A row with
+    more cells than the header is refused (:func:`_check_rows`); a last line cut short, without its
+    line end (a log still being written), is left out, and said in ``notes``.
 
     Parameters
     ----------
     path : str or Path
         The file: CSV text in any dialect :func:`sniff_dialect` tells, or an Excel .xlsx workbook.
+    notes : list of str, optional
+        What was left out is appended here (a cut last line); not said where None.
 
     Returns
     -------
@@ -645,7 +650,7 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
     ------
     InputError
         The file is missing, binary or an .xls workbook, has no header line or two columns of one name,
-        or pandas cannot parse it.
+        a row with more cells than the header, or pandas cannot parse it.
     """
     import pandas as pd
 
@@ -657,6 +662,7 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         head = handle.read(HEAD_BYTES)
     source: Path | io.BytesIO = file
     kind = binary_kind(head)
+    data = None
     if kind in ("xlsx", "xls"):
         data = workbook_as_csv(file, path)
         head, source = data[:HEAD_BYTES], io.BytesIO(data)
@@ -674,24 +680,35 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         msg = f"{path}: no header line, only # comments and blank lines"
         raise InputError(msg)
     dialect = dialect or CsvDialect()
+    cut = None
     if head.strip():
         check_unique_names(dialect.header(_header_line(head, dialect)), path)
+        try:
+            cut = _check_rows(dialect.decode(file.read_bytes() if data is None else data), dialect, path)
+        except InputError as exc:
+            if _looks_like_toml(head):
+                msg = _TOML_GIVEN.format(path=path)
+                raise InputError(msg) from exc
+            raise
     try:
-        frame = pd.read_csv(
-            source,
-            sep=dialect.delimiter,
-            decimal=dialect.decimal,
-            # the preamble, and a units row under the header
-            skiprows=[*range(dialect.preamble_lines), *range(dialect.preamble_lines + 1, dialect.head_lines)],
-            encoding=dialect.encoding,
-            skipinitialspace=True,
-            # a delimiter at the end of the data rows alone: the first column stays the time, not an index
-            index_col=False,
-        )
+        with warnings.catch_warnings():
+            # cells past the header's are empty (_check_rows refused any other): nothing is lost
+            warnings.filterwarnings("ignore", "Length of header or names does not match", pd.errors.ParserWarning)
+            frame = pd.read_csv(
+                source,
+                sep=dialect.delimiter,
+                decimal=dialect.decimal,
+                # the preamble, and a units row under the header
+                skiprows=[*range(dialect.preamble_lines), *range(dialect.preamble_lines + 1, dialect.head_lines)],
+                encoding=dialect.encoding,
+                skipinitialspace=True,
+                # a delimiter at the end of the data rows alone: the first column stays the time, not an index
+                index_col=False,
+            )
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         msg = f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})"
         if _looks_like_toml(head):
-            msg = f"{path}: a TOML file (name = value lines), not a CSV file of readings; give the CSV log here"
+            msg = _TOML_GIVEN.format(path=path)
         raise InputError(msg) from exc
     frame.columns = [str(c).removeprefix("\ufeff") for c in frame.columns]  # UTF-16's byte-order mark
     if dialect.names:  # by position: pandas has renamed a repeated name ("Date/Time.1"), left as it is
@@ -699,8 +716,63 @@ def read_csv(path: str | Path) -> tuple[pd.DataFrame, CsvDialect]:
         frame.columns = [
             new[i] if i in new and new[i] != dialect.written_names[i] else c for i, c in enumerate(frame.columns)
         ]
+    if cut is not None and len(frame):
+        frame = frame.iloc[:-1]
+        if notes is not None:
+            notes.append(cut)
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
     return frame.drop(columns=unnamed), dialect
+
+
+_TOML_GIVEN = "{path}: a TOML file (name = value lines), not a CSV file of readings; give the CSV log here"
+# a line quoted in a message is cut to this many characters
+_QUOTED_LINE = 80
+_INTEGER = re.compile(r"^[+-]?\d+$")
+
+
+def _check_rows(text: str, dialect: CsvDialect, path: str | Path) -> str | None:
+    """Refuse a data row with more cells than the header where the cells past it hold something:
+    pandas read such a file with each row's first cells under the header's names and dropped the
+    rest (a comma-separated export with decimal commas: one sensor's integer parts read as its
+    readings, the next sensor's decimal parts as the next one's). Returns a note on a last line
+    cut short (no line end, fewer cells than the line before it: a log still being written, which
+    :class:`~mtident.io.follow.LogFollower` waits for), which the reader leaves out; None if none."""
+    lines = _LINE_BREAK.split(text)
+    header = dialect.cells(lines[dialect.preamble_lines])
+    count = len(header)
+    previous = count
+    rows = csv.reader(lines[dialect.head_lines :], delimiter=dialect.delimiter)
+    last: list[str] = []
+    for row in rows:
+        if not row:
+            continue
+        if len(row) > count and any(cell.strip() for cell in row[count:]):
+            number = dialect.head_lines + rows.line_num
+            line = lines[number - 1]
+            quoted = repr(line if len(line) <= _QUOTED_LINE else line[:_QUOTED_LINE] + "...")
+            msg = (
+                f"{path}: line {number} has {len(row)} cells where the header has {count} ({', '.join(header)}): "
+                f"{quoted}; a row's readings would land under the wrong names"
+            )
+            readings = [cell.strip() for cell in row[1:] if cell.strip()]
+            if dialect.delimiter == "," and len(readings) >= 2 and all(_INTEGER.match(cell) for cell in readings):
+                msg += (
+                    f" (likely decimal commas in a comma-separated file: '{readings[0]},{readings[1]}' is one "
+                    "reading split in two); export it with ';' or tabs between the cells, or with a decimal point"
+                )
+            raise InputError(msg)
+        previous, last = len(last) or previous, row
+    ended = text.endswith(("\n", "\r"))
+    # fewer cells than the header too: a row that leaves out the header's last column (a logger's
+    # event column) or a trailing delimiter is whole
+    if ended or not lines[-1].strip() or len(last) >= min(previous, count) or len(lines) <= dialect.head_lines:
+        return None
+    line = lines[-1]
+    quoted = repr(line if len(line) <= _QUOTED_LINE else line[:_QUOTED_LINE] + "...")
+    return (
+        f"left out the last line, {quoted}: it has no line end and {len(last)} of the {previous} cells of the line "
+        "before it (a log still being written; `thermal watch` follows it as it grows)"
+    )
 
 
 def binary_kind(head: bytes) -> str | None:

@@ -34,6 +34,7 @@ from mtident.io.columns import (
     choose_time_column,
     millisecond_column,
     missing_column,
+    room_named,
     temperature_columns,
     text_only_cells,
 )
@@ -80,6 +81,8 @@ __all__ = [
     "OPEN_CIRCUIT_LOW_C",
     "TIME_UNITS",
     "time_unit_factor",
+    "scale_note",
+    "WORKSHOP_ROOM_C",
 ]
 
 # A PT100 channel with a broken wire reads far outside any machine-tool temperature.
@@ -360,6 +363,8 @@ def unit_overridden_note(header: str, time_unit: str | None, stated: str | None)
     )
 
 
+# A workshop's air (°C), heated or not: a room read far outside it is more likely in °F or K
+WORKSHOP_ROOM_C = (5.0, 40.0)
 # A warm-up is hours long: a time column read as minutes (no unit given anywhere) that runs past two
 # days is more likely seconds.
 UNLIKELY_MINUTES = 2 * 1440.0
@@ -964,8 +969,10 @@ def read_temperature_log(
         cells, time not increasing or duplicated, too few samples, too many bad
         samples in a sensor.
     """
-    frame, dialect, source, first_row = _as_frame(path)
+    read_notes: list[str] = []
+    frame, dialect, source, first_row = _as_frame(path, read_notes)
     notes: list[str] = [renamed] if (renamed := dialect.renaming()) else []
+    notes.extend(read_notes)
     first_cells = [str(v) for v in frame.iloc[0]] if len(frame) else []
     header, counter, time_notes = choose_time_column([str(c) for c in frame.columns], first_cells, dialect, time_col)
     notes.extend(time_notes)
@@ -1008,6 +1015,8 @@ def read_temperature_log(
     if (gap := gap_note(time_min)) is not None:
         notes.append(gap)
     columns = [_sensor_readings(frame, name, dialect, source, first_row, notes) for name in sensors]
+    if (scale := scale_note(sensors, np.column_stack(columns), dialect)) is not None:
+        notes.append(scale)
     return TemperatureLog(
         time_min,
         tuple(sensors),
@@ -1018,9 +1027,53 @@ def read_temperature_log(
     )
 
 
-def _as_frame(path: str | Path | pd.DataFrame) -> tuple[pd.DataFrame, CsvDialect, str, int]:
+def scale_note(sensors: list[str], values: FloatArray, dialect: CsvDialect) -> str | None:
+    """What a reader says when columns read as °C for want of a stated unit read far outside any
+    workshop's range (``WORKSHOP_ROOM_C``): a column named as the room (:func:`room_named`), or
+    every column above the range's top (at a warm-up's start the machine is near the room). A log in
+    °F (a room at 69) or K was taken as °C without a word. None otherwise.
+
+    Parameters
+    ----------
+    sensors : list of str
+        The sensor columns' names.
+    values : ndarray, shape (N, S)
+        Their readings as read (°C where a unit was stated, else the numbers as written; NaN: missing).
+    dialect : CsvDialect
+        The log's dialect, which says which columns state their unit.
+
+    Returns
+    -------
+    str or None
+    """
+    low, high = WORKSHOP_ROOM_C
+    assumed = [k for k, name in enumerate(sensors) if not dialect.unit_of(name).strip()]
+    spans = {}
+    for k in assumed:
+        valid = values[:, k][np.isfinite(values[:, k])]
+        if len(valid):
+            spans[k] = (float(np.min(valid)), float(np.median(valid)), float(np.max(valid)))
+    rooms = [k for k in spans if room_named(sensors[k]) and not low <= spans[k][1] <= high]
+    if rooms:
+        which = "; ".join(f"{sensors[k]!r} reads {spans[k][0]:g} to {spans[k][2]:g}" for k in rooms) + " as the room"
+    elif spans and len(spans) == len(sensors) and all(span[0] > high for span in spans.values()):
+        which = (
+            f"every column reads above {high:g} °C (the lowest {min(span[0] for span in spans.values()):g}), "
+            "none near the room"
+        )
+    else:
+        return None
+    return (
+        f"readings taken as °C (the log states no unit), but {which}: far outside any workshop's range "
+        f"({low:g} to {high:g} °C). If the log is in °F (or K), state the unit and it is converted: a units row "
+        "under the header (min;°F;°F) or the unit in the column names (Room [°F])"
+    )
+
+
+def _as_frame(path: str | Path | pd.DataFrame, notes: list[str]) -> tuple[pd.DataFrame, CsvDialect, str, int]:
     """The log as a table with stripped column names, its dialect, its name for the messages and
-    the row number a message gives its first data row."""
+    the row number a message gives its first data row; what the file's reader left out goes to
+    ``notes`` (a cut last line)."""
     import pandas as pd  # here, not at import: 0.4 s of start-up that `watch` does not need
 
     first_row = 1  # in messages, a CSV file's first data line is its row 2 (after the header)
@@ -1033,7 +1086,7 @@ def _as_frame(path: str | Path | pd.DataFrame) -> tuple[pd.DataFrame, CsvDialect
         if isinstance(path, str) and path in SAMPLES:
             path = sample_log_path(path)
         source = str(path)
-        frame, dialect = read_csv(path)
+        frame, dialect = read_csv(path, notes)
         first_row += dialect.head_lines
     frame.columns = [str(c).strip() for c in frame.columns]
     if isinstance(path, pd.DataFrame):  # a CSV file's header was checked by read_csv, before pandas renamed a repeat

@@ -16,7 +16,7 @@ from scipy.special import fdtri, stdtrit
 from mtident._json import finite_or_none
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
-from mtident.io.logs import TemperatureLog, as_temperature_log, unit_doubted
+from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog, as_temperature_log, unit_doubted
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 from mtident.thermal.model import (
@@ -62,6 +62,13 @@ __all__ = [
 
 Z95 = 1.959963984540054
 MIN_WINDOW_SAMPLES = 6
+# A first-order fit to fewer minutes of rise than this is not trusted: a thermal time constant is
+# tens of minutes, and a few minutes of its rise are nearly straight (:func:`_untrusted`).
+MIN_RISE_SEEN_MIN = 5.0
+# A T∞ interval wider than this many times the rise seen so far, plus the margin (°C), states
+# nothing physics allows of a machine part's warm-up (:func:`_untrusted`).
+MAX_HALF_PER_RISE = 5.0
+MAX_HALF_MARGIN_C = 5.0
 
 
 @dataclass(frozen=True)
@@ -106,6 +113,9 @@ class Identification:
         Whether the log's last quarter moved less than ``SETTLED_MOVE_C``, with at most half that
         still to come at the pace of the largest time constant: only then is the measured final
         temperature where the sensor settles to the tolerance's precision.
+    untrusted : ndarray of bool, shape (S,), optional
+        An answer no physics allows, or fitted to a few minutes of rise (said in ``notes``):
+        ``model_ok`` is then false.
     """
 
     sensors: tuple[str, ...]
@@ -134,6 +144,7 @@ class Identification:
     notes: tuple[str, ...]
     quantile: float = Z95
     measured_settled: np.ndarray | None = None
+    untrusted: np.ndarray | None = None
 
     def __repr__(self) -> str:
         # a notebook shows the answer, not ~40 kB of arrays
@@ -231,7 +242,9 @@ class Identification:
             "equilibrium_time_min": finite_or_none(self.equilibrium_time_min[index]),
             "rmse_C": finite_or_none(self.rmse_C[index]),
             "model_fits": bool(self.fits[index]),
-            "model_ok": bool(self.fits[index]) and not undetermined,
+            "model_ok": bool(self.fits[index])
+            and not undetermined
+            and not (self.untrusted is not None and self.untrusted[index]),
             "warnings": sensor_notes(self.notes, name),
             "assumptions": FIRST_ORDER_ASSUMPTIONS,
             "residual_chi2": finite_or_none(self.fit_chi2[index]),
@@ -991,6 +1004,7 @@ def _identify(
     eq_time = np.where(no_rise, np.nan, eq_time)
     quantile = float(stdtrit(max(n_window - 3, 1), 0.975))
     _say_undetermined(log, tw, quantile * steady_sd, rise, no_rise, notes)
+    untrusted = _untrusted(log, tw, start.begins, steady, quantile * steady_sd, rise, no_rise, notes)
     n_log = len(t)
     measured_part = np.full((len(times), y.shape[1]), np.nan)
     measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]
@@ -1026,7 +1040,52 @@ def _identify(
         measured_settled=settled,
         notes=tuple(notes),
         quantile=quantile,
+        untrusted=untrusted,
     )
+
+
+def _untrusted(
+    log: TemperatureLog,
+    tw: FloatArray,
+    begins: FloatArray,
+    steady: FloatArray,
+    half: FloatArray,
+    rise: FloatArray,
+    no_rise: np.ndarray,
+    notes: list[str],
+) -> np.ndarray:
+    """Which sensors' answers no physics allows, or that rest on too little rise, each said in
+    ``notes``: a fit to fewer than ``MIN_RISE_SEEN_MIN`` minutes of rise (a warm-up that began just
+    before the window's end: the filters then gave T∞ of millions of °C), or an interval reaching
+    outside the temperatures a machine part can have, or wider than ``MAX_HALF_PER_RISE`` times the
+    rise so far plus ``MAX_HALF_MARGIN_C``."""
+    seen = tw[-1] - begins
+    with np.errstate(invalid="ignore"):
+        short = ~no_rise & (seen < MIN_RISE_SEEN_MIN)
+        wide = (
+            ~no_rise
+            & ~short
+            & np.isfinite(half)
+            & (
+                (steady - half < OPEN_CIRCUIT_LOW_C)
+                | (steady + half > OPEN_CIRCUIT_HIGH_C)
+                | (half > MAX_HALF_PER_RISE * rise + MAX_HALF_MARGIN_C)
+            )
+        )
+    for s in np.flatnonzero(short).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: not trusted: its warm-up began {seen[s]:g} min before the window's end "
+            f"(at t = {begins[s]:g} min); a first-order fit to {seen[s]:g} min of rise cannot tell where it bends "
+            f"(at least {MIN_RISE_SEEN_MIN:g} min are needed): use a longer `window_min`"
+        )
+    for s in np.flatnonzero(wide).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: not trusted: the 95 % interval of T∞, {steady[s] - half[s]:.4g} to "
+            f"{steady[s] + half[s]:.4g} °C, is wider than physics allows (± {half[s]:.3g} °C for a rise of "
+            f"{rise[s]:.2g} °C so far; a machine part stays within {OPEN_CIRCUIT_LOW_C:g} to {OPEN_CIRCUIT_HIGH_C:g} "
+            "°C): the window's course does not determine it; use a longer `window_min`"
+        )
+    return short | wide
 
 
 def _future_times(
