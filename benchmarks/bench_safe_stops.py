@@ -22,7 +22,7 @@ rules; their failures were looked at (a conduction body's far sensor fitted with
 confidence; fast transients taking the place of a slow mode in a three-mode family) and the
 rules changed, so they are no longer held out. The default seeds (3000 on) were never looked at
 before this benchmark ran; 3000-3499, 4000-4299, 5000-5299, 6000-6499 and 8000-8199 have been
-since (docs/results.md says which rules each measured).
+since (the commit messages of docs/results.md say which rules each measured).
 
 Run: python benchmarks/bench_safe_stops.py --cases 500 --out results.jsonl [--shard 1/2]
      python benchmarks/bench_safe_stops.py --report results.jsonl

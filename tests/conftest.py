@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import os
 import sys
+import time
+from collections.abc import Callable
+from typing import TypeVar
 
 # One BLAS thread per test process: the suite runs a process per core (pytest-xdist), and a
 # multithreaded BLAS in each of them oversubscribes the cores and slows the suite a lot. Set
@@ -43,6 +46,21 @@ def first_order(
 
 def make_log(t: np.ndarray, columns: dict[str, np.ndarray]) -> TemperatureLog:
     return TemperatureLog(t, tuple(columns), np.column_stack(list(columns.values())), (), "test")
+
+
+_T = TypeVar("_T")
+
+
+def wait_until(condition: Callable[[], _T], what: str, timeout_s: float = 30.0, poll_s: float = 0.05) -> _T:
+    """Poll ``condition`` until it returns a true value, and return that value: a deadline instead
+    of a fixed sleep, so that a slow machine waits longer and a fast one not at all. At the
+    deadline the test fails, saying ``what`` did not happen."""
+    deadline = time.monotonic() + timeout_s
+    while not (value := condition()):
+        if time.monotonic() > deadline:
+            pytest.fail(f"{what}: not within {timeout_s:g} s")
+        time.sleep(poll_s)
+    return value
 
 
 @pytest.fixture

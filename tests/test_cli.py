@@ -33,6 +33,7 @@ def mtident(*args: str) -> Outcome:
     return Outcome(result.exit_code, result.stdout, result.stderr)
 
 
+@pytest.mark.slow
 def test_python_dash_m_mtident_runs_end_to_end():
     """Smoke test of the entry point in a process of its own: one JSON object on stdout, exit 0.
     (The other tests call the command in-process; test_watch runs `python -m mtident thermal
@@ -360,6 +361,7 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     assert json.loads(out.stdout)["min_identification_time_min"] > 0
 
 
+@pytest.mark.slow
 def test_plots_leave_the_users_matplotlib_alone_and_return_a_figure_without_a_path():
     """Importing the plots used to switch matplotlib to Agg: a notebook's inline plots stopped showing."""
     code = (
@@ -398,6 +400,7 @@ def loaded_modules(tmp_path_factory: pytest.TempPathFactory) -> dict[str, bool]:
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 @pytest.mark.xdist_group("one fresh process")
 def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats(loaded_modules):
     """Start-up: commands load on first use (`mtident --version` took 0.60-0.78 s with every
@@ -411,6 +414,7 @@ def test_a_thermal_command_loads_neither_the_feed_drive_code_nor_scipy_stats(loa
     }
 
 
+@pytest.mark.slow
 @pytest.mark.xdist_group("one fresh process")
 def test_watch_of_a_numeric_log_does_not_load_pandas(loaded_modules):
     """pandas costs 0.5 s of start-up; a check for two-column time stamps loaded it for every log

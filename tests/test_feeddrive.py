@@ -171,11 +171,10 @@ def test_identification_from_all_twelve_responses():
     assert all(errors[k] < 0.02 for k in ("K1", "K2", "K3", "K4"))
     covered = result.covers(truth)
     assert all(covered.values()), covered
-    for i, name in enumerate(IDENTIFIED):
-        if name.startswith(("B", "Q")) and result.identifiable[i]:
-            assert errors[name] < 20.0, (name, errors[name])
     # a parameter the data cannot pin down is reported, not given a confident wrong number
     assert [name for name, known in zip(IDENTIFIED, result.identifiable, strict=True) if not known] == ["Bt", "Bb"]
+    # the friction the data do pin down is within 20 %
+    assert errors["Qb"] < 20.0 and errors["Qm"] < 20.0, errors
     assert result.reproduces_record()
     assert all(r > 0.99 for r in result.correlation.values())
 
@@ -624,27 +623,34 @@ def test_binary_sequences_are_maximal_length():
         np.testing.assert_array_equal(circular, -1.0)
 
 
-@pytest.mark.parametrize(
-    ("kind", "swept"),
-    [("sweep", True), ("multisine", True), ("prbs", False), ("impulse", False), ("step", False), ("sine", False)],
-)
-def test_a_swept_excitation_is_said_to_bias_damping(kind, swept):
-    """Sweeps and Schroeder multisines (a periodic chirp) gave biased damping in simulation: the
-    identification says so, from the force alone; the other excitations are not called sweeps."""
+def _sweep_note_of(kind: str) -> list[str]:
+    """What the identification says of an excitation's force, 0.3 s of it at 10 kHz."""
     from mtident.feeddrive.identify import _sweep_note
 
     h = 1e-4
-    forces = Excitation(kind).forces(np.arange(0.0, 0.3, h))
-    said = _sweep_note(forces, h)
-    assert bool(said) is swept
-    if swept:
-        assert said[0].startswith("the excitation sweeps through its band (F_t_N from about ")
-        assert "biased beyond their own intervals" in said[0]
-    if kind == "sweep":
-        record = simulate(
-            FeedDriveParameters(), Excitation(kind), duration_s=0.3, noise_fraction=0.01, rng=np.random.default_rng(5)
-        )
-        assert identify_feed_drive(record, default_guess()).notes[0] == said[0]
+    return _sweep_note(Excitation(kind).forces(np.arange(0.0, 0.3, h)), h)
+
+
+@pytest.mark.parametrize("kind", ["sweep", "multisine"])
+def test_a_swept_excitation_is_said_to_bias_damping(kind):
+    """Sweeps and Schroeder multisines (a periodic chirp) gave biased damping in simulation: the
+    identification says so, from the force alone."""
+    said = _sweep_note_of(kind)
+    assert len(said) == 1
+    assert said[0].startswith("the excitation sweeps through its band (F_t_N from about ")
+    assert "biased beyond their own intervals" in said[0]
+
+
+@pytest.mark.parametrize("kind", ["prbs", "impulse", "step", "sine"])
+def test_the_other_excitations_are_not_called_sweeps(kind):
+    assert _sweep_note_of(kind) == []
+
+
+def test_an_identification_from_a_sweep_says_so_first():
+    record = simulate(
+        FeedDriveParameters(), Excitation("sweep"), duration_s=0.3, noise_fraction=0.01, rng=np.random.default_rng(5)
+    )
+    assert identify_feed_drive(record, default_guess()).notes[0] == _sweep_note_of("sweep")[0]
 
 
 def test_the_open_loop_refinement_recovers_a_noiseless_drive_from_a_biased_start():

@@ -55,6 +55,7 @@ def test_probe_and_streams_are_read_as_the_standard_writes_them():
         parse_streams(agent.answer("/nowhere", {})[1].encode())
 
 
+@pytest.mark.slow
 def test_a_stopped_and_restarted_agent_loses_and_doubles_no_sample(agent_server, tmp_path):
     agent, server = agent_server
     log = tmp_path / "vmc1.csv"
@@ -85,6 +86,7 @@ def test_a_stopped_and_restarted_agent_loses_and_doubles_no_sample(agent_server,
         MTConnectRecorder(server.url, log, device="VMC2")
 
 
+@pytest.mark.slow
 def test_an_answer_cut_at_the_count_is_not_written_in_part(agent_server, tmp_path, monkeypatch):
     import mtident.io.mtconnect as mtconnect
 
@@ -99,6 +101,7 @@ def test_an_answer_cut_at_the_count_is_not_written_in_part(agent_server, tmp_pat
     assert np.isfinite(recorded.temperature_C).all()
 
 
+@pytest.mark.slow
 def test_a_new_agent_instance_and_a_wrapped_buffer_are_said(agent_server, tmp_path):
     agent, server = agent_server
     recorder = MTConnectRecorder(server.url, tmp_path / "vmc1.csv", device="VMC1")
@@ -113,6 +116,7 @@ def test_a_new_agent_instance_and_a_wrapped_buffer_are_said(agent_server, tmp_pa
     assert "the agent was restarted (a new instance)" in recorder.fetch()[0]
 
 
+@pytest.mark.slow
 def test_unavailable_is_a_missing_reading_and_unknown_items_are_refused(agent_server, tmp_path):
     agent, server = agent_server
     publish(agent, range(0, 3))
@@ -130,6 +134,7 @@ def test_unavailable_is_a_missing_reading_and_unknown_items_are_refused(agent_se
         wrong.fetch()
 
 
+@pytest.mark.slow
 def test_watch_follows_an_agent_and_decides_as_the_replay_of_its_record(agent_server, tmp_path):
     agent, server = agent_server
     publish(agent, range(0, 400))

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import datetime as dt
 import socket
-import time
 
 import numpy as np
 import pytest
+from conftest import wait_until
 
 pytest.importorskip("asyncua", reason="the OPC UA source needs the asyncua package (mtident[opcua])")
 
@@ -77,13 +77,11 @@ class Machine:
         """Wait until the server's history holds every node's value of ``minute`` (it takes each
         change at its own sampling, a moment after the write)."""
         stamp = START + dt.timedelta(minutes=minute)
-        deadline = time.monotonic() + timeout_s
-        while True:
-            held = [v.read_raw_history(stamp, stamp + dt.timedelta(seconds=1), 0, False) for v in self.variables]
-            if all(held):
-                return
-            assert time.monotonic() < deadline, f"the server's history never took minute {minute}"
-            time.sleep(0.05)
+        wait_until(
+            lambda: all(v.read_raw_history(stamp, stamp + dt.timedelta(seconds=1), 0, False) for v in self.variables),
+            f"the server's history taking minute {minute}",
+            timeout_s,
+        )
 
     def publish(self, minute: float, values: tuple[float, float], good: bool = True) -> None:
         self.last = (minute, values)
@@ -101,14 +99,14 @@ def settle(recorder: OpcUaRecorder, rows: int, timeout_s: float = 10.0) -> list[
     """Fetch until the log holds ``rows`` data rows (the subscription delivers its changes at its
     publishing interval); what the recorder said on the way."""
     said: list[str] = []
-    deadline = time.monotonic() + timeout_s
-    while True:
-        said += recorder.fetch()
-        written = recorder.log.read_text().count("\n") - 1 if recorder.log.is_file() else 0
-        if written >= rows or time.monotonic() > deadline:
-            assert written == rows, (written, rows)
-            return said
-        time.sleep(0.05)
+
+    def written() -> list[int] | None:
+        said.extend(recorder.fetch())
+        count = recorder.log.read_text().count("\n") - 1 if recorder.log.is_file() else 0
+        return [count] if count >= rows else None
+
+    assert wait_until(written, f"{rows} rows in {recorder.log.name}", timeout_s) == [rows]
+    return said
 
 
 def change(minute: float, value: float) -> ua.DataValue:
@@ -143,6 +141,7 @@ def running_machine():  # noqa: ANN201
     m.stop()
 
 
+@pytest.mark.slow
 def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path):
     log = tmp_path / "opc.csv"
     recorder = OpcUaRecorder(machine.url, log, NODES)
@@ -179,7 +178,7 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     ]
     machine.publish(16.0, (21.6, 22.6))  # received, not yet fetched: written when the watch closes
     published.append(16)
-    time.sleep(1.0)
+    wait_until(lambda: again._changes._queue.qsize() >= 2, "both nodes' changes of minute 16 received")
     again.close()
     recorded = read_temperature_log(log)
     np.testing.assert_allclose(recorded.time_min, published)
@@ -187,6 +186,7 @@ def test_a_stopped_and_restarted_server_writes_each_value_once(machine, tmp_path
     assert recorded.sensors == ("T1", "T2")
 
 
+@pytest.mark.slow
 @pytest.mark.xdist_group("one OPC UA server")
 def test_a_bad_status_is_a_missing_reading(running_machine, tmp_path):
     recorder = OpcUaRecorder(running_machine.url, tmp_path / "bad.csv", NODES)
@@ -199,8 +199,20 @@ def test_a_bad_status_is_a_missing_reading(running_machine, tmp_path):
     assert lines == ["time_min,T1,T2", "0.000000,20,21", "1.000000,,"]
 
 
-@pytest.mark.parametrize("history", [True, False])
-def test_values_published_while_the_watch_was_stopped_come_from_the_servers_history(tmp_path, history):
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("history", "said", "minutes"),
+    [
+        (True, "5 reading(s) it published while the watch was stopped read from its history", [0, 1, 2, 3, 4, 5]),
+        # without a history, only the value of now
+        (
+            False,
+            "the values it published while the watch was stopped are not recorded (it keeps no history of the nodes)",
+            [0, 5],
+        ),
+    ],
+)
+def test_values_published_while_the_watch_was_stopped_come_from_the_servers_history(tmp_path, history, said, minutes):
     machine = Machine(history)
     machine.start()
     try:
@@ -214,21 +226,12 @@ def test_values_published_while_the_watch_was_stopped_come_from_the_servers_hist
         if history:
             machine.historized(5.0)
         again = OpcUaRecorder(machine.url, log, NODES)
-        said = settle(again, 6 if history else 2)
+        notes = settle(again, len(minutes))
         again.close()
     finally:
         machine.stop()
-    if history:
-        assert said == [
-            f"recording {machine.url} again: 5 reading(s) it published while the watch was stopped read from its history"
-        ]
-        np.testing.assert_allclose(read_temperature_log(log).time_min, range(6))
-    else:  # only the value of now
-        assert said == [
-            f"recording {machine.url} again: the values it published while the watch was stopped are not recorded "
-            "(it keeps no history of the nodes)"
-        ]
-        assert [line.split(",")[0] for line in log.read_text().splitlines()[1:]] == ["0.000000", "5.000000"]
+    assert notes == [f"recording {machine.url} again: {said}"]
+    assert [line.split(",")[0] for line in log.read_text().splitlines()[1:]] == [f"{m:.6f}" for m in minutes]
 
 
 def test_changes_are_written_in_time_order_whatever_the_order_received(tmp_path):
@@ -255,6 +258,7 @@ def test_a_row_waits_for_every_nodes_value_of_its_time(tmp_path):
     assert (tmp_path / "opc.csv").read_text().splitlines()[-1] == "2.000000,,32"
 
 
+@pytest.mark.slow
 @pytest.mark.xdist_group("one OPC UA server")
 def test_a_record_of_other_nodes_is_not_resumed(running_machine, tmp_path):
     log = tmp_path / "opc.csv"
@@ -267,6 +271,7 @@ def test_a_record_of_other_nodes_is_not_resumed(running_machine, tmp_path):
         OpcUaRecorder(running_machine.url, log, NODES[:1])
 
 
+@pytest.mark.slow
 @pytest.mark.xdist_group("one OPC UA server")
 def test_unknown_nodes_and_no_nodes_are_refused(running_machine, tmp_path):
     with pytest.raises(InputError, match="name the nodes to record"):
@@ -275,6 +280,7 @@ def test_unknown_nodes_and_no_nodes_are_refused(running_machine, tmp_path):
         OpcUaRecorder(running_machine.url, tmp_path / "y.csv", ["ns=2;s=Nowhere"]).fetch()
 
 
+@pytest.mark.slow
 @pytest.mark.xdist_group("one OPC UA server")
 def test_watch_follows_a_server_and_refuses_its_options_for_a_file(running_machine, tmp_path):
     import json

@@ -79,10 +79,9 @@ def test_a_sparse_run_that_ended_in_a_slow_mode_is_doubtful():
     state, _ = monitor_step(
         new_state(["S"], with_room=True), warm.time_min, warm.reading_C[:, None], warm.room_C, settings
     )
-    if state.stopped:
-        truth = float(warm.steady_C[int(np.searchsorted(warm.time_min, state.stop_time_min))])
-        assert abs(state.checks[0].steady_C - truth) < 0.2
+    # the doubted reference is not used, and without it the test does not stop within this warm-up
     assert not state.checks[0].reference_used
+    assert not state.stopped
 
 
 def test_a_run_that_needs_more_modes_than_it_pins_down_keeps_them_with_wide_boxes():

@@ -814,9 +814,9 @@ def test_robust_answers_over_generated_warm_ups_are_consistent(seed, fraction):
     window = max(fraction * warm.t95_min, 10 * warm.interval_min)
     result = identify_robust(make_log(warm.time_min, {"S": warm.reading_C}), window, warm.room_C)
     estimate = result.estimates[0]
-    if estimate.fit is not None:
-        (lo95, hi95), (lo99, hi99) = estimate.interval_C[0.95], estimate.interval_C[0.99]
-        assert lo99 <= lo95 <= estimate.steady_C <= hi95 <= hi99
+    assert estimate.fit is not None, estimate.status  # every warm-up of the population rises: a model is fitted
+    (lo95, hi95), (lo99, hi99) = estimate.interval_C[0.95], estimate.interval_C[0.99]
+    assert lo99 <= lo95 <= estimate.steady_C <= hi95 <= hi99
     json.dumps(result.summary(0), allow_nan=False)
 
 

@@ -11,13 +11,12 @@ import re
 import signal
 import subprocess
 import sys
-import time
 from dataclasses import replace
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from conftest import first_order, logger_dialects, make_log
+from conftest import first_order, logger_dialects, make_log, wait_until
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -564,6 +563,7 @@ def test_watch_refuses_a_missing_reference_and_a_bad_tolerance(tmp_path):
     assert code == 2 and "--free-fast-modes" in err and "0<=x<=2" in err
 
 
+@pytest.mark.slow
 def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     """SIGKILL while following a live log; the logger carries on; the same command resumes."""
     from mtident.thermal.reference import save_reference
@@ -600,14 +600,13 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     ]
     proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        deadline = time.monotonic() + 60
-        while not state.is_file() and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_until(state.is_file, "the watch's first state file", 60)
         with open(live, "a") as out_file:
             out_file.write("".join(lines[20:40]))
         # killed once it has saved some of the new rows (the state file is replaced whole)
-        while time.monotonic() < deadline and load_dataclass(state, SavedWatch).monitor.readings.latest_min < 20:
-            time.sleep(0.05)
+        wait_until(
+            lambda: load_dataclass(state, SavedWatch).monitor.readings.latest_min >= 20, "the new rows saved", 60
+        )
     finally:
         proc.send_signal(signal.SIGKILL)
         proc.wait()
@@ -620,6 +619,7 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     assert json.loads(out.stdout) == reference
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "stop, said", [(signal.SIGINT, "interrupted (Ctrl-C)"), (signal.SIGTERM, "terminated (SIGTERM)")]
 )
@@ -651,10 +651,12 @@ def test_watch_interrupted_says_where_it_was_and_keeps_its_state(tmp_path, stop,
         cwd=tmp_path,
     )
     try:
-        deadline = time.monotonic() + 120
-        while not state.is_file() and time.monotonic() < deadline:
-            time.sleep(0.05)
-        time.sleep(0.3)  # now it waits for new rows
+        # stopped once it has saved every row (t = 29 min) and waits for new ones
+        wait_until(
+            lambda: state.is_file() and load_dataclass(state, SavedWatch).monitor.readings.latest_min == 29,
+            "the whole log saved",
+            120,
+        )
         proc.send_signal(stop)
         out, err = proc.communicate(timeout=60)
     finally:

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import wait_until
 from test_watch import T, csv_text, first_order, noisy, one_mode_reference
 
 from mtident.cli import main
@@ -49,6 +50,7 @@ def served_page():  # noqa: ANN201
     served.stop()
 
 
+@pytest.mark.slow
 def test_the_page_serves_the_answer_the_curves_and_a_stream_of_answers(served_page):
     page, served = served_page
     assert served.url.startswith("http://127.0.0.1:")
@@ -74,6 +76,7 @@ def test_the_page_serves_the_answer_the_curves_and_a_stream_of_answers(served_pa
     assert float(np.median(latencies)) < 0.5
 
 
+@pytest.mark.slow
 def test_the_page_is_read_only(served_page):
     _, served = served_page
     request = urllib.request.Request(served.url + "state.json", data=b"{}", method="POST")
@@ -92,6 +95,7 @@ def test_addresses_are_read_and_bad_ones_refused(text, expected):
             parse_address(bad)
 
 
+@pytest.mark.slow
 def test_watch_serve_says_where_the_page_is(tmp_path):
     log = tmp_path / "run.csv"
     log.write_text(csv_text(T[:30], {"S": noisy(first_order(T[:30]), 42)}))
@@ -109,6 +113,7 @@ def test_watch_serve_says_where_the_page_is(tmp_path):
 BROWSER = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(BROWSER is None, reason="no headless Chromium here (Debian's package `chromium`)")
 def test_a_browser_shows_the_decision(served_page):
     page, served = served_page
@@ -125,6 +130,7 @@ def test_a_browser_shows_the_decision(served_page):
     assert shot.stat().st_size > 10_000
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(BROWSER is None, reason="no headless Chromium here (Debian's package `chromium`)")
 def test_a_browser_shows_the_decision_change_as_it_comes(served_page):
     """The page's own script at work: opened before any answer, it shows the stop once one is
@@ -134,10 +140,13 @@ def test_a_browser_shows_the_decision_change_as_it_comes(served_page):
     with _devtools(served.url) as evaluate:
         decision = 'document.getElementById("decision").textContent'
         assert evaluate(decision) == "Waiting for the first readings…"
-        published = time.monotonic()
         page.publish(answer, png)
-        while "can stop" not in (shown := evaluate(decision)) and time.monotonic() - published < 10:
-            time.sleep(0.01)
+
+        def stop_shown() -> str | None:
+            shown = str(evaluate(decision))
+            return shown if "can stop" in shown else None
+
+        shown = wait_until(stop_shown, "the page showing the stop", 10, 0.01)
         assert re.fullmatch(r"The test can stop \(at t = \d+ min\)\.", shown)
         assert evaluate('document.querySelector("#sensors td").textContent') == "S"
 
@@ -169,11 +178,11 @@ def _devtools(url: str):  # noqa: ANN202
                 return call("Runtime.evaluate", expression=expression)["result"].get("value")
 
             call("Page.navigate", url=url)
-            deadline = time.monotonic() + 30
-            while time.monotonic() < deadline and not (
-                evaluate("location.href") == url and evaluate("document.readyState") == "complete"
-            ):
-                time.sleep(0.05)
+            wait_until(
+                lambda: evaluate("location.href") == url and evaluate("document.readyState") == "complete",
+                f"Chromium loading {url}",
+                30,
+            )
             yield evaluate
     finally:
         browser.terminate()

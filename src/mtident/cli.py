@@ -13,7 +13,7 @@ import re
 import sys
 from collections.abc import Callable
 from functools import wraps
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 from rich.console import Console
@@ -22,6 +22,11 @@ from mtident import __version__
 from mtident.exceptions import MtidentError
 
 F = TypeVar("F", bound=Callable[..., Any])
+
+if TYPE_CHECKING:  # click's parameter types are generic in its annotations, a plain class in click 8.1
+    _PathParamType = click.ParamType[str]
+else:
+    _PathParamType = click.ParamType
 
 
 # The library's messages name its parameters in backticks (`time_unit='s'`); the command line says
@@ -163,7 +168,7 @@ class FiniteFloatRange(click.FloatRange):
         return number
 
 
-class OutputPath(click.ParamType):
+class OutputPath(_PathParamType):
     """A file to write: its folder exists and is writable, and it is no folder (checked before
     the work, so that a mistyped folder does not end a long run in an error).
 
@@ -178,7 +183,7 @@ class OutputPath(click.ParamType):
     name = "file"
     example = "out.csv"  # a file name in the message for a folder given
 
-    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
         """The file to write, checked before the work begins.
 
         Parameters

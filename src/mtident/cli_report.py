@@ -6,8 +6,8 @@ from pathlib import Path
 
 import click
 
-from mtident.cli import OutputPath, user_errors
-from mtident.cli_thermal import asked_sensors, log_options, log_path, stderr, thermal
+from mtident.cli import OutputPath, thermal, user_errors
+from mtident.cli_thermal import asked_sensors, log_options, log_path, stderr
 from mtident.cli_watch import _workbook_as_replayed_csv, decision_options, monitor_settings, state_file
 from mtident.exceptions import InputError
 from mtident.thermal.monitor import minutes

@@ -14,6 +14,7 @@ import numpy as np
 from rich.table import Table
 
 from mtident.cli import (
+    F,
     FiniteFloatRange,
     OptionConsole,
     OutputPath,
@@ -167,7 +168,7 @@ def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str, co
         )
 
 
-def log_options(func):  # noqa: ANN001,ANN201 - click decorator stack
+def log_options(func: F) -> F:
     """Add a log's argument and options to a command: FILE, --sensor, --time-col and --time-unit.
 
     Parameters
@@ -273,7 +274,7 @@ max_time_constant_option = click.option(
 )
 
 
-def load_reference_file(reference_path: str | None, machine: str | None = None):  # noqa: ANN201 - MachineReference or None
+def load_reference_file(reference_path: str | None, machine: str | None = None) -> MachineReference | None:
     """The reference run named by --reference, read (None where none is given).
 
     Parameters

@@ -24,6 +24,7 @@ from rich.table import Table
 
 from mtident._json import finite_or_none
 from mtident.cli import (
+    F,
     FiniteFloatRange,
     OptionConsole,
     OutputPath,
@@ -31,6 +32,7 @@ from mtident.cli import (
     carried_interrupt,
     print_json,
     table_console,
+    thermal,
     user_errors,
 )
 from mtident.cli_thermal import (
@@ -46,7 +48,6 @@ from mtident.cli_thermal import (
     max_time_constant_option,
     reference_option,
     stderr,
-    thermal,
 )
 from mtident.exceptions import InputError
 from mtident.io.logs import SAMPLES
@@ -66,7 +67,7 @@ _SAID = ("note", "warning", "ready", "not ready", "stop")
 _WAITING_HINT_S = 60.0
 
 
-def decision_options(func):  # noqa: ANN001,ANN201 - click decorator
+def decision_options(func: F) -> F:
     """The options of the stop decision, shared by watch and report.
 
     Parameters

@@ -117,7 +117,8 @@ def multisine(count: int, h: float, low_Hz: float, high_Hz: float) -> FloatArray
     spectrum = np.zeros(count // 2 + 1, dtype=complex)
     spectrum[lines] = np.exp(-1j * np.pi * k * (k - 1) / len(lines))
     signal = np.fft.irfft(spectrum, n=count)
-    return signal / np.abs(signal).max()
+    answer: FloatArray = signal / np.abs(signal).max()
+    return answer
 
 
 @dataclass(frozen=True, slots=True)

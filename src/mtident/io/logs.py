@@ -696,7 +696,8 @@ def _parse_time(
     notes: list[str] = []
 
     def minutes_since_first(stamps: pd.Series) -> FloatArray:
-        return (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
+        answer: FloatArray = (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=float) / 60.0
+        return answer
 
     numeric = pd.to_numeric(column, errors="coerce")
     if pd.api.types.is_timedelta64_dtype(column) or pd.api.types.is_datetime64_any_dtype(column):
@@ -822,7 +823,8 @@ def _rows_with_readings(frame: pd.DataFrame, header: str, sensors: list[str]) ->
     repeated[1:] |= times[1:] == times[:-1]
     repeated[:-1] |= times[:-1] == times[1:]
     trailing = np.flip(np.cumprod(np.flip(empty)).astype(bool))
-    return ~(empty & (repeated | trailing))
+    answer: np.ndarray = ~(empty & (repeated | trailing))
+    return answer
 
 
 def _longest_step(stamps: pd.Series) -> float:
@@ -900,7 +902,7 @@ def _sensor_readings(
         cells = raw.astype(str).map(number_without_unit).where(raw.notna())
     if dialect.decimal == "," and not pd.api.types.is_numeric_dtype(cells):
         cells = cells.astype(str).str.replace(",", ".", regex=False).where(cells.notna())
-    values = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
+    values: FloatArray = scale * pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float) + offset
     text = raw.astype(str).str.strip().str.lower()
     marked_open = text.isin(OPEN_CIRCUIT_TEXT).to_numpy()
     marked_missing = text.isin([*MISSING_TEXT, ""]).to_numpy()
@@ -1115,7 +1117,8 @@ def _sub_second_min(frame: pd.DataFrame, column: str, source: str, first_row: in
             f"{_cell(frame[column].iloc[row])} is not a number"
         )
         raise InputError(msg)
-    return values / 60_000.0
+    answer: FloatArray = values / 60_000.0
+    return answer
 
 
 def _sensor_candidates(frame: pd.DataFrame, available: list[str], notes: list[str]) -> list[str]:

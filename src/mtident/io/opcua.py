@@ -197,6 +197,7 @@ class OpcUaRecorder:
         """The values each node took since the last one written, from the server's history (a
         watch stopped, a connection lost); None where the server keeps no history of the nodes."""
         from asyncua import ua
+        from asyncua.ua.attribute_ids import AttributeIds
 
         backlog: list[tuple[int, Any]] = []
         now = dt.datetime.now(dt.UTC) + dt.timedelta(days=1)
@@ -207,7 +208,7 @@ class OpcUaRecorder:
             node = self._client.get_node(node_id)
             start = dt.datetime.fromisoformat(last) + dt.timedelta(microseconds=1)
             try:
-                access = node.read_attribute(ua.AttributeIds.AccessLevel).Value.Value
+                access = node.read_attribute(AttributeIds.AccessLevel).Value.Value
                 if not int(access) & ua.AccessLevel.HistoryRead.mask:
                     return None
                 values = node.read_raw_history(start, now, 0, False)
@@ -271,7 +272,8 @@ def _stamp(value: Any) -> dt.datetime | None:  # noqa: ANN401 - asyncua's DataVa
     stamp = value.SourceTimestamp or value.ServerTimestamp
     if stamp is None:
         return None
-    return stamp if stamp.tzinfo else stamp.replace(tzinfo=dt.UTC)
+    answer: dt.datetime | None = stamp if stamp.tzinfo else stamp.replace(tzinfo=dt.UTC)
+    return answer
 
 
 def _readings(changes: list[tuple[int, Any]]) -> int:

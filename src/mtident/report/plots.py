@@ -17,8 +17,15 @@ import numpy as np
 from matplotlib.figure import Figure
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from mtident._typing import FloatArray
+    from mtident.feeddrive.identify import FeedDriveIdentification
+    from mtident.feeddrive.params import FeedDriveParameters
+    from mtident.feeddrive.simulate import Response
     from mtident.thermal.identify import Identification
     from mtident.thermal.min_time import MinTimeResult
+    from mtident.thermal.monitor import MonitorSettings, MonitorState, Readings
     from mtident.thermal.robust_identify import RobustIdentification
 
 __all__ = [
@@ -83,7 +90,7 @@ def _save(fig: Figure, path: str | Path | None, dpi: int = 110, top: float = 1.0
     return out
 
 
-def grid(count: int, width: float = 4.2, height: float = 3.0):  # noqa: ANN201 - (figure, flat axes)
+def grid(count: int, width: float = 4.2, height: float = 3.0) -> tuple[Figure, list[Axes]]:
     """A figure with ``count`` panels in up to 3 columns; returns (figure, list of axes).
 
     Parameters
@@ -230,21 +237,28 @@ _PANEL_POINTS = 2000
 _ZOOM_PERIODS = 8
 
 
-def _zoom(time_s, lowest_Hz: float | None) -> slice:  # noqa: ANN001 - (N,) times
+def _zoom(time_s: FloatArray, lowest_Hz: float | None) -> slice:
     """The first samples of a record: ``_ZOOM_PERIODS`` periods of the lowest mode, or ``_PANEL_POINTS`` samples."""
     h = float(time_s[1] - time_s[0])
     count = int(_ZOOM_PERIODS / (lowest_Hz * h)) if lowest_Hz else _PANEL_POINTS
     return slice(0, max(10, min(len(time_s), count)))
 
 
-def _spectrum(values, h: float):  # noqa: ANN001, ANN202 - (N,) samples -> (frequencies, amplitude)
+def _spectrum(values: FloatArray, h: float) -> tuple[FloatArray, FloatArray]:
     """One-sided amplitude spectrum of a record (Hann window), for a log-scale panel."""
     window = np.hanning(len(values))
     amplitude = 2.0 * np.abs(np.fft.rfft((values - np.mean(values)) * window)) / window.sum()
-    return np.fft.rfftfreq(len(values), h), np.maximum(amplitude, 1e-300)
+    frequencies = np.asarray(np.fft.rfftfreq(len(values), h), dtype=np.float64)
+    return frequencies, np.maximum(amplitude, 1e-300)
 
 
-def _draw_spectra(axes, time_s, measured, model, modes_Hz) -> None:  # noqa: ANN001
+def _draw_spectra(
+    axes: list[Axes],
+    time_s: FloatArray,
+    measured: FloatArray,
+    model: FloatArray | None,
+    modes_Hz: FloatArray | None,
+) -> None:
     """Row of four spectra, one per coordinate: measured (and the model's where given), modes marked."""
     from mtident.feeddrive.params import COORDINATES
     from mtident.feeddrive.simulate import RESPONSE_COLUMNS
@@ -271,9 +285,9 @@ def _draw_spectra(axes, time_s, measured, model, modes_Hz) -> None:  # noqa: ANN
 
 
 def plot_responses(
-    response,
+    response: Response,
     path: str | Path | None = None,
-    modes_Hz=None,  # noqa: ANN001 - feeddrive.Response, (4,) Hz
+    modes_Hz: FloatArray | None = None,
 ) -> Path | Figure:
     """Displacements, velocities and accelerations of the four coordinates (Nguyen-Quoc et al. Figs 2-4), readable
     at any length: the first periods of the lowest mode sample by sample, and the spectrum of the
@@ -319,7 +333,12 @@ def plot_responses(
     return _save(fig, path, 100)
 
 
-def plot_feed_drive_identification(result, response, path: str | Path | None = None, truth=None) -> Path | Figure:  # noqa: ANN001
+def plot_feed_drive_identification(
+    result: FeedDriveIdentification,
+    response: Response,
+    path: str | Path | None = None,
+    truth: FeedDriveParameters | None = None,
+) -> Path | Figure:
     """Measured, filtered and open-loop model responses over the first periods (Nguyen-Quoc et al. Figs 5-7), the
     spectra of measured vs model responses, and parameter convergence with ±2σ (Figs 8-9).
 
@@ -405,18 +424,22 @@ def plot_feed_drive_identification(result, response, path: str | Path | None = N
     return _save(fig, path, 90, top=0.985)
 
 
-def _room_on(readings, times: np.ndarray) -> np.ndarray:  # noqa: ANN001 - Readings
+def _room_on(readings: Readings, times: np.ndarray) -> np.ndarray:
     """The room's readings at ``times``: interpolated, held at the ends (NaN where none is valid)."""
     room = np.asarray(readings.room_C, dtype=float)
     valid = np.isfinite(room)
     if not valid.any():
         return np.full(times.shape, np.nan)
-    return np.interp(times, readings.time_min[valid], room[valid])
+    room_on: np.ndarray = np.interp(times, readings.time_min[valid], room[valid])
+    return room_on
 
 
 def plot_monitor(
-    state, settings, path: str | Path | None = None, expected: dict[str, float] | None = None
-) -> Path | Figure:  # noqa: ANN001 - MonitorState, MonitorSettings
+    state: MonitorState,
+    settings: MonitorSettings,
+    path: str | Path | None = None,
+    expected: dict[str, float] | None = None,
+) -> Path | Figure:
     """Each sensor's readings so far, its best model's course on from there, the T∞ intervals
     (95 % and the decision's), and the stop or the expected stop.
 

@@ -7,6 +7,7 @@ of the record (or a horizon). All sensors of a log are filtered as one batch.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -40,7 +41,16 @@ from mtident.thermal.settings import (
     preset_tuning,
     tuning_from_data,
 )
-from mtident.ukf import FilterConfig, FilterRecord, GaussianState, filter_step, forecast, run_filter, transition_at
+from mtident.ukf import (
+    FilterCarry,
+    FilterConfig,
+    FilterRecord,
+    GaussianState,
+    filter_step,
+    forecast,
+    run_filter,
+    transition_at,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -316,7 +326,8 @@ def _profile_rss(time_min: FloatArray, values: FloatArray, rates: FloatArray, wi
     gram = np.swapaxes(basis, -1, -2) @ basis + 1e-12 * np.eye(basis.shape[-1])
     coef = np.linalg.solve(gram, (np.swapaxes(basis, -1, -2) @ values)[..., None])[..., 0]
     residual = values - (basis @ coef[..., None])[..., 0]
-    return np.sum(residual**2, axis=-1)
+    answer: FloatArray = np.sum(residual**2, axis=-1)
+    return answer
 
 
 def _best_rss(time_min: FloatArray, values: FloatArray, with_drift: bool) -> float:
@@ -578,7 +589,9 @@ def filter_window(
     return record, means, covs
 
 
-def _transition_with(dts: FloatArray, parametrisation: str = "rate", room_rate: FloatArray | None = None):  # noqa: ANN202 - a closure over the step intervals
+def _transition_with(
+    dts: FloatArray, parametrisation: str = "rate", room_rate: FloatArray | None = None
+) -> Callable[[FloatArray, int], FloatArray]:  # a closure over the step intervals
     step = transition_for(parametrisation)
     if room_rate is not None:
 
@@ -672,7 +685,8 @@ def room_rates(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
         return np.zeros(len(t))
     level = np.interp(t, t[valid], a[valid])
     dts = np.diff(t, prepend=t[0])
-    return np.diff(level, prepend=level[0]) / np.where(dts > 0, dts, 1.0)
+    answer: FloatArray = np.diff(level, prepend=level[0]) / np.where(dts > 0, dts, 1.0)
+    return answer
 
 
 def identify(
@@ -1085,7 +1099,7 @@ def _untrusted(
             f"{rise[s]:.2g} °C so far; a machine part stays within {OPEN_CIRCUIT_LOW_C:g} to {OPEN_CIRCUIT_HIGH_C:g} "
             "°C): the window's course does not determine it; use a longer `window_min`"
         )
-    return short | wide
+    return np.asarray(short | wide, dtype=bool)
 
 
 def _future_times(
@@ -1112,7 +1126,7 @@ def _rise_jacobian(time_min: FloatArray, params: FloatArray) -> FloatArray:
 
 
 def _predict_after_window(
-    carry,  # noqa: ANN001 - FilterCarry of the last window step
+    carry: FilterCarry,  # of the last window step
     physical_mean: FloatArray,
     t_future: FloatArray,
     t_last: float,

@@ -279,7 +279,8 @@ def first_level(values: FloatArray) -> FloatArray:
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a sensor without a valid first sample
-        return np.nanmedian(np.asarray(values, dtype=float)[:3], axis=0)
+        answer: FloatArray = np.nanmedian(np.asarray(values, dtype=float)[:3], axis=0)
+        return answer
 
 
 def first_order_onset(time_min: FloatArray, values: FloatArray, lead_fraction: float = 0.1) -> IntArray:

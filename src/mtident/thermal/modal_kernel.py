@@ -11,6 +11,8 @@ the fits and not the interpreter between them.
 
 from __future__ import annotations
 
+from typing import TypeAlias
+
 import numpy as np
 from numba import njit
 
@@ -33,6 +35,11 @@ __all__ = [
 # the same ridge as modal_search._JITTER, and the room columns' forward-difference step
 _JITTER = 1e-11
 _DIFF_STEP = 1e-6
+
+# the arrays :func:`fit_one` takes before ``log_tau`` (u, time_min, weight, target, room), and an
+# objective as :func:`objective_and_gradient` takes it (kind, threshold, sign, gap, log_mode_ratio)
+KernelInputs: TypeAlias = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
+KernelObjective: TypeAlias = tuple[float, float, float, float, float]
 
 
 @njit(cache=True)
@@ -76,7 +83,7 @@ def fit_one(
     room: FloatArray,
     log_tau: FloatArray,
     penalty: FloatArray,
-):  # noqa: ANN201  # pragma: no cover - compiled
+) -> tuple[float, FloatArray, float, FloatArray, FloatArray, FloatArray, FloatArray]:  # pragma: no cover - compiled
     """The penalised least-squares fit of one model and its slopes in log τ.
 
     Parameters
@@ -186,10 +193,10 @@ _DOUBLINGS = 8
 
 @njit(cache=True)
 def objective_and_gradient(
-    inputs: tuple,
+    inputs: KernelInputs,
     log_tau: FloatArray,
     penalty: FloatArray,
-    objective: tuple,
+    objective: KernelObjective,
 ) -> tuple[float, FloatArray]:  # pragma: no cover - compiled
     """One model's objective and its gradient in log τ, as ``modal_search._refine`` minimises it.
 
@@ -250,12 +257,12 @@ def objective_and_gradient(
 
 @njit(cache=True)
 def refine_log_tau(
-    inputs: tuple,
+    inputs: KernelInputs,
     start: FloatArray,
     lower: FloatArray,
     upper: FloatArray,
     penalty: FloatArray,
-    objective: tuple,
+    objective: KernelObjective,
     max_iterations: int,
     max_evaluations: int,
 ) -> FloatArray:  # pragma: no cover - compiled
@@ -295,14 +302,14 @@ def refine_log_tau(
 
 @njit(cache=True)
 def _quasi_newton_pass(
-    inputs: tuple,
+    inputs: KernelInputs,
     x: FloatArray,
     f: float,
     g: FloatArray,
     lower: FloatArray,
     upper: FloatArray,
     penalty: FloatArray,
-    objective: tuple,
+    objective: KernelObjective,
     max_iterations: int,
     max_evaluations: int,
 ) -> tuple[FloatArray, float, FloatArray, int]:  # pragma: no cover - compiled

@@ -138,7 +138,8 @@ class Problem:
         steps of the free grid, or half a step within a reference's boxes (a box of ±10 % spans
         less than two steps, so a wider basin left the starts no choice in them, and an end
         reached along one box's edge was missed)."""
-        return (2.0 if self.family.reference_min is None else 0.5) * np.log(_MAX_GRID_RATIO)
+        answer: float = (2.0 if self.family.reference_min is None else 0.5) * np.log(_MAX_GRID_RATIO)
+        return answer
 
     def bounds(self, k: int) -> FloatArray:
         """The search's bounds on the time constants of a model of ``k`` modes.
@@ -237,7 +238,8 @@ class Fits:
 
     @property
     def n_params(self) -> int:
-        return self.theta.shape[1] + self.tau.shape[1]
+        answer: int = self.theta.shape[1] + self.tau.shape[1]
+        return answer
 
 
 def _solve(
@@ -785,7 +787,8 @@ def choose_count(best_per_count: dict[int, Fits], n: int) -> Fits:
     """
 
     def bic(f: Fits) -> float:
-        return n * np.log(max(float(f.rss[0]), 1e-300) / n) + f.n_params * np.log(n)
+        answer: float = n * np.log(max(float(f.rss[0]), 1e-300) / n) + f.n_params * np.log(n)
+        return answer
 
     return min(best_per_count.values(), key=bic)
 
@@ -820,7 +823,8 @@ def weighted_residuals(problem: Problem, fits: Fits) -> FloatArray:
     ndarray, shape (B,)
     """
     X = design_columns(problem, fits.tau)[0]
-    return (problem.target() - X @ fits.theta[0]) * np.sqrt(problem.binned.count)
+    answer: FloatArray = (problem.target() - X @ fits.theta[0]) * np.sqrt(problem.binned.count)
+    return answer
 
 
 def make_problem(binned: Binned, noise_C: float, interval_min: float, family: ModeFamily) -> Problem:

@@ -266,7 +266,9 @@ def bin_index(time_min: FloatArray, fraction: float = BIN_FRACTION, origin_min: 
     >>> bin_index(np.array([0.0, 0.5, 1.0, 100.0, 1000.0])).astype(int).tolist()
     [0, 20, 35, 233, 348]
     """
-    return np.floor(np.log1p(np.maximum(np.asarray(time_min, dtype=float), 0.0) / origin_min) / np.log1p(fraction))
+    since: FloatArray = np.maximum(np.asarray(time_min, dtype=float), 0.0)
+    bins: FloatArray = np.floor(np.log1p(since / origin_min) / np.log1p(fraction))
+    return bins
 
 
 def bin_samples(time_min: FloatArray, values: FloatArray, room_C: FloatArray | None = None) -> Binned:
@@ -293,7 +295,8 @@ def bin_samples(time_min: FloatArray, values: FloatArray, room_C: FloatArray | N
     count = np.bincount(which).astype(float)
 
     def mean(x: FloatArray) -> FloatArray:
-        return np.bincount(which, weights=x) / count
+        answer: FloatArray = np.bincount(which, weights=x) / count
+        return answer
 
     room = None if room_C is None else mean(np.asarray(room_C, dtype=float)[valid])
     return Binned(mean(t[valid]), mean(y[valid]), count, room)

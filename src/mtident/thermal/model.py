@@ -7,6 +7,8 @@ interval works, also uneven ones (Δtₖ per step).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from mtident._typing import FloatArray, IntArray
@@ -133,7 +135,7 @@ def heat_balance_path(state: FloatArray, start: IntArray, dt_min: FloatArray, ro
     return path
 
 
-def transition_for(parametrisation: str):  # noqa: ANN201 - returns one of the two transitions
+def transition_for(parametrisation: str) -> Callable[[FloatArray, FloatArray | float], FloatArray]:
     """The transition of a parametrisation ("rate" or "slope").
 
     Parameters
@@ -234,4 +236,5 @@ def equilibrium_time(rate_per_min: FloatArray) -> FloatArray:
     ndarray
         The time from the curve's start (min).
     """
-    return np.log(1.0 / (1.0 - EQUILIBRIUM_FRACTION)) / rate_per_min
+    answer: FloatArray = np.log(1.0 / (1.0 - EQUILIBRIUM_FRACTION)) / rate_per_min
+    return answer

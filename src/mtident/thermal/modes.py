@@ -407,7 +407,7 @@ def course_with_room(
     room = np.asarray(room_C, dtype=float)
     valid = np.isfinite(room)
     room = np.interp(t, t[valid], room[valid]) if valid.any() else np.full(t.shape, room_level_C)
-    curve = model_curve(modes, steady_C - room_level_C, origin_min, t) + room
+    curve: FloatArray = model_curve(modes, steady_C - room_level_C, origin_min, t) + room
     after = t >= origin_min
     if room_gains and after.sum() > 1:
         lagged = room_lag(room[after], t[after], np.asarray(gain_time_constants_min))

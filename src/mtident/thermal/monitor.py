@@ -27,7 +27,7 @@ import numpy as np
 from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.thermal.modes import model_curve
+from mtident.thermal.modes import Mode, model_curve
 from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import (
     Assumptions,
@@ -846,9 +846,7 @@ def expected_stop(state: MonitorState, settings: MonitorSettings, s: int, horizo
     return float(times[high])
 
 
-def _as_modes(pairs: tuple[tuple[float, float], ...]) -> tuple:  # noqa: ANN401 - tuple of modes.Mode
-    from mtident.thermal.modes import Mode
-
+def _as_modes(pairs: tuple[tuple[float, float], ...]) -> tuple[Mode, ...]:
     return tuple(Mode(tau, amplitude) for tau, amplitude in pairs)
 
 

@@ -53,7 +53,8 @@ def on_display_steps(values: FloatArray) -> np.ndarray:
     """
     multiples = np.asarray(values, dtype=float)[..., None] / DISPLAY_STEPS_C
     with np.errstate(invalid="ignore"):
-        return ~(np.abs(multiples - np.round(multiples)) >= 1e-6)
+        answer: np.ndarray = ~(np.abs(multiples - np.round(multiples)) >= 1e-6)
+        return answer
 
 
 def step_from_grid(on_grid: np.ndarray, spread: FloatArray) -> FloatArray:
@@ -109,7 +110,8 @@ def reading_range(values: FloatArray) -> FloatArray:
     y = np.asarray(values, dtype=float)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a column without a valid reading
-        return np.nanmax(y, axis=0) - np.nanmin(y, axis=0)
+        answer: FloatArray = np.nanmax(y, axis=0) - np.nanmin(y, axis=0)
+        return answer
 
 
 def noise_sigma(values: FloatArray, time_min: FloatArray | None = None) -> FloatArray:
@@ -165,7 +167,8 @@ def noise_sigma(values: FloatArray, time_min: FloatArray | None = None) -> Float
             # differences alone: a cubic cannot follow a late start's kink, 0.038 °C for 0.02.)
             sigma = max(sigma, _cubic_residual_sigma(t_all[finite], column[finite]))
         out.append(max(sigma, 1e-9))
-    return np.maximum(np.array(out), display_resolution(values) / np.sqrt(12.0))
+    answer: FloatArray = np.maximum(np.array(out), display_resolution(values) / np.sqrt(12.0))
+    return answer
 
 
 # below this many fourth differences around missing readings, their MAD alone is no noise estimate to trust
@@ -195,7 +198,8 @@ def _unit_fourth_differences(t: FloatArray, y: FloatArray) -> FloatArray:
         weights = 1.0 / np.prod(apart, axis=2)
         weights /= np.linalg.norm(weights, axis=1, keepdims=True)
         combined = np.sum(weights * readings, axis=1)
-    return combined[np.isfinite(combined)]
+    answer: FloatArray = combined[np.isfinite(combined)]
+    return answer
 
 
 def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:

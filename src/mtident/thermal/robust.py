@@ -857,7 +857,8 @@ def room_wander_half_width(slowest_time_constant_min: float, level: float, setti
     """
     memory = min(slowest_time_constant_min, settings.max_time_constant_min)
     sd = settings.room_wander_C_per_h * np.sqrt(max(memory, 0.0) / 60.0)
-    return float(ndtri(0.5 + level / 2.0)) * sd
+    answer: float = float(ndtri(0.5 + level / 2.0)) * sd
+    return answer
 
 
 def _nested(intervals: dict[float, tuple[float, float]]) -> dict[float, tuple[float, float]]:

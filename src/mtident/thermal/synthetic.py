@@ -341,7 +341,8 @@ def room_temperature(time_min: FloatArray, room_start_C: float, room_drift: Mapp
     if room_drift is None:
         return np.full_like(t, room_start_C)
     amplitude, omega, phase, slope = _drift_terms(room_drift)
-    return room_start_C + slope * t + amplitude * (np.sin(omega * t + phase) - np.sin(phase))
+    answer: FloatArray = room_start_C + slope * t + amplitude * (np.sin(omega * t + phase) - np.sin(phase))
+    return answer
 
 
 def _drift_terms(room_drift: Mapping[str, float]) -> tuple[float, float, float, float]:
