@@ -57,6 +57,12 @@ class Agent:
     def next_sequence(self) -> int:
         return self.first_sequence + len(self.observations)
 
+    def restart(self) -> None:
+        """The agent started again: a new instance, an empty buffer, its sequence numbers from 1."""
+        self.instance += 1
+        self.observations = []
+        self.first_sequence = 1
+
     def drop_oldest(self, count: int) -> None:
         """The buffer wraps: the oldest observations are gone."""
         self.observations = self.observations[count:]
@@ -103,6 +109,12 @@ class Agent:
             count = int(query.get("count", ["100"])[0])
             if start < self.first_sequence:
                 start = self.first_sequence
+            if start > self.next_sequence:  # as a real agent answers (cppagent)
+                return (
+                    400,
+                    '<MTConnectError xmlns="urn:mtconnect.org:MTConnectError:2.0"><Errors><Error errorCode="OUT_OF_RANGE">'
+                    f"'from' must be less than or equal to {self.next_sequence}.</Error></Errors></MTConnectError>",
+                )
             chosen = [o for o in self.observations if o[0] >= start][:count]
             return 200, self.streams(chosen, chosen[-1][0] + 1 if chosen else max(start, self.next_sequence))
         return (

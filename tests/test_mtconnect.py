@@ -117,6 +117,27 @@ def test_a_new_agent_instance_and_a_wrapped_buffer_are_said(agent_server, tmp_pa
 
 
 @pytest.mark.slow
+def test_a_restarted_agent_loses_no_reading_of_its_new_buffer(agent_server, tmp_path):
+    # started again, the agent numbers its sequence from 1 and asking from where the recorder stopped is
+    # out of its range: every reading in its new buffer is recorded, the first one too
+    agent, server = agent_server
+    log = tmp_path / "vmc1.csv"
+    recorder = MTConnectRecorder(server.url, log, device="VMC1")
+    assert recorder.fetch() == []
+    publish(agent, range(0, 50))
+    recorder.fetch()
+    agent.restart()
+    publish(agent, range(50, 53))
+    notes = recorder.fetch()
+    assert len(notes) == 1 and "the agent was restarted (a new instance)" in notes[0], notes
+    publish(agent, range(53, 60))
+    assert recorder.fetch() == []
+    recorded = read_temperature_log(log)
+    np.testing.assert_allclose(recorded.time_min, MINUTES[:60])  # none lost, none doubled
+    np.testing.assert_allclose(recorded.temperature_C[:, 0], SPINDLE[:60], atol=1e-9)
+
+
+@pytest.mark.slow
 def test_unavailable_is_a_missing_reading_and_unknown_items_are_refused(agent_server, tmp_path):
     agent, server = agent_server
     publish(agent, range(0, 3))
@@ -162,3 +183,30 @@ def test_watch_follows_an_agent_and_decides_as_the_replay_of_its_record(agent_se
     )
     assert other_device.exit_code == 2
     assert "was recorded from" in other_device.stderr and "record to another log (--record FILE)" in other_device.stderr
+
+
+def test_recording_goes_on_while_the_fits_run(agent_server, tmp_path, monkeypatch):
+    """Under load the fits held the recording up to 100 s (one thread for both): the agent is asked
+    for its samples while a poll's fits run, not only between polls."""
+    import time
+
+    from mtident.thermal.session import WatchSession
+
+    agent, server = agent_server
+    publish(agent, range(0, 10))
+    asked_during = []
+    original = WatchSession.poll
+
+    def slow(session, redraw=None, cancel=None):  # noqa: ANN001, ANN202
+        before = len(agent.requests)
+        time.sleep(1.0)  # fits that take a second
+        asked_during.append(len(agent.requests) - before)
+        return original(session, redraw, cancel)
+
+    monkeypatch.setattr(WatchSession, "poll", slow)
+    record = tmp_path / "vmc1.csv"
+    args = ["thermal", "watch", server.url, "--device", "VMC1", "--from-buffer-start", "--record", str(record)]
+    out = CliRunner().invoke(main, [*args, "--poll", "0.05", "--timeout", "2.5", "--json"], catch_exceptions=False)
+    assert out.exit_code == 0, out.stderr
+    assert len(asked_during) >= 2 and min(asked_during) >= 5, asked_during
+    np.testing.assert_allclose(read_temperature_log(record).time_min, MINUTES[:10])

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import datetime as dt
 import socket
+import time
 
 import numpy as np
 import pytest
@@ -301,3 +302,98 @@ def test_watch_follows_a_server_and_refuses_its_options_for_a_file(running_machi
     assert record.read_text().splitlines() == ["time_min,T1,T2", "0.000000,20.4,21.4"]
     wrong = CliRunner().invoke(main, ["thermal", "watch", str(record), "--node", NODES[0]], catch_exceptions=False)
     assert wrong.exit_code == 2 and "--node: not for a log file" in wrong.stderr
+
+
+def test_a_repeated_value_is_a_reading_not_a_missing_one(machine, tmp_path):
+    # a sensor in 0.1 °C steps near equilibrium: most readings repeat the one before; each is a
+    # reading the server published (a new source time stamp), written once, not an empty cell, across
+    # a restart of the server too
+    log = tmp_path / "opc.csv"
+    recorder = OpcUaRecorder(machine.url, log, NODES)
+    room = [20.0, 20.0, 20.0, 20.1, 20.1, 20.1, 20.1, 20.0, 20.0, 20.0, 20.0, 20.0]
+    machine.publish(0.0, (room[0], 30.0))
+    settle(recorder, 1)
+    for k in range(1, len(room)):
+        if k == 8:  # the server killed and started again: its nodes hold their last values
+            machine.stop()
+            recorder.fetch()
+            machine.start()
+        machine.publish(float(k), (room[k], 30.0 if k < 6 else 30.5))  # both repeat, then one
+        settle(recorder, k + 1)
+    machine.publish(float(len(room)), (99.0, 99.0), good=False)  # an open circuit is still a missing reading
+    settle(recorder, len(room) + 1)
+    recorder.close()
+    lines = log.read_text().splitlines()
+    assert len(lines) == len(room) + 2 and lines[-1] == f"{len(room)}.000000,,"  # none lost, none doubled
+    recorded = read_temperature_log(log)  # (a row without a reading is not a sample)
+    np.testing.assert_allclose(recorded.time_min, range(len(room)))
+    np.testing.assert_allclose(recorded.temperature_C[:, 0], room)
+    np.testing.assert_allclose(recorded.temperature_C[:, 1], [30.0] * 6 + [30.5] * 6)
+
+
+def test_a_time_stamp_stepped_ahead_once_is_said_and_the_record_goes_on(tmp_path):
+    # a new variable's first value stamped hours ahead (the wall clock), then in line again: that one
+    # stamp is the outlier, said, and the readings after it are recorded, not dropped as older
+    recorder = _offline_recorder(tmp_path)
+    recorder._write([(0, change(0.0, 20.0)), (1, change(0.0, 30.0))])
+    recorder._write([(0, change(1.0, 21.0)), (1, change(1.0, 31.0))])
+    recorder._write([(0, change(2.0, 22.0)), (1, change(614.0, 32.0))])
+    for k in range(3, 6):
+        recorder._write([(0, change(float(k), 20.0 + k)), (1, change(float(k), 30.0 + k))])
+    recorder._write([], final=True)
+    lines = (tmp_path / "opc.csv").read_text().splitlines()
+    assert [line.split(",")[0] for line in lines[1:]] == [f"{k}.000000" for k in range(6)]
+    assert lines[3] == "2.000000,22," and lines[-1] == "5.000000,25,35"
+    said = recorder._notes
+    assert len(said) == 1 and "T2's reading stamped 2026-11-24 18:14:00 UTC, 612 min ahead" in said[0], said
+    assert "left out" in said[0] and "recording goes on" in said[0]
+
+
+def test_a_clock_that_moved_on_is_a_gap_and_readings_behind_the_log_are_said(tmp_path):
+    recorder = _offline_recorder(tmp_path)
+    recorder._write([(0, change(0.0, 20.0)), (1, change(0.0, 30.0))])
+    recorder._write([(0, change(700.0, 21.0)), (1, change(700.0, 31.0))])  # a jump: held until it goes on
+    assert len((tmp_path / "opc.csv").read_text().splitlines()) == 2
+    recorder._write([(0, change(701.0, 22.0)), (1, change(701.0, 32.0))])
+    recorder._write([(0, change(3.0, 23.0))])  # behind the log: left out, and said
+    recorder._write([], final=True)
+    lines = (tmp_path / "opc.csv").read_text().splitlines()
+    assert [line.split(",")[0] for line in lines[1:]] == ["0.000000", "700.000000", "701.000000"]
+    assert recorder._notes == [
+        "1 reading(s) of T1 stamped before the log's last row (2026-11-24 19:41:00 UTC) left out, as the log's "
+        "times must increase: the OPC UA server's clock went back, or they came late"
+    ]
+
+
+def test_a_server_whose_clock_steps_ahead_once_is_said_and_recorded_on(machine, tmp_path):
+    # a real server: one node's value stamped 612 min ahead once (a new variable's first value with the
+    # wall clock), then in line again; every other reading recorded, none doubled, the step said
+    log = tmp_path / "opc.csv"
+    recorder = OpcUaRecorder(machine.url, log, NODES)
+    said = []
+    for k in range(3):
+        machine.publish(float(k), (20 + k / 10, 21 + k / 10))
+        said += settle(recorder, k + 1)
+    machine.variables[1].write_value(
+        ua.DataValue(ua.Variant(29.9, ua.VariantType.Double), SourceTimestamp=START + dt.timedelta(minutes=614))
+    )
+    time.sleep(0.5)
+    said += recorder.fetch()
+    for k in range(3, 8):
+        machine.publish(float(k), (20 + k / 10, 21 + k / 10))
+        said += settle(recorder, k + 1)
+    recorder.close()
+    recorded = read_temperature_log(log)
+    np.testing.assert_allclose(recorded.time_min, range(8))
+    np.testing.assert_allclose(recorded.temperature_C[:, 1], [21 + k / 10 for k in range(8)])
+    assert len(said) == 1 and "clock stepped: T2's reading stamped 2026-11-24 18:14:00 UTC, 612 min ahead" in said[0]
+
+
+def test_a_sparse_source_is_no_clock_step(tmp_path):
+    # readings 15 min apart are written as they come, not each held for the next (only the first
+    # step, before the log has one to go by, waits for the next reading)
+    recorder = _offline_recorder(tmp_path)
+    for k in range(5):
+        recorder._write([(0, change(15.0 * k, 20.0 + k)), (1, change(15.0 * k, 30.0 + k))])
+        assert len((tmp_path / "opc.csv").read_text().splitlines()) == (2 if k == 1 else k + 2)
+    assert recorder._notes == []

@@ -11,6 +11,7 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -676,10 +677,10 @@ def test_ctrl_c_inside_compiled_code_is_an_interruption_not_a_traceback(tmp_path
     log.write_text(csv_text(T[:30], {"A": noisy(first_order(T[:30]), 19)}))
     polls = []
 
-    def poll(session, redraw=None):  # noqa: ANN001, ANN202
+    def poll(session, redraw=None, cancel=None):  # noqa: ANN001, ANN202
         polls.append(session)
         if len(polls) == 1:
-            return original(session, redraw)
+            return original(session, redraw, cancel)
         raise SystemError("<numba function> returned a result with an exception set") from KeyboardInterrupt()
 
     original = WatchSession.poll
@@ -688,7 +689,7 @@ def test_ctrl_c_inside_compiled_code_is_an_interruption_not_a_traceback(tmp_path
     assert code == 130 and "interrupted (Ctrl-C) at t = 29 min" in err
     assert json.loads(out)["last_time_min"] == 29.0
 
-    def broken(session, redraw=None):  # noqa: ANN001, ANN202
+    def broken(session, redraw=None, cancel=None):  # noqa: ANN001, ANN202
         raise SystemError("a fault of our own")
 
     monkeypatch.setattr(WatchSession, "poll", broken)
@@ -1016,3 +1017,55 @@ def test_the_watch_picture_draws_the_model_with_the_room_as_logged():
     drawn_t, drawn = (np.asarray(v, dtype=float) for v in line.get_data())
     inside = drawn_t <= t[-1]
     assert np.max(np.abs(drawn[inside] - np.interp(drawn_t[inside], t, y))) < 0.05
+
+
+def test_sigterm_during_a_fit_ends_cleanly_at_the_next_check_and_saves_what_it_says(tmp_path):
+    """A service manager's SIGTERM while the fits run (a long poll): no traceback from inside the
+    compiled code, an end within a few seconds, and the state file holds the time the message
+    says; the same command then resumes to the decision of a run never stopped."""
+    names = ("A", "B", "C", "D")
+    full = csv_text(T[:301], {n: noisy(first_order(T[:301], steady=24.0 + k), 60 + k) for k, n in enumerate(names)})
+    lines = full.splitlines(keepends=True)
+    log = tmp_path / "live.csv"
+    log.write_text("".join(lines[:31]))
+    state = tmp_path / "live-state.npz"
+    cmd = [sys.executable, "-m", "mtident", "thermal", "watch", str(log), "--json", "--state", str(state)]
+    proc = subprocess.Popen(
+        [*cmd, "--poll", "0.05"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not state.is_file() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        with open(log, "a") as out_file:
+            out_file.write("".join(lines[31:]))  # 270 rows at once: a poll of many checks
+        time.sleep(2.0)
+        proc.send_signal(signal.SIGTERM)
+        sent = time.monotonic()
+        out, err = proc.communicate(timeout=60)
+        took = time.monotonic() - sent
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "SystemError" not in err
+    assert took < 5.0, took
+    said = re.search(r"terminated \(SIGTERM\) at t = (\d+) min; the state is in", err)
+    assert said is not None, err
+    saved = load_dataclass(state, SavedWatch).monitor.readings.latest_min
+    assert f"{saved:.0f}" == said.group(1) and 30 <= saved < 300
+    assert json.loads(out)["last_time_min"] == saved
+    resumed = subprocess.run(
+        [*cmd, "--poll", "0.05", "--timeout", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+        check=False,
+    )
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resuming from" in resumed.stderr and "refused the row" not in resumed.stderr
+    whole = tmp_path / "whole.csv"
+    whole.write_text(full)
+    code, out, _ = run("thermal", "watch", str(whole), "--replay", "--json")
+    assert code == 0
+    assert json.loads(resumed.stdout)["sensors"] == json.loads(out)["sensors"]

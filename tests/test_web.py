@@ -220,3 +220,68 @@ def _png() -> bytes:
     buffer = io.BytesIO()
     plot_monitor(state, settings).savefig(buffer, format="png")  # type: ignore[union-attr]
     return buffer.getvalue()
+
+
+def _watch_serving(args: list[str], cwd: Path) -> tuple[subprocess.Popen[str], str]:
+    """`watch ... --serve 127.0.0.1:0` in a subprocess, and the page's URL once it says it."""
+    import sys
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mtident", "thermal", "watch", *args, "--serve", "127.0.0.1:0", "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=cwd,
+    )
+    assert proc.stderr is not None
+    for line in proc.stderr:
+        if (found := re.search(r"the live page is at (http://\S+/)", line)) is not None:
+            return proc, found.group(1)
+    proc.kill()
+    pytest.fail(f"the watch never served its page: {proc.communicate()}")
+
+
+def _first_answer(proc: subprocess.Popen[str], url: str, within_s: float) -> dict:
+    """The page's first answer, asked for while the watch runs, within ``within_s``."""
+    deadline = time.monotonic() + within_s
+    while time.monotonic() < deadline and proc.poll() is None:
+        state = json.loads(_get(url + "state.json"))
+        if state["version"] > 0:
+            return dict(state["answer"])
+        time.sleep(0.1)
+    pytest.fail(
+        f"no answer on the page within {within_s:g} s (the watch {'ended' if proc.poll() is not None else 'runs'})"
+    )
+
+
+def _log(rows: int, names: tuple[str, ...] = ("A", "B", "C")) -> str:
+    t = np.arange(0.0, float(rows))
+    return csv_text(t, {n: noisy(first_order(t, steady=24.0 + k), 70 + k) for k, n in enumerate(names)})
+
+
+def test_the_page_answers_at_once_after_a_resume_and_during_a_replay(tmp_path):
+    """A watch resumed with a long log to catch up on showed `{"version":0,"answer":{}}` until its
+    first poll ended (80 s); a replay never showed an answer at all."""
+    lines = _log(601).splitlines(keepends=True)
+    log = tmp_path / "live.csv"
+    log.write_text("".join(lines[:31]))
+    first = CliRunner().invoke(main, ["thermal", "watch", str(log), "--timeout", "0.2"], catch_exceptions=False)
+    assert first.exit_code == 0 and (tmp_path / "live.csv.watch-state.npz").is_file()
+    with open(log, "a") as out:
+        out.write("".join(lines[31:]))  # the logger went on while the watch was stopped
+    proc, url = _watch_serving([str(log), "--poll", "0.05"], tmp_path)
+    try:
+        answer = _first_answer(proc, url, 20.0)  # the resumed state's answer, before the catch-up's fits (80 s before)
+        assert answer["last_time_min"] == 29.0
+    finally:
+        proc.terminate()
+        proc.communicate(timeout=60)
+    whole = tmp_path / "whole.csv"
+    whole.write_text("".join(lines))
+    proc, url = _watch_serving([str(whole), "--replay"], tmp_path)
+    try:
+        answer = _first_answer(proc, url, 60.0)
+        assert proc.poll() is None and 0 < float(answer["last_time_min"]) < 600  # shown while the replay runs
+    finally:
+        proc.terminate()
+        proc.communicate(timeout=60)

@@ -52,6 +52,7 @@ from mtident.cli_thermal import (
 from mtident.exceptions import InputError
 from mtident.io.logs import SAMPLES
 from mtident.io.mtconnect import MTConnectRecorder
+from mtident.io.record import RecordingThread
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
 from mtident.thermal.robust import RobustSettings
@@ -568,7 +569,10 @@ def watch_command(
     live = sys.stdout.isatty() and not as_json
     page, served = _serve(serve_address, path)
     on_main = threading.current_thread() is threading.main_thread()
+    _terminating.clear()
     previous = signal.signal(signal.SIGTERM, _terminate) if on_main else None
+    # the source is recorded on its own thread: its rows reach the log while the fits run
+    recording = None if recorder is None else RecordingThread(recorder, poll_s)
     try:
         interrupted = _follow(
             session,
@@ -578,7 +582,7 @@ def watch_command(
             timeout_s,
             plot_path,
             live,
-            None if recorder is None else recorder.fetch,
+            None if recording is None else recording.fetch,
             page,
         )
     finally:
@@ -586,8 +590,8 @@ def watch_command(
             signal.signal(signal.SIGTERM, previous)
         if served is not None:
             served.stop()
-        if recorder is not None:
-            recorder.close()
+        if recording is not None:
+            recording.close()
     if session.state is None:
         if interrupted:
             sys.exit(130)
@@ -599,7 +603,15 @@ def watch_command(
         raise InputError(msg)
     if plot_path:
         _plot(session, plot_path)
-    _answer(session, path, replay, as_json, live=sys.stdout.isatty() and not as_json and not replay)
+    # interrupted: the answer without the expected stops, whose forecasts take seconds
+    _answer(
+        session,
+        path,
+        replay,
+        as_json,
+        live=sys.stdout.isatty() and not as_json and not replay,
+        forecast=not interrupted,
+    )
     if interrupted:
         sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
 
@@ -620,19 +632,29 @@ def _follow(
     from rich.live import Live
 
     last_data = time.monotonic()
-    last_plot = last_page = 0.0
+    last_plot = last_page = last_shown = 0.0
     said_room = said_waiting = False
     try:
         with Live(console=OptionConsole(), auto_refresh=False, transient=False) if live else _Nothing() as view:
 
             def redraw(s: WatchSession) -> None:
-                view.update(_status_table(s, path), refresh=True)
+                nonlocal last_shown
+                if live:
+                    view.update(_status_table(s, path), refresh=True)
+                if page is not None and time.monotonic() - last_shown > _PAGE_PROGRESS_S:
+                    # a long poll (a replay, a resume's catch-up) shows its progress on the page too
+                    _publish(page, s, last_page, forecast=False)
+                    last_shown = time.monotonic()
 
             while True:
+                if page is not None and page.version == 0 and session.state is not None:
+                    _publish(page, session, last_page, forecast=False)  # a resumed state: at once
                 for note in fetch() if fetch is not None else []:
                     stderr.print(f"mtident: {note}", highlight=False)
-                events = session.poll(redraw if live else None)
+                events = session.poll(redraw if live or page is not None else None, _terminating.is_set)
                 _say(events)
+                if _terminating.is_set():  # at a safe point: the state file holds what the message says
+                    return _say_interrupted(_Terminated(), session)
                 if session.state is not None and not said_room and session.settings.room_sensor is None:
                     _say_room_candidates(session.sensors, "watched as a machine sensor")
                     said_room = True
@@ -656,12 +678,16 @@ def _follow(
                     )
                     said_waiting = True
                 time.sleep(poll_s)
+                if _terminating.is_set():
+                    return _say_interrupted(_Terminated(), session)
     except KeyboardInterrupt as stop:
+        session.back_to_saved()  # a poll cut short fed rows the state file does not hold
         return _say_interrupted(stop, session)
     except SystemError as error:
         interrupt = carried_interrupt(error)
         if interrupt is None:
             raise
+        session.back_to_saved()
         return _say_interrupted(interrupt, session)
 
 
@@ -669,7 +695,9 @@ def _say_interrupted(stop: KeyboardInterrupt, session: WatchSession) -> bool:
     """Where the watch was stopped, and what it kept; True (interrupted)."""
     how = "terminated (SIGTERM)" if isinstance(stop, _Terminated) else "interrupted (Ctrl-C)"
     where = (
-        "before the first sample" if session.state is None else f"at t = {minutes(session.state.readings.latest_min)}"
+        "before the first sample"
+        if session.state is None or not len(session.state.readings.time_min)
+        else f"at t = {minutes(session.state.readings.latest_min)}"
     )
     kept = (
         f"the state is in {session.state_path}; the same command resumes from there"
@@ -684,8 +712,13 @@ class _Terminated(KeyboardInterrupt):
     """SIGTERM (a service manager stopping the watch), taken as Ctrl-C: the state kept, the record written."""
 
 
+# set by SIGTERM; the watch ends at its next safe point (between two checks or two sensors' fits, or
+# after a poll), not by an exception thrown into whatever runs (a compiled fit, a plot)
+_terminating = threading.Event()
+
+
 def _terminate(signum: int, frame: object) -> None:  # noqa: ARG001
-    raise _Terminated
+    _terminating.set()
 
 
 def _serve(address: str | None, path: Path) -> tuple[LivePage | None, Served | None]:
@@ -702,17 +735,20 @@ def _serve(address: str | None, path: Path) -> tuple[LivePage | None, Served | N
 
 # the expected stops cost a forecast per sensor: asked for on the page this seldom (s)
 _PAGE_FORECAST_S = 10.0
+# a long poll's progress is shown on the page this often at most (s): each costs a picture
+_PAGE_PROGRESS_S = 2.0
 
 
-def _publish(page: LivePage, session: WatchSession, last_forecast: float) -> float:
-    """Show the session's answer and curves on the live page; returns when the forecast was made."""
+def _publish(page: LivePage, session: WatchSession, last_forecast: float, forecast: bool = True) -> float:
+    """Show the session's answer and curves on the live page (with the expected stops, where
+    ``forecast`` and the last were made long enough ago); returns when the forecast was made."""
     import io
 
     from mtident.report.plots import plot_monitor
 
     state = session.state
     assert state is not None
-    forecast = not state.stopped and time.monotonic() - last_forecast > _PAGE_FORECAST_S
+    forecast = forecast and not state.stopped and time.monotonic() - last_forecast > _PAGE_FORECAST_S
     answer = session.result(with_forecast=forecast)
     latest = {}
     for s, name in enumerate(state.sensors):
@@ -733,9 +769,10 @@ def _say(events: list[Event]) -> None:
             stderr.print(f"mtident: {prefix}{when}{event.text}", highlight=False)
 
 
-def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live: bool) -> None:
-    """The decision: the JSON object, or the table, the verdict and what it rests on."""
-    outcome = session.result()
+def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live: bool, forecast: bool = True) -> None:
+    """The decision: the JSON object, or the table, the verdict and what it rests on (with the
+    expected stops where ``forecast``)."""
+    outcome = session.result(with_forecast=forecast)
     hindsight = session.hindsight() if replay else None
     if hindsight is not None:
         outcome["time_saved_min"] = hindsight.time_saved_min

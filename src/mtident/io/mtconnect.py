@@ -5,7 +5,8 @@ An MTConnect agent publishes a machine's data items over HTTP: ``/probe`` descri
 observation from sequence number N on, with the agent's buffer range in the header. The
 :class:`MTConnectRecorder` asks for the samples from the next sequence it has not seen, so that
 nothing is read twice or skipped across reconnects; a sequence that dropped out of the agent's
-buffer, or an agent restarted with a new instance (its sequence numbers begin again), is said.
+buffer, or an agent restarted with a new instance (its sequence numbers begin again), is said; a
+new instance's buffer is read from its start.
 ``UNAVAILABLE`` is a missing reading.
 
 Every observation is written to a CSV log (``time_min`` from the first observation, one column
@@ -349,10 +350,13 @@ class MTConnectRecorder:
                 header, observations = parse_streams(first, self.device)
                 self.instance_id = header.instance_id
             else:
-                header, observations = parse_streams(
-                    self._ask("sample", **{"from": self.next_sequence, "count": SAMPLE_COUNT}), self.device
-                )
+                header, observations = self._samples_after()
+                restarted = header.instance_id != self.instance_id
                 notes += self._continuity(header)
+                if restarted:  # a new instance: its buffer from its start, the first reading it took too
+                    header, observations = parse_streams(
+                        self._ask("sample", **{"from": header.first_sequence, "count": SAMPLE_COUNT}), self.device
+                    )
         except (urllib.error.URLError, ConnectionError, TimeoutError, OSError) as exc:
             if not self._unreachable:
                 notes.append(f"the agent at {self.url} does not answer ({exc}); trying again")
@@ -372,6 +376,23 @@ class MTConnectRecorder:
         self.next_sequence = next_sequence
         self._save()
         return notes
+
+    def _samples_after(self) -> tuple[StreamHeader, list[Observation]]:
+        """The observations from the next sequence number on; where the agent refuses the request
+        (a restarted agent numbers its sequence anew, and the number asked for is out of its range),
+        the header of its current values, whose new instance :meth:`_continuity` then finds."""
+        try:
+            return parse_streams(
+                self._ask("sample", **{"from": self.next_sequence, "count": SAMPLE_COUNT}), self.device
+            )
+        except (urllib.error.HTTPError, InputError) as refused:
+            try:
+                header, _ = parse_streams(self._ask("current"), self.device)
+            except (InputError, urllib.error.HTTPError):
+                raise refused from None
+            if header.instance_id == self.instance_id:
+                raise
+            return header, []
 
     def _continuity(self, header: StreamHeader) -> list[str]:
         assert self.next_sequence is not None

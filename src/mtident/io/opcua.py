@@ -1,8 +1,11 @@
 """Temperatures straight from an OPC UA server, recorded to a CSV log that the monitor follows.
 
 The :class:`OpcUaRecorder` subscribes to each node's data changes (with the server's source time
-stamps, every change the server samples queued, not only the last of a publishing interval) and
-writes them at each fetch, in time order, one row per time stamp. A subscription made again after
+stamps, every change the server samples queued, not only the last of a publishing interval; a
+trigger on the time stamp too, so a reading that repeats the one before is recorded, not taken
+for a missing one) and writes them at each fetch, in time order, one row per time stamp. A time
+stamp stepped far ahead of the others once is left out, and said; readings stamped before the
+log's last row (a clock gone back) are left out, and said. A subscription made again after
 a dropped connection starts with each node's value of now, written only where it is newer than
 the last written: nothing twice. A bad status code is a missing reading. The values a node took
 while the watch was stopped or the server could not be reached are read from the server's history
@@ -36,6 +39,10 @@ PUBLISHING_MS = 200.0
 QUEUE_SIZE = 1000
 # The server's clock (Server.ServerStatus.CurrentTime), read at each fetch to see a dropped connection.
 SERVER_TIME = "i=2258"
+# A time stamp this far (min) beyond the readings before it, and this many of the log's last steps,
+# waits for the next reading: the clock moved on (a gap) or stepped ahead once (that stamp left out).
+CLOCK_STEP_MIN = 10.0
+CLOCK_STEP_STEPS = 10.0
 # How many request timeouts a call to the client may wait before it is given up.
 SYNC_WAITS = 4
 
@@ -91,7 +98,12 @@ class OpcUaRecorder:
         self._client: Any = None
         self._unreachable = False
         self._changes = _Changes()
+        self._notes: list[str] = []  # what _connect and _write found, said by the next fetch
+        self._repeats_said = False
         self._pending: dict[dt.datetime, dict[int, float]] = {}
+        self._step: dt.datetime | None = None  # a time stamp far beyond the others, waiting (see _held_step)
+        self._step_from = dt.datetime.min.replace(tzinfo=dt.UTC)  # the reading before it
+        self._row_step = 0.0  # min between the log's last two rows (a sparse source's steps are no clock step)
         self._index: dict[str, int] = {}
         self._sidecar = self.log.with_name(self.log.name + SIDECAR_SUFFIX)
         self.names: list[str] = []
@@ -139,12 +151,50 @@ class OpcUaRecorder:
             self._index = {node.nodeid.to_string(): i for i, node in enumerate(nodes)}
             self._changes.lost = False
             subscription = client.create_subscription(PUBLISHING_MS, self._changes)
-            subscription.subscribe_data_change(nodes, queuesize=QUEUE_SIZE)
+            self._subscribe(subscription, nodes)
         except Exception as exc:
             _close(client)
             msg = f"{self.url}: cannot read the nodes {', '.join(self.nodes)} ({exc})"
             raise InputError(msg) from exc
         return client
+
+    def _subscribe(self, subscription: Any, nodes: list[Any]) -> None:  # noqa: ANN401 - asyncua's
+        """Subscribe to each node's values with a trigger on the time stamp as well as the value and
+        status: a reading that repeats the one before (a sensor in 0.1 °C steps near equilibrium) is
+        a reading, which the default trigger (status and value) would not report. Nodes whose server
+        refuses the filter are subscribed with the default one, and that is said."""
+        from asyncua import ua
+        from asyncua.ua.attribute_ids import AttributeIds
+
+        requests = []
+        for handle, node in enumerate(nodes, start=1):
+            parameters = ua.MonitoringParameters(
+                ClientHandle=handle,
+                SamplingInterval=0.0,
+                QueueSize=QUEUE_SIZE,
+                DiscardOldest=True,
+                Filter=ua.DataChangeFilter(Trigger=ua.DataChangeTrigger.StatusValueTimestamp),
+            )
+            requests.append(
+                ua.MonitoredItemCreateRequest(
+                    ItemToMonitor=ua.ReadValueId(NodeId=node.nodeid, AttributeId=AttributeIds.Value),
+                    MonitoringMode=ua.MonitoringMode.Reporting,
+                    RequestedParameters=parameters,
+                )
+            )
+        results = subscription.create_monitored_items(requests)
+        refused = [node for node, result in zip(nodes, results, strict=True) if isinstance(result, ua.StatusCode)]
+        if refused:
+            for result in subscription.subscribe_data_change(refused, queuesize=QUEUE_SIZE):
+                if isinstance(result, ua.StatusCode):
+                    result.check()
+            if not self._repeats_said:
+                names = [self.names[nodes.index(node)] for node in refused]
+                self._notes.append(
+                    f"the OPC UA server at {self.url} refuses a trigger on the time stamp for {', '.join(names)}: a "
+                    "reading that repeats the one before is not reported, and its row has an empty cell there"
+                )
+                self._repeats_said = True
 
     def close(self) -> None:
         """Write the changes received so far, and close the connection (the next fetch opens it again)."""
@@ -191,6 +241,8 @@ class OpcUaRecorder:
             )
             self._unreachable = self._resumed = False
         self._write((backlog or []) + self._changes.drain(self._index))
+        notes += self._notes
+        self._notes = []
         return notes
 
     def _history(self) -> list[tuple[int, Any]] | None:
@@ -223,27 +275,85 @@ class OpcUaRecorder:
         A server sends each node's change on its own, so the newest time stamp's row waits until
         every node has a value for it, a newer time stamp arrives, or the recorder closes
         (``final``): a row written early would lose the values of that time arriving later.
+
+        A time stamp more than ``CLOCK_STEP_MIN`` beyond the readings before it waits too, until
+        the next reading tells whether the clock moved on (a newer one: a gap, written) or stepped
+        ahead once (one back in line: that stamp is the outlier, left out and said, and recording
+        goes on). A reading stamped before the log's last row is left out (the log's times must
+        increase), and said.
         """
         # in time order, whatever the order received (history and subscription interleave)
         stamped = sorted(
             ((stamp, i, value) for i, value in changes if (stamp := _stamp(value)) is not None),
             key=lambda c: (c[0], c[1]),
         )
+        behind: dict[int, int] = {}
+        arrived: list[dt.datetime] = []
         for stamp, i, value in stamped:
             last = self.last_stamp.get(self.nodes[i])
-            if last is not None and stamp <= dt.datetime.fromisoformat(last):
+            if last is not None and stamp == dt.datetime.fromisoformat(last):
                 continue  # written before: a subscription made again starts with the value of now
+            if self.origin is not None and (stamp - self.origin).total_seconds() / 60.0 <= self.last_time_min:
+                behind[i] = behind.get(i, 0) + 1  # the server's clock went back
+                continue
             good = value.StatusCode is None or value.StatusCode.is_good()
             number = value.Value.Value if value.Value is not None else None
             self._pending.setdefault(stamp, {})[i] = (
                 float(number) if good and isinstance(number, int | float) else math.nan
             )
+            arrived.append(stamp)
+        if behind:
+            self._notes.append(
+                f"{sum(behind.values())} reading(s) of {', '.join(self.names[i] for i in sorted(behind))} stamped "
+                f"before the log's last row ({_utc(self._last_row())}) left out, as the log's times must increase: the "
+                "OPC UA server's clock went back, or they came late"
+            )
+        held = self._held_step(arrived)
         newest = max(self._pending, default=None)
         ready = sorted(
-            stamp for stamp, row in self._pending.items() if final or stamp != newest or len(row) == len(self.nodes)
+            stamp
+            for stamp, row in self._pending.items()
+            if (held is None or stamp < held) and (final or stamp != newest or len(row) == len(self.nodes))
         )
         if ready:
             self._append({stamp: self._pending.pop(stamp) for stamp in ready})
+
+    def _last_row(self) -> dt.datetime | None:
+        """The time stamp of the log's last row (None before the first)."""
+        if self.origin is None or not math.isfinite(self.last_time_min):
+            return None
+        return self.origin + dt.timedelta(minutes=self.last_time_min)
+
+    def _held_step(self, arrived: list[dt.datetime]) -> dt.datetime | None:
+        """The first time stamp pending that lies more than ``CLOCK_STEP_MIN`` (and
+        ``CLOCK_STEP_STEPS`` of the log's last steps) beyond the readings before it, whose rows wait
+        (None: none waits). One followed by a newer reading is a clock that moved on: it waits no
+        more. One followed, in a later fetch, by readings back in line (more than that before it) is
+        a stamp stepped ahead once: its rows are left out, and said."""
+        step = dt.timedelta(minutes=max(CLOCK_STEP_MIN, CLOCK_STEP_STEPS * self._row_step))
+        if self._step is not None:
+            if any(stamp > self._step for stamp in arrived):
+                self._step = None  # the clock moved on: a gap in the log, which the watch says
+                return None
+            elif any(stamp < self._step - step for stamp in arrived):
+                outliers = {stamp: self._pending.pop(stamp) for stamp in sorted(self._pending) if stamp >= self._step}
+                names = sorted({self.names[i] for row in outliers.values() for i in row})
+                ahead = f"{(self._step - self._step_from).total_seconds() / 60.0:.0f} min ahead"
+                self._notes.append(
+                    f"the OPC UA server's clock stepped: {', '.join(names)}'s reading stamped {_utc(self._step)}, "
+                    f"{ahead} of the readings before and after it; that reading is left out (its time is not "
+                    "known) and recording goes on"
+                )
+                self._step = None
+            else:
+                return self._step
+        previous = self._last_row()
+        for stamp in sorted(self._pending):
+            if previous is not None and stamp - previous > step:
+                self._step, self._step_from = stamp, previous
+                return stamp
+            previous = stamp
+        return None
 
     def _append(self, rows: dict[dt.datetime, dict[int, float]]) -> None:
         """Write ``rows`` (in time order) to the log, and each node's last time stamp to the sidecar."""
@@ -258,9 +368,11 @@ class OpcUaRecorder:
                     self.last_stamp[self.nodes[i]] = stamp.isoformat()
                 t = (stamp - self.origin).total_seconds() / 60.0
                 if t <= self.last_time_min:
-                    continue  # a server clock that went back: the log's times must increase
+                    continue  # not reached: _write leaves out what is stamped before the log's last row
                 cells = ("" if i not in row or math.isnan(row[i]) else f"{row[i]:g}" for i in range(len(self.nodes)))
                 out.write(f"{t:.6f}," + ",".join(cells) + "\n")
+                if math.isfinite(self.last_time_min):
+                    self._row_step = t - self.last_time_min
                 self.last_time_min = t
             out.flush()
             os.fsync(out.fileno())
@@ -274,6 +386,10 @@ def _stamp(value: Any) -> dt.datetime | None:  # noqa: ANN401 - asyncua's DataVa
         return None
     answer: dt.datetime | None = stamp if stamp.tzinfo else stamp.replace(tzinfo=dt.UTC)
     return answer
+
+
+def _utc(stamp: dt.datetime | None) -> str:
+    return "none" if stamp is None else f"{stamp.astimezone(dt.UTC):%Y-%m-%d %H:%M:%S} UTC"
 
 
 def _readings(changes: list[tuple[int, Any]]) -> int:

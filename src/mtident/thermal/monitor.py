@@ -20,6 +20,7 @@ readiness predicate run on the best model's continuation.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -464,8 +465,17 @@ def _validated(
     return t, y, room
 
 
+class _Cancelled(Exception):
+    """A check given up half-way because the caller asked to stop (see ``cancel`` of :func:`monitor_step`)."""
+
+
 def monitor_step(
-    state: MonitorState, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: MonitorSettings
+    state: MonitorState,
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    settings: MonitorSettings,
+    cancel: Callable[[], bool] | None = None,
 ) -> tuple[MonitorState, list[Event]]:
     """Take new readings, check each sensor when it falls due, and decide.
 
@@ -483,6 +493,11 @@ def monitor_step(
     room_C : ndarray, shape (n,), optional
         The room sensor's readings, for a monitor started with one.
     settings : MonitorSettings
+    cancel : callable, optional
+        Asked before each check and between its sensors; once it returns True the step ends there:
+        the state returned has taken the readings up to its last whole check, as if only those had
+        been given (its latest reading says how far it got), so a caller can save it and give the
+        rest again later.
 
     Returns
     -------
@@ -507,20 +522,29 @@ def monitor_step(
     events: list[Event] = []
     start = 0
     while start < len(t) and not state.stopped:
+        if cancel is not None and cancel():
+            break
         due = min(c.next_check_min for c in state.checks)
         end = start + int(np.searchsorted(t[start:], due, side="left")) + 1
         part = slice(start, min(end, len(t)))
         readings = state.readings.append(t[part], y[part], None if room is None else room[part])
-        state = replace(state, readings=readings)
+        fed = replace(state, readings=readings)
         if readings.latest_min >= due:
-            state, said = _check_due(state, settings)
+            try:
+                fed, said = _check_due(fed, settings, cancel)
+            except _Cancelled:
+                break  # the readings of this check are not taken: the state is as before them
             events.extend(said)
+        state = fed
         start = part.stop
     return state, events
 
 
-def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorState, list[Event]]:
-    """Check the sensors due at the latest reading, and decide."""
+def _check_due(
+    state: MonitorState, settings: MonitorSettings, cancel: Callable[[], bool] | None = None
+) -> tuple[MonitorState, list[Event]]:
+    """Check the sensors due at the latest reading, and decide (``_Cancelled`` where ``cancel``
+    asks to stop between two sensors)."""
     readings = state.readings
     now = readings.latest_min
     events: list[Event] = []
@@ -530,6 +554,8 @@ def _check_due(state: MonitorState, settings: MonitorSettings) -> tuple[MonitorS
     used = replace(settings, reference=None) if dropped else settings
 
     def check_sensor(s: int) -> None:
+        if cancel is not None and cancel():
+            raise _Cancelled
         estimate = sensor_estimate(readings, s, state.sensors[s], used)
         before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used)
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))

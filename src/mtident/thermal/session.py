@@ -165,6 +165,8 @@ class WatchSession:
         What the session found on opening (a state resumed, or one not resumed and why).
     last_rows : int
         Rows read by the last poll.
+    cancelled : bool
+        A poll ended early because its ``cancel`` asked (the state then holds the rows fed up to it).
     state : MonitorState or None
         The monitor's state; None before the log's header is read.
     state_path : Path
@@ -189,11 +191,13 @@ class WatchSession:
         self.state_path = Path(state_path) if state_path is not None else default_state_path(self.path)
         self.notes: list[str] = []
         self.last_rows = 0
+        self.cancelled = False
         room = settings.room_sensor
         self._asked = None if sensors is None else [*[n for n in sensors if n != room], *([room] if room else [])]
         self._key = _settings_key(settings, sensors, time_col, time_unit)
         self._fingerprint: tuple[str, int] = ("", 0)
         self.state: MonitorState | None = None
+        self._saved: MonitorState | None = None  # the state the state file holds (None: none written)
         self.follower = LogFollower(self.path, self._asked, time_col, time_unit, room=room)
         if resume and self.state_path.is_file():
             self._resume(time_col, time_unit)
@@ -225,21 +229,35 @@ class WatchSession:
             self.notes.append(f"the state file {self.state_path} was written for {' and '.join(differs)}; {afresh}")
             return
         self.follower = LogFollower.resume(self.path, json.loads(saved.position), time_col, time_unit)
-        self.state = saved.monitor
+        self.state = self._saved = saved.monitor
         self._fingerprint = (saved.fingerprint, saved.fingerprint_bytes)
         self.notes.append(f"resuming from {self.state_path} at t = {minutes(saved.monitor.readings.latest_min)}")
 
-    def save(self) -> None:
-        """Write the state file (atomically: a killed process leaves the old or the new one)."""
+    def save(self, position_before: dict[str, object] | None = None) -> None:
+        """Write the state file (atomically: a killed process leaves the old or the new one).
+
+        Parameters
+        ----------
+        position_before : dict, optional
+            The follower's position to save (default: where it is now): a poll cut short saves the
+            one of before it, with the state of the rows it fed.
+        """
         if self.state is None:
             return
         if self._fingerprint[1] < FINGERPRINT_BYTES:
             # taken again while the log is short: a live log's head grows to its full length
             self._fingerprint = log_fingerprint(self.path)
-        position = json.dumps(self.follower.position())
+        position = json.dumps(self.follower.position() if position_before is None else position_before)
         save_dataclass(
             self.state_path, SavedWatch(str(self.path.resolve()), *self._fingerprint, self._key, position, self.state)
         )
+        self._saved = self.state
+
+    def back_to_saved(self) -> None:
+        """Take up again the state the state file holds (a poll interrupted mid-way, by Ctrl-C, fed
+        rows it did not save): what is said and answered is then what a resume starts from."""
+        if self.persist and self._saved is not None:
+            self.state = self._saved
 
     # -- following ---------------------------------------------------------------------------
 
@@ -263,13 +281,20 @@ class WatchSession:
         """
         return self.state is not None and self.state.stopped
 
-    def poll(self, progress: Callable[[WatchSession], None] | None = None) -> list[Event]:
+    def poll(
+        self, progress: Callable[[WatchSession], None] | None = None, cancel: Callable[[], bool] | None = None
+    ) -> list[Event]:
         """Read the rows added to the log since the last poll, feed them to the monitor and save.
 
         Parameters
         ----------
         progress : callable, optional
             Called with the session after every ``FEED_ROWS`` rows fed (to redraw a table).
+        cancel : callable, optional
+            Asked between the monitor's checks (and their sensors): once it returns True the poll
+            ends there, and the state file keeps the rows fed up to the last whole check, with the
+            follower's position of before the poll (its rows up to that check are skipped when the
+            same command resumes). :attr:`cancelled` then says so.
 
         Returns
         -------
@@ -281,7 +306,13 @@ class WatchSession:
         InputError
             The log has no sensor column besides the room sensor's, or the reference knows none of its sensors.
         """
+        before = json.loads(json.dumps(self.follower.position()))  # a copy, as the state file keeps it
         rows = self.follower.poll()
+        if self.state is not None and len(rows.time_min) and len(self.state.readings.time_min):
+            # a poll cut short saved the follower's position of before it: its rows fed are skipped
+            taken = rows.time_min > self.state.readings.latest_min
+            if not taken.all():
+                rows = dataclasses.replace(rows, time_min=rows.time_min[taken], temperature_C=rows.temperature_C[taken])
         self.last_rows = len(rows.time_min)
         events = [Event("note", np.nan, text) for text in rows.notes]
         events += [Event("warning", np.nan, text) for text in rows.warnings]
@@ -303,9 +334,22 @@ class WatchSession:
         for start in range(0, len(rows.time_min), FEED_ROWS):
             part = slice(start, start + FEED_ROWS)
             self.state, said = monitor_step(
-                self.state, rows.time_min[part], values[part], None if room is None else room[part], self.settings
+                self.state,
+                rows.time_min[part],
+                values[part],
+                None if room is None else room[part],
+                self.settings,
+                cancel,
             )
             events.extend(said)
+            if cancel is not None and cancel():
+                self.cancelled = True
+                if self.persist:
+                    self.save(before)
+                # the rest of the rows are read again by the next poll (as by a resumed watch)
+                time_col, time_unit = self.follower.time_col, self.follower.time_unit
+                self.follower = LogFollower.resume(self.path, before, time_col, time_unit)
+                return events
             if progress is not None:
                 progress(self)
         if self.persist:
