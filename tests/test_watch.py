@@ -1052,7 +1052,7 @@ def test_sigterm_during_a_fit_ends_cleanly_at_the_next_check_and_saves_what_it_s
     said = re.search(r"terminated \(SIGTERM\) at t = (\d+) min; the state is in", err)
     assert said is not None, err
     saved = load_dataclass(state, SavedWatch).monitor.readings.latest_min
-    assert f"{saved:.0f}" == said.group(1) and 30 <= saved < 300
+    assert f"{saved:.0f}" == said.group(1) and 30 <= saved <= 300  # mid-fit, or after the last row on a fast machine
     assert json.loads(out)["last_time_min"] == saved
     resumed = subprocess.run(
         [*cmd, "--poll", "0.05", "--timeout", "1"],

@@ -53,11 +53,14 @@ def report_command(
 ) -> None:
     """Write up a finished or stopped warm-up test of FILE for the customer.
 
-    The report holds the setup, per sensor the measured curve with the predicted curve and its
-    band, T∞ with its interval, λ and t_eq, the decision and when it came, the check against the
-    rest of the log where the log runs on, the warnings, what the answer assumes, the method and
-    the software version. The decision is the one `thermal watch` reaches with the same options;
-    where a watch of this log left its state file, the report starts from it.
+    The report names the machine and program (--machine, or the reference run's) and when the
+    test began (the log's time stamps, or a recorder's first reading), says the decision and,
+    where the test could not stop, what holds it, a line per sensor; then per sensor T∞ with its
+    95 % interval, t_eq and the measured curve with the predicted one, the check against the rest
+    of the log where the log runs on (where the readings settled, and the time the stop saved),
+    the warnings, what the answer assumes, the method and the software version. The decision is
+    the one `thermal watch` reaches with the same options; where a watch of this log left its
+    state file, the report starts from it.
 
     \f
 
@@ -135,7 +138,7 @@ def report_command(
             if current.state is not None:
                 status.update(f"deciding: t = {minutes(current.state.readings.latest_min)} of the log")
 
-        report = build_report(session, progress)
+        report = build_report(session, progress, machine)
     written = write_pdf(report, output) if output.suffix.lower() == ".pdf" else write_html(report, output)
     verdict = (
         f"the test could stop at t = {minutes(report.stop_time_min)}"

@@ -35,6 +35,7 @@ __all__ = [
     "plot_responses",
     "plot_feed_drive_identification",
     "grid",
+    "draw_monitor_panel",
 ]
 
 
@@ -466,52 +467,73 @@ def plot_monitor(
     ValueError
         ``path``'s suffix is not a picture format matplotlib writes.
     """
+    fig, axes = grid(len(state.sensors))
+    for s, ax in enumerate(axes):
+        draw_monitor_panel(ax, state, settings, s, expected)
+        if s == 0:
+            ax.legend(fontsize=7, loc="lower right")
+    return _save(fig, path, 100)
+
+
+def draw_monitor_panel(
+    ax: Axes, state: MonitorState, settings: MonitorSettings, s: int, expected: dict[str, float] | None = None
+) -> None:
+    """One sensor's panel of :func:`plot_monitor` on ``ax`` (a report lays the panels out on its pages).
+
+    Parameters
+    ----------
+    ax : Axes
+        Where to draw.
+    state : MonitorState
+        The readings (min, °C) and each sensor's latest check.
+    settings : MonitorSettings
+        The settings ``state`` was decided with.
+    s : int
+        The sensor's index in ``state.sensors``.
+    expected : dict of str to float, optional
+        Sensor name → expected stop (min), drawn where finite and the test has not stopped.
+    """
     from mtident.thermal.modes import Mode, course_with_room
     from mtident.thermal.monitor import minutes
 
     readings = state.readings
-    fig, axes = grid(len(state.sensors))
     now = readings.latest_min
-    for s, ax in enumerate(axes):
-        check = state.checks[s]
-        ax.plot(readings.time_min, readings.values_C[:, s], ".", ms=2.5, color="0.45", label="measured")
-        if check.modes and np.isfinite(check.steady_C):
-            slowest = max(tau for tau, _ in check.modes)
-            future = np.linspace(check.origin_min, now + max(3.0 * slowest, 0.5 * now, 30.0), 300)
-            # with a room sensor the model follows the room as logged (held at its last level on)
-            logged = readings.room_C is not None and not np.isnan(check.room_level_C)
-            curve = course_with_room(
-                tuple(Mode(t, a) for t, a in check.modes),
-                check.steady_C,
-                check.origin_min,
-                future,
-                _room_on(readings, future) if logged else None,
-                check.room_level_C if logged else None,
-                check.room_gains,
-                tuple(t for t, _ in check.modes),
-            )
-            label = "best model, with the room as logged" if logged else "best model"
-            ax.plot(future, curve, color="tab:red", lw=1.5, label=label)
-        if np.isfinite(check.low95_C) and np.isfinite(check.high95_C):
-            ax.axhspan(check.low95_C, check.high95_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
-        if np.isfinite(check.low_C) and np.isfinite(check.high_C):
-            for k, edge in enumerate((check.low_C, check.high_C)):
-                ax.axhline(edge, color="tab:green", lw=0.8, ls="--", label=None if k else "T∞, decision's level")
-        if state.stopped:
-            ax.axvline(state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)}")
-        elif expected and np.isfinite(expected.get(check.sensor, np.nan)):
-            ax.axvline(expected[check.sensor], color="0.4", ls=":", lw=1, label="expected stop")
-        ax.set_title(f"{check.sensor}: {check.status}", fontsize=10)
-        ax.set_xlabel("time (min)")
-        ax.set_ylabel("temperature (°C)")
-        ax.grid(alpha=0.3)
-        measured = readings.values_C[:, s]
-        if np.isfinite(measured).any():
-            # the interval shown where it is of the rise's size; a far wider one would flatten the curve
-            low, high = float(np.nanmin(measured)), float(np.nanmax(measured))
-            span = max(high - low, 0.5)
-            low, high = max(min(low, check.low95_C), low - span), min(max(high, check.high95_C), high + span)
-            ax.set_ylim(low - 0.05 * span, high + 0.05 * span)
-        if s == 0:
-            ax.legend(fontsize=7, loc="lower right")
-    return _save(fig, path, 100)
+    check = state.checks[s]
+    ax.plot(readings.time_min, readings.values_C[:, s], ".", ms=2.5, color="0.45", label="measured")
+    if check.modes and np.isfinite(check.steady_C):
+        slowest = max(tau for tau, _ in check.modes)
+        future = np.linspace(check.origin_min, now + max(3.0 * slowest, 0.5 * now, 30.0), 300)
+        # with a room sensor the model follows the room as logged (held at its last level on)
+        logged = readings.room_C is not None and not np.isnan(check.room_level_C)
+        curve = course_with_room(
+            tuple(Mode(t, a) for t, a in check.modes),
+            check.steady_C,
+            check.origin_min,
+            future,
+            _room_on(readings, future) if logged else None,
+            check.room_level_C if logged else None,
+            check.room_gains,
+            tuple(t for t, _ in check.modes),
+        )
+        label = "best model, with the room as logged" if logged else "best model"
+        ax.plot(future, curve, color="tab:red", lw=1.5, label=label)
+    if np.isfinite(check.low95_C) and np.isfinite(check.high95_C):
+        ax.axhspan(check.low95_C, check.high95_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
+    if np.isfinite(check.low_C) and np.isfinite(check.high_C):
+        for k, edge in enumerate((check.low_C, check.high_C)):
+            ax.axhline(edge, color="tab:green", lw=0.8, ls="--", label=None if k else "T∞, decision's level")
+    if state.stopped:
+        ax.axvline(state.stop_time_min, color="k", ls="--", lw=1, label=f"stop at {minutes(state.stop_time_min)}")
+    elif expected and np.isfinite(expected.get(check.sensor, np.nan)):
+        ax.axvline(expected[check.sensor], color="0.4", ls=":", lw=1, label="expected stop")
+    ax.set_title(f"{check.sensor}: {check.status}", fontsize=10)
+    ax.set_xlabel("time (min)")
+    ax.set_ylabel("temperature (°C)")
+    ax.grid(alpha=0.3)
+    measured = readings.values_C[:, s]
+    if np.isfinite(measured).any():
+        # the interval shown where it is of the rise's size; a far wider one would flatten the curve
+        low, high = float(np.nanmin(measured)), float(np.nanmax(measured))
+        span = max(high - low, 0.5)
+        low, high = max(min(low, check.low95_C), low - span), min(max(high, check.high95_C), high + span)
+        ax.set_ylim(low - 0.05 * span, high + 0.05 * span)

@@ -1,11 +1,13 @@
-"""A warm-up test written up: the setup, each sensor's answer with its curve and band, the
-decision and when it came, the check against the rest of the log, the warnings, what the
-answer assumes, the method and the software version.
+"""A warm-up test written up for the customer: the machine and program, when the test began,
+the verdict and, where the test could not stop, what holds it (a line per sensor), each
+sensor's answer with its curve and band, the check against the rest of the log, the warnings,
+what the answer assumes, the method and the software version.
 
 :func:`build_report` runs the monitor over a finished or stopped log (resuming from the state
 file ``watch`` left beside it, where it belongs to this log and these settings);
 :func:`write_html` writes one self-contained HTML page (the figure embedded) and
-:func:`write_pdf` a PDF of two pages, both from the same :class:`WarmupReport`.
+:func:`write_pdf` an A4 PDF (the curves laid out two to a row, on as few pages as they fill),
+both from the same :class:`WarmupReport`.
 """
 
 from __future__ import annotations
@@ -15,24 +17,36 @@ import datetime as dt
 import io
 import json
 import math
+import re
+import textwrap
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import jinja2
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
 from matplotlib.transforms import Bbox
 
 from mtident import __version__
 from mtident.exceptions import InputError
-from mtident.report.plots import plot_monitor
-from mtident.thermal.monitor import MonitorSettings, assumptions, minutes
+from mtident.report.plots import draw_monitor_panel, plot_monitor
+from mtident.thermal.monitor import MonitorSettings, MonitorState, SensorCheck, assumptions, minutes
 from mtident.thermal.session import WatchSession
 
-__all__ = ["SensorLine", "WarmupReport", "build_report", "reading_gaps", "write_html", "write_pdf"]
+__all__ = [
+    "SensorLine",
+    "WarmupReport",
+    "build_report",
+    "log_start",
+    "reading_gaps",
+    "status_words",
+    "write_html",
+    "write_pdf",
+]
 
 
 @dataclass(frozen=True)
@@ -67,6 +81,9 @@ class SensorLine:
         T∞ at the stop, moved with the room, less ``settled_C`` (°C).
     within_tolerance : bool or None
         ``difference_C`` is within the tolerance; None where nothing could be checked.
+    settle_time_min : float
+        When the readings came within the tolerance of where they settled, to stay (min), NaN where
+        not known.
     """
 
     sensor: str
@@ -81,11 +98,32 @@ class SensorLine:
     settled_C: float
     difference_C: float
     within_tolerance: bool | None
+    settle_time_min: float = math.nan
 
     @property
     def rate_per_min(self) -> float:
         """λ of the slowest mode, 1/τ (the papers' rate)."""
         return 1.0 / self.slowest_time_constant_min if self.slowest_time_constant_min > 0 else math.nan
+
+
+@dataclass(frozen=True)
+class Curves:
+    """What the curves are drawn from: the monitor's state and settings, and the whole log.
+
+    Attributes
+    ----------
+    state : MonitorState
+    settings : MonitorSettings
+    time_min : ndarray, shape (T,)
+        The whole log's times (min), the readings after the stop among them.
+    values_C : ndarray, shape (T, S)
+        The whole log's readings (°C).
+    """
+
+    state: MonitorState
+    settings: MonitorSettings
+    time_min: np.ndarray
+    values_C: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -96,6 +134,16 @@ class WarmupReport:
     ----------
     source : str
         The log.
+    machine, serial, program : str
+        What the test is of, as far as known ("" where not): the machine from ``--machine`` or
+        the reference run the decision used, its serial number and program from that reference.
+    started : str or None
+        t = 0 in local time, in words ("26 Nov 2026, 07:00"), None where nothing says when.
+    started_from : str
+        Where ``started`` comes from (the log's time stamps, the recorder's first reading), or
+        why it is not known.
+    test_date : str or None
+        The test's day ("26 Nov 2026"), None where not known.
     room : str
         How the room entered the answer.
     samples, sampling_interval_min, log_end_min
@@ -104,13 +152,17 @@ class WarmupReport:
         Stretches without readings longer than ``GAP_INTERVALS`` sampling intervals: (from, to), min.
     recorded_from : str or None
         Where a watch recorded the log from (an MTConnect agent's device, an OPC UA server's
-        nodes) and its first reading's time, from the recorder's sidecar file; None for a logger's file.
+        nodes), from the recorder's sidecar file; None for a logger's file.
     decision : str
         "stop" or "continue".
     stop_time_min : float
         The stop (NaN: no stop within the log).
     reason : str or None
-        Why the test could not stop, where it could not.
+        The monitor's own account of why the test could not stop (the command line's), where it could not.
+    holding : tuple of str
+        Why not yet, in plain words: one line per sensor that holds the test, what would settle it.
+    ways_on : str or None
+        What the user can do, where the test could not stop.
     lines : tuple of SensorLine
     warnings : tuple of str
     assumptions : str
@@ -119,13 +171,25 @@ class WarmupReport:
         The decision's settings.
     hindsight : str or None
         The verdict of the check against the rest of the log, where the log runs on past the stop.
+    settle_time_min : float
+        When every waited-for sensor's readings had settled within the tolerance (NaN: not known).
+    time_saved_min : float
+        The settle time less the stop (NaN: not known).
     figure_png : bytes
         The curves (measured, the best model on, the T∞ intervals, the stop).
     version, created
         The software and when the report was made.
+    curves : Curves or None
+        What the PDF draws its curves from (as vectors, two to a row); None: it places ``figure_png``.
     """
 
     source: str
+    machine: str
+    serial: str
+    program: str
+    started: str | None
+    started_from: str
+    test_date: str | None
     room: str
     samples: int
     sampling_interval_min: float
@@ -135,6 +199,8 @@ class WarmupReport:
     decision: str
     stop_time_min: float
     reason: str | None
+    holding: tuple[str, ...]
+    ways_on: str | None
     lines: tuple[SensorLine, ...]
     warnings: tuple[str, ...]
     assumptions: str
@@ -142,9 +208,34 @@ class WarmupReport:
     tolerance_C: float
     decision_level: float
     hindsight: str | None
+    settle_time_min: float
+    time_saved_min: float
     figure_png: bytes
     version: str
     created: str
+    curves: Curves | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def title(self) -> str:
+        """The report's title: the machine and its program, else the log's file name."""
+        if not self.machine:
+            return f"Warm-up test: {Path(self.source).name}"
+        serial = f" (serial {self.serial})" if self.serial else ""
+        program = f", program {self.program}" if self.program else ""
+        return f"Warm-up test of {self.machine}{serial}{program}"
+
+    @property
+    def subtitle(self) -> str:
+        """The test's day and the log, under the title."""
+        day = f"Test of {self.test_date} · " if self.test_date else ""
+        return f"{day}log {Path(self.source).name}"
+
+    @property
+    def start_words(self) -> str:
+        """What t = 0 is, in words."""
+        if self.started is None:
+            return f"the log's first reading ({self.started_from})"
+        return f"{self.started} ({self.started_from})"
 
 
 # a stretch without readings longer than this many sampling intervals is said in the report
@@ -157,9 +248,54 @@ METHOD = (
     "assumed. A sensor may stop when its interval at the decision's confidence lies within the tolerance of its "
     "T∞ at two checks in a row; the test may stop when every sensor may."
 )
+# the table's terms, said under it
+T_EQ_NOTE = (
+    "t_eq: when the best model's curve comes within 5 % of its total rise from T∞ (min from t = 0). "
+    "95 % interval: where T∞ lies, at 95 %, by every model the readings allow."
+)
+SETTLED_NOTE = (
+    "settled: where the readings after the stop came to rest; difference: T∞ at the stop (moved with the room) "
+    "less that; settled by: when the readings came within the tolerance of it, to stay."
+)
+
+# the monitor's statuses in words for the customer
+_STATUS_WORDS = {
+    "may stop": "ready: T∞ within the tolerance",
+    "confirming": "within the tolerance, confirming",
+    "narrowing": "still warming",
+    "undetermined": "too early to tell",
+    "collecting": "collecting readings",
+    "no data": "no readings",
+    "no rise": "no rise yet",
+    "misfit": "readings do not follow the model",
+    "off reference": "does not follow the reference run",
+    "too coarse": "readings too coarse for the tolerance",
+}
 
 
-def build_report(session: WatchSession, progress: Callable[[WatchSession], None] | None = None) -> WarmupReport:
+def status_words(line: SensorLine) -> str:
+    """A sensor's status for the customer (the monitor's word where there is none other), with a
+    doubtful fit said.
+
+    Parameters
+    ----------
+    line : SensorLine
+
+    Returns
+    -------
+    str
+    """
+    words = _STATUS_WORDS.get(line.status, line.status)
+    if not line.model_ok and line.status not in ("no data", "no rise", "misfit", "collecting"):
+        words += "; fit doubtful"
+    return words
+
+
+def build_report(
+    session: WatchSession,
+    progress: Callable[[WatchSession], None] | None = None,
+    machine: str | None = None,
+) -> WarmupReport:
     """Run the session's monitor over the whole log and gather the report.
 
     Parameters
@@ -168,6 +304,9 @@ def build_report(session: WatchSession, progress: Callable[[WatchSession], None]
         The log and the decision's settings (resumed from its state file where it can be).
     progress : callable, optional
         Called with the session as readings are fed (for a progress display).
+    machine : str, optional
+        The machine the test is of (``--machine``); default: the reference run's, where the
+        decision used one.
 
     Returns
     -------
@@ -191,25 +330,51 @@ def build_report(session: WatchSession, progress: Callable[[WatchSession], None]
     )
     said = assumptions(settings, state.sensors[0], state.readings.room_C is not None)
     assumed = f"{said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
+    references: dict[str, list[str]] = {}
     for sensor in state.sensors:
         reference = assumptions(settings, sensor).reference
         if reference:
-            assumed += f"; reference for {sensor}: {reference}"
+            references.setdefault(reference, []).append(sensor)
+    for reference, named in references.items():
+        whom = "every sensor" if len(named) == len(state.sensors) > 1 else ", ".join(named)
+        assumed += f"; reference for {whom}: {reference}"
+    # the reference names the machine where the decision rested on it (one most sensors contradicted may be another's)
+    used = settings.reference if settings.reference is not None and not state.reference_dropped else None
+    sidecar_words, recorder_start = _recorder(session.path)
+    start = log_start(session.follower)
+    started_from = "the log's time stamps"
+    if start is None and recorder_start is not None:
+        start, started_from = recorder_start, "the recorder's first reading"
+    elif start is None:
+        started_from = "the log has no time stamps"
     figure = plot_monitor(state, settings)
     assert isinstance(figure, Figure)
     if state.stopped:
-        _draw_rest_of_log(figure, time_min, values, state.stop_time_min)
+        for s, ax in enumerate(figure.axes[: values.shape[1]]):
+            _draw_rest_of_log(ax, time_min, values[:, s], state.stop_time_min, legend=s == 0)
+    stopped = state.stopped
+    holding, ways = ((), None) if stopped else _holding(state, settings, session.expected_stops())
+    settle = math.nan if hindsight is None else hindsight.test_settle_time_min
+    saved = None if hindsight is None else hindsight.time_saved_min
     return WarmupReport(
         source=str(session.path),
+        machine=machine or (used.machine if used is not None else ""),
+        serial=used.serial if used is not None and (not machine or machine == used.machine) else "",
+        program=used.program if used is not None and (not machine or machine == used.machine) else "",
+        started=None if start is None else _when(start),
+        started_from=started_from,
+        test_date=None if start is None or isinstance(start, dt.time) else _day(start),
         room=said.room,
         samples=len(time_min),
         sampling_interval_min=float(np.median(np.diff(time_min))) if len(time_min) > 1 else math.nan,
         log_end_min=float(time_min[-1]) if len(time_min) else math.nan,
         gaps=reading_gaps(time_min),
-        recorded_from=_recorded_from(session.path),
+        recorded_from=sidecar_words,
         decision=str(outcome["decision"]),
-        stop_time_min=state.stop_time_min if state.stopped else math.nan,
+        stop_time_min=state.stop_time_min if stopped else math.nan,
         reason=outcome["reason"] if isinstance(outcome["reason"], str) else None,
+        holding=holding,
+        ways_on=ways,
         lines=lines,
         warnings=tuple(dict.fromkeys(w for summary in _sensors(outcome) for w in summary["warnings"])),
         assumptions=assumed,
@@ -217,21 +382,159 @@ def build_report(session: WatchSession, progress: Callable[[WatchSession], None]
         tolerance_C=settings.tolerance_C,
         decision_level=settings.decision_level,
         hindsight=None if hindsight is None else _hindsight_verdict(lines, hindsight.log_end_min, settings),
+        settle_time_min=settle,
+        time_saved_min=math.nan if saved is None else float(saved),
         figure_png=_png(figure),
         version=__version__,
-        created=dt.datetime.now().astimezone().isoformat(timespec="minutes"),
+        created=_when(dt.datetime.now().astimezone().replace(second=0, microsecond=0)),
+        curves=Curves(state, settings, time_min, values),
     )
 
 
-def _draw_rest_of_log(figure: Figure, time_min: np.ndarray, values: np.ndarray, stop_min: float) -> None:
-    """The readings after the stop, which the decision did not see, on each sensor's axes."""
+# ---- when the test began -----------------------------------------------------------------------
+
+
+def log_start(follower: Any) -> dt.datetime | dt.time | None:  # noqa: ANN401 - a LogFollower
+    """t = 0 by the log's own time stamps: a local clock's time as written (naive), an instant in
+    the computer's local zone where the stamps carry their offset from UTC, the time of day alone
+    where the log gives no date; None for a log timed in numbers from its start.
+
+    Parameters
+    ----------
+    follower : LogFollower
+        The follower that read the log (its time origin and the stamps' format).
+
+    Returns
+    -------
+    datetime, time or None
+    """
+    from mtident.io.stamps import TIME_OF_DAY_FORMATS, has_utc_offset
+
+    origin = getattr(follower, "origin", None)
+    if origin is None or not math.isfinite(origin):
+        return None
+    if getattr(follower, "serial_days", False):  # spreadsheet serial dates, read in minutes
+        return _rounded(dt.datetime(1899, 12, 30) + dt.timedelta(minutes=origin))
+    fmt = getattr(follower, "time_format", None)
+    if fmt is None:
+        return None
+    when = dt.datetime(1970, 1, 1, tzinfo=dt.UTC) + dt.timedelta(minutes=origin)
+    if fmt in TIME_OF_DAY_FORMATS:
+        return _rounded(when.replace(tzinfo=None)).time()
+    if has_utc_offset(getattr(follower, "first_stamp", None) or ""):
+        return _rounded(when).astimezone()
+    return _rounded(when.replace(tzinfo=None))
+
+
+def _rounded(when: dt.datetime) -> dt.datetime:
+    """To the second (minutes since 1970 in a float carry a few microseconds of rounding)."""
+    return (when + dt.timedelta(microseconds=500_000)).replace(microsecond=0)
+
+
+def _day(when: dt.datetime) -> str:
+    return f"{when.day} {when:%b %Y}"
+
+
+def _when(when: dt.datetime | dt.time) -> str:
+    """A time in words: "26 Nov 2026, 07:00" (seconds where not zero, the zone where known)."""
+    clock = f"{when:%H:%M}" + (f":{when:%S}" if when.second else "")
+    if isinstance(when, dt.time):
+        return f"{clock} (the log gives the time of day alone)"
+    zone = f" {when.tzname()}" if when.tzinfo is not None and when.tzname() else ""
+    return f"{_day(when)}, {clock}{zone}"
+
+
+def _recorder(log: Path) -> tuple[str | None, dt.datetime | None]:
+    """The source a watch recorded ``log`` from, in words, and its first reading's time in the
+    computer's local zone, from its recorder's sidecar ((None, None) where there is none, or it
+    cannot be read)."""
+    from mtident.io import mtconnect, opcua
+
+    for suffix, what in ((opcua.SIDECAR_SUFFIX, "nodes"), (mtconnect.SIDECAR_SUFFIX, "device")):
+        sidecar = log.with_name(log.name + suffix)
+        if not sidecar.is_file():
+            continue
+        try:
+            saved = json.loads(sidecar.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return None, None
+        named = ", ".join(saved.get("nodes", [])) if what == "nodes" else str(saved.get("device") or "all devices")
+        start = None
+        try:
+            start = _rounded(dt.datetime.fromisoformat(str(saved["origin"]))).astimezone()
+        except (KeyError, TypeError, ValueError):
+            pass
+        return f"{saved.get('url')} ({what} {named})", start
+    return None, None
+
+
+# ---- why not yet ---------------------------------------------------------------------------------
+
+
+def _holding(state: MonitorState, settings: MonitorSettings, expected: dict[str, float]) -> tuple[tuple[str, ...], str]:
+    """Why the test could not stop, a line per sensor that holds it, and the ways on."""
+    from mtident.thermal.monitor import _room_bound
+
+    waiting = [c for c in state.checks if settings.waits_for(c.sensor) and not c.may_stop]
+    if not waiting:
+        return ("Every sensor is within the tolerance; the stop is confirmed at the next check.",), "continue the test"
+    lines = [_holding_line(c, settings, expected.get(c.sensor, math.nan)) for c in waiting]
+    room_bound = [c.sensor for c in waiting if _room_bound(c, settings)]
+    ways = ["continue the test"]
+    if room_bound:
+        ways = [
+            f"for {', '.join(room_bound)}, log the room beside the sensors and name it (--ambient), or state a "
+            "smaller room wander (--room-wander) if the room is steadier than assumed: a longer test does not help"
+        ] + (["for the others, continue the test"] if len(room_bound) < len(waiting) else [])
+    if settings.reference is None:
+        ways.append("a reference run of this machine (mtident thermal learn) lets later tests stop far earlier")
+    return tuple(lines), "; ".join(ways)
+
+
+def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float) -> str:
+    tolerance = f"±{settings.tolerance_C:g} °C"
+    level = f"{settings.decision_level * 100:g} %"
+    if c.status == "no rise":
+        return (
+            f"{c.sensor}: has not risen above its noise yet. If the test does not heat it, leave it out (--sensor); "
+            "if it reads the room, name it as the room sensor (--ambient)."
+        )
+    if not math.isfinite(c.steady_C):
+        return f"{c.sensor}: {_STATUS_WORDS.get(c.status, c.status)}, no T∞ yet. Continue the test."
+    if c.status == "too coarse":
+        return (
+            f"{c.sensor}: its readings step by more than the tolerance ({tolerance}), which can bias T∞ by half a "
+            "step. Give a tolerance above the step."
+        )
+    if not c.model_ok and c.half_width_C <= settings.tolerance_C:
+        return (
+            f"{c.sensor}: T∞ {c.steady_C:.2f} °C is within {tolerance}, but its readings do not follow the model "
+            "well (see the warnings). Continue the test."
+        )
+    span = (
+        f"anywhere from {c.low_C:.2f} to {c.high_C:.2f} °C is still possible ({level})"
+        if math.isfinite(c.low_C) and math.isfinite(c.high_C)
+        else f"its range at {level} is not yet bounded"
+    )
+    slow = [float(m) for m in re.findall(r"about (\d+(?:\.\d+)?) min", c.ends)]
+    cause = f": a slower warming (time constant about {max(slow):.0f} min) still fits the readings" if slow else ""
+    settle = (
+        f" On its present course it settles by about t = {expected_min:.0f} min." if math.isfinite(expected_min) else ""
+    )
+    return f"{c.sensor}: T∞ {c.steady_C:.2f} °C, but {span}, wider than {tolerance}{cause}.{settle}"
+
+
+# ---- the pieces ----------------------------------------------------------------------------------
+
+
+def _draw_rest_of_log(ax: Axes, time_min: np.ndarray, values: np.ndarray, stop_min: float, legend: bool) -> None:
+    """The readings after the stop, which the decision did not see."""
     after = time_min > stop_min
     if not after.any():
         return
-    for s, ax in enumerate(figure.axes[: values.shape[1]]):
-        ax.plot(time_min[after], values[after, s], ".", ms=2.0, color="tab:blue", alpha=0.5, label="after the stop")
-        if s == 0:
-            ax.legend(fontsize=7, loc="lower right")
+    ax.plot(time_min[after], values[after], ".", ms=2.0, color="tab:blue", alpha=0.5, label="after the stop")
+    if legend:
+        ax.legend(fontsize=7, loc="lower right")
 
 
 def _sensors(outcome: dict[str, Any]) -> list[dict[str, Any]]:
@@ -246,12 +549,14 @@ def _line(summary: dict[str, Any], readings: np.ndarray, hindsight: Any, s: int)
     ci95, decision = summary["steady_state_ci95_C"], summary["decision_interval_C"]
     slowest = max((m["time_constant_min"] for m in summary["modes"]), default=math.nan)
     valid = readings[np.isfinite(readings)]
-    settled = difference = math.nan
+    settled = difference = settle = math.nan
     within: bool | None = None
     if hindsight is not None and bool(hindsight.checked[s]):
         settled = float(hindsight.settled_C[s])
         difference = float(hindsight.error_C[s])
         within = bool(hindsight.within[s])
+        if hindsight.settle_time_min is not None:
+            settle = float(hindsight.settle_time_min[s])
     return SensorLine(
         sensor=summary["sensor"],
         latest_C=float(valid[-1]) if len(valid) else math.nan,
@@ -265,6 +570,7 @@ def _line(summary: dict[str, Any], readings: np.ndarray, hindsight: Any, s: int)
         settled_C=settled,
         difference_C=difference,
         within_tolerance=within,
+        settle_time_min=settle,
     )
 
 
@@ -284,168 +590,43 @@ def _hindsight_verdict(lines: tuple[SensorLine, ...], log_end_min: float, settin
     )
 
 
+def saved_words(report: WarmupReport) -> str | None:
+    """The readings' settle time and the time the stop saved, in words, where known.
+
+    Parameters
+    ----------
+    report : WarmupReport
+
+    Returns
+    -------
+    str or None
+    """
+    if not math.isfinite(report.settle_time_min):
+        return None
+    settled = f"The readings settled within the tolerance by t = {minutes(report.settle_time_min)}"
+    saved = report.time_saved_min
+    if not math.isfinite(saved):
+        return settled + "."
+    if saved >= 0:
+        return f"{settled}: the stop at {minutes(report.stop_time_min)} saved {saved:.0f} min."
+    return f"{settled}, {-saved:.0f} min before the stop at {minutes(report.stop_time_min)}."
+
+
 def _png(figure: Figure) -> bytes:
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
     return buffer.getvalue()
 
 
-# ---- HTML ------------------------------------------------------------------------------------
-
-
-def _fmt(value: float, digits: int = 2) -> str:
-    return "—" if not math.isfinite(value) else f"{value:.{digits}f}"
-
-
-def _interval(pair: tuple[float, float]) -> str:
-    return f"{_fmt(pair[0])} to {_fmt(pair[1])}"
-
-
-_ENVIRONMENT = jinja2.Environment(
-    loader=jinja2.PackageLoader("mtident", "data"),
-    autoescape=jinja2.select_autoescape(["html"]),
-    undefined=jinja2.StrictUndefined,
-)
-_ENVIRONMENT.filters.update(fmt=_fmt, interval=_interval, minutes=minutes)
-
-
-def write_html(report: WarmupReport, path: str | Path) -> Path:
-    """Write the report as one self-contained HTML page (the figure embedded); returns the path.
-
-    Parameters
-    ----------
-    report : WarmupReport
-        From :func:`build_report`; its figure is embedded as a base64 PNG.
-    path : str or Path
-        The page to write (UTF-8), replaced if it exists.
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
-    page = _ENVIRONMENT.get_template("report.html.j2").render(
-        r=report, figure=base64.b64encode(report.figure_png).decode("ascii"), isfinite=math.isfinite
-    )
-    out = Path(path)
-    out.write_text(page, encoding="utf-8")
-    return out
-
-
-# ---- PDF -------------------------------------------------------------------------------------
-
-_A4_INCHES = (8.27, 11.69)
-
-
-def write_pdf(report: WarmupReport, path: str | Path) -> Path:
-    """Write the report as a PDF (A4: the summary and table, then the curves); returns the path.
-
-    Parameters
-    ----------
-    report : WarmupReport
-        From :func:`build_report`.
-    path : str or Path
-        The PDF to write (two A4 pages), replaced if it exists.
-
-    Returns
-    -------
-    Path
-        ``path``.
-    """
-    out = Path(path)
-    with PdfPages(out, metadata={"Title": f"Warm-up test: {Path(report.source).name}", "Creator": "mtident"}) as pdf:
-        pdf.savefig(summary_page(report))
-        pdf.savefig(_figure_page(report))
-    return out
-
-
-def summary_page(report: WarmupReport) -> Figure:
-    """The report's first page as a figure: the verdict, the setup, the table, the assumptions.
-
-    Parameters
-    ----------
-    report : WarmupReport
-        The test's answer, as the report gives it.
-
-    Returns
-    -------
-    Figure
-        An A4 page.
-    """
-    fig = Figure(figsize=_A4_INCHES)
-    y = 0.95
-    fig.text(0.07, y, f"Warm-up test: {Path(report.source).name}", fontsize=16, weight="bold")
-    y -= 0.035
-    colour = "tab:green" if report.decision == "stop" else "tab:orange"
-    fig.text(0.07, y, _verdict(report), fontsize=11, color=colour, weight="bold")
-    y -= 0.03
-    for text in _wrap(_setup(report), 110):
-        fig.text(0.07, y, text, fontsize=8.5)
-        y -= 0.018
-    y -= 0.01
-    rows_height = 0.021 * (len(report.lines) + 1)
-    table_ax = fig.add_axes((0.05, y - rows_height, 0.9, rows_height))
-    table_ax.axis("off")
-    header = ["sensor", "T∞ (°C)", "95 % interval", "t_eq (min)", "λ (1/min)", "status", "settled (°C)", "diff. (°C)"]
-    rows = [
-        [
-            line.sensor,
-            _fmt(line.steady_C),
-            _interval(line.ci95_C),
-            _fmt(line.equilibrium_time_min, 0),
-            _fmt(line.rate_per_min, 4),
-            line.status,
-            _fmt(line.settled_C),
-            _fmt(line.difference_C),
-        ]
-        for line in report.lines
-    ]
-    table = table_ax.table(cellText=rows, colLabels=header, bbox=Bbox.from_bounds(0.0, 0.0, 1.0, 1.0), cellLoc="center")
-    table.auto_set_font_size(False)
-    table.set_fontsize(7.5)
-    y -= rows_height + 0.035
-    blocks = [("Assumes", report.assumptions), ("Method", report.method)]
-    if report.hindsight:
-        blocks.insert(0, ("Check", report.hindsight))
-    if report.reason:
-        blocks.insert(0, ("Why not yet", report.reason))
-    if report.warnings:
-        blocks.append(("Warnings", " • ".join(report.warnings)))
-    for title, text in blocks:
-        fig.text(0.07, y, title, fontsize=9, weight="bold")
-        y -= 0.018
-        for wrapped in _wrap(text, 135):
-            fig.text(0.07, y, wrapped, fontsize=7.5)
-            y -= 0.015
-            if y < 0.05:
-                break
-        y -= 0.01
-    fig.text(0.07, 0.025, f"mtident {report.version} · {report.created}", fontsize=7, color="0.4")
-    return fig
-
-
-def _figure_page(report: WarmupReport) -> Figure:
-    import matplotlib.image as mpimg
-
-    fig = Figure(figsize=_A4_INCHES)
-    ax = fig.add_axes((0.03, 0.03, 0.94, 0.92))
-    ax.imshow(mpimg.imread(io.BytesIO(report.figure_png), format="png"))
-    ax.axis("off")
-    fig.text(
-        0.05, 0.965, "Measured and predicted curves, T∞ intervals (95 % shaded, the decision's dashed)", fontsize=10
-    )
-    return fig
-
-
 def _verdict(report: WarmupReport) -> str:
     if report.decision == "stop":
         return (
-            f"The test could stop at t = {minutes(report.stop_time_min)} (tolerance ±{report.tolerance_C:g} °C at "
-            f"{report.decision_level * 100:g} %)."
+            f"The test could stop at t = {minutes(report.stop_time_min)}: every sensor's T∞ known within "
+            f"±{report.tolerance_C:g} °C at {report.decision_level * 100:g} %."
         )
     return (
-        f"No stop within the log (to {minutes(report.log_end_min)}): tolerance ±{report.tolerance_C:g} °C at "
-        f"{report.decision_level * 100:g} %."
+        f"No stop within the log (to {minutes(report.log_end_min)}): not every sensor's T∞ is known within "
+        f"±{report.tolerance_C:g} °C at {report.decision_level * 100:g} % yet."
     )
 
 
@@ -469,43 +650,323 @@ def reading_gaps(time_min: np.ndarray) -> tuple[tuple[float, float], ...]:
     return tuple((float(time_min[k]), float(time_min[k + 1])) for k in long)
 
 
-def _recorded_from(log: Path) -> str | None:
-    """The source a watch recorded ``log`` from, in words, from its recorder's sidecar (None where
-    there is none, or it cannot be read)."""
-    from mtident.io import mtconnect, opcua
-
-    for suffix, what in ((opcua.SIDECAR_SUFFIX, "nodes"), (mtconnect.SIDECAR_SUFFIX, "device")):
-        sidecar = log.with_name(log.name + suffix)
-        if not sidecar.is_file():
-            continue
-        try:
-            saved = json.loads(sidecar.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            return None
-        named = ", ".join(saved.get("nodes", [])) if what == "nodes" else str(saved.get("device") or "all devices")
-        start = f"; t = 0 is {saved['origin']}" if saved.get("origin") else ""
-        return f"{saved.get('url')} ({what} {named}){start}"
-    return None
-
-
 def _gaps(report: WarmupReport) -> str:
     if not report.gaps:
         return ""
     spans = ", ".join(f"{minutes(a)} to {minutes(b)}" for a, b in report.gaps)
-    return f" No readings from {spans}."
+    return f"; none from {spans}"
 
 
-def _setup(report: WarmupReport) -> str:
-    return (
-        f"Log: {report.source}"
-        f"{'' if report.recorded_from is None else f', recorded from {report.recorded_from}'}. "
-        f"{len(report.lines)} sensor(s), {report.samples} readings every "
-        f"{_fmt(report.sampling_interval_min)} min to t = {minutes(report.log_end_min)}.{_gaps(report)} "
-        f"Room {report.room}."
+def _setup(report: WarmupReport) -> list[tuple[str, str]]:
+    """The setup, (term, words) as the HTML's list and the PDF's lines show it."""
+    rows = []
+    if report.machine:
+        rows.append(("Machine", report.machine + (f", serial {report.serial}" if report.serial else "")))
+    if report.program:
+        rows.append(("Program", f"{report.program} (the reference run's)"))
+    rows.append(("t = 0", report.start_words))
+    log = report.source + ("" if report.recorded_from is None else f", recorded from {report.recorded_from}")
+    rows += [
+        ("Log", log),
+        ("Sensors", ", ".join(line.sensor for line in report.lines)),
+        (
+            "Readings",
+            f"{report.samples}, every {_fmt(report.sampling_interval_min)} min, to t = "
+            f"{minutes(report.log_end_min)}{_gaps(report)}",
+        ),
+        ("Room", report.room),
+        ("Decision", f"tolerance ±{report.tolerance_C:g} °C, confidence {report.decision_level * 100:.0f} %"),
+    ]
+    return rows
+
+
+# ---- HTML ------------------------------------------------------------------------------------
+
+
+def _fmt(value: float, digits: int = 2) -> str:
+    return "—" if not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def _interval(pair: tuple[float, float]) -> str:
+    return f"{_fmt(pair[0])} to {_fmt(pair[1])}"
+
+
+def _settled(report: WarmupReport) -> bool:
+    """Whether the hindsight checked a sensor: the table's columns of where they settled."""
+    return any(line.within_tolerance is not None for line in report.lines)
+
+
+def _table(report: WarmupReport) -> tuple[list[str], list[list[str]]]:
+    """The table for the customer: header and rows (the hindsight's columns where a sensor settled)."""
+    reading = "at the stop (°C)" if report.decision == "stop" else "latest (°C)"
+    header = ["sensor", reading, "T∞ (°C)", "95 % interval (°C)", "t_eq (min)", "status"]
+    if _settled(report):
+        header += ["settled (°C)", "difference (°C)", "settled by (min)"]
+    rows = []
+    for line in report.lines:
+        row = [
+            line.sensor,
+            _fmt(line.latest_C),
+            _fmt(line.steady_C),
+            _interval(line.ci95_C),
+            _fmt(line.equilibrium_time_min, 0),
+            status_words(line),
+        ]
+        if _settled(report):
+            row += [_fmt(line.settled_C), _signed(line.difference_C), _fmt(line.settle_time_min, 0)]
+        rows.append(row)
+    return header, rows
+
+
+def _signed(value: float) -> str:
+    return "—" if not math.isfinite(value) else f"{value:+.2f}"
+
+
+_ENVIRONMENT = jinja2.Environment(
+    loader=jinja2.PackageLoader("mtident", "data"),
+    autoescape=jinja2.select_autoescape(["html", "html.j2"]),  # a sensor's name may hold < or &
+    undefined=jinja2.StrictUndefined,
+)
+_ENVIRONMENT.filters.update(fmt=_fmt, interval=_interval, minutes=minutes)
+
+
+def write_html(report: WarmupReport, path: str | Path) -> Path:
+    """Write the report as one self-contained HTML page (the figure embedded); returns the path.
+
+    Parameters
+    ----------
+    report : WarmupReport
+        From :func:`build_report`; its figure is embedded as a base64 PNG.
+    path : str or Path
+        The page to write (UTF-8), replaced if it exists.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    header, rows = _table(report)
+    page = _ENVIRONMENT.get_template("report.html.j2").render(
+        r=report,
+        verdict=_verdict(report),
+        saved=saved_words(report),
+        setup=_setup(report),
+        header=header,
+        rows=list(zip(rows, [line.within_tolerance is False for line in report.lines], strict=True)),
+        notes=[T_EQ_NOTE] + ([SETTLED_NOTE] if _settled(report) else []),
+        figure=base64.b64encode(report.figure_png).decode("ascii"),
     )
+    out = Path(path)
+    out.write_text(page, encoding="utf-8")
+    return out
 
 
-def _wrap(text: str, width: int) -> list[str]:
-    import textwrap
+# ---- PDF -------------------------------------------------------------------------------------
 
-    return textwrap.wrap(text, width) or [""]
+_A4_INCHES = (8.27, 11.69)
+_LEFT, _RIGHT, _TOP, _BOTTOM = 0.07, 0.93, 0.955, 0.055
+# the curves: two panels to a row, each row this high (a fraction of the page)
+_PANELS_PER_ROW = 2
+_ROW_HEIGHT = 0.22  # four rows to a page
+
+
+class _Pages:
+    """A4 pages filled from the top: text, the table and rows of curves flow on to a new page
+    where the one in hand is full."""
+
+    def __init__(self) -> None:
+        self.figures: list[Figure] = []
+        self.y = 0.0
+        self.new_page()
+
+    @property
+    def page(self) -> Figure:
+        return self.figures[-1]
+
+    def new_page(self) -> None:
+        self.figures.append(Figure(figsize=_A4_INCHES))
+        self.y = _TOP
+
+    def room(self, height: float) -> None:
+        """Start a new page unless ``height`` fits on this one."""
+        if self.y - height < _BOTTOM:
+            self.new_page()
+
+    def text(
+        self, text: str, size: float = 8.0, indent: float = 0.0, keep: float = 0.0, whole: bool = False, **style: Any
+    ) -> None:  # noqa: ANN401
+        """Wrapped to the page's width; ``keep``: room wanted below the first line (a heading's
+        text); ``whole``: the lines not split over two pages."""
+        step = size * 1.5 / 72.0 / _A4_INCHES[1]
+        width = int((_RIGHT - _LEFT - indent) * _A4_INCHES[0] * 72.0 / (size * 0.55))
+        wrapped = textwrap.wrap(text, width) or [""]
+        if whole:
+            self.room(step * len(wrapped))
+        for k, line in enumerate(wrapped):
+            self.room(step + (keep if k == 0 else 0.0))
+            self.y -= step
+            self.page.text(_LEFT + indent, self.y, line, fontsize=size, **style)
+
+    def bullet(self, text: str, size: float = 8.0) -> None:
+        step = size * 1.5 / 72.0 / _A4_INCHES[1]
+        self.room(step)
+        self.page.text(_LEFT + 0.01, self.y - step, "•", fontsize=size)
+        self.text(text, size, indent=0.03)
+
+    def heading(self, text: str, keep: float = 0.06) -> None:
+        self.space(0.012)
+        self.text(text, 10.0, keep=keep, weight="bold")
+        self.space(0.004)
+
+    def space(self, height: float) -> None:
+        self.y -= height
+
+    def table(self, header: list[str], rows: list[list[str]], widths: list[float]) -> None:
+        height = 0.022 * (len(rows) + 1)
+        self.room(height)
+        ax = self.page.add_axes((_LEFT - 0.02, self.y - height, _RIGHT - _LEFT + 0.04, height))
+        ax.axis("off")
+        table = ax.table(
+            cellText=rows, colLabels=header, colWidths=widths, bbox=Bbox.from_bounds(0, 0, 1, 1), cellLoc="center"
+        )
+        table.auto_set_font_size(False)
+        table.set_fontsize(7.0)
+        for (row, _), cell in table.get_celld().items():
+            cell.set_linewidth(0.4)
+            if row == 0:
+                cell.set_facecolor("#eeeeee")
+        self.y -= height
+
+    def panels(self, count: int) -> list[Axes]:
+        """Axes for ``count`` curves, two to a row, on this page and on as many more as they need."""
+        axes: list[Axes] = []
+        width = (_RIGHT - _LEFT - 0.08) / _PANELS_PER_ROW
+        for start in range(0, count, _PANELS_PER_ROW):
+            self.room(_ROW_HEIGHT)
+            for k in range(min(_PANELS_PER_ROW, count - start)):
+                left = _LEFT + 0.04 + k * (width + 0.08)
+                axes.append(self.page.add_axes((left, self.y - _ROW_HEIGHT + 0.045, width, _ROW_HEIGHT - 0.075)))
+            self.y -= _ROW_HEIGHT
+        return axes
+
+
+def write_pdf(report: WarmupReport, path: str | Path) -> Path:
+    """Write the report as an A4 PDF: the verdict, the setup, why not yet, the table, the
+    curves two to a row (drawn as vectors from ``report.curves``, else the report's picture),
+    then the warnings, the assumptions and the method; returns the path.
+
+    Parameters
+    ----------
+    report : WarmupReport
+        From :func:`build_report`.
+    path : str or Path
+        The PDF to write, replaced if it exists.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    pages = summary_pages(report)
+    out = Path(path)
+    with PdfPages(out, metadata={"Title": report.title, "Creator": f"mtident {report.version}"}) as pdf:
+        for page in pages:
+            pdf.savefig(page)
+    return out
+
+
+def summary_pages(report: WarmupReport) -> list[Figure]:
+    """The report's pages as A4 figures: the curves drawn from ``report.curves``, two to a row;
+    without them the report's picture is placed, as large as the page's width allows.
+
+    Parameters
+    ----------
+    report : WarmupReport
+
+    Returns
+    -------
+    list of Figure
+    """
+    pages = _Pages()
+    pages.text(report.title, 15.0, weight="bold")
+    pages.space(0.004)
+    pages.text(report.subtitle, 9.0, color="0.35")
+    pages.space(0.01)
+    colour = "tab:green" if report.decision == "stop" else "tab:orange"
+    pages.text(_verdict(report), 11.0, color=colour, weight="bold")
+    if (saved := saved_words(report)) is not None:
+        pages.text(saved, 9.0)
+    if report.hindsight:
+        pages.text(report.hindsight, 8.5)
+    if report.holding:
+        pages.heading("Why not yet", keep=0.03)
+        for line in report.holding:
+            pages.bullet(line, 8.0)
+        if report.ways_on:
+            pages.text(f"Ways on: {report.ways_on}.", 8.0, weight="bold")
+    pages.heading("Setup", keep=0.03)
+    for term, words in _setup(report):
+        pages.text(f"{term}: {words}", 8.0)
+    pages.heading("Per sensor", keep=0.022 * (len(report.lines) + 1))
+    header, rows = _table(report)
+    widths = [1.6, 1.0, 0.9, 1.7, 0.8, 2.4] + ([1.0, 1.1, 1.0] if _settled(report) else [])
+    if _settled(report):
+        header = [h.replace(" (", "\n(") for h in header]
+    pages.table(header, rows, widths)
+    pages.space(0.006)
+    for note in [T_EQ_NOTE] + ([SETTLED_NOTE] if _settled(report) else []):
+        pages.text(note, 6.5, whole=True, color="0.35")
+    pages.heading("Curves", keep=_ROW_HEIGHT)
+    pages.text(
+        "Measured readings, the best model's course, T∞'s 95 % interval (shaded) and the decision's (dashed), "
+        "the stop, and the readings after it, which the decision did not see.",
+        7.5,
+        keep=_ROW_HEIGHT,
+    )
+    _curves(pages, report)
+    if report.warnings:
+        pages.heading("Warnings", keep=0.03)
+        for warning in report.warnings:
+            pages.bullet(warning, 7.5)
+    pages.heading("What the answer assumes", keep=0.03)
+    pages.text(report.assumptions, 7.5)
+    pages.heading("Method", keep=0.03)
+    pages.text(report.method, 7.5)
+    count = len(pages.figures)
+    for k, page in enumerate(pages.figures, 1):
+        page.text(
+            _LEFT,
+            0.025,
+            f"{report.title} · mtident {report.version} · made {report.created} · page {k} of {count}",
+            fontsize=6.5,
+            color="0.4",
+        )
+    return pages.figures
+
+
+def _curves(pages: _Pages, report: WarmupReport) -> None:
+    curves = report.curves
+    if curves is None:
+        import matplotlib.image as mpimg
+
+        picture = mpimg.imread(io.BytesIO(report.figure_png), format="png")
+        width = _RIGHT - _LEFT
+        height = min(width * _A4_INCHES[0] * picture.shape[0] / picture.shape[1] / _A4_INCHES[1], _TOP - _BOTTOM)
+        pages.room(height)
+        ax = pages.page.add_axes((_LEFT, pages.y - height, width, height))
+        ax.imshow(picture)
+        ax.axis("off")
+        pages.y -= height
+        return
+    state = curves.state
+    axes = pages.panels(len(state.sensors))
+    for s, ax in enumerate(axes):
+        draw_monitor_panel(ax, state, curves.settings, s)
+        ax.title.set_fontsize(8.5)
+        ax.xaxis.label.set_fontsize(7.5)
+        ax.yaxis.label.set_fontsize(7.5)
+        ax.tick_params(labelsize=7)
+        if state.stopped and s < curves.values_C.shape[1]:
+            _draw_rest_of_log(ax, curves.time_min, curves.values_C[:, s], state.stop_time_min, legend=False)
+        if s == 0:
+            ax.legend(fontsize=6, loc="lower right")
