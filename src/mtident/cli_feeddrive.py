@@ -587,6 +587,15 @@ def _print_plan(plan: ExcitationPlan, measured: str) -> None:
         table.add_row(("[bold]" + label + "[/]") if p is plan.recommended else label, *cells)
     table_console(140).print(table)
     within = f"within ±{100 * plan.target:g} %"
+    best = plan.closest
+    if best is not None and best.force_noise_tolerated is not None:
+        tolerated = best.force_noise_tolerated
+        level = "any" if not np.isfinite(tolerated) else f"up to {100 * tolerated:.2g} % of its RMS"
+        stderr.print(
+            f"mtident: {best.candidate.label} keeps what it identifies {within} with white noise on the "
+            f"measured force {level} (a force sensor's or a motor current's; more widens the intervals)",
+            highlight=False,
+        )
     if plan.recommended is not None and plan.recommended is plan.lengthened:
         stderr.print(
             f"mtident: no test of the durations asked identifies all eight {within}; recommended, the most "

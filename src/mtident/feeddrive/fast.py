@@ -18,7 +18,14 @@ from numba import njit
 
 from mtident._typing import FloatArray
 
-__all__ = ["run_feed_drive_ukf", "response_moments", "covariance_recursion", "compiled_cache_ready"]
+__all__ = [
+    "run_feed_drive_ukf",
+    "response_moments",
+    "covariance_recursion",
+    "input_noise_moments",
+    "input_response_energy",
+    "compiled_cache_ready",
+]
 
 
 @njit(cache=True, fastmath=False)
@@ -435,6 +442,221 @@ def covariance_recursion(
     return cov, scatter
 
 
+@njit(cache=True, fastmath=False)
+def _sensitivities(
+    x: FloatArray,
+    sens: FloatArray,
+    free: FloatArray,
+    c_row: FloatArray,
+    c_s: FloatArray,
+    r: int,
+    g: FloatArray,
+) -> None:
+    """g (P,) = ∂ŷᵣ/∂(log-parameters, initial state) at one sample (P = 8 or 16, by g's length)."""
+    for j in range(8):
+        acc = 0.0
+        for i in range(8):
+            acc += c_row[r, i] * sens[j, i] + c_s[r, j, i] * x[i]
+        g[j] = acc
+    if g.shape[0] > 8:
+        for j in range(8):
+            acc = 0.0
+            for i in range(8):
+                acc += c_row[r, i] * free[j, i]
+            g[8 + j] = acc
+
+
+@njit(cache=True, fastmath=False)
+def _advance(
+    step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    u: FloatArray,
+    x: FloatArray,
+    sens: FloatArray,
+    free: FloatArray,
+    with_start: bool,
+) -> None:
+    """One sample of the state, its sensitivities to the log-parameters and (``with_start``) to the initial state."""
+    phi, gamma, phi_s, gamma_s = step
+    x_next = np.empty(8)
+    sens_next = np.empty((8, 8))
+    free_next = np.empty((8, 8))
+    for i in range(8):
+        acc = 0.0
+        for c in range(8):
+            acc += phi[i, c] * x[c]
+        for c in range(4):
+            acc += gamma[i, c] * u[c]
+        x_next[i] = acc
+        for j in range(8):
+            acc = 0.0
+            for c in range(8):
+                acc += phi_s[j, i, c] * x[c] + phi[i, c] * sens[j, c]
+            for c in range(4):
+                acc += gamma_s[j, i, c] * u[c]
+            sens_next[j, i] = acc
+            if with_start:
+                acc = 0.0
+                for c in range(8):
+                    acc += phi[i, c] * free[j, c]
+                free_next[j, i] = acc
+    x[:] = x_next
+    sens[:] = sens_next
+    if with_start:
+        free[:] = free_next
+
+
+@njit(cache=True, fastmath=False)
+def input_noise_moments(
+    step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    start: FloatArray,
+    forces: FloatArray,
+    rows: tuple[FloatArray, FloatArray, FloatArray],
+    measured: FloatArray,
+    weight: FloatArray,
+    input_var: FloatArray,
+    with_start: bool,
+) -> FloatArray:
+    """How white noise on the measured forces moves a least-squares fit of the record: M (P, P) =
+    Σₘ Aₘ diag(``input_var``) Aₘᵀ, Aₘ = ∂(Σₖ Σᵣ wᵣ gₖᵣ (yₖᵣ − ŷₖᵣ))/∂uₘ the gradient's sensitivity to
+    the force held over sample m. A fit whose Hessian is H then errs by H⁻¹ M H⁻¹ more (to first order)
+    than it does from the responses' noise alone.
+
+    The force uₘ moves every later response through the model, ŷₖ = c Φᵏ⁻ᵐ⁻¹ Γ uₘ (k > m) and e uₘ (k = m),
+    so Aₘ = λₘ Γ + Σᵣ wᵣ gₘᵣ eᵣ with the adjoint λₘ = λₘ₊₁ Φ + Σᵣ wᵣ gₘ₊₁,ᵣ cᵣ run backwards from the
+    record's end. The sensitivities gₖ are recomputed backwards segment by segment from states kept at
+    the segments' starts (about √N of them): memory O(√N), two passes forward.
+
+    Parameters
+    ----------
+    step : tuple of ndarray
+        (Φ, Γ, Φₛ, Γₛ), as in :func:`response_moments`.
+    start : ndarray, shape (8,)
+        Initial state X₀.
+    forces : ndarray, shape (N, 4)
+        Generalized forces u, held over each sample.
+    rows : tuple of ndarray
+        (c (R, 8), e (R, 4), cₛ (R, 8, 8)), as in :func:`response_moments`.
+    measured : ndarray, shape (N, R)
+        1 where the response is measured (its residual is fitted), else 0.
+    weight : ndarray, shape (R,)
+        1/σ² of each response, as the fit weighs it.
+    input_var : ndarray, shape (4,)
+        Variance of the white noise on each force column.
+    with_start : bool
+        The initial state is fitted too (P = 16, else 8).
+
+    Returns
+    -------
+    ndarray, shape (P, P)
+        M.
+    """
+    phi, gamma, _, _ = step
+    c_row, e_row, c_s = rows
+    r_count = c_row.shape[0]
+    n = forces.shape[0]
+    p = 16 if with_start else 8
+    length = max(1, int(np.sqrt(n)) + 1)
+    segments = (n + length - 1) // length
+    keep_x = np.empty((segments, 8))
+    keep_sens = np.empty((segments, 8, 8))
+    keep_free = np.empty((segments, 8, 8))
+    x = start.copy()
+    sens = np.zeros((8, 8))
+    free = np.eye(8)
+    for k in range(n):
+        if k % length == 0:
+            keep_x[k // length] = x
+            keep_sens[k // length] = sens
+            keep_free[k // length] = free
+        _advance(step, forces[k], x, sens, free, with_start)
+    big_m = np.zeros((p, p))
+    adjoint = np.zeros((p, 8))
+    adjoint_next = np.empty((p, 8))
+    grads = np.zeros((length, r_count, p))
+    g = np.empty(p)
+    a_m = np.empty((p, 4))
+    for s in range(segments - 1, -1, -1):
+        first = s * length
+        last = min(n, first + length)
+        x[:] = keep_x[s]
+        sens[:] = keep_sens[s]
+        free[:] = keep_free[s]
+        for k in range(first, last):
+            for r in range(r_count):
+                _sensitivities(x, sens, free, c_row, c_s, r, g)
+                for a in range(p):
+                    grads[k - first, r, a] = g[a] * weight[r] * measured[k, r]
+            _advance(step, forces[k], x, sens, free, with_start)
+        for m in range(last - 1, first - 1, -1):
+            row = grads[m - first]
+            for a in range(p):
+                for q in range(4):
+                    acc = 0.0
+                    for i in range(8):
+                        acc += adjoint[a, i] * gamma[i, q]
+                    for r in range(r_count):
+                        acc += row[r, a] * e_row[r, q]
+                    a_m[a, q] = acc
+            for a in range(p):
+                for b in range(a, p):
+                    acc = 0.0
+                    for q in range(4):
+                        acc += a_m[a, q] * input_var[q] * a_m[b, q]
+                    big_m[a, b] += acc
+            # λ for the sample before: λₘ₋₁ = λₘ Φ + Σᵣ wᵣ gₘᵣ cᵣ
+            for a in range(p):
+                for i in range(8):
+                    acc = 0.0
+                    for c in range(8):
+                        acc += adjoint[a, c] * phi[c, i]
+                    for r in range(r_count):
+                        acc += row[r, a] * c_row[r, i]
+                    adjoint_next[a, i] = acc
+            adjoint[:] = adjoint_next
+    for a in range(p):
+        for b in range(a):
+            big_m[a, b] = big_m[b, a]
+    return big_m
+
+
+@njit(cache=True, fastmath=False)
+def input_response_energy(
+    phi: FloatArray, gamma: FloatArray, c_row: FloatArray, e_row: FloatArray, n: int
+) -> FloatArray:
+    """Σⱼ (1 − j/n) hᵣ,q(j)² per response r and force q: the mean over a record of n samples of the variance
+    each response gains from unit white noise on force q (h the impulse response: e at j = 0, c Φʲ⁻¹ Γ after).
+
+    Parameters
+    ----------
+    phi, gamma : ndarray
+        Φ (8, 8) and Γ (8, 4), the exact one-sample step.
+    c_row, e_row : ndarray
+        c (R, 8) and e (R, 4), the output rows.
+    n : int
+        Samples in the record.
+
+    Returns
+    -------
+    ndarray, shape (R, 4)
+    """
+    r_count = c_row.shape[0]
+    out = np.zeros((r_count, 4))
+    for r in range(r_count):
+        for q in range(4):
+            out[r, q] = e_row[r, q] * e_row[r, q]
+    power = gamma.copy()  # Φʲ⁻¹ Γ
+    for j in range(1, n):
+        share = 1.0 - j / n
+        for r in range(r_count):
+            for q in range(4):
+                acc = 0.0
+                for i in range(8):
+                    acc += c_row[r, i] * power[i, q]
+                out[r, q] += share * acc * acc
+        power = phi @ power
+    return out
+
+
 def compiled_cache_ready() -> bool:
     """Whether numba's cache on disk holds the compiled loops (a run then loads them in about a
     second); False where it does not, or where it cannot be told: the first run after installing
@@ -448,7 +670,13 @@ def compiled_cache_ready() -> bool:
     """
     import os
 
-    loops: tuple[object, ...] = (run_feed_drive_ukf, response_moments, covariance_recursion)
+    loops: tuple[object, ...] = (
+        run_feed_drive_ukf,
+        response_moments,
+        covariance_recursion,
+        input_noise_moments,
+        input_response_energy,
+    )
     # numba's cache is internal: another version may keep it otherwise, and then this says False
     files = [getattr(getattr(loop, "_cache", None), "_cache_file", None) for loop in loops]
     paths = [getattr(file, "_index_path", None) for file in files]

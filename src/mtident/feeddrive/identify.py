@@ -31,7 +31,8 @@ import numpy as np
 
 from mtident._typing import BoolArray, FloatArray, IntArray
 from mtident.exceptions import CovarianceError, DivergenceError, InputError, NegativeWeightWarning
-from mtident.feeddrive.information import Consistency, closest_consistent
+from mtident.feeddrive.information import Consistency, closest_consistent, response_moments, scaled_inverse
+from mtident.feeddrive.inputnoise import force_noise, input_noise_moments, response_noise_from_forces
 from mtident.feeddrive.model import (
     exact_step,
     input_matrix,
@@ -628,6 +629,9 @@ def identify_feed_drive(
         likelihood, :mod:`mtident.feeddrive.refine`): unbiased where the filter is not (sweeps and
         multisines) and as precise as the record allows. Kept only where it fits the record within
         the noise; the filter's estimate stays in ``filter_parameters``. Not for the paper preset.
+        Noise on the measured forces, estimated from their record (:mod:`mtident.feeddrive.inputnoise`),
+        is carried into the refined intervals, the misfit and the open-loop check, and widens the filter's
+        intervals by as much as it widens the fit's at its estimate; the notes say so.
     refine_progress : callable, optional
         ``refine_progress(passes, max_passes)`` as each of the refinement's passes over the record begins.
 
@@ -689,6 +693,7 @@ def identify_feed_drive(
     result = _identification(scaled, response, (means, variances, final_cov), notes, preset)
     if not scaled.setup.log_form:  # the paper preset keeps its guess (zero prior variance): nothing to refine or check
         return result
+    result = _force_widened(result, scaled, response, noise_fraction, notes)
     if refine:
         refined, said = _refined(result, scaled, response, noise_fraction, notes, refine_progress)
         if refined is not None:
@@ -855,18 +860,63 @@ def _identification(
     )
 
 
+def _force_widened(
+    result: FeedDriveIdentification,
+    scaled: _ScaledProblem,
+    response: Response,
+    noise_fraction: float,
+    notes: list[str],
+) -> FeedDriveIdentification:
+    """The filter's result with its intervals widened for the noise on the measured forces (estimated from
+    their record; unchanged where they carry none). The filter takes the forces as exact, as the
+    open-loop fit does: each parameter's interval is widened by the factor the forces' noise widens the
+    fit's at the filter's estimate (its Fisher information, to first order), and the note says so."""
+    input_sd = force_noise(response.forces)
+    if not np.any(input_sd > 0):
+        return result
+    estimate = result.guess.with_identified(result.parameters)
+    idx = tuple(int(i) for i in scaled.idx)
+    data = response.values[:, scaled.idx]
+    weight = 1.0 / (noise_fraction * scaled.scale[scaled.idx]) ** 2
+    moments = response_moments(estimate, response.forces, scaled.h, idx, data)
+    inverse = scaled_inverse(np.einsum("rij,r->ij", moments.gram, weight))
+    spread = input_noise_moments(estimate, response.forces, scaled.h, idx, np.isfinite(data), weight, input_sd)
+    alone = np.maximum(np.diag(inverse)[:8], 1e-300)
+    widened = np.sqrt(np.maximum(np.diag(inverse + inverse @ spread @ inverse)[:8], 0.0) / alone)
+    said = _force_noise_notes(input_sd, response.forces, widened)
+    if not said:
+        return result
+    covariance_log = result.covariance_log * np.outer(widened, widened)
+    sd_log = np.sqrt(np.diag(covariance_log))
+    return replace(
+        result,
+        parameters_std=result.parameters * sd_log,
+        identifiable=2 * sd_log <= IDENTIFIED_WITHIN,
+        covariance_log=covariance_log,
+        notes=(*notes, *_parameter_notes(sd_log, result.prior_sd_log), *said),
+    )
+
+
 def _checked(
     result: FeedDriveIdentification, scaled: _ScaledProblem, response: Response, noise_fraction: float
 ) -> FeedDriveIdentification:
-    """``result`` with the open-loop check of its estimate against the record, and its note."""
+    """``result`` with the open-loop check of its estimate against the record, and its note. Noise on the
+    measured forces (estimated from their record) drives the model where it did not drive the drive: the
+    residual a correct estimate leaves is then that noise through the drive as well as the responses' own."""
+    estimate = result.guess.with_identified(result.parameters)
+    idx = tuple(int(i) for i in scaled.idx)
+    noise = noise_fraction * scaled.scale[scaled.idx]
+    input_sd = force_noise(response.forces)
+    if np.any(input_sd > 0):
+        noise = np.sqrt(noise**2 + response_noise_from_forces(estimate, scaled.h, idx, len(response.forces), input_sd))
     consistency = closest_consistent(
-        result.guess.with_identified(result.parameters),
+        estimate,
         result.covariance_log,
         response.forces,
         scaled.h,
-        tuple(int(i) for i in scaled.idx),
+        idx,
         response.values[:, scaled.idx],
-        noise_fraction * scaled.scale[scaled.idx],
+        noise,
     )
     notes = (*result.notes, *_consistency_notes(consistency, result.measured_columns))
     return replace(result, consistency=consistency, notes=notes)
@@ -892,6 +942,7 @@ def _refined(
         response.values[:, scaled.idx],
         noise_fraction * scaled.scale[scaled.idx],
         progress=progress,
+        input_noise=force_noise(response.forces),
     )
     worst = float(np.max(fit.misfit))
     if not fit.converged:
@@ -915,6 +966,7 @@ def _refined(
         f"{moved.max():.1f} of the refined standard deviations away ({IDENTIFIED[int(np.argmax(moved))]})"
     )
     check = Consistency(fit.misfit, 0.0, np.zeros(8), fit.start)
+    forced = _force_noise_notes(fit.input_noise, response.forces, fit.widened)
     refined = replace(
         filtered,
         parameters=values,
@@ -925,12 +977,48 @@ def _refined(
         notes=(
             *_refined_notes(notes, response.forces, scaled.h),
             *_parameter_notes(sd_log, None),
+            *forced,
             said,
         ),
         filter_parameters=filtered.parameters,
         filter_parameters_std=filtered.parameters_std,
     )
     return refined, said
+
+
+# A parameter whose interval the forces' noise widens more than this many times is said: the record
+# would pin it far closer with a cleaner force signal, and its interval rests on the noise estimated
+# from the force record.
+WIDENED_BY_FORCES = 2.0
+# The forces' noise is said where it widens some interval by this much at least.
+NOTED_WIDENING = 1.05
+
+
+def _force_noise_notes(input_noise: FloatArray, forces: FloatArray, widened: FloatArray) -> list[str]:
+    """What the noise on the measured forces did to the estimate's intervals (nothing where it widened none
+    by ``NOTED_WIDENING``), and the parameters it widened beyond ``WIDENED_BY_FORCES``."""
+    if float(np.max(widened)) < NOTED_WIDENING:
+        return []  # none, or too little to move an interval (an exact sine's spectral floor, 1e-6 of its RMS)
+    rms = np.sqrt(np.mean(forces**2, axis=0))
+    acting = [q for q in range(len(input_noise)) if input_noise[q] > 0]
+    levels = ", ".join(
+        f"{FORCE_COLUMNS[q]} {input_noise[q]:.3g}"
+        + (f" ({100 * input_noise[q] / rms[q]:.2g} % of its RMS)" if rms[q] > 0 else "")
+        for q in acting
+    )
+    said = [
+        f"the measured forces carry noise ({levels}, estimated from the force record as white noise): it drives "
+        "the model where it did not drive the drive, and the intervals carry its effect (up to "
+        f"{float(np.max(widened)):.2g}× wider than from the responses' noise alone)"
+    ]
+    flagged = [name for name, factor in zip(IDENTIFIED, widened, strict=True) if factor > WIDENED_BY_FORCES]
+    if flagged:
+        said.append(
+            f"{', '.join(flagged)}: limited by the force signal's noise (its interval {WIDENED_BY_FORCES:g}× or more "
+            "wider than the responses' noise alone gives, and resting on the force noise estimated from the record); "
+            "a cleaner force signal (filtered, averaged over repeats, a better sensor) pins it closer"
+        )
+    return said
 
 
 def _refined_notes(notes: list[str], forces: FloatArray, h: float) -> list[str]:

@@ -20,7 +20,7 @@ those from impulses and binary sequences stayed within them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.feeddrive.identify import IDENTIFIED_WITHIN, MEASUREMENT_SETS, filter_noise
 from mtident.feeddrive.information import SensitivitySystem, filter_covariance, fisher_covariance, sensitivity_system
+from mtident.feeddrive.inputnoise import tolerated_force_noise
 from mtident.feeddrive.model import Excitation
 from mtident.feeddrive.modes import modes, sampling_problem
 from mtident.feeddrive.params import COORDINATES, IDENTIFIED, FeedDriveParameters, validate
@@ -116,6 +117,10 @@ class PlanPrediction:
         Stated ±2σ within the plan's target: the identification will call it identified.
     reason : str or None
         Why the test is not recommended whatever its numbers (sampling too slow, one frequency).
+    force_noise_tolerated : float or None
+        For the plan's recommended (else closest) test of a refined estimate: the most white noise on the
+        measured forces, a fraction of their RMS, under which what it identifies stays identified
+        (``inputnoise.tolerated_force_noise``; inf: any). None where not predicted.
     """
 
     candidate: CandidateTest
@@ -123,6 +128,7 @@ class PlanPrediction:
     expected_std_log: FloatArray
     identified: BoolArray
     reason: str | None
+    force_noise_tolerated: float | None = None
 
     @property
     def identifies_all(self) -> bool:
@@ -180,6 +186,7 @@ class ExcitationPlan:
                 "expected_std_relative": {n: float(s) for n, s in zip(IDENTIFIED, p.expected_std_log, strict=True)},
                 "identified": {n: bool(k) for n, k in zip(IDENTIFIED, p.identified, strict=True)},
                 "reason": p.reason,
+                "force_noise_tolerated": p.force_noise_tolerated,
             }
 
         return {
@@ -388,7 +395,24 @@ def plan_tests(
     allowed = [p for p in predictions if p.reason is None]
     # min keeps the first of equals: the cheapest
     closest = recommended or (min(allowed, key=lambda p: float(np.max(p.stated_std_log))) if allowed else None)
+    if refine and closest is not None:
+        tolerant = _with_tolerance(guess, closest, noise_fraction, target)
+        predictions = tuple(tolerant if p is closest else p for p in predictions)
+        recommended = tolerant if recommended is closest else recommended
+        longer = tolerant if longer is closest else longer
+        closest = tolerant
     return ExcitationPlan(guess, target, noise_fraction, predictions, recommended, closest, longer, refine)
+
+
+def _with_tolerance(
+    guess: FeedDriveParameters, prediction: PlanPrediction, noise_fraction: float, target: float
+) -> PlanPrediction:
+    """``prediction`` with the noise on the measured forces its test tolerates (a refined estimate's)."""
+    c = prediction.candidate
+    h = 1.0 / c.sample_rate_Hz
+    forces = c.excitation.forces(np.arange(int(round(c.duration_s * c.sample_rate_Hz)) + 1, dtype=np.float64) * h)
+    tolerated = tolerated_force_noise(guess, forces, h, c.measured, noise_fraction, target)
+    return replace(prediction, force_noise_tolerated=tolerated)
 
 
 def _lengthened(

@@ -6,6 +6,9 @@ those early, biased values in place. Fitting the whole record open loop from the
 (the responses' noise-free simulation under the measured forces against the data, the initial
 state free) uses every sample alike and is the maximum-likelihood estimate for white measurement
 noise. Its covariance is the inverse Gauss-Newton Hessian: the Fisher information of the record.
+Where the measured forces carry noise too, the fit errs more: the residual holds that noise through
+the drive, coloured at the modes; the covariance then gains its first-order effect
+(:mod:`mtident.feeddrive.inputnoise`), and the misfit is measured against both noises.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from mtident.feeddrive.information import (
     scaled_inverse,
     stable_log_values,
 )
+from mtident.feeddrive.inputnoise import input_noise_moments, response_noise_from_forces
 from mtident.feeddrive.params import FeedDriveParameters
 
 __all__ = ["OpenLoopFit", "refine_open_loop"]
@@ -54,7 +58,8 @@ class OpenLoopFit:
         Covariance of its log-parameters (the inverse Fisher information, widened by the misfit
         where the residuals exceed the assumed noise).
     misfit : ndarray, shape (R,)
-        RMS residual of each measured response in units of its assumed noise.
+        RMS residual of each measured response in units of its assumed noise (with what the forces'
+        noise adds through the drive, where they carry any).
     start : ndarray, shape (8,)
         The fitted initial state.
     converged : bool
@@ -62,6 +67,10 @@ class OpenLoopFit:
         its standard deviation: the minimum. An unsettled fit is not an estimate.
     passes : int
         Passes over the record.
+    input_noise : ndarray, shape (4,)
+        The standard deviation of the noise on each force column the covariance carries (zero: exact).
+    widened : ndarray, shape (8,)
+        How many times the forces' noise widened each parameter's standard deviation (1: not at all).
     """
 
     parameters: FeedDriveParameters
@@ -70,6 +79,8 @@ class OpenLoopFit:
     start: FloatArray
     converged: bool
     passes: int
+    input_noise: FloatArray
+    widened: FloatArray
 
 
 def refine_open_loop(
@@ -81,6 +92,7 @@ def refine_open_loop(
     noise: FloatArray,
     max_passes: int = 100,
     progress: Callable[[int, int], None] | None = None,
+    input_noise: FloatArray | None = None,
 ) -> OpenLoopFit:
     """Fit the log-parameters and the initial state to the record open loop, from ``estimate``:
     minimise ‖(y − ŷ)/σ‖² by Levenberg-Marquardt.
@@ -104,6 +116,9 @@ def refine_open_loop(
     progress : callable, optional
         ``progress(passes, max_passes)`` as each pass over the record begins (a long record takes
         seconds a pass).
+    input_noise : ndarray, shape (4,), optional
+        Standard deviation of white noise on each force column (``inputnoise.force_noise``), carried into
+        the covariance and the misfit (default: the forces are exact).
 
     Returns
     -------
@@ -139,9 +154,21 @@ def refine_open_loop(
             np.all(np.abs(newton) <= _SETTLED * np.sqrt(np.maximum(np.diag(scaled_inverse(hessian)), 0.0)))
         )
     _, hessian = gauss_newton_step(moments, weight)
-    misfit = np.sqrt(moments.residual * weight / np.maximum(moments.count, 1.0))
+    inverse = scaled_inverse(hessian)
+    forced = np.zeros(len(weight))
+    input_sd = np.zeros(4) if input_noise is None else np.asarray(input_noise, dtype=float)
+    widened = np.ones(8)
+    if np.any(input_sd > 0):
+        fitted = estimate.with_identified(np.exp(log_values))
+        spread = input_noise_moments(fitted, forces, h, idx, np.isfinite(data), weight, input_sd, start)
+        alone = np.sqrt(np.maximum(np.diag(inverse)[:8], 1e-300))
+        inverse = inverse + inverse @ spread @ inverse
+        widened = np.sqrt(np.maximum(np.diag(inverse)[:8], 0.0)) / alone
+        forced = response_noise_from_forces(fitted, h, idx, len(forces), input_sd)
+    expected = 1.0 / weight + forced
+    misfit = np.sqrt(moments.residual / expected / np.maximum(moments.count, 1.0))
     widening = max(1.0, float(np.max(misfit)) ** 2)
-    covariance = widening * scaled_inverse(hessian)[:8, :8]
+    covariance = widening * inverse[:8, :8]
     return OpenLoopFit(
         parameters=estimate.with_identified(np.exp(log_values)),
         covariance_log=covariance,
@@ -149,4 +176,6 @@ def refine_open_loop(
         start=start,
         converged=converged,
         passes=passes,
+        input_noise=input_sd,
+        widened=widened,
     )
