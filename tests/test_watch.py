@@ -545,12 +545,12 @@ def test_a_sensor_only_the_assumed_room_wander_keeps_from_stopping_is_told_to_lo
     assert measured["room_bound_sensors"] == steady["room_bound_sensors"] == []
 
 
-def test_watch_old_options_are_taken_with_a_note(tmp_path):
+def test_watch_refuses_the_options_of_a_week_ago_by_name(tmp_path):
     log = tmp_path / "run.csv"
     log.write_text(csv_text(T[:20], {"S": noisy(first_order(T[:20]), 16)}))
-    code, _, err = run("thermal", "watch", str(log), "--replay", "--hold", "12", "--bin", "10")
-    assert code == 0, err
-    assert "--hold is no longer used" in err and "--bin is no longer used" in err
+    for old in ("--hold", "--bin"):
+        code, _, err = run("thermal", "watch", str(log), "--replay", old, "12")
+        assert code == 2 and f"No such option '{old}'" in err, err
 
 
 def test_watch_refuses_a_missing_reference_and_a_bad_tolerance(tmp_path):

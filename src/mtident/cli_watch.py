@@ -415,9 +415,6 @@ def monitor_settings(
     metavar="HOST:PORT",
     help="Serve a live page of the table and the curves, read-only (127.0.0.1:8050; 0.0.0.0:8050 for the network).",
 )
-@click.option("--hold", hidden=True, type=float)
-@click.option("--bin", "bin_s", hidden=True, type=float)
-@click.option("--room-coupling", hidden=True)
 @user_errors
 def watch_command(
     file: str,
@@ -446,9 +443,6 @@ def watch_command(
     record_path: str | None,
     from_buffer_start: bool,
     serve_address: str | None,
-    hold: float | None,
-    bin_s: float | None,
-    room_coupling: str | None,
 ) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
@@ -512,10 +506,6 @@ def watch_command(
         --from-buffer-start (MTConnect).
     serve_address : str or None
         --serve: HOST:PORT of the live page.
-    hold, bin_s : float or None
-        Hidden options no longer used: said and ignored.
-    room_coupling : str or None
-        A hidden option no longer used: said and ignored.
 
     Raises
     ------
@@ -523,13 +513,6 @@ def watch_command(
         --replay of a missing log, a log without data rows, or a source's options that do not fit
         FILE.
     """
-    for name, given in (("--hold", hold), ("--bin", bin_s), ("--room-coupling", room_coupling)):
-        if given is not None:
-            stderr.print(
-                f"mtident: note: {name} is no longer used (the decision rests on the modal fit of all readings so "
-                "far) and was ignored",
-                highlight=False,
-            )
     if resume and not replay:
         stderr.print(
             "mtident: note: --resume is the default for a live log; it matters only with --replay", highlight=False
