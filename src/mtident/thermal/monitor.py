@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import Literal
 
 import numpy as np
 
@@ -42,10 +43,12 @@ from mtident.thermal.robust import (
 
 __all__ = [
     "Event",
+    "EventKind",
     "MonitorSettings",
     "MonitorState",
     "Readings",
     "SensorCheck",
+    "Status",
     "assumptions",
     "expected_stop",
     "is_within",
@@ -55,6 +58,22 @@ __all__ = [
     "result",
     "sensor_estimate",
 ]
+
+# a sensor's status at its latest check, as a table and the JSON show it
+Status = Literal[
+    "collecting",
+    "no data",
+    "no rise",
+    "undetermined",
+    "narrowing",
+    "confirming",
+    "may stop",
+    "misfit",
+    "off reference",
+    "too coarse",
+]
+# what an event of the monitor (and of a watch session) says
+EventKind = Literal["check", "ready", "not ready", "stop", "warning", "note"]
 
 # a check falls due this little before its time (min): 60 µs, far below any logging interval
 _DUE_SLACK_MIN = 1e-6
@@ -221,7 +240,7 @@ class SensorCheck:
     Attributes
     ----------
     sensor : str
-    status : str
+    status : Status
     checked_min : float
         When it was last checked (min), NaN before its first check.
     next_check_min : float
@@ -260,7 +279,7 @@ class SensorCheck:
     """
 
     sensor: str
-    status: str = "collecting"
+    status: Status = "collecting"
     checked_min: float = math.nan
     next_check_min: float = 0.0
     passes: int = 0
@@ -360,7 +379,7 @@ class Event:
 
     Attributes
     ----------
-    kind : str
+    kind : EventKind
     time_min : float
         When it was said (min, on the log's clock).
     text : str
@@ -369,7 +388,7 @@ class Event:
         The sensor it is about; None for the whole test.
     """
 
-    kind: str
+    kind: EventKind
     time_min: float
     text: str
     sensor: str | None = None
@@ -590,12 +609,12 @@ def _check_due(
                 check_sensor(s)
     stop = now if all(checks[s].may_stop for s in waited) else math.nan
     if math.isfinite(stop):
-        which = "every sensor's" if len(waited) == len(checks) else "every sensor waited for has its"
+        which = "every sensor's T∞ is" if len(waited) == len(checks) else "every sensor waited for has its T∞"
         events.append(
             Event(
                 "stop",
                 now,
-                f"{which} T∞ within ±{settings.tolerance_C:g} °C at {settings.decision_level * 100:g} %: the "
+                f"{which} within ±{settings.tolerance_C:g} °C at {settings.decision_level * 100:g} %: the "
                 f"test can stop at t = {minutes(now)}",
             )
         )
@@ -746,9 +765,11 @@ def _checked(
     )
 
 
-def _status(estimate: SensorEstimate, within: bool, ready: bool) -> str:
+def _status(estimate: SensorEstimate, within: bool, ready: bool) -> Status:
     if estimate.fit is None:
-        return estimate.status if estimate.status in ("no data", "no rise") else "collecting"
+        return (
+            "no data" if estimate.status == "no data" else "no rise" if estimate.status == "no rise" else "collecting"
+        )
     if ready:
         return "may stop"
     if within:
@@ -793,7 +814,7 @@ def _check_events(
             said.add(key)
             events.append(Event("warning", now, text, after.sensor))
     if after.status != before.status:
-        kind = "ready" if after.may_stop else "not ready" if before.may_stop else "check"
+        kind: EventKind = "ready" if after.may_stop else "not ready" if before.may_stop else "check"
         bounded = math.isfinite(after.low_C) and math.isfinite(after.high_C)
         text = (
             f"{after.sensor}: {after.status}, T∞ {after.steady_C:.2f} °C, "
