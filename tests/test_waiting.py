@@ -225,3 +225,16 @@ def test_the_floor_a_warm_up_sets_holds_only_for_a_rising_sensor_and_follows_a_r
     # a sensor that cooled from a peak (an earlier heating at more power) sets none
     cooled = np.where(t < 60.0, rising, rising[59] - 0.02 * (t - 59.0))
     assert overshoot_floor_C(estimate.fit, t, cooled, None, 0.01, 0.0) == -np.inf
+
+
+def test_with_a_room_sensor_the_settle_time_is_of_the_readings_above_the_room():
+    """A new user's machine in a room on a daily cycle of ±0.3 °C: the readings kept moving with
+    the room long after they had settled above it, and `time_saved_min` was null in every run."""
+    t = np.arange(0.0, 600.0, 1.0)
+    room = 20.0 + 0.4 * np.sin(2.0 * np.pi * t / 1440.0)
+    sensor = room + 10.0 - 10.0 * np.exp(-t / 20.0)  # within 0.2 °C of room + 10 from 20·ln 50 = 78.2 min
+    values = sensor[:, None]
+    without = check_decision(("S",), np.array([30.0]), 150.0, t, values, 0.2)
+    assert without.time_saved_min is None
+    with_room = check_decision(("S",), np.array([30.0]), 150.0, t, values, 0.2, room_C=room)
+    assert with_room.test_settle_time_min == 79.0 and with_room.time_saved_min == 79.0 - 150.0

@@ -221,8 +221,8 @@ class WarmupReport:
         if not self.machine:
             return f"Warm-up test: {Path(self.source).name}"
         serial = f" (serial {self.serial})" if self.serial else ""
-        program = f", program {self.program}" if self.program else ""
-        return f"Warm-up test of {self.machine}{serial}{program}"
+        # the program on record is the reference run's, not necessarily this test's: it is said in the setup
+        return f"Warm-up test of {self.machine}{serial}"
 
     @property
     def subtitle(self) -> str:
@@ -663,7 +663,7 @@ def _setup(report: WarmupReport) -> list[tuple[str, str]]:
     if report.machine:
         rows.append(("Machine", report.machine + (f", serial {report.serial}" if report.serial else "")))
     if report.program:
-        rows.append(("Program", f"{report.program} (the reference run's)"))
+        rows.append(("Reference run's program", f"{report.program} (this test's may differ)"))
     rows.append(("t = 0", report.start_words))
     log = report.source + ("" if report.recorded_from is None else f", recorded from {report.recorded_from}")
     rows += [

@@ -70,7 +70,8 @@ class Hindsight:
         (default: the room's move for every sensor).
     settle_time_min : ndarray, shape (S,), optional
         When each sensor's readings came within the tolerance of where they settled, to stay
-        (:func:`settle_times`; NaN where the log did not settle); default: not known.
+        (:func:`settle_times`; with a room sensor, the readings less the room, as T∞ follows the
+        room; NaN where the log did not settle); default: not known.
     waited : ndarray of bool, shape (S,), optional
         The sensors the test waits for (default: every one).
     """
@@ -295,9 +296,27 @@ def check_decision(
         room_shift_C=shift,
         tolerance_C=float(tolerance_C),
         sensor_shift_C=followed,
-        settle_time_min=settle_times(time_min, values, settled, tolerance_C),
+        settle_time_min=_settle_times(time_min, values, room_C, settled, tolerance_C, np.array(slowest, dtype=float)),
         waited=None if waited is None else np.asarray(waited, dtype=bool),
     )
+
+
+def _settle_times(
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    settled_C: FloatArray,
+    tolerance_C: float,
+    slowest_mode_min: FloatArray,
+) -> FloatArray:
+    """The settle times of the readings, or with a room sensor of the readings less the room: T∞
+    follows the room one to one, and a room on a daily cycle keeps the readings themselves moving
+    by more than the tolerance long after the sensor has settled above it."""
+    if room_C is None or np.isfinite(room_C).sum() < 10:
+        return settle_times(time_min, values, settled_C, tolerance_C)
+    above = values - np.asarray(room_C, dtype=float)[:, None]
+    settled_above, _ = measured_equilibrium(time_min, above, tolerance_C / 2.0, tolerance_C / 4.0, slowest_mode_min)
+    return settle_times(time_min, above, settled_above, tolerance_C)
 
 
 def settle_times(time_min: FloatArray, values: FloatArray, settled_C: FloatArray, tolerance_C: float) -> FloatArray:
