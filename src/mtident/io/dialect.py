@@ -68,6 +68,9 @@ _TIME_WORDS = frozenset(
 # serial loggers), which inside a line made the csv module fail with a traceback.
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
+_DECIMAL_POINT = re.compile(r"^\s*[+-]?\d*\.\d+(?:[eE][+-]?\d+)?\s*$")
+# 1,500: a thousands' grouping as much as a decimal comma
+_THOUSANDS = re.compile(r"^\s*[+-]?\d{1,3}(?:,\d{3})+\s*$")
 
 
 @dataclass(frozen=True, slots=True)
@@ -328,6 +331,8 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
         )  # "17,90" quoted, as spreadsheets write it
         if any(_DECIMAL_COMMA.match(number_without_unit(cell)) for row in rows for cell in row):  # also "20,5 °C"
             decimal = ","
+    elif _quoted_decimal_commas(complete[preamble + 1 : preamble + 21]):
+        decimal = ","
     dialect = _stated_units(CsvDialect(delimiter, decimal, preamble, encoding), complete)
     if wait_for_row and preamble + 1 + dialect.extra_rows >= len(complete):
         # A live log's header comes before its rows; the delimiter (a tie in the header) and the
@@ -335,6 +340,16 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
         # read every reading as NaN.
         return None
     return dialect
+
+
+def _quoted_decimal_commas(rows: list[str]) -> bool:
+    """Whether comma-separated rows write their numbers with decimal commas, quoted (``"0,5","22,41"``,
+    as a spreadsheet in a decimal-comma locale writes them): a cell holds a decimal comma that is no
+    thousands' grouping (``1,500``), and no cell a decimal point. Such a log was refused, each reading
+    "not a number"."""
+    cells = [number_without_unit(cell) for row in csv.reader(rows, delimiter=",") for cell in row]
+    commas = [cell for cell in cells if _DECIMAL_COMMA.match(cell)]
+    return any(not _THOUSANDS.match(cell) for cell in commas) and not any(_DECIMAL_POINT.match(cell) for cell in cells)
 
 
 def _stated_units(dialect: CsvDialect, lines: list[str]) -> CsvDialect:
@@ -680,16 +695,29 @@ def read_csv(path: str | Path, notes: list[str] | None = None) -> tuple[pd.DataF
         msg = f"{path}: no header line, only # comments and blank lines"
         raise InputError(msg)
     dialect = dialect or CsvDialect()
+    if data is None and dialect.encoding.startswith("utf-16") and file.stat().st_size % 2:
+        # a UTF-16 log still being written, cut inside its last character: its whole characters are
+        # read (pandas refused the file, "truncated data"), and the cut last line is left out below;
+        # bytes without a whole line in them are no such log
+        whole_characters = file.read_bytes()[:-1]
+        if dialect.complete_length(whole_characters):
+            data = whole_characters
+            source = io.BytesIO(data)
     cut = None
     if head.strip():
         check_unique_names(dialect.header(_header_line(head, dialect)), path)
         try:
-            cut = _check_rows(dialect.decode(file.read_bytes() if data is None else data), dialect, path)
+            raw = file.read_bytes() if data is None else data
+            cut = _check_rows(dialect.decode(raw), dialect, path)
         except InputError as exc:
             if _looks_like_toml(head):
                 msg = _TOML_GIVEN.format(path=path)
                 raise InputError(msg) from exc
             raise
+    if cut is not None:
+        # read up to the cut line's start: a quote it leaves open ("22,4) made pandas refuse the whole file
+        data = raw[: dialect.complete_length(raw)]
+        source = io.BytesIO(data)
     try:
         with warnings.catch_warnings():
             # cells past the header's are empty (_check_rows refused any other): nothing is lost
@@ -716,10 +744,8 @@ def read_csv(path: str | Path, notes: list[str] | None = None) -> tuple[pd.DataF
         frame.columns = [
             new[i] if i in new and new[i] != dialect.written_names[i] else c for i, c in enumerate(frame.columns)
         ]
-    if cut is not None and len(frame):
-        frame = frame.iloc[:-1]
-        if notes is not None:
-            notes.append(cut)
+    if cut is not None and notes is not None:
+        notes.append(cut)
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
     return frame.drop(columns=unnamed), dialect
 
@@ -736,13 +762,16 @@ def _check_rows(text: str, dialect: CsvDialect, path: str | Path) -> str | None:
     rest (a comma-separated export with decimal commas: one sensor's integer parts read as its
     readings, the next sensor's decimal parts as the next one's). Returns a note on a last line
     cut short (no line end, fewer cells than the line before it: a log still being written, which
-    :class:`~mtident.io.follow.LogFollower` waits for), which the reader leaves out; None if none."""
+    :class:`~mtident.io.follow.LogFollower` waits for), which the reader leaves out; None if none.
+    A last line without its line end is cut short too where its last cell is (:func:`_cut_short`):
+    ``...;29,3`` for ``...;29,35``, or ``2`` for ``22,41``, was read as a reading, wrong and trusted."""
     lines = _LINE_BREAK.split(text)
     header = dialect.cells(lines[dialect.preamble_lines])
     count = len(header)
     previous = count
     rows = csv.reader(lines[dialect.head_lines :], delimiter=dialect.delimiter)
     last: list[str] = []
+    before: list[str] = []
     for row in rows:
         if not row:
             continue
@@ -761,18 +790,44 @@ def _check_rows(text: str, dialect: CsvDialect, path: str | Path) -> str | None:
                     "reading split in two); export it with ';' or tabs between the cells, or with a decimal point"
                 )
             raise InputError(msg)
-        previous, last = len(last) or previous, row
+        previous, last, before = len(last) or previous, row, last
     ended = text.endswith(("\n", "\r"))
-    # fewer cells than the header too: a row that leaves out the header's last column (a logger's
-    # event column) or a trailing delimiter is whole
-    if ended or not lines[-1].strip() or len(last) >= min(previous, count) or len(lines) <= dialect.head_lines:
+    if ended or not lines[-1].strip() or len(lines) <= dialect.head_lines:
         return None
     line = lines[-1]
     quoted = repr(line if len(line) <= _QUOTED_LINE else line[:_QUOTED_LINE] + "...")
+    # fewer cells than the header too: a row that leaves out the header's last column (a logger's
+    # event column) or a trailing delimiter is whole
+    if len(last) >= min(previous, count):
+        k = len(last) - 1
+        if not (before and k < len(before) and _cut_short(last[k], before[k], dialect.decimal)):
+            return None
+        return (
+            f"left out the last line, {quoted}: it has no line end and its last cell {last[k].strip()!r} is shorter "
+            f"than the one above it, {before[k].strip()!r} (a log still being written, cut in a reading; "
+            "`thermal watch` follows it as it grows)"
+        )
     return (
         f"left out the last line, {quoted}: it has no line end and {len(last)} of the {previous} cells of the line "
         "before it (a log still being written; `thermal watch` follows it as it grows)"
     )
+
+
+def _cut_short(cell: str, above: str, decimal: str) -> bool:
+    """Whether the last cell of a last line without its line end looks cut short against the cell
+    above it (the same column, the row before): empty where that one is not, without the decimal mark
+    that one has or fewer characters after it (``29,3`` under ``29,35``, ``2`` under ``22,41``), or,
+    where that one has no decimal mark, fewer characters (``2`` under ``22``). A whole row whose last
+    reading merely writes fewer decimals (%g-style numbers, 22.4 after 22.41) is left out too, and said:
+    a reading lost, where the other way a wrong one was trusted."""
+    cell, above = cell.strip(), above.strip()
+    if not above:
+        return False
+    if not cell:
+        return True
+    if decimal in above:
+        return decimal not in cell or len(cell) - cell.rindex(decimal) < len(above) - above.rindex(decimal)
+    return len(cell) < len(above)
 
 
 def binary_kind(head: bytes) -> str | None:

@@ -1076,9 +1076,9 @@ def _untrusted(
     seen = tw[-1] - begins
     with np.errstate(invalid="ignore"):
         short = ~no_rise & (seen < MIN_RISE_SEEN_MIN)
+        # a column that does not rise is no warm-up, but an absurd answer for it is no more to be trusted
         wide = (
-            ~no_rise
-            & ~short
+            ~short
             & np.isfinite(half)
             & (
                 (steady - half < OPEN_CIRCUIT_LOW_C)
