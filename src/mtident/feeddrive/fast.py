@@ -270,7 +270,6 @@ def response_moments(
     s : ndarray, shape (R,)
         Σ ŷ² over all samples.
     """
-    phi, gamma, phi_s, gamma_s = step
     c_row, e_row, c_s = rows
     r_count = data.shape[1]
     p = 16 if with_start else 8
@@ -282,9 +281,6 @@ def response_moments(
     sens = np.zeros((8, 8))
     free = np.eye(8)
     g = np.empty(p)
-    x_next = np.empty(8)
-    sens_next = np.empty((8, 8))
-    free_next = np.empty((8, 8))
     for k in range(forces.shape[0]):
         u = forces[k]
         for r in range(r_count):
@@ -293,17 +289,7 @@ def response_moments(
                 model += c_row[r, i] * x[i]
             for i in range(4):
                 model += e_row[r, i] * u[i]
-            for j in range(8):
-                acc = 0.0
-                for i in range(8):
-                    acc += c_row[r, i] * sens[j, i] + c_s[r, j, i] * x[i]
-                g[j] = acc
-            if with_start:
-                for j in range(8):
-                    acc = 0.0
-                    for i in range(8):
-                        acc += c_row[r, i] * free[j, i]
-                    g[8 + j] = acc
+            _sensitivities(x, sens, free, c_row, c_s, r, g)
             big_s[r] += model * model
             for a in range(p):
                 for b in range(a, p):
@@ -314,29 +300,7 @@ def response_moments(
                 big_c[r] += res * res
                 for a in range(p):
                     big_b[r, a] += g[a] * res
-        for i in range(8):
-            acc = 0.0
-            for c in range(8):
-                acc += phi[i, c] * x[c]
-            for c in range(4):
-                acc += gamma[i, c] * u[c]
-            x_next[i] = acc
-            for j in range(8):
-                acc = 0.0
-                for c in range(8):
-                    acc += phi_s[j, i, c] * x[c] + phi[i, c] * sens[j, c]
-                for c in range(4):
-                    acc += gamma_s[j, i, c] * u[c]
-                sens_next[j, i] = acc
-                if with_start:
-                    acc = 0.0
-                    for c in range(8):
-                        acc += phi[i, c] * free[j, c]
-                    free_next[j, i] = acc
-        x[:] = x_next
-        sens[:] = sens_next
-        if with_start:
-            free[:] = free_next
+        _advance(step, u, x, sens, free, with_start)
     for r in range(r_count):
         for a in range(p):
             for b in range(a):
