@@ -5,7 +5,7 @@ A machine is a linear thermal structure of ``n`` nodes,
     dx/dt = A·x + Σ_i b_i·P·w_i + b_room·room(t),
 
 * ``"network"``: a lumped RC network of 2-5 nodes whose time constants are drawn log-uniformly in
-  2-300 min (the construction of :mod:`mtident.thermal.synthetic`: a Jacobi matrix with exactly
+  2-300 min (the construction of :mod:`mtident.testing.warmups`: a Jacobi matrix with exactly
   those eigenvalues, optionally meshed, convection to the room on some nodes);
 * ``"conduction"``: a 1-D body (a shaft) of 30-60 finite volumes, its slowest time constant
   log-uniform in 2-300 min (the same module's construction);
@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import expm
 
-from mtident.thermal.synthetic import _conduction, _network
+from mtident.testing.warmups import _conduction, _network
 
 TOLERANCE_C = 0.2
 SENSOR_LAGS_MIN = (0.5, 3.0)

@@ -25,8 +25,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 from _common import seeded_run_parser, shard_seeds  # noqa: E402
 from bench_safe_stops import TOLERANCE_C, _replay, learnt_reference, near_first_order  # noqa: E402
 
+from mtident.testing.warmups import random_warmup  # noqa: E402
 from mtident.thermal.robust import RobustSettings  # noqa: E402
-from mtident.thermal.synthetic import random_warmup  # noqa: E402
 
 VARIANTS: dict[str, dict[str, object]] = {
     "default": {},

@@ -54,9 +54,9 @@ from _machines import (  # noqa: E402
 )
 
 from mtident.io.logs import TemperatureLog  # noqa: E402
+from mtident.testing.warmups import _network  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state, result  # noqa: E402
 from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
-from mtident.thermal.synthetic import _network  # noqa: E402
 
 FIRST_SEED = 36000
 HELD_OUT = range(36500, 36800)

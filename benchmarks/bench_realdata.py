@@ -2,7 +2,7 @@
 half of each record's 95 %-rise time, and the monitor replayed, without a reference and with one
 learnt from the other run of the same board (TCLab heater 1, runs 1 and 3).
 
-Truth: where the record settled (its last 5 %, :class:`~mtident.thermal.synthetic.RealCurve`); a
+Truth: where the record settled (its last 5 %, :class:`~mtident.testing.warmups.RealCurve`); a
 record that did not settle is scored by its last readings, which are below T∞, so an interval
 above them is not counted as a miss.
 
@@ -19,11 +19,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from mtident.io.logs import TemperatureLog  # noqa: E402
+from mtident.testing.warmups import load_real_curves  # noqa: E402
 from mtident.thermal.identify import identify  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state  # noqa: E402
 from mtident.thermal.reference import learn_reference  # noqa: E402
 from mtident.thermal.robust_identify import identify_robust  # noqa: E402
-from mtident.thermal.synthetic import load_real_curves  # noqa: E402
 
 TOLERANCE_C = 0.2
 

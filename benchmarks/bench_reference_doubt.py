@@ -2,7 +2,7 @@
 run leaves its own steady state much wider with one mode more than it determines (a slow mode the
 run was too short or too coarse to show), and decide that sensor without the reference.
 
-Per case of :func:`mtident.thermal.synthetic.random_warmup`: the reference learnt from another run
+Per case of :func:`mtident.testing.warmups.random_warmup`: the reference learnt from another run
 of the same machine (as in ``bench_safe_stops.py``), the run's own 95 % half-width of T∞ with the
 learnt mode count and with one more, and the monitor replayed with the reference (and, where the
 excess is over 0.1 °C, without it). ``--report`` prints, per threshold, the reference stops kept,
@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 from bench_safe_stops import TOLERANCE_C, _log, _replay
 
+from mtident.testing.warmups import random_warmup, reference_run
 from mtident.thermal.reference import learn_reference
 from mtident.thermal.robust import RobustSettings, estimate_sensor
-from mtident.thermal.synthetic import random_warmup, reference_run
 
 THRESHOLDS_C = (0.1, 0.2, 0.3, 0.5)
 

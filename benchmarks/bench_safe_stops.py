@@ -1,12 +1,12 @@
 """Safe stops on many warm-ups: the monitor and identify on a seeded population nobody shaped.
 
-Each case is a random warm-up of :func:`mtident.thermal.synthetic.random_warmup` (lumped networks
+Each case is a random warm-up of :func:`mtident.testing.warmups.random_warmup` (lumped networks
 of 1-4 nodes and conduction bodies, time constants 2-300 min, sensor lags, partly warm starts,
 drifting rooms with a room sensor, sampling 1 s-5 min, noise 0.005-0.05 °C, rounding
 0.01-0.32 °C). Per case:
 
 * the monitor replayed without a reference, and with a reference learnt from another run of the
-  same machine (:func:`~mtident.thermal.synthetic.reference_run`, at another power): the stop,
+  same machine (:func:`~mtident.testing.warmups.reference_run`, at another power): the stop,
   T∞'s error there against the truth (the equilibrium at the room's level at the stop), and
   whether the 95 % interval covers it;
 * ``identify`` (model-robust, and the papers' first-order UKF) at fixed fractions of t95: the 95 %
@@ -43,12 +43,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 from _common import seeded_run_parser, shard_seeds  # noqa: E402
 
 from mtident.io.logs import TemperatureLog  # noqa: E402
+from mtident.testing.warmups import modal_amplitudes, random_warmup, reference_run  # noqa: E402
 from mtident.thermal.identify import identify  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state  # noqa: E402
 from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
 from mtident.thermal.robust import RobustSettings  # noqa: E402
 from mtident.thermal.robust_identify import identify_robust  # noqa: E402
-from mtident.thermal.synthetic import modal_amplitudes, random_warmup, reference_run  # noqa: E402
 
 TOLERANCE_C = 0.2
 FRACTIONS = (0.25, 0.5)

@@ -65,8 +65,8 @@ def test_a_sparse_run_that_ended_in_a_slow_mode_is_doubtful():
     that trusted it stopped at 6.5 min, 0.29 °C low. The run's best fit with one mode more puts
     a 240-min mode in it and its steady state 0.8 °C higher: it is doubted, and the test does not
     stop wrongly."""
+    from mtident.testing.warmups import random_warmup, reference_run
     from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
-    from mtident.thermal.synthetic import random_warmup, reference_run
 
     warm = random_warmup(np.random.default_rng(18024))
     run = reference_run(warm.machine, np.random.default_rng(18024 + 10_000_000))
@@ -90,7 +90,7 @@ def test_a_run_that_needs_more_modes_than_it_pins_down_keeps_them_with_wide_boxe
     told a later test that nothing was slower than 17 min; the test stopped at 0.45·t95 with its
     99 % interval 0.18 °C above the truth. Kept with the box its run leaves it, the slow mode
     reaches 53 min, and the same readings' interval covers the truth."""
-    from mtident.thermal.synthetic import random_warmup, reference_run
+    from mtident.testing.warmups import random_warmup, reference_run
 
     warm = random_warmup(np.random.default_rng(8353))
     run = reference_run(warm.machine, np.random.default_rng(8353 + 10_000_000))
@@ -115,7 +115,7 @@ def test_readings_that_use_every_free_mode_are_given_one_more():
     hull at 34 min, 0.06-0.31 °C above the truth, stopped the test 0.22 °C high. The readings use
     both free modes beyond chance, so a third is allowed: the interval, 0.03 °C from the truth,
     is then too wide to stop (the replay stops at 42 min, 0.08 °C off)."""
-    from mtident.thermal.synthetic import random_warmup
+    from mtident.testing.warmups import random_warmup
 
     warm = random_warmup(np.random.default_rng(8604))
     modes = SensorModes((4.707080196886641, 14.634088036656596), (0.1, 0.1))
@@ -336,7 +336,7 @@ def test_a_room_sensors_own_noise_does_not_pin_t_inf():
     sensor of 0.04 °C noise: fed raw as an input of every mode, the room's noise collapsed the
     interval at 18.5 min to ±0.07 °C, 0.70 °C from the truth, with the reference's modes trusted.
     Averaged over a minute it is ±1.1 °C and covers the truth."""
-    from mtident.thermal.synthetic import random_warmup, reference_run
+    from mtident.testing.warmups import random_warmup, reference_run
 
     warm = random_warmup(np.random.default_rng(9429))
     assert warm.room_C is not None and warm.interval_min < 0.02
@@ -354,8 +354,8 @@ def test_the_hull_within_a_reference_reaches_as_far_as_a_search_from_many_starts
     """A three-node network with its learnt reference at half its t95: the hull's ends, searched
     from the best fit's basin alone, fell 0.15 °C short at 95 % (46.22 to 46.63 °C against 46.07
     to 46.72) of where a search from 30 starts, 6 of them polished, reaches."""
+    from mtident.testing.warmups import random_warmup, reference_run
     from mtident.thermal import modal_search
-    from mtident.thermal.synthetic import random_warmup, reference_run
 
     warm = random_warmup(np.random.default_rng(12002))
     run = reference_run(warm.machine, np.random.default_rng(12002 + 10_000_000))
@@ -382,7 +382,7 @@ def test_the_hull_within_a_reference_reaches_an_end_along_a_boxs_edge():
     within the 99 % threshold, but the hull's low end was searched from models at least two grid
     steps apart, which boxes of ±10-20 % do not hold, and stopped at 33.12 °C; the monitor stopped
     there 0.21 °C off the truth (33.04)."""
-    from mtident.thermal.synthetic import random_warmup, reference_run
+    from mtident.testing.warmups import random_warmup, reference_run
 
     warm = random_warmup(np.random.default_rng(13096))
     run = reference_run(warm.machine, np.random.default_rng(13096 + 10_000_000))
@@ -401,7 +401,7 @@ def test_a_hull_end_never_stops_short_of_a_model_already_within_the_threshold():
     discarded; the 99 % interval's low end was the estimate itself (26.637 °C) and missed the
     truth (26.636). The 95 % search had found 26.603, and the 95 % interval was narrowed to the
     99 % one's instead of the 99 % one widened."""
-    from mtident.thermal.synthetic import random_warmup, reference_run
+    from mtident.testing.warmups import random_warmup, reference_run
 
     warm = random_warmup(np.random.default_rng(15258))
     run = reference_run(warm.machine, np.random.default_rng(15258 + 10_000_000))

@@ -807,8 +807,8 @@ def test_robust_answers_over_generated_warm_ups_are_consistent(seed, fraction):
     99 % interval holds the 95 %, and the summary is plain JSON."""
     import json
 
+    from mtident.testing.warmups import random_warmup
     from mtident.thermal.robust_identify import identify_robust
-    from mtident.thermal.synthetic import random_warmup
 
     warm = random_warmup(np.random.default_rng(seed))
     window = max(fraction * warm.t95_min, 10 * warm.interval_min)
@@ -953,9 +953,9 @@ def test_a_fragile_95_percent_interval_is_not_trusted_by_identify():
     300-min mode fitting nearly as well reached 27.5 to 33.1 °C at 99 %, 14 times as wide where a
     regular likelihood gives 1.3. Such an interval is fragile, said, and not trusted; the monitor's
     decision, made at the wider level, is not judged by it."""
+    from mtident.testing.warmups import random_warmup
     from mtident.thermal.robust import estimate_sensor, with_fragility
     from mtident.thermal.robust_identify import identify_robust
-    from mtident.thermal.synthetic import random_warmup
 
     warm = random_warmup(np.random.default_rng(13451))
     window = 0.5 * warm.t95_min
@@ -1006,8 +1006,8 @@ def test_an_estimate_the_most_mode_fit_excludes_keeps_its_own_uncertainty():
     excludes at 95 % the two-mode model BIC chooses; the interval ended at that estimate, 39.78 °C,
     for a truth of 39.84, with `model_ok` true. Profiled around itself, the estimate's class
     reaches 40.2 °C; the low end, set by the four-mode models, stays."""
+    from mtident.testing.warmups import random_warmup
     from mtident.thermal.robust import estimate_sensor
-    from mtident.thermal.synthetic import random_warmup
 
     warm = random_warmup(np.random.default_rng(20065))
     n = int(np.searchsorted(warm.time_min, 0.25 * warm.t95_min, side="right"))
@@ -1025,9 +1025,9 @@ def test_a_slow_mode_at_the_largest_time_constant_is_not_missed_by_the_hull():
     it ranked below the three models polished, and the 95 % interval ended at 38.71 °C for a truth
     of 38.86 with `model_ok` true; polishing six reaches 40.37 °C. With the reference learnt from
     another run (4.7, 89 and 152 min), three polished ended it at 38.78 °C; six reach 39.03."""
+    from mtident.testing.warmups import random_warmup, reference_run
     from mtident.thermal.reference import learn_reference
     from mtident.thermal.robust import estimate_sensor
-    from mtident.thermal.synthetic import random_warmup, reference_run
 
     warm = random_warmup(np.random.default_rng(19120))
     n = int(np.searchsorted(warm.time_min, 0.5 * warm.t95_min, side="right"))

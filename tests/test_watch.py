@@ -361,7 +361,7 @@ def test_bad_settings_are_refused():
 
 def test_a_drifting_room_measured_by_a_room_sensor_stops_within_the_tolerance():
     """The room is an input of every mode: a 0.3 °C air-conditioning cycle does not bias T∞."""
-    from mtident.thermal.synthetic import Machine, simulate
+    from mtident.testing.warmups import Machine, simulate
 
     rate = 1.0 / PAPER_TAU
     machine = Machine(
@@ -743,7 +743,7 @@ def test_a_converters_first_step_is_no_rise_and_no_settled_fast_mode():
     decimal display's 0.01 °C noise, T∞ was 18.88 ± 0.16 °C at 99 % and the test stopped, 8.75 °C
     below where the sensor settles. Until the readings change often enough to show their step,
     the smallest change is their step: one step is no rise, and the monitor waits."""
-    from mtident.thermal.synthetic import random_warmup
+    from mtident.testing.warmups import random_warmup
 
     warm = random_warmup(np.random.default_rng(13433))
     assert warm.rounding_C == pytest.approx(0.32) and warm.room_C is None

@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from mtident.exceptions import InputError
-from mtident.thermal.synthetic import (
+from mtident.testing.warmups import (
     DURATION_LIMITS_MIN,
     INTERVALS_MIN,
     Machine,
