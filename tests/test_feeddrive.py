@@ -765,6 +765,10 @@ def test_the_first_run_says_it_compiles_the_filter_before_a_silent_minute(tmp_pa
     assert "compiling the filter first (once after installing: about a minute)" in out.stderr.splitlines()[0]
     monkeypatch.setattr(fast, "compiled_cache_ready", lambda: True)
     assert "compiling" not in run("feeddrive", "identify", str(path), "--no-refine").stderr
+    monkeypatch.setattr(fast, "compiled_cache_ready", lambda: False)
+    planned = run("feeddrive", "plan", "--excitation", "impulse", "--durations", "0.25", "--fs", "10000", "--no-refine")
+    assert planned.returncode == 0, planned.stderr
+    assert "predicting 2 tests: compiling the filter first" in planned.stderr.splitlines()[0]
 
 
 def _noisy_forces(record: Response, fraction: float, seed: int) -> Response:

@@ -333,14 +333,7 @@ def identify_command(
     truth = load_parameters(truth_path) if truth_path else None
     steps = len(response.time_s)
     compiling = "the first run after installing also compiles the filter"
-    from mtident.feeddrive import fast
-
-    if not fast.compiled_cache_ready() and not stderr.is_terminal:
-        # a spinner shows on a terminal alone: elsewhere (a pipe, a CI log) a minute passed without a word
-        stderr.print(
-            f"mtident: filtering {steps} samples: compiling the filter first (once after installing: about a minute)",
-            highlight=False,
-        )
+    _say_compiling(f"filtering {steps} samples")
     with stderr.status(f"filtering {steps} samples… ({compiling})") as status:
         result = identify_feed_drive(
             response,
@@ -560,6 +553,7 @@ def plan_command(
         _positive_list(rates, "--fs", "10000,20000"),
         measured,
     )
+    _say_compiling(f"predicting {len(candidates)} tests")
     with stderr.status(f"predicting {len(candidates)} tests…"):
         plan = plan_tests(guess, candidates, noise_fraction, target, refine=refine)
     if as_json:
@@ -623,3 +617,14 @@ def _print_plan(plan: ExcitationPlan, measured: str) -> None:
         f"{closest}; longer --durations, finer sensors (--noise) or another --measured set may identify them",
         highlight=False,
     )
+
+
+def _say_compiling(doing: str) -> None:
+    """Say, off a terminal, that the compiled loops are compiled first: a spinner shows on a
+    terminal alone, and elsewhere (a pipe, a CI log) a minute passed without a word."""
+    from mtident.feeddrive import fast
+
+    if not fast.compiled_cache_ready() and not stderr.is_terminal:
+        stderr.print(
+            f"mtident: {doing}: compiling the filter first (once after installing: about a minute)", highlight=False
+        )
