@@ -238,3 +238,17 @@ def test_with_a_room_sensor_the_settle_time_is_of_the_readings_above_the_room():
     assert without.time_saved_min is None
     with_room = check_decision(("S",), np.array([30.0]), 150.0, t, values, 0.2, room_C=room)
     assert with_room.test_settle_time_min == 79.0 and with_room.time_saved_min == 79.0 - 150.0
+
+
+def test_a_long_replay_shows_the_test_from_its_first_checks(tmp_path):
+    """A replay showed nothing on its table or page until its first 250 rows were fed and checked."""
+    from mtident.thermal.session import FIRST_FEED_ROWS, WatchSession
+
+    t = np.arange(0.0, 400.0, 1.0)
+    log = tmp_path / "long.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{30 - 10 * np.exp(-a / 60):.2f}\n" for a in t))
+    session = WatchSession(log, MonitorSettings(), persist=False, resume=False)
+    seen: list[float] = []
+    session.poll(lambda s: seen.append(s.state.readings.latest_min))
+    assert seen[0] == FIRST_FEED_ROWS - 1 == 24.0
+    assert seen[1] == 274.0  # then every 250 rows (until the test may stop)

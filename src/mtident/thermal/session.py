@@ -44,6 +44,7 @@ STATE_SUFFIX = ".watch-state.npz"
 FINGERPRINT_BYTES = 4096
 # rows fed to the monitor between two progress calls (a long replay's table moves on)
 FEED_ROWS = 250
+FIRST_FEED_ROWS = 25
 
 
 @dataclass(frozen=True)
@@ -331,8 +332,10 @@ class WatchSession:
             if self.settings.room_sensor
             else (rows.temperature_C, None)
         )
-        for start in range(0, len(rows.time_min), FEED_ROWS):
-            part = slice(start, start + FEED_ROWS)
+        # a first short part, so that a long replay's table and page show the test from its first checks
+        bounds = [0, *range(FIRST_FEED_ROWS, len(rows.time_min), FEED_ROWS), len(rows.time_min)]
+        for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
+            part = slice(start, stop)
             self.state, said = monitor_step(
                 self.state,
                 rows.time_min[part],
