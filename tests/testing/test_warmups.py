@@ -26,7 +26,7 @@ from mtident.testing.warmups import (
     simulate,
 )
 
-REAL_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "realdata"
+REAL_DATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 
 
 def _machines(seed: int, count: int, **kw: object) -> list[Machine]:
