@@ -583,7 +583,7 @@ def _check_due(
     for s, check in enumerate(checks):
         if now >= check.next_check_min:
             check_sensor(s)
-    contradicting = [] if dropped else _contradicting(checks, settings)
+    contradicting, known = ([], 0) if dropped else _contradicting(checks, settings)
     if contradicting:
         # the sensors that follow it are the exception: a reference of another machine fits a few by chance
         dropped, used = True, replace(settings, reference=None)
@@ -593,7 +593,7 @@ def _check_due(
                 "warning",
                 now,
                 f"the reference ({settings.reference.identity}) is contradicted by {len(contradicting)} of the "
-                f"{_known_count(checks, settings)} sensors it knows ({', '.join(contradicting)}): it is not used for "
+                f"{known} sensors it knows ({', '.join(contradicting)}): it is not used for "
                 "any sensor from now on (another machine's reference, or this machine changed since its run; learn "
                 "the reference again)",
             )
@@ -621,28 +621,20 @@ def _check_due(
     return MonitorState(state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped), events
 
 
-def _reference_known(checks: list[SensorCheck], settings: MonitorSettings) -> list[SensorCheck]:
-    """The checked sensors the reference has trusted modes for."""
+def _contradicting(checks: list[SensorCheck], settings: MonitorSettings) -> tuple[list[str], int]:
+    """The sensors that contradict the reference, where they are most of the two or more checked
+    sensors it has trusted modes for (each then answered without it), else none; and how many it
+    has trusted modes for."""
     reference = settings.reference
     if reference is None:
-        return []
-    return [
+        return [], 0
+    known = [
         c
         for c in checks
         if math.isfinite(c.steady_C) and (modes := reference.modes(c.sensor)) is not None and modes.doubt is None
     ]
-
-
-def _known_count(checks: list[SensorCheck], settings: MonitorSettings) -> int:
-    return len(_reference_known(checks, settings))
-
-
-def _contradicting(checks: list[SensorCheck], settings: MonitorSettings) -> list[str]:
-    """The sensors that contradict the reference, where they are most of the two or more it knows
-    (each then answered without it); else none."""
-    known = _reference_known(checks, settings)
     off = [c.sensor for c in known if not c.reference_used]
-    return off if len(known) >= 2 and 2 * len(off) > len(known) else []
+    return (off if len(known) >= 2 and 2 * len(off) > len(known) else []), len(known)
 
 
 def sensor_estimate(
