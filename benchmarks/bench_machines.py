@@ -109,6 +109,7 @@ def replay(case: Case, run, reference: MachineReference | None) -> dict[str, obj
                 "amplitudes": [round(a, 3) for _, a in check.modes],
                 "model_ok": check.model_ok,
                 "reference_used": check.reference_used,
+                "machine_used": check.machine_used,
                 "ends": check.ends[:300],
                 "warnings": [w[:200] for w in check.warnings],
             }

@@ -696,6 +696,7 @@ def learn_command(
                 "max_time_constant_min": reference.max_time_constant_min,
                 "room": reference.room,
                 "sensors": sensors_out,
+                "machine_model": _machine_model_json(reference),
                 "warnings": warnings,
             }
         )
@@ -709,7 +710,26 @@ def learn_command(
         used = "no" if m.doubt else "yes, no faster mode (--every-mode)" if m.free_fast_modes == 0 else "yes"
         table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), used)
     table_console().print(table)
+    model = reference.machine_model
+    if model is not None:
+        taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(model.time_constants_min, model.box, strict=True))
+        stderr.print(
+            f"mtident: machine model: {len(model.time_constants_min)} modes shared by {len(model.sensors)} sensors "
+            f"({taus} min); later tests fit every sensor together, each mode's amplitudes in this run's proportions",
+            highlight=False,
+        )
     _exit_if_none_used(reference)
+
+
+def _machine_model_json(reference: MachineReference) -> dict[str, object] | None:
+    model = reference.machine_model
+    if model is None:
+        return None
+    return {
+        "time_constants_min": list(model.time_constants_min),
+        "box": list(model.box),
+        "gains_C": {name: list(row) for name, row in zip(model.sensors, model.gains_C, strict=True)},
+    }
 
 
 def _exit_if_none_used(reference: MachineReference) -> None:

@@ -29,6 +29,7 @@ import numpy as np
 from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
+from mtident.thermal.machine_model import MachineFit, combined_estimate, machine_fit_of_window, unmeasured_wander
 from mtident.thermal.modes import Mode, model_curve
 from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import (
@@ -269,6 +270,8 @@ class SensorCheck:
         The data do not contradict the model, and T∞ is determined.
     reference_used : bool
         The reference run's time constants were used.
+    machine_used : bool
+        T∞ and its intervals come with the machine model's (every sensor fitted together).
     warnings : tuple of str
     ends : str
         In words, what sets the interval's ends (or why its readings are too coarse).
@@ -296,6 +299,7 @@ class SensorCheck:
     rise_C: float = 0.0
     model_ok: bool = False
     reference_used: bool = False
+    machine_used: bool = False
     warnings: tuple[str, ...] = ()
     ends: str = ""
     room_level_C: float = math.nan
@@ -571,11 +575,19 @@ def _check_due(
     checks = list(state.checks)
     dropped = state.reference_dropped
     used = replace(settings, reference=None) if dropped else settings
+    machine: dict[int, MachineFit | None] = {}
 
     def check_sensor(s: int) -> None:
         if cancel is not None and cancel():
             raise _Cancelled
-        estimate = sensor_estimate(readings, s, state.sensors[s], used)
+        if id(used.reference) not in machine:
+            machine[id(used.reference)] = machine_fit(readings, state.sensors, used)
+        estimate = combined_estimate(
+            sensor_estimate(readings, s, state.sensors[s], used),
+            machine[id(used.reference)],
+            s,
+            unmeasured_wander(used.reference, readings.room_C is not None, replace(used.robust, levels=used.levels)),
+        )
         before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used)
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
 
@@ -635,6 +647,27 @@ def _contradicting(checks: list[SensorCheck], settings: MonitorSettings) -> tupl
     ]
     off = [c.sensor for c in known if not c.reference_used]
     return (off if len(known) >= 2 and 2 * len(off) > len(known) else []), len(known)
+
+
+def machine_fit(readings: Readings, sensors: tuple[str, ...], settings: MonitorSettings) -> MachineFit | None:
+    """Every sensor's readings so far fitted together with the reference's machine model (None
+    without one).
+
+    Parameters
+    ----------
+    readings : Readings
+    sensors : tuple of str
+        The columns' names.
+    settings : MonitorSettings
+
+    Returns
+    -------
+    MachineFit or None
+    """
+    robust = replace(settings.robust, levels=settings.levels)
+    return machine_fit_of_window(
+        settings.reference, sensors, readings.time_min, readings.values_C, readings.room_C, robust
+    )
 
 
 def sensor_estimate(
@@ -748,6 +781,7 @@ def _checked(
         rise_C=estimate.rise_C,
         model_ok=estimate.model_ok,
         reference_used=estimate.reference_used,
+        machine_used=estimate.machine_used,
         warnings=estimate.warnings,
         ends=estimate.what_sets_the_ends(settings.decision_level)
         if resolves_tolerance(estimate, settings)
@@ -1095,5 +1129,6 @@ def _sensor_summary(
         "interval_ends": c.ends,
         "assumptions": assumptions(settings, c.sensor, room_measured).to_dict(),
         "reference_used": c.reference_used,
+        "machine_model_used": c.machine_used,
         "expected_stop_time_min": None if expected is None else finite_or_none(expected),
     }

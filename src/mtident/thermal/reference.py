@@ -21,6 +21,8 @@ from scipy.special import chdtri
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
+from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
+from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, noise_and_origin
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
 from mtident.thermal.readings import smoothed_room
 from mtident.thermal.robust import (
@@ -48,6 +50,8 @@ __all__ = [
 BOX_SDS = 3.0
 MAX_BOX_REACH = math.log(100.0)
 MAX_MODE_SD = 0.15
+# the machine model is kept only where the run pins each shared time constant within this
+MAX_MACHINE_BOX = 0.5
 # how a reference learnt with a room sensor says so in its file
 _ROOM_MEASURED = "a room sensor, an input of every mode"
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
@@ -88,6 +92,9 @@ class MachineReference:
     machine, serial, program, run_date : str
         What the run was of, as ``learn`` was told ("" where not said): the machine, its serial
         number, the program or speed it ran, and the day it ran.
+    machine_model : MachineModel, optional
+        Every sensor together: the modes they share and each mode's amplitudes across them
+        (None for a reference of one sensor, or one written before the machine model).
     """
 
     source: str
@@ -99,6 +106,7 @@ class MachineReference:
     serial: str = ""
     program: str = ""
     run_date: str = ""
+    machine_model: MachineModel | None = None
 
     @property
     def identity(self) -> str:
@@ -320,9 +328,54 @@ def learn_reference(
     sensors, split = split_merged_modes(sensors)
     warnings.extend(split)
     room = _ROOM_MEASURED if room_C is not None else "not measured"
+    model, said = _learn_machine(log, room_C, settings)
+    warnings.extend(said)
     return MachineReference(
-        log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors
+        log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors, machine_model=model
     ), warnings
+
+
+def _learn_machine(
+    log: TemperatureLog, room_C: FloatArray | None, settings: RobustSettings
+) -> tuple[MachineModel | None, list[str]]:
+    """The machine model of the run's sensors that it pins down together (each one's steady state
+    within ``PINNED_HALF_WIDTH_C`` at 95 % with the model), None where fewer than two, or where
+    the run does not pin down the modes they share; and what the warnings say."""
+    if len(log.sensors) < 2:
+        return None, []
+    noise, origin = noise_and_origin(log.time_min, log.temperature_C)
+    room = None if room_C is None else smoothed_room(log.time_min, room_C)
+    args = (log.time_min, log.temperature_C, room, noise, origin)
+    model = learn_machine_model(log.sensors, *args[:2], room, noise, origin, settings.max_time_constant_min)
+    if model is None:
+        return None, []
+    loose = [
+        f"{tau:.3g} min ±{box:.0%}"
+        for tau, box in zip(model.time_constants_min, model.box, strict=True)
+        if box > MAX_MACHINE_BOX
+    ]
+    if loose:
+        return None, [
+            f"the run does not pin down the modes its sensors share ({', '.join(loose)}): later tests use each "
+            "sensor's modes alone (learn from a run that reaches equilibrium)"
+        ]
+    itself = fit_test(model, log.sensors, *args, (0.95,))
+    pinned = (
+        []
+        if itself is None
+        else [n for n, h in zip(log.sensors, itself.half_width_C[0.95], strict=True) if h <= PINNED_HALF_WIDTH_C]
+    )
+    if len(pinned) < 2:
+        return None, [
+            "the run does not pin down two or more sensors together: later tests use each sensor's modes alone"
+        ]
+    left = [name for name in log.sensors if name not in pinned]
+    said = (
+        [f"the machine model leaves out {', '.join(left)}: the run does not pin their steady states down together"]
+        if left
+        else []
+    )
+    return model.of(pinned), said
 
 
 @dataclass(frozen=True)
@@ -602,6 +655,17 @@ def save_reference(reference: MachineReference, path: str | Path) -> None:
             for name, m in reference.sensors.items()
         },
     }
+    model = reference.machine_model
+    if model is not None:
+        doc["machine_model"] = {
+            "time_constants_min": list(model.time_constants_min),
+            "box": list(model.box),
+            "gains_C": {
+                name: list(row)
+                for name, row in zip(model.sensors, model.gains_C, strict=True)
+                if all(map(math.isfinite, row))
+            },
+        }
     Path(path).write_text(_HEADER + tomli_w.dumps(doc), encoding="utf-8")
 
 
@@ -647,6 +711,48 @@ def load_reference(path: str | Path) -> MachineReference:
         serial=str(doc.get("serial", "")),
         program=str(doc.get("program", "")),
         run_date=str(doc.get("run_date", "")),
+        machine_model=_machine_model(p, doc.get("machine_model")),
+    )
+
+
+def _machine_model(path: Path, entry: object) -> MachineModel | None:
+    """The ``[machine_model]`` table (None where the file has none)."""
+    if entry is None:
+        return None
+    taus = entry.get("time_constants_min") if isinstance(entry, dict) else None
+    box = entry.get("box") if isinstance(entry, dict) else None
+    gains = entry.get("gains_C") if isinstance(entry, dict) else None
+    k = len(taus) if isinstance(taus, list) else -1
+
+    def numbers(values: object, count: int) -> bool:
+        return (
+            isinstance(values, list)
+            and len(values) == count
+            and all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in values)
+        )
+
+    ok = (
+        0 < k <= MACHINE_MAX_MODES
+        and numbers(taus, k)
+        and numbers(box, k)
+        and isinstance(gains, dict)
+        and len(gains) >= 2
+    )
+    ok = ok and all(v > 0 for v in taus) and all(0 < v < 10 for v in box)  # type: ignore[union-attr]
+    ok = ok and all(numbers(row, k) for row in gains.values())  # type: ignore[union-attr]
+    if not ok:
+        msg = (
+            f"{path}: [machine_model]: expected time_constants_min = [1 to {MACHINE_MAX_MODES} positive minutes], "
+            "box = [as many positive fractions] and gains_C with a list of as many numbers for two or more sensors; "
+            f"found {entry!r} (learn the reference again, or delete the table to use each sensor's modes alone)"
+        )
+        raise InputError(msg)
+    assert isinstance(taus, list) and isinstance(box, list) and isinstance(gains, dict)
+    return MachineModel(
+        tuple(str(name) for name in gains),
+        tuple(float(v) for v in taus),
+        tuple(float(v) for v in box),
+        tuple(tuple(float(v) for v in row) for row in gains.values()),
     )
 
 

@@ -227,6 +227,9 @@ class SensorEstimate:
         Readings left out as spikes.
     display_step_C : float
         The step the readings come in (a display's rounding or a converter's; 0 where none).
+    machine_used : bool
+        T∞ and the intervals come with the machine model's (every sensor fitted together with the
+        reference run's modes and their proportions across the sensors).
     """
 
     sensor: str
@@ -242,6 +245,7 @@ class SensorEstimate:
     reference_used: bool = False
     spikes: int = 0
     display_step_C: float = 0.0
+    machine_used: bool = False
 
     @property
     def steady_C(self) -> float:
@@ -684,7 +688,16 @@ def describe_assumptions(
         faster = "no mode faster than these (assumed: the reference says it holds every mode)"
     else:
         faster = "no mode faster than these (assumed)"
-    return Assumptions(settings.max_time_constant_min, room, f"{reference.describe(sensor)}; {faster}")
+    return Assumptions(
+        settings.max_time_constant_min,
+        room,
+        f"{reference.describe(sensor)}; {faster}{_machine_words(reference, sensor)}",
+    )
+
+
+def _machine_words(reference: MachineReference, sensor: str) -> str:
+    model = reference.machine_model
+    return "" if model is None or sensor not in model.sensors else f"; and {model.describe()}"
 
 
 def _disagreement(

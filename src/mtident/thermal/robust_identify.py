@@ -18,6 +18,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.identify import measured_and_settled, rmse, window_samples
+from mtident.thermal.machine_model import combined_estimate, machine_fit_of_window, unmeasured_wander
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import (
@@ -294,11 +295,17 @@ def identify_robust(
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
     unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
+    machine = machine_fit_of_window(reference, log.sensors, t[:n], y[:n], room_window, settings)
     estimates = tuple(
-        with_fragility(
-            estimate_sensor(
-                name, t[:n], y[:n, s], room_window, settings, None if reference is None else reference.modes(name)
-            )
+        combined_estimate(
+            with_fragility(
+                estimate_sensor(
+                    name, t[:n], y[:n, s], room_window, settings, None if reference is None else reference.modes(name)
+                )
+            ),
+            machine,
+            s,
+            unmeasured_wander(reference, room_C is not None, settings),
         )
         for s, name in enumerate(log.sensors)
     )

@@ -1,0 +1,634 @@
+"""One model of the machine: every sensor a sum of the same modes, each mode's amplitudes across
+the sensors in the proportions a reference run showed.
+
+Physics (issue 36). For a linear thermal structure ``dx/dt = A·x + B·u + b·room`` seen through
+sensor rows ``C``, any constant heat input and any initial state give
+
+    y_s(t) = T∞_s − Σ_k (C_s·v_k)·z_k·e^(−t/τ_k) + (room through the same modes),
+
+with ``v_k`` the structure's mode shapes and ``z_k = w_kᵀ(x∞ − x0)`` one number per mode, the same
+for every sensor. The heat split, the power and a partly warm start change only ``z``; the shape
+``C_s·v_k`` is the machine's. A reference run that reached equilibrium measures it (its amplitudes
+``g_sk``, with ``z = 1`` in the reference), and a later test has only one free amplitude per mode for
+the whole machine instead of one per mode and sensor. Its slow mode, the one that keeps a test
+open, is then pinned by every sensor together.
+
+A sensor's own lag (a sleeve, a thermowell) adds a fast mode of its own: each sensor keeps
+``FAST_TIME_CONSTANTS_MIN`` modes with free amplitudes. The room enters through the same modes with
+static gain one; its gain per mode is ``g_sk·η_k``, ``η`` shared.
+
+The tie is held loosely, not exactly: each tied amplitude may leave ``g_sk·z_k`` by a prior of
+``TIE_SLACK`` of itself (the reference's own error, a slightly non-linear machine), and a sensor
+whose readings reject the tie (a likelihood-ratio test against its own free amplitudes) is left to
+its own fit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy import optimize
+from scipy.special import chdtri, ndtri
+
+from mtident._typing import FloatArray
+from mtident.thermal.lsq import flat_lead
+from mtident.thermal.modal_search import correlation_factor, room_lag
+from mtident.thermal.modal_types import Binned, IntervalEnd, Mode, bin_samples
+from mtident.thermal.modes import equilibrium_time
+from mtident.thermal.readings import display_resolution, noise_sigma, smoothed_room
+from mtident.thermal.robust import RobustSettings, SensorEstimate, room_wander_half_width
+
+if TYPE_CHECKING:
+    from mtident.thermal.reference import MachineReference
+
+FAST_TIME_CONSTANTS_MIN = (0.7, 2.5)
+"""Each sensor's own fast modes (free amplitudes): a sensor's lag, the start's details."""
+TIE_SLACK = 0.15
+"""Prior sd of a tied amplitude's departure from ``g_sk·z_k``, relative to it."""
+TAU_BOX_MIN = 0.05
+"""The smallest relative box searched around each of the reference's time constants."""
+TAU_BOX_SDS = 3.0
+REJECT_P = 1e-3
+MAX_MODES = 6
+_CONTRADICTED = {"misfit", "reference-disagrees"}
+MIN_LOG_SPACING = 0.2
+"""Two shared modes closer than this (log ratio) are one: the pair would only cancel."""
+_START_TAUS_MIN = (1.5, 4.0, 10.0, 25.0, 60.0, 150.0, 400.0)
+
+
+@dataclass(frozen=True)
+class MachineModel:
+    """The machine's modes and their shapes across its sensors, learnt from one complete run.
+
+    Attributes
+    ----------
+    sensors : tuple of str
+    time_constants_min : tuple of float
+        The shared modes' time constants (K), slowest first.
+    box : tuple of float
+        Each time constant's relative half-width searched in a test.
+    gains_C : tuple of tuple of float
+        ``gains_C[s][k]``: sensor s's amplitude of mode k in the reference run (°C; rise positive).
+    """
+
+    sensors: tuple[str, ...]
+    time_constants_min: tuple[float, ...]
+    box: tuple[float, ...]
+    gains_C: tuple[tuple[float, ...], ...]
+
+    def describe(self) -> str:
+        """What a test fitted with the model assumes, in words."""
+        taus = ", ".join(f"{t:.3g}" for t in self.time_constants_min)
+        return (
+            f"the machine model: every sensor fitted together, the amplitudes of its {len(self.time_constants_min)} "
+            f"shared modes ({taus} min) in the reference run's proportions across the sensors (each within "
+            f"{TIE_SLACK:.0%} of them), used where the readings do not reject it and its interval agrees with the "
+            "sensor's own"
+        )
+
+    def of(self, sensors: list[str]) -> MachineModel:
+        """The model of some of its sensors."""
+        return replace(self, sensors=tuple(sensors), gains_C=tuple(map(tuple, self.gains(sensors))))
+
+    def gains(self, sensors: tuple[str, ...] | list[str]) -> FloatArray:
+        """The gains (S, K) of ``sensors`` (a row of NaN for one the model does not know)."""
+        known = {name: row for name, row in zip(self.sensors, self.gains_C, strict=True)}
+        k = len(self.time_constants_min)
+        return np.array([known.get(name, (math.nan,) * k) for name in sensors], dtype=float).reshape(len(sensors), k)
+
+
+@dataclass(frozen=True)
+class MachineFit:
+    """A test's readings fitted with the machine model.
+
+    Attributes
+    ----------
+    steady_C : ndarray (S,)
+        Each sensor's T∞ at the room's latest level (NaN where the sensor is not in the fit).
+    half_width_C : dict of float to ndarray (S,)
+        The interval's half-width per level.
+    used : ndarray of bool (S,)
+        Sensors fitted with the tie (known to the model, with readings, not rejecting it).
+    rejected : tuple of str
+        Sensors whose readings reject the tie.
+    amplitudes : ndarray (K,)
+        The test's amplitude of each mode relative to the reference run (``z``).
+    modes : tuple of tuple of Mode
+        Per sensor, its course's modes (the shared ones, then its own fast ones; amplitudes as
+        :func:`~mtident.thermal.modes.model_curve` takes them), empty where not fitted.
+    room_gains : tuple of tuple of float
+        Per sensor, each of its modes' gain on the room (empty without a room).
+    origin_min : float
+        Where the modes begin.
+    """
+
+    steady_C: FloatArray
+    half_width_C: dict[float, FloatArray]
+    used: np.ndarray
+    rejected: tuple[str, ...]
+    amplitudes: FloatArray
+    modes: tuple[tuple[Mode, ...], ...] = ()
+    room_gains: tuple[tuple[float, ...], ...] = ()
+    origin_min: float = 0.0
+
+
+# ----------------------------------------------------------------------------------------------
+# Columns shared by the reference's fit and the test's
+
+
+def _exp_columns(u: FloatArray, taus: FloatArray) -> FloatArray:
+    columns: FloatArray = np.exp(-u[:, None] / np.asarray(taus, dtype=float)[None, :])
+    return columns
+
+
+def _room_columns(binned: Binned, taus: FloatArray) -> FloatArray:
+    assert binned.room_C is not None
+    return (room_lag(binned.room_C, binned.time_min, np.asarray(taus, dtype=float)) - binned.room_C).T
+
+
+def _target(binned: Binned) -> FloatArray:
+    return binned.value_C - (binned.room_C if binned.room_C is not None else 0.0)
+
+
+def _bins(
+    time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, origin_min: float
+) -> list[Binned | None]:
+    after = time_min >= origin_min
+    out: list[Binned | None] = []
+    for s in range(values.shape[1]):
+        y = values[after, s]
+        if np.count_nonzero(np.isfinite(y)) < 8:
+            out.append(None)
+            continue
+        b = bin_samples(time_min[after] - origin_min, y, None if room_C is None else room_C[after])
+        out.append(b)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# Learning the model from a complete run
+
+
+def _free_design(binned: Binned, taus: FloatArray) -> FloatArray:
+    """One sensor's columns with its own amplitudes: [level, fast modes, −each mode, room gains]."""
+    u = binned.time_min
+    cols = [np.ones((len(u), 1)), _exp_columns(u, np.array(FAST_TIME_CONSTANTS_MIN)), -_exp_columns(u, taus)]
+    if binned.room_C is not None:
+        cols.append(_room_columns(binned, taus))
+    design: FloatArray = np.hstack(cols)
+    return design
+
+
+def _sensor_solve(binned: Binned, taus: FloatArray, noise: float) -> tuple[FloatArray, float]:
+    """One sensor's free fit at shared ``taus``: its coefficients (:func:`_free_design`) and χ²."""
+    X = _free_design(binned, taus)
+    w = np.sqrt(binned.count) / noise
+    coef = np.asarray(np.linalg.lstsq(X * w[:, None], _target(binned) * w, rcond=None)[0], dtype=float)
+    resid = (_target(binned) - X @ coef) * w
+    return coef, float(resid @ resid)
+
+
+def _total_chi2(log_taus: FloatArray, bins: list[Binned], noise: FloatArray) -> float:
+    taus = np.exp(log_taus)
+    return sum(_sensor_solve(b, taus, n)[1] for b, n in zip(bins, noise, strict=True))
+
+
+def _spaced_chi2(log_taus: FloatArray, bins: list[Binned], noise: FloatArray) -> float:
+    """:func:`_total_chi2`, steeply penalised where two time constants come closer than
+    ``MIN_LOG_SPACING``: the search stays among models whose modes are distinct, instead of
+    ending on a cancelling pair."""
+    chi2 = _total_chi2(log_taus, bins, noise)
+    gaps = np.diff(np.sort(log_taus))
+    return chi2 * (1.0 + 100.0 * float(np.sum(np.clip(MIN_LOG_SPACING - gaps, 0.0, None) ** 2)))
+
+
+def _best_taus(
+    bins: list[Binned], noise: FloatArray, starts: list[FloatArray], bounds: tuple[float, float]
+) -> tuple[FloatArray, float]:
+    lo, hi = math.log(bounds[0]), math.log(bounds[1])
+    best: tuple[FloatArray, float] = (starts[0], math.inf)
+    for start in starts:
+        x0 = np.clip(np.log(start), lo + 1e-6, hi - 1e-6)
+        res = optimize.minimize(_spaced_chi2, x0, args=(bins, noise), method="L-BFGS-B", bounds=[(lo, hi)] * len(x0))
+        taus = np.sort(np.exp(res.x))[::-1]
+        spaced = len(taus) < 2 or np.min(np.log(taus[:-1] / taus[1:])) >= 0.9 * MIN_LOG_SPACING
+        if res.fun < best[1] and spaced:
+            best = (taus, float(res.fun))
+    return best
+
+
+def learn_machine_model(
+    sensors: tuple[str, ...] | list[str],
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    noise_C: FloatArray,
+    origin_min: float,
+    max_time_constant_min: float,
+) -> MachineModel | None:
+    """Fit a complete run's sensors together with shared time constants.
+
+    The number of shared modes grows while the drop in χ² beats the BIC's price of one more
+    mode (a time constant and an amplitude and room gain per sensor).
+
+    Returns
+    -------
+    MachineModel or None
+        None where fewer than two sensors have readings.
+    """
+    binned = _bins(np.asarray(time_min, float), np.asarray(values, float), room_C, origin_min)
+    keep = [s for s, b in enumerate(binned) if b is not None]
+    if len(keep) < 2:
+        return None
+    bins = [b for b in binned if b is not None]
+    noise = np.maximum(np.asarray(noise_C, float)[keep], 1e-4)
+    n_rows = sum(len(b) for b in bins)
+    span = max(float(b.time_min[-1]) for b in bins)
+    # a run pins down no mode much slower than itself: a longer one would only stand in for the room
+    bounds = (1.0, min(max_time_constant_min, 0.5 * span))
+    taus, chi2 = _best_taus(bins, noise, [np.array([30.0])], bounds)
+    per_mode_params = 1 + len(bins) * (2 if room_C is not None else 1)
+    for _ in range(1, MAX_MODES):
+        starts = [np.append(taus, t) for t in _START_TAUS_MIN if np.all(np.abs(np.log(taus / t)) > 0.3)]
+        more, more_chi2 = _best_taus(bins, noise, starts, bounds)
+        if chi2 - more_chi2 <= per_mode_params * math.log(n_rows):
+            break
+        taus, chi2 = more, more_chi2
+    k = len(taus)
+    gains = np.full((len(sensors), k), math.nan)
+    for s, b, n in zip(keep, bins, noise, strict=True):
+        coef, _ = _sensor_solve(b, taus, n)
+        gains[s] = coef[1 + len(FAST_TIME_CONSTANTS_MIN) : 1 + len(FAST_TIME_CONSTANTS_MIN) + k]
+    sd = _log_tau_sd(bins, noise, taus)
+    box = tuple(float(max(TAU_BOX_MIN, math.expm1(min(TAU_BOX_SDS * v, 1.0)))) for v in sd)
+    return MachineModel(
+        tuple(sensors),
+        tuple(float(t) for t in taus),
+        box,
+        tuple(tuple(float(v) for v in row) for row in gains),
+    )
+
+
+def _log_tau_sd(bins: list[Binned], noise: FloatArray, taus: FloatArray) -> FloatArray:
+    """Each log time constant's sd from the χ² surface's curvature (the Gauss-Newton Hessian)."""
+    x = np.log(taus)
+    h = 1e-3
+
+    def resid(v: FloatArray) -> FloatArray:
+        out = []
+        for b, n in zip(bins, noise, strict=True):
+            coef, _ = _sensor_solve(b, np.exp(v), n)
+            out.append((_target(b) - _free_design(b, np.exp(v)) @ coef) * np.sqrt(b.count) / n)
+        return np.concatenate(out)
+
+    r0 = resid(x)
+    J = np.empty((len(r0), len(x)))
+    for j in range(len(x)):
+        step = np.zeros_like(x)
+        step[j] = h
+        J[:, j] = (resid(x + step) - r0) / h
+    scale = max(1.0, float(r0 @ r0) / max(1, len(r0) - len(x)))
+    try:
+        cov = np.linalg.inv(J.T @ J) * scale
+    except np.linalg.LinAlgError:
+        return np.full(len(x), math.inf)
+    sd: FloatArray = np.sqrt(np.clip(np.diag(cov), 0, None))
+    return sd
+
+
+# ----------------------------------------------------------------------------------------------
+# Fitting a test with the model
+
+
+def fit_test(
+    model: MachineModel,
+    sensors: tuple[str, ...] | list[str],
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    noise_C: FloatArray,
+    origin_min: float,
+    levels: tuple[float, ...],
+) -> MachineFit | None:
+    """Each sensor's T∞ and interval from the test's readings so far, every sensor fitted together
+    with the model's modes.
+
+    Returns
+    -------
+    MachineFit or None
+        None where fewer than two sensors can be fitted with the tie.
+    """
+    t = np.asarray(time_min, float)
+    gains = model.gains(sensors)
+    binned = _bins(t, np.asarray(values, float), room_C, origin_min)
+    noise = np.maximum(np.asarray(noise_C, float), 1e-4)
+    candidates = [s for s, b in enumerate(binned) if b is not None and np.all(np.isfinite(gains[s]))]
+    rejected: list[int] = []
+    taus = np.array(model.time_constants_min)
+    # the worst sensor first, one at a time: a sensor far off pulls the shared amplitudes, and
+    # the others' misfit then is its doing; where most sensors reject the tie, it does not hold
+    while True:
+        used = [s for s in candidates if s not in rejected]
+        if len(used) < 2 or 2 * len(rejected) > len(candidates):
+            return None
+        passes = _tied_solve([binned[s] for s in used], gains[used], noise[used], model)  # type: ignore[misc]
+        if passes is None:
+            return None
+        at_model, solved = passes
+        excess = _excess([binned[s] for s in used], gains[used], noise[used], taus, at_model)  # type: ignore[misc]
+        worst = int(np.argmax(excess))
+        if excess[worst] <= chdtri(len(taus), REJECT_P):
+            break
+        rejected.append(used[worst])
+    steady, half = _interval([binned[s] for s in used], solved, levels)  # type: ignore[misc]
+    latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
+    out_steady = np.full(len(sensors), math.nan)
+    out_steady[used] = steady + latest_room
+    out_half = {}
+    for level, h in half.items():
+        full = np.full(len(sensors), math.inf)
+        full[used] = h
+        out_half[level] = full
+    mask = np.zeros(len(sensors), bool)
+    mask[used] = True
+    modes: list[tuple[Mode, ...]] = [()] * len(sensors)
+    gains_out: list[tuple[float, ...]] = [()] * len(sensors)
+    for j, s in enumerate(used):
+        modes[s] = tuple(
+            Mode(float(t), -float(a)) for t, a in zip(solved.taus, solved.amplitudes[j], strict=True)
+        ) + tuple(Mode(t, float(f)) for t, f in zip(FAST_TIME_CONSTANTS_MIN, solved.fast[j], strict=True))
+        if room_C is not None:
+            gains_out[s] = (*map(float, solved.room_gains[j]), *(0.0,) * len(FAST_TIME_CONSTANTS_MIN))
+    return MachineFit(
+        out_steady,
+        out_half,
+        mask,
+        tuple(sensors[s] for s in rejected),
+        solved.z,
+        tuple(modes),
+        tuple(gains_out),
+        origin_min,
+    )
+
+
+@dataclass(frozen=True)
+class _Solved:
+    """A joint fit: its coefficients and their covariance, the modes' amplitudes ``z``, and per
+    sensor the χ² of its readings (with its slack's prior), its rows and its residuals' correlation
+    factor."""
+
+    coef: FloatArray
+    cov: FloatArray
+    z: FloatArray
+    chi2_per_sensor: FloatArray
+    rows_per_sensor: np.ndarray
+    corr: FloatArray
+    taus: FloatArray
+    amplitudes: FloatArray
+    fast: FloatArray
+    room_gains: FloatArray
+
+
+def _tied_solve(
+    bins: list[Binned], gains: FloatArray, noise: FloatArray, model: MachineModel
+) -> tuple[_Solved, _Solved] | None:
+    """The joint penalised least squares, in two passes: the first at the model's time constants
+    (which the test of the tie uses: there the time constants cannot bend to one sensor); the
+    second with each slack's prior scaled by the first's ``z`` and each log time constant a
+    parameter too, linearised about the first's amplitudes (its prior the model's box)."""
+    taus = np.array(model.time_constants_min)
+    first = _penalised(bins, gains, noise, taus, np.ones(len(taus)), None)
+    if first is None:
+        return None
+    S, K = gains.shape
+    tau_sd = np.log1p(np.array(model.box)) / TAU_BOX_SDS
+    second = _penalised(bins, gains, noise, taus, np.maximum(np.abs(first.z), 0.05), (first.amplitudes, tau_sd))
+    return None if second is None else (first, second)
+
+
+def _penalised(
+    bins: list[Binned],
+    gains: FloatArray,
+    noise: FloatArray,
+    taus: FloatArray,
+    z_scale: FloatArray,
+    linearised: tuple[FloatArray, FloatArray] | None,
+    untied: int | None = None,
+) -> _Solved | None:
+    """Columns: per sensor its level and fast modes; per mode its amplitude ``z_k``; per sensor
+    and mode a slack; per mode the room's factor ``η_k`` (with a room); with ``linearised``
+    (the amplitudes (S, K) and each log time constant's prior sd), per mode its log time
+    constant's change. Sensor ``untied`` (if given) has no prior on its slack: its amplitudes are
+    its own."""
+    S, K = gains.shape
+    F = len(FAST_TIME_CONSTANTS_MIN)
+    with_room = bins[0].room_C is not None
+    i_fast, i_z = S, S + S * F
+    i_d = i_z + K
+    i_eta = i_d + S * K
+    i_tau = i_eta + (K if with_room else 0)
+    n_col = i_tau + (K if linearised is not None else 0)
+    blocks, targets = [], []
+    for s, b in enumerate(bins):
+        u = b.time_min
+        X = np.zeros((len(u), n_col))
+        X[:, s] = 1.0
+        X[:, i_fast + s * F : i_fast + (s + 1) * F] = _exp_columns(u, np.array(FAST_TIME_CONSTANTS_MIN))
+        e = _exp_columns(u, taus)
+        X[:, i_z : i_z + K] = -gains[s][None, :] * e
+        X[:, i_d + s * K : i_d + (s + 1) * K] = -e
+        if with_room:
+            X[:, i_eta : i_eta + K] = _room_columns(b, taus) * gains[s][None, :]
+        if linearised is not None:
+            # d/d(log τ) of −a·e^(−u/τ); the room's lags move less and are left at the model's τ
+            X[:, i_tau : i_tau + K] = -linearised[0][s][None, :] * e * (u[:, None] / taus[None, :])
+        w = np.sqrt(b.count) / noise[s]
+        blocks.append(X * w[:, None])
+        targets.append(_target(b) * w)
+    slack_sd = TIE_SLACK * np.maximum(np.abs(gains) * z_scale[None, :], 1e-3)
+    prior_cols = [i_d + s * K + k for s in range(S) for k in range(K) if s != untied]
+    prior_sd = [slack_sd[s, k] for s in range(S) for k in range(K) if s != untied]
+    if with_room:
+        prior_cols += list(range(i_eta, i_eta + K))
+        prior_sd += list(2.0 / np.maximum(np.max(np.abs(gains), axis=0), 1e-3))
+    if linearised is not None:
+        prior_cols += list(range(i_tau, i_tau + K))
+        prior_sd += list(linearised[1])
+    P = np.zeros((len(prior_cols), n_col))
+    P[np.arange(len(prior_cols)), prior_cols] = 1.0 / np.array(prior_sd)
+    X = np.vstack([*blocks, P])
+    y = np.concatenate([*targets, np.zeros(len(prior_cols))])
+    try:
+        coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+        cov = np.linalg.pinv(X.T @ X)
+    except np.linalg.LinAlgError:
+        return None
+    slack_chi2 = ((coef[i_d : i_d + S * K].reshape(S, K) / slack_sd) ** 2).sum(axis=1)
+    if untied is not None:
+        slack_chi2[untied] = 0.0
+    chi2 = np.empty(S)
+    corr = np.empty(S)
+    for s, (block, target) in enumerate(zip(blocks, targets, strict=True)):
+        r = target - block @ coef
+        chi2[s] = float(r @ r) + slack_chi2[s]
+        corr[s] = correlation_factor(r)
+    z = coef[i_z : i_z + K]
+    moved = taus * np.exp(coef[i_tau : i_tau + K]) if linearised is not None else taus
+    eta = coef[i_eta : i_eta + K] if with_room else np.zeros(K)
+    return _Solved(
+        coef,
+        cov,
+        z,
+        chi2,
+        np.array([len(b) for b in bins]),
+        corr,
+        moved,
+        gains * z[None, :] + coef[i_d : i_d + S * K].reshape(S, K),
+        coef[i_fast : i_fast + S * F].reshape(S, F),
+        gains * eta[None, :],
+    )
+
+
+def _excess(bins: list[Binned], gains: FloatArray, noise: FloatArray, taus: FloatArray, tied: _Solved) -> FloatArray:
+    """Per sensor, how far its readings reject the tie: the whole fit's χ² (slack priors included)
+    less the same with that sensor's amplitudes its own, over its residuals' correlation factor
+    (χ² with K degrees of freedom where the tie holds). The whole fit's, not the sensor's: a
+    sensor far off pulls the shared amplitudes, and the misfit shows in the others."""
+    total = float(tied.chi2_per_sensor.sum())
+    out = np.zeros(len(bins))
+    for s in range(len(bins)):
+        free = _penalised(bins, gains, noise, taus, np.maximum(np.abs(tied.z), 0.05), None, untied=s)
+        if free is not None:
+            out[s] = (total - float(free.chi2_per_sensor.sum())) / tied.corr[s]
+    return out
+
+
+def _interval(
+    bins: list[Binned], solved: _Solved, levels: tuple[float, ...]
+) -> tuple[FloatArray, dict[float, FloatArray]]:
+    """Each sensor's level and its half-width per level: the covariance's, scaled by the sensor's
+    χ² per degree of freedom where above one and by its residuals' correlation factor."""
+    S = len(bins)
+    steady = solved.coef[:S]
+    dof_scale = np.maximum(1.0, solved.chi2_per_sensor / np.maximum(solved.rows_per_sensor - 3, 1))
+    se = np.sqrt(np.clip(np.diag(solved.cov)[:S], 0, None) * dof_scale * solved.corr)
+    return steady, {lv: ndtri(0.5 + lv / 2.0) * se for lv in levels}
+
+
+# ----------------------------------------------------------------------------------------------
+# From a log's readings, and into a sensor's answer
+
+
+def noise_and_origin(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, float]:
+    """Each sensor's noise per reading (at least its display step's q/√12) and where the warm-up
+    begins: the earliest sensor's departure from its first level (the heat switches on once for
+    the whole machine; a remote sensor departs later only through its modes)."""
+    t = np.asarray(time_min, float)
+    y = np.asarray(values, float)
+    rounding = display_resolution(y)
+    noise = np.maximum(noise_sigma(y, t), rounding / math.sqrt(12.0))
+    lead = flat_lead(t, y, noise)
+    first = int(np.min(lead)) if len(lead) else 0
+    return noise, float(t[first]) if first < len(t) else float(t[0])
+
+
+def fit_readings(
+    model: MachineModel,
+    sensors: tuple[str, ...] | list[str],
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    levels: tuple[float, ...],
+) -> MachineFit | None:
+    """:func:`fit_test` on a log's readings so far: their noise and origin estimated, the room
+    smoothed as every per-sensor fit smooths it."""
+    t = np.asarray(time_min, float)
+    noise, origin = noise_and_origin(t, values)
+    room = None if room_C is None else smoothed_room(t, np.asarray(room_C, float))
+    return fit_test(model, sensors, t, values, room, noise, origin, levels)
+
+
+def machine_fit_of_window(
+    reference: MachineReference | None,
+    sensors: tuple[str, ...] | list[str],
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    settings: RobustSettings,
+) -> MachineFit | None:
+    """:func:`fit_readings` with a reference's machine model at ``settings.levels`` (None without one)."""
+    model = None if reference is None else reference.machine_model
+    return None if model is None else fit_readings(model, sensors, time_min, values, room_C, settings.levels)
+
+
+def unmeasured_wander(
+    reference: MachineReference | None, room_measured: bool, settings: RobustSettings
+) -> dict[float, float]:
+    """Per level, how far the room's unmeasured wander moves T∞ through the machine model's
+    slowest mode (nothing where the room is measured, or without a machine model)."""
+    model = None if reference is None else reference.machine_model
+    if room_measured or model is None:
+        return {}
+    slowest = max(model.time_constants_min)
+    return {level: room_wander_half_width(slowest, level, settings) for level in settings.levels}
+
+
+def combined_estimate(
+    estimate: SensorEstimate, fit: MachineFit | None, s: int, wander: dict[float, float]
+) -> SensorEstimate:
+    """The sensor's answer with the machine model's where both agree: T∞ from the machine model,
+    each interval the overlap of the two.
+
+    The sensor's own interval must hold the machine model's T∞ at every level; else the sensor
+    keeps its own answer (the machine model does not fit it, or the reference does not hold for
+    it). Its own T∞ need not lie in the machine model's interval: it is the less certain of the two.
+    ``wander`` widens the machine model's half-widths by the room's unmeasured wander per level.
+    """
+    if fit is None or estimate.fit is None or not fit.used[s] or _CONTRADICTED & set(estimate.warning_codes):
+        return estimate
+    steady = float(fit.steady_C[s])
+    intervals: dict[float, tuple[float, float]] = {}
+    for level, (lo, hi) in estimate.interval_C.items():
+        half = float(fit.half_width_C[level][s]) + wander.get(level, 0.0)
+        if not lo <= steady <= hi:
+            return estimate
+        intervals[level] = (max(lo, steady - half), min(hi, steady + half))
+    # the machine model determines what the sensor's own curve left open
+    kept = [i for i, code in enumerate(estimate.warning_codes) if code != "undetermined"]
+    modes = fit.modes[s]
+    start = estimate.fit.start_C
+    return replace(
+        estimate,
+        fit=replace(
+            estimate.fit,
+            steady_C=steady,
+            modes=modes,
+            origin_min=fit.origin_min,
+            room_gains=fit.room_gains[s] if estimate.fit.room_gains else (),
+            equilibrium_time_min=equilibrium_time(modes, steady, start, fit.origin_min),
+            ends={level: _ends(modes, steady, lo, hi) for level, (lo, hi) in intervals.items()},
+            interval_C=intervals,
+        ),
+        interval_C=intervals,
+        model_ok=True,
+        warnings=tuple(estimate.warnings[i] for i in kept),
+        warning_codes=tuple(estimate.warning_codes[i] for i in kept),
+        machine_used=True,
+    )
+
+
+def _ends(modes: tuple[Mode, ...], steady: float, low: float, high: float) -> tuple[IntervalEnd, IntervalEnd]:
+    """The models at an interval's ends: the slowest mode takes up the difference in T∞, so that
+    each end's course starts where the best one does."""
+    k = max(range(len(modes)), key=lambda i: modes[i].time_constant_min)
+
+    def moved(end: float) -> IntervalEnd:
+        shifted = tuple(
+            Mode(m.time_constant_min, m.amplitude_C - (end - steady)) if i == k else m for i, m in enumerate(modes)
+        )
+        return IntervalEnd(end, shifted)
+
+    return moved(low), moved(high)

@@ -1,0 +1,160 @@
+"""The machine model: every sensor one sum of the same modes, in the reference run's proportions."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from mtident.exceptions import InputError
+from mtident.io.logs import TemperatureLog
+from mtident.thermal.machine_model import (
+    MachineFit,
+    MachineModel,
+    combined_estimate,
+    fit_readings,
+    learn_machine_model,
+    noise_and_origin,
+)
+from mtident.thermal.modal_types import Mode
+from mtident.thermal.reference import learn_reference, load_reference, save_reference
+from mtident.thermal.robust import estimate_sensor
+
+ROOM_C = 20.0
+# a three-node chain (spindle nose, bearing housing, column), time constants of 9, 48 and 268 min
+_CONDUCTANCE = np.array([[-0.09, 0.06, 0.0], [0.02, -0.035, 0.012], [0.0, 0.004, -0.0065]])
+_HEAT = np.array([[0.5, 0.0], [0.0, 0.12], [0.0, 0.0]])
+# sensors: the three nodes and one between the last two
+_SENSOR_ROWS = np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [0, 0.5, 0.5]])
+SENSORS = ("nose", "housing", "column", "between")
+
+
+def _run(
+    split: tuple[float, float], power: float, x0_rise: np.ndarray, minutes: float, dt: float = 0.5
+) -> tuple[np.ndarray, np.ndarray]:
+    """Exact readings of the sensors (°C) from a start ``x0_rise`` above the room."""
+    A = _CONDUCTANCE
+    u = _HEAT @ (power * np.asarray(split))
+    steady = np.linalg.solve(-A, u)
+    t = np.arange(0.0, minutes + dt / 2, dt)
+    step = expm(A * dt)
+    x = np.empty((len(t), 3))
+    x[0] = x0_rise - steady
+    for k in range(1, len(t)):
+        x[k] = step @ x[k - 1]
+    return t, (x + steady) @ _SENSOR_ROWS.T + ROOM_C
+
+
+def _truth(split: tuple[float, float], power: float) -> np.ndarray:
+    return _SENSOR_ROWS @ np.linalg.solve(-_CONDUCTANCE, _HEAT @ (power * np.asarray(split))) + ROOM_C
+
+
+def _model() -> MachineModel:
+    t, y = _run((0.6, 0.4), 1.0, np.zeros(3), 1500.0)
+    model = learn_machine_model(SENSORS, t, y, None, np.full(4, 1e-3), 0.0, 300.0)
+    assert model is not None
+    return model
+
+
+def test_learns_the_structures_time_constants():
+    taus = sorted(-1.0 / np.linalg.eigvals(_CONDUCTANCE).real, reverse=True)
+    model = _model()
+    assert len(model.time_constants_min) == 3
+    np.testing.assert_allclose(model.time_constants_min, taus, rtol=0.02)
+
+
+def test_another_split_power_and_warm_start_are_one_amplitude_per_mode():
+    """The test at another heat split and power, partly warm: an hour of readings pins every
+    sensor's T∞ within 0.2 °C at 99 %, the column's too (its rise far from over), where each
+    sensor's own curve leaves it open by 0.5 to 2.4 °C."""
+    model = _model()
+    split, power = (0.45, 0.55), 1.3
+    t, y = _run(split, power, 0.2 * (_truth(split, power)[:3] - ROOM_C) * np.array([1.0, 0.8, 0.5]), 60.0)
+    fit = fit_readings(model, SENSORS, t, y, None, (0.95, 0.99))
+    assert isinstance(fit, MachineFit)
+    assert fit.used.all() and not fit.rejected
+    np.testing.assert_allclose(fit.steady_C, _truth(split, power), atol=0.01)
+    assert np.all(fit.half_width_C[0.99] < 0.2)
+    own = [estimate_sensor(name, t, y[:, s]).half_width(0.99) for s, name in enumerate(SENSORS)]
+    assert np.all(fit.half_width_C[0.99] < np.array(own) / 2.0)
+    # the column has risen well under half its way: its own curve cannot say where it ends
+    assert (y[-1, 2] - ROOM_C) < 0.5 * (_truth(split, power)[2] - ROOM_C)
+
+
+def test_a_sensor_of_another_machine_is_rejected():
+    model = _model()
+    t, y = _run((0.5, 0.5), 1.0, np.zeros(3), 120.0)
+    y = y.copy()
+    y[:, 1] = ROOM_C + 6.0 * (1.0 - np.exp(-t / 15.0))  # a curve none of the model's modes make
+    y = np.round(y + np.random.default_rng(3).normal(0.0, 0.01, y.shape), 2)
+    fit = fit_readings(model, SENSORS, t, y, None, (0.95, 0.99))
+    # four sensors and three modes: which of them breaks the tie is not always clear, but the
+    # machine model never answers for the housing, and leaves no sensor it rejects an interval
+    assert fit is None or ("housing" in fit.rejected and not fit.used[1])
+    if fit is not None:
+        assert all(math.isinf(fit.half_width_C[0.99][SENSORS.index(name)]) for name in fit.rejected)
+
+
+def test_noise_and_origin_find_a_late_switch_on():
+    t = np.arange(0.0, 100.0, 0.5)
+    y = np.where(t[:, None] < 20.0, 20.0, 20.0 + 5.0 * (1.0 - np.exp(-(t[:, None] - 20.0) / 10.0)))
+    y = np.round(y + np.random.default_rng(0).normal(0.0, 0.01, (len(t), 2)), 2)
+    noise, origin = noise_and_origin(t, y)
+    assert 19.0 <= origin <= 20.5
+    assert np.all((noise > 0.005) & (noise < 0.02))
+
+
+def test_combined_estimate_takes_the_overlap_or_keeps_its_own():
+    t = np.arange(0.0, 60.0, 0.5)
+    y = 20.0 + 5.0 * (1.0 - np.exp(-t / 10.0))
+    own = estimate_sensor("s", t, y + np.random.default_rng(1).normal(0, 0.01, len(t)))
+    lo, hi = own.interval_C[0.99]
+    agreeing = MachineFit(
+        np.array([own.steady_C + 0.001]),
+        {0.95: np.array([0.01]), 0.99: np.array([0.02])},
+        np.array([True]),
+        (),
+        np.ones(1),
+        ((Mode(10.0, -5.0),),),
+    )
+    both = combined_estimate(own, agreeing, 0, {})
+    assert both.machine_used
+    assert both.interval_C[0.99] == (max(lo, own.steady_C - 0.019), min(hi, own.steady_C + 0.021))
+    assert both.fit is not None and both.fit.modes == (Mode(10.0, -5.0),)
+    assert both.fit.equilibrium_time_min == pytest.approx(10.0 * math.log(20.0), rel=0.01)
+    off = replace(agreeing, steady_C=np.array([hi + 1.0]))
+    assert combined_estimate(own, off, 0, {}) is own
+
+
+def test_learn_reference_keeps_the_machine_model_through_its_file(tmp_path):
+    t, y = _run((0.6, 0.4), 1.0, np.zeros(3), 1500.0, dt=1.0)
+    y = np.round(y + np.random.default_rng(2).normal(0, 0.01, y.shape), 2)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
+    assert reference.machine_model is not None
+    path = tmp_path / "ref.toml"
+    save_reference(reference, path)
+    loaded = load_reference(path)
+    assert loaded.machine_model is not None
+    assert loaded.machine_model.sensors == SENSORS
+    np.testing.assert_allclose(loaded.machine_model.gains_C, reference.machine_model.gains_C)
+
+
+@pytest.mark.parametrize(
+    "table",
+    [
+        "time_constants_min = [40.0]\nbox = [0.1]\n[machine_model.gains_C]\na = [1.0]\n",
+        "time_constants_min = [-40.0]\nbox = [0.1]\n[machine_model.gains_C]\na = [1.0]\nb = [2.0]\n",
+        "time_constants_min = [40.0, 8.0]\nbox = [0.1]\n[machine_model.gains_C]\na = [1.0, 1.0]\nb = [2.0, 1.0]\n",
+    ],
+)
+def test_a_malformed_machine_model_is_refused_by_name(tmp_path, table):
+    path = tmp_path / "ref.toml"
+    path.write_text(
+        "source = 'x'\n[sensors.a]\ntime_constants_min = [40.0]\nbox = [0.1]\n[machine_model]\n" + table,
+        encoding="utf-8",
+    )
+    with pytest.raises(InputError, match=r"\[machine_model\]"):
+        load_reference(path)
