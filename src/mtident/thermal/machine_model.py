@@ -51,6 +51,9 @@ TIE_SLACK = 0.15
 TAU_BOX_MIN = 0.05
 """The smallest relative box searched around each of the reference's time constants."""
 TAU_BOX_SDS = 3.0
+LOOSE_BOX = 0.3
+"""A time constant whose box is wider than this is profiled, not linearised."""
+PROFILE_POINTS = (-1.0, -0.5, 0.5, 1.0)
 REJECT_P = 1e-3
 MAX_MODES = 6
 _CONTRADICTED = {"misfit", "reference-disagrees"}
@@ -327,14 +330,14 @@ def fit_test(
     noise = np.maximum(np.asarray(noise_C, float), 1e-4)
     candidates = [s for s, b in enumerate(binned) if b is not None and np.all(np.isfinite(gains[s]))]
     rejected: list[int] = []
-    taus = np.array(model.time_constants_min)
+    taus, tau_sd = _centres(model)
     # the worst sensor first, one at a time: a sensor far off pulls the shared amplitudes, and
     # the others' misfit then is its doing; where most sensors reject the tie, it does not hold
     while True:
         used = [s for s in candidates if s not in rejected]
         if len(used) < 2 or 2 * len(rejected) > len(candidates):
             return None
-        passes = _tied_solve([binned[s] for s in used], gains[used], noise[used], model)  # type: ignore[misc]
+        passes = _tied_solve([binned[s] for s in used], gains[used], noise[used], taus, tau_sd)  # type: ignore[misc]
         if passes is None:
             return None
         at_model, solved = passes
@@ -343,7 +346,7 @@ def fit_test(
         if excess[worst] <= chdtri(len(taus), REJECT_P):
             break
         rejected.append(used[worst])
-    steady, half = _interval([binned[s] for s in used], solved, levels)  # type: ignore[misc]
+    solved, steady, half = _profiled([binned[s] for s in used], gains[used], noise[used], model, solved, levels)  # type: ignore[misc]
     latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
     out_steady = np.full(len(sensors), math.nan)
     out_steady[used] = steady + latest_room
@@ -393,20 +396,60 @@ class _Solved:
 
 
 def _tied_solve(
-    bins: list[Binned], gains: FloatArray, noise: FloatArray, model: MachineModel
+    bins: list[Binned], gains: FloatArray, noise: FloatArray, taus: FloatArray, tau_sd: FloatArray
 ) -> tuple[_Solved, _Solved] | None:
-    """The joint penalised least squares, in two passes: the first at the model's time constants
-    (which the test of the tie uses: there the time constants cannot bend to one sensor); the
-    second with each slack's prior scaled by the first's ``z`` and each log time constant a
-    parameter too, linearised about the first's amplitudes (its prior the model's box)."""
-    taus = np.array(model.time_constants_min)
+    """The joint penalised least squares, in two passes: the first at ``taus`` (which the test of
+    the tie uses: there the time constants cannot bend to one sensor); the second with each
+    slack's prior scaled by the first's ``z`` and each log time constant a parameter too,
+    linearised about the first's amplitudes, its prior sd ``tau_sd``."""
     first = _penalised(bins, gains, noise, taus, np.ones(len(taus)), None)
     if first is None:
         return None
-    S, K = gains.shape
-    tau_sd = np.log1p(np.array(model.box)) / TAU_BOX_SDS
     second = _penalised(bins, gains, noise, taus, np.maximum(np.abs(first.z), 0.05), (first.amplitudes, tau_sd))
     return None if second is None else (first, second)
+
+
+def _profiled(
+    bins: list[Binned],
+    gains: FloatArray,
+    noise: FloatArray,
+    model: MachineModel,
+    best: _Solved,
+    levels: tuple[float, ...],
+) -> tuple[_Solved, FloatArray, dict[float, FloatArray]]:
+    """The fit and its intervals with each loose time constant (a box wider than ``LOOSE_BOX``,
+    too wide to linearise) profiled: held in turn at points across its box, the interval the hull
+    of those of every point whose χ² is within the decision's threshold of the best."""
+    taus, tau_sd = _centres(model)
+    loose = [k for k, box in enumerate(model.box) if box > LOOSE_BOX]
+    candidates = [best]
+    for k in loose:
+        for f in PROFILE_POINTS:
+            moved = taus.copy()
+            moved[k] *= (1.0 + model.box[k]) ** f
+            solved = _tied_solve(bins, gains, noise, moved, tau_sd)
+            if solved is not None:
+                candidates.append(solved[1])
+    chi2 = np.array([c.chi2_per_sensor.sum() / max(float(np.max(c.corr)), 1.0) for c in candidates])
+    point = candidates[int(np.argmin(chi2))]
+    steady, half = _interval(bins, point, levels)
+    low = {lv: steady - h for lv, h in half.items()}
+    high = {lv: steady + h for lv, h in half.items()}
+    for c, value in zip(candidates, chi2, strict=True):
+        for lv in levels:
+            if value - chi2.min() <= chdtri(1, 1.0 - lv):
+                other, other_half = _interval(bins, c, (lv,))
+                low[lv] = np.minimum(low[lv], other - other_half[lv])
+                high[lv] = np.maximum(high[lv], other + other_half[lv])
+    return point, steady, {lv: np.maximum(steady - low[lv], high[lv] - steady) for lv in levels}
+
+
+def _centres(model: MachineModel) -> tuple[FloatArray, FloatArray]:
+    """The model's time constants and each log time constant's prior sd for the linearised fit
+    (a loose one held: it is profiled instead)."""
+    box = np.array(model.box)
+    sd = np.where(box > LOOSE_BOX, 1e-6, np.log1p(box) / TAU_BOX_SDS)
+    return np.array(model.time_constants_min), sd
 
 
 def _penalised(
@@ -462,8 +505,7 @@ def _penalised(
     X = np.vstack([*blocks, P])
     y = np.concatenate([*targets, np.zeros(len(prior_cols))])
     try:
-        coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-        cov = np.linalg.pinv(X.T @ X)
+        coef, cov = _least_squares(X, y)
     except np.linalg.LinAlgError:
         return None
     slack_chi2 = ((coef[i_d : i_d + S * K].reshape(S, K) / slack_sd) ** 2).sum(axis=1)
@@ -490,6 +532,20 @@ def _penalised(
         coef[i_fast : i_fast + S * F].reshape(S, F),
         gains * eta[None, :],
     )
+
+
+def _least_squares(X: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The minimum-norm solution and the full covariance (X'X)⁻¹, its columns scaled first. Not
+    a pseudo-inverse: a direction the readings do not determine (two slow modes that cancel over
+    the readings so far) must leave every coefficient on it with a huge variance, where a
+    pseudo-inverse drops it and reports the coefficients as known."""
+    scale = np.linalg.norm(X, axis=0)
+    scale[scale == 0] = 1.0
+    U, sv, Vt = np.linalg.svd(X / scale, full_matrices=False)
+    floor = sv.max() * 1e-14
+    coef = (Vt.T @ np.where(sv > floor * 1e2, (U.T @ y) / np.maximum(sv, floor), 0.0)) / scale
+    cov = (Vt.T / np.maximum(sv, floor) ** 2) @ Vt / np.outer(scale, scale)
+    return coef, cov
 
 
 def _excess(bins: list[Binned], gains: FloatArray, noise: FloatArray, taus: FloatArray, tied: _Solved) -> FloatArray:
