@@ -158,3 +158,64 @@ def test_a_malformed_machine_model_is_refused_by_name(tmp_path, table):
     )
     with pytest.raises(InputError, match=r"\[machine_model\]"):
         load_reference(path)
+
+
+def test_a_direction_the_readings_leave_open_keeps_its_variance():
+    """Two columns the readings cannot tell apart: a pseudo-inverse would call both known."""
+    from mtident.thermal.machine_model import _least_squares
+
+    u = np.linspace(0.0, 1.0, 50)
+    X = np.column_stack([np.ones_like(u), u, u * (1.0 + 1e-13)])
+    _, cov = _least_squares(X, 1.0 + 2.0 * u)
+    assert cov[1, 1] > 1e6 and cov[2, 2] > 1e6
+    assert cov[0, 0] < 1.0  # the level is still known
+
+
+def _noisy_chain(split, power, x0_rise, minutes, seed, dt=1.0):
+    t, y = _run(split, power, x0_rise, minutes, dt)
+    return t, np.round(y + np.random.default_rng(seed).normal(0.0, 0.01, y.shape), 2)
+
+
+def test_watch_stops_earlier_with_the_machine_model_and_right():
+    from dataclasses import replace as replaced
+
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
+
+    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=4)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
+    assert reference.machine_model is not None
+    split, power = (0.45, 0.55), 1.3
+    t, y = _noisy_chain(split, power, np.zeros(3), 700.0, seed=5)
+    room = np.round(ROOM_C + np.random.default_rng(9).normal(0.0, 0.01, len(t)), 2)  # logged, steady
+    stops = {}
+    for label, ref in (("machine", reference), ("sensors", replaced(reference, machine_model=None))):
+        settings = MonitorSettings(tolerance_C=0.2, reference=ref)
+        state, _ = monitor_step(new_state(list(SENSORS), with_room=True), t, y, room, settings)
+        assert state.stopped, label
+        stops[label] = state.stop_time_min
+        steady = np.array([c.steady_C for c in state.checks])
+        assert np.all(np.abs(steady - _truth(split, power)) <= 0.2), label
+        assert all(c.machine_used for c in state.checks) == (label == "machine")
+    assert stops["machine"] < 0.7 * stops["sensors"]
+
+
+def test_identify_uses_the_machine_model_and_says_so():
+    from mtident.thermal.robust_identify import identify_robust
+
+    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=6)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
+    t, y = _noisy_chain((0.5, 0.5), 0.8, np.zeros(3), 400.0, seed=7)
+    answer = identify_robust(TemperatureLog(t, SENSORS, y, (), "test.csv"), 90.0, reference=reference)
+    assert all(e.machine_used for e in answer.estimates)
+    assert all("the machine model" in (a.reference or "") for a in answer.assumptions)
+    steady = np.array([e.steady_C for e in answer.estimates])
+    np.testing.assert_allclose(steady, _truth((0.5, 0.5), 0.8), atol=0.1)
+    # the predicted course passes through the window's readings
+    assert np.nanmax(np.abs(answer.curve_C[: answer.n_window] - y[: answer.n_window])) < 0.1
+
+
+def test_a_run_that_leaves_a_slow_mode_loose_gives_no_machine_model():
+    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 160.0, seed=8)
+    reference, warnings = learn_reference(TemperatureLog(t, SENSORS, y, (), "short.csv"))
+    assert reference.machine_model is None
+    assert any("slow modes its sensors share" in w for w in warnings)
