@@ -535,16 +535,20 @@ def _penalised(
 
 
 def _least_squares(X: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The minimum-norm solution and the full covariance (X'X)⁻¹, its columns scaled first. Not
-    a pseudo-inverse: a direction the readings do not determine (two slow modes that cancel over
-    the readings so far) must leave every coefficient on it with a huge variance, where a
-    pseudo-inverse drops it and reports the coefficients as known."""
+    """The minimum-norm solution and the full covariance (X'X)⁻¹, from the normal equations with
+    the columns scaled (the design has many rows and few columns). Not a pseudo-inverse: a
+    direction the readings do not determine (two slow modes that cancel over the readings so far)
+    must leave every coefficient on it with a huge variance, where a pseudo-inverse drops it and
+    reports the coefficients as known."""
     scale = np.linalg.norm(X, axis=0)
     scale[scale == 0] = 1.0
-    U, sv, Vt = np.linalg.svd(X / scale, full_matrices=False)
-    floor = sv.max() * 1e-14
-    coef = (Vt.T @ np.where(sv > floor * 1e2, (U.T @ y) / np.maximum(sv, floor), 0.0)) / scale
-    cov = (Vt.T / np.maximum(sv, floor) ** 2) @ Vt / np.outer(scale, scale)
+    Xs = X / scale
+    eigenvalues, vectors = np.linalg.eigh(Xs.T @ Xs)
+    floor = max(float(eigenvalues.max()), 1e-300) * 1e-28
+    kept = eigenvalues > floor * 1e4
+    projected = vectors.T @ (Xs.T @ y)
+    coef = (vectors @ np.where(kept, projected / np.maximum(eigenvalues, floor), 0.0)) / scale
+    cov = (vectors / np.maximum(eigenvalues, floor)) @ vectors.T / np.outer(scale, scale)
     return coef, cov
 
 
