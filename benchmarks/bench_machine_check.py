@@ -60,9 +60,12 @@ def main() -> None:
             n = int(np.searchsorted(run.time_min, at, side="right"))
             readings = Readings(run.time_min[:n], run.reading_C[:n], run.room_reading_C[:n])
             with np.errstate(all="ignore"):
-                joint = _time(lambda r=readings: machine_fit(r, sensors, settings))
+                joint = _time(lambda r=readings, n=sensors, k=settings: machine_fit(r, n, k))
                 own = _time(
-                    lambda r=readings: [sensor_estimate(r, s, name, settings) for s, name in enumerate(sensors)], 1
+                    lambda r=readings, n=sensors, k=settings: [
+                        sensor_estimate(r, s, name, k) for s, name in enumerate(n)
+                    ],
+                    1,
                 )
             rows.append((case.seed, len(sensors), at, joint, own))
             print(

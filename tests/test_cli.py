@@ -592,3 +592,54 @@ def test_ctrl_c_inside_compiled_code_aborts_like_ctrl_c_and_other_system_errors_
     monkeypatch.setattr(cli_thermal, "identify", broken)
     with pytest.raises(SystemError, match="a fault of our own"):
         mtident("thermal", "identify", "@sample", "--sensor", "T1", "--method", "ukf")
+
+
+def _warm_up(path: Path, to_unit, units_row: str = "") -> Path:
+    """A warm-up from 20 °C to 100 °C (τ = 30 min) over 3 h, written in another unit without one."""
+    t = np.arange(0.0, 181.0)
+    celsius = 20 + 80 * (1 - np.exp(-t / 30))
+    path.write_text(
+        "time_min,spindle\n" + units_row + "".join(f"{a:g},{to_unit(b):.4f}\n" for a, b in zip(t, celsius, strict=True))
+    )
+    return path
+
+
+def test_the_unit_option_reads_a_log_without_units_in_fahrenheit_or_kelvin(tmp_path):
+    """Issue 37: a log in °F or K that states no unit was read as °C; --unit states it, for every
+    command that reads a log (212 °F and 373.15 K are 100 °C)."""
+    fahrenheit = tmp_path / "f.csv"
+    fahrenheit.write_text("time_min,spindle,room\n" + "".join(f"{m},{68 + 18 * m},{68 + m / 10:g}\n" for m in range(9)))
+    info = json.loads(mtident("thermal", "inspect", str(fahrenheit), "--unit", "F", "--json").stdout)
+    spindle, room = info["sensors"]
+    assert spindle["last_C"] == pytest.approx(100.0) and spindle["first_C"] == pytest.approx(20.0)
+    assert room["first_C"] == pytest.approx(20.0) and spindle["unit"] == room["unit"] == "°F (--unit)"
+    assert "read in °F (--unit), converted to °C: spindle, room" in info["notes"]
+    assert json.loads(mtident("thermal", "inspect", str(fahrenheit), "--json").stdout)["sensors"][0]["last_C"] == 212
+    kelvin = _warm_up(tmp_path / "k.csv", lambda c: c + 273.15)
+    out = mtident("thermal", "identify", str(kelvin), "--unit", "K", "--method", "lsq", "--json")
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result["start_C"] == pytest.approx(20.0, abs=0.01) and result["steady_state_C"] == pytest.approx(
+        100, abs=0.01
+    )
+    assert "read in K (--unit), converted to °C: spindle" in out.stderr
+    for command in ("identify", "learn", "min-time", "inspect", "watch", "report"):
+        assert re.search(r"--unit \[C\|F\|K\]", mtident("thermal", command, "--help").stdout), command
+
+
+def test_the_unit_option_refuses_a_column_whose_own_unit_it_contradicts(tmp_path):
+    stated = _warm_up(tmp_path / "stated.csv", lambda c: c, "min,°C\n")
+    out = mtident("thermal", "identify", str(stated), "--unit", "F", "--method", "lsq")
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert [line for line in out.stderr.splitlines() if line.startswith("mtident: error")] == [
+        f"mtident: error: {stated}: sensor 'spindle' is in °C by the units row, but --unit F says the temperatures "
+        "are in °F; leave the option out to read each column in its own unit, or correct the units row"
+    ]
+    assert mtident("thermal", "identify", str(stated), "--unit", "C", "--method", "lsq").returncode == 0
+
+
+def test_the_note_on_a_room_read_as_celsius_says_the_unit_option(tmp_path):
+    path = tmp_path / "f.csv"
+    path.write_text("time_min,spindle,room\n" + "".join(f"{m},{70 + m},{69 + m / 100:.2f}\n" for m in range(30)))
+    notes = json.loads(mtident("thermal", "inspect", str(path), "--json").stdout)["notes"]
+    assert any("far outside any workshop's range" in n and "--unit F (or --unit K)" in n for n in notes), notes

@@ -17,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from conftest import first_order, logger_dialects, make_log, wait_until
+from conftest import PAPER_STEADY, first_order, logger_dialects, make_log, wait_until
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -165,6 +165,57 @@ def test_follower_never_writes_to_the_log(tmp_path):
     follower.poll()
     follower.poll()
     assert (hashlib.sha256(path.read_bytes()).hexdigest(), path.stat().st_mtime_ns) == before
+
+
+def test_follower_reads_a_log_without_units_in_the_unit_stated_room_too(tmp_path):
+    """Issue 37: the live follower read a °F log that states no unit as °C, as the file reader did;
+    ``temperature_unit`` converts every column, the room's too, and a resumed follower goes on so."""
+    path = tmp_path / "log.csv"
+    path.write_text("time_min,A,room\n0,68,68\n1,212,69.8\n")
+    follower = LogFollower(path, room="room", temperature_unit="F")
+    rows = follower.poll()
+    np.testing.assert_allclose(rows.temperature_C, [[20.0, 20.0], [100.0, 21.0]])
+    assert "read in °F (`temperature_unit`), converted to °C: A" in rows.notes
+    with path.open("a") as out:
+        out.write("2,203,71.6\n")
+    resumed = LogFollower.resume(path, json.loads(json.dumps(follower.position())), None, None, "F")
+    np.testing.assert_allclose(resumed.poll().temperature_C, [[95.0, 22.0]])
+    kelvin = tmp_path / "kelvin.csv"
+    kelvin.write_text("time_min,A\n0,293.15\n1,373.15\n")
+    np.testing.assert_allclose(LogFollower(kelvin, temperature_unit="K").poll().temperature_C, [[20.0], [100.0]])
+    np.testing.assert_allclose(LogFollower(path).poll().temperature_C[:2], [[68.0, 68.0], [212.0, 69.8]])
+
+
+@pytest.mark.parametrize("sensors", [None, ["A", "room [°C]"]])
+def test_follower_refuses_a_column_whose_own_unit_the_stated_one_contradicts(tmp_path, sensors):
+    path = tmp_path / "log.csv"
+    path.write_text("time_min,A,room [°C]\n0,68,20\n1,212,21\n")
+    with pytest.raises(InputError, match=r"sensor 'room \[°C\]' is in °C by its name, but `temperature_unit='F'`"):
+        LogFollower(path, sensors, room="room [°C]", temperature_unit="F").poll()
+    code, _, err = run("thermal", "watch", str(path), "--replay", "--unit", "F", "--state", str(tmp_path / "s.npz"))
+    assert code == 2 and "Traceback" not in err
+    assert "sensor 'room [°C]' is in °C by its name, but --unit F says the temperatures are in °F" in err
+
+
+def test_watch_reads_a_log_in_fahrenheit_as_the_unit_option_says(tmp_path):
+    """The decision of a °F log without units, with --unit F, is the one of the same log in °C; a
+    state saved with the option is not resumed without it (its readings were converted)."""
+    log = tmp_path / "run.csv"
+    curve = noisy(first_order(T[:200]), 13)
+    log.write_text(csv_text(T[:200], {"A": curve * 9 / 5 + 32}))
+    state = tmp_path / "state.npz"
+    code, out, err = run("thermal", "watch", str(log), "--replay", "--unit", "F", "--json", "--state", str(state))
+    assert code == 0, err
+    data = json.loads(out)
+    assert abs(data["steady_state_C"] - PAPER_STEADY) < 0.5, data["steady_state_C"]
+    assert "read in °F (--unit), converted to °C: A" in err
+    settings = MonitorSettings()
+    saved = WatchSession(log, settings, state_path=state, temperature_unit="F")
+    assert saved.state is not None and any("resuming from" in n for n in saved.notes)
+    again = WatchSession(log, settings, state_path=state)
+    assert again.state is None and "other settings or sensors" in again.notes[0]
+    _, values, _ = saved.whole_log()
+    np.testing.assert_allclose(values[:, 0], np.round(curve * 9 / 5 + 32, 3) * 5 / 9 - 160 / 9, atol=1e-9)
 
 
 # ---- stopping rule -------------------------------------------------------------------------

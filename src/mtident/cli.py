@@ -33,6 +33,7 @@ else:
 # the option instead (--time-unit s).
 _OPTION_OF = {
     "time_unit": "--time-unit",
+    "temperature_unit": "--unit",
     "time_col": "--time-col",
     "sensors": "--sensor",
     "window_min": "--window",
@@ -51,8 +52,8 @@ def as_options(text: str) -> str:
     text : str
         A message from the library. Each parameter it names in backticks, alone or with a quoted
         value or a bracketed list, is replaced where the command line has an option for it
-        (``time_unit``, ``time_col``, ``sensors``, ``window_min``, ``max_time_constant_min``,
-        ``ambient_C``); other words in backticks are kept as they are.
+        (``time_unit``, ``temperature_unit``, ``time_col``, ``sensors``, ``window_min``,
+        ``max_time_constant_min``, ``ambient_C``); other words in backticks are kept as they are.
 
     Returns
     -------

@@ -39,6 +39,7 @@ def report_command(
     sensors: tuple[str, ...],
     time_col: str | None,
     time_unit: str | None,
+    temperature_unit: str | None,
     tolerance_C: float,
     decision_level: float,
     max_tau_min: float,
@@ -72,6 +73,8 @@ def report_command(
         --sensor (empty: all).
     time_col, time_unit : str or None
         --time-col and --time-unit.
+    temperature_unit : str or None
+        --unit: the unit of the temperature columns that state none.
     tolerance_C : float
         --tolerance (°C).
     decision_level : float
@@ -125,6 +128,7 @@ def report_command(
         sensors=asked_sensors(sensors, path) or None,
         time_col=time_col,
         time_unit=time_unit,
+        temperature_unit=temperature_unit,
         state_path=state_file(file, path, state_path),
         persist=False,  # a watch may still follow this log: its state file is its own
     )

@@ -19,6 +19,7 @@ from mtident.cli import (
     OptionConsole,
     OutputPath,
     PicturePath,
+    as_options,
     print_json,
     table_console,
     thermal,
@@ -27,6 +28,7 @@ from mtident.cli import (
 from mtident.exceptions import InputError
 from mtident.io.columns import room_named
 from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
+from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 from mtident.thermal.identify import Identification
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
@@ -80,7 +82,13 @@ def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
     return list(dict.fromkeys(name for name in names if name and name != "all"))
 
 
-def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None) -> TemperatureLog:
+def load_log(
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    temperature_unit: str | None = None,
+) -> TemperatureLog:
     """The log FILE names, read as the options say; its notes said on stderr.
 
     Parameters
@@ -93,6 +101,8 @@ def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_uni
         The --time-col option.
     time_unit : str or None
         The --time-unit option.
+    temperature_unit : str or None, optional
+        The --unit option: the unit of the temperature columns that state none.
 
     Returns
     -------
@@ -105,7 +115,11 @@ def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_uni
     """
     path = log_path(file)
     log = read_temperature_log(
-        path, time_col=time_col, time_unit=time_unit, sensors=asked_sensors(sensors, path) or None
+        path,
+        time_col=time_col,
+        time_unit=time_unit,
+        sensors=asked_sensors(sensors, path) or None,
+        temperature_unit=temperature_unit,
     )
     for note in log.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
@@ -113,7 +127,12 @@ def load_log(file: str, sensors: tuple[str, ...], time_col: str | None, time_uni
 
 
 def load_log_with_room(
-    file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, room_col: str | None
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    room_col: str | None,
+    temperature_unit: str | None = None,
 ) -> tuple[TemperatureLog, np.ndarray | None]:
     """The log's sensors, and the room column split off from them when one is named.
 
@@ -129,6 +148,8 @@ def load_log_with_room(
         The --time-unit option.
     room_col : str or None
         The --ambient option: the room sensor's column; None without one.
+    temperature_unit : str or None, optional
+        The --unit option: the unit of the temperature columns that state none, the room's too.
 
     Returns
     -------
@@ -143,12 +164,14 @@ def load_log_with_room(
         A log that cannot be read as asked, or no sensor column besides the room column.
     """
     if room_col is None:
-        log = load_log(file, sensors, time_col, time_unit)
+        log = load_log(file, sensors, time_col, time_unit, temperature_unit)
         _say_room_candidates(log.sensors, "identified as a machine sensor")
         return log, None
     asked = asked_sensors(sensors, log_path(file))
     # only the asked-for columns and the room are read: a dead column elsewhere does not matter
-    every = load_log(file, tuple(dict.fromkeys([*asked, room_col])) if asked else (), time_col, time_unit)
+    every = load_log(
+        file, tuple(dict.fromkeys([*asked, room_col])) if asked else (), time_col, time_unit, temperature_unit
+    )
     log, room = every.split_room(room_col)
     return log.select([name for name in asked if name != room_col] or None), room
 
@@ -169,7 +192,7 @@ def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str, co
 
 
 def log_options(func: F) -> F:
-    """Add a log's argument and options to a command: FILE, --sensor, --time-col and --time-unit.
+    """Add a log's argument and options to a command: FILE, --sensor, --time-col, --time-unit and --unit.
 
     Parameters
     ----------
@@ -181,6 +204,16 @@ def log_options(func: F) -> F:
     callable
         ``func`` with the argument and the options.
     """
+    func = click.option(
+        "--unit",
+        "temperature_unit",
+        type=click.Choice(list(TEMPERATURE_UNIT_OPTIONS), case_sensitive=False),
+        metavar=f"[{'|'.join(TEMPERATURE_UNIT_OPTIONS)}]",
+        help=(
+            "Unit of the temperature columns that state none (no units row, no unit in the name): C, F or K, "
+            "converted to °C (default: °C). A column whose own unit differs is refused."
+        ),
+    )(func)
     func = click.option(
         "--time-unit",
         type=click.Choice(list(TIME_UNITS)),
@@ -383,6 +416,7 @@ def identify_command(
     sensors: tuple[str, ...],
     time_col: str | None,
     time_unit: str | None,
+    temperature_unit: str | None,
     window_min: float,
     method: str,
     preset: str,
@@ -418,6 +452,8 @@ def identify_command(
         --sensor (empty: all).
     time_col, time_unit : str or None
         --time-col and --time-unit.
+    temperature_unit : str or None
+        --unit: the unit of the temperature columns that state none.
     window_min : float
         --window: the identification time L (min).
     method : str
@@ -450,7 +486,7 @@ def identify_command(
     InputError
         Options that do not go together, or a log that cannot be read (said as a one-line error).
     """
-    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
+    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
     if method == ROBUST_METHOD:
         from mtident.thermal.robust import RobustSettings
         from mtident.thermal.robust_identify import identify_robust
@@ -606,6 +642,7 @@ def learn_command(
     sensors: tuple[str, ...],
     time_col: str | None,
     time_unit: str | None,
+    temperature_unit: str | None,
     ambient_col: str | None,
     max_tau_min: float,
     output_path: str,
@@ -632,6 +669,8 @@ def learn_command(
         --sensor (empty: all).
     time_col, time_unit : str or None
         --time-col and --time-unit.
+    temperature_unit : str or None
+        --unit: the unit of the temperature columns that state none.
     ambient_col : str or None
         --ambient: the room sensor's column.
     max_tau_min : float
@@ -653,7 +692,7 @@ def learn_command(
     from mtident.thermal.reference import learn_reference, save_reference
     from mtident.thermal.robust import RobustSettings
 
-    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
+    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
     with stderr.status(f"learning the modes of {len(log.sensors)} sensor(s)…"):
         reference, warnings = learn_reference(log, room, RobustSettings(max_time_constant_min=max_tau_min))
     if every_mode:
@@ -792,6 +831,7 @@ def min_time_command(
     sensors: tuple[str, ...],
     time_col: str | None,
     time_unit: str | None,
+    temperature_unit: str | None,
     sampling_periods: str,
     windows: str | None,
     method: str,
@@ -812,6 +852,8 @@ def min_time_command(
         --sensor (empty: all).
     time_col, time_unit : str or None
         --time-col and --time-unit.
+    temperature_unit : str or None
+        --unit: the unit of the temperature columns that state none.
     sampling_periods : str
         --sampling-periods: minutes, comma-separated.
     windows : str or None
@@ -839,7 +881,7 @@ def min_time_command(
             raise InputError(msg)
         step = parts[2] if len(parts) == 3 else 1.0
         candidates = list(np.arange(parts[0], parts[1] + step / 2, step))
-    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col)
+    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
     with stderr.status("searching identification times…"):
         result = minimal_identification_time(log, method, preset, periods, candidates, room)
     for name, begins in zip(
@@ -900,7 +942,12 @@ def min_time_command(
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the summary.")
 @user_errors
 def inspect_command(
-    file: str, sensors: tuple[str, ...], time_col: str | None, time_unit: str | None, as_json: bool
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    temperature_unit: str | None,
+    as_json: bool,
 ) -> None:
     """Show how FILE is read: its format, the header line, the time column and step, each
     sensor's unit and readings, and every column left out with the reason.
@@ -917,13 +964,15 @@ def inspect_command(
         --sensor (empty: all).
     time_col, time_unit : str or None
         --time-col and --time-unit.
+    temperature_unit : str or None
+        --unit: the unit of the temperature columns that state none.
     as_json : bool
         --json.
     """
     from mtident.io.describe import describe_log
 
     path = log_path(file)
-    info = describe_log(path, time_col, time_unit, asked_sensors(sensors, path) or None)
+    info = describe_log(path, time_col, time_unit, asked_sensors(sensors, path) or None, temperature_unit)
     if as_json:
         print_json(info)
         return
@@ -961,7 +1010,7 @@ def inspect_command(
     for d in sensor_rows:
         table.add_row(
             d["sensor"],
-            d["unit"],
+            as_options(d["unit"]),
             str(d["missing"]),
             _fmt(d["first_C"]),
             _fmt(d["last_C"]),

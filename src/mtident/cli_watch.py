@@ -421,6 +421,7 @@ def watch_command(
     sensors: tuple[str, ...],
     time_col: str | None,
     time_unit: str | None,
+    temperature_unit: str | None,
     tolerance_C: float,
     decision_level: float,
     max_tau_min: float,
@@ -464,6 +465,8 @@ def watch_command(
         --sensor (empty: all).
     time_col, time_unit : str or None
         --time-col and --time-unit.
+    temperature_unit : str or None
+        --unit: the unit of the temperature columns that state none.
     tolerance_C : float
         --tolerance (°C).
     decision_level : float
@@ -540,6 +543,7 @@ def watch_command(
         sensors=asked_sensors(sensors, path) or None,
         time_col=time_col,
         time_unit=time_unit,
+        temperature_unit=temperature_unit,
         state_path=state_file(str(path) if recorder else file, path, state_path),
         resume=resume or not replay,
     )

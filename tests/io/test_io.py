@@ -1531,3 +1531,76 @@ def test_every_column_far_above_a_workshops_range_read_as_celsius_is_said(write_
         "workshop" in note
         for note in read_temperature_log(write_csv("time_min,spindle,housing\n" + warm, "c.csv")).notes
     )
+
+
+# a spindle from 20 °C to 100 °C (212 °F, 373.15 K) with a room at 20 °C, in °C; the tests write it in °F or
+# K without a unit
+_STATED_C = np.column_stack([20 + 80 * np.arange(12.0) / 11, np.full(12, 20.0)])
+
+
+def _without_units(to_unit, units_row: str = "") -> str:
+    rows = "".join(f"{m},{to_unit(spindle):.4f},{to_unit(room):.4f}\n" for m, (spindle, room) in enumerate(_STATED_C))
+    return "time_min,spindle,room\n" + units_row + rows
+
+
+@pytest.mark.parametrize(
+    ("unit", "to_unit", "written"),
+    [("F", lambda c: c * 9 / 5 + 32, "°F"), ("K", lambda c: c + 273.15, "K"), ("C", lambda c: c, "°C")],
+)
+def test_temperature_unit_states_the_unit_of_columns_that_state_none(write_csv, unit, to_unit, written):
+    """Issue 37: a log in °F or K without a units row or a unit in its names was read as °C, with at
+    most a note on a room far outside a workshop's range; ``temperature_unit`` states its unit, and
+    every temperature column converts, the room's too (212 °F and 373.15 K are 100 °C)."""
+    path = write_csv(_without_units(to_unit))
+    assert path.read_text().splitlines()[-1] == f"11,{to_unit(100.0):.4f},{to_unit(20.0):.4f}"  # 212 °F, 373.15 K
+    log = read_temperature_log(path, temperature_unit=unit)
+    assert log.sensors == ("spindle", "room")
+    np.testing.assert_allclose(log.temperature_C, _STATED_C, atol=1e-4)
+    assert log.temperature_C[-1, 0] == pytest.approx(100.0)
+    converted = [n for n in log.notes if "`temperature_unit`" in n]
+    if unit == "C":
+        assert not converted
+    else:
+        assert converted == [f"read in {written} (`temperature_unit`), converted to °C: spindle, room"]
+    assert not any("workshop" in note for note in log.notes)  # the unit was stated: nothing is assumed
+    if unit != "C":  # without the option the numbers are read as °C, as they are written
+        plain = read_temperature_log(path)
+        np.testing.assert_allclose(plain.temperature_C, to_unit(_STATED_C), atol=1e-4)
+
+
+def test_the_note_on_a_room_read_as_celsius_names_the_unit_option(write_csv):
+    log = read_temperature_log(write_csv(_without_units(lambda c: c * 9 / 5 + 32)))
+    said = [note for note in log.notes if "far outside any workshop's range" in note]
+    assert said and "`temperature_unit='F'`" in said[0], log.notes
+
+
+@pytest.mark.parametrize(
+    ("header", "units_row", "unit", "message"),
+    [
+        ("time_min,spindle,room", "min,°C,\n", "F", "sensor 'spindle' is in °C by the units row"),
+        ("time_min,spindle [K],room", "", "F", "sensor 'spindle [K]' is in K by its name"),
+        ("time_min,spindle,room (°F)", "", "K", "sensor 'room (°F)' is in °F by its name"),
+        ("time_min,spindle,room", "min,K,°F\n", "C", "sensor 'spindle' is in K by the units row"),
+    ],
+)
+def test_a_columns_own_unit_that_temperature_unit_contradicts_is_refused(write_csv, header, units_row, unit, message):
+    """Which of the two is right cannot be told: the column is refused, named with its unit and the option."""
+    rows = "".join(f"{m},{300 + m},{70 + m / 10}\n" for m in range(8))
+    path = write_csv(header + "\n" + units_row + rows)
+    with pytest.raises(InputError, match=re.escape(message) + f".*`temperature_unit='{unit}'`"):
+        read_temperature_log(path, temperature_unit=unit)
+    read_temperature_log(path)  # read in its own units without the option
+
+
+def test_temperature_unit_leaves_a_columns_own_unit_that_agrees_and_other_quantities_alone(write_csv):
+    """A column in °F by its name is read in °F with ``temperature_unit='F'``; one in rpm by the units
+    row is no temperature whatever the option says; a humidity named as one is left out."""
+    rows = "".join(f"{m},{212 - m},{32 + m},{1000 + m},{50 + m}\n" for m in range(8))
+    log = read_temperature_log(
+        write_csv("time_min,T1 [°F],T2,speed,Humidity\nmin,,,rpm,\n" + rows), temperature_unit="F"
+    )
+    assert log.sensors == ("T1 [°F]", "T2")
+    np.testing.assert_allclose(log.temperature_C[:, 0], (212 - np.arange(8.0) - 32) * 5 / 9)
+    np.testing.assert_allclose(log.temperature_C[:, 1], np.arange(8.0) * 5 / 9)
+    with pytest.raises(InputError, match=r"temperature unit 'X' is not one of: C, F, K"):
+        read_temperature_log(write_csv("time_min,T1\n" + rows.replace(",", ";")), temperature_unit="X")

@@ -16,7 +16,14 @@ from typing import Protocol
 
 from mtident.exceptions import InputError
 from mtident.io.stamps import DATE_FORMATS, parses_as, stamp_format
-from mtident.io.units import celsius_conversion, is_from_humidity, is_humidity, is_number, unit_key
+from mtident.io.units import (
+    celsius_conversion,
+    is_from_humidity,
+    is_humidity,
+    is_number,
+    stated_temperature_unit,
+    unit_key,
+)
 
 __all__ = [
     "missing_column",
@@ -28,6 +35,7 @@ __all__ = [
     "time_named",
     "event_named",
     "temperature_columns",
+    "sensor_unit",
     "check_unique_names",
     "room_named",
 ]
@@ -308,15 +316,51 @@ def room_named(name: str) -> bool:
     return any(word in _ROOM_NAME_WORDS for word in words)
 
 
+def sensor_unit(name: str, dialect: DialectView, temperature_unit: str | None = None) -> str:
+    """The unit a sensor column's readings are in, as written: its own (a units row, its cells, its
+    name), else the unit ``temperature_unit`` states for the columns without one, else "" (°C).
+    Both readers of a log convert by it (:func:`~mtident.io.units.celsius_conversion`);
+    :func:`temperature_columns` refuses a column whose own unit ``temperature_unit`` contradicts.
+
+    Parameters
+    ----------
+    name : str
+        The sensor column's name.
+    dialect : DialectView
+        The log's dialect: the units it states.
+    temperature_unit : str or None, optional
+        The unit the user states ("C", "F" or "K"); None: the log's own, °C where it states none.
+
+    Returns
+    -------
+    str
+        The column's own unit as written ("[°F]", "K"), "°C", "°F" or "K" by ``temperature_unit``, or "".
+
+    Raises
+    ------
+    InputError
+        ``temperature_unit`` is no unit of temperature.
+    """
+    own = dialect.unit_of(name)
+    stated = stated_temperature_unit(temperature_unit)
+    return own if own.strip() or stated is None else stated
+
+
 def temperature_columns(
-    names: list[str], asked: bool, dialect: DialectView, source: str | Path
+    names: list[str],
+    asked: bool,
+    dialect: DialectView,
+    source: str | Path,
+    temperature_unit: str | None = None,
 ) -> tuple[list[str], list[str]]:
     """The sensor columns to read, and notes, by their units (a units row, or a unit in the name).
 
     A column whose unit is no temperature (a logger's speed or voltage channel),
     or that is named as a humidity, is left out of the default selection with a
     note, and refused when ``asked`` for by name; one in K or °F is converted,
-    with a note.
+    with a note. A column without a unit of its own is in ``temperature_unit``
+    (°C without it); one whose own unit is another temperature unit than
+    ``temperature_unit`` is refused: which of the two is right cannot be told.
 
     Parameters
     ----------
@@ -330,6 +374,9 @@ def temperature_columns(
         from the humidity.
     source : str or Path
         The log, named in the notes and messages.
+    temperature_unit : str or None, optional
+        The unit of the temperature columns without a unit of their own: "C", "F" or "K" (the command
+        line's --unit); None: °C.
 
     Returns
     -------
@@ -341,9 +388,11 @@ def temperature_columns(
     Raises
     ------
     InputError
-        A column asked for is a humidity or in a unit that is no temperature, or no column is left.
+        A column asked for is a humidity or in a unit that is no temperature, no column is left,
+        ``temperature_unit`` is no unit of temperature, or a column's own unit contradicts it.
     """
-    kept, notes, other, times, events, computed = [], [], [], [], [], []
+    stated = stated_temperature_unit(temperature_unit)
+    kept, notes, other, times, events, computed, by_option = [], [], [], [], [], [], []
     for name in names:
         if not asked and time_named(name):
             times.append(name)
@@ -370,9 +419,22 @@ def temperature_columns(
                 raise InputError(msg)
             other.append(f"{name} ({unit})")
             continue
-        if conversion != (1.0, 0.0):
+        if stated is not None and unit and conversion != celsius_conversion(stated):
+            msg = (
+                f"{source}: sensor {name!r} is in {unit} by {by}, but `temperature_unit={temperature_unit!r}` says "
+                f"the temperatures are in {stated}; leave the option out to read each column in its own unit, or "
+                f"correct {by}"
+            )
+            raise InputError(msg)
+        if not unit and stated is not None:
+            conversion = celsius_conversion(stated)
+            if conversion != (1.0, 0.0):
+                by_option.append(name)
+        elif conversion != (1.0, 0.0):
             notes.append(f"sensor {name!r}: read in {unit} ({by}), converted to °C")
         kept.append(name)
+    if by_option:
+        notes.append(f"read in {stated} (`temperature_unit`), converted to °C: {', '.join(by_option)}")
     by = dialect.units_source if dialect.units else "its name"
     if times:
         notes.append(f"left out, named as times: {', '.join(times)}")

@@ -16,7 +16,7 @@ import numpy as np
 
 from mtident.io.dialect import CsvDialect, binary_kind, read_csv
 from mtident.io.logs import TIME_UNITS, read_temperature_log, time_unit_assumed, time_unit_factor
-from mtident.io.units import is_number
+from mtident.io.units import is_number, stated_temperature_unit
 
 __all__ = ["describe_log"]
 
@@ -24,7 +24,11 @@ _DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab"}
 
 
 def describe_log(
-    path: str | Path, time_col: str | None = None, time_unit: str | None = None, sensors: list[str] | None = None
+    path: str | Path,
+    time_col: str | None = None,
+    time_unit: str | None = None,
+    sensors: list[str] | None = None,
+    temperature_unit: str | None = None,
 ) -> dict[str, object]:
     """How the log at ``path`` is read, as plain JSON types.
 
@@ -32,10 +36,10 @@ def describe_log(
     mark, the lines before the header, the header line's number, the rows between
     the header and the data); ``time`` (its column, the first cell as written, how it
     is read: stamps, or numbers in a unit and whence the unit; the samples, the span
-    and the median step in minutes); ``sensors`` (per sensor:
-    its unit as the log states it, valid and missing samples, first, last, lowest
-    and highest reading in °C); ``notes`` (columns left out, conversions, rows
-    skipped).
+    and the median step in minutes); ``sensors`` (per sensor: its unit as the log
+    states it, or as ``temperature_unit`` does where it states none, valid and
+    missing samples, first, last, lowest and highest reading in °C); ``notes``
+    (columns left out, conversions, rows skipped).
 
     Parameters
     ----------
@@ -47,6 +51,8 @@ def describe_log(
         Unit of a numeric time column (default: the header's suffix or a units row, else minutes).
     sensors : list of str, optional
         The sensor columns to describe, in this order (default: all).
+    temperature_unit : {"C", "F", "K"}, optional
+        Unit of the temperature columns that state none of their own (default: °C).
 
     Returns
     -------
@@ -63,7 +69,10 @@ def describe_log(
     file = Path(path)
     frame, dialect = read_csv(file)
     # a log just begun is worth a look too: no five samples needed here
-    log = read_temperature_log(file, time_col=time_col, time_unit=time_unit, sensors=sensors, min_samples=1)
+    log = read_temperature_log(
+        file, time_col=time_col, time_unit=time_unit, sensors=sensors, min_samples=1, temperature_unit=temperature_unit
+    )
+    stated = stated_temperature_unit(temperature_unit)
     with file.open("rb") as handle:
         kind = binary_kind(handle.read(8))
     steps = np.diff(log.time_min)
@@ -79,7 +88,8 @@ def describe_log(
         per_sensor.append(
             {
                 "sensor": name,
-                "unit": dialect.unit_of(name).strip() or "°C (assumed)",
+                "unit": dialect.unit_of(name).strip()
+                or ("°C (assumed)" if stated is None else f"{stated} (`temperature_unit`)"),
                 "samples": int(len(valid)),
                 "missing": int(len(values) - len(valid)),
                 "first_C": float(valid[0]) if len(valid) else None,

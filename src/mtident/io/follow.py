@@ -38,6 +38,7 @@ from mtident.io.columns import (
     choose_time_column,
     millisecond_column,
     missing_column,
+    sensor_unit,
     temperature_columns,
     text_only_cells,
 )
@@ -181,6 +182,9 @@ class LogFollower:
         Minutes between the last two rows taken (a clock change is told against it).
     serial_days : bool
         The time column, named as dates, holds spreadsheet serial dates, read in days.
+    temperature_unit : str or None
+        Unit of the temperature columns that state none of their own ("C", "F" or "K"); None: °C. A
+        column whose own unit is another temperature unit is refused.
     """
 
     path: Path
@@ -203,6 +207,7 @@ class LogFollower:
     clock_shift: float = 0.0
     last_step: float | None = None  # minutes between the last two rows taken (a clock change is told by it)
     serial_days: bool = False  # a column named as dates holds spreadsheet serial dates: read in days
+    temperature_unit: str | None = None  # the unit of the temperature columns that state none (an option, not saved)
     # derived once from the header and the options, not saved: (minutes per unit, unit assumed) of a
     # numeric time column (looked up on every row, it cost an eighth of a 28,800-row replay)
     _time_scale: tuple[float, bool] | None = field(default=None, repr=False, compare=False)
@@ -233,7 +238,14 @@ class LogFollower:
         }
 
     @classmethod
-    def resume(cls, path: Path, position: dict[str, Any], time_col: str | None, time_unit: str | None) -> LogFollower:
+    def resume(
+        cls,
+        path: Path,
+        position: dict[str, Any],
+        time_col: str | None,
+        time_unit: str | None,
+        temperature_unit: str | None = None,
+    ) -> LogFollower:
         """A follower that continues from a saved position.
 
         Parameters
@@ -247,6 +259,8 @@ class LogFollower:
             The time column's name, None to find it.
         time_unit : str or None
             Unit of a numeric time column ("ms", "s", "min", "h", "d"), None to take it from the log.
+        temperature_unit : str or None, optional
+            Unit of the temperature columns that state none of their own ("C", "F" or "K"); None: °C.
 
         Returns
         -------
@@ -276,6 +290,7 @@ class LogFollower:
             clock_shift=float(position.get("clock_shift", 0.0)),
             last_step=position.get("last_step"),
             serial_days=bool(position.get("serial_days", False)),
+            temperature_unit=temperature_unit,
         )
 
     def _set_header(self, line: str, rows: list[list[str]]) -> list[str]:
@@ -357,10 +372,15 @@ class LogFollower:
             msg = f"{self.path}: no sensor column besides the room sensor {room_last!r}"
             raise InputError(msg)
         if room_last is not None:  # the room sensor, named, must be a temperature
-            sensors, unit_notes = temperature_columns(chosen[:-1], False, self.dialect, self.path)
-            chosen = [*sensors, *temperature_columns(chosen[-1:], True, self.dialect, self.path)[0]]
+            sensors, unit_notes = temperature_columns(
+                chosen[:-1], False, self.dialect, self.path, self.temperature_unit
+            )
+            room = temperature_columns(chosen[-1:], True, self.dialect, self.path, self.temperature_unit)[0]
+            chosen = [*sensors, *room]
         else:
-            chosen, unit_notes = temperature_columns(list(chosen), asked, self.dialect, self.path)
+            chosen, unit_notes = temperature_columns(
+                list(chosen), asked, self.dialect, self.path, self.temperature_unit
+            )
         return list(chosen), [*notes, *unit_notes]
 
     def _data_lines(self, lines: list[str], notes: list[str]) -> list[str]:
@@ -504,7 +524,10 @@ class LogFollower:
         lines, restarted = new
         assert self.header is not None and self.dialect is not None
         conversions = np.array(
-            [celsius_conversion(self.dialect.unit_of(self.header[i])) or (1.0, 0.0) for i in self.columns[1:]]
+            [
+                celsius_conversion(sensor_unit(self.header[i], self.dialect, self.temperature_unit)) or (1.0, 0.0)
+                for i in self.columns[1:]
+            ]
         ).reshape(-1, 2)
         times: list[float] = []
         rows: list[list[float]] = []

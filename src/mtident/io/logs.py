@@ -3,7 +3,9 @@
 The time column is the first one unless ``time_col`` names another. Its unit is
 minutes unless ``time_unit`` says otherwise or the header ends in ``_s``,
 ``_min`` or ``_h``; ISO-8601 timestamps are read as such, and so are dotted
-day-first ones (``22.11.2026 08:00:00``) and times of day. Temperatures are °C.
+day-first ones (``22.11.2026 08:00:00``) and times of day. Temperatures are °C
+unless a units row or a column's name says K or °F, or ``temperature_unit`` does
+for the columns that state no unit.
 The file may be comma-, semicolon- or tab-separated, with a decimal comma, a
 ``#`` preamble and cp1252 text (:mod:`mtident.io.dialect`).
 
@@ -35,6 +37,7 @@ from mtident.io.columns import (
     millisecond_column,
     missing_column,
     room_named,
+    sensor_unit,
     temperature_columns,
     text_only_cells,
 )
@@ -887,14 +890,21 @@ def as_temperature_log(log: object, caller: str) -> TemperatureLog:
 
 
 def _sensor_readings(
-    frame: pd.DataFrame, name: str, dialect: CsvDialect, source: str, first_row: int, notes: list[str]
+    frame: pd.DataFrame,
+    name: str,
+    dialect: CsvDialect,
+    source: str,
+    first_row: int,
+    notes: list[str],
+    temperature_unit: str | None = None,
 ) -> FloatArray:
-    """A sensor's column in °C, NaN for an empty or open-circuit cell (said in ``notes``); an
-    error naming the first cell that is no number, or a column mostly empty."""
+    """A sensor's column in °C (from its own unit, else ``temperature_unit``), NaN for an empty or
+    open-circuit cell (said in ``notes``); an error naming the first cell that is no number, or a
+    column mostly empty."""
     import pandas as pd
 
     raw = frame[name]
-    scale, offset = celsius_conversion(dialect.unit_of(name)) or (1.0, 0.0)
+    scale, offset = celsius_conversion(sensor_unit(name, dialect, temperature_unit)) or (1.0, 0.0)
     # One bad cell leaves a decimal-comma column as text: its good cells must still read as numbers
     # (the message named the first good cell, '20,00', instead of the bad one).
     cells = raw
@@ -941,6 +951,7 @@ def read_temperature_log(
     time_unit: str | None = None,
     min_samples: int = 5,
     sensors: list[str] | None = None,
+    temperature_unit: str | None = None,
 ) -> TemperatureLog:
     """Read and validate a CSV temperature log.
 
@@ -959,6 +970,10 @@ def read_temperature_log(
     sensors : list of str, optional
         The sensor columns to read and validate, in this order (default: all).
         A dead sensor that is not asked for does not stop the others.
+    temperature_unit : {"C", "F", "K"}, optional
+        Unit of the temperature columns that state none of their own (no units
+        row, no unit in the name); default: °C. A column whose own unit is
+        another temperature unit is refused.
 
     Returns
     -------
@@ -969,7 +984,8 @@ def read_temperature_log(
     InputError
         Missing or unreadable file, no such column, no sensor column, non-numeric
         cells, time not increasing or duplicated, too few samples, too many bad
-        samples in a sensor.
+        samples in a sensor, a column's own unit that ``temperature_unit``
+        contradicts.
     """
     read_notes: list[str] = []
     frame, dialect, source, first_row = _as_frame(path, read_notes)
@@ -996,7 +1012,9 @@ def read_temperature_log(
         raise InputError(msg)
     if not sensors:
         available = _sensor_candidates(frame, available, notes)
-    sensors, unit_notes = temperature_columns(list(sensors) if sensors else available, bool(sensors), dialect, source)
+    sensors, unit_notes = temperature_columns(
+        list(sensors) if sensors else available, bool(sensors), dialect, source, temperature_unit
+    )
     notes.extend(unit_notes)
     keep = _rows_with_readings(frame, header, sensors)
     if not keep.all():
@@ -1016,8 +1034,8 @@ def read_temperature_log(
     time_min = _time_min(frame, header, clock, time_unit, dialect, source, first_row, sub_second, notes)
     if (gap := gap_note(time_min)) is not None:
         notes.append(gap)
-    columns = [_sensor_readings(frame, name, dialect, source, first_row, notes) for name in sensors]
-    if (scale := scale_note(sensors, np.column_stack(columns), dialect)) is not None:
+    columns = [_sensor_readings(frame, name, dialect, source, first_row, notes, temperature_unit) for name in sensors]
+    if (scale := scale_note(sensors, np.column_stack(columns), dialect, temperature_unit)) is not None:
         notes.append(scale)
     return TemperatureLog(
         time_min,
@@ -1029,11 +1047,14 @@ def read_temperature_log(
     )
 
 
-def scale_note(sensors: list[str], values: FloatArray, dialect: CsvDialect) -> str | None:
+def scale_note(
+    sensors: list[str], values: FloatArray, dialect: CsvDialect, temperature_unit: str | None = None
+) -> str | None:
     """What a reader says when columns read as °C for want of a stated unit read far outside any
     workshop's range (``WORKSHOP_ROOM_C``): a column named as the room (:func:`room_named`), or
     every column above the range's top (at a warm-up's start the machine is near the room). A log in
-    °F (a room at 69) or K was taken as °C without a word. None otherwise.
+    °F (a room at 69) or K was taken as °C without a word. None otherwise, and where the user
+    stated the unit (``temperature_unit``).
 
     Parameters
     ----------
@@ -1043,12 +1064,16 @@ def scale_note(sensors: list[str], values: FloatArray, dialect: CsvDialect) -> s
         Their readings as read (°C where a unit was stated, else the numbers as written; NaN: missing).
     dialect : CsvDialect
         The log's dialect, which says which columns state their unit.
+    temperature_unit : str or None, optional
+        The unit the user stated for the columns without one: none of them is then assumed.
 
     Returns
     -------
     str or None
     """
     low, high = WORKSHOP_ROOM_C
+    if temperature_unit is not None:
+        return None
     assumed = [k for k, name in enumerate(sensors) if not dialect.unit_of(name).strip()]
     spans = {}
     for k in assumed:
@@ -1067,8 +1092,9 @@ def scale_note(sensors: list[str], values: FloatArray, dialect: CsvDialect) -> s
         return None
     return (
         f"readings taken as °C (the log states no unit), but {which}: far outside any workshop's range "
-        f"({low:g} to {high:g} °C). If the log is in °F (or K), state the unit and it is converted: a units row "
-        "under the header (min;°F;°F) or the unit in the column names (Room [°F])"
+        f"({low:g} to {high:g} °C). If the log is in °F (or K), state the unit and it is converted: "
+        "`temperature_unit='F'` (or `temperature_unit='K'`), a units row under the header (min;°F;°F) or the unit "
+        "in the column names (Room [°F])"
     )
 
 

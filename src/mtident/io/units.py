@@ -12,7 +12,11 @@ from __future__ import annotations
 
 import re
 
+from mtident.exceptions import InputError
+
 __all__ = [
+    "TEMPERATURE_UNIT_OPTIONS",
+    "stated_temperature_unit",
     "unit_key",
     "unit_in_name",
     "time_unit_name",
@@ -56,6 +60,10 @@ _TEMPERATURE_UNITS = {
     **dict.fromkeys(("k", "kelvin"), (1.0, -273.15)),
     **dict.fromkeys(("f", "degf", "fahrenheit", "degreesf", "degreef"), (5.0 / 9.0, -160.0 / 9.0)),
 }
+# The units a user may state for a log's temperature columns without a unit of their own
+# (``temperature_unit``, the command line's --unit), and how the notes and messages write them
+TEMPERATURE_UNIT_OPTIONS = {"C": "°C", "F": "°F", "K": "K"}
+_UNIT_WRITTEN = {(1.0, 0.0): "°C", (1.0, -273.15): "K", (5.0 / 9.0, -160.0 / 9.0): "°F"}
 # Units of a logger's other channels, named at the end of a column's name ("Speed (rpm)", "RH/%"):
 # such a column is no temperature. (A units row may name any unit; a name must name a known one.)
 # Not the letters a machine's sensors are labelled with: "Bearing (A)", "(N)" for north, and "(RH)"
@@ -237,6 +245,35 @@ def celsius_conversion(unit: str) -> tuple[float, float] | None:
     if not unit.strip():
         return 1.0, 0.0
     return _TEMPERATURE_UNITS.get(unit_key(unit))
+
+
+def stated_temperature_unit(unit: str | None) -> str | None:
+    """The temperature unit a user states for a log's columns without a unit of their own, as the
+    notes write it ("F": "°F"); None where none is stated.
+
+    Parameters
+    ----------
+    unit : str or None
+        "C", "F" or "K" (a unit as a log writes it, "°F" or "Kelvin", is taken too); None: the log's own
+        units, °C where it states none.
+
+    Returns
+    -------
+    str or None
+        "°C", "°F" or "K"; None for None.
+
+    Raises
+    ------
+    InputError
+        ``unit`` is no unit of temperature.
+    """
+    if unit is None:
+        return None
+    conversion = _TEMPERATURE_UNITS.get(unit_key(unit)) if unit.strip() else None
+    if conversion is None:
+        msg = f"temperature unit {unit!r} is not one of: {', '.join(TEMPERATURE_UNIT_OPTIONS)}"
+        raise InputError(msg)
+    return _UNIT_WRITTEN[conversion]
 
 
 def is_humidity(name: str) -> bool:

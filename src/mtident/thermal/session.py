@@ -121,7 +121,11 @@ def log_fingerprint(path: Path, length: int = FINGERPRINT_BYTES) -> tuple[str, i
 
 
 def _settings_key(
-    settings: MonitorSettings, sensors: list[str] | None, time_col: str | None, time_unit: str | None
+    settings: MonitorSettings,
+    sensors: list[str] | None,
+    time_col: str | None,
+    time_unit: str | None,
+    temperature_unit: str | None = None,
 ) -> str:
     """Everything that changes the answer, as text: a state saved with another key is not resumed."""
     fields = dataclasses.asdict(settings)
@@ -132,11 +136,10 @@ def _settings_key(
         if settings.reference is None
         else {name: dataclasses.asdict(m) for name, m in settings.reference.sensors.items()}
     )
-    return json.dumps(
-        {"settings": fields, "sensors": sensors, "time_col": time_col, "time_unit": time_unit},
-        sort_keys=True,
-        default=str,
-    )
+    options: dict[str, object] = {"settings": fields, "sensors": sensors, "time_col": time_col, "time_unit": time_unit}
+    if temperature_unit is not None:  # the log's own units, as before the option: such a state resumes
+        options["temperature_unit"] = temperature_unit
+    return json.dumps(options, sort_keys=True, default=str)
 
 
 class WatchSession:
@@ -152,6 +155,8 @@ class WatchSession:
         The sensors to watch (default: every temperature column but the room's).
     time_col, time_unit : str, optional
         How to read the time column.
+    temperature_unit : {"C", "F", "K"}, optional
+        Unit of the temperature columns that state none of their own (default: °C).
     state_path : Path, optional
         The state file (default: beside the log, :func:`default_state_path`).
     persist : bool
@@ -182,6 +187,7 @@ class WatchSession:
         sensors: list[str] | None = None,
         time_col: str | None = None,
         time_unit: str | None = None,
+        temperature_unit: str | None = None,
         state_path: Path | None = None,
         resume: bool = True,
         persist: bool = True,
@@ -195,11 +201,13 @@ class WatchSession:
         self.cancelled = False
         room = settings.room_sensor
         self._asked = None if sensors is None else [*[n for n in sensors if n != room], *([room] if room else [])]
-        self._key = _settings_key(settings, sensors, time_col, time_unit)
+        self._key = _settings_key(settings, sensors, time_col, time_unit, temperature_unit)
         self._fingerprint: tuple[str, int] = ("", 0)
         self.state: MonitorState | None = None
         self._saved: MonitorState | None = None  # the state the state file holds (None: none written)
-        self.follower = LogFollower(self.path, self._asked, time_col, time_unit, room=room)
+        self.follower = LogFollower(
+            self.path, self._asked, time_col, time_unit, room=room, temperature_unit=temperature_unit
+        )
         if resume and self.state_path.is_file():
             self._resume(time_col, time_unit)
 
@@ -229,7 +237,9 @@ class WatchSession:
             )
             self.notes.append(f"the state file {self.state_path} was written for {' and '.join(differs)}; {afresh}")
             return
-        self.follower = LogFollower.resume(self.path, json.loads(saved.position), time_col, time_unit)
+        self.follower = LogFollower.resume(
+            self.path, json.loads(saved.position), time_col, time_unit, self.follower.temperature_unit
+        )
         self.state = self._saved = saved.monitor
         self._fingerprint = (saved.fingerprint, saved.fingerprint_bytes)
         self.notes.append(f"resuming from {self.state_path} at t = {minutes(saved.monitor.readings.latest_min)}")
@@ -351,7 +361,8 @@ class WatchSession:
                     self.save(before)
                 # the rest of the rows are read again by the next poll (as by a resumed watch)
                 time_col, time_unit = self.follower.time_col, self.follower.time_unit
-                self.follower = LogFollower.resume(self.path, before, time_col, time_unit)
+                unit = self.follower.temperature_unit
+                self.follower = LogFollower.resume(self.path, before, time_col, time_unit, unit)
                 return events
             if progress is not None:
                 progress(self)
@@ -455,7 +466,14 @@ class WatchSession:
             return np.empty(0), np.empty((0, 0)), None
         room = self.settings.room_sensor
         columns = [*self.state.sensors, *([room] if room else [])]
-        rows = LogFollower(self.path, columns, self.follower.time_col, self.follower.time_unit, room=room).poll()
+        rows = LogFollower(
+            self.path,
+            columns,
+            self.follower.time_col,
+            self.follower.time_unit,
+            room=room,
+            temperature_unit=self.follower.temperature_unit,
+        ).poll()
         if room:
             return rows.time_min, rows.temperature_C[:, :-1], rows.temperature_C[:, -1]
         return rows.time_min, rows.temperature_C, None
