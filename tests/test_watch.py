@@ -953,7 +953,8 @@ def test_an_interval_without_bounds_is_said_so_not_as_infinities():
     """A new user's events read "interval -inf to inf °C"."""
     from dataclasses import replace as changed
 
-    from mtident.thermal.monitor import SensorCheck, _check_events, _reason
+    from mtident.thermal.monitor import SensorCheck, _check_events
+    from mtident.thermal.monitor_answer import _reason
     from mtident.thermal.robust import estimate_sensor
 
     estimate = estimate_sensor("S", np.arange(10.0), np.zeros(10))

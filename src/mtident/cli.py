@@ -318,22 +318,27 @@ def carried_interrupt(error: SystemError) -> KeyboardInterrupt | None:
 
 
 class LazyGroup(click.Group):
-    """A command group whose commands live in a module imported when first needed.
+    """A command group whose commands live in modules imported when first needed.
 
     ``mtident thermal ...`` then does not load the feed-drive code (nor ``--version`` either).
+    The group names every module that registers a command on it: here, in one place.
 
     Parameters
     ----------
     *args, **kwargs
         Passed on to ``click.Group``.
-    commands_module : str
-        Dotted name of the module whose import registers the group's commands on it
-        (``"mtident.cli_thermal"``).
+    commands_modules : tuple of str
+        Dotted names of the modules whose import registers the group's commands on it
+        (``("mtident.cli_thermal", "mtident.cli_watch")``), imported in this order.
     """
 
-    def __init__(self, *args: Any, commands_module: str, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, commands_modules: tuple[str, ...], **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        self.commands_module = commands_module
+        self.commands_modules = commands_modules
+
+    def _register(self) -> None:
+        for module in self.commands_modules:
+            importlib.import_module(module)  # registers its commands on this group
 
     def list_commands(self, ctx: click.Context) -> list[str]:
         """The group's command names, its module imported first.
@@ -346,7 +351,7 @@ class LazyGroup(click.Group):
         -------
         list of str
         """
-        importlib.import_module(self.commands_module)  # registers its commands on this group
+        self._register()
         return super().list_commands(ctx)
 
     def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
@@ -362,7 +367,7 @@ class LazyGroup(click.Group):
         click.Command or None
             None where the group has no such command.
         """
-        importlib.import_module(self.commands_module)
+        self._register()
         return super().get_command(ctx, cmd_name)
 
 
@@ -372,11 +377,12 @@ def main() -> None:
     """When a machine tool's warm-up test can stop, and a ball-screw feed drive's stiffness and damping."""
 
 
-@main.group(cls=LazyGroup, commands_module="mtident.cli_thermal")
+# every command of a group is registered by importing the modules named here
+@main.group(cls=LazyGroup, commands_modules=("mtident.cli_thermal", "mtident.cli_watch", "mtident.cli_report"))
 def thermal() -> None:
     """Thermal test acceleration: identify a warm-up from its first minutes."""
 
 
-@main.group(cls=LazyGroup, commands_module="mtident.cli_feeddrive")
+@main.group(cls=LazyGroup, commands_modules=("mtident.cli_feeddrive",))
 def feeddrive() -> None:
     """Ball-screw feed drive: 4-DOF model, modes, simulation, identification."""

@@ -32,7 +32,7 @@ from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 from mtident.thermal.identify import Identification
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
-from mtident.thermal.robust import MAX_FREE_FAST
+from mtident.thermal.robust_types import MAX_FREE_FAST
 from mtident.thermal.settings import IDENTIFY_METHODS, ROBUST_METHOD
 
 if TYPE_CHECKING:
@@ -1025,6 +1025,3 @@ def inspect_command(
     _say_room_candidates(
         [str(d["sensor"]) for d in sensor_rows], "read as a sensor column", " (with identify, watch, learn or report)"
     )
-
-
-from mtident import cli_watch  # noqa: E402,F401 - registers `thermal watch` and `thermal report` on the group

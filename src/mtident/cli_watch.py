@@ -7,16 +7,14 @@ tables, a picture and the JSON answer.
 
 from __future__ import annotations
 
-import contextlib
 import math
 import signal
 import sys
 import threading
 import time
-import urllib.parse
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import click
 import numpy as np
@@ -35,6 +33,7 @@ from mtident.cli import (
     thermal,
     user_errors,
 )
+from mtident.cli_sources import Recorder, network_recorder
 from mtident.cli_thermal import (
     _column_layout,
     _fmt,
@@ -51,7 +50,6 @@ from mtident.cli_thermal import (
 )
 from mtident.exceptions import InputError
 from mtident.io.logs import SAMPLES
-from mtident.io.mtconnect import MTConnectRecorder
 from mtident.io.record import RecordingThread
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
@@ -139,132 +137,6 @@ def decision_options(func: F) -> F:
     for option in reversed(options):
         func = option(func)
     return func
-
-
-class Recorder(Protocol):
-    """A network source recorded to the CSV log the watch follows.
-
-    Attributes
-    ----------
-    log : Path
-        The CSV log the readings are written to.
-    """
-
-    log: Path
-
-    def fetch(self) -> list[str]:
-        """Write the readings received since the last fetch to the log.
-
-        Returns
-        -------
-        list of str
-            What the user should hear of (the source unreachable, or back again).
-        """
-        ...
-
-    def close(self) -> None:
-        """Write what is left to the log, and close the connection."""
-        ...
-
-
-def network_recorder(
-    file: str,
-    device: str | None,
-    nodes: tuple[str, ...],
-    items: tuple[str, ...],
-    record_path: str | None,
-    from_buffer_start: bool,
-    replay: bool,
-) -> Recorder | None:
-    """The recorder of an MTConnect agent (http:// or https://) or an OPC UA server (opc.tcp://)
-    where FILE is one, else None; a source's options refused for a file.
-
-    Parameters
-    ----------
-    file : str
-        FILE: a log, an MTConnect agent's URL (http:// or https://) or an OPC UA server's
-        (opc.tcp://).
-    device : str or None
-        --device: the MTConnect device's name.
-    nodes : tuple of str
-        --node: the OPC UA nodes to record.
-    items : tuple of str
-        --item: MTConnect data items as ID=NAME.
-    record_path : str or None
-        --record: the CSV to write (default: DEVICE.csv or HOST.csv in the current folder).
-    from_buffer_start : bool
-        --from-buffer-start.
-    replay : bool
-        --replay.
-
-    Returns
-    -------
-    Recorder or None
-        None for a log file.
-
-    Raises
-    ------
-    InputError
-        An option of one kind of source given for another or for a file, --replay with a source,
-        or an --item that is not ID=NAME.
-    """
-    is_agent, is_server = file.startswith(("http://", "https://")), file.startswith("opc.tcp://")
-    given = {
-        "--device": device,
-        "--item": items,
-        "--from-buffer-start": from_buffer_start,
-        "--node": nodes,
-        "--record": record_path,
-    }
-    wrong = [
-        name
-        for name, value in given.items()
-        if value and not (is_agent and name != "--node" or is_server and name in ("--node", "--record"))
-    ]
-    if wrong:
-        msg = (
-            f"{', '.join(wrong)}: not for "
-            f"{'an OPC UA server' if is_server else 'an MTConnect agent' if is_agent else 'a log file'} "
-            "(--device, --item and --from-buffer-start are for an MTConnect agent, http://host:5000; --node for an OPC "
-            "UA server, opc.tcp://host:4840; --record for either)"
-        )
-        raise InputError(msg)
-    if not (is_agent or is_server):
-        return None
-    if replay:
-        msg = (
-            f"{file}: --replay replays a log file; the readings are recorded (--record) and can be replayed from there"
-        )
-        raise InputError(msg)
-    host = urllib.parse.urlparse(file).hostname or "source"
-    log = Path(record_path) if record_path else Path.cwd() / f"{device or host}.csv"
-    if is_server:
-        import logging
-
-        from mtident.io.opcua import OpcUaRecorder
-
-        # the recorder says when the server does not answer; asyncua's own tracebacks of it are noise here
-        logging.getLogger("asyncua").setLevel(logging.CRITICAL)
-        with _record_hint():
-            return OpcUaRecorder(file, log, list(nodes))
-    mapping = {}
-    for item in items:
-        key, sep, name = item.partition("=")
-        if not sep or not key.strip() or not name.strip():
-            msg = f"--item {item!r}: expected ID=NAME (a data item's id or name, and the sensor's name)"
-            raise InputError(msg)
-        mapping[key.strip()] = name.strip()
-    with _record_hint():
-        return MTConnectRecorder(file, log, device, mapping or None, from_buffer_start=from_buffer_start)
-
-
-@contextlib.contextmanager
-def _record_hint() -> Iterator[None]:
-    """A recorder's refusal to resume a log with the option that names another."""
-    try:
-        yield
-    except InputError as error:
-        raise InputError(f"{error} (--record FILE)") from None
 
 
 def state_file(file: str, path: Path, given: str | None) -> Path:
@@ -553,32 +425,17 @@ def watch_command(
         stderr.print(f"mtident: recording {file} to {path}", highlight=False)
     elif not path.is_file():
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
-    live = sys.stdout.isatty() and not as_json
-    page, served = _serve(serve_address, path)
-    on_main = threading.current_thread() is threading.main_thread()
-    _terminating.clear()
-    previous = signal.signal(signal.SIGTERM, _terminate) if on_main else None
-    # the source is recorded on its own thread: its rows reach the log while the fits run
-    recording = None if recorder is None else RecordingThread(recorder, poll_s)
-    try:
-        interrupted = _follow(
-            session,
-            path,
-            replay,
-            poll_s,
-            timeout_s,
-            plot_path,
-            live,
-            None if recording is None else recording.fetch,
-            page,
-        )
-    finally:
-        if on_main:
-            signal.signal(signal.SIGTERM, previous)
-        if served is not None:
-            served.stop()
-        if recording is not None:
-            recording.close()
+    interrupted = _follow_served(
+        session,
+        path,
+        replay,
+        poll_s,
+        timeout_s,
+        plot_path,
+        sys.stdout.isatty() and not as_json,
+        serve_address,
+        recorder,
+    )
     if session.state is None:
         if interrupted:
             sys.exit(130)
@@ -601,6 +458,71 @@ def watch_command(
     )
     if interrupted:
         sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
+
+
+def _follow_served(
+    session: WatchSession,
+    path: Path,
+    replay: bool,
+    poll_s: float,
+    timeout_s: float | None,
+    plot_path: str | None,
+    live: bool,
+    serve_address: str | None,
+    recorder: Recorder | None,
+) -> bool:
+    """:func:`_follow` with its surroundings: the live page served where ``--serve`` asks for one,
+    SIGTERM taken as an interrupt (on the main thread), and a network source recorded on its own
+    thread; each undone when the following ends.
+
+    Parameters
+    ----------
+    session : WatchSession
+    path : Path
+        The log followed.
+    replay : bool
+        Replay a finished log instead of following a growing one.
+    poll_s, timeout_s : float
+        How often to look for new rows, and how long to wait for the log to appear (s).
+    plot_path : str or None
+        Where to keep a plot up to date.
+    live : bool
+        Redraw the table in place (a terminal, not JSON).
+    serve_address : str or None
+        Where to serve the live page (None: no page).
+    recorder : Recorder or None
+        A network source that writes the log (None: a log file).
+
+    Returns
+    -------
+    bool
+        Whether the following was interrupted (Ctrl-C or SIGTERM).
+    """
+    page, served = _serve(serve_address, path)
+    on_main = threading.current_thread() is threading.main_thread()
+    _terminating.clear()
+    previous = signal.signal(signal.SIGTERM, _terminate) if on_main else None
+    # the source is recorded on its own thread: its rows reach the log while the fits run
+    recording = None if recorder is None else RecordingThread(recorder, poll_s)
+    try:
+        return _follow(
+            session,
+            path,
+            replay,
+            poll_s,
+            timeout_s,
+            plot_path,
+            live,
+            None if recording is None else recording.fetch,
+            page,
+        )
+    finally:
+        if on_main:
+            signal.signal(signal.SIGTERM, previous)
+        if served is not None:
+            served.stop()
+        if recording is not None:
+            recording.close()
 
 
 def _follow(
@@ -991,6 +913,3 @@ def _workbook_as_replayed_csv(path: Path) -> Path:
     copy = folder / f"{path.stem}.csv"
     copy.write_bytes(workbook_as_csv(path, path))
     return copy
-
-
-from mtident import cli_report  # noqa: E402,F401 - registers `thermal report` (it shares the decision options)

@@ -315,7 +315,8 @@ def test_a_reference_learnt_with_a_room_sensor_used_without_one_is_said(tmp_path
 def test_the_assumptions_say_how_many_free_modes_a_reference_leaves_room_for():
     """Two free modes by default, but never more than four modes in all: a reference of three
     modes leaves room for one, and the assumptions say why it is not two."""
-    from mtident.thermal.robust import RobustSettings, describe_assumptions
+    from mtident.thermal.assumptions import describe_assumptions
+    from mtident.thermal.robust import RobustSettings
 
     reference = MachineReference(
         "run.csv",

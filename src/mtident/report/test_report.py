@@ -473,7 +473,7 @@ def _recorder(log: Path) -> tuple[str | None, dt.datetime | None]:
 
 def _holding(state: MonitorState, settings: MonitorSettings, expected: dict[str, float]) -> tuple[tuple[str, ...], str]:
     """Why the test could not stop, a line per sensor that holds it, and the ways on."""
-    from mtident.thermal.monitor import _room_bound
+    from mtident.thermal.monitor_answer import _room_bound
 
     waiting = [c for c in state.checks if settings.waits_for(c.sensor) and not c.may_stop]
     if not waiting:

@@ -27,7 +27,7 @@ import numpy as np
 
 from mtident._json import finite_or_none
 from mtident._typing import FloatArray
-from mtident.thermal.identify import measured_equilibrium
+from mtident.thermal.measured import measured_equilibrium
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 

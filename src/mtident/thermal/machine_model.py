@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import optimize
@@ -40,9 +39,6 @@ from mtident.thermal.modal_types import Binned, IntervalEnd, Mode, bin_samples
 from mtident.thermal.modes import equilibrium_time
 from mtident.thermal.readings import display_resolution, noise_sigma, smoothed_room
 from mtident.thermal.robust import RobustSettings, SensorEstimate, room_wander_half_width
-
-if TYPE_CHECKING:
-    from mtident.thermal.reference import MachineReference
 
 FAST_TIME_CONSTANTS_MIN = (0.7, 2.5)
 """Each sensor's own fast modes (free amplitudes): a sensor's lag, the start's details."""
@@ -612,24 +608,20 @@ def fit_readings(
 
 
 def machine_fit_of_window(
-    reference: MachineReference | None,
+    model: MachineModel | None,
     sensors: tuple[str, ...] | list[str],
     time_min: FloatArray,
     values: FloatArray,
     room_C: FloatArray | None,
     settings: RobustSettings,
 ) -> MachineFit | None:
-    """:func:`fit_readings` with a reference's machine model at ``settings.levels`` (None without one)."""
-    model = None if reference is None else reference.machine_model
+    """:func:`fit_readings` at ``settings.levels`` (None without a model)."""
     return None if model is None else fit_readings(model, sensors, time_min, values, room_C, settings.levels)
 
 
-def unmeasured_wander(
-    reference: MachineReference | None, room_measured: bool, settings: RobustSettings
-) -> dict[float, float]:
+def unmeasured_wander(model: MachineModel | None, room_measured: bool, settings: RobustSettings) -> dict[float, float]:
     """Per level, how far the room's unmeasured wander moves T∞ through the machine model's
     slowest mode (nothing where the room is measured, or without a machine model)."""
-    model = None if reference is None else reference.machine_model
     if room_measured or model is None:
         return {}
     slowest = max(model.time_constants_min)

@@ -21,26 +21,36 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
-from typing import Literal
+from dataclasses import replace
 
 import numpy as np
 
-from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.thermal.machine_model import MachineFit, combined_estimate, machine_fit_of_window, unmeasured_wander
-from mtident.thermal.modes import Mode, model_curve
-from mtident.thermal.reference import MachineReference, reference_notes
-from mtident.thermal.robust import (
-    Assumptions,
-    RobustSettings,
-    SensorEstimate,
-    describe_assumptions,
-    estimate_sensor,
-    room_wander_half_width,
-    sampling_interval_min,
+from mtident.thermal.machine_model import (
+    MachineFit,
+    MachineModel,
+    combined_estimate,
+    machine_fit_of_window,
+    unmeasured_wander,
 )
+from mtident.thermal.modes import Mode, model_curve
+from mtident.thermal.monitor_answer import assumptions, result
+from mtident.thermal.monitor_types import (
+    REPORT_LEVEL,
+    Event,
+    EventKind,
+    MonitorSettings,
+    MonitorState,
+    Readings,
+    SensorCheck,
+    Status,
+    minutes,
+)
+from mtident.thermal.readings import sampling_interval_min
+from mtident.thermal.reference import reference_notes
+from mtident.thermal.robust import estimate_sensor
+from mtident.thermal.robust_types import SensorEstimate
 
 __all__ = [
     "Event",
@@ -60,368 +70,13 @@ __all__ = [
     "sensor_estimate",
 ]
 
-# a sensor's status at its latest check, as a table and the JSON show it
-Status = Literal[
-    "collecting",
-    "no data",
-    "no rise",
-    "undetermined",
-    "narrowing",
-    "confirming",
-    "may stop",
-    "misfit",
-    "off reference",
-    "too coarse",
-]
-# what an event of the monitor (and of a watch session) says
-EventKind = Literal["check", "ready", "not ready", "stop", "warning", "note"]
-
 # a check falls due this little before its time (min): 60 µs, far below any logging interval
 _DUE_SLACK_MIN = 1e-6
+
+
 # checks of a sensor far from the tolerance, or waiting for the others, come this many times
 # ``check_spacing`` apart
 _LONGEST_SHARE = 4.0
-
-# the interval's level for the report and for the decision
-REPORT_LEVEL = 0.95
-
-
-@dataclass(frozen=True)
-class MonitorSettings:
-    """How the monitor decides.
-
-    Parameters
-    ----------
-    tolerance_C : float
-        A sensor may stop when every model the data allow puts T∞ within this of the estimate.
-    decision_level : float
-        Confidence level of the interval the decision uses.
-    consecutive_checks : int
-        Checks in a row that must find the interval within the tolerance.
-    check_spacing : float
-        Checks come every this fraction of the time since the sensor's warm-up began (more
-        seldom while the interval is far from the tolerance).
-    robust : RobustSettings
-        The largest time constant and the room's wander.
-    reference : MachineReference, optional
-        A reference run of the same machine.
-    room_sensor : str, optional
-        The room sensor's name, where one is used.
-    wait_for : tuple of str
-        The sensors whose T∞ the test waits for (empty: every sensor watched); the others are
-        checked and reported but do not hold the stop (a slow column sensor in a spindle test).
-
-    Raises
-    ------
-    InputError
-        A tolerance, level, number of checks, check spacing, largest time constant or room wander
-        outside its range.
-    """
-
-    tolerance_C: float = 0.2
-    decision_level: float = 0.99
-    consecutive_checks: int = 2
-    check_spacing: float = 0.025
-    robust: RobustSettings = field(default_factory=RobustSettings)
-    reference: MachineReference | None = None
-    room_sensor: str | None = None
-    wait_for: tuple[str, ...] = ()
-
-    def waits_for(self, sensor: str) -> bool:
-        """Whether the test waits for ``sensor`` (every sensor, unless ``wait_for`` names some).
-
-        Parameters
-        ----------
-        sensor : str
-
-        Returns
-        -------
-        bool
-        """
-        return not self.wait_for or sensor in self.wait_for
-
-    def __post_init__(self) -> None:
-        checks = [
-            (
-                "tolerance_C",
-                self.tolerance_C,
-                math.isfinite(self.tolerance_C) and self.tolerance_C > 0,
-                "a positive number of °C",
-            ),
-            ("decision_level", self.decision_level, 0.5 < self.decision_level < 1.0, "a probability between 0.5 and 1"),
-            ("consecutive_checks", self.consecutive_checks, self.consecutive_checks >= 1, "at least 1"),
-            ("check_spacing", self.check_spacing, 0 < self.check_spacing <= 1, "a fraction in (0, 1]"),
-            (
-                "max_time_constant_min",
-                self.robust.max_time_constant_min,
-                math.isfinite(self.robust.max_time_constant_min) and self.robust.max_time_constant_min > 0,
-                "a positive number of minutes",
-            ),
-            (
-                "room_wander_C_per_h",
-                self.robust.room_wander_C_per_h,
-                math.isfinite(self.robust.room_wander_C_per_h) and self.robust.room_wander_C_per_h >= 0,
-                "0 or more °C in an hour",
-            ),
-        ]
-        for name, value, ok, expected in checks:
-            if not ok:
-                msg = f"{name}: expected {expected}, found {value!r}"
-                raise InputError(msg)
-
-    @property
-    def levels(self) -> tuple[float, ...]:
-        """The levels the intervals are computed at: the report's (95 %) and the decision's.
-
-        Returns
-        -------
-        tuple of float
-        """
-        return (REPORT_LEVEL, self.decision_level)
-
-
-@dataclass(frozen=True)
-class Readings:
-    """Every reading so far: times (N,), the sensors' readings (N, S) and the room's (N,).
-
-    Attributes
-    ----------
-    time_min : ndarray, shape (N,)
-        Minutes since the log began, increasing.
-    values_C : ndarray, shape (N, S)
-        The sensors' readings (°C, NaN: missing).
-    room_C : ndarray, shape (N,), optional
-        The room sensor's readings (°C); None without a room sensor.
-    """
-
-    time_min: FloatArray
-    values_C: FloatArray
-    room_C: FloatArray | None = None
-
-    def append(self, time_min: FloatArray, values_C: FloatArray, room_C: FloatArray | None) -> Readings:
-        """These readings with more after them.
-
-        Parameters
-        ----------
-        time_min : ndarray, shape (n,)
-            The new times (min), after the last one.
-        values_C : ndarray, shape (n, S)
-            The sensors' new readings (°C, NaN: missing).
-        room_C : ndarray, shape (n,) or None
-            The room's new readings (°C); None without a room sensor.
-
-        Returns
-        -------
-        Readings
-        """
-        room = None if self.room_C is None or room_C is None else np.concatenate([self.room_C, room_C])
-        return Readings(np.concatenate([self.time_min, time_min]), np.concatenate([self.values_C, values_C]), room)
-
-    @property
-    def latest_min(self) -> float:
-        """The time of the last reading (NaN before the first).
-
-        Returns
-        -------
-        float
-            The time (min).
-        """
-        return float(self.time_min[-1]) if len(self.time_min) else math.nan
-
-
-@dataclass(frozen=True)
-class SensorCheck:
-    """One sensor's latest check, in plain numbers (what a table or a page shows).
-
-    ``passes`` counts the checks in a row that found the interval within the tolerance;
-    ``status`` is one of "collecting", "no data", "no rise", "undetermined", "narrowing",
-    "confirming", "may stop", "misfit", "off reference", "too coarse" (readings in steps no finer than the
-    tolerance).
-
-    Attributes
-    ----------
-    sensor : str
-    status : Status
-    checked_min : float
-        When it was last checked (min), NaN before its first check.
-    next_check_min : float
-        When its next check falls due (min).
-    passes : int
-    ready_since_min : float
-        The check from which it may stop (min), NaN while it may not.
-    steady_C : float
-        T∞ (°C), NaN without a fit.
-    low95_C, high95_C : float
-        T∞'s 95 % interval (°C), infinite without one.
-    low_C, high_C : float
-        T∞'s interval at the decision's level (°C), infinite without one.
-    equilibrium_time_min : float
-        When the best model stays within 5 % of its total rise from T∞ (min, from the log's start),
-        NaN without a fit.
-    origin_min : float
-        Where its warm-up begins (min).
-    modes : tuple of (float, float)
-        The best model's modes: time constant (min) and amplitude (°C).
-    noise_C : float
-        The readings' noise (°C, per reading).
-    rise_C : float
-        How far it has moved from its first level (°C).
-    model_ok : bool
-        The data do not contradict the model, and T∞ is determined.
-    reference_used : bool
-        The reference run's time constants were used.
-    machine_used : bool
-        T∞ and its intervals come with the machine model's (every sensor fitted together).
-    warnings : tuple of str
-    ends : str
-        In words, what sets the interval's ends (or why its readings are too coarse).
-    room_level_C : float
-        The room's last level (°C), NaN without a room sensor.
-    room_gains : tuple of float
-        The best model's gain on the room per mode (with a room sensor; its course as logged).
-    """
-
-    sensor: str
-    status: Status = "collecting"
-    checked_min: float = math.nan
-    next_check_min: float = 0.0
-    passes: int = 0
-    ready_since_min: float = math.nan
-    steady_C: float = math.nan
-    low95_C: float = -math.inf
-    high95_C: float = math.inf
-    low_C: float = -math.inf
-    high_C: float = math.inf
-    equilibrium_time_min: float = math.nan
-    origin_min: float = 0.0
-    modes: tuple[tuple[float, float], ...] = ()
-    noise_C: float = math.nan
-    rise_C: float = 0.0
-    model_ok: bool = False
-    reference_used: bool = False
-    machine_used: bool = False
-    warnings: tuple[str, ...] = ()
-    ends: str = ""
-    room_level_C: float = math.nan
-    room_gains: tuple[float, ...] = ()
-
-    @property
-    def half_width_C(self) -> float:
-        """The larger distance from T∞ to an end of the decision's interval.
-
-        Returns
-        -------
-        float
-            The half-width (°C), infinite without T∞.
-        """
-        return (
-            max(self.steady_C - self.low_C, self.high_C - self.steady_C) if math.isfinite(self.steady_C) else math.inf
-        )
-
-    @property
-    def may_stop(self) -> bool:
-        """Whether this sensor may stop (its status is "may stop").
-
-        Returns
-        -------
-        bool
-        """
-        return self.status == "may stop"
-
-
-@dataclass(frozen=True)
-class MonitorState:
-    """Everything the monitor knows: the readings, each sensor's latest check, the decision, and
-    the warnings already said (each said once per sensor).
-
-    Attributes
-    ----------
-    sensors : tuple of str
-    readings : Readings
-    checks : tuple of SensorCheck
-        One per sensor, in the order of ``sensors``.
-    stop_time_min : float
-        When the test may stop (min), NaN until then.
-    said : tuple of str
-        The warnings already said, one entry per sensor and kind of warning.
-    reference_dropped : bool
-        Whether the reference was dropped for every sensor, most of those it knows having
-        contradicted it (another machine's, or this one changed).
-    """
-
-    sensors: tuple[str, ...]
-    readings: Readings
-    checks: tuple[SensorCheck, ...]
-    stop_time_min: float = math.nan
-    said: tuple[str, ...] = ()
-    reference_dropped: bool = False
-
-    @property
-    def stopped(self) -> bool:
-        """Whether the test may stop (``stop_time_min`` is set).
-
-        Returns
-        -------
-        bool
-        """
-        return math.isfinite(self.stop_time_min)
-
-    def __repr__(self) -> str:
-        # a notebook shows the decision, not the readings' arrays
-        decision = f"stop at t = {minutes(self.stop_time_min)}" if self.stopped else "continue"
-        statuses = ", ".join(f"{c.sensor} {c.status}" for c in self.checks)
-        return (
-            f"MonitorState({len(self.sensors)} sensor(s), t = {minutes(self.readings.latest_min)}, decision: "
-            f"{decision}; {statuses})"
-        )
-
-
-@dataclass(frozen=True)
-class Event:
-    """Something the monitor has to say: ``kind`` is "check", "ready", "not ready", "stop",
-    "warning" or "note".
-
-    Attributes
-    ----------
-    kind : EventKind
-    time_min : float
-        When it was said (min, on the log's clock).
-    text : str
-        What to say.
-    sensor : str or None
-        The sensor it is about; None for the whole test.
-    """
-
-    kind: EventKind
-    time_min: float
-    text: str
-    sensor: str | None = None
-
-
-def minutes(value: float) -> str:
-    """Minutes as a person reads them: whole where whole, else to 0.1 (or to the second below
-    a minute).
-
-    Parameters
-    ----------
-    value : float
-        A time (min).
-
-    Returns
-    -------
-    str
-        With its unit: "12 min", "12.3 min", below a minute "30 s"; "—" for NaN or infinity.
-
-    Examples
-    --------
-    >>> minutes(12.0), minutes(12.34), minutes(0.5), minutes(float("nan"))
-    ('12 min', '12.3 min', '30 s', '—')
-    """
-    if not math.isfinite(value):
-        return "—"
-    if abs(value - round(value)) < 1e-6:
-        return f"{round(value):d} min"
-    return f"{value:.1f} min" if abs(value) >= 1 else f"{value * 60:.0f} s"
 
 
 def new_state(sensors: tuple[str, ...] | list[str], with_room: bool = False) -> MonitorState:
@@ -586,7 +241,7 @@ def _check_due(
             sensor_estimate(readings, s, state.sensors[s], used),
             machine[id(used.reference)],
             s,
-            unmeasured_wander(used.reference, readings.room_C is not None, replace(used.robust, levels=used.levels)),
+            unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels)),
         )
         before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used)
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
@@ -666,8 +321,12 @@ def machine_fit(readings: Readings, sensors: tuple[str, ...], settings: MonitorS
     """
     robust = replace(settings.robust, levels=settings.levels)
     return machine_fit_of_window(
-        settings.reference, sensors, readings.time_min, readings.values_C, readings.room_C, robust
+        _model_of(settings), sensors, readings.time_min, readings.values_C, readings.room_C, robust
     )
+
+
+def _model_of(settings: MonitorSettings) -> MachineModel | None:
+    return None if settings.reference is None else settings.reference.machine_model
 
 
 def sensor_estimate(
@@ -932,203 +591,3 @@ def _candidate_times(now: float, horizon: float, origin: float) -> list[float]:
         out.append(origin + elapsed * 1.15**k)
         k += 1
     return out
-
-
-def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = False) -> Assumptions:
-    """What a sensor's interval rests on, as the answer says it.
-
-    Parameters
-    ----------
-    settings : MonitorSettings
-        The largest time constant, the room's wander or sensor, and the reference run.
-    sensor : str
-        The sensor whose reference modes, if any, are described.
-    room_measured : bool
-        The monitor is given the room's readings (named or not by ``settings.room_sensor``).
-
-    Returns
-    -------
-    Assumptions
-        The model, the largest time constant (min), how the room entered, and the reference.
-    """
-    return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor, room_measured)
-
-
-def result(
-    state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None
-) -> dict[str, object]:
-    """The JSON answer: the decision, the single-sensor keys of the sensor the test
-    waits for (the slowest to equilibrium once stopped, the widest interval before), and per
-    sensor its answer, verdict and assumptions; ``expected``: each sensor's expected stop, where
-    the caller has it.
-
-    Parameters
-    ----------
-    state : MonitorState
-    settings : MonitorSettings
-    expected : dict of str to float, optional
-
-    Returns
-    -------
-    dict
-    """
-    if state.reference_dropped:
-        settings = replace(settings, reference=None)  # the answers rest on no reference: their assumptions say so
-    measured = state.readings.room_C is not None
-    sensors = [
-        _sensor_summary(c, settings, None if expected is None else expected.get(c.sensor), measured)
-        for c in state.checks
-    ]
-    stopped = state.stopped
-    waited = [c for c in state.checks if settings.waits_for(c.sensor)]
-    if stopped:
-        key = max(waited, key=lambda c: c.equilibrium_time_min if math.isfinite(c.equilibrium_time_min) else -math.inf)
-    else:
-        key = max(waited, key=lambda c: c.half_width_C)
-    lead = sensors[state.checks.index(key)]
-    out: dict[str, object] = {
-        k: lead[k]
-        for k in (
-            "sensor",
-            "steady_state_C",
-            "steady_state_ci95_C",
-            "equilibrium_time_min",
-            "model_ok",
-            "warnings",
-            "assumptions",
-        )
-    }
-    out.update(
-        stop_time_min=state.stop_time_min if stopped else None,
-        decision="stop" if stopped else "continue",
-        reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings),
-        room_bound_sensors=[] if stopped else [c.sensor for c in waited if _room_bound(c, settings)],
-        waited_for=[c.sensor for c in waited],
-        reference_dropped=state.reference_dropped,
-        last_time_min=finite_or_none(state.readings.latest_min),
-        tolerance_C=settings.tolerance_C,
-        decision_level=settings.decision_level,
-        sensors=sensors,
-    )
-    # the time saved is known only in hindsight, against when the readings settled (the session's
-    # hindsight sets it); a predicted 95 %-rise time lies far beyond where they settle within the tolerance
-    out["time_saved_min"] = None
-    out["settle_time_min"] = None
-    if expected is not None:
-        values = [expected.get(c.sensor, math.nan) for c in waited]
-        out["expected_stop_time_min"] = max(values) if all(math.isfinite(v) for v in values) else None
-    return out
-
-
-def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
-    """Why the test cannot stop yet, and the two ways on."""
-    if not waiting:
-        return "every sensor may stop; confirming at the next check"
-    parts = []
-    for c in waiting:
-        if c.status == "no rise":
-            parts.append(
-                f"{c.sensor}: no rise above its noise yet, which keeps the test from stopping (if the test does not "
-                "heat it, leave it out of the sensors watched; if it is the room's, name it as the room sensor)"
-            )
-        elif not math.isfinite(c.steady_C):
-            parts.append(f"{c.sensor}: {c.status}")
-        elif c.status == "too coarse":
-            parts.append(
-                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, but {c.ends} (±{settings.tolerance_C:g} °C): rounding can bias "
-                "T∞ "
-                "by half a step, which no interval shows; give a tolerance above the step"
-            )
-        elif not c.model_ok and c.half_width_C <= settings.tolerance_C:
-            parts.append(
-                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level * 100:g} % interval {c.low_C:.2f} to "
-                f"{c.high_C:.2f} °C, within ±{settings.tolerance_C:g} °C of T∞, but its model is not trusted (its "
-                "warnings say why)"
-            )
-        else:
-            bounds = (
-                f"interval {c.low_C:.2f} to {c.high_C:.2f} °C"
-                if math.isfinite(c.low_C) and math.isfinite(c.high_C)
-                else "interval not yet bounded"
-            )
-            parts.append(
-                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level * 100:g} % {bounds}, reaching beyond "
-                f"±{settings.tolerance_C:g} °C of T∞ ({c.ends})" + _room_bound_clause(c, settings)
-            )
-    learn = ", or give a reference run of this machine (mtident thermal learn)"
-    ways = "continue the test" + ("" if settings.reference is not None else learn)
-    room = (
-        "state a smaller room wander if the room is steadier than assumed (0 for a steady room), or log the room "
-        "beside the sensors and name it as the room sensor (the fit then follows the room instead of assuming it; "
-        "without a reference run, a slow mode may still keep the interval open)"
-    )
-    bound = [c.sensor for c in waiting if _room_bound(c, settings)]
-    slow = [c.sensor for c in waiting if _room_wander_C(c, settings) > 0 and c.sensor not in bound]
-    if bound:
-        others = len(bound) < len(waiting)
-        ways = f"for {', '.join(bound)}, {room}" + (f"; for the others, {ways}" if others else "")
-    elif slow:
-        ways += f"; for {', '.join(slow)}, also {room}"
-    return "; ".join(parts) + f". Ways on: {ways}."
-
-
-def _room_bound_clause(check: SensorCheck, settings: MonitorSettings) -> str:
-    wander = _room_wander_C(check, settings)
-    if wander == 0:
-        return ""
-    assumed = (
-        f"the room's unmeasured wander alone, as assumed ({settings.robust.room_wander_C_per_h:g} °C in an hour over "
-        f"its slowest mode's {max(tau for tau, _ in check.modes):.0f} min), moves T∞ ±{wander:.2f} °C at "
-        f"{settings.decision_level * 100:g} %"
-    )
-    if _room_bound(check, settings):
-        alone = _readings_half_width(check, wander)
-        return f"; the readings alone pin T∞ within ±{alone:.2f} °C, but {assumed}: no longer test narrows that"
-    return f"; where its slowest mode stays as slow, {assumed}, more than the tolerance"
-
-
-def _room_wander_C(check: SensorCheck, settings: MonitorSettings) -> float:
-    """The half-width the unmeasured room's assumed wander alone gives the sensor's T∞ at the
-    decision's level (on its best model's slowest mode), where that alone is wider than the
-    tolerance; else 0."""
-    if not check.modes or not math.isfinite(check.steady_C) or math.isfinite(check.room_level_C):
-        return 0.0
-    slowest = max(tau for tau, _ in check.modes)
-    wander = room_wander_half_width(slowest, settings.decision_level, settings.robust)
-    return wander if wander > settings.tolerance_C else 0.0
-
-
-def _readings_half_width(check: SensorCheck, wander: float) -> float:
-    """The decision interval's half-width less the room's wander (added in quadrature)."""
-    return math.sqrt(max(check.half_width_C**2 - wander**2, 0.0))
-
-
-def _room_bound(check: SensorCheck, settings: MonitorSettings) -> bool:
-    """Whether only the unmeasured room's assumed wander keeps the sensor from the tolerance: its
-    readings alone pin T∞ within it, the wander alone does not. No longer test helps."""
-    wander = _room_wander_C(check, settings)
-    return wander > 0 and _readings_half_width(check, wander) <= settings.tolerance_C
-
-
-def _sensor_summary(
-    c: SensorCheck, settings: MonitorSettings, expected: float | None, room_measured: bool
-) -> dict[str, object]:
-    return {
-        "sensor": c.sensor,
-        "waited_for": settings.waits_for(c.sensor),
-        "status": c.status,
-        "may_stop": c.may_stop,
-        "checked_at_min": finite_or_none(c.checked_min),
-        "steady_state_C": finite_or_none(c.steady_C),
-        "steady_state_ci95_C": [finite_or_none(c.low95_C), finite_or_none(c.high95_C)],
-        "decision_interval_C": [finite_or_none(c.low_C), finite_or_none(c.high_C)],
-        "equilibrium_time_min": finite_or_none(c.equilibrium_time_min),
-        "modes": [{"time_constant_min": tau, "amplitude_C": a} for tau, a in c.modes],
-        "model_ok": c.model_ok,
-        "warnings": list(c.warnings),
-        "interval_ends": c.ends,
-        "assumptions": assumptions(settings, c.sensor, room_measured).to_dict(),
-        "reference_used": c.reference_used,
-        "machine_model_used": c.machine_used,
-        "expected_stop_time_min": None if expected is None else finite_or_none(expected),
-    }

@@ -19,9 +19,13 @@ __all__ = [
     "display_resolution",
     "noise_sigma",
     "on_display_steps",
+    "quantisation_step",
     "quick_estimate",
     "reading_range",
+    "rise_threshold_C",
+    "sampling_interval_min",
     "smoothed_room",
+    "spikes",
     "step_from_grid",
 ]
 
@@ -294,3 +298,107 @@ def smoothed_room(time_min: FloatArray, room_C: FloatArray, window_min: float = 
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = (sums[hi] - sums[lo]) / (counts[hi] - counts[lo])
     return np.where(valid, mean, np.nan)
+
+
+def sampling_interval_min(time_min: FloatArray) -> float:
+    """The log's usual sampling interval (the median step; 1 min for fewer than two readings).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+
+    Returns
+    -------
+    float
+        The interval (min).
+    """
+    t = np.asarray(time_min, dtype=float)
+    return float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+
+
+def rise_threshold_C(noise_C: float, rounding_C: float) -> float:
+    """A move from the first level that is a rise, not noise: 6σ, or three rounding steps.
+
+    Parameters
+    ----------
+    noise_C : float
+        The readings' noise (°C, per reading).
+    rounding_C : float
+        The step the readings come in (°C; 0 where none).
+
+    Returns
+    -------
+    float
+        The threshold (°C).
+    """
+    return max(6.0 * noise_C, 3.0 * rounding_C, 1e-6)
+
+
+def quantisation_step(values: FloatArray) -> float:
+    """The step a converter's quantisation puts between readings (0 where none is seen): the
+    smallest common change between successive readings, where nearly all changes are whole
+    multiples of it (a 10-bit converter's 0.32 °C, off any decimal grid a display step would
+    show). Where the readings have changed fewer than five times, the smallest change: as far as
+    they tell, they may move in steps that large (a converter's two levels, 0.32 °C apart, read as
+    a settled fast mode, would put T∞ on the upper level within ±0.16 °C).
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+        One sensor's readings (°C, NaN: missing).
+
+    Returns
+    -------
+    float
+        The step (°C).
+
+    Examples
+    --------
+    >>> round(quantisation_step(22.84 + 0.3223 * np.array([0, 0, 1, 1, 2, 2, 2, 4, 5, 5, 6, 6])), 4)
+    0.3223
+    >>> quantisation_step(np.array([20.0, 20.013, 20.031, 20.04, 20.052, 20.071, 20.079, 20.102]))
+    0.0
+    >>> round(quantisation_step(np.array([18.56, 18.56, 18.56, 18.88, 18.88, 18.88])), 2)
+    0.32
+    """
+    changes = np.abs(np.diff(np.asarray(values, dtype=float)))
+    changes = changes[np.isfinite(changes) & (changes > 1e-9)]
+    if len(changes) < 5:
+        return float(changes.min()) if len(changes) else 0.0
+    step = float(np.percentile(changes, 5))
+    multiples = changes / step
+    if np.mean(np.abs(multiples - np.round(multiples)) < 0.05) < 0.8:
+        return 0.0
+    return float(np.median(changes[np.round(multiples) == 1]))
+
+
+def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: int = 3) -> np.ndarray:
+    """Which readings are spikes: further from the median of their neighbours (``half_window``
+    each side, none missing) than 8σ and five rounding steps (a Hampel filter). A smooth
+    rise, however steep, keeps its readings at the median of their neighbours; a glitch does not.
+    The last ``half_window`` readings of a live log are judged when their neighbours come.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N,)
+    noise_C, rounding_C : float
+    half_window : int, optional
+        Neighbours on each side of a reading.
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+    """
+    y = np.asarray(values, dtype=float)
+    width = 2 * half_window + 1
+    wild = np.zeros(len(y), dtype=bool)
+    if len(y) < width:
+        return wild
+    # only readings with every neighbour (a window with a missing one has no median): at a live
+    # log's end, or where a rise begins, a one-sided median trails the curve
+    median = np.median(np.lib.stride_tricks.sliding_window_view(y, width), axis=1)
+    limit = max(8.0 * noise_C, 5.0 * rounding_C)
+    with np.errstate(invalid="ignore"):
+        wild[half_window : len(y) - half_window] = np.abs(y[half_window : len(y) - half_window] - median) > limit
+    return wild

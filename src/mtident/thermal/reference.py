@@ -25,17 +25,8 @@ from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, noise_and_origin
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
 from mtident.thermal.readings import smoothed_room
-from mtident.thermal.robust import (
-    DEFAULT_MAX_MODES,
-    DISAGREEMENT_LEVEL,
-    MAX_FREE_FAST,
-    MIN_REFERENCE_BOX,
-    UNTRUSTING_CODES,
-    RobustSettings,
-    SensorEstimate,
-    SensorModes,
-    estimate_sensor,
-)
+from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
+from mtident.thermal.robust_types import DEFAULT_MAX_MODES, MAX_FREE_FAST, RobustSettings, SensorEstimate, SensorModes
 
 __all__ = [
     "MachineReference",
@@ -770,7 +761,8 @@ def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
     )
     ok = isinstance(taus, list) and isinstance(boxes, list) and len(boxes) == len(taus)
     ok = ok and 0 < len(taus) <= DEFAULT_MAX_MODES  # type: ignore[arg-type]
-    ok = ok and all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in [*taus, *boxes])  # type: ignore[misc]
+    numbers = [*taus, *boxes] if ok else []  # type: ignore[misc]
+    ok = ok and all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in numbers)
     ok = ok and all(v < 1 for v in boxes)  # type: ignore[union-attr]
     free = entry.get("free_fast_modes") if isinstance(entry, dict) else None
     ok = ok and (free is None or (isinstance(free, int) and not isinstance(free, bool) and 0 <= free <= MAX_FREE_FAST))

@@ -1,17 +1,19 @@
 """One sensor's model-robust answer: where its warm-up begins, its noise, the modal fit and its
-interval, what that interval assumes, and whether to trust it.
+interval, and whether to trust it.
 
 The interval of :func:`mtident.thermal.modes.fit_steady_state` covers every sum of modes the
 data do not exclude. Here it gets what the readings alone cannot give: the room's unmeasured
 wander (without a room sensor), a reference run's time constants (and a check that the test
-agrees with them), and the verdict a script reads (``model_ok`` and the warnings).
+agrees with them), and the verdict a script reads (``model_ok`` and the warnings). The answer's
+types are in :mod:`~mtident.thermal.robust_types` and what it assumes, in words, in
+:mod:`~mtident.thermal.assumptions`; the types and the readings' checks are importable from here
+as before.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from dataclasses import replace
 
 import numpy as np
 from scipy.special import chdtri, ndtri
@@ -19,7 +21,6 @@ from scipy.special import chdtri, ndtri
 from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
 from mtident.thermal.modes import (
-    DEFAULT_MAX_TIME_CONSTANT_MIN,
     Binned,
     ModeFamily,
     SteadyState,
@@ -27,18 +28,33 @@ from mtident.thermal.modes import (
     bin_samples,
     fit_steady_state,
 )
-from mtident.thermal.readings import display_resolution, noise_sigma, smoothed_room
-
-if TYPE_CHECKING:
-    from mtident.thermal.reference import MachineReference
+from mtident.thermal.readings import (
+    display_resolution,
+    noise_sigma,
+    quantisation_step,
+    rise_threshold_C,
+    sampling_interval_min,
+    smoothed_room,
+    spikes,
+)
+from mtident.thermal.robust_types import (
+    DEFAULT_MAX_MODES,
+    MAX_FREE_FAST,
+    Assumptions,
+    RobustSettings,
+    SensorEstimate,
+    SensorModes,
+)
 
 __all__ = [
+    "DEFAULT_MAX_MODES",
+    "MAX_FREE_FAST",
     "Assumptions",
     "RobustSettings",
     "SensorEstimate",
     "SensorModes",
-    "describe_assumptions",
     "estimate_sensor",
+    "free_fast",
     "rise_threshold_C",
     "room_wander_half_width",
     "sampling_interval_min",
@@ -50,37 +66,52 @@ __all__ = [
 # A reference's time constant is never taken as known better than ±10 %: the study of stopping
 # rules found boxes of this size safe, and exact time constants not.
 MIN_REFERENCE_BOX = 0.10
+
+
 # Residuals this much more correlated than noise mean the model does not describe the data: a
 # sensor far from the heat in a conduction body (many modes of alternating sign) fitted by three
 # modes at a factor of 3 put T∞ 0.7 °C outside a 99 % interval of ±0.08 °C; correct fits rarely
 # reach 2.5.
 MISFIT_FACTOR = 2.5
-# With a reference, up to this many free modes faster than its slowest (the cost of a check grows
-# with each).
-MAX_FREE_FAST = 2
+
+
 # A test whose readings a fit with free time constants describes better than the reference's
 # boxes at this level does not follow the reference.
 DISAGREEMENT_LEVEL = 0.99
+
+
 # a boxed time constant within this share of its box's end is held there by the box, not by the data
 EDGE_SHARE = 0.005
+
+
 # how much further than the largest time constant the test of a fit held at it lets a mode reach
 SLOWER_REACH = 10.0
+
+
 # the warnings that make an estimate untrusted (``model_ok`` false)
 UNTRUSTING_CODES = frozenset({"misfit", "undetermined", "modes-unresolved", "slower-than-allowed", "fragile"})
+
+
 # With a tolerance to meet, the likelihood-ratio test and the wider families run only where the
 # interval is within this many tolerances: beyond, each could only widen an interval that already
 # fails the decision, and they cost most of a check (the reference's warning comes at the first
 # check that could pass on it, before any stop).
 DECISION_MARGIN = 1.0
+
+
 # Where the readings use every mode of the family beyond chance, one more is allowed, up to this
 # many (a fit of six modes costs about ten of four).
 MAX_MODES_WHEN_SATURATED = 6
-# the modes searched without widening, and the most a reference run keeps
-DEFAULT_MAX_MODES = 4
+
+
 # With a reference, where the readings use every free mode beyond chance, one more is allowed, up
 # to this many (each multiplies the reference grid by the free grid's size).
 MAX_FREE_WHEN_SATURATED = 3
+
+
 MIN_BINS = 8
+
+
 # A regular likelihood's 99 % interval is 1.3 times as wide as its 95 % one. Far wider, the fit is
 # nearly as good over a long valley of models between the two levels (slow modes the readings
 # barely exclude), and whether the narrower interval covers rests on the χ² calibration alone.
@@ -90,256 +121,9 @@ FRAGILE_RATIO = 3.0
 # the floor a warm-up that does not overshoot sets on T∞: the median of this many latest readings,
 # less this many times the noise (and the display step)
 _LATEST_READINGS = 5
+
+
 _FLOOR_NOISES = 4.0
-
-
-@dataclass(frozen=True)
-class RobustSettings:
-    """What the model-robust answer assumes and how sure it must be.
-
-    Parameters
-    ----------
-    max_time_constant_min : float
-        The slowest mode the machine may have (minutes).
-    room_wander_C_per_h : float
-        Without a room sensor: how far the unmeasured room may wander, as a random walk of this
-        many °C in an hour (0: a room known to be steady).
-    levels : tuple of float
-        Confidence levels of the intervals computed (the report's and the decision's).
-    max_modes : int
-        At most this many modes.
-    more_modes_when_used : bool
-        Where the readings use all ``max_modes`` beyond chance, cover more, up to
-        ``MAX_MODES_WHEN_SATURATED``; with a reference, one free mode more where they use every
-        free mode, up to ``MAX_FREE_WHEN_SATURATED`` (False: exactly the family asked for, as a
-        reference run's fit of a given number of modes wants).
-    free_fast_modes : int
-        With a reference: at most this many free modes faster than its slowest box (below or
-        between its other boxes), which a reference run can miss (0 assumes the reference holds
-        every mode of the machine: the earliest stops, and an assumption every answer then states).
-    """
-
-    max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
-    room_wander_C_per_h: float = 0.05
-    levels: tuple[float, ...] = (0.95, 0.99)
-    max_modes: int = DEFAULT_MAX_MODES
-    free_fast_modes: int = MAX_FREE_FAST
-    more_modes_when_used: bool = True
-
-
-@dataclass(frozen=True)
-class SensorModes:
-    """A sensor's modes learnt from a reference run.
-
-    Parameters
-    ----------
-    time_constants_min : tuple of float
-    box : tuple of float
-        Relative half-width of each time constant's uncertainty (0.1: ±10 %).
-    amplitudes_C : tuple of float
-        The amplitudes in the reference run (for information; a new test's are free).
-    doubt : str or None
-        Why the reference run did not pin this sensor down (its steady state left uncertain, or its
-        modes a misfit), or None. A doubtful sensor's modes are not used by later tests: a run
-        that did not reach its equilibrium, or that a few modes do not describe, can miss the very
-        mode that sets a later test's steady state.
-    free_fast_modes : int or None
-        The most free modes faster than these a later test allows for this sensor (0: the
-        reference is said to hold every mode, as of a machine known to be first order); None:
-        the test's own setting. A test's smaller setting wins.
-    """
-
-    time_constants_min: tuple[float, ...]
-    box: tuple[float, ...]
-    amplitudes_C: tuple[float, ...] = ()
-    doubt: str | None = None
-    free_fast_modes: int | None = None
-
-
-@dataclass(frozen=True)
-class Assumptions:
-    """What an interval rests on, said with every answer.
-
-    Attributes
-    ----------
-    max_time_constant_min : float
-        The largest time constant searched (min).
-    room : str
-        How the room enters the answer, in words.
-    reference : str or None
-        The reference run's modes and how they are used, in words; None without a reference.
-    model : str
-        The models the interval covers, in words.
-    """
-
-    max_time_constant_min: float
-    room: str
-    reference: str | None = None
-    model: str = (
-        "a sum of up to four exponential modes (six where the readings use all four), of a warm-up that does not "
-        "overshoot: a rising sensor's T∞ not below its latest readings"
-    )
-
-    def to_dict(self) -> dict[str, object]:
-        """The JSON object of the answer's ``assumptions``.
-
-        Returns
-        -------
-        dict
-            ``model``, ``max_time_constant_min``, ``room`` and ``reference``.
-        """
-        return {
-            "model": self.model,
-            "max_time_constant_min": self.max_time_constant_min,
-            "room": self.room,
-            "reference": self.reference,
-        }
-
-
-@dataclass(frozen=True)
-class SensorEstimate:
-    """One sensor's model-robust answer.
-
-    Attributes
-    ----------
-    sensor : str
-    status : str
-        "estimated", "no data", "no rise" (within its noise of its first level) or "too few readings".
-    fit : SteadyState or None
-    onset_min : float
-        Where its warm-up begins (after a flat start, the last flat reading).
-    rise_C : float
-        How far it has moved from its first level.
-    noise_C : float
-        The readings' noise (per reading).
-    interval_C : dict of float to (float, float)
-        T∞'s interval per level, the room's unmeasured wander included.
-    model_ok : bool
-        False where the data contradict the model or T∞ is not determined.
-    warnings : tuple of str
-    warning_codes : tuple of str
-        What each warning is about, one word each ("late-start", "spikes", "misfit",
-        "undetermined", "fragile", "reference-disagrees", "reference-doubtful", "too-few-readings", "no-data",
-        "no-rise"): to say each once.
-    reference_used : bool
-        The reference's time constants were used (the test agrees with them).
-    spikes : int
-        Readings left out as spikes.
-    display_step_C : float
-        The step the readings come in (a display's rounding or a converter's; 0 where none).
-    machine_used : bool
-        T∞ and the intervals come with the machine model's (every sensor fitted together with the
-        reference run's modes and their proportions across the sensors).
-    """
-
-    sensor: str
-    status: str
-    fit: SteadyState | None
-    onset_min: float
-    rise_C: float
-    noise_C: float
-    interval_C: dict[float, tuple[float, float]]
-    model_ok: bool
-    warnings: tuple[str, ...]
-    warning_codes: tuple[str, ...] = ()
-    reference_used: bool = False
-    spikes: int = 0
-    display_step_C: float = 0.0
-    machine_used: bool = False
-
-    @property
-    def steady_C(self) -> float:
-        """T∞ of the best-fitting model (NaN without a fit).
-
-        Returns
-        -------
-        float
-            T∞ (°C).
-        """
-        return float("nan") if self.fit is None else self.fit.steady_C
-
-    def half_width(self, level: float) -> float:
-        """The larger distance from T∞ to an end of the interval at ``level`` (inf without one).
-
-        Parameters
-        ----------
-        level : float
-            A confidence level of ``interval_C``.
-
-        Returns
-        -------
-        float
-            The half-width (°C).
-        """
-        if self.fit is None:
-            return float("inf")
-        lo, hi = self.interval_C[level]
-        return max(self.steady_C - lo, hi - self.steady_C)
-
-    def what_sets_the_ends(self, level: float) -> str:
-        """In words, the models that set the interval's ends: "a mode of about 280 min with
-        −0.8 °C still fits".
-
-        Parameters
-        ----------
-        level : float
-            A confidence level of ``interval_C``.
-
-        Returns
-        -------
-        str
-            One phrase per end whose model has a mode; "too few readings for a model" without a fit at
-            ``level``.
-        """
-        if self.fit is None or level not in self.fit.ends:
-            return "too few readings for a model"
-        words = []
-        # each end as the interval states it (widened for the room's wander where it is not
-        # measured), so that the sentence and the interval beside it agree
-        ends = zip(self.fit.ends[level], ("low", "high"), self.interval_C[level], strict=True)
-        for end, label, value in ends:
-            slowest = end.slowest()
-            if slowest is not None:
-                words.append(
-                    f"{label} end {value:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min with "
-                    f"{slowest.amplitude_C:+.2f} °C still fits"
-                )
-        return "; ".join(words)
-
-
-def sampling_interval_min(time_min: FloatArray) -> float:
-    """The log's usual sampling interval (the median step; 1 min for fewer than two readings).
-
-    Parameters
-    ----------
-    time_min : ndarray, shape (N,)
-        Sample times (min).
-
-    Returns
-    -------
-    float
-        The interval (min).
-    """
-    t = np.asarray(time_min, dtype=float)
-    return float(np.median(np.diff(t))) if len(t) > 1 else 1.0
-
-
-def rise_threshold_C(noise_C: float, rounding_C: float) -> float:
-    """A move from the first level that is a rise, not noise: 6σ, or three rounding steps.
-
-    Parameters
-    ----------
-    noise_C : float
-        The readings' noise (°C, per reading).
-    rounding_C : float
-        The step the readings come in (°C; 0 where none).
-
-    Returns
-    -------
-    float
-        The threshold (°C).
-    """
-    return max(6.0 * noise_C, 3.0 * rounding_C, 1e-6)
 
 
 def estimate_sensor(
@@ -634,72 +418,6 @@ def free_fast(reference: SensorModes, settings: RobustSettings) -> int:
     return max(0, min(settings.free_fast_modes, said, settings.max_modes - len(reference.time_constants_min)))
 
 
-def describe_assumptions(
-    settings: RobustSettings,
-    room_sensor: str | None,
-    reference: MachineReference | None,
-    sensor: str,
-    room_measured: bool = False,
-) -> Assumptions:
-    """What a sensor's interval rests on, in words.
-
-    Parameters
-    ----------
-    settings : RobustSettings
-        The largest time constant, the room's wander and the free fast modes allowed.
-    room_sensor : str or None
-        The room sensor's name; None without one.
-    reference : MachineReference or None
-        A reference run of the same machine.
-    sensor : str
-        The sensor whose reference modes are described.
-    room_measured : bool
-        Room readings were given (under ``room_sensor``'s name, or unnamed).
-
-    Returns
-    -------
-    Assumptions
-    """
-    if room_sensor is not None:
-        room = f"measured by {room_sensor!r}, an input of every mode; T∞ at the room's last level"
-    elif room_measured:
-        room = "measured (the room readings given), an input of every mode; T∞ at the room's last level"
-    elif settings.room_wander_C_per_h > 0:
-        room = f"not measured; taken to wander as a random walk of {settings.room_wander_C_per_h:g} °C in an hour"
-    else:
-        room = "not measured; taken as steady"
-    if reference is None or sensor not in reference.sensors:
-        return Assumptions(
-            settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor)
-        )
-    modes = reference.sensors[sensor]
-    if modes.doubt is not None:
-        return Assumptions(
-            settings.max_time_constant_min, room, f"{reference.describe(sensor)}; not used: {modes.doubt}"
-        )
-    extra = free_fast(modes, settings)
-    if extra:
-        faster = f"up to {extra} free mode{'s' if extra > 1 else ''} faster than the slowest of these" + (
-            f" ({settings.max_modes} modes in all)" if extra < settings.free_fast_modes else ""
-        )
-    elif len(modes.time_constants_min) >= settings.max_modes:
-        faster = f"no free mode besides these ({settings.max_modes} modes in all)"
-    elif settings.free_fast_modes:
-        faster = "no mode faster than these (assumed: the reference says it holds every mode)"
-    else:
-        faster = "no mode faster than these (assumed)"
-    return Assumptions(
-        settings.max_time_constant_min,
-        room,
-        f"{reference.describe(sensor)}; {faster}{_machine_words(reference, sensor)}",
-    )
-
-
-def _machine_words(reference: MachineReference, sensor: str) -> str:
-    model = reference.machine_model
-    return "" if model is None or sensor not in model.sensors else f"; and {model.describe()}"
-
-
 def _disagreement(
     binned: Binned, noise: float, interval: float, boxed: SteadyState, family: ModeFamily, likelihood_ratio: bool = True
 ) -> str | None:
@@ -985,72 +703,3 @@ def _without_fit(
     return SensorEstimate(
         sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",), (status.replace(" ", "-"),)
     )
-
-
-def quantisation_step(values: FloatArray) -> float:
-    """The step a converter's quantisation puts between readings (0 where none is seen): the
-    smallest common change between successive readings, where nearly all changes are whole
-    multiples of it (a 10-bit converter's 0.32 °C, off any decimal grid a display step would
-    show). Where the readings have changed fewer than five times, the smallest change: as far as
-    they tell, they may move in steps that large (a converter's two levels, 0.32 °C apart, read as
-    a settled fast mode, would put T∞ on the upper level within ±0.16 °C).
-
-    Parameters
-    ----------
-    values : ndarray, shape (N,)
-        One sensor's readings (°C, NaN: missing).
-
-    Returns
-    -------
-    float
-        The step (°C).
-
-    Examples
-    --------
-    >>> round(quantisation_step(22.84 + 0.3223 * np.array([0, 0, 1, 1, 2, 2, 2, 4, 5, 5, 6, 6])), 4)
-    0.3223
-    >>> quantisation_step(np.array([20.0, 20.013, 20.031, 20.04, 20.052, 20.071, 20.079, 20.102]))
-    0.0
-    >>> round(quantisation_step(np.array([18.56, 18.56, 18.56, 18.88, 18.88, 18.88])), 2)
-    0.32
-    """
-    changes = np.abs(np.diff(np.asarray(values, dtype=float)))
-    changes = changes[np.isfinite(changes) & (changes > 1e-9)]
-    if len(changes) < 5:
-        return float(changes.min()) if len(changes) else 0.0
-    step = float(np.percentile(changes, 5))
-    multiples = changes / step
-    if np.mean(np.abs(multiples - np.round(multiples)) < 0.05) < 0.8:
-        return 0.0
-    return float(np.median(changes[np.round(multiples) == 1]))
-
-
-def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: int = 3) -> np.ndarray:
-    """Which readings are spikes: further from the median of their neighbours (``half_window``
-    each side, none missing) than 8σ and five rounding steps (a Hampel filter). A smooth
-    rise, however steep, keeps its readings at the median of their neighbours; a glitch does not.
-    The last ``half_window`` readings of a live log are judged when their neighbours come.
-
-    Parameters
-    ----------
-    values : ndarray, shape (N,)
-    noise_C, rounding_C : float
-    half_window : int, optional
-        Neighbours on each side of a reading.
-
-    Returns
-    -------
-    ndarray of bool, shape (N,)
-    """
-    y = np.asarray(values, dtype=float)
-    width = 2 * half_window + 1
-    wild = np.zeros(len(y), dtype=bool)
-    if len(y) < width:
-        return wild
-    # only readings with every neighbour (a window with a missing one has no median): at a live
-    # log's end, or where a rise begins, a one-sided median trails the curve
-    median = np.median(np.lib.stride_tricks.sliding_window_view(y, width), axis=1)
-    limit = max(8.0 * noise_C, 5.0 * rounding_C)
-    with np.errstate(invalid="ignore"):
-        wild[half_window : len(y) - half_window] = np.abs(y[half_window : len(y) - half_window] - median) > limit
-    return wild

@@ -17,18 +17,13 @@ from mtident._json import finite_or_none
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
-from mtident.thermal.identify import measured_and_settled, rmse, window_samples
+from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.machine_model import combined_estimate, machine_fit_of_window, unmeasured_wander
+from mtident.thermal.measured import measured_and_settled, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_notes
-from mtident.thermal.robust import (
-    Assumptions,
-    RobustSettings,
-    SensorEstimate,
-    describe_assumptions,
-    estimate_sensor,
-    with_fragility,
-)
+from mtident.thermal.robust import estimate_sensor, with_fragility
+from mtident.thermal.robust_types import Assumptions, RobustSettings, SensorEstimate
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -295,7 +290,8 @@ def identify_robust(
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
     unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
-    machine = machine_fit_of_window(reference, log.sensors, t[:n], y[:n], room_window, settings)
+    model = None if reference is None else reference.machine_model
+    machine = machine_fit_of_window(model, log.sensors, t[:n], y[:n], room_window, settings)
     estimates = tuple(
         combined_estimate(
             with_fragility(
@@ -305,7 +301,7 @@ def identify_robust(
             ),
             machine,
             s,
-            unmeasured_wander(reference, room_C is not None, settings),
+            unmeasured_wander(model, room_C is not None, settings),
         )
         for s, name in enumerate(log.sensors)
     )

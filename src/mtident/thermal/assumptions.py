@@ -1,0 +1,78 @@
+"""What a sensor's model-robust interval rests on, in words: the largest time constant, the room
+(measured, or its assumed wander), and a reference run's modes with the free modes a test may add
+(:class:`~mtident.thermal.robust_types.Assumptions`, in every answer).
+"""
+
+from __future__ import annotations
+
+from mtident.thermal.reference import MachineReference
+from mtident.thermal.robust import free_fast
+from mtident.thermal.robust_types import Assumptions, RobustSettings
+
+__all__ = ["describe_assumptions"]
+
+
+def describe_assumptions(
+    settings: RobustSettings,
+    room_sensor: str | None,
+    reference: MachineReference | None,
+    sensor: str,
+    room_measured: bool = False,
+) -> Assumptions:
+    """What a sensor's interval rests on, in words.
+
+    Parameters
+    ----------
+    settings : RobustSettings
+        The largest time constant, the room's wander and the free fast modes allowed.
+    room_sensor : str or None
+        The room sensor's name; None without one.
+    reference : MachineReference or None
+        A reference run of the same machine.
+    sensor : str
+        The sensor whose reference modes are described.
+    room_measured : bool
+        Room readings were given (under ``room_sensor``'s name, or unnamed).
+
+    Returns
+    -------
+    Assumptions
+    """
+    if room_sensor is not None:
+        room = f"measured by {room_sensor!r}, an input of every mode; T∞ at the room's last level"
+    elif room_measured:
+        room = "measured (the room readings given), an input of every mode; T∞ at the room's last level"
+    elif settings.room_wander_C_per_h > 0:
+        room = f"not measured; taken to wander as a random walk of {settings.room_wander_C_per_h:g} °C in an hour"
+    else:
+        room = "not measured; taken as steady"
+    if reference is None or sensor not in reference.sensors:
+        return Assumptions(
+            settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor)
+        )
+    modes = reference.sensors[sensor]
+    if modes.doubt is not None:
+        return Assumptions(
+            settings.max_time_constant_min, room, f"{reference.describe(sensor)}; not used: {modes.doubt}"
+        )
+    extra = free_fast(modes, settings)
+    if extra:
+        faster = f"up to {extra} free mode{'s' if extra > 1 else ''} faster than the slowest of these" + (
+            f" ({settings.max_modes} modes in all)" if extra < settings.free_fast_modes else ""
+        )
+    elif len(modes.time_constants_min) >= settings.max_modes:
+        faster = f"no free mode besides these ({settings.max_modes} modes in all)"
+    elif settings.free_fast_modes:
+        faster = "no mode faster than these (assumed: the reference says it holds every mode)"
+    else:
+        faster = "no mode faster than these (assumed)"
+    return Assumptions(
+        settings.max_time_constant_min,
+        room,
+        f"{reference.describe(sensor)}; {faster}{_machine_words(reference, sensor)}",
+    )
+
+
+def _machine_words(reference: MachineReference, sensor: str) -> str:
+    model = reference.machine_model
+    return "" if model is None or sensor not in model.sensors else f"; and {model.describe()}"

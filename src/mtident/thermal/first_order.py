@@ -1,0 +1,748 @@
+"""The papers' first-order identification (Xia et al. 2014 §2.1 end and §2.4; Yu et al. 2019
+§1.5): filter the measurements up to the identification time L with a UKF (or fit them by least
+squares), then predict to the end of the record (or a horizon). All sensors of a log are filtered
+as one batch. Its answer is an :class:`~mtident.thermal.identification.Identification`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.special import fdtri, stdtrit
+
+from mtident._typing import BoolArray, FloatArray
+from mtident.exceptions import InputError
+from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog
+from mtident.thermal.identification import Identification
+from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
+from mtident.thermal.measured import measured_and_settled, rmse, window_samples
+from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
+from mtident.thermal.model import (
+    equilibrium_time,
+    heat_balance_path,
+    observe_temperature,
+    rise_curve,
+    slope_transition,
+    to_physical,
+    transition_for,
+)
+from mtident.thermal.readings import noise_sigma, reading_range
+from mtident.thermal.settings import ThermalTuning, filter_config, preset_tuning, tuning_from_data
+from mtident.ukf import (
+    FilterCarry,
+    FilterConfig,
+    FilterRecord,
+    GaussianState,
+    filter_step,
+    forecast,
+    run_filter,
+    transition_at,
+)
+
+__all__ = [
+    "filter_window",
+    "first_order_suffices",
+    "identify_first_order",
+    "model_check",
+    "room_input",
+    "room_rates",
+]
+
+# A first-order fit to fewer minutes of rise than this is not trusted: a thermal time constant is
+# tens of minutes, and a few minutes of its rise are nearly straight (:func:`_untrusted`).
+MIN_RISE_SEEN_MIN = 5.0
+
+
+# A T∞ interval wider than this many times the rise seen so far, plus the margin (°C), states
+# nothing physics allows of a machine part's warm-up (:func:`_untrusted`).
+MAX_HALF_PER_RISE = 5.0
+
+
+MAX_HALF_MARGIN_C = 5.0
+
+
+def _profile_rss(time_min: FloatArray, values: FloatArray, rates: FloatArray, with_drift: bool) -> FloatArray:
+    """Residual sum of squares of a + b·e^(−λt) (+ c·t) for each λ in ``rates``, linear parameters solved out."""
+    t = time_min - time_min[0]
+    columns = [np.ones((len(rates), len(t))), np.exp(-rates[:, None] * t[None, :])]
+    if with_drift:
+        columns.append(np.broadcast_to(t / max(t[-1], 1e-9), (len(rates), len(t))))
+    basis = np.stack(columns, axis=-1)  # (G, N, k)
+    gram = np.swapaxes(basis, -1, -2) @ basis + 1e-12 * np.eye(basis.shape[-1])
+    coef = np.linalg.solve(gram, (np.swapaxes(basis, -1, -2) @ values)[..., None])[..., 0]
+    residual = values - (basis @ coef[..., None])[..., 0]
+    answer: FloatArray = np.sum(residual**2, axis=-1)
+    return answer
+
+
+def _best_rss(time_min: FloatArray, values: FloatArray, with_drift: bool) -> float:
+    """Smallest RSS over λ by three rounds of a zooming log-spaced grid (no local-minimum trap)."""
+    span = max(float(time_min[-1] - time_min[0]), 1e-9)
+    lo, hi = np.log(0.01 / span), np.log(100.0 / span)
+    best = np.inf
+    for _ in range(3):
+        grid = np.linspace(lo, hi, 41)
+        rss = _profile_rss(time_min, values, np.exp(grid), with_drift)
+        i = int(np.argmin(rss))
+        best = min(best, float(rss[i]))
+        step = grid[1] - grid[0]
+        lo, hi = grid[i] - step, grid[i] + step
+    return best
+
+
+def first_order_suffices(time_min: FloatArray, values: FloatArray, level: float = 0.999) -> bool:
+    """Nested F-test: does a + b·e^(−λt) + c·t fit no better than a + b·e^(−λt)?
+
+    False when the ramp term is significant at ``level`` — the signature of a
+    slow mode (or drift) that a first-order model would average away. Needs no
+    noise level.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    values : ndarray, shape (N,)
+        One sensor's readings (°C), all finite.
+    level : float, optional
+        The test's confidence level.
+
+    Returns
+    -------
+    bool
+        True where the ramp term is not significant at ``level``.
+    """
+    rss_null = _best_rss(time_min, values, with_drift=False)
+    rss_alt = _best_rss(time_min, values, with_drift=True)
+    floor = len(values) * (1e-4) ** 2  # residuals of a noise-free curve are rounding error
+    f_stat = (rss_null - rss_alt) / max(rss_alt, floor) * (len(values) - 4)
+    return bool(
+        f_stat < fdtri(1, len(values) - 4, level)
+    )  # the F(1, N − 4) quantile; scipy.stats costs 0.5 s to import
+
+
+def model_check(
+    time_min: FloatArray, values: FloatArray, residuals: FloatArray, sigma: FloatArray
+) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """Residual tests of the first-order model inside the window.
+
+    1. A nested-model F-test: does a + b·e^(−λt) + c·t fit significantly better
+       than a + b·e^(−λt)? A fast-plus-slow warm-up, whose slow part looks like a
+       ramp in a short window, does (F above the 99.9 % point). The test needs no
+       noise level.
+    2. A gross misfit: χ²/dof of the filter's residuals against the noise level
+       (at least 0.1 mK, below which residuals are rounding error) above
+       4 + 4·sqrt(2/dof) together with a lag-1 autocorrelation above 3/sqrt(N).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N, S)
+        The window's measurements (NaN allowed).
+    residuals : ndarray, shape (N, S)
+        Data minus the identified curve inside the window.
+    sigma : ndarray, shape (S,)
+        Noise level from :func:`~mtident.thermal.readings.noise_sigma`.
+
+    Returns
+    -------
+    chi2, autocorrelation, fits : ndarray, shape (S,)
+    """
+    chi2, corr, fits = [], [], []
+    for s in range(residuals.shape[1]):
+        ok = np.isfinite(residuals[:, s]) & np.isfinite(values[:, s])
+        r = residuals[ok, s]
+        dof = max(len(r) - 3, 1)
+        c2 = float(np.sum((r / max(sigma[s], 1e-4)) ** 2) / dof)
+        centred = r - r.mean()
+        denom = float(np.sum(centred**2))
+        ac = float(np.sum(centred[1:] * centred[:-1]) / denom) if denom > 0 else 0.0
+        # χ² alone only for a gross misfit: the noise level is itself an estimate (±20 %).
+        passes = c2 < 4.0 + 4.0 * np.sqrt(2.0 / dof) or ac < 3.0 / np.sqrt(len(r))
+        if passes and len(r) >= 8:
+            passes = first_order_suffices(time_min[ok], values[ok, s])
+        chi2.append(c2)
+        corr.append(ac)
+        fits.append(passes)
+    return np.array(chi2), np.array(corr), np.array(fits)
+
+
+def filter_window(
+    time_min: FloatArray,
+    values: FloatArray,
+    config: FilterConfig,
+    tuning: ThermalTuning,
+    room_rate: FloatArray | None = None,
+) -> tuple[FilterRecord, FloatArray, FloatArray]:
+    """Filter samples (N, S) of every sensor at once; the first is measured at t₀ itself (Δt = 0).
+
+    ``room_rate`` (N,), °C/min over each step, makes the room the input of the
+    heat balance (slope parametrisation only; see
+    :func:`~mtident.thermal.model.slope_transition`). Returns the filter record
+    and the per-step mean (N, S, 3) and covariance (N, S, 3, 3) of [T, λ, T∞]
+    whatever the parametrisation.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: a missing measurement).
+    config : FilterConfig
+        The UKF variant (:func:`~mtident.thermal.settings.filter_config`).
+    tuning : ThermalTuning
+        Initial state and covariances, and the parametrisation.
+    room_rate : ndarray, shape (N,), optional
+        The room's rate over each step (°C/min). None: a steady room.
+
+    Returns
+    -------
+    record : FilterRecord
+        The filter's record, in the tuning's parametrisation.
+    mean : ndarray, shape (N, S, 3)
+        [T, λ, T∞] after each sample (°C, 1/min, °C).
+    cov : ndarray, shape (N, S, 3, 3)
+        Their covariance.
+    """
+    dts = np.diff(time_min, prepend=time_min[0])
+    record = run_filter(
+        GaussianState(tuning.initial_mean, tuning.initial_cov),
+        values[..., None],
+        _transition_with(dts, tuning.parametrisation, room_rate),
+        observe_temperature,
+        tuning.process_cov,
+        tuning.emission_cov,
+        config,
+    )
+    means, covs = to_physical(record.means, record.covs, tuning.parametrisation)
+    return record, means, covs
+
+
+def _transition_with(
+    dts: FloatArray, parametrisation: str = "rate", room_rate: FloatArray | None = None
+) -> Callable[[FloatArray, int], FloatArray]:  # a closure over the step intervals
+    step = transition_for(parametrisation)
+    if room_rate is not None:
+
+        def with_room(points: FloatArray, k: int) -> FloatArray:
+            return slope_transition(points, dts[k], room_rate[k])
+
+        return with_room
+
+    def transition(points: FloatArray, k: int) -> FloatArray:
+        return step(points, dts[k])
+
+    return transition
+
+
+def _curve_with_room(time_min: FloatArray, values: FloatArray, room_rate: FloatArray, final: FloatArray) -> FloatArray:
+    """The identified heat balance (final λ, final T∞ over the room) run over the window with the room as input.
+
+    Started from each sensor's first valid sample; ``final`` (S, 3) is [T, λ, T∞] at the window's end.
+    """
+    rate, steady_end = final[:, 1], final[:, 2]
+    dts = np.diff(time_min, prepend=time_min[0])
+    room_change = np.cumsum(room_rate * dts)  # the room's level relative to t₀
+    first = np.array([np.flatnonzero(np.isfinite(col))[0] for col in values.T])
+    T = values[first, np.arange(values.shape[1])]
+    # s = λ(T_room + ΔT∞ − T) at the first sample, with ΔT∞ = T∞ − T_room at the window's end
+    slope = rate * (steady_end - room_change[-1] + room_change[first] - T)
+    curve = heat_balance_path(np.stack([T, slope, rate], axis=-1), first, dts, room_rate)
+    return np.where(np.arange(len(time_min))[:, None] >= first[None, :], curve, np.nan)
+
+
+def room_input(log: TemperatureLog, ambient_C: FloatArray | None, method: str, preset: str) -> FloatArray | None:
+    """The room's rate over each step of ``log`` from a room sensor, checked; None without one.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    ambient_C : ndarray, shape (N,) or None
+        A room sensor's readings (°C) at the log's sample times; None without one.
+    method : str
+        The identification method.
+    preset : str
+        The tuning preset.
+
+    Returns
+    -------
+    ndarray, shape (N,) or None
+        The room's rate over each step (°C/min, :func:`room_rates`).
+
+    Raises
+    ------
+    InputError
+        A room sensor with the "lsq" method or a paper's preset, or with another number of readings
+        than the log has samples.
+    """
+    if ambient_C is None:
+        return None
+    if method == "lsq" or preset != "data":
+        msg = (
+            "a room sensor (`ambient_C`) needs a UKF method with the data tuning: lsq and the papers' presets model a "
+            "steady room"
+        )
+        raise InputError(msg)
+    if len(ambient_C) != len(log.time_min):
+        msg = f"the room sensor has {len(ambient_C)} readings for {len(log.time_min)} samples"
+        raise InputError(msg)
+    return room_rates(log.time_min, ambient_C)
+
+
+def room_rates(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
+    """The room's rate (°C/min) over each step, from a room sensor; missing readings interpolated.
+
+    The first step (Δt = 0) has rate 0. A room sensor with no valid reading
+    gives rate 0 throughout (the room is taken as steady).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    room_C : ndarray, shape (N,)
+        The room sensor's readings (°C, NaN: missing).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The room's rate over the step to each sample (°C/min).
+    """
+    t = np.asarray(time_min, dtype=float)
+    a = np.asarray(room_C, dtype=float)
+    valid = np.isfinite(a)
+    if not valid.any():
+        return np.zeros(len(t))
+    level = np.interp(t, t[valid], a[valid])
+    dts = np.diff(t, prepend=t[0])
+    answer: FloatArray = np.diff(level, prepend=level[0]) / np.where(dts > 0, dts, 1.0)
+    return answer
+
+
+def identify_first_order(
+    log: TemperatureLog,
+    window_min: float,
+    method: str,
+    preset: str,
+    horizon_min: float | None = None,
+    pseudo_measurement_seed: int | None = None,
+    ambient_C: FloatArray | None = None,
+) -> Identification:
+    """Identify every sensor of ``log`` with one of the papers' first-order filters, or least
+    squares, from its first ``window_min`` minutes, then predict (:func:`~mtident.thermal.identify.identify`
+    with a method other than "robust").
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    window_min : float
+        Identification time L (minutes from the first sample).
+    method : {"ukf", "aukf", "fukf", "afukf", "lsq"}
+    preset : {"data", "xia2014", "yu2019"}
+        Initial values and tuning: from the data or a paper's exactly.
+    horizon_min : float, optional
+        Predict to this time (default: the end of the log, or 4 time constants beyond the
+        window if that is later).
+    pseudo_measurement_seed : int, optional
+        Predict as Xia et al. 2014 Eqs 21-22 do, from a generator with this seed.
+    ambient_C : ndarray, shape (N,), optional
+        A room sensor at the log's sample times (a UKF method with the data tuning only).
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    InputError
+        A window that is not a positive number of minutes or holds too few samples, or a room
+        sensor the method or preset cannot take.
+    """
+    if not (np.isfinite(window_min) and window_min > 0):
+        msg = f"window_min must be a positive number of minutes, not {window_min!r}"
+        raise InputError(msg)
+    room_rate = room_input(log, ambient_C, method, preset)
+    # A diverging filter (the papers' presets can) is reported in the notes, not as numpy warnings.
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _identify(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, room_rate)
+
+
+@dataclass(frozen=True)
+class _WarmupStart:
+    """Where each sensor's warm-up begins in the window: a warm-up that began after the log
+    (``late``, flat at ``level`` until ``begins``), and the window's readings with a flat start
+    left out (NaN) where the data tuning fits from the end of it."""
+
+    window_readings: FloatArray
+    late: np.ndarray
+    begins: FloatArray
+    level: FloatArray
+
+    @classmethod
+    def of(cls, log: TemperatureLog, n_window: int, preset: str, notes: list[str]) -> _WarmupStart:
+        tw, yw = log.time_min[:n_window], log.temperature_C[:n_window]
+        sensors = yw.shape[1]
+        if preset != "data":
+            # the papers' presets fit from the first sample, as the papers do
+            return cls(yw, np.zeros(sensors, dtype=bool), np.full(sensors, tw[0]), first_level(yw))
+        onset = late_onset(tw, yw, noise_sigma(yw, tw))
+        late = onset > 0
+        # the data tuning leaves out a flat start (a sensor lag, or a warm-up that began later),
+        # which a first-order model cannot follow
+        onsets = first_order_onset(tw, yw)
+        trimmed = yw.copy()
+        for is_late in (True, False):
+            which = [i for i in np.flatnonzero(onsets).tolist() if late[i] == is_late]
+            for i in which:
+                trimmed[: onsets[i], i] = np.nan
+            why = (
+                "stay at their first level (the warm-up began after the log)"
+                if is_late
+                else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
+            )
+            if len(which) == 1:
+                i = which[0]
+                notes.append(
+                    f"sensor {log.sensors[i]!r}: the first {tw[onsets[i]] - tw[0]:g} min {why}; the model is fitted "
+                    f"from t = {tw[onsets[i]]:g} min"
+                )
+            elif which:  # one note for all: the sample's five lagging sensors made five lines
+                lead = ", ".join(f"{log.sensors[i]!r} ({tw[onsets[i]] - tw[0]:g} min)" for i in which)
+                notes.append(f"sensors {lead}: the first minutes {why}; each model is fitted from the end of them")
+        return cls(trimmed, late, tw[onset], first_level(yw))
+
+
+@dataclass(frozen=True)
+class _Course:
+    """A first-order identification's course: the curve over the window and on, its variance,
+    the parameters' history over the window and their final mean and covariance."""
+
+    times: FloatArray
+    mean_curve: FloatArray
+    curve_var: FloatArray
+    history: FloatArray
+    history_sd: FloatArray
+    final_mean: FloatArray
+    final_cov: FloatArray
+    window_fit: FloatArray
+
+
+def _least_squares_course(
+    t: FloatArray, tw: FloatArray, yw: FloatArray, tuning: ThermalTuning, window_min: float, horizon_min: float | None
+) -> _Course:
+    fit = fit_rise(tw, yw, tuning.initial_mean)
+    params, cov = fit.params, fit.cov
+    times = np.concatenate([tw, _future_times(t, len(tw), window_min, horizon_min, params[:, 1])])
+    mean_curve = rise_curve(times[:, None], params[:, 0], params[:, 1], params[:, 2])
+    jac = _rise_jacobian(times[:, None], params)
+    n, sensors = len(tw), yw.shape[1]
+    return _Course(
+        times=times,
+        mean_curve=mean_curve,
+        curve_var=np.einsum("nsi,sij,nsj->ns", jac, cov, jac),
+        history=np.broadcast_to(params, (n, sensors, 3)).copy(),
+        history_sd=np.broadcast_to(np.sqrt(np.diagonal(cov, axis1=-2, axis2=-1)), (n, sensors, 3)).copy(),
+        final_mean=params,
+        final_cov=cov,
+        window_fit=mean_curve[:n],
+    )
+
+
+def _filtered_course(
+    t: FloatArray,
+    tw: FloatArray,
+    yw: FloatArray,
+    method: str,
+    preset: str,
+    tuning: ThermalTuning,
+    window_min: float,
+    horizon_min: float | None,
+    pseudo_measurement_seed: int | None,
+    room_rate: FloatArray | None,
+) -> _Course:
+    n, sensors = len(tw), yw.shape[1]
+    t_future = _future_times(t, n, window_min, horizon_min, tuning.initial_mean[:, 1])
+    config = filter_config(method, tuning)
+    record, history, history_cov = filter_window(tw, yw, config, tuning, None if room_rate is None else room_rate[:n])
+    history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
+    # A-posteriori variance factor: R came from a noise estimate (±20 % from ~30 samples); the
+    # residual variance of the best first-order fit says how far off it was, and the covariance
+    # is scaled by the ratio (as curve_fit does with absolute_sigma=False).
+    variance_factor = np.ones(sensors)
+    if preset == "data":
+        for s in range(sensors):
+            ok = np.isfinite(yw[:, s])
+            fit_var = _best_rss(tw[ok], yw[ok, s], with_drift=False) / max(int(ok.sum()) - 3, 1)
+            variance_factor[s] = np.clip(fit_var / tuning.emission_cov[s, 0, 0], 0.25, 25.0)
+    history_sd = history_sd * np.sqrt(variance_factor)[:, None]
+    final_mean, final_cov = history[-1], history_cov[-1] * variance_factor[:, None, None]
+    future_mean, future_var = _predict_after_window(
+        record.final, final_mean, t_future, tw[-1], config, tuning, pseudo_measurement_seed
+    )
+    # the model curve through the final state, back over the window, for the residual test
+    if room_rate is None:
+        window_fit = rise_curve(tw[:, None] - tw[-1], final_mean[:, 0], final_mean[:, 1], final_mean[:, 2])
+    else:
+        window_fit = _curve_with_room(tw, yw, room_rate[:n], final_mean)
+    return _Course(
+        times=np.concatenate([tw, t_future]),
+        mean_curve=np.concatenate([history[:, :, 0], future_mean]),
+        curve_var=np.concatenate([history_sd[:, :, 0] ** 2, future_var * variance_factor]),
+        history=history,
+        history_sd=history_sd,
+        final_mean=final_mean,
+        final_cov=final_cov,
+        window_fit=window_fit,
+    )
+
+
+def _verdicts(
+    log: TemperatureLog,
+    tw: FloatArray,
+    method: str,
+    course: _Course,
+    chi2: FloatArray,
+    autocorr: FloatArray,
+    fits: np.ndarray,
+    notes: list[str],
+) -> tuple[FloatArray, FloatArray]:
+    """The final mean (T∞ NaN where there is no approach to a steady state) and T∞'s standard
+    deviation, widened where the first-order model does not fit the window; said in ``notes``."""
+    for s in np.flatnonzero(~fits).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: the first-order model does not fit the window (residual χ²/dof "
+            f"{chi2[s]:.2f}, lag-1 autocorrelation {autocorr[s]:.2f}); the T∞ interval was widened by "
+            f"{max(np.sqrt(chi2[s]), 2.0):.1f}x, and a longer window or a two-term model may be needed"
+        )
+    steady_sd = np.sqrt(course.final_cov[:, 2, 2]) * np.where(fits, 1.0, np.maximum(np.sqrt(chi2), 2.0))
+    final_mean = course.final_mean.copy()
+    rate_now = final_mean[:, 1]
+    no_steady = ~(np.isfinite(rate_now) & (rate_now > 0) & np.isfinite(final_mean[:, 2]) & np.isfinite(steady_sd))
+    for s in np.flatnonzero(no_steady).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: no approach to a steady state in the first {tw[-1]:g} min "
+            f"(λ = {rate_now[s]:.3g}/min with the {method} filter); T∞ is not identifiable from this window — "
+            "use a longer `window_min`"
+        )
+    final_mean[no_steady, 2] = np.nan
+    return final_mean, np.where(no_steady, np.nan, steady_sd)
+
+
+def _say_undetermined(
+    log: TemperatureLog, tw: FloatArray, half: FloatArray, rise: FloatArray, no_rise: np.ndarray, notes: list[str]
+) -> None:
+    """An interval wider than the whole rise so far: the window's course is still nearly
+    straight and does not tell where it bends."""
+    with np.errstate(invalid="ignore"):
+        undetermined = ~no_rise & (half > rise)
+    if not np.any(undetermined):
+        return
+    names = ", ".join(
+        f"{log.sensors[s]!r} (± {half[s]:.2g} °C, rose {rise[s]:.2g} °C)" for s in np.flatnonzero(undetermined).tolist()
+    )
+    notes.append(
+        f"T∞ is barely determined by the first {tw[-1]:g} min for {names}: the 95 % interval is wider than the rise "
+        "seen so far (the course is still nearly straight); a longer `window_min` narrows it (thermal watch says when "
+        "it is narrow enough)"
+    )
+
+
+def _identify(
+    log: TemperatureLog,
+    window_min: float,
+    method: str,
+    preset: str,
+    horizon_min: float | None,
+    pseudo_measurement_seed: int | None,
+    room_rate: FloatArray | None = None,
+) -> Identification:
+    n_window = window_samples(log, window_min)
+    t = log.time_min
+    y = log.temperature_C
+    tw = t[:n_window]
+    notes: list[str] = list(log.notes)
+    start = _WarmupStart.of(log, n_window, preset, notes)
+    yw = start.window_readings
+    tuning = tuning_from_data(tw, yw) if preset == "data" else preset_tuning(preset, y.shape[1])
+    # the data tuning has the noise level already (its R); the papers' R is a setting, not the noise
+    sigma = np.sqrt(tuning.emission_cov[:, 0, 0]) if preset == "data" else noise_sigma(yw, tw)
+    if method == "lsq":
+        course = _least_squares_course(t, tw, yw, tuning, window_min, horizon_min)
+    else:
+        course = _filtered_course(
+            t, tw, yw, method, preset, tuning, window_min, horizon_min, pseudo_measurement_seed, room_rate
+        )
+    chi2, autocorr, fits = model_check(tw, yw, yw - course.window_fit, sigma)
+    final_mean, steady_sd = _verdicts(log, tw, method, course, chi2, autocorr, fits, notes)
+    mean_curve, curve_var, times = course.mean_curve, course.curve_var, course.times
+    if np.any(start.late):
+        # before its warm-up began the sensor stayed at its first level; the equilibrium time
+        # counts from the log's start, as the measured one does
+        before = start.late[None, :] & (times[:, None] < start.begins[None, :])
+        mean_curve = np.where(before, start.level[None, :], mean_curve)
+        curve_var = np.where(before, sigma[None, :] ** 2, curve_var)
+    steady = final_mean[:, 2]
+    rate = final_mean[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan) + np.where(start.late, start.begins - tw[0], 0.0)
+    # A sensor that does not rise in the window (never heated, or not connected) is at its level;
+    # a λ fitted to its noise would give it an "equilibrium time" it never had.
+    rise = reading_range(yw)
+    no_rise = rise < rise_threshold(sigma)
+    for s in np.flatnonzero(no_rise).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: no rise in the first {tw[-1]:g} min ({rise[s]:.2f} °C from lowest to "
+            "highest): no warm-up to identify; it has no equilibrium time"
+        )
+    eq_time = np.where(no_rise, np.nan, eq_time)
+    quantile = float(stdtrit(max(n_window - 3, 1), 0.975))
+    _say_undetermined(log, tw, quantile * steady_sd, rise, no_rise, notes)
+    untrusted = _untrusted(log, tw, start.begins, steady, quantile * steady_sd, rise, no_rise, notes)
+    n_log = len(t)
+    measured_part = np.full((len(times), y.shape[1]), np.nan)
+    measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]
+    in_log = times <= t[-1] + 1e-9
+    errors = rmse(mean_curve[in_log], y[: int(in_log.sum())])
+    final_measured, eq_measured, settled = measured_and_settled(t, y, DEFAULT_MAX_TIME_CONSTANT_MIN)
+    history, history_sd = course.history, course.history_sd
+    rate_sd = np.sqrt(course.final_cov[:, 1, 1])
+    return Identification(
+        sensors=log.sensors,
+        method=method,
+        preset=preset,
+        window_min=float(tw[-1]),
+        n_window=n_window,
+        time_min=times,
+        measured_C=measured_part,
+        curve_C=mean_curve,
+        curve_sd_C=np.sqrt(np.maximum(curve_var, 0.0)),
+        steady_state_C=steady,
+        steady_state_sd_C=steady_sd,
+        rate_per_min=rate,
+        rate_sd_per_min=rate_sd,
+        start_C=mean_curve[0],
+        equilibrium_time_min=eq_time,
+        rmse_C=errors,
+        fit_chi2=chi2,
+        fit_autocorr=autocorr,
+        fits=fits,
+        history=history,
+        history_sd=history_sd,
+        measured_final_C=final_measured,
+        measured_equilibrium_time_min=eq_measured,
+        measured_settled=settled,
+        notes=tuple(notes),
+        quantile=quantile,
+        untrusted=untrusted,
+    )
+
+
+def _untrusted(
+    log: TemperatureLog,
+    tw: FloatArray,
+    begins: FloatArray,
+    steady: FloatArray,
+    half: FloatArray,
+    rise: FloatArray,
+    no_rise: np.ndarray,
+    notes: list[str],
+) -> np.ndarray:
+    """Which sensors' answers no physics allows, or that rest on too little rise, each said in
+    ``notes``: a fit to fewer than ``MIN_RISE_SEEN_MIN`` minutes of rise (a warm-up that began just
+    before the window's end: the filters then gave T∞ of millions of °C), or an interval reaching
+    outside the temperatures a machine part can have, or wider than ``MAX_HALF_PER_RISE`` times the
+    rise so far plus ``MAX_HALF_MARGIN_C``."""
+    seen = tw[-1] - begins
+    with np.errstate(invalid="ignore"):
+        short = ~no_rise & (seen < MIN_RISE_SEEN_MIN)
+        # a column that does not rise is no warm-up, but an absurd answer for it is no more to be trusted
+        wide = (
+            ~short
+            & np.isfinite(half)
+            & (
+                (steady - half < OPEN_CIRCUIT_LOW_C)
+                | (steady + half > OPEN_CIRCUIT_HIGH_C)
+                | (half > MAX_HALF_PER_RISE * rise + MAX_HALF_MARGIN_C)
+            )
+        )
+    for s in np.flatnonzero(short).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: not trusted: its warm-up began {seen[s]:g} min before the window's end "
+            f"(at t = {begins[s]:g} min); a first-order fit to {seen[s]:g} min of rise cannot tell where it bends "
+            f"(at least {MIN_RISE_SEEN_MIN:g} min are needed): use a longer `window_min`"
+        )
+    for s in np.flatnonzero(wide).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: not trusted: the 95 % interval of T∞, {steady[s] - half[s]:.4g} to "
+            f"{steady[s] + half[s]:.4g} °C, is wider than physics allows (± {half[s]:.3g} °C for a rise of "
+            f"{rise[s]:.2g} °C so far; a machine part stays within {OPEN_CIRCUIT_LOW_C:g} to {OPEN_CIRCUIT_HIGH_C:g} "
+            "°C): the window's course does not determine it; use a longer `window_min`"
+        )
+    return np.asarray(short | wide, dtype=bool)
+
+
+def _future_times(
+    t: FloatArray, n_window: int, window_min: float, horizon_min: float | None, rate: FloatArray
+) -> FloatArray:
+    """Sample times after the window: the log's own, then uniform steps to the horizon."""
+    logged = t[n_window:]
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    if horizon_min is None:
+        finite = rate[np.isfinite(rate) & (rate > 0)]
+        reach = 4.0 / float(np.min(finite)) if finite.size else 0.0
+        horizon_min = max(float(t[-1]), min(window_min + reach, 20 * max(float(t[-1]), window_min)))
+    if horizon_min <= t[-1]:
+        return logged[logged <= horizon_min + 1e-9]
+    extra = np.arange(t[-1] + step, horizon_min + 0.5 * step, step)
+    return np.concatenate([logged, extra])
+
+
+def _rise_jacobian(time_min: FloatArray, params: FloatArray) -> FloatArray:
+    """∂T(t)/∂[T₀, λ, T∞], shape (N, S, 3)."""
+    T0, lam, Tinf = params[:, 0], params[:, 1], params[:, 2]
+    decay = np.exp(-lam * time_min)
+    return np.stack([decay, -(T0 - Tinf) * time_min * decay, 1.0 - decay], axis=-1)
+
+
+def _predict_after_window(
+    carry: FilterCarry,  # of the last window step
+    physical_mean: FloatArray,
+    t_future: FloatArray,
+    t_last: float,
+    config: FilterConfig,
+    tuning: ThermalTuning,
+    seed: int | None,
+) -> tuple[FloatArray, FloatArray]:
+    """Temperature mean and variance (F, S) after the window, with Q and R as adapted last.
+
+    The mean is the model curve through the state at L; its variance comes from
+    the UKF's time updates (Q included). The UT mean itself is not used: with
+    the broad posterior of a short window its sigma points include negative
+    decay rates, which pull the mean away from every plausible curve.
+    """
+    S = physical_mean.shape[0]
+    if len(t_future) == 0:
+        return np.empty((0, S)), np.empty((0, S))
+    dts = np.diff(t_future, prepend=t_last)
+    transition = _transition_with(dts, tuning.parametrisation)
+    normal = replace(config, adaptive_law=None, square_root=False)
+    if seed is None:
+        mean = rise_curve((t_future - t_last)[:, None], physical_mean[:, 0], physical_mean[:, 1], physical_mean[:, 2])
+        predicted = forecast(
+            GaussianState(carry.mean, carry.covariance()), transition, carry.process_cov, len(dts), normal
+        )
+        return mean, predicted.cov[:, :, 0, 0]
+    # Xia et al. 2014 Eqs 21-22: sₖ = f(x̂ₖ₋₁) + q·randn, yₖ = h(sₖ) + r·randn, then a normal UKF update.
+    rng = np.random.default_rng(seed)
+    q_sd = np.sqrt(np.diagonal(carry.process_cov, axis1=-2, axis2=-1))
+    r_sd = np.sqrt(carry.emission_cov[..., 0, 0])
+    state = replace(carry, cov=carry.covariance(), chol=None)
+    weights = normal.sigma_points.weights(3)
+    means, variances = [], []
+    for k in range(len(dts)):
+        s = transition(state.mean, k) + q_sd * rng.standard_normal(state.mean.shape)
+        pseudo = s[:, :1] + (r_sd * rng.standard_normal(r_sd.shape))[:, None]
+        state, _ = filter_step(state, pseudo, transition_at(transition, k), observe_temperature, normal, weights)
+        means.append(state.mean[:, 0])
+        variances.append(state.covariance()[:, 0, 0])
+    return np.array(means), np.array(variances)

@@ -1,0 +1,198 @@
+"""What a log itself shows, beside any model: how many samples a window holds, the RMSE of a
+curve against every reading (Xia et al. 2014, Eq. 33), and the measured final temperature and
+95 %-rise time of a log that ran to equilibrium, and whether it settled. Both identifications
+(the papers' filters and the model-robust fit) measure their answers with these.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mtident._typing import FloatArray
+from mtident.exceptions import InputError
+from mtident.io.logs import TemperatureLog, unit_doubted
+from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
+from mtident.thermal.model import EQUILIBRIUM_FRACTION
+from mtident.thermal.readings import display_resolution
+
+__all__ = [
+    "MIN_WINDOW_SAMPLES",
+    "SETTLED_MOVE_C",
+    "measured_and_settled",
+    "measured_equilibrium",
+    "rmse",
+    "window_samples",
+]
+
+MIN_WINDOW_SAMPLES = 6
+
+
+def rmse(estimate: FloatArray, measured: FloatArray) -> FloatArray:
+    """Xia et al. 2014 Eq. 33: sqrt(Σ(Tₑ − Tₒ)²/(M − 1)) over the finite samples, per column.
+
+    Parameters
+    ----------
+    estimate : ndarray, shape (N, S)
+        The identified or predicted temperatures (°C).
+    measured : ndarray, shape (N, S)
+        The measured temperatures (°C, NaN: missing).
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        The RMSE (°C) over the samples where both are finite; NaN where there is none (a sensor
+        with no curve: an RMSE of 0 read as a perfect fit).
+    """
+    diff = estimate - measured
+    ok = np.isfinite(diff)
+    count = ok.sum(axis=0)
+    sums = np.where(ok, diff**2, 0.0).sum(axis=0)
+    return np.where(count > 0, np.sqrt(sums / np.maximum(count - 1, 1)), np.nan)
+
+
+# a log counts as settled to the tolerance's precision where its last quarter moved less than this
+# (°C), half the default tolerance
+SETTLED_MOVE_C = 0.1
+
+
+def measured_and_settled(
+    time_min: FloatArray, values: FloatArray, slowest_mode_min: float
+) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """The papers' measured final temperature and 95 %-rise time (:func:`measured_equilibrium`
+    with its 5 % rule alone), and whether each sensor settled to the tolerance's precision: its last
+    quarter moved less than ``SETTLED_MOVE_C``, with at most half that still to come at the pace of
+    ``slowest_mode_min``.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N, S)
+    slowest_mode_min : float
+        The slowest mode the rise still to come is bounded with (min).
+
+    Returns
+    -------
+    final_C, equilibrium_time_min : ndarray, shape (S,)
+    settled : ndarray of bool, shape (S,)
+    """
+    final, equilibrium = measured_equilibrium(time_min, values)
+    settled = np.isfinite(
+        measured_equilibrium(time_min, values, SETTLED_MOVE_C, SETTLED_MOVE_C / 2.0, slowest_mode_min)[0]
+    )
+    return final, equilibrium, settled
+
+
+def measured_equilibrium(
+    time_min: FloatArray,
+    values: FloatArray,
+    max_late_move_C: float = math.inf,
+    max_remaining_C: float = math.inf,
+    slowest_mode_min: float | FloatArray = DEFAULT_MAX_TIME_CONSTANT_MIN,
+) -> tuple[FloatArray, FloatArray]:
+    """Final temperature and 95 %-rise time read off a log that ran to equilibrium.
+
+    The final temperature is the median of the last 10 samples; the log counts as
+    having reached equilibrium when its last quarter rose by less than 5 % of the
+    total rise and less than ``max_late_move_C`` (the mean of its last sixteenth against that of
+    the sixteenth a quarter before its end), and when the rise still to come that this late move
+    allows is at most ``max_remaining_C``. Otherwise NaN. A log still moving
+    within those bounds gives a final temperature, and a 95 %-rise time, short of
+    where it settles: the papers' "measured" values, read off the end of a test.
+
+    The rise still to come is bounded by a mode as slow as ``slowest_mode_min``: a move m
+    over Δ minutes of such a mode leaves m / (e^(Δ/τ) − 1) to come. A small late move is not
+    settled by itself: a 180-min mode moves 0.09 °C in 68 min with 0.2 °C still to come.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min).
+    values : ndarray, shape (N, S)
+        Readings (°C, NaN: missing).
+    max_late_move_C : float
+        The most the last quarter may move (°C).
+    max_remaining_C : float
+        The most the rise still to come may be (°C).
+    slowest_mode_min : float or ndarray, shape (S,)
+        The slowest mode the rise still to come is bounded with (min), one for every sensor or
+        each its own.
+
+    Returns
+    -------
+    final_C : ndarray, shape (S,)
+        The final temperature (°C), NaN where the log did not reach equilibrium or a sensor has
+        fewer than 40 valid readings.
+    equilibrium_time_min : ndarray, shape (S,)
+        The time (min, on ``time_min``) at which the smoothed readings first reach 95 % of the
+        rise, NaN where the final temperature is NaN.
+    """
+    finals, times = [], []
+    n = len(time_min)
+    slowest = np.broadcast_to(np.asarray(slowest_mode_min, dtype=float), (values.shape[1],))
+    for col, tau in zip(values.T, slowest, strict=True):
+        ok = np.isfinite(col)
+        t, y = time_min[ok], col[ok]
+        if len(y) < 40:
+            finals.append(np.nan)
+            times.append(np.nan)
+            continue
+        start = float(np.median(y[:3]))
+        final = float(np.median(y[-10:]))
+        quarter = max(n // 4, 5)
+        # means over a quarter of the quarter, not medians of five: readings in display steps
+        # (0.1 °C) and a little noise put five-reading medians a whole step apart on a settled log
+        span = max(quarter // 4, 5)
+        late_rise = float(np.mean(y[-span:]) - np.mean(y[-quarter : -quarter + span]))
+        apart = float(np.mean(t[-span:]) - np.mean(t[-quarter : -quarter + span]))
+        # the move less two of its standard errors: noise alone does not make a settled log move
+        noise = 2.0 * math.sqrt(float(np.var(y[-span:]) + np.var(y[-quarter : -quarter + span])) / span)
+        # readings in display steps with too little noise to dither them can hide a move of up to a
+        # step: a log in 0.1 °C steps still 0.1 °C short of its level read as settled
+        step = float(display_resolution(y[:, None])[0])
+        hidden = step if math.sqrt(float(np.var(y[-span:]))) < step / 2.0 else 0.0
+        pace = float(tau) if math.isfinite(tau) and tau > 0 else DEFAULT_MAX_TIME_CONSTANT_MIN
+        to_come = (max(abs(late_rise) - noise, 0.0) + hidden) / max(math.expm1(apart / pace), 1e-12)
+        rise = final - start
+        if rise == 0 or abs(late_rise) > min(0.05 * abs(rise), max_late_move_C) or to_come > max_remaining_C:
+            finals.append(np.nan)
+            times.append(np.nan)
+            continue
+        smooth = np.convolve(y, np.ones(5) / 5, mode="same")
+        target = start + EQUILIBRIUM_FRACTION * rise
+        crossed = (smooth >= target) if rise > 0 else (smooth <= target)
+        crossed[:2] = False
+        crossed[-2:] = crossed[-2:] | True
+        times.append(float(t[int(np.argmax(crossed))]))
+        finals.append(final)
+    return np.array(finals), np.array(times)
+
+
+def window_samples(log: TemperatureLog, window_min: float) -> int:
+    """How many samples the first ``window_min`` minutes hold, at least ``MIN_WINDOW_SAMPLES``.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+    window_min : float
+        The identification window (min).
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InputError
+        Fewer samples than an identification needs.
+    """
+    n = log.window(window_min)
+    if n < MIN_WINDOW_SAMPLES:
+        unit = ", or the time column's unit, `time_unit`: its times were read as minutes" if unit_doubted(log) else ""
+        msg = (
+            f"{log.source}: only {n} samples in the first {window_min:g} min; the identification needs at least "
+            f"{MIN_WINDOW_SAMPLES} (use a longer `window_min`{unit})"
+        )
+        raise InputError(msg)
+    return n

@@ -1,0 +1,217 @@
+"""The live monitor's answer: the JSON a watch prints and saves (:func:`result`: the decision, the
+sensor the test waits for, and per sensor its answer, verdict and assumptions), and why a test
+cannot stop yet, with the ways on, in words.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from mtident._json import finite_or_none
+from mtident.thermal.assumptions import describe_assumptions
+from mtident.thermal.monitor_types import MonitorSettings, MonitorState, SensorCheck
+from mtident.thermal.robust import room_wander_half_width
+from mtident.thermal.robust_types import Assumptions
+
+__all__ = ["assumptions", "result"]
+
+
+def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = False) -> Assumptions:
+    """What a sensor's interval rests on, as the answer says it.
+
+    Parameters
+    ----------
+    settings : MonitorSettings
+        The largest time constant, the room's wander or sensor, and the reference run.
+    sensor : str
+        The sensor whose reference modes, if any, are described.
+    room_measured : bool
+        The monitor is given the room's readings (named or not by ``settings.room_sensor``).
+
+    Returns
+    -------
+    Assumptions
+        The model, the largest time constant (min), how the room entered, and the reference.
+    """
+    return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor, room_measured)
+
+
+def result(
+    state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None
+) -> dict[str, object]:
+    """The JSON answer: the decision, the single-sensor keys of the sensor the test
+    waits for (the slowest to equilibrium once stopped, the widest interval before), and per
+    sensor its answer, verdict and assumptions; ``expected``: each sensor's expected stop, where
+    the caller has it.
+
+    Parameters
+    ----------
+    state : MonitorState
+    settings : MonitorSettings
+    expected : dict of str to float, optional
+
+    Returns
+    -------
+    dict
+    """
+    if state.reference_dropped:
+        settings = replace(settings, reference=None)  # the answers rest on no reference: their assumptions say so
+    measured = state.readings.room_C is not None
+    sensors = [
+        _sensor_summary(c, settings, None if expected is None else expected.get(c.sensor), measured)
+        for c in state.checks
+    ]
+    stopped = state.stopped
+    waited = [c for c in state.checks if settings.waits_for(c.sensor)]
+    if stopped:
+        key = max(waited, key=lambda c: c.equilibrium_time_min if math.isfinite(c.equilibrium_time_min) else -math.inf)
+    else:
+        key = max(waited, key=lambda c: c.half_width_C)
+    lead = sensors[state.checks.index(key)]
+    out: dict[str, object] = {
+        k: lead[k]
+        for k in (
+            "sensor",
+            "steady_state_C",
+            "steady_state_ci95_C",
+            "equilibrium_time_min",
+            "model_ok",
+            "warnings",
+            "assumptions",
+        )
+    }
+    out.update(
+        stop_time_min=state.stop_time_min if stopped else None,
+        decision="stop" if stopped else "continue",
+        reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings),
+        room_bound_sensors=[] if stopped else [c.sensor for c in waited if _room_bound(c, settings)],
+        waited_for=[c.sensor for c in waited],
+        reference_dropped=state.reference_dropped,
+        last_time_min=finite_or_none(state.readings.latest_min),
+        tolerance_C=settings.tolerance_C,
+        decision_level=settings.decision_level,
+        sensors=sensors,
+    )
+    # the time saved is known only in hindsight, against when the readings settled (the session's
+    # hindsight sets it); a predicted 95 %-rise time lies far beyond where they settle within the tolerance
+    out["time_saved_min"] = None
+    out["settle_time_min"] = None
+    if expected is not None:
+        values = [expected.get(c.sensor, math.nan) for c in waited]
+        out["expected_stop_time_min"] = max(values) if all(math.isfinite(v) for v in values) else None
+    return out
+
+
+def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
+    """Why the test cannot stop yet, and the two ways on."""
+    if not waiting:
+        return "every sensor may stop; confirming at the next check"
+    parts = []
+    for c in waiting:
+        if c.status == "no rise":
+            parts.append(
+                f"{c.sensor}: no rise above its noise yet, which keeps the test from stopping (if the test does not "
+                "heat it, leave it out of the sensors watched; if it is the room's, name it as the room sensor)"
+            )
+        elif not math.isfinite(c.steady_C):
+            parts.append(f"{c.sensor}: {c.status}")
+        elif c.status == "too coarse":
+            parts.append(
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, but {c.ends} (±{settings.tolerance_C:g} °C): rounding can bias "
+                "T∞ "
+                "by half a step, which no interval shows; give a tolerance above the step"
+            )
+        elif not c.model_ok and c.half_width_C <= settings.tolerance_C:
+            parts.append(
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level * 100:g} % interval {c.low_C:.2f} to "
+                f"{c.high_C:.2f} °C, within ±{settings.tolerance_C:g} °C of T∞, but its model is not trusted (its "
+                "warnings say why)"
+            )
+        else:
+            bounds = (
+                f"interval {c.low_C:.2f} to {c.high_C:.2f} °C"
+                if math.isfinite(c.low_C) and math.isfinite(c.high_C)
+                else "interval not yet bounded"
+            )
+            parts.append(
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level * 100:g} % {bounds}, reaching beyond "
+                f"±{settings.tolerance_C:g} °C of T∞ ({c.ends})" + _room_bound_clause(c, settings)
+            )
+    learn = ", or give a reference run of this machine (mtident thermal learn)"
+    ways = "continue the test" + ("" if settings.reference is not None else learn)
+    room = (
+        "state a smaller room wander if the room is steadier than assumed (0 for a steady room), or log the room "
+        "beside the sensors and name it as the room sensor (the fit then follows the room instead of assuming it; "
+        "without a reference run, a slow mode may still keep the interval open)"
+    )
+    bound = [c.sensor for c in waiting if _room_bound(c, settings)]
+    slow = [c.sensor for c in waiting if _room_wander_C(c, settings) > 0 and c.sensor not in bound]
+    if bound:
+        others = len(bound) < len(waiting)
+        ways = f"for {', '.join(bound)}, {room}" + (f"; for the others, {ways}" if others else "")
+    elif slow:
+        ways += f"; for {', '.join(slow)}, also {room}"
+    return "; ".join(parts) + f". Ways on: {ways}."
+
+
+def _room_bound_clause(check: SensorCheck, settings: MonitorSettings) -> str:
+    wander = _room_wander_C(check, settings)
+    if wander == 0:
+        return ""
+    assumed = (
+        f"the room's unmeasured wander alone, as assumed ({settings.robust.room_wander_C_per_h:g} °C in an hour over "
+        f"its slowest mode's {max(tau for tau, _ in check.modes):.0f} min), moves T∞ ±{wander:.2f} °C at "
+        f"{settings.decision_level * 100:g} %"
+    )
+    if _room_bound(check, settings):
+        alone = _readings_half_width(check, wander)
+        return f"; the readings alone pin T∞ within ±{alone:.2f} °C, but {assumed}: no longer test narrows that"
+    return f"; where its slowest mode stays as slow, {assumed}, more than the tolerance"
+
+
+def _room_wander_C(check: SensorCheck, settings: MonitorSettings) -> float:
+    """The half-width the unmeasured room's assumed wander alone gives the sensor's T∞ at the
+    decision's level (on its best model's slowest mode), where that alone is wider than the
+    tolerance; else 0."""
+    if not check.modes or not math.isfinite(check.steady_C) or math.isfinite(check.room_level_C):
+        return 0.0
+    slowest = max(tau for tau, _ in check.modes)
+    wander = room_wander_half_width(slowest, settings.decision_level, settings.robust)
+    return wander if wander > settings.tolerance_C else 0.0
+
+
+def _readings_half_width(check: SensorCheck, wander: float) -> float:
+    """The decision interval's half-width less the room's wander (added in quadrature)."""
+    return math.sqrt(max(check.half_width_C**2 - wander**2, 0.0))
+
+
+def _room_bound(check: SensorCheck, settings: MonitorSettings) -> bool:
+    """Whether only the unmeasured room's assumed wander keeps the sensor from the tolerance: its
+    readings alone pin T∞ within it, the wander alone does not. No longer test helps."""
+    wander = _room_wander_C(check, settings)
+    return wander > 0 and _readings_half_width(check, wander) <= settings.tolerance_C
+
+
+def _sensor_summary(
+    c: SensorCheck, settings: MonitorSettings, expected: float | None, room_measured: bool
+) -> dict[str, object]:
+    return {
+        "sensor": c.sensor,
+        "waited_for": settings.waits_for(c.sensor),
+        "status": c.status,
+        "may_stop": c.may_stop,
+        "checked_at_min": finite_or_none(c.checked_min),
+        "steady_state_C": finite_or_none(c.steady_C),
+        "steady_state_ci95_C": [finite_or_none(c.low95_C), finite_or_none(c.high95_C)],
+        "decision_interval_C": [finite_or_none(c.low_C), finite_or_none(c.high_C)],
+        "equilibrium_time_min": finite_or_none(c.equilibrium_time_min),
+        "modes": [{"time_constant_min": tau, "amplitude_C": a} for tau, a in c.modes],
+        "model_ok": c.model_ok,
+        "warnings": list(c.warnings),
+        "interval_ends": c.ends,
+        "assumptions": assumptions(settings, c.sensor, room_measured).to_dict(),
+        "reference_used": c.reference_used,
+        "machine_model_used": c.machine_used,
+        "expected_stop_time_min": None if expected is None else finite_or_none(expected),
+    }

@@ -1,0 +1,242 @@
+"""What the model-robust answer is made of: its settings (:class:`RobustSettings`), a reference
+run's modes of one sensor (:class:`SensorModes`), what an interval assumes (:class:`Assumptions`)
+and one sensor's answer (:class:`SensorEstimate`). The fit that makes them is
+:mod:`~mtident.thermal.robust`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, SteadyState
+
+__all__ = [
+    "DEFAULT_MAX_MODES",
+    "MAX_FREE_FAST",
+    "Assumptions",
+    "RobustSettings",
+    "SensorEstimate",
+    "SensorModes",
+]
+
+# With a reference, up to this many free modes faster than its slowest (the cost of a check grows
+# with each).
+MAX_FREE_FAST = 2
+
+
+# the modes searched without widening, and the most a reference run keeps
+DEFAULT_MAX_MODES = 4
+
+
+@dataclass(frozen=True)
+class RobustSettings:
+    """What the model-robust answer assumes and how sure it must be.
+
+    Parameters
+    ----------
+    max_time_constant_min : float
+        The slowest mode the machine may have (minutes).
+    room_wander_C_per_h : float
+        Without a room sensor: how far the unmeasured room may wander, as a random walk of this
+        many °C in an hour (0: a room known to be steady).
+    levels : tuple of float
+        Confidence levels of the intervals computed (the report's and the decision's).
+    max_modes : int
+        At most this many modes.
+    more_modes_when_used : bool
+        Where the readings use all ``max_modes`` beyond chance, cover more, up to
+        ``MAX_MODES_WHEN_SATURATED``; with a reference, one free mode more where they use every
+        free mode, up to ``MAX_FREE_WHEN_SATURATED`` (False: exactly the family asked for, as a
+        reference run's fit of a given number of modes wants).
+    free_fast_modes : int
+        With a reference: at most this many free modes faster than its slowest box (below or
+        between its other boxes), which a reference run can miss (0 assumes the reference holds
+        every mode of the machine: the earliest stops, and an assumption every answer then states).
+    """
+
+    max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
+    room_wander_C_per_h: float = 0.05
+    levels: tuple[float, ...] = (0.95, 0.99)
+    max_modes: int = DEFAULT_MAX_MODES
+    free_fast_modes: int = MAX_FREE_FAST
+    more_modes_when_used: bool = True
+
+
+@dataclass(frozen=True)
+class SensorModes:
+    """A sensor's modes learnt from a reference run.
+
+    Parameters
+    ----------
+    time_constants_min : tuple of float
+    box : tuple of float
+        Relative half-width of each time constant's uncertainty (0.1: ±10 %).
+    amplitudes_C : tuple of float
+        The amplitudes in the reference run (for information; a new test's are free).
+    doubt : str or None
+        Why the reference run did not pin this sensor down (its steady state left uncertain, or its
+        modes a misfit), or None. A doubtful sensor's modes are not used by later tests: a run
+        that did not reach its equilibrium, or that a few modes do not describe, can miss the very
+        mode that sets a later test's steady state.
+    free_fast_modes : int or None
+        The most free modes faster than these a later test allows for this sensor (0: the
+        reference is said to hold every mode, as of a machine known to be first order); None:
+        the test's own setting. A test's smaller setting wins.
+    """
+
+    time_constants_min: tuple[float, ...]
+    box: tuple[float, ...]
+    amplitudes_C: tuple[float, ...] = ()
+    doubt: str | None = None
+    free_fast_modes: int | None = None
+
+
+@dataclass(frozen=True)
+class Assumptions:
+    """What an interval rests on, said with every answer.
+
+    Attributes
+    ----------
+    max_time_constant_min : float
+        The largest time constant searched (min).
+    room : str
+        How the room enters the answer, in words.
+    reference : str or None
+        The reference run's modes and how they are used, in words; None without a reference.
+    model : str
+        The models the interval covers, in words.
+    """
+
+    max_time_constant_min: float
+    room: str
+    reference: str | None = None
+    model: str = (
+        "a sum of up to four exponential modes (six where the readings use all four), of a warm-up that does not "
+        "overshoot: a rising sensor's T∞ not below its latest readings"
+    )
+
+    def to_dict(self) -> dict[str, object]:
+        """The JSON object of the answer's ``assumptions``.
+
+        Returns
+        -------
+        dict
+            ``model``, ``max_time_constant_min``, ``room`` and ``reference``.
+        """
+        return {
+            "model": self.model,
+            "max_time_constant_min": self.max_time_constant_min,
+            "room": self.room,
+            "reference": self.reference,
+        }
+
+
+@dataclass(frozen=True)
+class SensorEstimate:
+    """One sensor's model-robust answer.
+
+    Attributes
+    ----------
+    sensor : str
+    status : str
+        "estimated", "no data", "no rise" (within its noise of its first level) or "too few readings".
+    fit : SteadyState or None
+    onset_min : float
+        Where its warm-up begins (after a flat start, the last flat reading).
+    rise_C : float
+        How far it has moved from its first level.
+    noise_C : float
+        The readings' noise (per reading).
+    interval_C : dict of float to (float, float)
+        T∞'s interval per level, the room's unmeasured wander included.
+    model_ok : bool
+        False where the data contradict the model or T∞ is not determined.
+    warnings : tuple of str
+    warning_codes : tuple of str
+        What each warning is about, one word each ("late-start", "spikes", "misfit",
+        "undetermined", "fragile", "reference-disagrees", "reference-doubtful", "too-few-readings", "no-data",
+        "no-rise"): to say each once.
+    reference_used : bool
+        The reference's time constants were used (the test agrees with them).
+    spikes : int
+        Readings left out as spikes.
+    display_step_C : float
+        The step the readings come in (a display's rounding or a converter's; 0 where none).
+    machine_used : bool
+        T∞ and the intervals come with the machine model's (every sensor fitted together with the
+        reference run's modes and their proportions across the sensors).
+    """
+
+    sensor: str
+    status: str
+    fit: SteadyState | None
+    onset_min: float
+    rise_C: float
+    noise_C: float
+    interval_C: dict[float, tuple[float, float]]
+    model_ok: bool
+    warnings: tuple[str, ...]
+    warning_codes: tuple[str, ...] = ()
+    reference_used: bool = False
+    spikes: int = 0
+    display_step_C: float = 0.0
+    machine_used: bool = False
+
+    @property
+    def steady_C(self) -> float:
+        """T∞ of the best-fitting model (NaN without a fit).
+
+        Returns
+        -------
+        float
+            T∞ (°C).
+        """
+        return float("nan") if self.fit is None else self.fit.steady_C
+
+    def half_width(self, level: float) -> float:
+        """The larger distance from T∞ to an end of the interval at ``level`` (inf without one).
+
+        Parameters
+        ----------
+        level : float
+            A confidence level of ``interval_C``.
+
+        Returns
+        -------
+        float
+            The half-width (°C).
+        """
+        if self.fit is None:
+            return float("inf")
+        lo, hi = self.interval_C[level]
+        return max(self.steady_C - lo, hi - self.steady_C)
+
+    def what_sets_the_ends(self, level: float) -> str:
+        """In words, the models that set the interval's ends: "a mode of about 280 min with
+        −0.8 °C still fits".
+
+        Parameters
+        ----------
+        level : float
+            A confidence level of ``interval_C``.
+
+        Returns
+        -------
+        str
+            One phrase per end whose model has a mode; "too few readings for a model" without a fit at
+            ``level``.
+        """
+        if self.fit is None or level not in self.fit.ends:
+            return "too few readings for a model"
+        words = []
+        # each end as the interval states it (widened for the room's wander where it is not
+        # measured), so that the sentence and the interval beside it agree
+        ends = zip(self.fit.ends[level], ("low", "high"), self.interval_C[level], strict=True)
+        for end, label, value in ends:
+            slowest = end.slowest()
+            if slowest is not None:
+                words.append(
+                    f"{label} end {value:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min with "
+                    f"{slowest.amplitude_C:+.2f} °C still fits"
+                )
+        return "; ".join(words)
