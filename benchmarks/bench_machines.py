@@ -157,7 +157,7 @@ def describe(case: Case) -> dict[str, object]:
     }
 
 
-def run_case(case: Case, seed: int) -> dict[str, object]:
+def run_case(case: Case, seed: int, without: bool = True) -> dict[str, object]:
     out = describe(case)
     run = simulate(case, np.random.default_rng(seed + 20_000_000), "test")
     out["log_reaches_settle"] = bool(run.time_min[-1] >= out["t_settle_used_min"])
@@ -172,7 +172,7 @@ def run_case(case: Case, seed: int) -> dict[str, object]:
     out["reference_doubts"] = (
         None if reference is None else [name for name, m in reference.sensors.items() if m.doubt is not None]
     )
-    out["without_reference"] = replay(case, run, None)
+    out["without_reference"] = replay(case, run, None) if without else None
     out["with_reference"] = replay(case, run, reference) if reference is not None else None
     return out
 
@@ -285,6 +285,11 @@ def _block(cases: list[dict], key: str) -> dict[str, object]:
         "median_stop_over_settle": float(np.median(ratio)) if len(ratio) else None,
         "p90_stop_over_settle": float(np.percentile(ratio, 90)) if len(ratio) else None,
         "median_seconds": float(np.median([c[key]["seconds"] for c in runs])) if runs else None,
+        "machine_model_used_share": float(
+            np.mean([bool(p.get("machine_used")) for c in runs for p in c[key]["sensors"]])
+        )
+        if runs
+        else None,
     }
 
 
@@ -375,6 +380,11 @@ def main() -> None:
     parser = seeded_run_parser(__doc__.splitlines()[0], 100, FIRST_SEED, "machines.jsonl")
     parser.add_argument("--markdown", action="store_true", help="with --report: Markdown tables instead of JSON")
     parser.add_argument("--named", action="store_true", help="run the two named cases and stop")
+    parser.add_argument(
+        "--with-reference-only",
+        action="store_true",
+        help="replay each test with its reference only (the path a change to the reference's use affects)",
+    )
     args = parser.parse_args()
     if args.report:
         summary = report(args.report)
@@ -391,7 +401,7 @@ def main() -> None:
             print(f"seed {seed} is in the held-out block 36500-36799: run only to evaluate a change, once", flush=True)
         started = time.perf_counter()
         case = draw_case(seed)
-        row = run_case(case, seed)
+        row = run_case(case, seed, not args.with_reference_only)
         row["case_seconds"] = time.perf_counter() - started
         with args.out.open("a") as out:
             out.write(json.dumps(row, default=float) + "\n")
