@@ -237,6 +237,7 @@ def _model_dict(e: SensorEstimate) -> dict[str, object]:
         "noise_C": finite_or_none(e.noise_C),
         "interval_ends": e.what_sets_the_ends(REPORT_LEVEL),
         "reference_used": e.reference_used,
+        "machine_model_used": e.machine_used,
         "spikes_left_out": e.spikes,
     }
 
