@@ -48,6 +48,12 @@ TAU_BOX_MIN = 0.05
 """The smallest relative box searched around each of the reference's time constants."""
 TAU_BOX_SDS = 3.0
 LOOSE_BOX = 0.3
+ROOM_LAG_SHARE = 1.0
+"""The share of the room's rate times the slowest time constant taken as the lag's sd."""
+ROOM_PRIOR_SHARE = 0.3
+ROOM_PRIOR_GAIN = 0.5
+"""The room factors' prior sd: this share of their static-gain-one value, plus a room gain of this
+at the sensor that shows the mode most."""
 MODEL_ERROR_FACTOR = 1.8
 """The fit's standard error times this: the machine model is a truncation (fewer modes than the
 machine, time constants learnt at another heat split), and its error shows in the extrapolation,
@@ -353,10 +359,11 @@ def fit_test(
     latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
     out_steady = np.full(len(sensors), math.nan)
     out_steady[used] = steady + latest_room
+    lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min))
     out_half = {}
     for level, h in half.items():
         full = np.full(len(sensors), math.inf)
-        full[used] = h
+        full[used] = np.hypot(h, ndtri(0.5 + level / 2.0) * lag_sd)
         out_half[level] = full
     mask = np.zeros(len(sensors), bool)
     mask[used] = True
@@ -497,16 +504,20 @@ def _penalised(
     slack_sd = TIE_SLACK * np.maximum(np.abs(gains) * z_scale[None, :], 1e-3)
     prior_cols = [i_d + s * K + k for s in range(S) for k in range(K) if s != untied]
     prior_sd = [slack_sd[s, k] for s in range(S) for k in range(K) if s != untied]
+    prior_mean = [0.0] * len(prior_cols)
     if with_room:
+        mean, sd = _room_prior(gains)
         prior_cols += list(range(i_eta, i_eta + K))
-        prior_sd += list(2.0 / np.maximum(np.max(np.abs(gains), axis=0), 1e-3))
+        prior_sd += list(sd)
+        prior_mean += list(mean)
     if linearised is not None:
         prior_cols += list(range(i_tau, i_tau + K))
         prior_sd += list(linearised[1])
+        prior_mean += [0.0] * K
     P = np.zeros((len(prior_cols), n_col))
     P[np.arange(len(prior_cols)), prior_cols] = 1.0 / np.array(prior_sd)
     X = np.vstack([*blocks, P])
-    y = np.concatenate([*targets, np.zeros(len(prior_cols))])
+    y = np.concatenate([*targets, np.array(prior_mean) / np.array(prior_sd)])
     try:
         coef, cov = _least_squares(X, y)
     except np.linalg.LinAlgError:
@@ -535,6 +546,37 @@ def _penalised(
         coef[i_fast : i_fast + S * F].reshape(S, F),
         gains * eta[None, :],
     )
+
+
+def _room_lag_sd(time_min: FloatArray, room_C: FloatArray | None, slowest_min: float) -> float:
+    """How far a moving room's lag may be off (one sd, °C): the room's rate over the last
+    ``slowest_min`` (or the last hour, the faster) times ``slowest_min``. A machine follows a
+    drifting or cycling room behind it by the rate times an effective time constant that depends
+    on the room's path into the machine, which a model of fewer modes than the machine gets wrong
+    (a pair of slow modes of 143 and 159 min, learnt as one of 147, put a 0.17 °C/h drift's lag at
+    half its size, and T∞ 0.4 °C low)."""
+    if room_C is None:
+        return 0.0
+    t = np.asarray(time_min, float)
+    room = np.asarray(room_C, float)
+    rates = []
+    for span in (slowest_min, 60.0):
+        recent = (t >= t[-1] - span) & np.isfinite(room)
+        if np.count_nonzero(recent) >= 3 and np.ptp(t[recent]) > 0:
+            rates.append(abs(float(np.polyfit(t[recent], room[recent], 1)[0])))
+    return ROOM_LAG_SHARE * max(rates, default=0.0) * slowest_min
+
+
+def _room_prior(gains: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The prior of each mode's room factor ``η``: centred on the room's static gain of one at every
+    sensor (``Σ_k g_sk·η_k = 1``, in least squares), not on a machine the room does not reach. A
+    room that drifts or cycles keeps a machine behind it by about its rate times the time
+    constants; the readings alone cannot tell that lag from a lower T∞ (both shift every level),
+    and a prior at zero read a lag of 0.2-0.4 °C as a lower T∞, confidently."""
+    mean = np.asarray(np.linalg.lstsq(gains, np.ones(len(gains)), rcond=None)[0], dtype=float)
+    scale = np.maximum(np.max(np.abs(gains), axis=0), 1e-3)
+    sd: FloatArray = ROOM_PRIOR_SHARE * np.abs(mean) + ROOM_PRIOR_GAIN / scale
+    return mean, sd
 
 
 def _least_squares(X: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
