@@ -246,6 +246,22 @@ def learn_machine_model(
     The number of shared modes grows while the drop in χ² beats the BIC's price of one more
     mode (a time constant and an amplitude and room gain per sensor).
 
+    Parameters
+    ----------
+    sensors : sequence of str
+        The columns' names.
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N, S)
+        The run's readings (°C, NaN: missing).
+    room_C : ndarray, shape (N,), optional
+        The room sensor (an input of every mode, static gain one).
+    noise_C : ndarray, shape (S,)
+        Each sensor's noise per reading.
+    origin_min : float
+        Where the warm-up begins.
+    max_time_constant_min : float
+        The slowest mode searched (at most half the run, which pins down nothing slower).
+
     Returns
     -------
     MachineModel or None
@@ -327,6 +343,21 @@ def fit_test(
 ) -> MachineFit | None:
     """Each sensor's T∞ and interval from the test's readings so far, every sensor fitted together
     with the model's modes.
+
+    Parameters
+    ----------
+    model : MachineModel
+    sensors : sequence of str
+        The columns' names (a sensor the model does not know is left out).
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N, S)
+    room_C : ndarray, shape (N,), optional
+        The room sensor, smoothed.
+    noise_C : ndarray, shape (S,)
+    origin_min : float
+        Where the warm-up begins.
+    levels : tuple of float
+        The intervals' confidence levels.
 
     Returns
     -------
