@@ -340,6 +340,7 @@ def fit_test(
     noise_C: FloatArray,
     origin_min: float,
     levels: tuple[float, ...],
+    room_lag: bool = True,
 ) -> MachineFit | None:
     """Each sensor's T∞ and interval from the test's readings so far, every sensor fitted together
     with the model's modes.
@@ -358,6 +359,9 @@ def fit_test(
         Where the warm-up begins.
     levels : tuple of float
         The intervals' confidence levels.
+    room_lag : bool, optional
+        Count a moving room's lag as uncertain (:func:`_room_lag_sd`): a test's readings. False
+        for the reference run itself, whose modes and room gains are being learnt from it.
 
     Returns
     -------
@@ -390,7 +394,7 @@ def fit_test(
     latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
     out_steady = np.full(len(sensors), math.nan)
     out_steady[used] = steady + latest_room
-    lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min))
+    lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min)) if room_lag else 0.0
     out_half = {}
     for level, h in half.items():
         full = np.full(len(sensors), math.inf)

@@ -367,7 +367,7 @@ def _learn_machine(
             f"the machine model would build {worst}'s rise from modes {np.max(cancelling):.0f} times larger that "
             "cancel: too fragile to extrapolate a test with; later tests use each sensor's modes alone"
         ]
-    itself = fit_test(model, log.sensors, *args, (0.95,))
+    itself = fit_test(model, log.sensors, *args, (0.95,), room_lag=False)
     pinned = (
         []
         if itself is None
