@@ -219,3 +219,14 @@ def test_a_run_that_leaves_a_slow_mode_loose_gives_no_machine_model():
     reference, warnings = learn_reference(TemperatureLog(t, SENSORS, y, (), "short.csv"))
     assert reference.machine_model is None
     assert any("slow modes its sensors share" in w for w in warnings)
+
+
+def test_a_reference_run_in_a_daily_room_keeps_its_machine_model():
+    """The moving room's lag is a later test's uncertainty, not the reference run's: counted
+    against the run itself, a daily cycle of ±0.3 °C left no sensor pinned down."""
+    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=10)
+    room = ROOM_C + 0.3 * np.sin(2.0 * np.pi * t / 1440.0)
+    y = y + (room - ROOM_C)[:, None]  # the room moves every sensor with it (static gain one, quickly)
+    reference, warnings = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), np.round(room, 2))
+    assert reference.machine_model is not None, warnings
+    assert len(reference.machine_model.sensors) == len(SENSORS)
