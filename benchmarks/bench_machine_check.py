@@ -11,27 +11,21 @@ Run: python benchmarks/bench_machine_check.py [--cases 6]
 
 from __future__ import annotations
 
-import os
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
 
-# one BLAS thread: the small solves of both sides are timed, not the thread pool's contention
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
-
-import argparse  # noqa: E402
-import statistics  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-import numpy as np  # noqa: E402
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _machines import TOLERANCE_C, draw_case, simulate  # noqa: E402
-from bench_machines import FIRST_SEED, learnt_reference  # noqa: E402
+from _machines import TOLERANCE_C, draw_case, simulate
+from bench_machines import FIRST_SEED, learnt_reference
 
-from mtident.thermal.monitor import MonitorSettings, Readings, machine_fit, sensor_estimate  # noqa: E402
+from mtident.thermal.monitor import MonitorSettings, Readings, machine_fit, sensor_estimate
 
 TIMES_MIN = (30.0, 90.0, 240.0)
 

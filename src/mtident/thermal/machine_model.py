@@ -27,11 +27,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from scipy import optimize
 from scipy.special import chdtri, ndtri
 
+from mtident._threads import one_blas_thread
 from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
 from mtident.thermal.modal_search import correlation_factor, room_lag
@@ -194,18 +196,25 @@ def _free_design(binned: Binned, taus: FloatArray) -> FloatArray:
     return design
 
 
-def _sensor_solve(binned: Binned, taus: FloatArray, noise: float) -> tuple[FloatArray, float]:
-    """One sensor's free fit at shared ``taus``: its coefficients (:func:`_free_design`) and χ²."""
+def _sensor_solve(binned: Binned, taus: FloatArray, noise: float) -> tuple[FloatArray, FloatArray]:
+    """One sensor's free fit at shared ``taus``: its coefficients (:func:`_free_design`) and its
+    weighted residuals."""
     X = _free_design(binned, taus)
     w = np.sqrt(binned.count) / noise
     coef = np.asarray(np.linalg.lstsq(X * w[:, None], _target(binned) * w, rcond=None)[0], dtype=float)
-    resid = (_target(binned) - X @ coef) * w
-    return coef, float(resid @ resid)
+    resid: FloatArray = (_target(binned) - X @ coef) * w
+    return coef, resid
+
+
+def _residuals(log_taus: FloatArray, bins: list[Binned], noise: FloatArray) -> FloatArray:
+    """Every sensor's weighted residuals, each with its own amplitudes at shared time constants."""
+    taus = np.exp(log_taus)
+    return np.concatenate([_sensor_solve(b, taus, n)[1] for b, n in zip(bins, noise, strict=True)])
 
 
 def _total_chi2(log_taus: FloatArray, bins: list[Binned], noise: FloatArray) -> float:
-    taus = np.exp(log_taus)
-    return sum(_sensor_solve(b, taus, n)[1] for b, n in zip(bins, noise, strict=True))
+    resid = _residuals(log_taus, bins, noise)
+    return float(resid @ resid)
 
 
 def _spaced_chi2(log_taus: FloatArray, bins: list[Binned], noise: FloatArray) -> float:
@@ -267,6 +276,19 @@ def learn_machine_model(
     MachineModel or None
         None where fewer than two sensors have readings.
     """
+    with one_blas_thread():
+        return _learn(sensors, time_min, values, room_C, noise_C, origin_min, max_time_constant_min)
+
+
+def _learn(
+    sensors: tuple[str, ...] | list[str],
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    noise_C: FloatArray,
+    origin_min: float,
+    max_time_constant_min: float,
+) -> MachineModel | None:
     binned = _bins(np.asarray(time_min, float), np.asarray(values, float), room_C, origin_min)
     keep = [s for s, b in enumerate(binned) if b is not None]
     if len(keep) < 2:
@@ -304,20 +326,12 @@ def _log_tau_sd(bins: list[Binned], noise: FloatArray, taus: FloatArray) -> Floa
     """Each log time constant's sd from the χ² surface's curvature (the Gauss-Newton Hessian)."""
     x = np.log(taus)
     h = 1e-3
-
-    def resid(v: FloatArray) -> FloatArray:
-        out = []
-        for b, n in zip(bins, noise, strict=True):
-            coef, _ = _sensor_solve(b, np.exp(v), n)
-            out.append((_target(b) - _free_design(b, np.exp(v)) @ coef) * np.sqrt(b.count) / n)
-        return np.concatenate(out)
-
-    r0 = resid(x)
+    r0 = _residuals(x, bins, noise)
     J = np.empty((len(r0), len(x)))
     for j in range(len(x)):
         step = np.zeros_like(x)
         step[j] = h
-        J[:, j] = (resid(x + step) - r0) / h
+        J[:, j] = (_residuals(x + step, bins, noise) - r0) / h
     scale = max(1.0, float(r0 @ r0) / max(1, len(r0) - len(x)))
     try:
         cov = np.linalg.inv(J.T @ J) * scale
@@ -370,56 +384,79 @@ def fit_test(
     """
     t = np.asarray(time_min, float)
     gains = model.gains(sensors)
-    binned = _bins(t, np.asarray(values, float), room_C, origin_min)
     noise = np.maximum(np.asarray(noise_C, float), 1e-4)
-    candidates = [s for s, b in enumerate(binned) if b is not None and np.all(np.isfinite(gains[s]))]
+    fitted = {
+        s: b
+        for s, b in enumerate(_bins(t, np.asarray(values, float), room_C, origin_min))
+        if b is not None and np.all(np.isfinite(gains[s]))
+    }
     rejected: list[int] = []
     taus, tau_sd = _centres(model)
     # the worst sensor first, one at a time: a sensor far off pulls the shared amplitudes, and
     # the others' misfit then is its doing; where most sensors reject the tie, it does not hold
     while True:
-        used = [s for s in candidates if s not in rejected]
-        if len(used) < 2 or 2 * len(rejected) > len(candidates):
+        used = [s for s in fitted if s not in rejected]
+        if len(used) < 2 or 2 * len(rejected) > len(fitted):
             return None
-        passes = _tied_solve([binned[s] for s in used], gains[used], noise[used], taus, tau_sd)  # type: ignore[misc]
+        bins = [fitted[s] for s in used]
+        passes = _tied_solve(bins, gains[used], noise[used], taus, tau_sd)
         if passes is None:
             return None
         at_model, solved = passes
-        excess = _excess([binned[s] for s in used], gains[used], noise[used], taus, at_model)  # type: ignore[misc]
+        excess = _excess(bins, gains[used], noise[used], taus, at_model)
         worst = int(np.argmax(excess))
         if excess[worst] <= chdtri(len(taus), REJECT_P):
             break
         rejected.append(used[worst])
-    solved, steady, half = _profiled([binned[s] for s in used], gains[used], noise[used], model, solved, levels)  # type: ignore[misc]
-    latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
-    out_steady = np.full(len(sensors), math.nan)
-    out_steady[used] = steady + latest_room
+    solved, steady, half = _profiled(bins, gains[used], noise[used], model, solved, levels)
     lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min)) if room_lag else 0.0
-    out_half = {}
-    for level, h in half.items():
-        full = np.full(len(sensors), math.inf)
-        full[used] = np.hypot(h, ndtri(0.5 + level / 2.0) * lag_sd)
-        out_half[level] = full
-    mask = np.zeros(len(sensors), bool)
-    mask[used] = True
-    modes: list[tuple[Mode, ...]] = [()] * len(sensors)
-    gains_out: list[tuple[float, ...]] = [()] * len(sensors)
-    for j, s in enumerate(used):
-        modes[s] = tuple(
-            Mode(float(t), -float(a)) for t, a in zip(solved.taus, solved.amplitudes[j], strict=True)
-        ) + tuple(Mode(t, float(f)) for t, f in zip(FAST_TIME_CONSTANTS_MIN, solved.fast[j], strict=True))
-        if room_C is not None:
-            gains_out[s] = (*map(float, solved.room_gains[j]), *(0.0,) * len(FAST_TIME_CONSTANTS_MIN))
+    half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag_sd) for level, h in half.items()}
+    latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
+    placed = _Placed(len(sensors), used)
     return MachineFit(
-        out_steady,
-        out_half,
-        mask,
+        placed.values(steady + latest_room, math.nan),
+        {level: placed.values(h, math.inf) for level, h in half.items()},
+        placed.values(np.ones(len(used), bool), False),
         tuple(sensors[s] for s in rejected),
         solved.z,
-        tuple(modes),
-        tuple(gains_out),
+        placed.rows(_modes_of(solved), ()),
+        placed.rows(_room_gains_of(solved), ()) if room_C is not None else (),
         origin_min,
     )
+
+
+@dataclass(frozen=True)
+class _Placed:
+    """The fitted sensors' places among all the sensors."""
+
+    count: int
+    used: list[int]
+
+    def values(self, fitted: np.ndarray, missing: object) -> np.ndarray:
+        out = np.full(self.count, missing, dtype=np.asarray(fitted).dtype)
+        out[self.used] = fitted
+        return out
+
+    def rows(self, fitted: list[tuple[Any, ...]], missing: tuple[Any, ...]) -> tuple[tuple[Any, ...], ...]:
+        out = [missing] * self.count
+        for j, s in enumerate(self.used):
+            out[s] = fitted[j]
+        return tuple(out)
+
+
+def _modes_of(solved: _Solved) -> list[tuple[Any, ...]]:
+    """Each fitted sensor's modes: the shared ones, then its own fast ones."""
+    fast = np.array(FAST_TIME_CONSTANTS_MIN)
+    return [
+        tuple(Mode(float(t), -float(a)) for t, a in zip(solved.taus, shared, strict=True))
+        + tuple(Mode(float(t), float(f)) for t, f in zip(fast, own, strict=True))
+        for shared, own in zip(solved.amplitudes, solved.fast, strict=True)
+    ]
+
+
+def _room_gains_of(solved: _Solved) -> list[tuple[Any, ...]]:
+    """Each fitted sensor's room gain per mode (its own fast modes none)."""
+    return [(*map(float, row), *(0.0,) * len(FAST_TIME_CONSTANTS_MIN)) for row in solved.room_gains]
 
 
 @dataclass(frozen=True)
@@ -678,7 +715,7 @@ def noise_and_origin(time_min: FloatArray, values: FloatArray) -> tuple[FloatArr
 
 
 def fit_readings(
-    model: MachineModel,
+    model: MachineModel | None,
     sensors: tuple[str, ...] | list[str],
     time_min: FloatArray,
     values: FloatArray,
@@ -686,23 +723,14 @@ def fit_readings(
     levels: tuple[float, ...],
 ) -> MachineFit | None:
     """:func:`fit_test` on a log's readings so far: their noise and origin estimated, the room
-    smoothed as every per-sensor fit smooths it."""
+    smoothed as every per-sensor fit smooths it (None without a model)."""
+    if model is None:
+        return None
     t = np.asarray(time_min, float)
     noise, origin = noise_and_origin(t, values)
     room = None if room_C is None else smoothed_room(t, np.asarray(room_C, float))
-    return fit_test(model, sensors, t, values, room, noise, origin, levels)
-
-
-def machine_fit_of_window(
-    model: MachineModel | None,
-    sensors: tuple[str, ...] | list[str],
-    time_min: FloatArray,
-    values: FloatArray,
-    room_C: FloatArray | None,
-    settings: RobustSettings,
-) -> MachineFit | None:
-    """:func:`fit_readings` at ``settings.levels`` (None without a model)."""
-    return None if model is None else fit_readings(model, sensors, time_min, values, room_C, settings.levels)
+    with one_blas_thread():
+        return fit_test(model, sensors, t, values, room, noise, origin, levels)
 
 
 def unmeasured_wander(model: MachineModel | None, room_measured: bool, settings: RobustSettings) -> dict[float, float]:

@@ -31,7 +31,7 @@ from mtident.thermal.machine_model import (
     MachineFit,
     MachineModel,
     combined_estimate,
-    machine_fit_of_window,
+    fit_readings,
     unmeasured_wander,
 )
 from mtident.thermal.modes import Mode, model_curve
@@ -230,19 +230,14 @@ def _check_due(
     checks = list(state.checks)
     dropped = state.reference_dropped
     used = replace(settings, reference=None) if dropped else settings
-    machine: dict[int, MachineFit | None] = {}
+    # every sensor fitted together once a check; the sensors checked take their part of it
+    machine = machine_fit(readings, state.sensors, used)
+    wander = unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels))
 
     def check_sensor(s: int) -> None:
         if cancel is not None and cancel():
             raise _Cancelled
-        if id(used.reference) not in machine:
-            machine[id(used.reference)] = machine_fit(readings, state.sensors, used)
-        estimate = combined_estimate(
-            sensor_estimate(readings, s, state.sensors[s], used),
-            machine[id(used.reference)],
-            s,
-            unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels)),
-        )
+        estimate = combined_estimate(sensor_estimate(readings, s, state.sensors[s], used), machine, s, wander)
         before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used)
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
 
@@ -254,6 +249,7 @@ def _check_due(
     if contradicting:
         # the sensors that follow it are the exception: a reference of another machine fits a few by chance
         dropped, used = True, replace(settings, reference=None)
+        machine, wander = None, {}
         assert settings.reference is not None
         events.append(
             Event(
@@ -319,9 +315,8 @@ def machine_fit(readings: Readings, sensors: tuple[str, ...], settings: MonitorS
     -------
     MachineFit or None
     """
-    robust = replace(settings.robust, levels=settings.levels)
-    return machine_fit_of_window(
-        _model_of(settings), sensors, readings.time_min, readings.values_C, readings.room_C, robust
+    return fit_readings(
+        _model_of(settings), sensors, readings.time_min, readings.values_C, readings.room_C, settings.levels
     )
 
 

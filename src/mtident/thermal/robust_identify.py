@@ -18,7 +18,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.assumptions import describe_assumptions
-from mtident.thermal.machine_model import combined_estimate, machine_fit_of_window, unmeasured_wander
+from mtident.thermal.machine_model import combined_estimate, fit_readings, unmeasured_wander
 from mtident.thermal.measured import measured_and_settled, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_notes
@@ -292,7 +292,7 @@ def identify_robust(
     room_window = None if room_C is None else room_C[:n]
     unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
     model = None if reference is None else reference.machine_model
-    machine = machine_fit_of_window(model, log.sensors, t[:n], y[:n], room_window, settings)
+    machine = fit_readings(model, log.sensors, t[:n], y[:n], room_window, settings.levels)
     estimates = tuple(
         combined_estimate(
             with_fragility(

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from mtident.thermal.modal_types import MAX_MODES
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, SteadyState
 
 __all__ = [
@@ -24,8 +25,8 @@ __all__ = [
 MAX_FREE_FAST = 2
 
 
-# the modes searched without widening, and the most a reference run keeps
-DEFAULT_MAX_MODES = 4
+# the modes searched without widening, and the most a reference run keeps: the mode family's
+DEFAULT_MAX_MODES = MAX_MODES
 
 
 @dataclass(frozen=True)
