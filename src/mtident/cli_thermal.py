@@ -754,7 +754,13 @@ def learn_command(
         taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(model.time_constants_min, model.box, strict=True))
         stderr.print(
             f"mtident: machine model: {len(model.time_constants_min)} modes shared by {len(model.sensors)} sensors "
-            f"({taus} min); later tests fit every sensor together, each mode's amplitudes in this run's proportions",
+            f"({taus} min); later tests fit every sensor together, each mode's amplitudes in this run's proportions"
+            + (
+                f"; the room's path into {model.learnt_room_sensors()} learnt: a later test's moving room is a known "
+                "input"
+                if model.room_gains
+                else ""
+            ),
             highlight=False,
         )
     _exit_if_none_used(reference)
@@ -768,6 +774,11 @@ def _machine_model_json(reference: MachineReference) -> dict[str, object] | None
         "time_constants_min": list(model.time_constants_min),
         "box": list(model.box),
         "gains_C": {name: list(row) for name, row in zip(model.sensors, model.gains_C, strict=True)},
+        "room_lag_min": {
+            name: float(np.dot(row, model.time_constants_min))
+            for name, row in zip(model.sensors, model.room_gains, strict=True)
+            if all(map(math.isfinite, row))
+        },
     }
 
 

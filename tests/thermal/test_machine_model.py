@@ -230,3 +230,108 @@ def test_a_reference_run_in_a_daily_room_keeps_its_machine_model():
     reference, warnings = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), np.round(room, 2))
     assert reference.machine_model is not None, warnings
     assert len(reference.machine_model.sensors) == len(SENSORS)
+
+
+# the chain coupled to the room by each node's conductance (A·1 + b = 0: the room's static gain one)
+_ROOM_COUPLING = -_CONDUCTANCE @ np.ones(3)
+
+
+def _run_in_room(split, power, x0_rise, minutes, room, seed, dt=1.0):
+    """Noisy readings (σ 0.01 °C, to 0.01 °C) of the chain warming in a room ``room(t)`` (°C), the
+    room logged to 0.01 °C; x0_rise above the room's first level."""
+    t = np.arange(0.0, minutes + dt / 2, dt)
+    r = room(t)
+    n = len(_CONDUCTANCE)
+    # exact for a room that moves linearly between the readings
+    M = np.zeros((n + 2, n + 2))
+    M[:n, :n] = _CONDUCTANCE
+    M[:n, n] = _HEAT @ (power * np.asarray(split))
+    M[:n, n + 1] = _ROOM_COUPLING
+    x = np.empty((len(t), n))
+    x[0] = x0_rise + r[0]
+    for k in range(1, len(t)):
+        M[:n, n] = _HEAT @ (power * np.asarray(split)) + _ROOM_COUPLING * r[k - 1]
+        M[:n, n + 1] = _ROOM_COUPLING * (r[k] - r[k - 1]) / dt
+        step = expm(M * dt)
+        x[k] = step[:n, :n] @ x[k - 1] + step[:n, n] + step[:n, n + 1] * dt
+    y = x @ _SENSOR_ROWS.T
+    rng = np.random.default_rng(seed)
+    return t, np.round(y + rng.normal(0.0, 0.01, y.shape), 2), np.round(r, 2)
+
+
+def _daily(amplitude, phase=0.0):
+    return lambda t: ROOM_C + amplitude * np.sin(2.0 * np.pi * t / 1440.0 + phase)
+
+
+def _lag_behind_the_room():
+    """Each sensor's lag behind a room that rises at a steady rate (min): C·(−A)⁻¹·1."""
+    return _SENSOR_ROWS @ np.linalg.solve(-_CONDUCTANCE, np.ones(3))
+
+
+def test_a_reference_run_in_a_daily_room_learns_how_the_room_reaches_each_sensor(tmp_path):
+    t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, _daily(0.3), seed=11)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), room)
+    model = reference.machine_model
+    assert model is not None and len(model.room_gains) == len(SENSORS)
+    gains, cov = model.room_response(SENSORS)
+    taus = np.array(model.time_constants_min)
+    np.testing.assert_allclose(gains @ taus, _lag_behind_the_room(), rtol=0.15)
+    np.testing.assert_allclose(gains.sum(axis=1), 1.0, atol=0.1)
+    assert "the room's path into every sensor learnt" in model.describe()
+    path = tmp_path / "ref.toml"
+    save_reference(reference, path)
+    loaded = load_reference(path).machine_model
+    assert loaded is not None
+    np.testing.assert_allclose(loaded.room_response(SENSORS)[0], gains)
+    np.testing.assert_allclose(loaded.room_response(SENSORS)[1], cov)
+
+
+def test_a_reference_run_in_a_steady_room_learns_no_room_response():
+    t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, lambda t: np.full_like(t, ROOM_C), seed=12)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), room)
+    assert reference.machine_model is not None
+    assert not any(np.all(np.isfinite(row)) for row in reference.machine_model.room_gains)
+
+
+def test_a_learnt_room_response_stops_a_test_in_a_daily_room_earlier_and_right():
+    """The test at another split and power, in a room cycling ±0.3 °C a day: the room a known
+    input of each sensor, where without it the room's lag behind its cycle stays open."""
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
+
+    t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, _daily(0.3), seed=13)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), room)
+    assert reference.machine_model is not None and reference.machine_model.room_gains
+    split, power = (0.45, 0.55), 1.2
+    t, y, room = _run_in_room(split, power, np.zeros(3), 900.0, _daily(0.3, phase=2.0), seed=14)
+    unlearnt = replace(reference, machine_model=replace(reference.machine_model, room_gains=(), room_gain_cov=()))
+    stops = {}
+    for label, ref in (("learnt", reference), ("fitted", unlearnt)):
+        settings = MonitorSettings(tolerance_C=0.2, reference=ref, room_sensor="room")
+        state, _ = monitor_step(new_state(list(SENSORS), with_room=True), t, y, room, settings)
+        stops[label] = state.stop_time_min if state.stopped else math.inf
+        if state.stopped:
+            at = int(np.searchsorted(t, state.stop_time_min))
+            truth = _truth(split, power) - ROOM_C + _daily(0.3, phase=2.0)(t[at])
+            steady = np.array([c.steady_C for c in state.checks])
+            assert np.all(np.abs(steady - truth) <= 0.2), label
+            assert all(c.low95_C <= v <= c.high95_C for c, v in zip(state.checks, truth, strict=True)), label
+    assert stops["learnt"] < 800.0 and stops["learnt"] < 0.8 * stops["fitted"], stops
+
+
+@pytest.mark.parametrize(
+    "table",
+    [
+        "[machine_model.room_response.c]\ngains = [1.0]\ncovariance = [[0.1]]\n",
+        "[machine_model.room_response.a]\ngains = [1.0, 2.0]\ncovariance = [[0.1]]\n",
+        "[machine_model.room_response.a]\ngains = [1.0]\n",
+    ],
+)
+def test_a_malformed_room_response_is_refused_by_name(tmp_path, table):
+    path = tmp_path / "ref.toml"
+    path.write_text(
+        "source = 'x'\n[sensors.a]\ntime_constants_min = [40.0]\nbox = [0.1]\n[machine_model]\n"
+        "time_constants_min = [40.0]\nbox = [0.1]\n[machine_model.gains_C]\na = [1.0]\nb = [2.0]\n" + table,
+        encoding="utf-8",
+    )
+    with pytest.raises(InputError, match=r"room_response"):
+        load_reference(path)

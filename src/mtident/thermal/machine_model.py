@@ -15,7 +15,10 @@ open, is then pinned by every sensor together.
 
 A sensor's own lag (a sleeve, a thermowell) adds a fast mode of its own: each sensor keeps
 ``FAST_TIME_CONSTANTS_MIN`` modes with free amplitudes. The room enters through the same modes with
-static gain one; its gain per mode is ``g_sk·η_k``, ``η`` shared.
+static gain one. How the room reaches each sensor does not depend on the heat input: where the
+reference run's room moved enough to show it, each sensor's gains on the room ``h_sk`` are learnt
+from that run and a test's room is then a known input; elsewhere a test fits them as ``g_sk·η_k``,
+``η`` shared, and counts a moving room's lag as uncertain.
 
 The tie is held loosely, not exactly: each tied amplitude may leave ``g_sk·z_k`` by a prior of
 ``TIE_SLACK`` of itself (the reference's own error, a slightly non-linear machine), and a sensor
@@ -39,7 +42,7 @@ from mtident.thermal.lsq import flat_lead
 from mtident.thermal.modal_search import correlation_factor, room_lag
 from mtident.thermal.modal_types import Binned, IntervalEnd, Mode, bin_samples
 from mtident.thermal.modes import equilibrium_time
-from mtident.thermal.readings import display_resolution, noise_sigma, smoothed_room
+from mtident.thermal.readings import display_resolution, noise_sigma, room_trend
 from mtident.thermal.robust import RobustSettings, SensorEstimate, room_wander_half_width
 
 FAST_TIME_CONSTANTS_MIN = (0.7, 2.5)
@@ -52,6 +55,18 @@ TAU_BOX_SDS = 3.0
 LOOSE_BOX = 0.3
 ROOM_LAG_SHARE = 1.0
 """The share of the room's rate times the slowest time constant taken as the lag's sd."""
+ROOM_RESPONSE_SHARE = 0.3
+"""A learnt room response's own error (one sd): this share of the room's effect on the sensor, in
+quadrature with the reference's standard error (the model is a truncation)."""
+ROOM_TREND_MIN = 120.0
+"""The room enters the machine model as its local straight line over this window
+(:func:`~mtident.thermal.readings.room_trend`): the room sensor's noise and display steps are
+one error shared by every sensor, which a joint fit would otherwise take for a slow mode."""
+ROOM_STATIC_SD = 0.05
+"""The prior sd of a sensor's static gain on the room (one) in its learnt room gains."""
+ROOM_RESPONSE_LEARNT = 0.2
+"""A sensor's room response is kept from the reference run where its lag behind a ramp
+(``Σ_k h_sk·τ_k``) is known within this share of the slowest time constant (one sd)."""
 ROOM_PRIOR_SHARE = 0.3
 ROOM_PRIOR_GAIN = 0.5
 """The room factors' prior sd: this share of their static-gain-one value, plus a room gain of this
@@ -86,12 +101,19 @@ class MachineModel:
         Each time constant's relative half-width searched in a test.
     gains_C : tuple of tuple of float
         ``gains_C[s][k]``: sensor s's amplitude of mode k in the reference run (°C; rise positive).
+    room_gains : tuple of tuple of float, optional
+        ``room_gains[s][k]``: sensor s's gain of mode k on the room, learnt from the reference run
+        (a row of NaN: not learnt for that sensor; empty: for none).
+    room_gain_cov : tuple, optional
+        Per sensor, the covariance (K, K) of its room gains.
     """
 
     sensors: tuple[str, ...]
     time_constants_min: tuple[float, ...]
     box: tuple[float, ...]
     gains_C: tuple[tuple[float, ...], ...]
+    room_gains: tuple[tuple[float, ...], ...] = ()
+    room_gain_cov: tuple[tuple[tuple[float, ...], ...], ...] = ()
 
     def describe(self) -> str:
         """What a test fitted with the model assumes, in words."""
@@ -101,11 +123,42 @@ class MachineModel:
             f"shared modes ({taus} min) in the reference run's proportions across the sensors (each within "
             f"{TIE_SLACK:.0%} of them), used where the readings do not reject it and its interval agrees with the "
             "sensor's own"
+            + (
+                f"; the room's path into {self.learnt_room_sensors()} learnt from the reference run"
+                if self.room_gains
+                else ""
+            )
         )
+
+    def learnt_room_sensors(self) -> str:
+        """The sensors whose room response the model knows, in words."""
+        known = [name for name, row in zip(self.sensors, self.room_gains, strict=True) if np.all(np.isfinite(row))]
+        return "every sensor" if len(known) == len(self.sensors) else ", ".join(known)
 
     def of(self, sensors: list[str]) -> MachineModel:
         """The model of some of its sensors."""
-        return replace(self, sensors=tuple(sensors), gains_C=tuple(map(tuple, self.gains(sensors))))
+        if not self.room_gains:
+            return replace(self, sensors=tuple(sensors), gains_C=tuple(map(tuple, self.gains(sensors))))
+        gains, cov = self.room_response(sensors)
+        return replace(
+            self,
+            sensors=tuple(sensors),
+            gains_C=tuple(map(tuple, self.gains(sensors))),
+            room_gains=tuple(tuple(map(float, row)) for row in gains),
+            room_gain_cov=tuple(tuple(tuple(map(float, r)) for r in c) for c in cov),
+        )
+
+    def room_response(self, sensors: tuple[str, ...] | list[str]) -> tuple[FloatArray, FloatArray]:
+        """The room gains (S, K) of ``sensors`` and their covariances (S, K, K) (NaN where not
+        learnt)."""
+        k = len(self.time_constants_min)
+        known = dict(zip(self.sensors, zip(self.room_gains, self.room_gain_cov, strict=True), strict=False))
+        gains = np.full((len(sensors), k), math.nan)
+        cov = np.full((len(sensors), k, k), math.nan)
+        for s, name in enumerate(sensors):
+            if name in known:
+                gains[s], cov[s] = known[name]
+        return gains, cov
 
     def gains(self, sensors: tuple[str, ...] | list[str]) -> FloatArray:
         """The gains (S, K) of ``sensors`` (a row of NaN for one the model does not know)."""
@@ -314,11 +367,40 @@ def _learn(
         gains[s] = coef[1 + len(FAST_TIME_CONSTANTS_MIN) : 1 + len(FAST_TIME_CONSTANTS_MIN) + k]
     sd = _log_tau_sd(bins, noise, taus)
     box = tuple(float(max(TAU_BOX_MIN, math.expm1(min(TAU_BOX_SDS * v, 1.0)))) for v in sd)
-    return MachineModel(
+    model = MachineModel(
         tuple(sensors),
         tuple(float(t) for t in taus),
         box,
         tuple(tuple(float(v) for v in row) for row in gains),
+    )
+    return model if room_C is None else _with_room_response(model, keep, bins, noise)
+
+
+def _with_room_response(model: MachineModel, keep: list[int], bins: list[Binned], noise: FloatArray) -> MachineModel:
+    """The model with each sensor's gains on the room, where the run pins its lag behind the room
+    down (:data:`ROOM_RESPONSE_LEARNT`): its own free fit's room coefficients and their covariance,
+    scaled by the residuals' χ² per degree of freedom and correlation."""
+    taus = np.array(model.time_constants_min)
+    k = len(taus)
+    gains = np.full((len(model.sensors), k), math.nan)
+    cov = np.full((len(model.sensors), k, k), math.nan)
+    for s, b, n in zip(keep, bins, noise, strict=True):
+        X = _free_design(b, taus)
+        w = np.sqrt(b.count) / n
+        # the room's static gain is one: Σ_k h_sk = 1, within what a sensor's own lag takes
+        static = np.concatenate([np.zeros(X.shape[1] - k), np.ones(k)]) / ROOM_STATIC_SD
+        coef, full = _least_squares(np.vstack([X * w[:, None], static]), np.append(_target(b) * w, 1 / ROOM_STATIC_SD))
+        resid = (_target(b) - X @ coef) * w
+        scale = max(1.0, float(resid @ resid) / max(1, len(resid) - X.shape[1])) * correlation_factor(resid)
+        c = full[-k:, -k:] * scale
+        if math.sqrt(max(float(taus @ c @ taus), 0.0)) <= ROOM_RESPONSE_LEARNT * taus.max():
+            gains[s], cov[s] = coef[-k:], c
+    if not np.any(np.isfinite(gains[:, 0])):
+        return model
+    return replace(
+        model,
+        room_gains=tuple(tuple(map(float, row)) for row in gains),
+        room_gain_cov=tuple(tuple(tuple(map(float, r)) for r in c) for c in cov),
     )
 
 
@@ -390,8 +472,11 @@ def fit_test(
         for s, b in enumerate(_bins(t, np.asarray(values, float), room_C, origin_min))
         if b is not None and np.all(np.isfinite(gains[s]))
     }
-    rejected: list[int] = []
     taus, tau_sd = _centres(model)
+    lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min)) if room_lag else 0.0
+    known = _known_room(model, sensors, fitted, taus, lag_sd if room_lag else math.inf)
+    fitted.update({s: bin_ for s, (bin_, _, _) in known.items()})
+    rejected: list[int] = []
     # the worst sensor first, one at a time: a sensor far off pulls the shared amplitudes, and
     # the others' misfit then is its doing; where most sensors reject the tie, it does not hold
     while True:
@@ -409,8 +494,9 @@ def fit_test(
             break
         rejected.append(used[worst])
     solved, steady, half = _profiled(bins, gains[used], noise[used], model, solved, levels)
-    lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min)) if room_lag else 0.0
-    half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag_sd) for level, h in half.items()}
+    lag = np.array([known[s][1] if s in known else lag_sd for s in used]) if room_lag else np.zeros(len(used))
+    half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag) for level, h in half.items()}
+    room_gains = [known[s][2] if s in known else row for s, row in zip(used, _room_gains_of(solved), strict=True)]
     latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
     placed = _Placed(len(sensors), used)
     return MachineFit(
@@ -420,9 +506,35 @@ def fit_test(
         tuple(sensors[s] for s in rejected),
         solved.z,
         placed.rows(_modes_of(solved), ()),
-        placed.rows(_room_gains_of(solved), ()) if room_C is not None else (),
+        placed.rows(room_gains, ()) if room_C is not None else (),
         origin_min,
     )
+
+
+def _known_room(
+    model: MachineModel, sensors: tuple[str, ...] | list[str], fitted: dict[int, Binned], taus: FloatArray, worse: float
+) -> dict[int, tuple[Binned, float, tuple[float, ...]]]:
+    """The sensors whose room response the model knows well enough here: per sensor its readings
+    with the room's course through that response taken out (no room left to fit), how far that
+    course may be off (one sd, °C: the reference's standard error and :data:`ROOM_RESPONSE_SHARE`
+    of the course, the most over the later half of the readings) and its room gains per mode (its
+    fast modes none). A sensor whose room course would be less certain than ``worse`` (the lag
+    counted without it) is left to the fitted room factors."""
+    if not model.room_gains:
+        return {}
+    gains, cov = model.room_response(sensors)
+    out: dict[int, tuple[Binned, float, tuple[float, ...]]] = {}
+    for s, b in fitted.items():
+        if b.room_C is None or not np.all(np.isfinite(gains[s])):
+            continue
+        R = _room_columns(b, taus)
+        course = R @ gains[s]
+        sd = np.hypot(np.sqrt(np.clip(np.einsum("bk,kl,bl->b", R, cov[s], R), 0, None)), ROOM_RESPONSE_SHARE * course)
+        off = float(np.max(sd[b.time_min >= 0.5 * b.time_min[-1]]))
+        if off < worse:
+            row = (*map(float, gains[s]), *(0.0,) * len(FAST_TIME_CONSTANTS_MIN))
+            out[s] = (replace(b, value_C=b.value_C - b.room_C - course, room_C=None), off, row)
+    return out
 
 
 @dataclass(frozen=True)
@@ -550,7 +662,7 @@ def _penalised(
     its own."""
     S, K = gains.shape
     F = len(FAST_TIME_CONSTANTS_MIN)
-    with_room = bins[0].room_C is not None
+    with_room = any(b.room_C is not None for b in bins)
     i_fast, i_z = S, S + S * F
     i_d = i_z + K
     i_eta = i_d + S * K
@@ -565,7 +677,7 @@ def _penalised(
         e = _exp_columns(u, taus)
         X[:, i_z : i_z + K] = -gains[s][None, :] * e
         X[:, i_d + s * K : i_d + (s + 1) * K] = -e
-        if with_room:
+        if b.room_C is not None:
             X[:, i_eta : i_eta + K] = _room_columns(b, taus) * gains[s][None, :]
         if linearised is not None:
             # d/d(log τ) of −a·e^(−u/τ); the room's lags move less and are left at the model's τ
@@ -728,7 +840,7 @@ def fit_readings(
         return None
     t = np.asarray(time_min, float)
     noise, origin = noise_and_origin(t, values)
-    room = None if room_C is None else smoothed_room(t, np.asarray(room_C, float))
+    room = None if room_C is None else room_trend(t, np.asarray(room_C, float), ROOM_TREND_MIN)
     with one_blas_thread():
         return fit_test(model, sensors, t, values, room, noise, origin, levels)
 

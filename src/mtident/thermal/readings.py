@@ -300,6 +300,43 @@ def smoothed_room(time_min: FloatArray, room_C: FloatArray, window_min: float = 
     return np.where(valid, mean, np.nan)
 
 
+def room_trend(time_min: FloatArray, room_C: FloatArray, window_min: float) -> FloatArray:
+    """A room sensor's readings as a local straight line over a window centred on each time
+    (one-sided at the ends, where a straight line still follows a drift without lag): the room's
+    course without the sensor's noise and display steps, which every sensor would otherwise share
+    as one error.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min), increasing.
+    room_C : ndarray, shape (N,)
+        The room's readings (°C, NaN: missing).
+    window_min : float
+        The window's width (min).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The local line's value at each time (NaN where the reading itself is missing).
+    """
+    t = np.asarray(time_min, dtype=float)
+    room = np.asarray(room_C, dtype=float)
+    valid = np.isfinite(room)
+    u = t - t[0]
+    sums = [
+        np.concatenate([[0.0], np.cumsum(np.where(valid, v, 0.0))]) for v in (np.ones_like(u), u, u * u, room, u * room)
+    ]
+    lo = np.searchsorted(t, t - window_min / 2.0, side="left")
+    hi = np.searchsorted(t, t + window_min / 2.0, side="right")
+    n, su, suu, sy, suy = (c[hi] - c[lo] for c in sums)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        det = n * suu - su * su
+        slope = np.where(det > 1e-9 * np.maximum(n * suu, 1e-300), (n * suy - su * sy) / det, 0.0)
+        line = (sy - slope * su) / n + slope * u
+    return np.where(valid, line, np.nan)
+
+
 def sampling_interval_min(time_min: FloatArray) -> float:
     """The log's usual sampling interval (the median step; 1 min for fewer than two readings).
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -22,9 +23,9 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
-from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, noise_and_origin
+from mtident.thermal.machine_model import ROOM_TREND_MIN, MachineModel, fit_test, learn_machine_model, noise_and_origin
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
-from mtident.thermal.readings import smoothed_room
+from mtident.thermal.readings import room_trend, smoothed_room
 from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
 from mtident.thermal.robust_types import DEFAULT_MAX_MODES, MAX_FREE_FAST, RobustSettings, SensorEstimate, SensorModes
 
@@ -343,7 +344,7 @@ def _learn_machine(
     if len(log.sensors) < 2:
         return None, []
     noise, origin = noise_and_origin(log.time_min, log.temperature_C)
-    room = None if room_C is None else smoothed_room(log.time_min, room_C)
+    room = None if room_C is None else room_trend(log.time_min, room_C, ROOM_TREND_MIN)
     args = (log.time_min, log.temperature_C, room, noise, origin)
     model = learn_machine_model(log.sensors, *args[:2], room, noise, origin, settings.max_time_constant_min)
     if model is None:
@@ -665,7 +666,7 @@ def save_reference(reference: MachineReference, path: str | Path) -> None:
     }
     model = reference.machine_model
     if model is not None:
-        doc["machine_model"] = {
+        table: dict[str, object] = {
             "time_constants_min": list(model.time_constants_min),
             "box": list(model.box),
             "gains_C": {
@@ -674,6 +675,13 @@ def save_reference(reference: MachineReference, path: str | Path) -> None:
                 if all(map(math.isfinite, row))
             },
         }
+        learnt = zip(model.sensors, model.room_gains, model.room_gain_cov, strict=True) if model.room_gains else ()
+        room = {
+            name: {"gains": list(row), "covariance": [list(r) for r in cov]}
+            for name, row, cov in learnt
+            if all(map(math.isfinite, row))
+        }
+        doc["machine_model"] = table | ({"room_response": room} if room else {})
     Path(path).write_text(_HEADER + tomli_w.dumps(doc), encoding="utf-8")
 
 
@@ -755,12 +763,47 @@ def _machine_model(path: Path, entry: object) -> MachineModel | None:
             f"found {entry!r} (learn the reference again, or delete the table to use each sensor's modes alone)"
         )
         raise InputError(msg)
-    assert isinstance(taus, list) and isinstance(box, list) and isinstance(gains, dict)
-    return MachineModel(
+    assert isinstance(entry, dict) and isinstance(taus, list) and isinstance(box, list) and isinstance(gains, dict)
+    model = MachineModel(
         tuple(str(name) for name in gains),
         tuple(float(v) for v in taus),
         tuple(float(v) for v in box),
         tuple(tuple(float(v) for v in row) for row in gains.values()),
+    )
+    return _room_response(path, model, entry.get("room_response"), numbers)
+
+
+def _room_response(
+    path: Path, model: MachineModel, entry: object, numbers: Callable[[object, int], bool]
+) -> MachineModel:
+    """The model with the ``[machine_model.room_response.NAME]`` tables' room gains (none where the
+    file has none)."""
+    if entry is None:
+        return model
+    k = len(model.time_constants_min)
+    ok = isinstance(entry, dict) and bool(entry) and set(entry) <= set(model.sensors)
+    for table in entry.values() if isinstance(entry, dict) else ():
+        ok = ok and isinstance(table, dict) and numbers(table.get("gains"), k)
+        cov = table.get("covariance") if isinstance(table, dict) else None
+        ok = ok and isinstance(cov, list) and len(cov) == k and all(numbers(row, k) for row in cov)
+    if not ok:
+        msg = (
+            f"{path}: [machine_model.room_response]: expected, per sensor of the model, gains = [{k} numbers] and "
+            f"covariance = [{k} lists of {k} numbers]; found {entry!r} (learn the reference again, or delete the "
+            "table to fit the room in each test)"
+        )
+        raise InputError(msg)
+    assert isinstance(entry, dict)
+    nan_row = (math.nan,) * k
+    return replace(
+        model,
+        room_gains=tuple(
+            tuple(map(float, entry[name]["gains"])) if name in entry else nan_row for name in model.sensors
+        ),
+        room_gain_cov=tuple(
+            tuple(tuple(map(float, row)) for row in entry[name]["covariance"]) if name in entry else (nan_row,) * k
+            for name in model.sensors
+        ),
     )
 
 
