@@ -52,9 +52,9 @@ def main() -> None:
             if not np.isfinite(window) or np.searchsorted(c.time_min, window) < 8:
                 continue
             robust = identify_robust(_log(c), window)
-            lo, hi = robust.steady_state_ci95()[0]
+            lo, hi = robust.steady_state_ci95_C[0]
             first = identify(_log(c), window, "ukf")
-            flo, fhi = first.steady_state_ci95()[0]
+            flo, fhi = first.steady_state_ci95_C[0]
             print(
                 f"{c.name:>28} {c.t95_min:5.1f} {window:5.1f} {robust.steady_state_C[0]:8.2f} [{lo:7.2f}, {hi:7.2f}] "
                 f"{'yes' if robust.model_ok[0] else 'no':>3} {str(lo <= truth <= hi):>6} "

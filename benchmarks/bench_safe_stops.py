@@ -109,7 +109,7 @@ def _identify_at(warm, fraction: float, reference) -> dict[str, object]:  # noqa
     robust = identify_robust(
         log, window, warm.room_C, reference=reference, room_sensor="room" if warm.room_C is not None else None
     )
-    lo, hi = robust.steady_state_ci95()[0]
+    lo, hi = robust.steady_state_ci95_C[0]
     out["robust"] = {
         "covered": bool(lo <= truth <= hi),
         "half_width_C": float((hi - lo) / 2),
@@ -121,7 +121,7 @@ def _identify_at(warm, fraction: float, reference) -> dict[str, object]:  # noqa
             warnings.simplefilter("ignore")
             try:
                 first = identify(log, window, "ukf", ambient_C=warm.room_C)
-                flo, fhi = first.steady_state_ci95()[0]
+                flo, fhi = first.steady_state_ci95_C[0]
                 out["first_order"] = {
                     "covered": bool(flo <= truth <= fhi),
                     "half_width_C": float((fhi - flo) / 2),

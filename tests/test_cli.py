@@ -164,6 +164,19 @@ def test_thermal_min_time_json_has_the_contract_keys(tmp_path):
         (["thermal", "identify", "missing.csv"], "missing.csv: no such file"),
         (["thermal", "identify", "@sample", "--sensor", "T99"], "no sensor column 'T99'"),
         (["thermal", "identify", "@sample", "--window", "2"], "samples in the first 2 min"),
+        # the refusals are identify()'s, said as options
+        (
+            ["thermal", "identify", "@sample", "--preset", "xia2014"],
+            "--preset is a setting of the papers' first-order filters: give --method ukf, aukf, fukf, afukf or lsq",
+        ),
+        (
+            ["thermal", "identify", "@sample", "--method", "ukf", "--reference", "@sample-machine"],
+            "--reference needs the model-robust method (--method robust)",
+        ),
+        (
+            ["thermal", "identify", "@sample", "--method", "lsq", "--max-time-constant", "200"],
+            "(--max-time-constant, --room-wander, --free-fast-modes) are the model-robust method's (--method robust)",
+        ),
         (
             ["thermal", "min-time", "@sample", "--sampling-periods", "35,abc"],
             "--sampling-periods: expected comma-separated minutes",
@@ -259,7 +272,7 @@ def test_identify_writes_its_curves_for_a_spreadsheet(tmp_path, monkeypatch):
     result = identify(read_temperature_log(sample_log_path()).select(["T1", "T9"]), 30.0, "ukf")
     np.testing.assert_allclose(table["T9_model_C"], result.curve_C[:, 1], atol=1e-6)
     np.testing.assert_allclose(
-        table["T1_high95_C"] - table["T1_model_C"], result.quantile * result.curve_sd_C[:, 0], atol=2e-6
+        table["T1_high95_C"] - table["T1_model_C"], result.details.quantile * result.details.curve_sd_C[:, 0], atol=2e-6
     )
     np.testing.assert_allclose(table["T1_measured_C"], result.measured_C[:, 0], atol=1e-6)
 

@@ -1011,7 +1011,7 @@ def test_a_string_of_sensors_and_unnamed_room_readings_are_taken_as_meant():
     said = result(state, MonitorSettings())["sensors"][0]["assumptions"]["room"]
     assert said.startswith("measured (the room readings given), an input of every mode")
     answer = identify_robust(make_log(t, {"T1": y}), 60.0, room)
-    assert answer.assumptions[0].room.startswith("measured (the room readings given)")
+    assert answer.details.assumptions[0].room.startswith("measured (the room readings given)")
 
 
 def test_a_state_file_from_before_a_field_with_a_default_was_added_loads_with_it(tmp_path):

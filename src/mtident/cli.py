@@ -39,6 +39,12 @@ _OPTION_OF = {
     "window_min": "--window",
     "max_time_constant_min": "--max-time-constant",
     "ambient_C": "--ambient",
+    "method": "--method",
+    "preset": "--preset",
+    "pseudo_measurement_seed": "--pseudo-seed",
+    "reference": "--reference",
+    "room_wander_C_per_h": "--room-wander",
+    "free_fast_modes": "--free-fast-modes",
 }
 _PARAMETER = re.compile(r"`(\w+)(?:=(?:'([^']*)'|\[([^\]]*)\]))?`")
 
@@ -53,7 +59,9 @@ def as_options(text: str) -> str:
         A message from the library. Each parameter it names in backticks, alone or with a quoted
         value or a bracketed list, is replaced where the command line has an option for it
         (``time_unit``, ``temperature_unit``, ``time_col``, ``sensors``, ``window_min``,
-        ``max_time_constant_min``, ``ambient_C``); other words in backticks are kept as they are.
+        ``max_time_constant_min``, ``ambient_C``, ``method``, ``preset``, ``pseudo_measurement_seed``,
+        ``reference``, ``room_wander_C_per_h``, ``free_fast_modes``); other words in backticks are kept as they
+        are.
 
     Returns
     -------

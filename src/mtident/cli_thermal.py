@@ -30,14 +30,13 @@ from mtident.io.columns import room_named
 from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
 from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
-from mtident.thermal.identify import Identification
+from mtident.thermal.identification import Identification, MethodDetails
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
-from mtident.thermal.robust_types import MAX_FREE_FAST
+from mtident.thermal.robust_types import MAX_FREE_FAST, RobustSettings
 from mtident.thermal.settings import IDENTIFY_METHODS, ROBUST_METHOD
 
 if TYPE_CHECKING:
     from mtident.thermal.reference import MachineReference
-    from mtident.thermal.robust_identify import RobustIdentification
 
 stderr = OptionConsole(stderr=True, soft_wrap=True)
 
@@ -487,31 +486,23 @@ def identify_command(
         Options that do not go together, or a log that cannot be read (said as a one-line error).
     """
     log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
-    if method == ROBUST_METHOD:
-        from mtident.thermal.robust import RobustSettings
-        from mtident.thermal.robust_identify import identify_robust
-
-        if preset != "data" or pseudo_seed is not None:
-            msg = (
-                f"--{'preset' if preset != 'data' else 'pseudo-seed'} is a setting of the papers' first-order "
-                "filters: give --method ukf, aukf, fukf, afukf or lsq with it"
-            )
-            raise InputError(msg)
-        settings = RobustSettings(
-            max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
+    settings = RobustSettings(
+        max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
+    )
+    with stderr.status(f"fitting {len(log.sensors)} sensor(s)…"):
+        result = identify(
+            log,
+            window_min,
+            method,
+            preset,
+            horizon_min,
+            pseudo_seed,
+            room,
+            settings=settings,
+            reference=load_reference_file(reference_path, machine),
+            room_sensor=ambient_col,
         )
-        with stderr.status(f"fitting {len(log.sensors)} sensor(s)…"):
-            result: Identification | RobustIdentification = identify_robust(
-                log, window_min, room, settings, load_reference_file(reference_path, machine), horizon_min, ambient_col
-            )
-    else:
-        if reference_path is not None:
-            msg = (
-                "--reference needs the model-robust method (--method robust): the first-order filters have one mode "
-                "and no reference to use"
-            )
-            raise InputError(msg)
-        result = identify(log, window_min, method, preset, horizon_min, pseudo_seed, room)
+    if method != ROBUST_METHOD:
         stderr.print(
             "mtident: note: the papers' first-order model: the interval assumes a first-order machine (a slower mode "
             "not yet seen moves T∞ beyond it); --method robust covers up to four modes",
@@ -549,7 +540,7 @@ def identify_command(
 
 def _identify_table(
     source: str,
-    result: Identification | RobustIdentification,
+    result: Identification[MethodDetails],
     summaries: list[dict[str, object]],
     method: str,
     preset: str,
@@ -690,7 +681,6 @@ def learn_command(
         A log that cannot be read, or no sensor whose modes could be learnt.
     """
     from mtident.thermal.reference import learn_reference, save_reference
-    from mtident.thermal.robust import RobustSettings
 
     log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
     with stderr.status(f"learning the modes of {len(log.sensors)} sensor(s)…"):

@@ -206,9 +206,9 @@ def test_identify_uses_the_machine_model_and_says_so():
     reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
     t, y = _noisy_chain((0.5, 0.5), 0.8, np.zeros(3), 400.0, seed=7)
     answer = identify_robust(TemperatureLog(t, SENSORS, y, (), "test.csv"), 90.0, reference=reference)
-    assert all(e.machine_used for e in answer.estimates)
-    assert all("the machine model" in (a.reference or "") for a in answer.assumptions)
-    steady = np.array([e.steady_C for e in answer.estimates])
+    assert all(e.machine_used for e in answer.details.estimates)
+    assert all("the machine model" in (a.reference or "") for a in answer.details.assumptions)
+    steady = np.array([e.steady_C for e in answer.details.estimates])
     np.testing.assert_allclose(steady, _truth((0.5, 0.5), 0.8), atol=0.1)
     # the predicted course passes through the window's readings
     assert np.nanmax(np.abs(answer.curve_C[: answer.n_window] - y[: answer.n_window])) < 0.1

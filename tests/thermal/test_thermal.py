@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mtident.exceptions import InputError
-from mtident.io import read_temperature_log
-from mtident.thermal import METHODS, identify, minimal_identification_time
+from mtident.io import read_temperature_log, sample_log_path
+from mtident.thermal import METHODS, RobustSettings, identify, load_reference, minimal_identification_time
 from mtident.thermal.identify import MIN_WINDOW_SAMPLES, Z95, measured_equilibrium, rmse
 from mtident.thermal.lsq import cramer_rao_bound, first_order_onset
 from mtident.thermal.model import rise_transition, slope_transition, to_physical
@@ -26,8 +26,8 @@ def test_noiseless_first_order_curve_is_recovered_exactly(method):
     t = np.arange(0.0, 61.0)
     result = identify(make_log(t, {"S": first_order(t)}), 60.0, method)
     np.testing.assert_allclose(result.steady_state_C, [PAPER_STEADY], rtol=1e-6)
-    np.testing.assert_allclose(result.rate_per_min, [PAPER_RATE], rtol=1e-6)
-    assert result.fits.all() and not result.notes
+    np.testing.assert_allclose(result.details.rate_per_min, [PAPER_RATE], rtol=1e-6)
+    assert result.details.fits.all() and not result.notes
 
 
 def test_uneven_sampling_is_handled():
@@ -37,7 +37,7 @@ def test_uneven_sampling_is_handled():
     # Fourth differences of unevenly spaced samples do not cancel the curve, so the
     # noise estimate is ~0.01 °C instead of ~0 and the fit is as good as that noise allows.
     np.testing.assert_allclose(result.steady_state_C, [PAPER_STEADY], rtol=5e-3)
-    assert abs(result.steady_state_C[0] - PAPER_STEADY) < Z95 * result.steady_state_sd_C[0]
+    assert abs(result.steady_state_C[0] - PAPER_STEADY) < Z95 * result.details.steady_state_sd_C[0]
 
 
 def test_slope_transition_caps_the_growth_of_a_negative_rate():
@@ -120,7 +120,7 @@ def test_the_samples_lagging_sensor_is_identified_from_its_own_start():
     """T9 lags 3 min, left out of the fit; with its first third tilted, it came out at 39.7 ± 56.9 °C
     from 30 min (RMSE 4.06 °C over the log); now 23.8 ± 3.1 against the measured 23.49."""
     nine = identify(sample_log().select(["T9"]), 30.0, "ukf")
-    low, high = nine.steady_state_ci95()[0]
+    low, high = nine.steady_state_ci95_C[0]
     assert low <= nine.measured_final_C[0] <= high and high - low < 7.0 and nine.rmse_C[0] < 0.3
 
 
@@ -229,10 +229,10 @@ def test_a_clean_curve_logged_in_rounded_steps_is_identified_within_its_interval
     sigma = noise_sigma(readings[:30, None])[0]
     assert step / np.sqrt(12.0) - 1e-12 <= sigma < step
     result = identify(make_log(t, {"S": readings}), 30.0, "ukf")
-    assert abs(result.steady_state_C[0] - PAPER_STEADY) <= result.quantile * result.steady_state_sd_C[0]
+    assert abs(result.steady_state_C[0] - PAPER_STEADY) <= result.details.quantile * result.details.steady_state_sd_C[0]
     # as wide as noise of q/√12 allows (the Cramér-Rao bound of that noise), not a collapse or a blow-up
     bound = np.sqrt(cramer_rao_bound(t[:31], PAPER_START, PAPER_RATE, PAPER_STEADY, sigma)[2, 2])
-    assert 0.5 * bound < result.steady_state_sd_C[0] < 2.0 * bound
+    assert 0.5 * bound < result.details.steady_state_sd_C[0] < 2.0 * bound
 
 
 def test_a_sensor_that_does_not_rise_has_no_equilibrium_time():
@@ -282,7 +282,7 @@ def test_monte_carlo_default_method_reaches_the_cramer_rao_bound_with_calibrated
     bound = np.sqrt(cramer_rao_bound(t[:29], PAPER_START, PAPER_RATE, PAPER_STEADY, 0.02)[2, 2])
     assert np.std(error) < 1.25 * bound
     assert abs(np.mean(error)) < 3 * np.std(error) / np.sqrt(200)  # no bias beyond Monte Carlo noise
-    covered = np.mean(np.abs(error) <= result.quantile * result.steady_state_sd_C)
+    covered = np.mean(np.abs(error) <= result.details.quantile * result.details.steady_state_sd_C)
     assert 0.90 <= covered <= 0.98
 
 
@@ -297,11 +297,11 @@ def test_fast_plus_slow_curve_is_not_answered_with_a_narrow_wrong_interval():
     final = 17.9 + 10.0
     runs = {f"r{seed}": truth + 0.02 * np.random.default_rng(seed).standard_normal(len(t)) for seed in range(5)}
     first_order_fit = identify(make_log(t, runs), 30.0, "ukf")  # the 5 runs batched as 5 sensors
-    assert not first_order_fit.fits.any()
+    assert not first_order_fit.details.fits.any()
     assert any("the first-order model does not fit the window" in n for n in first_order_fit.notes)
     robust = identify(make_log(t, dict(list(runs.items())[:3])), 30.0)  # 3 runs: 0.6 s each
     assert robust.method == "robust"
-    lo, hi = robust.steady_state_ci95().T
+    lo, hi = robust.steady_state_ci95_C.T
     assert np.all((lo <= final) & (final <= hi)), (lo, hi)
     assert not np.any(robust.model_ok)
 
@@ -312,7 +312,7 @@ def test_the_sample_identified_from_28_min_covers_every_measured_final_value():
     from mtident.io import sample_log_path
 
     result = identify(read_temperature_log(sample_log_path()), 28.0, "ukf")
-    lo, hi = result.steady_state_ci95().T
+    lo, hi = result.steady_state_ci95_C.T
     assert np.all((lo <= result.measured_final_C) & (result.measured_final_C <= hi))
     assert np.all(hi - lo < 30.0)
 
@@ -329,7 +329,7 @@ def test_a_warm_up_that_began_after_the_log_is_fitted_from_its_start():
         "the first 15 min stay at their first level (the warm-up began after the log)" in n for n in result.notes
     )
     assert not any("'on time'" in n for n in result.notes)
-    lo, hi = result.steady_state_ci95()[0]
+    lo, hi = result.steady_state_ci95_C[0]
     assert lo <= 26.7 <= hi and hi - lo < 0.6
     assert abs(result.equilibrium_time_min[0] - result.measured_equilibrium_time_min[0]) < 10.0
     # RMSE 0.101 °C (0.094 median over 100 seeds before the quick estimate took each sensor on its own span, 0.080
@@ -383,7 +383,7 @@ def test_a_sensor_that_never_heats_neither_crashes_nor_warns(method):
         warnings.simplefilter("error")
         result = identify(log, 30.0, method)
         minimal_identification_time(log, method)
-    lo, hi = result.steady_state_ci95()[0]
+    lo, hi = result.steady_state_ci95_C[0]
     assert lo <= 20.0 <= hi
     assert result.steady_state_C[1] == pytest.approx(PAPER_STEADY, abs=1e-3)
 
@@ -406,8 +406,8 @@ def test_prediction_band_and_rmse():
     t = np.arange(0.0, 300.0)
     y = first_order(t) + 0.02 * rng.standard_normal(len(t))
     result = identify(make_log(t, {"S": y}), 30.0, "ukf")
-    assert result.curve_C.shape == result.curve_sd_C.shape
-    assert np.all(np.diff(result.curve_sd_C[30:200, 0]) >= -1e-12)  # uncertainty grows with the horizon
+    assert result.curve_C.shape == result.details.curve_sd_C.shape
+    assert np.all(np.diff(result.details.curve_sd_C[30:200, 0]) >= -1e-12)  # uncertainty grows with the horizon
     np.testing.assert_allclose(result.rmse_C, rmse(result.curve_C[:300], y[:, None]))
     assert result.rmse_C[0] < 1.0
 
@@ -422,7 +422,9 @@ def test_prediction_band_is_calibrated_at_the_end_of_the_test():
     t = np.arange(0.0, 301.0)
     runs = first_order(t)[:, None] + 0.02 * rng.standard_normal((len(t), 100))
     result = identify(make_log(t, {f"r{i}": runs[:, i] for i in range(100)}), 30.0, "ukf")
-    inside = np.abs(result.curve_C[300] - first_order(300.0)) <= result.quantile * result.curve_sd_C[300]
+    inside = (
+        np.abs(result.curve_C[300] - first_order(300.0)) <= result.details.quantile * result.details.curve_sd_C[300]
+    )
     assert 0.85 <= np.mean(inside) <= 0.99
     assert abs(result.equilibrium_time_min[0] - np.log(20) / PAPER_RATE) < 40
 
@@ -507,7 +509,7 @@ def test_a_window_that_does_not_determine_the_steady_state_is_said():
     assert len(said) == 1
     named = re.findall(r"'(T\d+)' \(± ([\d.]+) °C, rose ([\d.]+) °C\)", said[0])
     assert [name for name, _, _ in named] == ["T6", "T7", "T9", "T10"]
-    halves = early.steady_state_ci95() @ np.array([-0.5, 0.5])
+    halves = early.steady_state_ci95_C @ np.array([-0.5, 0.5])
     for name, half, rose in named:
         i = log.sensors.index(name)
         assert float(half) == pytest.approx(halves[i], rel=0.05) and float(half) > float(rose)
@@ -540,8 +542,8 @@ def test_sample_log_is_ten_sensors_four_hundred_minutes():
 @pytest.mark.parametrize("method", ["ukf", "aukf", "fukf", "afukf"])
 def test_paper_presets_run_end_to_end_on_the_sample(preset, method):
     result = identify(sample_log(), 28.0, method, preset=preset)
-    assert result.history.shape == (29, 10, 3)
-    np.testing.assert_allclose(result.history[0, :, 1], 0.01, rtol=0.5)  # starts from the paper's λ₀
+    assert result.details.history.shape == (29, 10, 3)
+    np.testing.assert_allclose(result.details.history[0, :, 1], 0.01, rtol=0.5)  # starts from the paper's λ₀
     summary = result.summary(0)
     assert summary["preset"] == preset
 
@@ -582,6 +584,22 @@ def test_min_time_uses_one_filter_run_for_every_window():
             r"preset 'smith' is not one of: data, xia2014, yu2019",
         ),
         (
+            lambda log: identify(log, 30.0, preset="xia2014"),
+            r"`preset` is a setting of the papers' first-order filters: give `method` ukf, aukf, fukf, afukf or lsq",
+        ),
+        (
+            lambda log: identify(log, 30.0, pseudo_measurement_seed=7),
+            r"`pseudo_measurement_seed` is a setting of the papers' first-order filters",
+        ),
+        (
+            lambda log: identify(log, 30.0, "ukf", reference=load_reference(sample_log_path("@sample-machine"))),
+            r"`reference` needs the model-robust method",
+        ),
+        (
+            lambda log: identify(log, 30.0, "lsq", settings=RobustSettings(max_time_constant_min=200.0)),
+            r"RobustSettings other than the default \(`max_time_constant_min`",
+        ),
+        (
             lambda log: minimal_identification_time(log, periods_min=[35, 400]),
             r"covers 59 min; the longest sampling period is 400 min",
         ),
@@ -616,7 +634,7 @@ def test_a_flat_start_is_left_out_so_the_interval_still_covers():
     result = identify(make_log(t, runs), 60.0, "ukf")
     error = result.steady_state_C - 29.9
     # fitted from t₀: mean error +0.19 °C and 16 of 20 covered (measured before this rule)
-    assert np.mean(np.abs(error) <= result.quantile * result.steady_state_sd_C) >= 0.85
+    assert np.mean(np.abs(error) <= result.details.quantile * result.details.steady_state_sd_C) >= 0.85
     assert abs(np.mean(error)) < 0.05
     assert any("rise slower than a first-order curve starts" in note for note in result.notes)
     # the papers' presets keep every sample, as the papers do
@@ -656,7 +674,7 @@ def test_a_room_sensor_keeps_a_drifting_room_out_of_the_identified_curve():
     truth = 8.8 + room[90]  # the steady state at the room's level at the window's end
     plain = identify(log, 90.0, "ukf")
     with_room = identify(log, 90.0, "ukf", ambient_C=room_sensor)
-    covered = lambda r: np.mean(np.abs(r.steady_state_C - truth) <= r.quantile * r.steady_state_sd_C)  # noqa: E731
+    covered = lambda r: np.mean(np.abs(r.steady_state_C - truth) <= r.details.quantile * r.details.steady_state_sd_C)  # noqa: E731
     # measured: without the room 0.11 °C bias and 3/40 covered; with it −0.015 °C and 38/40
     assert np.mean(plain.steady_state_C - truth) > 0.08 and covered(plain) < 0.3
     assert abs(np.mean(with_room.steady_state_C - truth)) < 0.04 and covered(with_room) >= 0.85
@@ -708,7 +726,9 @@ def test_results_show_their_answer_in_a_notebook_not_their_arrays():
     log = sample_log()
     result = identify(log.select(["T1", "T2"]), 30.0, "ukf")
     text = repr(result)
-    assert len(text) < 400 and text.splitlines()[1].startswith(f"  T1: T∞ {result.steady_state_C[0]:.2f} ± ")
+    assert len(text) < 400 and text.splitlines()[1].startswith(
+        f"  T1: T∞ {result.steady_state_C[0]:.2f} °C, 95 % interval "
+    )
     assert repr(log) == (
         f"TemperatureLog({str(log.source)!r}: 10 sensor(s) (T1, T2, T3, T4, T5, ..., T10), 401 samples over 0-400 "
         "min, 0 note(s))"
@@ -813,7 +833,7 @@ def test_robust_answers_over_generated_warm_ups_are_consistent(seed, fraction):
     warm = random_warmup(np.random.default_rng(seed))
     window = max(fraction * warm.t95_min, 10 * warm.interval_min)
     result = identify_robust(make_log(warm.time_min, {"S": warm.reading_C}), window, warm.room_C)
-    estimate = result.estimates[0]
+    estimate = result.details.estimates[0]
     assert estimate.fit is not None, estimate.status  # every warm-up of the population rises: a model is fitted
     (lo95, hi95), (lo99, hi99) = estimate.interval_C[0.95], estimate.interval_C[0.99]
     assert lo99 <= lo95 <= estimate.steady_C <= hi95 <= hi99
@@ -961,10 +981,10 @@ def test_a_fragile_95_percent_interval_is_not_trusted_by_identify():
     window = 0.5 * warm.t95_min
     log = make_log(warm.time_min, {"S": warm.reading_C})
     found = identify_robust(log, window, warm.room_C, room_sensor="room")
-    (lo, hi), truth = found.steady_state_ci95()[0], warm.steady_C[np.searchsorted(warm.time_min, window, "right") - 1]
-    wide_lo, wide_hi = found.estimates[0].interval_C[0.99]
+    (lo, hi), truth = found.steady_state_ci95_C[0], warm.steady_C[np.searchsorted(warm.time_min, window, "right") - 1]
+    wide_lo, wide_hi = found.details.estimates[0].interval_C[0.99]
     assert not lo <= truth <= hi and wide_lo <= truth <= wide_hi and wide_hi - wide_lo > 3.0 * (hi - lo)
-    assert not found.model_ok[0] and "fragile" in found.estimates[0].warning_codes
+    assert not found.model_ok[0] and "fragile" in found.details.estimates[0].warning_codes
     assert "is fragile" in found.summary(0)["warnings"][-1]
     n = int(np.searchsorted(warm.time_min, window, side="right"))
     regular = estimate_sensor("S", warm.time_min[: n + 600], warm.reading_C[: n + 600], warm.room_C[: n + 600])

@@ -23,10 +23,9 @@ if TYPE_CHECKING:
     from mtident.feeddrive.identify import FeedDriveIdentification
     from mtident.feeddrive.params import FeedDriveParameters
     from mtident.feeddrive.simulate import Response
-    from mtident.thermal.identify import Identification
+    from mtident.thermal.identification import Identification, MethodDetails
     from mtident.thermal.min_time import MinTimeResult
     from mtident.thermal.monitor import MonitorSettings, MonitorState, Readings
-    from mtident.thermal.robust_identify import RobustIdentification
 
 __all__ = [
     "plot_identification",
@@ -117,20 +116,13 @@ def grid(count: int, width: float = 4.2, height: float = 3.0) -> tuple[Figure, l
     return fig, flat[:count]
 
 
-def _follows_room(result: Identification | RobustIdentification, s: int) -> bool:
-    """Whether sensor ``s``'s model takes the room as an input (a robust answer with a room sensor)."""
-    estimates = getattr(result, "estimates", ())
-    fit = estimates[s].fit if s < len(estimates) else None
-    return fit is not None and fit.room_level_C is not None
-
-
-def plot_identification(result: Identification | RobustIdentification, path: str | Path | None = None) -> Path | Figure:
+def plot_identification(result: Identification[MethodDetails], path: str | Path | None = None) -> Path | Figure:
     """Measured and predicted temperature per sensor, with the 95 % band, the
     identification time, T∞ and the predicted equilibrium time (Xia et al. 2014 Figs 6-8).
 
     Parameters
     ----------
-    result : Identification or RobustIdentification
+    result : Identification
         One panel per sensor: the curve fitted up to ``result.window_min`` (min), predicted after it.
     path : str or Path, optional
         Where to write the picture, its format from the suffix (PNG without one); default:
@@ -152,12 +144,12 @@ def plot_identification(result: Identification | RobustIdentification, path: str
         measured = result.measured_C[:, s]
         ax.plot(t, measured, ".", ms=2.5, color="0.45", label="measured")
         mean = result.curve_C[:, s]
-        low, high = (edge[:, s] for edge in result.band_C())
+        low, high = result.band_low_C[:, s], result.band_high_C[:, s]
         inside = t <= result.window_min + 1e-9
         ax.plot(t[inside], mean[inside], color="tab:blue", lw=1.6, label="fitted")
         # with a room sensor the course after L follows the room as logged, and T∞ is at the room's
         # level at L: the two part where the room moved after it
-        follows_room = _follows_room(result, s)
+        follows_room = result.details.follows_room(s)
         ax.plot(
             t[~inside],
             mean[~inside],

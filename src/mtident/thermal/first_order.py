@@ -1,7 +1,8 @@
 """The papers' first-order identification (Xia et al. 2014 §2.1 end and §2.4; Yu et al. 2019
 §1.5): filter the measurements up to the identification time L with a UKF (or fit them by least
 squares), then predict to the end of the record (or a horizon). All sensors of a log are filtered
-as one batch. Its answer is an :class:`~mtident.thermal.identification.Identification`.
+as one batch. Its answer is an :class:`~mtident.thermal.identification.Identification` whose
+``details`` are :class:`FirstOrderDetails`.
 """
 
 from __future__ import annotations
@@ -12,10 +13,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.special import fdtri, stdtrit
 
+from mtident._json import finite_or_none
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog
-from mtident.thermal.identification import Identification
+from mtident.thermal.identification import Identification, sensor_notes
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
 from mtident.thermal.measured import measured_and_settled, rmse, window_samples
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
@@ -42,6 +44,9 @@ from mtident.ukf import (
 )
 
 __all__ = [
+    "FIRST_ORDER_ASSUMPTIONS",
+    "FirstOrderDetails",
+    "Z95",
     "filter_window",
     "first_order_suffices",
     "identify_first_order",
@@ -49,6 +54,16 @@ __all__ = [
     "room_input",
     "room_rates",
 ]
+
+Z95 = 1.959963984540054
+
+FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
+    "model": "first order (one exponential, the papers' model): the interval assumes a first-order machine; "
+    "a slower mode not yet seen moves T∞ beyond it",
+    "max_time_constant_min": None,
+    "room": "the room at its level in the window (or the room sensor's course, where given)",
+    "reference": None,
+}
 
 # A first-order fit to fewer minutes of rise than this is not trusted: a thermal time constant is
 # tens of minutes, and a few minutes of its rise are nearly straight (:func:`_untrusted`).
@@ -61,6 +76,93 @@ MAX_HALF_PER_RISE = 5.0
 
 
 MAX_HALF_MARGIN_C = 5.0
+
+
+@dataclass(frozen=True)
+class FirstOrderDetails:
+    """What the papers' first-order filters (or least squares) add to an
+    :class:`~mtident.thermal.identification.Identification`, arrays with a sensor axis S.
+
+    Attributes
+    ----------
+    curve_sd_C : ndarray, shape (N, S)
+        The curve's standard deviation (filtered up to L, predicted after).
+    steady_state_sd_C, rate_per_min, rate_sd_per_min : ndarray, shape (S,)
+        T∞'s standard deviation, and λ with its own.
+    fit_chi2, fit_autocorr : ndarray, shape (S,)
+        Residual test of the first-order model inside the window.
+    fits : ndarray of bool, shape (S,)
+        The residual test passed; where it failed the interval was widened.
+    history : ndarray, shape (L, S, 3)
+        Filtered state at each sample up to L (convergence plots).
+    history_sd : ndarray, shape (L, S, 3)
+    quantile : float
+        Multiplier of the standard deviations for the 95 % intervals: Student's t
+        with N − 3 degrees of freedom, because the noise level is estimated
+        from the same N samples.
+    untrusted : ndarray of bool, shape (S,)
+        An answer no physics allows, or fitted to a few minutes of rise (said in the notes):
+        ``model_ok`` is then false.
+    """
+
+    curve_sd_C: FloatArray
+    steady_state_sd_C: FloatArray
+    rate_per_min: FloatArray
+    rate_sd_per_min: FloatArray
+    fit_chi2: FloatArray
+    fit_autocorr: FloatArray
+    fits: BoolArray
+    history: FloatArray
+    history_sd: FloatArray
+    quantile: float
+    untrusted: BoolArray
+
+    def summary(self, index: int) -> dict[str, object]:
+        """λ with its standard deviation, the time constant, the residual test and what the answer assumes.
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position.
+
+        Returns
+        -------
+        dict
+            ``lambda_per_min``, ``lambda_sd_per_min``, ``time_constant_min``, ``model_fits``,
+            ``residual_chi2`` and ``assumptions``; None where a value is not finite.
+        """
+        rate = float(self.rate_per_min[index])
+        return {
+            "lambda_per_min": finite_or_none(rate),
+            "lambda_sd_per_min": finite_or_none(self.rate_sd_per_min[index]),
+            "time_constant_min": 1.0 / rate if rate > 0 else None,
+            "model_fits": bool(self.fits[index]),
+            "assumptions": FIRST_ORDER_ASSUMPTIONS,
+            "residual_chi2": finite_or_none(self.fit_chi2[index]),
+        }
+
+    def describe(self) -> list[str]:
+        """The first-order assumption, in a line.
+
+        Returns
+        -------
+        list of str
+        """
+        return ["  assumes: first order (one exponential): a slower mode not yet seen moves T∞ beyond the interval"]
+
+    def follows_room(self, index: int) -> bool:
+        """False: the first-order prediction holds the room at its level at L.
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position.
+
+        Returns
+        -------
+        bool
+        """
+        return False
 
 
 def _profile_rss(time_min: FloatArray, values: FloatArray, rates: FloatArray, with_drift: bool) -> FloatArray:
@@ -327,7 +429,7 @@ def identify_first_order(
     horizon_min: float | None = None,
     pseudo_measurement_seed: int | None = None,
     ambient_C: FloatArray | None = None,
-) -> Identification:
+) -> Identification[FirstOrderDetails]:
     """Identify every sensor of ``log`` with one of the papers' first-order filters, or least
     squares, from its first ``window_min`` minutes, then predict (:func:`~mtident.thermal.identify.identify`
     with a method other than "robust").
@@ -351,6 +453,7 @@ def identify_first_order(
     Returns
     -------
     Identification
+        With :class:`FirstOrderDetails`.
 
     Raises
     ------
@@ -555,7 +658,7 @@ def _identify(
     horizon_min: float | None,
     pseudo_measurement_seed: int | None,
     room_rate: FloatArray | None = None,
-) -> Identification:
+) -> Identification[FirstOrderDetails]:
     n_window = window_samples(log, window_min)
     t = log.time_min
     y = log.temperature_C
@@ -606,6 +709,11 @@ def _identify(
     final_measured, eq_measured, settled = measured_and_settled(t, y, DEFAULT_MAX_TIME_CONSTANT_MIN)
     history, history_sd = course.history, course.history_sd
     rate_sd = np.sqrt(course.final_cov[:, 1, 1])
+    quantile_half = quantile * steady_sd
+    ci95 = np.column_stack([steady - quantile_half, steady + quantile_half])
+    curve_sd = np.sqrt(np.maximum(curve_var, 0.0))
+    band_half = quantile * curve_sd
+    notes_said = tuple(notes)
     return Identification(
         sensors=log.sensors,
         method=method,
@@ -615,25 +723,33 @@ def _identify(
         time_min=times,
         measured_C=measured_part,
         curve_C=mean_curve,
-        curve_sd_C=np.sqrt(np.maximum(curve_var, 0.0)),
+        band_low_C=mean_curve - band_half,
+        band_high_C=mean_curve + band_half,
         steady_state_C=steady,
-        steady_state_sd_C=steady_sd,
-        rate_per_min=rate,
-        rate_sd_per_min=rate_sd,
+        steady_state_ci95_C=ci95,
         start_C=mean_curve[0],
         equilibrium_time_min=eq_time,
         rmse_C=errors,
-        fit_chi2=chi2,
-        fit_autocorr=autocorr,
-        fits=fits,
-        history=history,
-        history_sd=history_sd,
+        # a residual test passed, T∞ determined, and an answer physics allows
+        model_ok=fits & np.isfinite(ci95).all(axis=1) & ~untrusted,
+        warnings=tuple(tuple(sensor_notes(notes_said, name)) for name in log.sensors),
         measured_final_C=final_measured,
         measured_equilibrium_time_min=eq_measured,
         measured_settled=settled,
-        notes=tuple(notes),
-        quantile=quantile,
-        untrusted=untrusted,
+        notes=notes_said,
+        details=FirstOrderDetails(
+            curve_sd_C=curve_sd,
+            steady_state_sd_C=steady_sd,
+            rate_per_min=rate,
+            rate_sd_per_min=rate_sd,
+            fit_chi2=chi2,
+            fit_autocorr=autocorr,
+            fits=fits,
+            history=history,
+            history_sd=history_sd,
+            quantile=quantile,
+            untrusted=untrusted,
+        ),
     )
 
 

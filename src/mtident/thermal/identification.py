@@ -1,12 +1,19 @@
-"""A first-order identification's answer (the papers' filters, or least squares): each sensor's
-curve over the window and on, T∞ with its interval, the model check and the measured equilibrium,
-and one sensor's summary for the JSON.
+"""A thermal identification's answer, whatever the method: each sensor's curve over the window
+and on with its 95 % band, T∞ with its interval, the verdict, what the log itself measured, and
+one sensor's summary for the JSON.
+
+:class:`Identification` is the one answer; what a method adds (the papers' filters' λ and
+residual test, the model-robust fit's modes) is its ``details``, behind the small
+:class:`MethodDetails` protocol. The methods that build it are
+:func:`~mtident.thermal.first_order.identify_first_order` (the papers' filters, least squares)
+and :func:`~mtident.thermal.robust_identify.identify_robust` (the modal fit); this module imports
+neither.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 import numpy as np
 
@@ -16,19 +23,64 @@ from mtident._typing import BoolArray, FloatArray
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["FIRST_ORDER_ASSUMPTIONS", "Identification", "Z95", "sensor_notes"]
+__all__ = ["Identification", "MethodDetails", "sensor_notes"]
 
-Z95 = 1.959963984540054
+
+class MethodDetails(Protocol):
+    """What one identification method adds to the common answer."""
+
+    def summary(self, index: int) -> dict[str, object]:
+        """The method's own keys of one sensor's JSON object (its λ, time constant, assumptions ...).
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position.
+
+        Returns
+        -------
+        dict
+            JSON types; None where a value is not finite.
+        """
+        ...
+
+    def describe(self) -> list[str]:
+        """Lines that say what the answer assumes, for the identification's repr.
+
+        Returns
+        -------
+        list of str
+            Each line indented by two spaces.
+        """
+        ...
+
+    def follows_room(self, index: int) -> bool:
+        """Whether the sensor's prediction after L follows the room as logged (a room input).
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position.
+
+        Returns
+        -------
+        bool
+        """
+        ...
+
+
+DetailsT = TypeVar("DetailsT", bound=MethodDetails, covariant=True)
 
 
 @dataclass(frozen=True)
-class Identification:
+class Identification(Generic[DetailsT]):
     """The identified warm-up of every sensor of a log, arrays with a sensor axis S.
 
     Attributes
     ----------
     sensors : tuple of str
     method, preset : str
+        The method that identified it and its tuning ("robust" always with "data").
     window_min : float
         Identification time L actually used (time of the last sample ≤ L).
     n_window : int
@@ -37,35 +89,35 @@ class Identification:
         The log's sample times, then the forecast horizon beyond it.
     measured_C : ndarray, shape (N, S)
         The log's readings at ``time_min``, NaN past the log's end.
-    curve_C, curve_sd_C : ndarray, shape (N, S)
-        Estimated temperature (filtered up to L, predicted after) and its standard deviation.
-    steady_state_C, steady_state_sd_C, rate_per_min, rate_sd_per_min, start_C : ndarray, shape (S,)
+    curve_C : ndarray, shape (N, S)
+        Estimated temperature: fitted up to L, predicted after.
+    band_low_C, band_high_C : ndarray, shape (N, S)
+        The curve's 95 % band.
+    steady_state_C : ndarray, shape (S,)
+        T∞ (NaN where a sensor has no fit).
+    steady_state_ci95_C : ndarray, shape (S, 2)
+        T∞'s 95 % interval, low and high (infinite where not determined).
+    start_C : ndarray, shape (S,)
+        The curve's start.
     equilibrium_time_min : ndarray, shape (S,)
         Predicted time to 95 % of the total rise, from the start of the log.
     rmse_C : ndarray, shape (S,)
         Xia et al. 2014 Eq. 33 over all measured samples.
-    fit_chi2, fit_autocorr : ndarray, shape (S,)
-        Residual test of the first-order model inside the window.
-    fits : ndarray of bool, shape (S,)
-        The residual test passed; where it failed the interval was widened.
-    quantile : float
-        Multiplier of the standard deviations for the 95 % intervals: Student's t
-        with N − 3 degrees of freedom, because the noise level is estimated
-        from the same N samples.
-    history : ndarray, shape (L, S, 3)
-        Filtered state at each sample up to L (convergence plots).
-    history_sd : ndarray, shape (L, S, 3)
+    model_ok : ndarray of bool, shape (S,)
+        Whether each sensor's answer is trusted: a fit the data do not contradict, with T∞ determined.
+    warnings : tuple of tuple of str
+        Each sensor's warnings.
     measured_final_C, measured_equilibrium_time_min : ndarray, shape (S,)
         From the log itself where it reached equilibrium, else NaN.
-    notes : tuple of str
-    quantile : float
-    measured_settled : ndarray of bool, shape (S,), optional
+    measured_settled : ndarray of bool, shape (S,)
         Whether the log's last quarter moved less than ``SETTLED_MOVE_C``, with at most half that
         still to come at the pace of the largest time constant: only then is the measured final
         temperature where the sensor settles to the tolerance's precision.
-    untrusted : ndarray of bool, shape (S,), optional
-        An answer no physics allows, or fitted to a few minutes of rise (said in ``notes``):
-        ``model_ok`` is then false.
+    notes : tuple of str
+        The log's notes and the identification's.
+    details : MethodDetails
+        What the method adds: :class:`~mtident.thermal.first_order.FirstOrderDetails` or
+        :class:`~mtident.thermal.robust_identify.RobustDetails`.
     """
 
     sensors: tuple[str, ...]
@@ -76,44 +128,43 @@ class Identification:
     time_min: FloatArray
     measured_C: FloatArray
     curve_C: FloatArray
-    curve_sd_C: FloatArray
+    band_low_C: FloatArray
+    band_high_C: FloatArray
     steady_state_C: FloatArray
-    steady_state_sd_C: FloatArray
-    rate_per_min: FloatArray
-    rate_sd_per_min: FloatArray
+    steady_state_ci95_C: FloatArray
     start_C: FloatArray
     equilibrium_time_min: FloatArray
     rmse_C: FloatArray
-    fit_chi2: FloatArray
-    fit_autocorr: FloatArray
-    fits: BoolArray
-    history: FloatArray
-    history_sd: FloatArray
+    model_ok: BoolArray
+    warnings: tuple[tuple[str, ...], ...]
     measured_final_C: FloatArray
     measured_equilibrium_time_min: FloatArray
+    measured_settled: BoolArray
     notes: tuple[str, ...]
-    quantile: float = Z95
-    measured_settled: np.ndarray | None = None
-    untrusted: np.ndarray | None = None
+    details: DetailsT
 
     def __repr__(self) -> str:
-        # a notebook shows the answer, not ~40 kB of arrays
+        # a notebook shows the answer, not ~40 kB of arrays, and why a sensor is not trusted
         lines = [
             f"Identification({self.method}/{self.preset}, L = {self.window_min:g} min, {len(self.sensors)} sensor(s))"
         ]
-        for i, name in enumerate(self.sensors):
-            half = self.quantile * self.steady_state_sd_C[i]
+        for s, name in enumerate(self.sensors):
+            lo, hi = self.steady_state_ci95_C[s]
+            verdict = "" if self.model_ok[s] else ", not trusted:"
             lines.append(
-                f"  {name}: T∞ {self.steady_state_C[i]:.2f} ± {half:.2f} °C, λ {self.rate_per_min[i]:.4g}/min, "
-                f"t_eq {self.equilibrium_time_min[i]:.0f} min, RMSE {self.rmse_C[i]:.3f} "
-                f"°C{'' if self.fits[i] else ', model check failed'}"
+                f"  {name}: T∞ {self.steady_state_C[s]:.2f} °C, 95 % interval {lo:.2f} to {hi:.2f} °C, "
+                f"t_eq {self.equilibrium_time_min[s]:.0f} min, RMSE {self.rmse_C[s]:.3f} °C{verdict}"
             )
+            lines += [] if self.model_ok[s] else [f"    - {warning}" for warning in self.warnings[s]]
+        lines += self.details.describe()
+        said = {w for sensor in self.warnings for w in sensor}
+        lines += [f"  note: {note}" for note in self.notes if note not in said]
         return "\n".join(lines)
 
     def curve_frame(self) -> pd.DataFrame:
         """The measured and modelled curve of every sensor with its 95 % band, a row per time: for
         a report or a spreadsheet. ``part`` says whether the row is in the identification window
-        (the filtered curve) or after it (the prediction); a time past the log's end has no
+        (the fitted curve) or after it (the prediction); a time past the log's end has no
         measured value.
 
         Returns
@@ -124,7 +175,6 @@ class Identification:
         """
         import pandas as pd
 
-        half = self.quantile * self.curve_sd_C
         columns: dict[str, object] = {
             "time_min": self.time_min,
             "part": np.where(self.time_min <= self.window_min + 1e-9, "window", "prediction"),
@@ -132,34 +182,12 @@ class Identification:
         for s, name in enumerate(self.sensors):
             columns[f"{name}_measured_C"] = self.measured_C[:, s]
             columns[f"{name}_model_C"] = self.curve_C[:, s]
-            columns[f"{name}_low95_C"] = self.curve_C[:, s] - half[:, s]
-            columns[f"{name}_high95_C"] = self.curve_C[:, s] + half[:, s]
+            columns[f"{name}_low95_C"] = self.band_low_C[:, s]
+            columns[f"{name}_high95_C"] = self.band_high_C[:, s]
         return pd.DataFrame(columns)
 
-    def band_C(self) -> tuple[FloatArray, FloatArray]:
-        """The curve's 95 % band, low and high, each (N, S).
-
-        Returns
-        -------
-        low, high : ndarray, shape (N, S)
-            The band's ends (°C).
-        """
-        half = self.quantile * self.curve_sd_C
-        return self.curve_C - half, self.curve_C + half
-
-    def steady_state_ci95(self) -> FloatArray:
-        """(S, 2) 95 % interval of T∞.
-
-        Returns
-        -------
-        ndarray, shape (S, 2)
-            The low and high end of each sensor's interval (°C).
-        """
-        half = self.quantile * self.steady_state_sd_C
-        return np.column_stack([self.steady_state_C - half, self.steady_state_C + half])
-
     def summary(self, index: int) -> dict[str, object]:
-        """The JSON object of one sensor (the documentation's JSON page), plus extras.
+        """The JSON object of one sensor (the documentation's JSON page).
 
         Parameters
         ----------
@@ -169,50 +197,31 @@ class Identification:
         Returns
         -------
         dict
-            JSON types: T∞ with its interval, λ, the time constant, the equilibrium time, the RMSE, the
-            model check, the sensor's warnings and what the answer assumes; None where a value is not
-            finite.
+            JSON types: T∞ with its interval, the equilibrium time, the RMSE, ``model_ok``, the
+            sensor's warnings, what the log measured, and the method's own keys (its λ and time
+            constant, what the answer assumes, ...); None where a value is not finite.
         """
-        lo, hi = self.steady_state_ci95()[index]
-        rate = float(self.rate_per_min[index])
-        name = self.sensors[index]
-        undetermined = not (np.isfinite(lo) and np.isfinite(hi))
-        return {
-            "sensor": name,
+        lo, hi = self.steady_state_ci95_C[index]
+        common: dict[str, object] = {
+            "sensor": self.sensors[index],
             "method": self.method,
             "preset": self.preset,
             "window_min": float(self.window_min),
             "steady_state_C": finite_or_none(self.steady_state_C[index]),
             "steady_state_ci95_C": [finite_or_none(lo), finite_or_none(hi)],
-            "lambda_per_min": finite_or_none(rate),
-            "lambda_sd_per_min": finite_or_none(self.rate_sd_per_min[index]),
-            "time_constant_min": 1.0 / rate if rate > 0 else None,
             "start_C": finite_or_none(self.start_C[index]),
             "total_rise_C": finite_or_none(self.steady_state_C[index] - self.start_C[index]),
             "equilibrium_time_min": finite_or_none(self.equilibrium_time_min[index]),
             "rmse_C": finite_or_none(self.rmse_C[index]),
-            "model_fits": bool(self.fits[index]),
-            "model_ok": bool(self.fits[index])
-            and not undetermined
-            and not (self.untrusted is not None and self.untrusted[index]),
-            "warnings": sensor_notes(self.notes, name),
-            "assumptions": FIRST_ORDER_ASSUMPTIONS,
-            "residual_chi2": finite_or_none(self.fit_chi2[index]),
+            "model_ok": bool(self.model_ok[index]),
+            "warnings": list(self.warnings[index]),
             "measured_final_C": finite_or_none(self.measured_final_C[index]),
             "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[index]),
-            "measured_settled": None
-            if self.measured_settled is None or not np.isfinite(self.measured_final_C[index])
-            else bool(self.measured_settled[index]),
+            "measured_settled": bool(self.measured_settled[index])
+            if np.isfinite(self.measured_final_C[index])
+            else None,
         }
-
-
-FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
-    "model": "first order (one exponential, the papers' model): the interval assumes a first-order machine; "
-    "a slower mode not yet seen moves T∞ beyond it",
-    "max_time_constant_min": None,
-    "room": "the room at its level in the window (or the room sensor's course, where given)",
-    "reference": None,
-}
+        return common | self.details.summary(index)
 
 
 def sensor_notes(notes: tuple[str, ...], sensor: str) -> list[str]:

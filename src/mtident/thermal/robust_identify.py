@@ -1,6 +1,7 @@
 """Identify every sensor of a log with the model-robust estimate: the default of ``identify``.
 
-Each sensor's readings up to the identification time are fitted with sums of up to four
+Its answer is an :class:`~mtident.thermal.identification.Identification` whose ``details`` are
+:class:`RobustDetails`. Each sensor's readings up to the identification time are fitted with sums of up to four
 exponential modes (:mod:`mtident.thermal.robust`); the answer is the best-fitting model's course
 and T∞, with the interval over every model the data cannot exclude. The predicted curve's band
 is the envelope of the best model and the two models that set the interval's ends.
@@ -9,7 +10,6 @@ is the envelope of the best model and the two models that set the interval's end
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,17 +18,16 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.assumptions import describe_assumptions
+from mtident.thermal.identification import Identification
 from mtident.thermal.machine_model import combined_estimate, fit_readings, unmeasured_wander
 from mtident.thermal.measured import measured_and_settled, rmse, window_samples
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import estimate_sensor, with_fragility
 from mtident.thermal.robust_types import Assumptions, RobustSettings, SensorEstimate
+from mtident.thermal.settings import ROBUST_METHOD
 
-if TYPE_CHECKING:
-    import pandas as pd
-
-__all__ = ["RobustIdentification", "identify_robust"]
+__all__ = ["RobustDetails", "identify_robust"]
 
 REPORT_LEVEL = 0.95
 # the prediction runs this many of the slowest mode's time constants past the window, at least
@@ -36,193 +35,83 @@ HORIZON_TIME_CONSTANTS = 4.0
 
 
 @dataclass(frozen=True)
-class RobustIdentification:
-    """The model-robust identification of every sensor of a log (arrays with a sensor axis S).
+class RobustDetails:
+    """What the model-robust estimate adds to an
+    :class:`~mtident.thermal.identification.Identification`: each sensor's estimate and what its
+    interval assumes.
 
     Attributes
     ----------
-    sensors : tuple of str
-    window_min : float
-        Identification time actually used (the last reading at or before the asked one).
-    n_window : int
-        The number of readings in the window.
-    time_min : ndarray, shape (N,)
-        The log's times, then the prediction's beyond it.
-    measured_C, curve_C, band_low_C, band_high_C : ndarray, shape (N, S)
-        Readings (NaN past the log), the best model's course, and the 95 % band: the envelope
-        of the best model and the models that set the ends of T∞'s interval.
     estimates : tuple of SensorEstimate
+        Each sensor's best model, its intervals at every level computed, and its verdict.
     assumptions : tuple of Assumptions
-    rmse_C : ndarray, shape (S,)
-        Xia et al. 2014 Eq. 33 of the best model over every measured reading.
-    measured_final_C, measured_equilibrium_time_min : ndarray, shape (S,)
-        From the log itself where it reached equilibrium, else NaN.
-    notes : tuple of str
-    method, preset : str
-        Always "robust" and "data" (the names :class:`~mtident.thermal.identify.Identification` also has).
-    measured_settled : ndarray of bool, shape (S,)
-        Whether the log's last quarter moved less than ``SETTLED_MOVE_C``, with at most half that
-        still to come at the pace of a mode as slow as the largest time constant allowed: where
-        not, the measured values (the papers' 5 % rule) may be short of where the sensor settles.
+        What each sensor's interval rests on.
     """
 
-    sensors: tuple[str, ...]
-    window_min: float
-    n_window: int
-    time_min: FloatArray
-    measured_C: FloatArray
-    curve_C: FloatArray
-    band_low_C: FloatArray
-    band_high_C: FloatArray
     estimates: tuple[SensorEstimate, ...]
     assumptions: tuple[Assumptions, ...]
-    rmse_C: FloatArray
-    measured_final_C: FloatArray
-    measured_equilibrium_time_min: FloatArray
-    notes: tuple[str, ...]
-    method: str = "robust"
-    preset: str = "data"
-    measured_settled: np.ndarray | None = None
-
-    @property
-    def steady_state_C(self) -> FloatArray:
-        """T∞ of each sensor's best-fitting model (NaN without a fit).
-
-        Returns
-        -------
-        ndarray, shape (S,)
-            T∞ (°C).
-        """
-        return np.array([e.steady_C for e in self.estimates])
-
-    @property
-    def equilibrium_time_min(self) -> FloatArray:
-        """When each sensor's best model stays within 5 % of its total rise from T∞ (NaN without a fit).
-
-        Returns
-        -------
-        ndarray, shape (S,)
-            The time (min, from the log's start).
-        """
-        return np.array([np.nan if e.fit is None else e.fit.equilibrium_time_min for e in self.estimates])
-
-    @property
-    def model_ok(self) -> np.ndarray:
-        """Whether each sensor's answer is trusted: a fit the data do not contradict, with T∞ determined.
-
-        Returns
-        -------
-        ndarray of bool, shape (S,)
-        """
-        return np.array([e.model_ok for e in self.estimates])
-
-    def steady_state_ci95(self) -> FloatArray:
-        """(S, 2) 95 % interval of T∞ over every model the data cannot exclude.
-
-        Returns
-        -------
-        ndarray, shape (S, 2)
-            The low and high end of each sensor's interval (°C), infinite without a fit.
-        """
-        return np.array([e.interval_C.get(REPORT_LEVEL, (-np.inf, np.inf)) for e in self.estimates], dtype=float)
-
-    def band_C(self) -> tuple[FloatArray, FloatArray]:
-        """The curve's 95 % band, low and high, each (N, S).
-
-        Returns
-        -------
-        low, high : ndarray, shape (N, S)
-            The band's ends (°C).
-        """
-        return self.band_low_C, self.band_high_C
-
-    def __repr__(self) -> str:
-        lines = [f"RobustIdentification(L = {self.window_min:g} min, {len(self.sensors)} sensor(s))"]
-        for e, (lo, hi) in zip(self.estimates, self.steady_state_ci95(), strict=True):
-            verdict = "" if e.model_ok else ", not trusted:"
-            lines.append(f"  {e.sensor}: T∞ {e.steady_C:.2f} °C, 95 % interval {lo:.2f} to {hi:.2f} °C{verdict}")
-            # a notebook shows why, not only that
-            lines += [f"    - {warning}" for warning in e.warnings] if not e.model_ok else []
-        said = self.assumptions[0] if self.assumptions else None
-        if said is not None:
-            lines.append(
-                f"  assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
-            )
-            lines += [
-                f"  reference for {name}: {a.reference}"
-                for name, a in zip(self.sensors, self.assumptions, strict=True)
-                if a.reference is not None
-            ]
-        lines += [f"  note: {note}" for note in self.notes]
-        return "\n".join(lines)
-
-    def curve_frame(self) -> pd.DataFrame:
-        """The measured and modelled curve of every sensor with its 95 % band, a row per time.
-
-        Returns
-        -------
-        pandas.DataFrame
-            Columns ``time_min``, ``part`` ("window" or "prediction") and per sensor ``NAME_measured_C``,
-            ``NAME_model_C``, ``NAME_low95_C`` and ``NAME_high95_C`` (°C).
-        """
-        import pandas as pd
-
-        columns: dict[str, object] = {
-            "time_min": self.time_min,
-            "part": np.where(self.time_min <= self.window_min + 1e-9, "window", "prediction"),
-        }
-        for s, name in enumerate(self.sensors):
-            columns[f"{name}_measured_C"] = self.measured_C[:, s]
-            columns[f"{name}_model_C"] = self.curve_C[:, s]
-            columns[f"{name}_low95_C"] = self.band_low_C[:, s]
-            columns[f"{name}_high95_C"] = self.band_high_C[:, s]
-        return pd.DataFrame(columns)
 
     def summary(self, index: int) -> dict[str, object]:
-        """The JSON object for one sensor, with its verdict and assumptions.
+        """T∞'s interval at the highest level computed, the slowest time constant, the assumptions
+        and the best model's modes.
 
         Parameters
         ----------
         index : int
-            The sensor's position in ``sensors``.
+            The sensor's position.
 
         Returns
         -------
         dict
-            JSON types: T∞ with its 95 % interval and its interval at the highest level computed, the
-            slowest time constant, the equilibrium time, the RMSE, ``model_ok``, the warnings, the
-            assumptions and the best model's modes; None where a value is not finite.
+            ``steady_state_ciNN_C`` (NN the highest level, in %), ``lambda_per_min``,
+            ``time_constant_min``, ``model_fits``, ``assumptions`` and ``model``; None where a value
+            is not finite.
         """
         e = self.estimates[index]
-        fit = e.fit
-        lo, hi = self.steady_state_ci95()[index]
-        slowest = np.nan if fit is None else fit.slowest_time_constant_min()
+        slowest = np.nan if e.fit is None else e.fit.slowest_time_constant_min()
         lo99, hi99 = e.interval_C.get(max(e.interval_C), (-np.inf, np.inf))
         return {
-            "sensor": e.sensor,
-            "method": self.method,
-            "preset": self.preset,
-            "window_min": float(self.window_min),
-            "steady_state_C": finite_or_none(e.steady_C),
-            "steady_state_ci95_C": [finite_or_none(lo), finite_or_none(hi)],
             f"steady_state_ci{round(100 * max(e.interval_C))}_C": [finite_or_none(lo99), finite_or_none(hi99)],
             "lambda_per_min": finite_or_none(1.0 / slowest) if np.isfinite(slowest) else None,
             "time_constant_min": finite_or_none(slowest),
-            "start_C": None if fit is None else finite_or_none(fit.start_C),
-            "total_rise_C": None if fit is None else finite_or_none(e.steady_C - fit.start_C),
-            "equilibrium_time_min": finite_or_none(self.equilibrium_time_min[index]),
-            "rmse_C": finite_or_none(self.rmse_C[index]),
-            "model_ok": bool(e.model_ok),
             "model_fits": bool(e.model_ok),
-            "warnings": list(e.warnings),
             "assumptions": self.assumptions[index].to_dict(),
             "model": _model_dict(e),
-            "measured_final_C": finite_or_none(self.measured_final_C[index]),
-            "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[index]),
-            "measured_settled": None
-            if self.measured_settled is None or not np.isfinite(self.measured_final_C[index])
-            else bool(self.measured_settled[index]),
         }
+
+    def describe(self) -> list[str]:
+        """What the intervals assume, and each sensor's reference.
+
+        Returns
+        -------
+        list of str
+        """
+        said = self.assumptions[0] if self.assumptions else None
+        if said is None:
+            return []
+        return [
+            f"  assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}",
+            *(
+                f"  reference for {e.sensor}: {a.reference}"
+                for e, a in zip(self.estimates, self.assumptions, strict=True)
+                if a.reference is not None
+            ),
+        ]
+
+    def follows_room(self, index: int) -> bool:
+        """Whether the sensor's modes take the room as an input (a room sensor was given).
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position.
+
+        Returns
+        -------
+        bool
+        """
+        fit = self.estimates[index].fit
+        return fit is not None and fit.room_level_C is not None
 
 
 def _model_dict(e: SensorEstimate) -> dict[str, object]:
@@ -250,7 +139,7 @@ def identify_robust(
     reference: MachineReference | None = None,
     horizon_min: float | None = None,
     room_sensor: str | None = None,
-) -> RobustIdentification:
+) -> Identification[RobustDetails]:
     """Identify every sensor of ``log`` from its first ``window_min`` minutes with the
     model-robust estimate, and predict its course.
 
@@ -272,7 +161,8 @@ def identify_robust(
 
     Returns
     -------
-    RobustIdentification
+    Identification
+        With :class:`RobustDetails`.
 
     Raises
     ------
@@ -317,8 +207,11 @@ def identify_robust(
     in_log = times <= t[-1] + 1e-9
     # the window's fit may not know the log's slowest mode: the largest allowed sets the pace
     final, equilibrium, settled = measured_and_settled(t, y, settings.max_time_constant_min)
-    return RobustIdentification(
+    steady = np.array([e.steady_C for e in estimates])
+    return Identification(
         sensors=log.sensors,
+        method=ROBUST_METHOD,
+        preset="data",
         window_min=float(t[n - 1]),
         n_window=n,
         time_min=times,
@@ -326,15 +219,26 @@ def identify_robust(
         curve_C=curve,
         band_low_C=low,
         band_high_C=high,
-        estimates=estimates,
-        assumptions=tuple(
-            describe_assumptions(settings, room_sensor, reference, name, room_C is not None) for name in log.sensors
-        ),
+        steady_state_C=steady,
+        steady_state_ci95_C=np.array(
+            [e.interval_C.get(REPORT_LEVEL, (-np.inf, np.inf)) for e in estimates], dtype=float
+        ).reshape(-1, 2),
+        start_C=np.array([np.nan if e.fit is None else e.fit.start_C for e in estimates]),
+        # when each best model stays within 5 % of its total rise from T∞
+        equilibrium_time_min=np.array([np.nan if e.fit is None else e.fit.equilibrium_time_min for e in estimates]),
         rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
+        model_ok=np.array([e.model_ok for e in estimates], dtype=bool),
+        warnings=tuple(e.warnings for e in estimates),
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
         measured_settled=settled,
         notes=(*log.notes, *unfit, *(w for e in estimates for w in e.warnings)),
+        details=RobustDetails(
+            estimates=estimates,
+            assumptions=tuple(
+                describe_assumptions(settings, room_sensor, reference, name, room_C is not None) for name in log.sensors
+            ),
+        ),
     )
 
 
