@@ -51,6 +51,17 @@ def make_log(t: np.ndarray, columns: dict[str, np.ndarray]) -> TemperatureLog:
 _T = TypeVar("_T")
 
 
+def through_state_file(value: _T) -> _T:
+    """``value`` (a frozen dataclass) written to a state file and read back, as a resumed watch reads it."""
+    import tempfile
+
+    from mtident.persist import load_dataclass, save_dataclass
+
+    with tempfile.TemporaryDirectory() as folder:
+        save_dataclass(Path(folder) / "state.npz", value)
+        return load_dataclass(Path(folder) / "state.npz", type(value))
+
+
 def wait_until(condition: Callable[[], _T], what: str, timeout_s: float = 30.0, poll_s: float = 0.05) -> _T:
     """Poll ``condition`` until it returns a true value, and return that value: a deadline instead
     of a fixed sleep, so that a slow machine waits longer and a fast one not at all. At the

@@ -17,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from conftest import PAPER_STEADY, first_order, logger_dialects, make_log, wait_until
+from conftest import PAPER_STEADY, first_order, logger_dialects, make_log, through_state_file, wait_until
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -114,7 +114,7 @@ def test_follower_reads_logs_as_loggers_write_them_like_the_file_reader(tmp_path
         with open(path, "ab") as out:
             out.write(data[a:b])
         if a == len(data) // 2:  # killed here and started again from the state file's position
-            follower = LogFollower.resume(path, json.loads(json.dumps(follower.position())), None, None)
+            follower = LogFollower.resume(path, through_state_file(follower.position()), None, None)
         rows = follower.poll()
         assert not rows.warnings
         times.extend(rows.time_min)
@@ -178,7 +178,7 @@ def test_follower_reads_a_log_without_units_in_the_unit_stated_room_too(tmp_path
     assert "read in °F (`temperature_unit`), converted to °C: A" in rows.notes
     with path.open("a") as out:
         out.write("2,203,71.6\n")
-    resumed = LogFollower.resume(path, json.loads(json.dumps(follower.position())), None, None, "F")
+    resumed = LogFollower.resume(path, through_state_file(follower.position()), None, None, "F")
     np.testing.assert_allclose(resumed.poll().temperature_C, [[95.0, 22.0]])
     kelvin = tmp_path / "kelvin.csv"
     kelvin.write_text("time_min,A\n0,293.15\n1,373.15\n")
@@ -484,6 +484,38 @@ def test_an_unreadable_state_file_is_said_and_overwritten(tmp_path):
     assert "cannot be resumed" in session.notes[0]
     session.poll()
     assert isinstance(load_dataclass(session.state_path, SavedWatch), SavedWatch)
+
+
+def test_a_state_file_of_an_older_version_is_not_resumed_but_started_afresh(tmp_path):
+    """Older versions kept the follower's position as JSON text of their own (a dict, its dialect a
+    list of four, five or eight entries): such a state file is not read by branches of its own,
+    it is said and started afresh, then written as the follower's frozen position."""
+    import dataclasses
+
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:60], {"S": noisy(first_order(T[:60]), 12)}))
+    first = WatchSession(log, MonitorSettings())
+    first.poll()
+    saved = load_dataclass(first.state_path, SavedWatch)
+
+    @dataclasses.dataclass(frozen=True)
+    class OlderSavedWatch:
+        log: str
+        fingerprint: str
+        fingerprint_bytes: int
+        settings_key: str
+        position: str
+        monitor: MonitorState
+
+    older = {"offset": 120, "dialect": [",", ".", 0, "utf-8-sig"], "origin": 0.0, "last_time": 59.0}
+    fields = {f.name: getattr(saved, f.name) for f in dataclasses.fields(saved)}
+    save_dataclass(first.state_path, OlderSavedWatch(**{**fields, "position": json.dumps(older)}))
+    session = WatchSession(log, MonitorSettings())
+    assert session.state is None
+    assert f"the state file {session.state_path} cannot be resumed" in session.notes[0]
+    assert "FollowPosition" in session.notes[0] and session.notes[0].endswith("starting afresh")
+    session.poll()
+    assert load_dataclass(session.state_path, SavedWatch).position == session.follower.position()
 
 
 # ---- the command ---------------------------------------------------------------------------

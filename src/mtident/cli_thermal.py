@@ -27,7 +27,8 @@ from mtident.cli import (
 )
 from mtident.exceptions import InputError
 from mtident.io.columns import room_named
-from mtident.io.logs import SAMPLES, TIME_UNITS, TemperatureLog, read_temperature_log, sample_log_path
+from mtident.io.logs import SAMPLES, TemperatureLog, read_temperature_log, sample_log_path
+from mtident.io.time_notes import TIME_UNITS
 from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 from mtident.thermal.identification import Identification, MethodDetails

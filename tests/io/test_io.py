@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import logger_dialects
+from conftest import logger_dialects, through_state_file
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -214,7 +213,7 @@ def test_a_local_clock_changed_for_summer_time_is_read_across_the_change(
     follower = LogFollower(live)
     first = follower.poll()
     live.write_bytes(text)
-    resumed = LogFollower.resume(live, json.loads(json.dumps(follower.position())), None, None)
+    resumed = LogFollower.resume(live, through_state_file(follower.position()), None, None)
     second = resumed.poll()
     np.testing.assert_allclose(np.concatenate([first.time_min, second.time_min]), log.time_min, atol=1e-9)
     assert not second.warnings and [n for n in second.notes if said.split(" at row")[0] in n and "after t = " in n]
@@ -717,49 +716,31 @@ def test_a_live_decimal_comma_log_whose_header_comes_first_reads_its_numbers(tmp
     assert follower.sensors == ["Temp, Spindel", "Temp, Motor"]
 
 
-def test_a_follower_position_saved_before_units_rows_resumes(tmp_path):
-    from mtident.io.follow import LogFollower
+def test_a_follower_position_resumes_through_the_state_file_and_an_older_one_is_refused(tmp_path):
+    """The position is a frozen value that the generic persistence saves (the dialect with its units
+    row); the dicts and lists older versions saved (a dialect of four, five or eight entries) are
+    refused with the way on, not read by branches of their own."""
+    from mtident.io.dialect import CsvDialect
+    from mtident.io.follow import FollowPosition, LogFollower
 
     live = tmp_path / "live.csv"
-    live.write_text("time;T1\n0;20,5\n")
-    follower = LogFollower(live)
-    follower.poll()
-    position = follower.position()
-    assert position["dialect"] == {
-        "delimiter": ";",
-        "decimal": ",",
-        "preamble_lines": 0,
-        "encoding": "utf-8-sig",
-        "units": [],
-        "extra_rows": 0,
-        "units_source": "the units row",
-        "units_in_cells": False,
-        "names": [],
-        "written_names": [],
-        "from_humidity": [],
-    }
-    json.loads(json.dumps(position))  # plain JSON
-    position["dialect"] = [
-        ";",
-        ",",
-        0,
-        "utf-8-sig",
-    ]  # as a state file of an older version wrote it: a list of the first four
-    with open(live, "a") as out:
-        out.write("1;20,6\n")
-    rows = LogFollower.resume(live, position, None, None).poll()
-    np.testing.assert_array_equal(rows.temperature_C, [[20.6]])
-    # one written before the rows under the header were counted: five entries, a units row if any
     live.write_text("time;T1\nmin;K\n0;293,5\n")
     follower = LogFollower(live)
     follower.poll()
-    position = follower.position()
-    assert (position["dialect"]["units"], position["dialect"]["extra_rows"]) == ([["time", "min"], ["T1", "K"]], 1)
-    position["dialect"] = [";", ",", 0, "utf-8-sig", [["time", "min"], ["T1", "K"]]]  # five entries
+    position = through_state_file(follower.position())
+    assert isinstance(position, FollowPosition) and position == follower.position()
+    assert position.layout is not None and position.layout.dialect == CsvDialect(
+        ";", ",", 0, "utf-8-sig", (("time", "min"), ("T1", "K")), 1
+    )
     with open(live, "a") as out:
         out.write("1;293,6\n")
     rows = LogFollower.resume(live, position, None, None).poll()
     np.testing.assert_allclose(rows.temperature_C, [[293.6 - 273.15]])
+    older = {"offset": 20, "dialect": [";", ",", 0, "utf-8-sig", [["time", "min"], ["T1", "K"]]]}
+    with pytest.raises(
+        InputError, match=r"live.csv: the follower's position is a dict, as an older version .*start afresh"
+    ):
+        LogFollower.resume(live, older, None, None)  # type: ignore[arg-type]
 
 
 def test_a_date_and_a_time_of_day_in_two_columns_are_one_stamp(write_csv):
@@ -1006,7 +987,7 @@ def test_spreadsheet_serial_dates_are_named_not_read_as_minutes(write_csv):
     first = follower.poll()
     assert first.notes == (said,)
     live.write_text("Date,T1\n" + rows)
-    second = LogFollower.resume(live, json.loads(json.dumps(follower.position())), None, None).poll()
+    second = LogFollower.resume(live, through_state_file(follower.position()), None, None).poll()
     np.testing.assert_allclose(np.concatenate([first.time_min, second.time_min]), np.arange(60.0), atol=1e-4)
 
 
@@ -1294,7 +1275,7 @@ def test_channels_named_under_a_numbering_header(write_csv):
     rows = follower.poll()
     assert follower.sensors == ["Spindle", "Motor"] and any("No.2 is 'Spindle'" in n for n in rows.notes)
     np.testing.assert_array_equal(rows.temperature_C, log.temperature_C)
-    resumed = LogFollower.resume(path, json.loads(json.dumps(follower.position())), None, None)
+    resumed = LogFollower.resume(path, through_state_file(follower.position()), None, None)
     assert resumed.dialect == follower.dialect
     assert read_temperature_log(path, sensors=["Motor"]).sensors == ("Motor",)
     # a row of default names ("ch1") renames nothing; a row that would repeat a name is no row of names

@@ -21,8 +21,6 @@ replaced by NaN — the filters treat NaN as a missing measurement — and liste
 
 from __future__ import annotations
 
-import datetime as dt
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -33,15 +31,14 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.columns import (
     check_unique_names,
-    choose_time_column,
-    millisecond_column,
     missing_column,
     room_named,
-    sensor_unit,
     temperature_columns,
     text_only_cells,
 )
 from mtident.io.dialect import CsvDialect, read_csv
+from mtident.io.layout import LogLayout, time_columns
+from mtident.io.parse import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C
 from mtident.io.stamps import (
     IMPLAUSIBLE_STEP_MIN,
     MINUTES_PER_DAY,
@@ -49,13 +46,26 @@ from mtident.io.stamps import (
     after_midnight,
     clock_change,
     clock_change_note,
-    date_and_clock,
     elapsed_minutes,
     has_utc_offset,
     other_date_order,
     stamp_format,
 )
-from mtident.io.units import celsius_conversion, number_without_unit
+from mtident.io.time_notes import (
+    UNLIKELY_MINUTES,
+    gap_note,
+    hours_hint,
+    names_a_date,
+    read_as_minutes,
+    seconds_hint,
+    serial_date_hint,
+    serial_date_note,
+    sparse_hint,
+    time_unit_assumed,
+    time_unit_factor,
+    unit_overridden_note,
+)
+from mtident.io.units import number_without_unit
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -64,33 +74,15 @@ __all__ = [
     "TemperatureLog",
     "read_temperature_log",
     "sample_log_path",
+    "as_temperature_log",
     "SAMPLES",
-    "time_unit_assumed",
     "unit_doubted",
-    "gap_note",
-    "gap_said",
-    "hours_hint",
-    "seconds_hint",
-    "sparse_hint",
-    "unit_hint",
-    "SPARSE_HINT_ROWS",
-    "unit_overridden_note",
-    "serial_date_hint",
-    "serial_date_note",
-    "names_a_date",
-    "HOURS_HINT_SAMPLES",
-    "UNLIKELY_MINUTES",
     "OPEN_CIRCUIT_HIGH_C",
     "OPEN_CIRCUIT_LOW_C",
-    "TIME_UNITS",
-    "time_unit_factor",
     "scale_note",
     "WORKSHOP_ROOM_C",
 ]
 
-# A PT100 channel with a broken wire reads far outside any machine-tool temperature.
-OPEN_CIRCUIT_HIGH_C = 400.0
-OPEN_CIRCUIT_LOW_C = -60.0
 # What loggers write in place of a reading for a broken thermocouple or an overrange (Graphtec
 # "BURNOUT"); the live follower reads any text as a missing reading.
 OPEN_CIRCUIT_TEXT = (
@@ -111,7 +103,6 @@ OPEN_CIRCUIT_TEXT = (
 MISSING_TEXT = ("-", "--", "---", "n/a", "na", "#n/a", "#na", "null", "none", "nan")
 # Above this share of bad samples a sensor is refused rather than bridged.
 MAX_BAD_FRACTION = 0.1
-TIME_UNITS = {"ms": 1.0 / 60_000.0, "s": 1.0 / 60.0, "min": 1.0, "h": 60.0, "d": 1440.0}
 
 
 @dataclass(frozen=True)
@@ -296,196 +287,13 @@ def sample_log_path(name: str = "@sample") -> Path:
     return Path(str(resources.files("mtident") / "data" / SAMPLES[name]))
 
 
-def _suffix_unit(header: str) -> str | None:
-    """The unit a time column's name ends in: Time_s, t_min, hours_h."""
-    return next((unit for unit in TIME_UNITS if header.lower().endswith("_" + unit)), None)
-
-
-def time_unit_factor(header: str, time_unit: str | None, stated: str | None = None) -> float:
-    """Minutes per unit of a numeric time column: ``time_unit``, else the header's suffix (_s, _min,
-    _h), else the unit ``stated`` by a units row or in the name's brackets (``Time [s]``), else minutes.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name (a suffix such as ``_s`` or ``_min`` states its unit).
-    time_unit : str or None
-        The unit the user gave: "ms", "s", "min", "h" or "d"; None to take it from the log.
-    stated : str or None, optional
-        The unit the log states for the column (units row or brackets in the name), as a key of
-        ``TIME_UNITS``; None where it states none.
-
-    Returns
-    -------
-    float
-        Minutes per unit of the column (1/60 for seconds, 60 for hours, 1440 for days).
-
-    Raises
-    ------
-    InputError
-        ``time_unit`` is not one of the units.
-    """
-    if time_unit is not None:
-        if time_unit not in TIME_UNITS:
-            msg = f"time unit {time_unit!r} is not one of: {', '.join(TIME_UNITS)}"
-            raise InputError(msg)
-        return TIME_UNITS[time_unit]
-    unit = _suffix_unit(header) or stated
-    return TIME_UNITS[unit] if unit is not None else 1.0
-
-
-def unit_overridden_note(header: str, time_unit: str | None, stated: str | None) -> str | None:
-    """What a reader says when the unit given (``time_unit``) differs from the one the log states
-    for its time column (a suffix of its name, brackets or a units row): the option wins, and a
-    slip in it rescales every time constant. None where they agree or either is missing.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-    time_unit : str or None
-        The unit the user gave.
-    stated : str or None
-        The unit a units row or brackets state, as a key of ``TIME_UNITS``.
-
-    Returns
-    -------
-    str or None
-
-    Examples
-    --------
-    >>> unit_overridden_note("time_s", "min", None) is not None, unit_overridden_note("time_s", "s", None)
-    (True, None)
-    """
-    own = _suffix_unit(header) or stated
-    if time_unit is None or own is None or TIME_UNITS.get(time_unit) == TIME_UNITS[own]:
-        return None
-    return (
-        f"time column {header!r} states its unit as {own}, but `time_unit={time_unit!r}` reads it in {time_unit}: the "
-        "option wins; leave it out if the column's own unit is right"
-    )
-
-
 # A workshop's air (°C), heated or not: a room read far outside it is more likely in °F or K
 WORKSHOP_ROOM_C = (5.0, 40.0)
-# A warm-up is hours long: a time column read as minutes (no unit given anywhere) that runs past two
-# days is more likely seconds.
-UNLIKELY_MINUTES = 2 * 1440.0
-# a step this many times the usual one, and this long (min), is a gap worth a note (:func:`gap_note`)
-GAP_FACTOR = 10.0
-GAP_MIN_MIN = 5.0
-# readings enough to tell a log in hours read as minutes (:func:`hours_hint`)
-HOURS_HINT_SAMPLES = 100
-# a usual step this long (min), read as minutes for want of a unit, may be seconds (:func:`sparse_hint`)
-SPARSE_HINT_STEP_MIN = 10.0
-# the first readings whose usual step tells a column in seconds read as minutes
-SPARSE_HINT_ROWS = 10
-
-
-def time_unit_assumed(header: str, time_unit: str | None, stated: str | None) -> bool:
-    """Whether :func:`time_unit_factor` falls back to minutes: no --time-unit, header suffix or units row.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-    time_unit : str or None
-        The unit the user gave, or None.
-    stated : str or None
-        The unit the log states for the column, or None.
-
-    Returns
-    -------
-    bool
-        True where neither ``time_unit``, a suffix of ``header`` nor ``stated`` gives a unit.
-    """
-    return time_unit is None and stated is None and _suffix_unit(header) is None
-
-
-def names_a_date(header: str) -> bool:
-    """Whether a time column's name says it holds dates (``Date``, ``Date/Time``, ``Datum``):
-    spreadsheet serial dates in it are read as days, not refused.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-
-    Returns
-    -------
-    bool
-        True where the name contains "date", "Datum", "fecha", "日付" or "日時" (any case).
-    """
-    key = header.lower()
-    return any(word in key for word in ("date", "datum", "fecha", "日付", "日時"))
-
-
-def _serial_date(first: float) -> str:
-    """A spreadsheet serial date (days since 30.12.1899) and the date it is, for a message."""
-    when = dt.datetime(1899, 12, 30) + dt.timedelta(seconds=round(first * 86_400.0))
-    return f"days since 30.12.1899: {first:.5f} is {when:%d.%m.%Y %H:%M:%S}"
-
-
-def serial_date_note(header: str, first: float) -> str:
-    """What a reader says when it reads a time column's spreadsheet serial dates as days.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-    first : float
-        The column's first value (days since 30.12.1899), shown with the date and time it is.
-
-    Returns
-    -------
-    str
-        The note, suggesting ``time_unit='min'`` where the column is minutes after all.
-    """
-    return (
-        f"time column {header!r} read as spreadsheet serial dates ({_serial_date(first)}); give `time_unit='min'` if "
-        "it "
-        "is minutes"
-    )
-
-
-def serial_date_hint(header: str, first: float, step: float) -> str | None:
-    """A message if a time column read as minutes holds spreadsheet serial dates (days since
-    30.12.1899: 46348.33 is 22.11.2026 08:00, as a spreadsheet saves a date cell formatted as a
-    number): read as minutes, a 2-h test lasted 0.08 min and was identified as nonsense.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-    first : float
-        The column's first value, as read.
-    step : float
-        The spacing of its values (the median step, or a later value less the first), in the same unit.
-
-    Returns
-    -------
-    str or None
-        The message, suggesting ``time_unit='d'``, where ``first`` is a fractional number from 20000
-        to 80000 (the years 1954 to 2119) and ``step`` is positive and at most 0.05 (72 min as days);
-        else None.
-    """
-    if not (
-        20_000.0 <= first <= 80_000.0 and 0.0 < step <= 0.05 and first != math.floor(first)
-    ):  # 1954-2119, steps under 72 min
-        return None
-    return (
-        f"time column {header!r} looks like spreadsheet serial dates ({_serial_date(first)}), not minutes: give "
-        "`time_unit='d'` (or `time_unit='min'` if it is minutes)"
-    )
-
-
-def _read_as_minutes(header: str) -> str:
-    return f"time column {header!r} is read as minutes (no unit in its name, a units row or `time_unit`)"
 
 
 def unit_doubted(log: TemperatureLog) -> bool:
     """Whether the reader of ``log`` said its time column, read as minutes for want of a unit, may
-    be in another unit (:func:`seconds_hint`, :func:`sparse_hint`, :func:`hours_hint`).
+    be in another unit (:mod:`mtident.io.time_notes`: ``seconds_hint``, ``sparse_hint``, ``hours_hint``).
 
     Parameters
     ----------
@@ -495,184 +303,8 @@ def unit_doubted(log: TemperatureLog) -> bool:
     -------
     bool
     """
-    said = _read_as_minutes(log.time_column)
+    said = read_as_minutes(log.time_column)
     return any(note.startswith(said) for note in log.notes)
-
-
-def seconds_hint(header: str, span_min: float) -> str:
-    """What a reader says when a time column read as minutes, for want of a stated unit, runs past two
-    days (``UNLIKELY_MINUTES``): a warm-up is hours long, so the column is more likely seconds.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-    span_min : float
-        The last time read (min), which the message gives in minutes and in days.
-
-    Returns
-    -------
-    str
-        The note, suggesting ``time_unit='s'``.
-    """
-    return (
-        f"{_read_as_minutes(header)} and runs to {span_min:g} min ({span_min / 1440:.1f} days): if it is in "
-        "seconds, give `time_unit='s'`"
-    )
-
-
-def gap_note(time_min: FloatArray) -> str | None:
-    """What a reader says of the longest gap between readings against their usual (median) step
-    (:func:`gap_said`); None where it is no gap.
-
-    Parameters
-    ----------
-    time_min : ndarray, shape (N,)
-        Sample times (min), increasing.
-
-    Returns
-    -------
-    str or None
-
-    Examples
-    --------
-    >>> gap_note(np.r_[np.arange(0.0, 60.0, 0.5), np.arange(100.0, 200.0, 0.5)])
-    'a gap of 40.5 min in the readings after t = 59.5 min (otherwise a reading every 30 s): the fit bridges it'
-    """
-    steps = np.diff(np.asarray(time_min, dtype=float))
-    if len(steps) < 3:
-        return None
-    k = int(np.argmax(steps))
-    return gap_said(float(steps[k]), float(time_min[k]), float(np.median(steps)))
-
-
-def gap_said(step_min: float, after_min: float, usual_min: float) -> str | None:
-    """What a reader says of a step between readings that is ``GAP_FACTOR`` times the usual one and
-    at least ``GAP_MIN_MIN`` minutes (a logger paused, a cable pulled): the fit bridges it, and the
-    user should know it did. None for a shorter step.
-
-    Parameters
-    ----------
-    step_min : float
-        The step (min).
-    after_min : float
-        The time of the reading before it (min).
-    usual_min : float
-        The usual step between readings (min).
-
-    Returns
-    -------
-    str or None
-    """
-    if step_min < max(GAP_FACTOR * usual_min, GAP_MIN_MIN):
-        return None
-    every = f"{60.0 * usual_min:.3g} s" if usual_min < 1.0 else f"{usual_min:.3g} min"
-    return (
-        f"a gap of {step_min:.3g} min in the readings after t = {after_min:g} min (otherwise a reading every "
-        f"{every}): the fit bridges it"
-    )
-
-
-def sparse_hint(header: str, times_min: FloatArray) -> str | None:
-    """What a reader says when a time column read as minutes, for want of a stated unit, has
-    readings a usual ``SPARSE_HINT_STEP_MIN`` or more apart: a warm-up logged every half hour is
-    rare, one logged every 30 s common, and seconds read as minutes stretch the warm-up sixty-fold,
-    so that its first minutes look settled. None otherwise (fewer than three readings too).
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-    times_min : ndarray
-        The times read so far (min).
-
-    Returns
-    -------
-    str or None
-        The note, suggesting ``time_unit='s'``.
-
-    Examples
-    --------
-    >>> sparse_hint("t", np.array([0.0, 30.0, 60.0])) is not None, sparse_hint("t", np.array([0.0, 1.0, 2.0]))
-    (True, None)
-    """
-    if len(times_min) < 3:
-        return None
-    step = float(np.median(np.diff(times_min)))
-    if step < SPARSE_HINT_STEP_MIN:
-        return None
-    return (
-        f"{_read_as_minutes(header)}, a reading every {step:g} min: if it is in seconds, give `time_unit='s'` "
-        "(read as minutes, a warm-up in seconds looks "
-        "sixty times slower, and settled long before it is)"
-    )
-
-
-def unit_hint(header: str, first_times_min: FloatArray, last_min: float, samples: int) -> str | None:
-    """The one thing a log follower says of a numeric time column read as minutes for want of a
-    stated unit, or None: its first ``SPARSE_HINT_ROWS`` readings a usual ten minutes or more
-    apart (:func:`sparse_hint`), else a span past two days (:func:`seconds_hint`), else a dense
-    hour (:func:`hours_hint`). The step comes first: live, it tells at once, where the span tells
-    only after two days of readings.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-    first_times_min : ndarray
-        The first ``SPARSE_HINT_ROWS`` times read (min; fewer while fewer were read).
-    last_min : float
-        The last time read (min from the first reading): the span.
-    samples : int
-        How many readings that span holds.
-
-    Returns
-    -------
-    str or None
-
-    Examples
-    --------
-    >>> unit_hint("t", np.array([0.0, 20.0, 40.0]), 2900.0, 146).split(", a reading every")[1][:7]
-    ' 20 min'
-    """
-    if (hint := sparse_hint(header, np.asarray(first_times_min, dtype=float)[:SPARSE_HINT_ROWS])) is not None:
-        return hint
-    if last_min > UNLIKELY_MINUTES:
-        return seconds_hint(header, last_min)
-    return hours_hint(header, last_min, samples)
-
-
-def hours_hint(header: str, span_min: float, samples: int) -> str | None:
-    """What a reader says when a time column read as minutes, for want of a stated unit, holds at
-    least ``HOURS_HINT_SAMPLES`` readings over at most an hour, a second or less apart: a warm-up
-    logged so densely for so short a time is more likely a column in hours. None otherwise.
-
-    Parameters
-    ----------
-    header : str
-        The time column's name.
-    span_min : float
-        The last time read (min).
-    samples : int
-        How many readings that span holds.
-
-    Returns
-    -------
-    str or None
-        The note, suggesting ``time_unit='h'``.
-
-    Examples
-    --------
-    >>> hours_hint("t", 14.0, 1681) is not None, hours_hint("t", 14.0, 15) is None
-    (True, True)
-    """
-    if samples < HOURS_HINT_SAMPLES or span_min > 60.0 or span_min / (samples - 1) > 1.0 / 60.0:
-        return None
-    return (
-        f"{_read_as_minutes(header)} and runs only to {span_min:g} min with a reading every "
-        f"{60.0 * span_min / (samples - 1):.2g} s: if it is in hours, give "
-        "`time_unit='h'`"
-    )
 
 
 def _cell(value: object) -> str:
@@ -844,19 +476,6 @@ def _text_only(column: pd.Series) -> bool:
     return not pd.api.types.is_numeric_dtype(column) and text_only_cells(column.dropna().astype(str).tolist())
 
 
-def _clock_column(frame: pd.DataFrame, header: str) -> str | None:
-    """The column after the time column if the two hold a date and a time of day (the first row
-    tells), else None."""
-    columns = list(frame.columns)
-    following = columns.index(header) + 1
-    if following >= len(columns) or not len(frame):
-        return None
-    date, clock = frame[header].iloc[0], frame[columns[following]].iloc[0]
-    if not (isinstance(date, str) and isinstance(clock, str)):
-        return None
-    return str(columns[following]) if date_and_clock(date, clock) else None
-
-
 def as_temperature_log(log: object, caller: str) -> TemperatureLog:
     """``log`` as a :class:`TemperatureLog`: a DataFrame is read (and checked) like a CSV file.
 
@@ -893,18 +512,18 @@ def _sensor_readings(
     frame: pd.DataFrame,
     name: str,
     dialect: CsvDialect,
+    conversion: FloatArray,
     source: str,
     first_row: int,
     notes: list[str],
-    temperature_unit: str | None = None,
 ) -> FloatArray:
-    """A sensor's column in °C (from its own unit, else ``temperature_unit``), NaN for an empty or
-    open-circuit cell (said in ``notes``); an error naming the first cell that is no number, or a
-    column mostly empty."""
+    """A sensor's column in °C (by ``conversion``, the layout's (scale, offset): from its own unit,
+    else the one given), NaN for an empty or open-circuit cell (said in ``notes``); an error naming
+    the first cell that is no number, or a column mostly empty."""
     import pandas as pd
 
     raw = frame[name]
-    scale, offset = celsius_conversion(sensor_unit(name, dialect, temperature_unit)) or (1.0, 0.0)
+    scale, offset = float(conversion[0]), float(conversion[1])
     # One bad cell leaves a decimal-comma column as text: its good cells must still read as numbers
     # (the message named the first good cell, '20,00', instead of the bad one).
     cells = raw
@@ -991,21 +610,16 @@ def read_temperature_log(
     frame, dialect, source, first_row = _as_frame(path, read_notes)
     notes: list[str] = [renamed] if (renamed := dialect.renaming()) else []
     notes.extend(read_notes)
-    first_cells = [str(v) for v in frame.iloc[0]] if len(frame) else []
-    header, counter, time_notes = choose_time_column([str(c) for c in frame.columns], first_cells, dialect, time_col)
+    names = [str(c) for c in frame.columns]
+    first_cells = list(frame.iloc[0]) if len(frame) else []
+    (at, clock_at, milliseconds_at), left_out, time_notes = time_columns(names, first_cells, dialect, time_col, source)
     notes.extend(time_notes)
-    if header not in frame.columns:
-        msg = f"{source}: no time column {header!r}; the columns are: {', '.join(frame.columns)}"
-        raise InputError(msg)
     if len(frame) < min_samples:
         msg = f"{source}: {len(frame)} samples; at least {min_samples} are needed"
         raise InputError(msg)
-    clock = _clock_column(frame, header)
-    at = millisecond_column(list(frame.columns), list(frame.columns).index(clock or header))
-    milliseconds = None if at is None else str(frame.columns[at])
-    sub_second = None if milliseconds is None else _sub_second_min(frame, milliseconds, source, first_row)
-    left_out = (header, clock, milliseconds, frame.columns[0] if counter else None)
-    available = [c for c in frame.columns if c not in left_out]
+    header, clock = names[at], None if clock_at is None else names[clock_at]
+    sub_second = None if milliseconds_at is None else _sub_second_min(frame, names[milliseconds_at], source, first_row)
+    available = [c for c in names if c not in left_out]
     missing_names = [n for n in sensors or [] if n not in available]
     if missing_names:
         msg = missing_column(source, missing_names[0], available)
@@ -1031,10 +645,25 @@ def read_temperature_log(
         notes.append(f"left out {int(repeated.sum())} row(s) repeating an earlier row exactly (rows {rows})")
         frame = frame[~repeated]
         sub_second = None if sub_second is None else sub_second[~repeated]
-    time_min = _time_min(frame, header, clock, time_unit, dialect, source, first_row, sub_second, notes)
+    layout = LogLayout(
+        dialect,
+        tuple(names),
+        at,
+        clock_at,
+        milliseconds_at,
+        tuple(sensors),
+        tuple(names.index(name) for name in sensors),
+        time_unit,
+        temperature_unit,
+    )
+    time_min = _time_min(frame, layout, source, first_row, sub_second, notes)
     if (gap := gap_note(time_min)) is not None:
         notes.append(gap)
-    columns = [_sensor_readings(frame, name, dialect, source, first_row, notes, temperature_unit) for name in sensors]
+    conversions = layout.conversions()
+    columns = [
+        _sensor_readings(frame, name, dialect, conversions[k], source, first_row, notes)
+        for k, name in enumerate(sensors)
+    ]
     if (scale := scale_note(sensors, np.column_stack(columns), dialect, temperature_unit)) is not None:
         notes.append(scale)
     return TemperatureLog(
@@ -1164,18 +793,18 @@ def _sensor_candidates(frame: pd.DataFrame, available: list[str], notes: list[st
 
 def _time_min(
     frame: pd.DataFrame,
-    header: str,
-    clock: str | None,
-    time_unit: str | None,
-    dialect: CsvDialect,
+    layout: LogLayout,
     source: str,
     first_row: int,
     sub_second: FloatArray | None,
     notes: list[str],
 ) -> FloatArray:
     """The log's times in minutes from its time column, or from a date column and the time of day
-    in the next (``clock``); what was assumed goes to ``notes``."""
+    in the next (the layout's clock column); what was assumed goes to ``notes``."""
     import pandas as pd
+
+    header, time_unit = layout.time_name, layout.time_unit
+    clock = None if layout.clock_column is None else layout.header[layout.clock_column]
 
     if clock is not None:
         stamps = frame[header].astype(str).str.strip() + " " + frame[clock].astype(str).str.strip()
@@ -1189,7 +818,7 @@ def _time_min(
         )
         notes.extend(time_notes)
         return time_min
-    stated = dialect.time_unit(header)
+    stated = layout.dialect.time_unit(header)
     time_min, time_notes = _parse_time(frame[header], header, time_unit, source, first_row, stated, sub_second)
     notes.extend(time_notes)
     if (overridden := unit_overridden_note(header, time_unit, stated)) is not None:

@@ -341,7 +341,7 @@ def build_report(
     # the reference names the machine where the decision rested on it (one most sensors contradicted may be another's)
     used = settings.reference if settings.reference is not None and not state.reference_dropped else None
     sidecar_words, recorder_start = _recorder(session.path)
-    start = log_start(session.follower)
+    start = log_start(session.follower.position().time)
     started_from = "the log's time stamps"
     if start is None and recorder_start is not None:
         start, started_from = recorder_start, "the recorder's first reading"
@@ -394,15 +394,16 @@ def build_report(
 # ---- when the test began -----------------------------------------------------------------------
 
 
-def log_start(follower: Any) -> dt.datetime | dt.time | None:  # noqa: ANN401 - a LogFollower
+def log_start(follower: Any) -> dt.datetime | dt.time | None:  # noqa: ANN401 - a TimeState
     """t = 0 by the log's own time stamps: a local clock's time as written (naive), an instant in
     the computer's local zone where the stamps carry their offset from UTC, the time of day alone
     where the log gives no date; None for a log timed in numbers from its start.
 
     Parameters
     ----------
-    follower : LogFollower
-        The follower that read the log (its time origin and the stamps' format).
+    follower : TimeState
+        How far the follower read the log's time column (its time origin and the stamps' format:
+        :class:`~mtident.io.parse.TimeState`).
 
     Returns
     -------

@@ -22,7 +22,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.follow import LogFollower
+from mtident.io.follow import FollowPosition, LogFollower
 from mtident.persist import StateFileError, load_dataclass, save_dataclass
 from mtident.thermal.hindsight import Hindsight, check_decision
 from mtident.thermal.monitor import (
@@ -62,8 +62,8 @@ class SavedWatch:
         How many bytes the fingerprint covers.
     settings_key : str
         The settings, the sensors and how the time column is read, as JSON text.
-    position : str
-        The follower's position in the log, as JSON text.
+    position : FollowPosition
+        The follower's position in the log.
     monitor : MonitorState
     """
 
@@ -71,7 +71,7 @@ class SavedWatch:
     fingerprint: str
     fingerprint_bytes: int
     settings_key: str
-    position: str
+    position: FollowPosition
     monitor: MonitorState
 
 
@@ -238,18 +238,18 @@ class WatchSession:
             self.notes.append(f"the state file {self.state_path} was written for {' and '.join(differs)}; {afresh}")
             return
         self.follower = LogFollower.resume(
-            self.path, json.loads(saved.position), time_col, time_unit, self.follower.temperature_unit
+            self.path, saved.position, time_col, time_unit, self.follower.temperature_unit
         )
         self.state = self._saved = saved.monitor
         self._fingerprint = (saved.fingerprint, saved.fingerprint_bytes)
         self.notes.append(f"resuming from {self.state_path} at t = {minutes(saved.monitor.readings.latest_min)}")
 
-    def save(self, position_before: dict[str, object] | None = None) -> None:
+    def save(self, position_before: FollowPosition | None = None) -> None:
         """Write the state file (atomically: a killed process leaves the old or the new one).
 
         Parameters
         ----------
-        position_before : dict, optional
+        position_before : FollowPosition, optional
             The follower's position to save (default: where it is now): a poll cut short saves the
             one of before it, with the state of the rows it fed.
         """
@@ -258,7 +258,7 @@ class WatchSession:
         if self._fingerprint[1] < FINGERPRINT_BYTES:
             # taken again while the log is short: a live log's head grows to its full length
             self._fingerprint = log_fingerprint(self.path)
-        position = json.dumps(self.follower.position() if position_before is None else position_before)
+        position = self.follower.position() if position_before is None else position_before
         save_dataclass(
             self.state_path, SavedWatch(str(self.path.resolve()), *self._fingerprint, self._key, position, self.state)
         )
@@ -317,7 +317,7 @@ class WatchSession:
         InputError
             The log has no sensor column besides the room sensor's, or the reference knows none of its sensors.
         """
-        before = json.loads(json.dumps(self.follower.position()))  # a copy, as the state file keeps it
+        before = self.follower.position()
         rows = self.follower.poll()
         if self.state is not None and len(rows.time_min) and len(self.state.readings.time_min):
             # a poll cut short saved the follower's position of before it: its rows fed are skipped
