@@ -62,6 +62,9 @@ ROOM_TREND_MIN = 120.0
 """The room enters the machine model as its local straight line over this window
 (:func:`~mtident.thermal.readings.room_trend`): the room sensor's noise and display steps are
 one error shared by every sensor, which a joint fit would otherwise take for a slow mode."""
+ROOM_RESPONSE_LAG_SHARE = 0.5
+"""And this share of the lag's sd without a learnt response (:data:`ROOM_LAG_SHARE`): the drift's
+lag, which a reference's daily cycle does not show."""
 ROOM_STATIC_SD = 0.05
 """The prior sd of a sensor's static gain on the room (one) in its learnt room gains."""
 ROOM_RESPONSE_LEARNT = 0.2
@@ -474,7 +477,7 @@ def fit_test(
     }
     taus, tau_sd = _centres(model)
     lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min)) if room_lag else 0.0
-    known = _known_room(model, sensors, fitted, taus, lag_sd if room_lag else math.inf)
+    known = _known_room(model, sensors, fitted, taus, lag_sd if room_lag else None)
     fitted.update({s: bin_ for s, (bin_, _, _) in known.items()})
     rejected: list[int] = []
     # the worst sensor first, one at a time: a sensor far off pulls the shared amplitudes, and
@@ -512,14 +515,23 @@ def fit_test(
 
 
 def _known_room(
-    model: MachineModel, sensors: tuple[str, ...] | list[str], fitted: dict[int, Binned], taus: FloatArray, worse: float
+    model: MachineModel,
+    sensors: tuple[str, ...] | list[str],
+    fitted: dict[int, Binned],
+    taus: FloatArray,
+    lag_sd: float | None,
 ) -> dict[int, tuple[Binned, float, tuple[float, ...]]]:
     """The sensors whose room response the model knows well enough here: per sensor its readings
     with the room's course through that response taken out (no room left to fit), how far that
-    course may be off (one sd, °C: the reference's standard error and :data:`ROOM_RESPONSE_SHARE`
-    of the course, the most over the later half of the readings) and its room gains per mode (its
-    fast modes none). A sensor whose room course would be less certain than ``worse`` (the lag
-    counted without it) is left to the fitted room factors."""
+    course may be off (one sd, °C) and its room gains per mode (its fast modes none).
+
+    The course may be off by the reference's standard error, :data:`ROOM_RESPONSE_SHARE` of
+    itself (the most over the later half of the readings), and :data:`ROOM_RESPONSE_LAG_SHARE` of
+    ``lag_sd``, the lag counted without a learnt response: a reference run's room shows the
+    response at its own frequencies (a daily cycle), and a drift's lag is the response at none,
+    which a machine whose room reaches a sensor through a chain of bodies sets beyond the slowest
+    time constant. A sensor whose course would be less certain than ``lag_sd`` is left to the
+    fitted room factors; ``lag_sd`` None: the reference run itself, every learnt response used."""
     if not model.room_gains:
         return {}
     gains, cov = model.room_response(sensors)
@@ -530,8 +542,9 @@ def _known_room(
         R = _room_columns(b, taus)
         course = R @ gains[s]
         sd = np.hypot(np.sqrt(np.clip(np.einsum("bk,kl,bl->b", R, cov[s], R), 0, None)), ROOM_RESPONSE_SHARE * course)
-        off = float(np.max(sd[b.time_min >= 0.5 * b.time_min[-1]]))
-        if off < worse:
+        late = float(np.max(sd[b.time_min >= 0.5 * b.time_min[-1]]))
+        off = 0.0 if lag_sd is None else math.hypot(late, ROOM_RESPONSE_LAG_SHARE * lag_sd)
+        if lag_sd is None or off < lag_sd:
             row = (*map(float, gains[s]), *(0.0,) * len(FAST_TIME_CONSTANTS_MIN))
             out[s] = (replace(b, value_C=b.value_C - b.room_C - course, room_C=None), off, row)
     return out
