@@ -1,10 +1,21 @@
-"""Numbers for JSON answers."""
+"""Answers as JSON values, generated from their fields.
+
+One walk over a tree of frozen dataclasses, tuples, dicts, numbers, strings and numpy arrays
+(:func:`walk_fields`) serves both the JSON answers (:func:`to_json_value`) and the state files
+(:mod:`mtident.persist`): a field added to a result is in its JSON with no more code.
+"""
 
 from __future__ import annotations
 
+import dataclasses
+import enum
 import math
+from collections.abc import Callable
+from typing import Any
 
-__all__ = ["finite_or_none"]
+import numpy as np
+
+__all__ = ["finite_or_none", "to_json_value", "walk_fields"]
 
 
 def finite_or_none(value: float) -> float | None:
@@ -27,3 +38,94 @@ def finite_or_none(value: float) -> float | None:
     """
     value = float(value)
     return value if math.isfinite(value) else None
+
+
+def walk_fields(value: Any, leaf: Callable[[Any], Any], *, dict_as_pairs: bool = False) -> Any:
+    """A tree of plain containers: a dataclass as a dict of its fields (in their order), a tuple
+    or list as a list, a dict as a dict (or as ``[key, value]`` pairs), every other value through
+    ``leaf``.
+
+    Parameters
+    ----------
+    value : object
+        A dataclass instance, a container of them, or a leaf.
+    leaf : callable
+        Turns a value that is none of the above (a number, a string, an array, None) into its
+        encoded form.
+    dict_as_pairs : bool, optional
+        Write a dict as a list of ``[key, value]`` pairs, for keys that are not strings (a state
+        file's intervals keyed by level); keys are walked as values then.
+
+    Returns
+    -------
+    object
+        The walked tree.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass(frozen=True)
+    ... class Mode:
+    ...     time_constant_min: float
+    ...     amplitude_C: float
+    >>> walk_fields((Mode(12.0, -3.5),), str)
+    [{'time_constant_min': '12.0', 'amplitude_C': '-3.5'}]
+    """
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {
+            f.name: walk_fields(getattr(value, f.name), leaf, dict_as_pairs=dict_as_pairs)
+            for f in dataclasses.fields(value)
+        }
+    if isinstance(value, tuple | list):
+        return [walk_fields(v, leaf, dict_as_pairs=dict_as_pairs) for v in value]
+    if isinstance(value, dict):
+        if dict_as_pairs:
+            return [
+                [walk_fields(k, leaf, dict_as_pairs=True), walk_fields(v, leaf, dict_as_pairs=True)]
+                for k, v in value.items()
+            ]
+        return {k: walk_fields(v, leaf) for k, v in value.items()}
+    return leaf(value)
+
+
+def to_json_value(value: Any) -> Any:
+    """The JSON value of a result, from its fields: a dataclass as an object of its fields, tuples
+    and arrays as lists, an enumeration as its value, and None where a number is not finite (JSON
+    has no NaN or infinity).
+
+    Parameters
+    ----------
+    value : object
+        A dataclass instance (frozen, with JSON-able fields), a container of them, or a leaf.
+
+    Returns
+    -------
+    object
+        dicts, lists, strings, plain numbers, booleans and None, for ``json.dumps``.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> import numpy as np
+    >>> @dataclass(frozen=True)
+    ... class Answer:
+    ...     sensor: str
+    ...     steady_state_C: float
+    ...     interval_C: tuple[float, float]
+    ...     times_min: np.ndarray
+    >>> to_json_value(Answer("T1", np.float64(24.5), (24.1, float("inf")), np.array([1.0, np.nan])))
+    {'sensor': 'T1', 'steady_state_C': 24.5, 'interval_C': [24.1, None], 'times_min': [1.0, None]}
+    """
+    return walk_fields(value, _json_leaf)
+
+
+def _json_leaf(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return walk_fields(value.tolist(), _json_leaf)
+    if isinstance(value, enum.Enum):
+        return value.value
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

@@ -13,6 +13,7 @@ import click
 import numpy as np
 from rich.table import Table
 
+from mtident._json import to_json_value
 from mtident.cli import (
     F,
     FiniteFloatRange,
@@ -705,16 +706,6 @@ def learn_command(
     )
     stderr.print(f"mtident: reference written to {output_path}{unused}", highlight=False)
     if as_json:
-        sensors_out = {
-            name: {
-                "time_constants_min": list(m.time_constants_min),
-                "box": list(m.box),
-                "amplitudes_C": list(m.amplitudes_C),
-                "doubt": m.doubt,
-                "free_fast_modes": m.free_fast_modes,
-            }
-            for name, m in reference.sensors.items()
-        }
         print_json(
             {
                 "reference": str(output_path),
@@ -725,7 +716,7 @@ def learn_command(
                 "run_date": reference.run_date,
                 "max_time_constant_min": reference.max_time_constant_min,
                 "room": reference.room,
-                "sensors": sensors_out,
+                "sensors": to_json_value(reference.sensors),
                 "machine_model": _machine_model_json(reference),
                 "warnings": warnings,
             }

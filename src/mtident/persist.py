@@ -23,6 +23,8 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from mtident._json import walk_fields
+
 __all__ = ["save_dataclass", "load_dataclass", "StateFileError"]
 
 T = TypeVar("T")
@@ -34,21 +36,20 @@ class StateFileError(ValueError):
 
 
 def _encode(value: Any, arrays: dict[str, np.ndarray]) -> Any:
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {f.name: _encode(getattr(value, f.name), arrays) for f in dataclasses.fields(value)}
-    if isinstance(value, np.ndarray):
-        key = f"a{len(arrays)}"
-        arrays[key] = value
-        return {"__array__": key}
-    if isinstance(value, tuple | list):
-        return [_encode(v, arrays) for v in value]
-    if isinstance(value, dict):
-        return [[_encode(k, arrays), _encode(v, arrays)] for k, v in value.items()]
-    if isinstance(value, float) and not math.isfinite(value):
-        return {"__float__": repr(value)}
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
+    """The JSON tree of ``value`` (:func:`~mtident._json.walk_fields`), its arrays moved to ``arrays``."""
+
+    def leaf(item: Any) -> Any:
+        if isinstance(item, np.ndarray):
+            key = f"a{len(arrays)}"
+            arrays[key] = item
+            return {"__array__": key}
+        if isinstance(item, float) and not math.isfinite(item):
+            return {"__float__": repr(item)}
+        if isinstance(item, np.generic):
+            return item.item()
+        return item
+
+    return walk_fields(value, leaf, dict_as_pairs=True)
 
 
 def save_dataclass(path: str | Path, value: object) -> None:

@@ -625,10 +625,10 @@ def test_binary_sequences_are_maximal_length():
 
 def _sweep_note_of(kind: str) -> list[str]:
     """What the identification says of an excitation's force, 0.3 s of it at 10 kHz."""
-    from mtident.feeddrive.identify import _sweep_note
+    from mtident.feeddrive.identify_notes import sweep_note
 
     h = 1e-4
-    return _sweep_note(Excitation(kind).forces(np.arange(0.0, 0.3, h)), h)
+    return sweep_note(Excitation(kind).forces(np.arange(0.0, 0.3, h)), h)
 
 
 @pytest.mark.parametrize("kind", ["sweep", "multisine"])

@@ -1,6 +1,7 @@
 """Ball-screw feed drive (Nguyen-Quoc et al.): parameters, modes, RK4 response, UKF identification, test planning."""
 
-from mtident.feeddrive.identify import FeedDriveIdentification, default_guess, identify_feed_drive
+from mtident.feeddrive.identification import FeedDriveIdentification
+from mtident.feeddrive.identify import default_guess, identify_feed_drive
 from mtident.feeddrive.model import Excitation
 from mtident.feeddrive.modes import Modes, modes, sampling_problem
 from mtident.feeddrive.params import IDENTIFIED, FeedDriveParameters, load_parameters, parameter_template, validate

@@ -26,7 +26,8 @@ import numpy as np
 
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
-from mtident.feeddrive.identify import IDENTIFIED_WITHIN, MEASUREMENT_SETS, filter_noise
+from mtident.feeddrive.filter_problem import MEASUREMENT_SETS, filter_noise
+from mtident.feeddrive.identification import IDENTIFIED_WITHIN
 from mtident.feeddrive.information import SensitivitySystem, filter_covariance, fisher_covariance, sensitivity_system
 from mtident.feeddrive.inputnoise import tolerated_force_noise
 from mtident.feeddrive.model import Excitation

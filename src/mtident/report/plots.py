@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
     from mtident._typing import FloatArray
-    from mtident.feeddrive.identify import FeedDriveIdentification
+    from mtident.feeddrive.identification import FeedDriveIdentification
     from mtident.feeddrive.params import FeedDriveParameters
     from mtident.feeddrive.simulate import Response
     from mtident.thermal.identification import Identification, MethodDetails

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from mtident._json import finite_or_none
+from mtident._json import finite_or_none, to_json_value
 from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.monitor_types import MonitorSettings, MonitorState, SensorCheck
 from mtident.thermal.robust import room_wander_half_width
@@ -210,7 +210,7 @@ def _sensor_summary(
         "model_ok": c.model_ok,
         "warnings": list(c.warnings),
         "interval_ends": c.ends,
-        "assumptions": assumptions(settings, c.sensor, room_measured).to_dict(),
+        "assumptions": to_json_value(assumptions(settings, c.sensor, room_measured)),
         "reference_used": c.reference_used,
         "machine_model_used": c.machine_used,
         "expected_stop_time_min": None if expected is None else finite_or_none(expected),

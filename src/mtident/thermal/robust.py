@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import replace
+from typing import Literal
 
 import numpy as np
 from scipy.special import chdtri, ndtri
@@ -44,6 +45,7 @@ from mtident.thermal.robust_types import (
     RobustSettings,
     SensorEstimate,
     SensorModes,
+    WarningCode,
 )
 
 __all__ = [
@@ -89,7 +91,9 @@ SLOWER_REACH = 10.0
 
 
 # the warnings that make an estimate untrusted (``model_ok`` false)
-UNTRUSTING_CODES = frozenset({"misfit", "undetermined", "modes-unresolved", "slower-than-allowed", "fragile"})
+UNTRUSTING_CODES: frozenset[WarningCode] = frozenset(
+    {"misfit", "undetermined", "modes-unresolved", "slower-than-allowed", "fragile"}
+)
 
 
 # With a tolerance to meet, the likelihood-ratio test and the wider families run only where the
@@ -617,14 +621,14 @@ class _Notes:
 
     def __init__(self, sensor: str) -> None:
         self.sensor = sensor
-        self.codes: list[str] = []
+        self.codes: list[WarningCode] = []
         self.texts: list[str] = []
 
-    def add(self, code: str, text: str) -> None:
+    def add(self, code: WarningCode, text: str) -> None:
         self.codes.append(code)
         self.texts.append(f"{self.sensor}: {text}")
 
-    def said(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    def said(self) -> tuple[tuple[str, ...], tuple[WarningCode, ...]]:
         return tuple(self.texts), tuple(self.codes)
 
 
@@ -697,9 +701,23 @@ def with_fragility(estimate: SensorEstimate) -> SensorEstimate:
 
 
 def _without_fit(
-    sensor: str, status: str, rise: float, noise: float, onset: float, settings: RobustSettings, why: str
+    sensor: str,
+    status: Literal["no data", "no rise", "too few readings"],
+    rise: float,
+    noise: float,
+    onset: float,
+    settings: RobustSettings,
+    why: str,
 ) -> SensorEstimate:
     wide = {q: (-np.inf, np.inf) for q in settings.levels}
     return SensorEstimate(
-        sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",), (status.replace(" ", "-"),)
+        sensor, status, None, onset, rise, noise, wide, False, (f"{sensor}: {why}",), (_WITHOUT_FIT_CODES[status],)
     )
+
+
+# the warning code of each status without a fit
+_WITHOUT_FIT_CODES: dict[str, WarningCode] = {
+    "no data": "no-data",
+    "no rise": "no-rise",
+    "too few readings": "too-few-readings",
+}

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtident._json import finite_or_none
+from mtident._json import finite_or_none, to_json_value
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
@@ -75,7 +75,7 @@ class RobustDetails:
             "lambda_per_min": finite_or_none(1.0 / slowest) if np.isfinite(slowest) else None,
             "time_constant_min": finite_or_none(slowest),
             "model_fits": bool(e.model_ok),
-            "assumptions": self.assumptions[index].to_dict(),
+            "assumptions": to_json_value(self.assumptions[index]),
             "model": _model_dict(e),
         }
 
@@ -118,9 +118,7 @@ def _model_dict(e: SensorEstimate) -> dict[str, object]:
     fit = e.fit
     return {
         "status": e.status,
-        "modes": []
-        if fit is None
-        else [{"time_constant_min": m.time_constant_min, "amplitude_C": m.amplitude_C} for m in fit.modes],
+        "modes": [] if fit is None else to_json_value(fit.modes),
         "onset_min": finite_or_none(e.onset_min),
         "rise_C": finite_or_none(e.rise_C),
         "noise_C": finite_or_none(e.noise_C),

@@ -7,6 +7,7 @@ and one sensor's answer (:class:`SensorEstimate`). The fit that makes them is
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 from mtident.thermal.modal_types import MAX_MODES
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, SteadyState
@@ -15,9 +16,31 @@ __all__ = [
     "DEFAULT_MAX_MODES",
     "MAX_FREE_FAST",
     "Assumptions",
+    "EstimateStatus",
     "RobustSettings",
     "SensorEstimate",
     "SensorModes",
+    "WarningCode",
+]
+
+# how far a sensor's answer got, as the JSON's model.status says it
+EstimateStatus = Literal["estimated", "no data", "no rise", "too few readings"]
+
+# what a sensor's warning is about, one word each: to say each once, and to decide on it
+WarningCode = Literal[
+    "late-start",
+    "spikes",
+    "misfit",
+    "undetermined",
+    "fragile",
+    "modes-saturated",
+    "modes-unresolved",
+    "slower-than-allowed",
+    "reference-disagrees",
+    "reference-doubtful",
+    "too-few-readings",
+    "no-data",
+    "no-rise",
 ]
 
 # With a reference, up to this many free modes faster than its slowest (the cost of a check grows
@@ -116,21 +139,6 @@ class Assumptions:
         "overshoot: a rising sensor's T∞ not below its latest readings"
     )
 
-    def to_dict(self) -> dict[str, object]:
-        """The JSON object of the answer's ``assumptions``.
-
-        Returns
-        -------
-        dict
-            ``model``, ``max_time_constant_min``, ``room`` and ``reference``.
-        """
-        return {
-            "model": self.model,
-            "max_time_constant_min": self.max_time_constant_min,
-            "room": self.room,
-            "reference": self.reference,
-        }
-
 
 @dataclass(frozen=True)
 class SensorEstimate:
@@ -139,7 +147,7 @@ class SensorEstimate:
     Attributes
     ----------
     sensor : str
-    status : str
+    status : EstimateStatus
         "estimated", "no data", "no rise" (within its noise of its first level) or "too few readings".
     fit : SteadyState or None
     onset_min : float
@@ -153,10 +161,9 @@ class SensorEstimate:
     model_ok : bool
         False where the data contradict the model or T∞ is not determined.
     warnings : tuple of str
-    warning_codes : tuple of str
-        What each warning is about, one word each ("late-start", "spikes", "misfit",
-        "undetermined", "fragile", "reference-disagrees", "reference-doubtful", "too-few-readings", "no-data",
-        "no-rise"): to say each once.
+    warning_codes : tuple of WarningCode
+        What each warning is about, one word each (``WarningCode``: "late-start", "spikes",
+        "misfit", "undetermined", "fragile", ...): to say each once.
     reference_used : bool
         The reference's time constants were used (the test agrees with them).
     spikes : int
@@ -169,7 +176,7 @@ class SensorEstimate:
     """
 
     sensor: str
-    status: str
+    status: EstimateStatus
     fit: SteadyState | None
     onset_min: float
     rise_C: float
@@ -177,7 +184,7 @@ class SensorEstimate:
     interval_C: dict[float, tuple[float, float]]
     model_ok: bool
     warnings: tuple[str, ...]
-    warning_codes: tuple[str, ...] = ()
+    warning_codes: tuple[WarningCode, ...] = ()
     reference_used: bool = False
     spikes: int = 0
     display_step_C: float = 0.0
