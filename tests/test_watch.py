@@ -373,6 +373,21 @@ def test_the_decision_does_not_depend_on_the_last_bits_of_the_times():
 
 
 @pytest.mark.xdist_group("one whole monitor run")
+def test_each_checks_state_is_handed_on_as_soon_as_the_check_ends():
+    """The state at each check, as a page shows it while the step's later checks run: the step's
+    readings up to the check and the check's answer, as if the step had been given only those."""
+    shown: list[MonitorState] = []
+    whole, _ = monitor_step(new_state(["S"]), BATCHED_T, BATCHED_Y, None, BATCHED_SETTINGS, checked=shown.append)
+    assert len(shown) >= 3 and shown[-1].checks == whole.checks and shown[-1].stop_time_min == whole.stop_time_min
+    at = [s.readings.latest_min for s in shown]
+    assert at == sorted(set(at)) and all(s.checks[0].checked_min == s.readings.latest_min for s in shown)
+    some = len(shown) // 2
+    upto = int(at[some]) + 1
+    alone, _ = monitor_step(new_state(["S"]), BATCHED_T[:upto], BATCHED_Y[:upto], None, BATCHED_SETTINGS)
+    assert alone.checks == shown[some].checks and alone.readings.latest_min == at[some]
+
+
+@pytest.mark.xdist_group("one whole monitor run")
 def test_the_state_saved_and_loaded_decides_alike(tmp_path):
     t, y = BATCHED_T, BATCHED_Y
     options = BATCHED_SETTINGS

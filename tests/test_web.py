@@ -10,9 +10,11 @@ import re
 import shutil
 import socket
 import subprocess
+import threading
 import time
 import urllib.error
 import urllib.request
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -246,7 +248,7 @@ def _first_answer(proc: subprocess.Popen[str], url: str, within_s: float) -> dic
     deadline = time.monotonic() + within_s
     while time.monotonic() < deadline and proc.poll() is None:
         state = json.loads(_get(url + "state.json"))
-        if state["version"] > 0:
+        if "decision" in state["answer"]:  # not the newest readings alone, which a live log's page shows first
             return dict(state["answer"])
         time.sleep(0.1)
     pytest.fail(
@@ -281,7 +283,108 @@ def test_the_page_answers_at_once_after_a_resume_and_during_a_replay(tmp_path):
     proc, url = _watch_serving([str(whole), "--replay"], tmp_path)
     try:
         answer = _first_answer(proc, url, 60.0)
-        assert proc.poll() is None and 0 < float(answer["last_time_min"]) < 600  # shown while the replay runs
+        assert proc.poll() is None and 0 <= float(answer["last_time_min"]) < 600  # shown while the replay runs
     finally:
         proc.terminate()
         proc.communicate(timeout=60)
+
+
+class _HeldCheck:
+    """The monitor's checks, one of them held until released: a check whose fits take long.
+
+    ``hold(now)`` chooses the check to hold by its time (min); :attr:`held` is set once it waits.
+    """
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch, hold: Callable[[float, list[float]], bool]) -> None:
+        from mtident.thermal import monitor
+
+        self.done: list[float] = []  # the times of the checks that ended
+        self.held = threading.Event()
+        self.release = threading.Event()
+        checked = monitor._check_due
+
+        def check_due(state, settings, cancel=None):  # noqa: ANN001, ANN202
+            if not self.release.is_set() and hold(state.readings.latest_min, self.done):
+                self.held.set()
+                self.release.wait(timeout=60.0)
+            out = checked(state, settings, cancel)
+            self.done.append(out[0].readings.latest_min)
+            return out
+
+        monkeypatch.setattr(monitor, "_check_due", check_due)
+
+
+def _following(session, log: Path, page: LivePage, replay: bool) -> threading.Thread:  # noqa: ANN001
+    from mtident.cli_watch import _follow
+
+    thread = threading.Thread(
+        target=_follow, args=(session, log, replay, 0.05, 1.0, None, False, None, page), daemon=True
+    )
+    thread.start()
+    return thread
+
+
+def test_a_checks_answer_is_on_the_page_while_the_next_checks_fits_run(tmp_path, monkeypatch):
+    """The page was published only after every 250 rows fed (at most every 2 s): a replay's page
+    lagged its checks by the fits of the checks after them (the sample log: 3.5 s at the median, 9 s
+    at most)."""
+    from mtident.thermal.monitor import MonitorSettings
+    from mtident.thermal.session import WatchSession
+
+    log = tmp_path / "whole.csv"
+    log.write_text(_log(601))
+    # the second check past the replay's first 25 rows (fed alone) is held: the first is in the same part
+    held = _HeldCheck(monkeypatch, lambda now, done: now > 25 and sum(t > 25 for t in done) == 1)
+    page = LivePage(log.name)
+    session = WatchSession(log, MonitorSettings(), state_path=tmp_path / "state.npz", resume=False)
+    thread = _following(session, log, page, replay=True)
+    try:
+        assert held.held.wait(timeout=60.0), "no check past the first 25 rows"
+        first = held.done[-1]
+        shown = wait_until(
+            lambda: page.snapshot()[1].get("last_time_min") == first, "the ended check's answer on the page"
+        )
+        assert shown and page.snapshot()[1]["recorded_time_min"] == first
+    finally:
+        held.release.set()
+        thread.join(timeout=120.0)
+    assert not thread.is_alive() and page.snapshot()[1]["last_time_min"] == 600.0
+
+
+def test_a_live_logs_new_rows_are_on_the_page_while_a_check_runs(tmp_path, monkeypatch):
+    """The watch read the log only between its checks: rows written during a check's fits reached
+    the page after them (the sample log written a row every 50 ms: 4.6 s at the median)."""
+    from mtident.thermal.monitor import MonitorSettings
+    from mtident.thermal.session import WatchSession
+
+    lines = _log(61).splitlines(keepends=True)
+    log = tmp_path / "live.csv"
+    log.write_text("".join(lines[:31]))
+    held = _HeldCheck(monkeypatch, lambda now, done: True)  # the first check
+    page = LivePage(log.name)
+    session = WatchSession(log, MonitorSettings(), state_path=tmp_path / "state.npz")
+    thread = _following(session, log, page, replay=False)
+    try:
+        assert held.held.wait(timeout=60.0), "no check"
+        with open(log, "a") as out:
+            out.write("".join(lines[31:]))  # the logger writes on while the check's fits run
+        wait_until(lambda: page.snapshot()[1].get("recorded_time_min") == 60.0, "the new rows on the page")
+        latest = page.snapshot()[1]["latest_C"]
+        assert latest == dict(zip(("A", "B", "C"), map(float, lines[-1].split(",")[1:]), strict=True))
+        assert not held.done  # still within the check
+    finally:
+        held.release.set()
+        thread.join(timeout=120.0)
+    assert not thread.is_alive() and page.snapshot()[1]["last_time_min"] == 60.0
+
+
+def test_the_page_shows_readings_newer_than_its_answer_and_never_older():
+    page = LivePage("run.csv")
+    page.record(3.0, {"S": 20.5})  # before any answer: the readings alone
+    assert page.snapshot()[1] == {"recorded_time_min": 3.0, "latest_C": {"S": 20.5}}
+    answer = {"last_time_min": 10.0, "recorded_time_min": 10.0, "latest_C": {"S": 21.0}, "decision": "continue"}
+    page.publish(answer)
+    assert page.snapshot()[1] == answer  # the readings of t = 3 are older than the answer's
+    page.record(12.0, {"S": 21.2})
+    version, shown, _ = page.snapshot()
+    assert version == 3 and shown == {**answer, "recorded_time_min": 12.0, "latest_C": {"S": 21.2}}

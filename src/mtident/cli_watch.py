@@ -54,7 +54,7 @@ from mtident.io.record import RecordingThread
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
 from mtident.thermal.robust import RobustSettings
-from mtident.thermal.session import WatchSession, default_state_path
+from mtident.thermal.session import RecordTail, WatchSession, default_state_path
 
 if TYPE_CHECKING:
     from mtident.web import LivePage, Served
@@ -537,7 +537,28 @@ def _follow(
     page: LivePage | None = None,
 ) -> bool:
     """Poll the log until the decision, the log's end (a replay) or a timeout; True if Ctrl-C
-    ended it (the state file then holds the last rows fed)."""
+    ended it (the state file then holds the last rows fed). A live log's newest readings reach the
+    page from a thread of their own, while this one runs the checks."""
+    tail = None if page is None or replay else RecordTail(session, page.record, poll_s)
+    try:
+        return _follow_polls(session, path, replay, poll_s, timeout_s, plot_path, live, fetch, page)
+    finally:
+        if tail is not None:
+            tail.close()
+
+
+def _follow_polls(
+    session: WatchSession,
+    path: Path,
+    replay: bool,
+    poll_s: float,
+    timeout_s: float | None,
+    plot_path: str | None,
+    live: bool,
+    fetch: Callable[[], list[str]] | None,
+    page: LivePage | None,
+) -> bool:
+    """The polls of :func:`_follow`."""
     from rich.live import Live
 
     last_data = time.monotonic()
@@ -550,10 +571,12 @@ def _follow(
                 nonlocal last_shown
                 if live:
                     view.update(_status_table(s, path), refresh=True)
-                if page is not None and time.monotonic() - last_shown > _PAGE_PROGRESS_S:
-                    # a long poll (a replay, a resume's catch-up) shows its progress on the page too
-                    _publish(page, s, last_page, forecast=False)
-                    last_shown = time.monotonic()
+                if page is not None:
+                    # each check's answer at once (a long poll's too: a replay, a resume's catch-up); the
+                    # curves, which cost a picture, at most every _PAGE_PROGRESS_S
+                    picture = time.monotonic() - last_shown > _PAGE_PROGRESS_S
+                    _publish(page, s, last_page, forecast=False, picture=picture)
+                    last_shown = time.monotonic() if picture else last_shown
 
             while True:
                 if page is not None and page.version == 0 and session.state is not None:
@@ -648,9 +671,12 @@ _PAGE_FORECAST_S = 10.0
 _PAGE_PROGRESS_S = 2.0
 
 
-def _publish(page: LivePage, session: WatchSession, last_forecast: float, forecast: bool = True) -> float:
-    """Show the session's answer and curves on the live page (with the expected stops, where
-    ``forecast`` and the last were made long enough ago); returns when the forecast was made."""
+def _publish(
+    page: LivePage, session: WatchSession, last_forecast: float, forecast: bool = True, picture: bool = True
+) -> float:
+    """Show the session's answer on the live page (with the expected stops, where ``forecast`` and
+    the last were made long enough ago), and its curves where ``picture``; returns when the forecast
+    was made."""
     import io
 
     from mtident.report.plots import plot_monitor
@@ -663,10 +689,12 @@ def _publish(page: LivePage, session: WatchSession, last_forecast: float, foreca
     for s, name in enumerate(state.sensors):
         valid = state.readings.values_C[:, s][np.isfinite(state.readings.values_C[:, s])]
         latest[name] = float(valid[-1]) if len(valid) else None
-    figure = plot_monitor(state, session.settings)
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=90)  # type: ignore[union-attr]
-    page.publish({**answer, "latest_C": latest}, buffer.getvalue())
+    shown = {**answer, "latest_C": latest, "recorded_time_min": finite_or_none(state.readings.latest_min)}
+    page.publish(shown)  # the answer at once; its curves once drawn
+    if picture:
+        buffer = io.BytesIO()
+        plot_monitor(state, session.settings).savefig(buffer, format="png", dpi=90)  # type: ignore[union-attr]
+        page.publish(shown, buffer.getvalue())
     return time.monotonic() if forecast else last_forecast
 
 

@@ -40,7 +40,8 @@ class LivePage:
     title : str
         The log watched.
     version : int
-        Raised by each :meth:`publish`; the event stream sends an answer when it changes.
+        Raised by each :meth:`publish` and :meth:`record`; the event stream sends an answer when it
+        changes.
     """
 
     title: str
@@ -48,6 +49,8 @@ class LivePage:
     _answer: dict[str, object] = field(default_factory=dict)
     _plot: bytes = b""
     _published_at: float = 0.0
+    # the newest readings recorded (time in min, latest per sensor), shown over the answer's own
+    _record: tuple[float, dict[str, float | None]] | None = None
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
     def publish(self, answer: dict[str, object], plot_png: bytes | None = None) -> None:
@@ -67,10 +70,33 @@ class LivePage:
             self.version += 1
             self._published_at = time.time()
 
-    def snapshot(self) -> tuple[int, dict[str, object], float]:
-        """The version, the answer and when it was published (seconds since the epoch)."""
+    def record(self, time_min: float, latest_C: dict[str, float | None]) -> None:
+        """Show the newest readings as soon as they are recorded, before the monitor has checked them.
+
+        Parameters
+        ----------
+        time_min : float
+            The newest row's time (min from the log's first row).
+        latest_C : dict of str to float or None
+            Each sensor's latest reading (°C; None: none yet).
+        """
         with self._lock:
-            return self.version, self._answer, self._published_at
+            self._record = (time_min, latest_C)
+            self.version += 1
+            self._published_at = time.time()
+
+    def snapshot(self) -> tuple[int, dict[str, object], float]:
+        """The version, the answer and when it was published (seconds since the epoch).
+
+        The answer's ``latest_C`` and ``recorded_time_min`` are the newest readings recorded
+        (:meth:`record`) where they are newer than those the answer was made from.
+        """
+        with self._lock:
+            answer = self._answer
+            checked = answer.get("recorded_time_min", answer.get("last_time_min"))
+            if self._record is not None and (not isinstance(checked, float | int) or self._record[0] > checked):
+                answer = {**answer, "recorded_time_min": self._record[0], "latest_C": self._record[1]}
+            return self.version, answer, self._published_at
 
     def plot(self) -> bytes:
         with self._lock:

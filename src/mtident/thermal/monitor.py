@@ -154,6 +154,7 @@ def monitor_step(
     room_C: FloatArray | None,
     settings: MonitorSettings,
     cancel: Callable[[], bool] | None = None,
+    checked: Callable[[MonitorState], None] | None = None,
 ) -> tuple[MonitorState, list[Event]]:
     """Take new readings, check each sensor when it falls due, and decide.
 
@@ -176,6 +177,9 @@ def monitor_step(
         the state returned has taken the readings up to its last whole check, as if only those had
         been given (its latest reading says how far it got), so a caller can save it and give the
         rest again later.
+    checked : callable, optional
+        Called with the state as soon as each check ends (its readings up to the check): a live
+        page or table shows a check's answer then, not after the step's later checks.
 
     Returns
     -------
@@ -213,6 +217,8 @@ def monitor_step(
             except _Cancelled:
                 break  # the readings of this check are not taken: the state is as before them
             events.extend(said)
+            if checked is not None:
+                checked(fed)
         state = fed
         start = part.stop
     return state, events

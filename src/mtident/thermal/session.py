@@ -14,6 +14,7 @@ import dataclasses
 import hashlib
 import json
 import os
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from mtident._typing import FloatArray
-from mtident.exceptions import InputError
+from mtident.exceptions import InputError, MtidentError
 from mtident.io.follow import FollowPosition, LogFollower
 from mtident.persist import StateFileError, load_dataclass, save_dataclass
 from mtident.thermal.hindsight import Hindsight, check_decision
@@ -37,7 +38,7 @@ from mtident.thermal.monitor import (
 )
 from mtident.thermal.reference import reference_notes
 
-__all__ = ["SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
+__all__ = ["RecordTail", "SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
 
 STATE_SUFFIX = ".watch-state.npz"
 # the log's head that identifies it: its header and first rows
@@ -300,7 +301,9 @@ class WatchSession:
         Parameters
         ----------
         progress : callable, optional
-            Called with the session after every ``FEED_ROWS`` rows fed (to redraw a table).
+            Called with the session as soon as each of the monitor's checks ends and after every
+            ``FEED_ROWS`` rows fed (to redraw a table or a page: a check's answer is shown then,
+            not after the poll's later checks).
         cancel : callable, optional
             Asked between the monitor's checks (and their sensors): once it returns True the poll
             ends there, and the state file keeps the rows fed up to the last whole check, with the
@@ -344,6 +347,12 @@ class WatchSession:
         )
         # a first short part, so that a long replay's table and page show the test from its first checks
         bounds = [0, *range(FIRST_FEED_ROWS, len(rows.time_min), FEED_ROWS), len(rows.time_min)]
+
+        def checked(state: MonitorState) -> None:
+            self.state = state
+            if progress is not None:
+                progress(self)
+
         for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
             part = slice(start, stop)
             self.state, said = monitor_step(
@@ -353,6 +362,7 @@ class WatchSession:
                 None if room is None else room[part],
                 self.settings,
                 cancel,
+                checked,
             )
             events.extend(said)
             if cancel is not None and cancel():
@@ -377,6 +387,24 @@ class WatchSession:
             msg = f"{self.path}: no sensor column besides the room sensor {room!r}"
             raise InputError(msg)
         return new_state(watched, with_room=room is not None)
+
+    def new_follower(self) -> LogFollower:
+        """A follower of the same log, columns, time column and units, at the log's start (the
+        session's own keeps its position for the state file).
+
+        Returns
+        -------
+        LogFollower
+        """
+        follower = self.follower
+        return LogFollower(
+            self.path,
+            self._asked,
+            follower.time_col,
+            follower.time_unit,
+            room=self.settings.room_sensor,
+            temperature_unit=follower.temperature_unit,
+        )
 
     # -- answers -----------------------------------------------------------------------------
 
@@ -477,3 +505,64 @@ class WatchSession:
         if room:
             return rows.time_min, rows.temperature_C[:, :-1], rows.temperature_C[:, -1]
         return rows.time_min, rows.temperature_C, None
+
+
+class RecordTail:
+    """The log's newest readings, read on a thread of their own every ``period_s`` and handed to
+    ``shown`` at once: the watch's thread reads the log only between its checks, whose fits take
+    seconds (under load far more), and a page shows the record without waiting for them.
+
+    It reads the log with a follower of its own (the session's keeps its position for the state
+    file) and says nothing of what it reads: the session's follower says it.
+
+    Parameters
+    ----------
+    session : WatchSession
+        Whose log, sensors, time column and units are read.
+    shown : callable
+        Called on the tail's thread with the newest row's time (min from the log's first row) and
+        each watched sensor's latest reading (°C; None: none yet), after each read that found rows.
+    period_s : float
+        Seconds between two reads.
+    """
+
+    def __init__(
+        self, session: WatchSession, shown: Callable[[float, dict[str, float | None]], None], period_s: float
+    ) -> None:
+        self._follower = session.new_follower()
+        self._room = session.settings.room_sensor
+        self._shown = shown
+        self._period_s = period_s
+        self._latest: dict[str, float | None] = {}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="mtident-record-tail", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self.read()
+            except (MtidentError, OSError):
+                return  # the session's follower meets the same and says it; the page then shows the monitor's
+            self._stop.wait(self._period_s)
+
+    def read(self) -> None:
+        """Read the rows added since the last read, and show the newest (nothing where none were added)."""
+        rows = self._follower.poll()
+        if not len(rows.time_min):
+            return
+        columns = self._follower.sensors or []
+        names = columns[:-1] if self._room else columns
+        for s, name in enumerate(names):
+            column = rows.temperature_C[:, s]
+            finite = column[np.isfinite(column)]
+            if len(finite):
+                self._latest[name] = float(finite[-1])
+            else:
+                self._latest.setdefault(name, None)
+        self._shown(float(rows.time_min[-1]), dict(self._latest))
+
+    def close(self) -> None:
+        """Stop reading."""
+        self._stop.set()
+        self._thread.join(timeout=5.0)
