@@ -487,3 +487,9 @@ def test_a_doubt_says_why_the_run_did_not_pin_the_sensor_down():
     assert doubt(41.0, 5.0).startswith("T∞ not determined yet (95 % interval")
     assert doubt(90.0, 1.0).startswith("with the modes learnt, the run pins its own steady state down only to ")
     assert doubt(90.0, 1.0).endswith("(95 %), not to the ±0.1 °C a reference needs")
+
+
+def test_the_wide_boxes_a_run_leaves_are_named_slowest_first():
+    from mtident.thermal.reference import _spans
+
+    assert _spans((100.0, 250.0, 10.0), (0.5, 0.8, 0.05), 1) == "50-450 min, 50-150 min"

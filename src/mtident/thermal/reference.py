@@ -596,8 +596,9 @@ def _learn_sensor(
 
 
 def _spans(centres: tuple[float, ...], boxes: tuple[float, ...], skip: int) -> str:
-    """The widest boxes, as ranges of minutes."""
-    order = sorted(range(len(boxes)), key=lambda k: boxes[k])[skip:]
+    """The widest boxes, as ranges of minutes, slowest first."""
+    widest = sorted(range(len(boxes)), key=lambda k: boxes[k])[skip:]
+    order = sorted(widest, key=lambda k: -centres[k])
     return ", ".join(f"{centres[k] * (1 - boxes[k]):.3g}-{centres[k] * (1 + boxes[k]):.3g} min" for k in order)
 
 

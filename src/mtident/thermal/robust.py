@@ -645,8 +645,9 @@ def _verdict(
     if onset_min is not None:
         notes.add(
             "late-start",
-            f"flat until t = {round(onset_min, 1):g} min, within its noise (the warm-up began after the log, or its "
-            "heat reached this sensor only then); the modes are counted from there",
+            f"flat until t = {round(onset_min, 1):g} min, within its noise (the warm-up began after the log, its "
+            "heat reached this sensor only then, or a partly warm sensor moved too slowly to show sooner); the modes "
+            "are counted from there",
         )
     if fit.correlation_factor > MISFIT_FACTOR:
         ok = False
