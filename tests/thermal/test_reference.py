@@ -438,6 +438,21 @@ def test_a_room_is_averaged_over_a_minute_keeping_its_drift_and_its_gaps():
     np.testing.assert_allclose(smoothed_room(coarse, np.sin(coarse)), np.sin(coarse), rtol=0, atol=1e-12)
 
 
+def test_a_room_trend_follows_a_drift_to_the_end_through_display_steps_and_gaps():
+    from mtident.thermal.readings import room_trend
+
+    t = np.arange(0.0, 300.0, 2.0)
+    line = 20.0 + 0.003 * t
+    np.testing.assert_allclose(room_trend(t, line, 120.0), line, atol=1e-9)  # a line is kept exactly
+    steps = np.round((line + np.random.default_rng(1).normal(0.0, 0.01, t.size)) / 0.05) * 0.05
+    steps[40:45] = np.nan
+    trend = room_trend(t, steps, 120.0)
+    assert np.isnan(trend[40:45]).all()
+    # the steps' error (up to half a step) shrinks to a fifth, and the latest value has no lag
+    assert np.nanmax(np.abs(steps - line)) > 0.02
+    assert np.nanmax(np.abs(trend - line)) < 0.01 and abs(trend[-1] - line[-1]) < 0.005
+
+
 def test_identify_says_each_sensors_reference(tmp_path):
     """The table's assumptions gave the first sensor's reference as if it were every sensor's."""
     t = np.arange(0.0, 61.0)
