@@ -28,7 +28,15 @@ from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
 from mtident.thermal.reference import MachineReference, save_reference
 from mtident.thermal.robust import RobustSettings, SensorModes, estimate_sensor
-from mtident.thermal.session import SavedWatch, WatchSession, default_state_path
+from mtident.thermal.session import (
+    Ended,
+    FollowSettings,
+    Polled,
+    SavedWatch,
+    Watching,
+    WatchSession,
+    default_state_path,
+)
 
 T = np.arange(0.0, 401.0)
 # the papers' curve, first order: τ = 62.5 min, 95 % of the rise at 187 min
@@ -807,12 +815,12 @@ def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypa
 
 def test_watch_says_it_is_waiting_for_rows_of_a_log_that_does_not_grow(tmp_path, monkeypatch):
     """A newcomer gave a finished log without --replay, and the watch waited in silence."""
-    import mtident.cli_watch
+    import mtident.thermal.session
 
     t = np.arange(0.0, 20.0)
     log = tmp_path / "done.csv"
     log.write_text("time_min,S\n" + "".join(f"{a:g},{20 + a / 10:.2f}\n" for a in t))
-    monkeypatch.setattr(mtident.cli_watch, "_WAITING_HINT_S", 0.1)
+    monkeypatch.setattr(mtident.thermal.session, "WAITING_HINT_S", 0.1)
     code, _, err = run(
         "thermal", "watch", str(log), "--poll", "0.05", "--timeout", "0.5", "--state", str(tmp_path / "s")
     )
@@ -1168,3 +1176,23 @@ def test_sigterm_during_a_fit_ends_cleanly_at_the_next_check_and_saves_what_it_s
     code, out, _ = run("thermal", "watch", str(whole), "--replay", "--json")
     assert code == 0
     assert json.loads(resumed.stdout)["sensors"] == json.loads(out)["sensors"]
+
+
+def test_a_sessions_run_yields_its_polls_and_ends_by_timeout_replay_or_cancel(tmp_path):
+    """The loop the command renders lives in the library: the sensors said once, each poll, and
+    why it ended (a cancel, as SIGTERM's flag, with the state file kept for a resume)."""
+    log = tmp_path / "short.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{20 + a / 10:.2f}\n" for a in range(20)))
+
+    def kinds(follow: FollowSettings, cancel=None) -> list[object]:  # noqa: ANN001
+        session = WatchSession(log, MonitorSettings(), state_path=tmp_path / "s.npz", resume=False)
+        return [e for e in session.run(follow, cancel=cancel) if not hasattr(e, "kind")]
+
+    timed_out = kinds(FollowSettings(poll_s=0.05, timeout_s=0.2))
+    assert timed_out[0] == Watching(("S",)) and timed_out[1] == Polled(20, False)
+    assert all(e == Polled(0, False) for e in timed_out[2:-1]) and len(timed_out) > 3
+    assert isinstance(timed_out[-1], Ended) and timed_out[-1].reason == "timeout"
+    replayed = kinds(FollowSettings(replay=True))
+    assert [type(e) for e in replayed] == [Watching, Polled, Ended] and replayed[-1].reason == "replayed"
+    cancelled = kinds(FollowSettings(poll_s=0.05), cancel=lambda: True)
+    assert cancelled[-1].reason == "cancelled" and (tmp_path / "s.npz").is_file()

@@ -316,9 +316,10 @@ class _HeldCheck:
 
 def _following(session, log: Path, page: LivePage, replay: bool) -> threading.Thread:  # noqa: ANN001
     from mtident.cli_watch import _follow
+    from mtident.thermal.session import FollowSettings
 
     thread = threading.Thread(
-        target=_follow, args=(session, log, replay, 0.05, 1.0, None, False, None, page), daemon=True
+        target=_follow, args=(session, log, FollowSettings(replay, 0.05, 1.0), None, False, None, page), daemon=True
     )
     thread.start()
     return thread

@@ -386,7 +386,15 @@ def main() -> None:
 
 
 # every command of a group is registered by importing the modules named here
-@main.group(cls=LazyGroup, commands_modules=("mtident.cli_thermal", "mtident.cli_watch", "mtident.cli_report"))
+@main.group(
+    cls=LazyGroup,
+    commands_modules=(
+        "mtident.cli_thermal",
+        "mtident.cli_learn",
+        "mtident.cli_watch",
+        "mtident.cli_report",
+    ),
+)
 def thermal() -> None:
     """Thermal test acceleration: identify a warm-up from its first minutes."""
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -34,24 +35,7 @@ REPORT_FORMATS = (".html", ".htm", ".pdf")
     help="The state file of a watch of this log, to start from (default: beside the log, LOG.watch-state.npz).",
 )
 @user_errors
-def report_command(
-    file: str,
-    sensors: tuple[str, ...],
-    time_col: str | None,
-    time_unit: str | None,
-    temperature_unit: str | None,
-    tolerance_C: float,
-    decision_level: float,
-    max_tau_min: float,
-    reference_path: str | None,
-    machine: str | None,
-    free_fast_modes: int,
-    ambient_col: str | None,
-    room_wander: float,
-    wait_for: tuple[str, ...],
-    output_path: str,
-    state_path: str | None,
-) -> None:
+def report_command(**options: Any) -> None:
     """Write up a finished or stopped warm-up test of FILE for the customer.
 
     The report names the machine and program (--machine, or the reference run's) and when the
@@ -67,42 +51,15 @@ def report_command(
 
     Parameters
     ----------
-    file : str
-        FILE: a log, or a shipped log's @-name.
-    sensors : tuple of str
-        --sensor (empty: all).
-    time_col, time_unit : str or None
-        --time-col and --time-unit.
-    temperature_unit : str or None
-        --unit: the unit of the temperature columns that state none.
-    tolerance_C : float
-        --tolerance (°C).
-    decision_level : float
-        --confidence.
-    max_tau_min : float
-        --max-time-constant (min).
-    reference_path : str or None
-        --reference.
-    machine : str or None
-        --machine: the machine the test is of.
-    free_fast_modes : int
-        --free-fast-modes.
-    ambient_col : str or None
-        --ambient: the room sensor's column.
-    room_wander : float
-        --room-wander (°C in an hour).
-    wait_for : tuple of str
-        --wait-for (empty: every sensor).
-    output_path : str
-        -o: the report, .html or .pdf.
-    state_path : str or None
-        --state: a watch's state file to start from.
+    **options
+        The options by click's names, each with its help above.
 
     Raises
     ------
     InputError
         An -o that is not .html or .pdf, or no such log.
     """
+    file, output_path = options["file"], options["output_path"]
     output = Path(output_path)
     if output.suffix.lower() not in REPORT_FORMATS:
         msg = f"-o {output_path}: the report is written as HTML or PDF; give a name ending in .html or .pdf"
@@ -111,25 +68,15 @@ def report_command(
     if not path.is_file():
         msg = f"{path}: no such file"
         raise InputError(msg)
-    settings = monitor_settings(
-        tolerance_C,
-        decision_level,
-        max_tau_min,
-        reference_path,
-        free_fast_modes,
-        ambient_col,
-        room_wander,
-        wait_for,
-        machine,
-    )
+    settings = monitor_settings(options)
     session = WatchSession(
         _workbook_as_replayed_csv(path),
         settings,
-        sensors=asked_sensors(sensors, path) or None,
-        time_col=time_col,
-        time_unit=time_unit,
-        temperature_unit=temperature_unit,
-        state_path=state_file(file, path, state_path),
+        sensors=asked_sensors(options["sensors"], path) or None,
+        time_col=options["time_col"],
+        time_unit=options["time_unit"],
+        temperature_unit=options["temperature_unit"],
+        state_path=state_file(file, path, options["state_path"]),
         persist=False,  # a watch may still follow this log: its state file is its own
     )
     for note in session.notes:
@@ -142,7 +89,7 @@ def report_command(
             if current.state is not None:
                 status.update(f"deciding: t = {minutes(current.state.readings.latest_min)} of the log")
 
-        report = build_report(session, progress, machine)
+        report = build_report(session, progress, options["machine"])
     written = write_pdf(report, output) if output.suffix.lower() == ".pdf" else write_html(report, output)
     verdict = (
         f"the test could stop at t = {minutes(report.stop_time_min)}"

@@ -12,9 +12,10 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Generator, Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import click
 import numpy as np
@@ -54,16 +55,26 @@ from mtident.io.record import RecordingThread
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
 from mtident.thermal.robust import RobustSettings
-from mtident.thermal.session import RecordTail, WatchSession, default_state_path
+from mtident.thermal.session import (
+    Ended,
+    FollowSettings,
+    Polled,
+    RecordTail,
+    SourceNote,
+    Waiting,
+    WatchEvent,
+    Watching,
+    WatchSession,
+    default_state_path,
+)
 
 if TYPE_CHECKING:
     from mtident.web import LivePage, Served
 
 # events said on stderr as they come (a status change while narrowing is shown in the table)
 _SAID = ("note", "warning", "ready", "not ready", "stop")
-# a watch that has seen no new row for this long says it is waiting, once (a finished log given
-# without --replay otherwise waits in silence)
-_WAITING_HINT_S = 60.0
+# the --plot picture is drawn again this often at most (s), and at the stop
+_PLOT_S = 5.0
 
 
 def decision_options(func: F) -> F:
@@ -161,39 +172,13 @@ def state_file(file: str, path: Path, given: str | None) -> Path:
     return Path.cwd() / default_state_path(path).name if file in SAMPLES else default_state_path(path)
 
 
-def monitor_settings(
-    tolerance_C: float,
-    decision_level: float,
-    max_tau_min: float,
-    reference_path: str | None,
-    free_fast_modes: int,
-    ambient_col: str | None,
-    room_wander: float,
-    wait_for: tuple[str, ...] = (),
-    machine: str | None = None,
-) -> MonitorSettings:
+def monitor_settings(options: Mapping[str, Any]) -> MonitorSettings:
     """The decision's settings from the options of :func:`decision_options`.
 
     Parameters
     ----------
-    tolerance_C : float
-        --tolerance (°C).
-    decision_level : float
-        --confidence.
-    max_tau_min : float
-        --max-time-constant (min).
-    reference_path : str or None
-        --reference.
-    free_fast_modes : int
-        --free-fast-modes.
-    ambient_col : str or None
-        --ambient: the room sensor's column.
-    room_wander : float
-        --room-wander (°C in an hour).
-    wait_for : tuple of str
-        --wait-for (empty: every sensor).
-    machine : str or None
-        --machine: the machine the test is of.
+    options : mapping
+        The command's options by click's names; those of :func:`decision_options` are read.
 
     Returns
     -------
@@ -205,14 +190,123 @@ def monitor_settings(
         A reference file that cannot be read.
     """
     return MonitorSettings(
-        tolerance_C=tolerance_C,
-        decision_level=decision_level,
+        tolerance_C=options["tolerance_C"],
+        decision_level=options["decision_level"],
         robust=RobustSettings(
-            max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
+            max_time_constant_min=options["max_tau_min"],
+            room_wander_C_per_h=options["room_wander"],
+            free_fast_modes=options["free_fast_modes"],
         ),
-        reference=load_reference_file(reference_path, machine),
-        room_sensor=ambient_col,
-        wait_for=tuple(wait_for),
+        reference=load_reference_file(options["reference_path"], options["machine"]),
+        room_sensor=options["ambient_col"],
+        wait_for=tuple(options["wait_for"]),
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class LogRequest:
+    """FILE and how its columns are read (:func:`~mtident.cli_thermal.log_options`).
+
+    Attributes
+    ----------
+    file : str
+        FILE as given: a log, a shipped log's @-name, an MTConnect agent's URL or an OPC UA server's.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit, temperature_unit : str or None
+        --time-col, --time-unit and --unit.
+    """
+
+    file: str
+    sensors: tuple[str, ...]
+    time_col: str | None
+    time_unit: str | None
+    temperature_unit: str | None
+
+
+@dataclass(frozen=True, slots=True)
+class SourceRequest:
+    """A network source's options (:func:`~mtident.cli_sources.network_recorder`).
+
+    Attributes
+    ----------
+    device : str or None
+    nodes, items : tuple of str
+    record_path : str or None
+    from_buffer_start : bool
+    """
+
+    device: str | None
+    nodes: tuple[str, ...]
+    items: tuple[str, ...]
+    record_path: str | None
+    from_buffer_start: bool
+
+
+@dataclass(frozen=True, slots=True)
+class WatchRequest:
+    """What ``thermal watch`` was asked, grouped (:func:`watch_request`).
+
+    Attributes
+    ----------
+    log : LogRequest
+    source : SourceRequest
+    decision : MonitorSettings
+    follow : FollowSettings
+    resume : bool
+        --resume.
+    state_path : str or None
+        --state.
+    plot_path : str or None
+        --plot.
+    as_json : bool
+        --json.
+    serve_address : str or None
+        --serve.
+    """
+
+    log: LogRequest
+    source: SourceRequest
+    decision: MonitorSettings
+    follow: FollowSettings
+    resume: bool
+    state_path: str | None
+    plot_path: str | None
+    as_json: bool
+    serve_address: str | None
+
+
+def watch_request(options: Mapping[str, Any]) -> WatchRequest:
+    """The watch's options, by click's names, grouped into settings.
+
+    Parameters
+    ----------
+    options : mapping
+        The options of ``thermal watch`` (their help is the command's ``--help``).
+
+    Returns
+    -------
+    WatchRequest
+
+    Raises
+    ------
+    InputError
+        A reference file that cannot be read.
+    """
+    return WatchRequest(
+        log=LogRequest(
+            options["file"], options["sensors"], options["time_col"], options["time_unit"], options["temperature_unit"]
+        ),
+        source=SourceRequest(
+            options["device"], options["nodes"], options["items"], options["record_path"], options["from_buffer_start"]
+        ),
+        decision=monitor_settings(options),
+        follow=FollowSettings(options["replay"], options["poll_s"], options["timeout_s"]),
+        resume=options["resume"],
+        state_path=options["state_path"],
+        plot_path=options["plot_path"],
+        as_json=options["as_json"],
+        serve_address=options["serve_address"],
     )
 
 
@@ -288,35 +382,7 @@ def monitor_settings(
     help="Serve a live page of the table and the curves, read-only (127.0.0.1:8050; 0.0.0.0:8050 for the network).",
 )
 @user_errors
-def watch_command(
-    file: str,
-    sensors: tuple[str, ...],
-    time_col: str | None,
-    time_unit: str | None,
-    temperature_unit: str | None,
-    tolerance_C: float,
-    decision_level: float,
-    max_tau_min: float,
-    reference_path: str | None,
-    machine: str | None,
-    free_fast_modes: int,
-    ambient_col: str | None,
-    room_wander: float,
-    wait_for: tuple[str, ...],
-    replay: bool,
-    resume: bool,
-    state_path: str | None,
-    poll_s: float,
-    timeout_s: float | None,
-    plot_path: str | None,
-    as_json: bool,
-    device: str | None,
-    nodes: tuple[str, ...],
-    items: tuple[str, ...],
-    record_path: str | None,
-    from_buffer_start: bool,
-    serve_address: str | None,
-) -> None:
+def watch_command(**options: Any) -> None:
     """Follow a warm-up log as it grows and say when the test can stop.
 
     Each sensor's readings so far are fitted with sums of up to four exponential modes (six where
@@ -331,56 +397,8 @@ def watch_command(
 
     Parameters
     ----------
-    file : str
-        FILE: a log, a shipped log's @-name, an MTConnect agent's URL or an OPC UA server's.
-    sensors : tuple of str
-        --sensor (empty: all).
-    time_col, time_unit : str or None
-        --time-col and --time-unit.
-    temperature_unit : str or None
-        --unit: the unit of the temperature columns that state none.
-    tolerance_C : float
-        --tolerance (°C).
-    decision_level : float
-        --confidence.
-    max_tau_min : float
-        --max-time-constant (min).
-    reference_path : str or None
-        --reference.
-    machine : str or None
-        --machine: the machine the test is of.
-    free_fast_modes : int
-        --free-fast-modes.
-    ambient_col : str or None
-        --ambient: the room sensor's column.
-    room_wander : float
-        --room-wander (°C in an hour).
-    wait_for : tuple of str
-        --wait-for (empty: every sensor).
-    replay, resume : bool
-        --replay and --resume.
-    state_path : str or None
-        --state.
-    poll_s : float
-        --poll (s).
-    timeout_s : float or None
-        --timeout (s).
-    plot_path : str or None
-        --plot.
-    as_json : bool
-        --json.
-    device : str or None
-        --device (MTConnect).
-    nodes : tuple of str
-        --node (OPC UA).
-    items : tuple of str
-        --item (MTConnect).
-    record_path : str or None
-        --record.
-    from_buffer_start : bool
-        --from-buffer-start (MTConnect).
-    serve_address : str or None
-        --serve: HOST:PORT of the live page.
+    **options
+        The options by click's names, each with its help above (:func:`watch_request`).
 
     Raises
     ------
@@ -388,36 +406,43 @@ def watch_command(
         --replay of a missing log, a log without data rows, or a source's options that do not fit
         FILE.
     """
-    if resume and not replay:
+    watch(watch_request(options))
+
+
+def watch(request: WatchRequest) -> None:
+    """Run the watch a :class:`WatchRequest` asks for and render it.
+
+    Parameters
+    ----------
+    request : WatchRequest
+
+    Raises
+    ------
+    InputError
+        As :func:`watch_command`.
+    """
+    file, follow = request.log.file, request.follow
+    if request.resume and not follow.replay:
         stderr.print(
             "mtident: note: --resume is the default for a live log; it matters only with --replay", highlight=False
         )
-    recorder = network_recorder(file, device, nodes, items, record_path, from_buffer_start, replay)
+    source = request.source
+    recorder = network_recorder(
+        file, source.device, source.nodes, source.items, source.record_path, source.from_buffer_start, follow.replay
+    )
     path = log_path(file) if recorder is None else recorder.log
-    if replay and not path.is_file():
+    if follow.replay and not path.is_file():
         msg = f"{path}: no such file"
         raise InputError(msg)
-    settings = monitor_settings(
-        tolerance_C,
-        decision_level,
-        max_tau_min,
-        reference_path,
-        free_fast_modes,
-        ambient_col,
-        room_wander,
-        wait_for,
-        machine,
-    )
-    followed = _workbook_as_replayed_csv(path) if replay else path
     session = WatchSession(
-        followed,
-        settings,
-        sensors=asked_sensors(sensors, path) or None,
-        time_col=time_col,
-        time_unit=time_unit,
-        temperature_unit=temperature_unit,
-        state_path=state_file(str(path) if recorder else file, path, state_path),
-        resume=resume or not replay,
+        _workbook_as_replayed_csv(path) if follow.replay else path,
+        request.decision,
+        sensors=asked_sensors(request.log.sensors, path) or None,
+        time_col=request.log.time_col,
+        time_unit=request.log.time_unit,
+        temperature_unit=request.log.temperature_unit,
+        state_path=state_file(str(path) if recorder else file, path, request.state_path),
+        resume=request.resume or not follow.replay,
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)
@@ -425,35 +450,26 @@ def watch_command(
         stderr.print(f"mtident: recording {file} to {path}", highlight=False)
     elif not path.is_file():
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
-    interrupted = _follow_served(
-        session,
-        path,
-        replay,
-        poll_s,
-        timeout_s,
-        plot_path,
-        sys.stdout.isatty() and not as_json,
-        serve_address,
-        recorder,
-    )
+    live = sys.stdout.isatty() and not request.as_json
+    interrupted = _follow_served(session, path, request, live, recorder)
     if session.state is None:
         if interrupted:
             sys.exit(130)
         msg = (
             f"{path}: no data rows"
             if path.is_file()
-            else f"{path}: no such file (not created within the --timeout of {timeout_s:g} s)"
+            else f"{path}: no such file (not created within the --timeout of {follow.timeout_s:g} s)"
         )
         raise InputError(msg)
-    if plot_path:
-        _plot(session, plot_path)
+    if request.plot_path:
+        _plot(session, request.plot_path)
     # interrupted: the answer without the expected stops, whose forecasts take seconds
     _answer(
         session,
         path,
-        replay,
-        as_json,
-        live=sys.stdout.isatty() and not as_json and not replay,
+        follow.replay,
+        request.as_json,
+        live=live and not follow.replay,
         forecast=not interrupted,
     )
     if interrupted:
@@ -461,15 +477,7 @@ def watch_command(
 
 
 def _follow_served(
-    session: WatchSession,
-    path: Path,
-    replay: bool,
-    poll_s: float,
-    timeout_s: float | None,
-    plot_path: str | None,
-    live: bool,
-    serve_address: str | None,
-    recorder: Recorder | None,
+    session: WatchSession, path: Path, request: WatchRequest, live: bool, recorder: Recorder | None
 ) -> bool:
     """:func:`_follow` with its surroundings: the live page served where ``--serve`` asks for one,
     SIGTERM taken as an interrupt (on the main thread), and a network source recorded on its own
@@ -480,16 +488,9 @@ def _follow_served(
     session : WatchSession
     path : Path
         The log followed.
-    replay : bool
-        Replay a finished log instead of following a growing one.
-    poll_s, timeout_s : float
-        How often to look for new rows, and how long to wait for the log to appear (s).
-    plot_path : str or None
-        Where to keep a plot up to date.
+    request : WatchRequest
     live : bool
         Redraw the table in place (a terminal, not JSON).
-    serve_address : str or None
-        Where to serve the live page (None: no page).
     recorder : Recorder or None
         A network source that writes the log (None: a log file).
 
@@ -498,24 +499,15 @@ def _follow_served(
     bool
         Whether the following was interrupted (Ctrl-C or SIGTERM).
     """
-    page, served = _serve(serve_address, path)
+    page, served = _serve(request.serve_address, path)
     on_main = threading.current_thread() is threading.main_thread()
     _terminating.clear()
     previous = signal.signal(signal.SIGTERM, _terminate) if on_main else None
     # the source is recorded on its own thread: its rows reach the log while the fits run
-    recording = None if recorder is None else RecordingThread(recorder, poll_s)
+    recording = None if recorder is None else RecordingThread(recorder, request.follow.poll_s)
     try:
-        return _follow(
-            session,
-            path,
-            replay,
-            poll_s,
-            timeout_s,
-            plot_path,
-            live,
-            None if recording is None else recording.fetch,
-            page,
-        )
+        fetch = None if recording is None else recording.fetch
+        return _follow(session, path, request.follow, request.plot_path, live, fetch, page)
     finally:
         if on_main:
             signal.signal(signal.SIGTERM, previous)
@@ -528,99 +520,117 @@ def _follow_served(
 def _follow(
     session: WatchSession,
     path: Path,
-    replay: bool,
-    poll_s: float,
-    timeout_s: float | None,
+    follow: FollowSettings,
     plot_path: str | None,
     live: bool,
     fetch: Callable[[], list[str]] | None = None,
     page: LivePage | None = None,
 ) -> bool:
-    """Poll the log until the decision, the log's end (a replay) or a timeout; True if Ctrl-C
-    ended it (the state file then holds the last rows fed). A live log's newest readings reach the
-    page from a thread of their own, while this one runs the checks."""
-    tail = None if page is None or replay else RecordTail(session, page.record, poll_s)
-    try:
-        return _follow_polls(session, path, replay, poll_s, timeout_s, plot_path, live, fetch, page)
-    finally:
-        if tail is not None:
-            tail.close()
-
-
-def _follow_polls(
-    session: WatchSession,
-    path: Path,
-    replay: bool,
-    poll_s: float,
-    timeout_s: float | None,
-    plot_path: str | None,
-    live: bool,
-    fetch: Callable[[], list[str]] | None,
-    page: LivePage | None,
-) -> bool:
-    """The polls of :func:`_follow`."""
+    """Render :meth:`WatchSession.run` until it ends; True if Ctrl-C or SIGTERM ended it (the
+    state file then holds the last rows fed). A live log's newest readings reach the page from a
+    thread of their own, while this one runs the checks."""
     from rich.live import Live
 
-    last_data = time.monotonic()
-    last_plot = last_page = last_shown = 0.0
-    said_room = said_waiting = False
+    tail = None if page is None or follow.replay else RecordTail(session, page.record, follow.poll_s)
+    run = None
     try:
         with Live(console=OptionConsole(), auto_refresh=False, transient=False) if live else _Nothing() as view:
-
-            def redraw(s: WatchSession) -> None:
-                nonlocal last_shown
-                if live:
-                    view.update(_status_table(s, path), refresh=True)
-                if page is not None:
-                    # each check's answer at once (a long poll's too: a replay, a resume's catch-up); the
-                    # curves, which cost a picture, at most every _PAGE_PROGRESS_S
-                    picture = time.monotonic() - last_shown > _PAGE_PROGRESS_S
-                    _publish(page, s, last_page, forecast=False, picture=picture)
-                    last_shown = time.monotonic() if picture else last_shown
-
-            while True:
-                if page is not None and page.version == 0 and session.state is not None:
-                    _publish(page, session, last_page, forecast=False)  # a resumed state: at once
-                for note in fetch() if fetch is not None else []:
-                    stderr.print(f"mtident: {note}", highlight=False)
-                events = session.poll(redraw if live or page is not None else None, _terminating.is_set)
-                _say(events)
-                if _terminating.is_set():  # at a safe point: the state file holds what the message says
+            shown = _Shown(path, follow.timeout_s, plot_path, view if live else None, page)
+            if page is not None and session.state is not None:
+                shown.publish(session, forecast=False)  # a resumed state: at once
+            redraw = shown.progress if live or page is not None else None
+            run = session.run(follow, redraw, _terminating.is_set, fetch)
+            for event in run:
+                if isinstance(event, Ended) and event.reason == "cancelled":
                     return _say_interrupted(_Terminated(), session)
-                if session.state is not None and not said_room and session.settings.room_sensor is None:
-                    _say_room_candidates(session.sensors, "watched as a machine sensor")
-                    said_room = True
-                if session.last_rows:
-                    last_data = time.monotonic()
-                if page is not None and session.state is not None and (session.last_rows or session.stopped):
-                    last_page = _publish(page, session, last_page)
-                if plot_path and session.state is not None and (time.monotonic() - last_plot > 5.0 or session.stopped):
-                    _plot(session, plot_path)
-                    last_plot = time.monotonic()
-                if session.stopped or replay:
-                    return False
-                if timeout_s is not None and time.monotonic() - last_data > timeout_s:
-                    stderr.print(f"mtident: no new row for {timeout_s:g} s; stopping", highlight=False)
-                    return False
-                if not said_waiting and time.monotonic() - last_data > _WAITING_HINT_S:
-                    stderr.print(
-                        f"mtident: waiting for new rows: none for {_WAITING_HINT_S:g} s (a finished log is replayed "
-                        "with --replay; Ctrl-C stops, and the same command resumes)",
-                        highlight=False,
-                    )
-                    said_waiting = True
-                time.sleep(poll_s)
-                if _terminating.is_set():
-                    return _say_interrupted(_Terminated(), session)
+                shown.show(session, event)
+            return False
     except KeyboardInterrupt as stop:
-        session.back_to_saved()  # a poll cut short fed rows the state file does not hold
+        _close(run)  # a poll cut short fed rows the state file does not hold: the run takes up the saved state
         return _say_interrupted(stop, session)
     except SystemError as error:
         interrupt = carried_interrupt(error)
         if interrupt is None:
             raise
-        session.back_to_saved()
+        _close(run)
         return _say_interrupted(interrupt, session)
+    finally:
+        if tail is not None:
+            tail.close()
+
+
+def _close(run: Generator[WatchEvent, None, None] | None) -> None:
+    if run is not None:
+        run.close()
+
+
+class _Shown:
+    """What a run shows as it goes: the table redrawn in place, the live page, the picture and the
+    lines on stderr; the page's curves and the picture drawn at most so often, each costing a figure.
+
+    Parameters
+    ----------
+    path : Path
+        The log followed.
+    timeout_s : float or None
+        --timeout (s).
+    plot_path : str or None
+        --plot.
+    view : rich.live.Live or None
+        Where the table is redrawn (None: not a terminal, or JSON).
+    page : LivePage or None
+        --serve's page.
+    """
+
+    def __init__(
+        self, path: Path, timeout_s: float | None, plot_path: str | None, view: Any, page: LivePage | None
+    ) -> None:
+        self.path = path
+        self.timeout_s = math.nan if timeout_s is None else timeout_s
+        self.plot_path = plot_path
+        self.view = view
+        self.page = page
+        self.last_forecast = self.last_picture = self.last_plot = 0.0
+
+    def publish(self, session: WatchSession, forecast: bool = True, picture: bool = True) -> None:
+        assert self.page is not None
+        self.last_forecast = _publish(self.page, session, self.last_forecast, forecast, picture)
+
+    def progress(self, session: WatchSession) -> None:
+        """A check ended within a poll: the table and the page show its answer at once; the
+        curves, which cost a picture, at most every ``_PAGE_PROGRESS_S``."""
+        if self.view is not None:
+            self.view.update(_status_table(session, self.path), refresh=True)
+        if self.page is not None:
+            picture = time.monotonic() - self.last_picture > _PAGE_PROGRESS_S
+            _publish(self.page, session, self.last_forecast, forecast=False, picture=picture)
+            self.last_picture = time.monotonic() if picture else self.last_picture
+
+    def show(self, session: WatchSession, event: WatchEvent) -> None:
+        """Render one of the run's events."""
+        if isinstance(event, Event):
+            _say([event])
+        elif isinstance(event, SourceNote):
+            stderr.print(f"mtident: {event.text}", highlight=False)
+        elif isinstance(event, Watching):
+            if session.settings.room_sensor is None:
+                _say_room_candidates(event.sensors, "watched as a machine sensor")
+            if self.page is not None and self.page.version == 0:
+                self.publish(session, forecast=False)
+        elif isinstance(event, Polled):
+            if self.page is not None and (event.rows or event.stopped):
+                self.publish(session)
+            if self.plot_path and (time.monotonic() - self.last_plot > _PLOT_S or event.stopped):
+                _plot(session, self.plot_path)
+                self.last_plot = time.monotonic()
+        elif isinstance(event, Waiting):
+            stderr.print(
+                f"mtident: waiting for new rows: none for {event.idle_s:g} s (a finished log is replayed "
+                "with --replay; Ctrl-C stops, and the same command resumes)",
+                highlight=False,
+            )
+        elif event.reason == "timeout":
+            stderr.print(f"mtident: no new row for {self.timeout_s:g} s; stopping", highlight=False)
 
 
 def _say_interrupted(stop: KeyboardInterrupt, session: WatchSession) -> bool:

@@ -2,7 +2,9 @@
 
 :class:`WatchSession` is what a terminal, a notebook or a web page drives: it owns the
 :class:`~mtident.io.follow.LogFollower`, the :class:`~mtident.thermal.monitor.MonitorState` and the
-state file, and each :meth:`WatchSession.poll` returns the monitor's events to be shown. The
+state file, and each :meth:`WatchSession.poll` returns the monitor's events to be shown;
+:meth:`WatchSession.run` polls until the decision, the log's end or a timeout and yields what
+happens as events, for a command, a page or a test to render. The
 state file lives beside the log unless told otherwise; it records which log it belongs to (its
 path and a fingerprint of its first bytes), so that a different log copied over the same path
 starts afresh instead of resuming the old test's answer.
@@ -15,9 +17,11 @@ import hashlib
 import json
 import os
 import threading
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
@@ -38,7 +42,20 @@ from mtident.thermal.monitor import (
 )
 from mtident.thermal.reference import reference_notes
 
-__all__ = ["RecordTail", "SavedWatch", "WatchSession", "default_state_path", "log_fingerprint"]
+__all__ = [
+    "Ended",
+    "FollowSettings",
+    "Polled",
+    "RecordTail",
+    "SavedWatch",
+    "SourceNote",
+    "Waiting",
+    "WatchEvent",
+    "WatchSession",
+    "Watching",
+    "default_state_path",
+    "log_fingerprint",
+]
 
 STATE_SUFFIX = ".watch-state.npz"
 # the log's head that identifies it: its header and first rows
@@ -46,6 +63,104 @@ FINGERPRINT_BYTES = 4096
 # rows fed to the monitor between two progress calls (a long replay's table moves on)
 FEED_ROWS = 250
 FIRST_FEED_ROWS = 25
+# a watch that has seen no new row for this long says it is waiting, once (a finished log given
+# without --replay otherwise waits in silence)
+WAITING_HINT_S = 60.0
+
+
+@dataclass(frozen=True, slots=True)
+class FollowSettings:
+    """How :meth:`WatchSession.run` follows the log.
+
+    Attributes
+    ----------
+    replay : bool
+        Feed what the log holds now, once, and end (a finished log replayed as if it arrived live).
+    poll_s : float
+        Seconds between two looks at a growing log.
+    timeout_s : float or None
+        End after this many seconds without a new row (None: wait until the decision).
+    """
+
+    replay: bool = False
+    poll_s: float = 0.5
+    timeout_s: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Watching:
+    """The log's sensors are known (its header read, or a state resumed): said once.
+
+    Attributes
+    ----------
+    sensors : tuple of str
+        The sensors watched.
+    """
+
+    sensors: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Polled:
+    """A poll ended, its rows recorded and fed to the monitor (its events yielded before this).
+
+    Attributes
+    ----------
+    rows : int
+        Rows the poll read (0: the log did not grow).
+    stopped : bool
+        Whether the test may now stop.
+    """
+
+    rows: int
+    stopped: bool
+
+
+@dataclass(frozen=True, slots=True)
+class SourceNote:
+    """What a network source's recorder says (a reconnection, a data item that appeared).
+
+    Attributes
+    ----------
+    text : str
+    """
+
+    text: str
+
+
+@dataclass(frozen=True, slots=True)
+class Waiting:
+    """No new row for ``idle_s`` seconds: said once, while the watch goes on waiting.
+
+    Attributes
+    ----------
+    idle_s : float
+    """
+
+    idle_s: float
+
+
+EndReason = Literal["stopped", "replayed", "timeout", "cancelled"]
+
+
+@dataclass(frozen=True, slots=True)
+class Ended:
+    """The run ended: the test may stop, the replayed log was fed, no row came within the timeout,
+    or the ``cancel`` asked (the state file then holds what a resume starts from).
+
+    Attributes
+    ----------
+    reason : {"stopped", "replayed", "timeout", "cancelled"}
+    idle_s : float
+        Seconds since the last new row.
+    """
+
+    reason: EndReason
+    idle_s: float
+
+
+# what :meth:`WatchSession.run` yields: the monitor's events (checks, decisions, notes) and the run's own
+WatchEvent = Event | Watching | Polled | SourceNote | Waiting | Ended
 
 
 @dataclass(frozen=True)
@@ -379,6 +494,81 @@ class WatchSession:
         if self.persist:
             self.save()
         return events
+
+    def run(
+        self,
+        follow: FollowSettings,
+        progress: Callable[[WatchSession], None] | None = None,
+        cancel: Callable[[], bool] | None = None,
+        fetch: Callable[[], list[str]] | None = None,
+    ) -> Generator[WatchEvent, None, None]:
+        """Poll the log until the decision, the log's end (a replay), a timeout or ``cancel``,
+        yielding what happens.
+
+        Each poll yields the source's notes (:class:`SourceNote`), the follower's and the monitor's
+        events (:class:`~mtident.thermal.monitor_types.Event`: checks, decisions, notes, warnings),
+        :class:`Watching` once the sensors are known, then :class:`Polled`; the run ends with
+        :class:`Ended`. An exception (Ctrl-C) takes up the saved state again before it goes on
+        (:meth:`back_to_saved`), as does closing the run early.
+
+        Parameters
+        ----------
+        follow : FollowSettings
+            Replay or follow, how often to poll, and the timeout.
+        progress : callable, optional
+            Called with the session as each check ends, within a poll (:meth:`poll`).
+        cancel : callable, optional
+            Asked between checks and after each poll and wait: once it returns True the run ends
+            there (a signal handler's flag; the state file keeps what a resume starts from).
+        fetch : callable, optional
+            Returns what a network source's recorder has to say since it was last asked.
+
+        Yields
+        ------
+        Event, Watching, Polled, SourceNote, Waiting or Ended
+
+        Raises
+        ------
+        InputError
+            As :meth:`poll`.
+        """
+        cancelled = cancel if cancel is not None else (lambda: False)
+        last_data = time.monotonic()
+        said_watching = said_waiting = False
+        try:
+            while True:
+                for note in fetch() if fetch is not None else []:
+                    yield SourceNote(note)
+                yield from self.poll(progress, cancel)
+                if cancelled():  # at a safe point: the state file holds what the poll fed
+                    yield Ended("cancelled", time.monotonic() - last_data)
+                    return
+                if not said_watching and self.state is not None:
+                    said_watching = True
+                    yield Watching(self.sensors)
+                if self.last_rows:
+                    last_data = time.monotonic()
+                if self.state is not None:
+                    yield Polled(self.last_rows, self.stopped)
+                idle_s = time.monotonic() - last_data
+                if self.stopped or follow.replay:
+                    yield Ended("stopped" if self.stopped else "replayed", idle_s)
+                    return
+                if follow.timeout_s is not None and idle_s > follow.timeout_s:
+                    yield Ended("timeout", idle_s)
+                    return
+                if not said_waiting and idle_s > WAITING_HINT_S:
+                    said_waiting = True
+                    yield Waiting(WAITING_HINT_S)
+                time.sleep(follow.poll_s)
+                if cancelled():
+                    yield Ended("cancelled", time.monotonic() - last_data)
+                    return
+        except BaseException:
+            # Ctrl-C mid-poll fed rows the state file does not hold (a KeyboardInterrupt, or the
+            # SystemError of compiled code it landed in), or the run was closed early
+            self.back_to_saved()
+            raise
 
     def _new_state(self, columns: list[str]) -> MonitorState:
         room = self.settings.room_sensor

@@ -1,0 +1,202 @@
+"""``mtident thermal learn``: a reference run's modes learnt and written for later tests."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+from typing import TYPE_CHECKING
+
+import click
+import numpy as np
+from rich.table import Table
+
+from mtident._json import to_json_value
+from mtident.cli import OutputPath, print_json, table_console, thermal, user_errors
+from mtident.cli_thermal import (
+    _column_layout,
+    load_log_with_room,
+    log_options,
+    max_time_constant_option,
+    stderr,
+)
+from mtident.exceptions import InputError
+from mtident.thermal.robust_types import RobustSettings
+
+if TYPE_CHECKING:
+    from mtident.thermal.reference import MachineReference
+
+
+@thermal.command("learn")
+@log_options
+@click.option(
+    "--ambient",
+    "ambient_col",
+    metavar="NAME",
+    help="Room-temperature column: an input of every mode's heat balance while learning.",
+)
+@max_time_constant_option
+@click.option(
+    "-o",
+    "--output",
+    "output_path",
+    type=OutputPath(),
+    required=True,
+    help="The reference file to write (TOML), for --reference in identify and watch.",
+)
+@click.option(
+    "--every-mode",
+    "every_mode",
+    is_flag=True,
+    help="Say that the modes learnt are every mode of the machine (one learnt, a machine known to be first "
+    "order): later tests then allow no free mode faster than them (--free-fast-modes 0 for these sensors), "
+    "stop earliest, and state the assumption. Where the run merged or missed a mode, such stops can be wrong "
+    "(docs: limits).",
+)
+@click.option(
+    "--machine", metavar="NAME", default="", help="The machine the run is of (a test's --machine is held to it)."
+)
+@click.option("--serial", metavar="TEXT", default="", help="The machine's serial number.")
+@click.option("--program", metavar="TEXT", default="", help="The program or spindle speed the run ran (8000 rpm).")
+@click.option("--run-date", "run_date", metavar="DATE", default="", help="The day the run ran (2026-11-20).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@user_errors
+def learn_command(
+    file: str,
+    sensors: tuple[str, ...],
+    time_col: str | None,
+    time_unit: str | None,
+    temperature_unit: str | None,
+    ambient_col: str | None,
+    max_tau_min: float,
+    output_path: str,
+    every_mode: bool,
+    machine: str,
+    serial: str,
+    program: str,
+    run_date: str,
+    as_json: bool,
+) -> None:
+    """Learn each sensor's thermal modes from FILE, a warm-up that ran to equilibrium.
+
+    The time constants belong to the machine's structure, not to the load: a later test of the
+    same machine, with --reference, searches them only near these (never as exact), and may
+    stop far earlier. A later test that does not follow them is said to (a changed machine).
+
+    \f
+
+    Parameters
+    ----------
+    file : str
+        FILE: a log, or a shipped log's @-name.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit : str or None
+        --time-col and --time-unit.
+    temperature_unit : str or None
+        --unit: the unit of the temperature columns that state none.
+    ambient_col : str or None
+        --ambient: the room sensor's column.
+    max_tau_min : float
+        --max-time-constant (min).
+    output_path : str
+        -o: the reference file to write.
+    every_mode : bool
+        --every-mode: later tests allow no free mode faster than the modes learnt.
+    machine, serial, program, run_date : str
+        --machine, --serial, --program and --run-date: what the run was of, written in the file.
+    as_json : bool
+        --json.
+
+    Raises
+    ------
+    InputError
+        A log that cannot be read, or no sensor whose modes could be learnt.
+    """
+    from mtident.thermal.reference import learn_reference, save_reference
+
+    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
+    with stderr.status(f"learning the modes of {len(log.sensors)} sensor(s)…"):
+        reference, warnings = learn_reference(log, room, RobustSettings(max_time_constant_min=max_tau_min))
+    if every_mode:
+        reference = reference.holding_every_mode()
+    reference = dataclasses.replace(reference, machine=machine, serial=serial, program=program, run_date=run_date)
+    for warning in warnings:
+        stderr.print(f"mtident: warning: {warning}", highlight=False)
+    if not reference.sensors:
+        msg = f"{log.source}: no sensor's modes could be learnt; nothing written"
+        raise InputError(msg)
+    save_reference(reference, output_path)
+    doubtful = [name for name, m in reference.sensors.items() if m.doubt is not None]
+    unused = (
+        f"; none of its sensors will be used by later tests (each is doubtful: {', '.join(doubtful)})"
+        if len(doubtful) == len(reference.sensors)
+        else f"; later tests will not use {', '.join(doubtful)} (doubtful)"
+        if doubtful
+        else ""
+    )
+    stderr.print(f"mtident: reference written to {output_path}{unused}", highlight=False)
+    if as_json:
+        print_json(
+            {
+                "reference": str(output_path),
+                "source": reference.source,
+                "machine": reference.machine,
+                "serial": reference.serial,
+                "program": reference.program,
+                "run_date": reference.run_date,
+                "max_time_constant_min": reference.max_time_constant_min,
+                "room": reference.room,
+                "sensors": to_json_value(reference.sensors),
+                "machine_model": _machine_model_json(reference),
+                "warnings": warnings,
+            }
+        )
+        _exit_if_none_used(reference)
+        return
+    table = Table(title=f"{reference.identity}: modes learnt (time constants with their box)")
+    for column in ("sensor", "time constants (min)", "amplitudes (°C)", "used by later tests"):
+        table.add_column(column, justify="left" if column == "sensor" else "right", **_column_layout(column))
+    for name, m in reference.sensors.items():
+        taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(m.time_constants_min, m.box, strict=True))
+        used = "no" if m.doubt else "yes, no faster mode (--every-mode)" if m.free_fast_modes == 0 else "yes"
+        table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), used)
+    table_console().print(table)
+    model = reference.machine_model
+    if model is not None:
+        taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(model.time_constants_min, model.box, strict=True))
+        stderr.print(
+            f"mtident: machine model: {len(model.time_constants_min)} modes shared by {len(model.sensors)} sensors "
+            f"({taus} min); later tests fit every sensor together, each mode's amplitudes in this run's proportions"
+            + (
+                f"; the room's path into {model.learnt_room_sensors()} learnt: a later test's moving room is a known "
+                "input"
+                if model.room_gains
+                else ""
+            ),
+            highlight=False,
+        )
+    _exit_if_none_used(reference)
+
+
+def _machine_model_json(reference: MachineReference) -> dict[str, object] | None:
+    model = reference.machine_model
+    if model is None:
+        return None
+    return {
+        "time_constants_min": list(model.time_constants_min),
+        "box": list(model.box),
+        "gains_C": {name: list(row) for name, row in zip(model.sensors, model.gains_C, strict=True)},
+        "room_lag_min": {
+            name: float(np.dot(row, model.time_constants_min))
+            for name, row in zip(model.sensors, model.room_gains, strict=True)
+            if all(map(math.isfinite, row))
+        },
+    }
+
+
+def _exit_if_none_used(reference: MachineReference) -> None:
+    """Status 1 where every sensor is doubtful: a script must not go on to use a reference that
+    teaches nothing (the file is written, to be read)."""
+    if all(m.doubt is not None for m in reference.sensors.values()):
+        sys.exit(1)
