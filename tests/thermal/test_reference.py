@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import re
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -508,3 +509,28 @@ def test_the_wide_boxes_a_run_leaves_are_named_slowest_first():
     from mtident.thermal.reference import _spans
 
     assert _spans((100.0, 250.0, 10.0), (0.5, 0.8, 0.05), 1) == "50-450 min, 50-150 min"
+
+
+def test_another_machines_reference_whose_modes_bring_the_warm_up_down_is_not_used():
+    """A new user's trial: the reference of a slower machine (every time constant ×1/0.45). With
+    its modes the fit put S1's T∞ below where the sensor already was, and the floor of a warm-up
+    that does not overshoot then lifted the interval above T∞ (30.44 °C, 95 % 30.61 to 36.76,
+    trusted). The readings: its first 120 min and the room."""
+    rows = np.loadtxt(Path(__file__).with_name("data") / "another_machine_S1.csv", delimiter=",", skiprows=1)
+    modes = SensorModes((20.155, 90.290, 198.36), (0.1, 0.1, 0.1), (-3.018, -4.966, -1.995))
+    estimate = estimate_sensor("S1", rows[:, 0], rows[:, 1], rows[:, 2], reference=modes)
+    for low, high in estimate.interval_C.values():
+        assert low <= estimate.steady_C <= high
+        assert low <= 31.5 <= high  # the truth
+
+
+def test_a_fit_below_the_floor_by_more_than_its_error_contradicts_a_warm_up():
+    from types import SimpleNamespace
+
+    from mtident.thermal.robust import _below_floor
+
+    fit = SimpleNamespace(steady_C=30.42, interval_C={0.95: (30.40, 30.44), 0.99: (30.39, 30.45)})
+    assert _below_floor(fit, 30.56)  # S2 of the trial: the floor 7 standard errors above T∞
+    wide = SimpleNamespace(steady_C=30.44, interval_C={0.95: (25.5, 36.76)})
+    assert not _below_floor(wide, 30.61)  # within its error: the floor only lifts the low end
+    assert not _below_floor(fit, -np.inf)

@@ -92,7 +92,7 @@ SLOWER_REACH = 10.0
 
 # the warnings that make an estimate untrusted (``model_ok`` false)
 UNTRUSTING_CODES: frozenset[WarningCode] = frozenset(
-    {"misfit", "undetermined", "modes-unresolved", "slower-than-allowed", "fragile"}
+    {"misfit", "undetermined", "modes-unresolved", "slower-than-allowed", "fragile", "below-floor"}
 )
 
 
@@ -229,7 +229,26 @@ def estimate_sensor(
         )
     fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes, refine_within)
     floor = overshoot_floor_C(fit, t[onset:], y[onset:], None if room is None else room, noise, rounding)
-    readings = {q: (max(lo, floor), hi) for q, (lo, hi) in fit.interval_C.items()}
+    if reference_used and _below_floor(fit, floor):
+        # the reference's modes make this warm-up come down to its T∞: they are not this sensor's
+        notes.add(
+            "reference-disagrees",
+            f"with the reference's modes its T∞ would be {fit.steady_C:.2f} °C, below where it already is "
+            f"({floor:.2f} °C) by more than the fit's own error, and a warm-up does not come down: has the machine "
+            "changed, or is the reference another machine's? The answer does not use the reference",
+        )
+        fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, None, notes, refine_within)
+        floor = overshoot_floor_C(fit, t[onset:], y[onset:], None if room is None else room, noise, rounding)
+    if _below_floor(fit, floor):
+        notes.add(
+            "below-floor",
+            f"its best fit puts T∞ at {fit.steady_C:.2f} °C, below where it already is ({floor:.2f} °C) by more than "
+            "the fit's own error, and a warm-up does not come down: the fit does not describe this sensor's warm-up "
+            "(a heat input that changed, a sensor that cooled); its interval is the fit's own, not trusted",
+        )
+        floor = -np.inf
+    # the floor lifts the low end, never above T∞ itself (the fit's own interval stays around it)
+    readings = {q: (min(max(lo, floor), fit.steady_C), hi) for q, (lo, hi) in fit.interval_C.items()}
     intervals = _nested(_with_room_wander(fit, readings, room_C is not None, settings))
     ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, notes)
     return SensorEstimate(
@@ -496,6 +515,16 @@ def _every_free(count: int) -> str:
 
 def _taus(taus: tuple[float, ...]) -> str:
     return "τ " + ", ".join(f"{x:.3g}" for x in taus) + " min"
+
+
+def _below_floor(fit: SteadyState, floor: float) -> bool:
+    """Whether the fit's T∞ lies below the floor by more than one of its standard errors (from
+    its narrowest interval's upper half-width): the fit describes a warm-up that comes down."""
+    if not np.isfinite(floor) or not fit.interval_C:
+        return False
+    level = min(fit.interval_C)
+    se = (fit.interval_C[level][1] - fit.steady_C) / float(ndtri(0.5 + level / 2.0))
+    return bool(floor > fit.steady_C + max(se, 0.0))
 
 
 def overshoot_floor_C(
