@@ -656,3 +656,18 @@ def test_the_note_on_a_room_read_as_celsius_says_the_unit_option(tmp_path):
     path.write_text("time_min,spindle,room\n" + "".join(f"{m},{70 + m},{69 + m / 100:.2f}\n" for m in range(30)))
     notes = json.loads(mtident("thermal", "inspect", str(path), "--json").stdout)["notes"]
     assert any("far outside any workshop's range" in n and "--unit F (or --unit K)" in n for n in notes), notes
+
+
+def test_the_papers_filters_interval_stays_where_a_warm_up_allows():
+    """identify --method afukf at 30 min: T9's 95 % interval reached 15.68 °C, under the room
+    (18.04 °C) and 3.7 °C under where T9 already was (19.35 °C), trusted."""
+    import json
+
+    out = mtident(
+        "thermal", "identify", "@sample-room", "--window", "30", "--method", "afukf", "--ambient", "room", "--json"
+    )
+    assert out.returncode == 0
+    sensors = {s["sensor"]: s for s in json.loads(out.stdout)["sensors"]}
+    low, high = sensors["T9"]["steady_state_ci95_C"]
+    assert 19.0 < low <= sensors["T9"]["steady_state_C"] <= high
+    assert "not below its latest readings" in sensors["T9"]["assumptions"]["model"]

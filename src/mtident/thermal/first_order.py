@@ -19,7 +19,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog
 from mtident.thermal.identification import Identification, sensor_notes
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
-from mtident.thermal.measured import measured_and_settled, rmse, window_samples
+from mtident.thermal.measured import measured_and_settled, rmse, warm_up_floor_C, window_samples
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 from mtident.thermal.model import (
     equilibrium_time,
@@ -30,7 +30,7 @@ from mtident.thermal.model import (
     to_physical,
     transition_for,
 )
-from mtident.thermal.readings import noise_sigma, reading_range
+from mtident.thermal.readings import display_resolution, noise_sigma, reading_range
 from mtident.thermal.settings import ThermalTuning, filter_config, preset_tuning, tuning_from_data
 from mtident.ukf import (
     FilterCarry,
@@ -59,7 +59,8 @@ Z95 = 1.959963984540054
 
 FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
     "model": "first order (one exponential, the papers' model): the interval assumes a first-order machine; "
-    "a slower mode not yet seen moves T∞ beyond it",
+    "a slower mode not yet seen moves T∞ beyond it; of a warm-up that does not overshoot: a rising sensor's T∞ "
+    "not below its latest readings",
     "max_time_constant_min": None,
     "room": "the room at its level in the window (or the room sensor's course, where given)",
     "reference": None,
@@ -467,7 +468,7 @@ def identify_first_order(
     room_rate = room_input(log, ambient_C, method, preset)
     # A diverging filter (the papers' presets can) is reported in the notes, not as numpy warnings.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return _identify(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, room_rate)
+        return _identify(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, room_rate, ambient_C)
 
 
 @dataclass(frozen=True)
@@ -658,6 +659,7 @@ def _identify(
     horizon_min: float | None,
     pseudo_measurement_seed: int | None,
     room_rate: FloatArray | None = None,
+    ambient_C: FloatArray | None = None,
 ) -> Identification[FirstOrderDetails]:
     n_window = window_samples(log, window_min)
     t = log.time_min
@@ -710,7 +712,11 @@ def _identify(
     history, history_sd = course.history, course.history_sd
     rate_sd = np.sqrt(course.final_cov[:, 1, 1])
     quantile_half = quantile * steady_sd
-    ci95 = np.column_stack([steady - quantile_half, steady + quantile_half])
+    floor = _warm_up_floors(
+        tw, yw, None if ambient_C is None else np.asarray(ambient_C, float)[:n_window], steady, sigma
+    )
+    # a warm-up does not come down: the low end no lower than where the sensor already is (never above T∞)
+    ci95 = np.column_stack([np.minimum(np.maximum(steady - quantile_half, floor), steady), steady + quantile_half])
     curve_sd = np.sqrt(np.maximum(curve_var, 0.0))
     band_half = quantile * curve_sd
     notes_said = tuple(notes)
@@ -750,6 +756,20 @@ def _identify(
             quantile=quantile,
             untrusted=untrusted,
         ),
+    )
+
+
+def _warm_up_floors(
+    tw: FloatArray, yw: FloatArray, room_C: FloatArray | None, steady: FloatArray, sigma: FloatArray
+) -> FloatArray:
+    """Per sensor, the lowest T∞ its warm-up allows (:func:`~mtident.thermal.measured.warm_up_floor_C`),
+    −inf where none holds."""
+    rounding = display_resolution(yw)
+    return np.array(
+        [
+            warm_up_floor_C(float(steady[s]), tw, yw[:, s], room_C, float(sigma[s]), float(rounding[s]))
+            for s in range(yw.shape[1])
+        ]
     )
 
 

@@ -196,3 +196,67 @@ def window_samples(log: TemperatureLog, window_min: float) -> int:
         )
         raise InputError(msg)
     return n
+
+
+# the floor a warm-up that does not overshoot sets on T∞: the median of this many latest readings,
+# less this many times the noise (and the display step)
+_LATEST_READINGS = 5
+
+
+_FLOOR_NOISES = 4.0
+
+
+def warm_up_floor_C(
+    steady_C: float,
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    noise_C: float,
+    rounding_C: float,
+) -> float:
+    """The lowest T∞ a warm-up that does not overshoot allows: its latest level, less the noise
+    and, with a room sensor, the most the room has stood above its latest level since the warm-up
+    began (a passive structure follows a room that fell only late, with a static gain of one).
+
+    With constant heat, every temperature of a structure started at rest, or partly warm and
+    still below its equilibrium, stays at or below its equilibrium (for a conductance network
+    e^(At) is elementwise non-negative; for a continuous body, the maximum principle): a model
+    whose T∞ lies below where the sensor already is describes a curve that came down from above,
+    which such a warm-up cannot make. Where the sensor does not rise to its fit's T∞, or its
+    latest readings lie below its highest by more than the noise (it cooled: an earlier heating
+    at more power, a heat input that fell), nothing is assumed: −inf.
+
+    Parameters
+    ----------
+    steady_C : float
+        The fit's T∞.
+    time_min : ndarray, shape (N,)
+        The times since the warm-up began (min).
+    values : ndarray, shape (N,)
+        The readings since then (°C, NaN: missing).
+    room_C : ndarray, shape (N,), optional
+        The room's (smoothed) readings beside them.
+    noise_C, rounding_C : float
+        The readings' noise and display step (°C).
+
+    Returns
+    -------
+    float
+        The floor (°C), −inf where none holds.
+    """
+    ok = np.isfinite(values) if room_C is None else np.isfinite(values) & np.isfinite(room_C)
+    if ok.sum() < 2 * _LATEST_READINGS or not np.isfinite(steady_C):
+        return -np.inf
+    y = values[ok]
+    # levels as medians of a few readings, so that one noisy reading neither sets nor breaks the floor
+    levels = np.median(np.lib.stride_tricks.sliding_window_view(y, _LATEST_READINGS), axis=1)
+    latest, highest, first = float(levels[-1]), float(levels.max()), float(levels[0])
+    margin = _FLOOR_NOISES * noise_C + rounding_C
+    heated = steady_C > first and latest > first + margin
+    if not heated or latest < highest - margin:
+        return -np.inf
+    excursion = 0.0
+    if room_C is not None:
+        room = room_C[ok]
+        excursion = max(float(np.max(room)) - float(room[-1]), 0.0)
+    return latest - margin - excursion

@@ -21,6 +21,7 @@ from scipy.special import chdtri, ndtri
 
 from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
+from mtident.thermal.measured import warm_up_floor_C
 from mtident.thermal.modes import (
     Binned,
     ModeFamily,
@@ -120,14 +121,6 @@ MIN_BINS = 8
 # nearly as good over a long valley of models between the two levels (slow modes the readings
 # barely exclude), and whether the narrower interval covers rests on the χ² calibration alone.
 FRAGILE_RATIO = 3.0
-
-
-# the floor a warm-up that does not overshoot sets on T∞: the median of this many latest readings,
-# less this many times the noise (and the display step)
-_LATEST_READINGS = 5
-
-
-_FLOOR_NOISES = 4.0
 
 
 def estimate_sensor(
@@ -535,51 +528,10 @@ def overshoot_floor_C(
     noise_C: float,
     rounding_C: float,
 ) -> float:
-    """The lowest T∞ a warm-up that does not overshoot allows: its latest level, less the noise
-    and, with a room sensor, the most the room has stood above its latest level since the warm-up
-    began (a passive structure follows a room that fell only late, with a static gain of one).
-
-    With constant heat, every temperature of a structure started at rest, or partly warm and
-    still below its equilibrium, stays at or below its equilibrium (for a conductance network
-    e^(At) is elementwise non-negative; for a continuous body, the maximum principle): a model
-    whose T∞ lies below where the sensor already is describes a curve that came down from above,
-    which such a warm-up cannot make. Where the sensor does not rise to its fit's T∞, or its
-    latest readings lie below its highest by more than the noise (it cooled: an earlier heating
-    at more power, a heat input that fell), nothing is assumed: −inf.
-
-    Parameters
-    ----------
-    fit : SteadyState
-    time_min : ndarray, shape (N,)
-        The times since the warm-up began (min).
-    values : ndarray, shape (N,)
-        The readings since then (°C, NaN: missing).
-    room_C : ndarray, shape (N,), optional
-        The room's (smoothed) readings beside them.
-    noise_C, rounding_C : float
-        The readings' noise and display step (°C).
-
-    Returns
-    -------
-    float
-        The floor (°C), −inf where none holds.
-    """
-    ok = np.isfinite(values) if room_C is None else np.isfinite(values) & np.isfinite(room_C)
-    if ok.sum() < 2 * _LATEST_READINGS or not fit.determined or not np.isfinite(fit.steady_C):
+    """:func:`~mtident.thermal.measured.warm_up_floor_C` of a determined fit (−inf otherwise)."""
+    if not fit.determined:
         return -np.inf
-    y = values[ok]
-    # levels as medians of a few readings, so that one noisy reading neither sets nor breaks the floor
-    levels = np.median(np.lib.stride_tricks.sliding_window_view(y, _LATEST_READINGS), axis=1)
-    latest, highest, first = float(levels[-1]), float(levels.max()), float(levels[0])
-    margin = _FLOOR_NOISES * noise_C + rounding_C
-    heated = fit.steady_C > first and latest > first + margin
-    if not heated or latest < highest - margin:
-        return -np.inf
-    excursion = 0.0
-    if room_C is not None:
-        room = room_C[ok]
-        excursion = max(float(np.max(room)) - float(room[-1]), 0.0)
-    return latest - margin - excursion
+    return warm_up_floor_C(fit.steady_C, time_min, values, room_C, noise_C, rounding_C)
 
 
 def _with_room_wander(
