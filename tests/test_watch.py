@@ -1196,3 +1196,20 @@ def test_a_sessions_run_yields_its_polls_and_ends_by_timeout_replay_or_cancel(tm
     assert [type(e) for e in replayed] == [Watching, Polled, Ended] and replayed[-1].reason == "replayed"
     cancelled = kinds(FollowSettings(poll_s=0.05), cancel=lambda: True)
     assert cancelled[-1].reason == "cancelled" and (tmp_path / "s.npz").is_file()
+
+
+def test_a_sigterm_while_the_answer_is_written_is_noted_not_fatal():
+    """A SIGTERM after the following ended, while the final answer's forecasts ran, killed the
+    process outright: exit -15, no word (the state file held every reading)."""
+    import os
+
+    from mtident.cli_watch import _sigterm_deferred
+
+    before = signal.getsignal(signal.SIGTERM)
+    with _sigterm_deferred() as terminated:
+        os.kill(os.getpid(), signal.SIGTERM)
+        deadline = time.monotonic() + 5.0
+        while not terminated.is_set() and time.monotonic() < deadline:
+            time.sleep(0.01)
+    assert terminated.is_set()
+    assert signal.getsignal(signal.SIGTERM) == before

@@ -12,7 +12,8 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Generator, Mapping
+from collections.abc import Callable, Generator, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -461,19 +462,42 @@ def watch(request: WatchRequest) -> None:
             else f"{path}: no such file (not created within the --timeout of {follow.timeout_s:g} s)"
         )
         raise InputError(msg)
-    if request.plot_path:
-        _plot(session, request.plot_path)
-    # interrupted: the answer without the expected stops, whose forecasts take seconds
-    _answer(
-        session,
-        path,
-        follow.replay,
-        request.as_json,
-        live=live and not follow.replay,
-        forecast=not interrupted,
-    )
-    if interrupted:
+    # a SIGTERM while the answer is written ends the command once it is written, with a word
+    with _sigterm_deferred() as terminated:
+        if request.plot_path:
+            _plot(session, request.plot_path)
+        # interrupted: the answer without the expected stops, whose forecasts take seconds
+        _answer(
+            session,
+            path,
+            follow.replay,
+            request.as_json,
+            live=live and not follow.replay,
+            forecast=not interrupted,
+        )
+    if terminated.is_set() and not interrupted:
+        stderr.print(
+            f"mtident: terminated (SIGTERM) while the answer was written; it was written in full, and the state is "
+            f"in {session.state_path}",
+            highlight=False,
+        )
+    if interrupted or terminated.is_set():
         sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
+
+
+@contextmanager
+def _sigterm_deferred() -> Iterator[threading.Event]:
+    """SIGTERM noted, not acted on, within the block (on the main thread): the event is set if
+    one came."""
+    terminated = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield terminated
+        return
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: terminated.set())
+    try:
+        yield terminated
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _follow_served(
