@@ -335,3 +335,29 @@ def test_a_malformed_room_response_is_refused_by_name(tmp_path, table):
     )
     with pytest.raises(InputError, match=r"room_response"):
         load_reference(path)
+
+
+def test_another_machines_reference_is_dropped_when_most_sensors_reject_its_machine_model():
+    """A new user's trial: the reference of a slower machine (every time constant ×1/0.45). Its
+    per-sensor modes fitted most sensors by chance, and two said 'may stop' with intervals 0.1-0.8 °C
+    short of the truth; the machine model's tie, rejected by most sensors, says it is not this machine."""
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
+    from mtident.thermal.robust_identify import identify_robust
+
+    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=21)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
+    assert reference.machine_model is not None
+    # the other machine: the same network, every rate 1/0.45 as fast
+    fast = _CONDUCTANCE / 0.45
+    u = _HEAT @ np.array([0.5, 0.5])
+    steady = np.linalg.solve(-fast, u / 0.45)
+    t = np.arange(0.0, 241.0)
+    x = np.array([expm(fast * tk) @ (-steady) for tk in t]) + steady
+    y = np.round(x @ _SENSOR_ROWS.T + ROOM_C + np.random.default_rng(22).normal(0.0, 0.01, (len(t), 4)), 2)
+    settings = MonitorSettings(tolerance_C=0.2, reference=reference)
+    state, events = monitor_step(new_state(list(SENSORS)), t, y, None, settings)
+    assert state.reference_dropped
+    assert any("its machine model is rejected by" in e.text for e in events)
+    answer = identify_robust(TemperatureLog(t, SENSORS, y, (), "test.csv"), 200.0, reference=reference)
+    assert any("its machine model is rejected by" in n for n in answer.notes)
+    assert not any(e.reference_used for e in answer.details.estimates)

@@ -84,6 +84,9 @@ MODEL_ERROR_FLOOR_C = 0.015
 """A time constant whose box is wider than this is profiled, not linearised."""
 PROFILE_POINTS = (-1.0, -0.5, 0.5, 1.0)
 REJECT_P = 1e-3
+CONTRADICTION_MIN_MIN = 10.0
+"""Most sensors rejecting the tie say the test is not the reference's machine only over readings
+of at least this (min) and half the slowest shared mode."""
 MAX_MODES = 6
 _CONTRADICTED = {"misfit", "reference-disagrees"}
 MIN_LOG_SPACING = 0.2
@@ -193,6 +196,9 @@ class MachineFit:
         Per sensor, each of its modes' gain on the room (empty without a room).
     origin_min : float
         Where the modes begin.
+    contradicted : bool
+        Most of the sensors fitted reject the tie (then none is used): the test does not follow the
+        reference's machine (another machine's reference, or a changed machine).
     """
 
     steady_C: FloatArray
@@ -203,6 +209,7 @@ class MachineFit:
     modes: tuple[tuple[Mode, ...], ...] = ()
     room_gains: tuple[tuple[float, ...], ...] = ()
     origin_min: float = 0.0
+    contradicted: bool = False
 
 
 # ----------------------------------------------------------------------------------------------
@@ -465,7 +472,8 @@ def fit_test(
     Returns
     -------
     MachineFit or None
-        None where fewer than two sensors can be fitted with the tie.
+        None where fewer than two sensors can be fitted with the tie; ``contradicted`` where most
+        of them reject it.
     """
     t = np.asarray(time_min, float)
     gains = model.gains(sensors)
@@ -484,7 +492,13 @@ def fit_test(
     # the others' misfit then is its doing; where most sensors reject the tie, it does not hold
     while True:
         used = [s for s in fitted if s not in rejected]
-        if len(used) < 2 or 2 * len(rejected) > len(fitted):
+        if 2 * len(rejected) > len(fitted):
+            # early on, a test's fast start (a mode faster than the reference run could show) rejects
+            # the tie too: only readings over half the slowest mode say it is another machine
+            if t[-1] - origin_min < max(CONTRADICTION_MIN_MIN, 0.5 * max(model.time_constants_min)):
+                return None
+            return _contradicted(len(sensors), tuple(sensors[s] for s in rejected), levels, origin_min)
+        if len(used) < 2:
             return None
         bins = [fitted[s] for s in used]
         passes = _tied_solve(bins, gains[used], noise[used], taus, tau_sd)
@@ -548,6 +562,19 @@ def _known_room(
             row = (*map(float, gains[s]), *(0.0,) * len(FAST_TIME_CONSTANTS_MIN))
             out[s] = (replace(b, value_C=b.value_C - b.room_C - course, room_C=None), off, row)
     return out
+
+
+def _contradicted(count: int, rejected: tuple[str, ...], levels: tuple[float, ...], origin_min: float) -> MachineFit:
+    """The answer where most sensors reject the tie: no sensor fitted with it."""
+    return MachineFit(
+        np.full(count, math.nan),
+        {level: np.full(count, math.inf) for level in levels},
+        np.zeros(count, bool),
+        rejected,
+        np.zeros(0),
+        origin_min=origin_min,
+        contradicted=True,
+    )
 
 
 @dataclass(frozen=True)

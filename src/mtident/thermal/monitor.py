@@ -238,6 +238,22 @@ def _check_due(
     used = replace(settings, reference=None) if dropped else settings
     # every sensor fitted together once a check; the sensors checked take their part of it
     machine = machine_fit(readings, state.sensors, used)
+    if machine is not None and machine.contradicted:
+        # the machine model is the reference's strongest claim: where most sensors reject it, the
+        # per-sensor modes of the same run are not this machine's either
+        assert settings.reference is not None
+        events.append(
+            Event(
+                "warning",
+                now,
+                f"the reference ({settings.reference.identity}): its machine model is rejected by "
+                f"{len(machine.rejected)} of the sensors it knows ({', '.join(machine.rejected)}): the reference is "
+                "not used for any sensor from now on (another machine's reference, or this machine changed since its "
+                "run; learn the reference again)",
+            )
+        )
+        dropped, used, machine = True, replace(settings, reference=None), None
+        checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
     wander = unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels))
 
     def check_sensor(s: int) -> None:

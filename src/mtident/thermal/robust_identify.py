@@ -181,6 +181,14 @@ def identify_robust(
     unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
     model = None if reference is None else reference.machine_model
     machine = fit_readings(model, log.sensors, t[:n], y[:n], room_window, settings.levels)
+    if machine is not None and machine.contradicted:
+        assert reference is not None
+        unfit.append(
+            f"the reference ({reference.identity}): its machine model is rejected by {len(machine.rejected)} of the "
+            f"sensors it knows ({', '.join(machine.rejected)}): the reference is not used for any sensor (another "
+            "machine's reference, or this machine changed since its run; learn the reference again)"
+        )
+        reference, model, machine = None, None, None
     estimates = tuple(
         combined_estimate(
             with_fragility(
