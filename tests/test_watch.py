@@ -6,6 +6,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import math
 import os
 import re
 import signal
@@ -597,7 +598,8 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
     assert "Ways on: continue the test, or give a reference run of this machine" in text
     assert (
         "Assumes: a sum of up to four exponential modes (six where the readings use all four), of a warm-up that "
-        "does not overshoot: a rising sensor's T∞ not below its latest readings, time constants up to 300 min" in text
+        "does not overshoot: a rising sensor's T∞ not below its latest readings, less four times their noise, "
+        "time constants up to 300 min" in text
     )
     # the ends named in words are the interval's own (widened for the room's wander alike)
     code, out, err = run("thermal", "watch", str(log), "--replay", "--room-wander", "0.5")
@@ -1213,3 +1215,18 @@ def test_a_sigterm_while_the_answer_is_written_is_noted_not_fatal():
             time.sleep(0.01)
     assert terminated.is_set()
     assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_expected_stops_end_when_asked_between_two_sensors(tmp_path):
+    """A SIGTERM while the final answer is written: the forecasts (seconds each) stop at once."""
+    log = tmp_path / "log.csv"
+    log.write_text(
+        csv_text(T[:161], {n: noisy(first_order(T[:161], steady=24.0 + k), 70 + k) for k, n in enumerate("AB")})
+    )
+    session = WatchSession(log, MonitorSettings(), persist=False)
+    session.poll()
+    asked = []
+    assert session.expected_stops(cancel=lambda: asked.append(1) or True) is None and len(asked) == 1
+    assert all(np.isfinite(v) for v in (session.expected_stops() or {"none": math.nan}).values())
+    cancelled = session.result(cancel=lambda: True)["sensors"]
+    assert all(s.get("expected_stop_time_min") is None for s in cancelled)  # type: ignore[union-attr]

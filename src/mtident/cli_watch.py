@@ -474,11 +474,12 @@ def watch(request: WatchRequest) -> None:
             request.as_json,
             live=live and not follow.replay,
             forecast=not interrupted,
+            cancel=terminated.is_set,
         )
     if terminated.is_set() and not interrupted:
         stderr.print(
-            f"mtident: terminated (SIGTERM) while the answer was written; it was written in full, and the state is "
-            f"in {session.state_path}",
+            "mtident: terminated (SIGTERM) while the answer was written; it was written without the expected stops "
+            f"not yet forecast, and the state is in {session.state_path}",
             highlight=False,
         )
     if interrupted or terminated.is_set():
@@ -740,10 +741,18 @@ def _say(events: list[Event]) -> None:
             stderr.print(f"mtident: {prefix}{when}{event.text}", highlight=False)
 
 
-def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live: bool, forecast: bool = True) -> None:
+def _answer(
+    session: WatchSession,
+    path: Path,
+    replay: bool,
+    as_json: bool,
+    live: bool,
+    forecast: bool = True,
+    cancel: Callable[[], bool] | None = None,
+) -> None:
     """The decision: the JSON object, or the table, the verdict and what it rests on (with the
-    expected stops where ``forecast``)."""
-    outcome = session.result(with_forecast=forecast)
+    expected stops where ``forecast``, unless ``cancel`` stops them)."""
+    outcome = session.result(with_forecast=forecast, cancel=cancel)
     hindsight = session.hindsight() if replay else None
     if hindsight is not None:
         outcome["time_saved_min"] = hindsight.time_saved_min
@@ -765,7 +774,9 @@ def _answer(session: WatchSession, path: Path, replay: bool, as_json: bool, live
         f"Assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}",
         highlight=False,
     )
-    if session.settings.reference is not None:
+    if session.settings.reference is not None and state.reference_dropped:
+        console.print("  reference: not used (the test contradicted it; see the warning above)", highlight=False)
+    elif session.settings.reference is not None:
         # each sensor has its own modes in the reference, or none, or doubtful ones
         for name in state.sensors:
             console.print(f"  reference for {name}: {assumptions(session.settings, name).reference}", highlight=False)

@@ -353,7 +353,7 @@ def build_report(
         for s, ax in enumerate(figure.axes[: values.shape[1]]):
             _draw_rest_of_log(ax, time_min, values[:, s], state.stop_time_min, legend=s == 0)
     stopped = state.stopped
-    holding, ways = ((), None) if stopped else _holding(state, settings, session.expected_stops())
+    holding, ways = ((), None) if stopped else _holding(state, settings, session.expected_stops() or {})
     settle = math.nan if hindsight is None else hindsight.test_settle_time_min
     saved = None if hindsight is None else hindsight.time_saved_min
     return WarmupReport(

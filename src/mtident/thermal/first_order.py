@@ -60,7 +60,7 @@ Z95 = 1.959963984540054
 FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
     "model": "first order (one exponential, the papers' model): the interval assumes a first-order machine; "
     "a slower mode not yet seen moves T∞ beyond it; of a warm-up that does not overshoot: a rising sensor's T∞ "
-    "not below its latest readings",
+    "not below its latest readings, less four times their noise",
     "max_time_constant_min": None,
     "room": "the room at its level in the window (or the room sensor's course, where given)",
     "reference": None,

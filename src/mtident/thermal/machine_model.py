@@ -43,7 +43,7 @@ from mtident.thermal.modal_search import correlation_factor, room_lag
 from mtident.thermal.modal_types import Binned, IntervalEnd, Mode, bin_samples
 from mtident.thermal.modes import equilibrium_time
 from mtident.thermal.readings import display_resolution, noise_sigma, room_trend
-from mtident.thermal.robust import RobustSettings, SensorEstimate, room_wander_half_width
+from mtident.thermal.robust import MISFIT_FACTOR, RobustSettings, SensorEstimate, room_wander_half_width
 
 FAST_TIME_CONSTANTS_MIN = (0.7, 2.5)
 """Each sensor's own fast modes (free amplitudes): a sensor's lag, the start's details."""
@@ -197,8 +197,9 @@ class MachineFit:
     origin_min : float
         Where the modes begin.
     contradicted : bool
-        Most of the sensors fitted reject the tie (then none is used): the test does not follow the
-        reference's machine (another machine's reference, or a changed machine).
+        Most of the sensors fitted reject the tie or misfit the model (residuals correlated beyond
+        ``MISFIT_FACTOR``; then none is used): the test does not follow the reference's machine
+        (another machine's reference, or a changed machine).
     """
 
     steady_C: FloatArray
@@ -484,6 +485,9 @@ def fit_test(
         if b is not None and np.all(np.isfinite(gains[s]))
     }
     taus, tau_sd = _centres(model)
+    # early on, a test's fast start (a mode faster than the reference run could show) misfits the
+    # model too: only readings over half the slowest mode say it is another machine
+    long_enough = t[-1] - origin_min >= max(CONTRADICTION_MIN_MIN, 0.5 * max(model.time_constants_min))
     lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min)) if room_lag else 0.0
     known = _known_room(model, sensors, fitted, taus, lag_sd if room_lag else None)
     fitted.update({s: bin_ for s, (bin_, _, _) in known.items()})
@@ -493,9 +497,7 @@ def fit_test(
     while True:
         used = [s for s in fitted if s not in rejected]
         if 2 * len(rejected) > len(fitted):
-            # early on, a test's fast start (a mode faster than the reference run could show) rejects
-            # the tie too: only readings over half the slowest mode say it is another machine
-            if t[-1] - origin_min < max(CONTRADICTION_MIN_MIN, 0.5 * max(model.time_constants_min)):
+            if not long_enough:
                 return None
             return _contradicted(len(sensors), tuple(sensors[s] for s in rejected), levels, origin_min)
         if len(used) < 2:
@@ -511,6 +513,10 @@ def fit_test(
             break
         rejected.append(used[worst])
     solved, steady, half = _profiled(bins, gains[used], noise[used], model, solved, levels)
+    # the tie holds (the shapes), but the time constants do not: a machine of other time constants
+    misfit = [sensors[s] for s, corr in zip(used, solved.corr, strict=True) if corr > MISFIT_FACTOR]
+    if long_enough and 2 * (len(rejected) + len(misfit)) > len(fitted):
+        return _contradicted(len(sensors), (*(sensors[s] for s in rejected), *misfit), levels, origin_min)
     lag = np.array([known[s][1] if s in known else lag_sd for s in used]) if room_lag else np.zeros(len(used))
     half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag) for level, h in half.items()}
     room_gains = [known[s][2] if s in known else row for s, row in zip(used, _room_gains_of(solved), strict=True)]

@@ -598,25 +598,38 @@ class WatchSession:
 
     # -- answers -----------------------------------------------------------------------------
 
-    def expected_stops(self) -> dict[str, float]:
+    def expected_stops(self, cancel: Callable[[], bool] | None = None) -> dict[str, float] | None:
         """Each sensor's expected stop on its best model's course (NaN: not foreseeable).
+
+        Parameters
+        ----------
+        cancel : callable, optional
+            Asked between two sensors' forecasts (each takes seconds): True stops the forecasts.
 
         Returns
         -------
-        dict of str to float
-            Per sensor, the expected stop (min); empty before the log's header is read.
+        dict of str to float or None
+            Per sensor, the expected stop (min); empty before the log's header is read; None
+            where ``cancel`` stopped them.
         """
         if self.state is None:
             return {}
-        return {name: expected_stop(self.state, self.settings, s) for s, name in enumerate(self.state.sensors)}
+        out = {}
+        for s, name in enumerate(self.state.sensors):
+            if cancel is not None and cancel():
+                return None
+            out[name] = expected_stop(self.state, self.settings, s)
+        return out
 
-    def result(self, with_forecast: bool = True) -> dict[str, object]:
+    def result(self, with_forecast: bool = True, cancel: Callable[[], bool] | None = None) -> dict[str, object]:
         """The JSON answer (:func:`~mtident.thermal.monitor.result`).
 
         Parameters
         ----------
         with_forecast : bool, optional
             Add each sensor's expected stop while the test has not stopped (a forecast per sensor).
+        cancel : callable, optional
+            As :meth:`expected_stops`: the answer then has no expected stops.
 
         Returns
         -------
@@ -630,7 +643,7 @@ class WatchSession:
         if self.state is None:
             msg = f"{self.path}: no data rows" if self.path.is_file() else f"{self.path}: no such file"
             raise InputError(msg)
-        expected = self.expected_stops() if with_forecast and not self.state.stopped else None
+        expected = self.expected_stops(cancel) if with_forecast and not self.state.stopped else None
         return result(self.state, self.settings, expected)
 
     def hindsight(self, whole: tuple[FloatArray, FloatArray, FloatArray | None] | None = None) -> Hindsight | None:
