@@ -1217,8 +1217,9 @@ def test_a_sigterm_while_the_answer_is_written_is_noted_not_fatal():
     assert signal.getsignal(signal.SIGTERM) == before
 
 
-def test_expected_stops_end_when_asked_between_two_sensors(tmp_path):
-    """A SIGTERM while the final answer is written: the forecasts (seconds each) stop at once."""
+def test_expected_stops_end_when_asked_within_a_forecast(tmp_path):
+    """A SIGTERM while the final answer is written: the forecasts (up to 12 s a sensor) stop at the
+    next fit of the one under way."""
     log = tmp_path / "log.csv"
     log.write_text(
         csv_text(T[:161], {n: noisy(first_order(T[:161], steady=24.0 + k), 70 + k) for k, n in enumerate("AB")})
@@ -1226,7 +1227,7 @@ def test_expected_stops_end_when_asked_between_two_sensors(tmp_path):
     session = WatchSession(log, MonitorSettings(), persist=False)
     session.poll()
     asked = []
-    assert session.expected_stops(cancel=lambda: asked.append(1) or True) is None and len(asked) == 1
+    assert session.expected_stops(cancel=lambda: asked.append(1) or True) is None and 1 <= len(asked) <= 2
     assert all(np.isfinite(v) for v in (session.expected_stops() or {"none": math.nan}).values())
     cancelled = session.result(cancel=lambda: True)["sensors"]
     assert all(s.get("expected_stop_time_min") is None for s in cancelled)  # type: ignore[union-attr]

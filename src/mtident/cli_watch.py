@@ -478,8 +478,8 @@ def watch(request: WatchRequest) -> None:
         )
     if terminated.is_set() and not interrupted:
         stderr.print(
-            "mtident: terminated (SIGTERM) while the answer was written; it was written without the expected stops "
-            f"not yet forecast, and the state is in {session.state_path}",
+            "mtident: terminated (SIGTERM) while the answer was written: it was written without the sensors' "
+            f"expected stops, and the state is in {session.state_path}",
             highlight=False,
         )
     if interrupted or terminated.is_set():
@@ -753,7 +753,8 @@ def _answer(
     """The decision: the JSON object, or the table, the verdict and what it rests on (with the
     expected stops where ``forecast``, unless ``cancel`` stops them)."""
     outcome = session.result(with_forecast=forecast, cancel=cancel)
-    hindsight = session.hindsight() if replay else None
+    # the comparison with the rest of a replayed log reads it again and fits: not after a SIGTERM
+    hindsight = session.hindsight() if replay and not (cancel is not None and cancel()) else None
     if hindsight is not None:
         outcome["time_saved_min"] = hindsight.time_saved_min
         outcome["settle_time_min"] = finite_or_none(hindsight.test_settle_time_min)

@@ -532,7 +532,13 @@ def _check_events(
     return events
 
 
-def expected_stop(state: MonitorState, settings: MonitorSettings, s: int, horizon_min: float | None = None) -> float:
+def expected_stop(
+    state: MonitorState,
+    settings: MonitorSettings,
+    s: int,
+    horizon_min: float | None = None,
+    cancel: Callable[[], bool] | None = None,
+) -> float:
     """When sensor ``s`` is expected to pass the readiness predicate, if its best model's course
     goes on (its continuation taken as readings at the log's sampling interval, with the noise
     it has now); NaN where not within ``horizon_min`` (default: 5 largest time constants).
@@ -549,6 +555,8 @@ def expected_stop(state: MonitorState, settings: MonitorSettings, s: int, horizo
     horizon_min : float, optional
         The latest time (min, on the log's clock) to look at; default: the latest reading plus
         5 × ``settings.robust.max_time_constant_min``.
+    cancel : callable, optional
+        Asked before each fit of the forecast (a second or more each): True ends it, NaN.
 
     Returns
     -------
@@ -573,6 +581,8 @@ def expected_stop(state: MonitorState, settings: MonitorSettings, s: int, horizo
     times = _candidate_times(now, horizon, check.origin_min)
 
     def ready_at(when: float) -> bool:
+        if cancel is not None and cancel():
+            raise _Cancelled
         future = np.arange(now + step, when + step / 2, step)
         if not len(future):
             return False
@@ -586,12 +596,15 @@ def expected_stop(state: MonitorState, settings: MonitorSettings, s: int, horizo
         return is_within(sensor_estimate(extended, s, check.sensor, settings, check.noise_C), settings)
 
     # the interval only narrows as the model's course goes on: the first ready time by bisection
-    if not times or not ready_at(times[-1]):
+    try:
+        if not times or not ready_at(times[-1]):
+            return math.nan
+        low, high = -1, len(times) - 1
+        while high - low > 1:
+            middle = (low + high) // 2
+            low, high = (low, middle) if ready_at(times[middle]) else (middle, high)
+    except _Cancelled:
         return math.nan
-    low, high = -1, len(times) - 1
-    while high - low > 1:
-        middle = (low + high) // 2
-        low, high = (low, middle) if ready_at(times[middle]) else (middle, high)
     return float(times[high])
 
 

@@ -616,9 +616,9 @@ class WatchSession:
             return {}
         out = {}
         for s, name in enumerate(self.state.sensors):
+            out[name] = expected_stop(self.state, self.settings, s, cancel=cancel)
             if cancel is not None and cancel():
                 return None
-            out[name] = expected_stop(self.state, self.settings, s)
         return out
 
     def result(self, with_forecast: bool = True, cancel: Callable[[], bool] | None = None) -> dict[str, object]:
