@@ -291,13 +291,21 @@ def smoothed_room(time_min: FloatArray, room_C: FloatArray, window_min: float = 
     t = np.asarray(time_min, dtype=float)
     room = np.asarray(room_C, dtype=float)
     valid = np.isfinite(room)
-    sums = np.concatenate([[0.0], np.cumsum(np.where(valid, room, 0.0))])
-    counts = np.concatenate([[0], np.cumsum(valid)])
-    lo = np.searchsorted(t, t - window_min / 2.0, side="left")
-    hi = np.searchsorted(t, t + window_min / 2.0, side="right")
+    n, total = _window_sums(t, valid, window_min, np.ones_like(t), room)
     with np.errstate(invalid="ignore", divide="ignore"):
-        mean = (sums[hi] - sums[lo]) / (counts[hi] - counts[lo])
+        mean = total / n
     return np.where(valid, mean, np.nan)
+
+
+def _window_sums(time_min: FloatArray, valid: np.ndarray, window_min: float, *columns: FloatArray) -> list[FloatArray]:
+    """Each column's sum over the valid readings within ``window_min / 2`` of each time."""
+    lo = np.searchsorted(time_min, time_min - window_min / 2.0, side="left")
+    hi = np.searchsorted(time_min, time_min + window_min / 2.0, side="right")
+    out = []
+    for column in columns:
+        cumulative = np.concatenate([[0.0], np.cumsum(np.where(valid, column, 0.0))])
+        out.append(cumulative[hi] - cumulative[lo])
+    return out
 
 
 def room_trend(time_min: FloatArray, room_C: FloatArray, window_min: float) -> FloatArray:
@@ -324,12 +332,7 @@ def room_trend(time_min: FloatArray, room_C: FloatArray, window_min: float) -> F
     room = np.asarray(room_C, dtype=float)
     valid = np.isfinite(room)
     u = t - t[0]
-    sums = [
-        np.concatenate([[0.0], np.cumsum(np.where(valid, v, 0.0))]) for v in (np.ones_like(u), u, u * u, room, u * room)
-    ]
-    lo = np.searchsorted(t, t - window_min / 2.0, side="left")
-    hi = np.searchsorted(t, t + window_min / 2.0, side="right")
-    n, su, suu, sy, suy = (c[hi] - c[lo] for c in sums)
+    n, su, suu, sy, suy = _window_sums(t, valid, window_min, np.ones_like(u), u, u * u, room, u * room)
     with np.errstate(invalid="ignore", divide="ignore"):
         det = n * suu - su * su
         slope = np.where(det > 1e-9 * np.maximum(n * suu, 1e-300), (n * suy - su * sy) / det, 0.0)
