@@ -517,7 +517,8 @@ def fit_test(
     misfit = [sensors[s] for s, corr in zip(used, solved.corr, strict=True) if corr > MISFIT_FACTOR]
     if long_enough and 2 * (len(rejected) + len(misfit)) > len(fitted):
         return _contradicted(len(sensors), (*(sensors[s] for s in rejected), *misfit), levels, origin_min)
-    lag = np.array([known[s][1] if s in known else lag_sd for s in used]) if room_lag else np.zeros(len(used))
+    # without room_lag (the reference run itself) both are zero
+    lag = np.array([known[s][1] if s in known else lag_sd for s in used])
     half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag) for level, h in half.items()}
     room_gains = [known[s][2] if s in known else row for s, row in zip(used, _room_gains_of(solved), strict=True)]
     latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])

@@ -20,7 +20,7 @@ readiness predicate run on the best model's continuation.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -241,17 +241,8 @@ def _check_due(
     if machine is not None and machine.contradicted:
         # the machine model is the reference's strongest claim: where most sensors reject it, the
         # per-sensor modes of the same run are not this machine's either
-        assert settings.reference is not None
-        events.append(
-            Event(
-                "warning",
-                now,
-                f"the reference ({settings.reference.identity}): its machine model is rejected by "
-                f"{len(machine.rejected)} of the sensors it knows ({', '.join(machine.rejected)}): the reference is "
-                "not used for any sensor from now on (another machine's reference, or this machine changed since its "
-                "run; learn the reference again)",
-            )
-        )
+        why = f"is refused: its machine model is rejected by {len(machine.rejected)} of the sensors it knows"
+        events.append(_reference_dropped(settings, now, why, machine.rejected))
         dropped, used, machine = True, replace(settings, reference=None), None
         checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
     wander = unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels))
@@ -272,17 +263,8 @@ def _check_due(
         # the sensors that follow it are the exception: a reference of another machine fits a few by chance
         dropped, used = True, replace(settings, reference=None)
         machine, wander = None, {}
-        assert settings.reference is not None
-        events.append(
-            Event(
-                "warning",
-                now,
-                f"the reference ({settings.reference.identity}) is contradicted by {len(contradicting)} of the "
-                f"{known} sensors it knows ({', '.join(contradicting)}): it is not used for "
-                "any sensor from now on (another machine's reference, or this machine changed since its run; learn "
-                "the reference again)",
-            )
-        )
+        why = f"is contradicted by {len(contradicting)} of the {known} sensors it knows"
+        events.append(_reference_dropped(settings, now, why, contradicting))
         checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
         for s in range(len(checks)):
             check_sensor(s)
@@ -304,6 +286,18 @@ def _check_due(
             )
         )
     return MonitorState(state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped), events
+
+
+def _reference_dropped(settings: MonitorSettings, now: float, why: str, sensors: Sequence[str]) -> Event:
+    """The warning that the reference is used for no sensor from now on, and why."""
+    assert settings.reference is not None
+    return Event(
+        "warning",
+        now,
+        f"the reference ({settings.reference.identity}) {why} ({', '.join(sensors)}): it is not used for any "
+        "sensor from now on (another machine's reference, or this machine changed since its run; learn the "
+        "reference again)",
+    )
 
 
 def _contradicting(checks: list[SensorCheck], settings: MonitorSettings) -> tuple[list[str], int]:
