@@ -1108,11 +1108,12 @@ def test_a_state_file_from_before_a_field_with_a_default_was_added_loads_with_it
 def test_the_watch_picture_draws_the_model_with_the_room_as_logged():
     """With a room sensor, the picture drew the best model about the room's last level: a housing
     in a room that had moved since looked 0.2 °C off its own readings. It now follows the room as
-    logged, as identify's picture does."""
+    logged, as identify's picture does (the fits take the room as its two-hour trend: a room
+    cycling within a few hours is drawn as far as they follow it)."""
     from mtident.report.plots import plot_monitor
 
     t = np.arange(0.0, 241.0)
-    room = 20.0 + 0.4 * np.sin(2.0 * np.pi * t / 300.0)
+    room = 20.0 + 0.6 * np.sin(2.0 * np.pi * t / 1440.0)
     y = np.empty_like(t)
     y[0] = room[0]
     for i in range(1, len(t)):  # one node of 40 min heated by 6 °C over its room, a minute a step

@@ -42,7 +42,7 @@ from mtident.thermal.lsq import flat_lead
 from mtident.thermal.modal_search import correlation_factor, room_lag
 from mtident.thermal.modal_types import Binned, IntervalEnd, Mode, bin_samples
 from mtident.thermal.modes import equilibrium_time
-from mtident.thermal.readings import display_resolution, noise_sigma, room_trend
+from mtident.thermal.readings import ROOM_TREND_MIN, display_resolution, noise_sigma, room_input
 from mtident.thermal.robust import MISFIT_FACTOR, RobustSettings, SensorEstimate, room_wander_half_width
 
 FAST_TIME_CONSTANTS_MIN = (0.7, 2.5)
@@ -58,10 +58,6 @@ ROOM_LAG_SHARE = 1.0
 ROOM_RESPONSE_SHARE = 0.3
 """A learnt room response's own error (one sd): this share of the room's effect on the sensor, in
 quadrature with the reference's standard error (the model is a truncation)."""
-ROOM_TREND_MIN = 120.0
-"""The room enters the machine model as its local straight line over this window
-(:func:`~mtident.thermal.readings.room_trend`): the room sensor's noise and display steps are
-one error shared by every sensor, which a joint fit would otherwise take for a slow mode."""
 ROOM_RESPONSE_LAG_SHARE = 0.5
 """And this share of the lag's sd without a learnt response (:data:`ROOM_LAG_SHARE`): the drift's
 lag, which a reference's daily cycle does not show."""
@@ -460,7 +456,7 @@ def fit_test(
     time_min : ndarray, shape (N,)
     values : ndarray, shape (N, S)
     room_C : ndarray, shape (N,), optional
-        The room sensor, smoothed.
+        The room sensor as its trend (:func:`~mtident.thermal.readings.room_input`).
     noise_C : ndarray, shape (S,)
     origin_min : float
         Where the warm-up begins.
@@ -887,7 +883,7 @@ def fit_readings(
         return None
     t = np.asarray(time_min, float)
     noise, origin = noise_and_origin(t, values)
-    room = None if room_C is None else room_trend(t, np.asarray(room_C, float), ROOM_TREND_MIN)
+    room = None if room_C is None else room_input(t, np.asarray(room_C, float), ROOM_TREND_MIN)
     with one_blas_thread():
         return fit_test(model, sensors, t, values, room, noise, origin, levels)
 

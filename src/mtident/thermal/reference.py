@@ -23,9 +23,9 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
-from mtident.thermal.machine_model import ROOM_TREND_MIN, MachineModel, fit_test, learn_machine_model, noise_and_origin
+from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, noise_and_origin
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
-from mtident.thermal.readings import room_trend, smoothed_room
+from mtident.thermal.readings import ROOM_TREND_MIN, room_input
 from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
 from mtident.thermal.robust_types import DEFAULT_MAX_MODES, MAX_FREE_FAST, RobustSettings, SensorEstimate, SensorModes
 
@@ -344,7 +344,7 @@ def _learn_machine(
     if len(log.sensors) < 2:
         return None, []
     noise, origin = noise_and_origin(log.time_min, log.temperature_C)
-    room = None if room_C is None else room_trend(log.time_min, room_C, ROOM_TREND_MIN)
+    room = None if room_C is None else room_input(log.time_min, room_C, ROOM_TREND_MIN)
     args = (log.time_min, log.temperature_C, room, noise, origin)
     model = learn_machine_model(log.sensors, *args[:2], room, noise, origin, settings.max_time_constant_min)
     if model is None:
@@ -579,7 +579,7 @@ def _learn_sensor(
         if fit is None or len(fit.modes) < count:
             break
         first = int(np.searchsorted(time_min, fit.origin_min))
-        room = None if room_C is None else smoothed_room(time_min, room_C)[first:]
+        room = None if room_C is None else room_input(time_min, room_C)[first:]
         binned = bin_samples(time_min[first:], values[first:], room)
         estimates[count], sds[count] = estimate, np.asarray(log_time_constant_sd(binned, fit), dtype=float)
     if not estimates:

@@ -35,8 +35,8 @@ from mtident.thermal.readings import (
     noise_sigma,
     quantisation_step,
     rise_threshold_C,
+    room_input,
     sampling_interval_min,
-    smoothed_room,
     spikes,
 )
 from mtident.thermal.robust_types import (
@@ -208,7 +208,7 @@ def estimate_sensor(
         )
     lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
     onset = lead if lead < len(t) else 0
-    room = None if room_C is None else smoothed_room(t, np.asarray(room_C, dtype=float))[onset:]
+    room = None if room_C is None else room_input(t, np.asarray(room_C, dtype=float))[onset:]
     binned = bin_samples(t[onset:], y[onset:], room)
     if len(binned) < MIN_BINS:
         return _without_fit(
