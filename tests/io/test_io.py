@@ -1585,3 +1585,56 @@ def test_temperature_unit_leaves_a_columns_own_unit_that_agrees_and_other_quanti
     np.testing.assert_allclose(log.temperature_C[:, 1], np.arange(8.0) * 5 / 9)
     with pytest.raises(InputError, match=r"temperature unit 'X' is not one of: C, F, K"):
         read_temperature_log(write_csv("time_min,T1\n" + rows.replace(",", ";")), temperature_unit="X")
+
+
+def test_rows_after_a_row_left_out_are_named_by_their_own_line(write_csv):
+    """A message names the row as the file numbers it: a repeated row left out before it made the
+    reader name the row above."""
+    rows = "".join(f"{k},{20 + k / 10:.2f},{21 + k / 10:.2f}\n" for k in range(20))
+    twice = rows.replace("3,20.30,21.30\n", "3,20.30,21.30\n3,20.30,21.30\n")
+    log = read_temperature_log(write_csv("time_min,A,B\n" + twice.replace("8,20.80,", "8,,")))
+    # line 1 the header, k at line k + 2, one more after the row written twice
+    assert log.notes[-1] == "sensor 'A': skipped 1 empty/NaN sample(s) (rows 11)", log.notes
+    with pytest.raises(InputError, match=r"sensor 'A', row 11: 'x' is not a number"):
+        read_temperature_log(write_csv("time_min,A,B\n" + twice.replace("8,20.80,", "8,x,"), "bad.csv"))
+
+
+@pytest.mark.parametrize("text", ["", "  \n\n"])
+def test_an_empty_file_is_said_to_be_empty(write_csv, text):
+    with pytest.raises(InputError, match=r"log\.csv: an empty file; a log is CSV text, a header line"):
+        read_temperature_log(write_csv(text))
+
+
+def test_the_file_reader_reads_its_lines_with_the_followers_function(write_csv):
+    """One log reader: the rows of a whole log are parse_lines' over the layout, read as a whole log."""
+    from mtident.io.dialect import read_lines
+    from mtident.io.layout import layout_of_head
+    from mtident.io.parse import TimeState, WholeLog, parse_lines
+
+    rows = "".join(
+        f"{k};{20 + k / 10:.2f};{'' if k == 7 else f'{21 + k / 10:.2f}'}\n".replace(".", ",") for k in range(20)
+    )
+    path = write_csv("# logger\ntime_min;A;B\n" + rows)
+    log = read_temperature_log(path)
+    lines, dialect = read_lines(path)
+    layout, _ = layout_of_head(lines[0], [dialect.cells(line) for line in lines[1:]], dialect, path)
+    state, whole = parse_lines(layout, TimeState(), lines[1:], str(path), whole=WholeLog(3))
+    _, live = parse_lines(layout, TimeState(), lines[1:], str(path))
+    np.testing.assert_array_equal(whole.time_min, log.time_min)
+    np.testing.assert_array_equal(whole.temperature_C, log.temperature_C)
+    np.testing.assert_array_equal(live.temperature_C, log.temperature_C)
+    assert whole.notes == log.notes == ("sensor 'B': skipped 1 empty/NaN sample(s) (rows 10)",)
+    assert state.last_time == live.time_min[-1] == 19.0 and whole.warnings == ()
+
+
+def test_a_dataframe_of_local_stamps_is_read_across_a_summer_time_change_like_its_csv(write_csv):
+    import pandas as pd
+
+    stamps = ["2026-10-25 01:30:00", "2026-10-25 02:00:00", "2026-10-25 02:30:00", "2026-10-25 02:00:00"]
+    stamps += ["2026-10-25 02:30:00", "2026-10-25 03:00:00"]
+    frame = pd.DataFrame({"A": 20 + np.arange(6.0)}, index=pd.Index(pd.to_datetime(stamps), name="t"))
+    log = read_temperature_log(frame)
+    text = read_temperature_log(write_csv("t,A\n" + "".join(f"{s},{20 + k}\n" for k, s in enumerate(stamps))))
+    np.testing.assert_array_equal(log.time_min, [0, 30, 60, 90, 120, 150])
+    np.testing.assert_array_equal(log.time_min, text.time_min)
+    assert "read as the end of summer time" in log.notes[0] and "at row 3" in log.notes[0]

@@ -18,6 +18,7 @@ here, so they read a log the same way; the time stamps are read in
 
 from __future__ import annotations
 
+import codecs
 import csv
 import datetime
 import io
@@ -49,6 +50,7 @@ __all__ = [
     "sniff_dialect",
     "header_names",
     "read_csv",
+    "read_lines",
     "binary_kind",
     "HEAD_BYTES",
 ]
@@ -638,13 +640,108 @@ def _header_line(head: bytes, dialect: CsvDialect) -> str:
     return _LINE_BREAK.split(dialect.decode(head))[dialect.preamble_lines]
 
 
-def read_csv(path: str | Path, notes: list[str] | None = None) -> tuple[pd.DataFrame, CsvDialect]:
-    """A whole CSV file as a DataFrame, read in its own dialect; InputError, naming ``path`` as
-    given, if it is missing or no CSV.
+def read_lines(path: str | Path, notes: list[str] | None = None) -> tuple[list[str], CsvDialect]:
+    """A whole log file's lines from its header line on, read in its own dialect; InputError,
+    naming ``path`` as given, if it is missing or no CSV.
 
-    An empty column without a name (a delimiter at the end of every line) is dropped. A row with
-    more cells than the header is refused (:func:`_check_rows`); a last line cut short, without its
-    line end (a log still being written), is left out, and said in ``notes``.
+    A row with more cells than the header is refused (:func:`_check_rows`); a last line cut short,
+    without its line end (a log still being written), is left out, and said in ``notes``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file: CSV text in any dialect :func:`sniff_dialect` tells, or an Excel .xlsx workbook.
+    notes : list of str, optional
+        What was left out is appended here (a cut last line); not said where None.
+
+    Returns
+    -------
+    lines : list of str
+        The header line, the rows under it (``dialect.extra_rows``) and the data lines, without their
+        line breaks (the last one empty where the file ends in one); empty for an empty file.
+    dialect : CsvDialect
+        How the file is written.
+
+    Raises
+    ------
+    InputError
+        The file is missing, binary or an .xls workbook, has no header line or two columns of one name,
+        a row with more cells than the header, or text its encoding cannot read.
+    """
+    file = Path(path)
+    if not file.is_file():
+        msg = f"{path}: a folder, not a log file" if file.is_dir() else f"{path}: no such file"
+        raise InputError(msg)
+    with file.open("rb") as handle:
+        head = handle.read(HEAD_BYTES)
+    kind = binary_kind(head)
+    data = None
+    if kind in ("xlsx", "xls"):
+        data = workbook_as_csv(file, path)
+        head = data[:HEAD_BYTES]
+    elif kind is not None:
+        msg = f"{path}: not a text file; a log is read as CSV text (or as an Excel .xlsx workbook)"
+        raise InputError(msg)
+    # the whole file fits in the head: its last line is complete even without a newline
+    whole = len(head) < HEAD_BYTES
+    try:
+        dialect = sniff_dialect(head, whole=whole)
+    except csv.Error as exc:
+        msg = f"{path}: not a readable CSV file ({exc})"
+        raise InputError(msg) from exc
+    if dialect is None and head.strip():
+        msg = f"{path}: no header line, only # comments and blank lines"
+        raise InputError(msg)
+    if dialect is None:  # an empty file: the reader says so
+        return [], CsvDialect()
+    if data is None and dialect.encoding.startswith("utf-16") and file.stat().st_size % 2:
+        # a UTF-16 log still being written, cut inside its last character: its whole characters are
+        # read, and the cut last line is left out below; bytes without a whole line in them are no such log
+        whole_characters = file.read_bytes()[:-1]
+        if dialect.complete_length(whole_characters):
+            data = whole_characters
+    check_unique_names(dialect.header(_header_line(head, dialect)), path)
+    text = _checked_text(file.read_bytes() if data is None else data, head, dialect, path, notes)
+    return _LINE_BREAK.split(text)[dialect.preamble_lines :], dialect
+
+
+def _checked_text(data: bytes, head: bytes, dialect: CsvDialect, path: str | Path, notes: list[str] | None) -> str:
+    """The file's text, its rows checked (:func:`_check_rows`) and a last line cut short left out (said
+    in ``notes``); InputError for a row longer than the header, or bytes its encoding cannot read."""
+    try:
+        text, failed = _strictly_decoded(data, dialect.encoding), None
+    except UnicodeDecodeError as exc:  # said after a row's error, which names the line to mend
+        text, failed = dialect.decode(data), exc
+    try:
+        cut = _check_rows(text, dialect, path)
+    except InputError as exc:
+        if _looks_like_toml(head):
+            msg = _TOML_GIVEN.format(path=path)
+            raise InputError(msg) from exc
+        raise
+    if failed is not None:
+        msg = f"{path}: not a readable CSV file ({str(failed).splitlines()[0]})"
+        raise InputError(_TOML_GIVEN.format(path=path) if _looks_like_toml(head) else msg) from failed
+    if cut is None:
+        return text
+    if notes is not None:
+        notes.append(cut)
+    # up to the cut line's start: a quote it leaves open ("22,4) must not swallow the rows before it
+    return text[: max(text.rfind("\n"), text.rfind("\r")) + 1]
+
+
+def _strictly_decoded(data: bytes, encoding: str) -> str:
+    """Bytes as text in ``encoding``; UnicodeDecodeError where they are not, read as a stream is (a
+    character cut at the end is named at its own position)."""
+    decoder = codecs.getincrementaldecoder(encoding)()
+    return (decoder.decode(data) + decoder.decode(b"", final=True)).removeprefix("\ufeff")
+
+
+def read_csv(path: str | Path, notes: list[str] | None = None) -> tuple[pd.DataFrame, CsvDialect]:
+    """A whole CSV file as a DataFrame, read in its own dialect (:func:`read_lines`, whose checks
+    it makes); InputError, naming ``path`` as given, if it is missing or no CSV.
+
+    An empty column without a name (a delimiter at the end of every line) is dropped.
 
     Parameters
     ----------
@@ -664,88 +761,33 @@ def read_csv(path: str | Path, notes: list[str] | None = None) -> tuple[pd.DataF
     Raises
     ------
     InputError
-        The file is missing, binary or an .xls workbook, has no header line or two columns of one name,
-        a row with more cells than the header, or pandas cannot parse it.
+        As :func:`read_lines`, and where pandas cannot parse the file.
     """
     import pandas as pd
 
-    file = Path(path)
-    if not file.is_file():
-        msg = f"{path}: a folder, not a log file" if file.is_dir() else f"{path}: no such file"
-        raise InputError(msg)
-    with file.open("rb") as handle:
-        head = handle.read(HEAD_BYTES)
-    source: Path | io.BytesIO = file
-    kind = binary_kind(head)
-    data = None
-    if kind in ("xlsx", "xls"):
-        data = workbook_as_csv(file, path)
-        head, source = data[:HEAD_BYTES], io.BytesIO(data)
-    elif kind is not None:
-        msg = f"{path}: not a text file; a log is read as CSV text (or as an Excel .xlsx workbook)"
-        raise InputError(msg)
-    # the whole file fits in the head: its last line is complete even without a newline
-    whole = len(head) < HEAD_BYTES
-    try:
-        dialect = sniff_dialect(head, whole=whole)
-    except csv.Error as exc:
-        msg = f"{path}: not a readable CSV file ({exc})"
-        raise InputError(msg) from exc
-    if dialect is None and whole and head.strip():
-        msg = f"{path}: no header line, only # comments and blank lines"
-        raise InputError(msg)
-    dialect = dialect or CsvDialect()
-    if data is None and dialect.encoding.startswith("utf-16") and file.stat().st_size % 2:
-        # a UTF-16 log still being written, cut inside its last character: its whole characters are
-        # read (pandas refused the file, "truncated data"), and the cut last line is left out below;
-        # bytes without a whole line in them are no such log
-        whole_characters = file.read_bytes()[:-1]
-        if dialect.complete_length(whole_characters):
-            data = whole_characters
-            source = io.BytesIO(data)
-    cut = None
-    if head.strip():
-        check_unique_names(dialect.header(_header_line(head, dialect)), path)
-        try:
-            raw = file.read_bytes() if data is None else data
-            cut = _check_rows(dialect.decode(raw), dialect, path)
-        except InputError as exc:
-            if _looks_like_toml(head):
-                msg = _TOML_GIVEN.format(path=path)
-                raise InputError(msg) from exc
-            raise
-    if cut is not None:
-        # read up to the cut line's start: a quote it leaves open ("22,4) made pandas refuse the whole file
-        data = raw[: dialect.complete_length(raw)]
-        source = io.BytesIO(data)
+    lines, dialect = read_lines(path, notes)
     try:
         with warnings.catch_warnings():
             # cells past the header's are empty (_check_rows refused any other): nothing is lost
             warnings.filterwarnings("ignore", "Length of header or names does not match", pd.errors.ParserWarning)
             frame = pd.read_csv(
-                source,
+                io.StringIO("\n".join(lines)),
                 sep=dialect.delimiter,
                 decimal=dialect.decimal,
-                # the preamble, and a units row under the header
-                skiprows=[*range(dialect.preamble_lines), *range(dialect.preamble_lines + 1, dialect.head_lines)],
-                encoding=dialect.encoding,
+                # a units row under the header
+                skiprows=list(range(1, 1 + dialect.extra_rows)),
                 skipinitialspace=True,
                 # a delimiter at the end of the data rows alone: the first column stays the time, not an index
                 index_col=False,
             )
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         msg = f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})"
-        if _looks_like_toml(head):
-            msg = _TOML_GIVEN.format(path=path)
         raise InputError(msg) from exc
-    frame.columns = [str(c).removeprefix("\ufeff") for c in frame.columns]  # UTF-16's byte-order mark
     if dialect.names:  # by position: pandas has renamed a repeated name ("Date/Time.1"), left as it is
         new = dict(enumerate(dialect.names))
         frame.columns = [
             new[i] if i in new and new[i] != dialect.written_names[i] else c for i, c in enumerate(frame.columns)
         ]
-    if cut is not None and notes is not None:
-        notes.append(cut)
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed: ") and frame[c].isna().all()]
     return frame.drop(columns=unnamed), dialect
 

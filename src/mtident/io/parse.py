@@ -1,9 +1,11 @@
 """A log's data lines into rows: one pure function, :func:`parse_lines`, over the log's layout
 (:class:`~mtident.io.layout.LogLayout`) and how far its time column has been read
-(:class:`TimeState`).
+(:class:`TimeState`), for the live follower and the file reader alike.
 
-Rows come in the order written and are read one by one, as a logger writes them, so that lines
-read in pieces (a live log, polled) give the rows and notes of the lines read at once:
+The lines are split into cells and their readings read as numbers in one way
+(:mod:`mtident.io.cells`). A live log's rows come in the order written and are read one by one,
+as a logger writes them, so that lines read in pieces (a live log, polled) give the rows and
+notes of the lines read at once:
 
 * a row whose time cannot be read is refused with a warning;
 * a row at or before the last time taken is refused with a warning (quietly after a restart,
@@ -13,12 +15,13 @@ read in pieces (a live log, polled) give the rows and notes of the lines read at
 * a slashed date read the wrong way round (month first for day first) is read again the other way
   where that steps on plausibly;
 * a reading that is empty, no number or an open circuit's is NaN, with a note per sensor.
+
+A whole log (:class:`WholeLog`, the file reader's) is read at once, by its columns, and what the
+follower passes over with a warning is an error naming the row (:mod:`mtident.io.whole`).
 """
 
 from __future__ import annotations
 
-import csv
-import io
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -26,6 +29,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
+from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, numbers, split_rows
 from mtident.io.layout import LogLayout
 from mtident.io.stamps import (
     CLOCK_DAY_ZERO_MIN,
@@ -41,12 +45,9 @@ from mtident.io.stamps import (
     stamp_format,
 )
 from mtident.io.time_notes import gap_said, names_a_date, serial_date_hint, serial_date_note
+from mtident.io.whole import read_whole
 
-__all__ = ["TimeState", "ParsedRows", "parse_lines", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C"]
-
-# A PT100 channel with a broken wire reads far outside any machine-tool temperature.
-OPEN_CIRCUIT_HIGH_C = 400.0
-OPEN_CIRCUIT_LOW_C = -60.0
+__all__ = ["TimeState", "ParsedRows", "WholeLog", "parse_lines", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,8 +106,29 @@ class ParsedRows:
     warnings: tuple[str, ...] = ()
 
 
+@dataclass(frozen=True, slots=True)
+class WholeLog:
+    """Lines that are a whole log, read at once (the file reader's): a time or a reading that
+    cannot be read, and a time that repeats or goes back, is an error naming its row; rows without
+    readings at the end or at a repeated time, and rows written twice, are left out with a note.
+
+    Attributes
+    ----------
+    first_row : int
+        The number messages give the first data line (a CSV file's line after its header and the rows
+        under it; 0 for a table's first row). Blank lines are not counted.
+    """
+
+    first_row: int
+
+
 def parse_lines(
-    layout: LogLayout, state: TimeState, lines: list[str], source: str | Path, restarted: bool = False
+    layout: LogLayout,
+    state: TimeState,
+    lines: list[str],
+    source: str | Path,
+    restarted: bool = False,
+    whole: WholeLog | None = None,
 ) -> tuple[TimeState, ParsedRows]:
     """The rows of a log's data lines, and the time state after them.
 
@@ -123,25 +145,38 @@ def parse_lines(
     restarted : bool, optional
         The lines are the log read again from its start (a logger restarted): rows at or before
         the last time taken are passed over quietly, and summer-time changes found again.
+    whole : WholeLog or None, optional
+        The lines are a whole log, read from ``TimeState()``, its rows numbered in messages as this says.
 
     Returns
     -------
     state : TimeState
         How far the time column is read after them.
     rows : ParsedRows
-        The rows taken, notes and warnings.
+        The rows taken, notes and warnings (none for a whole log).
 
     Raises
     ------
     InputError
-        Spreadsheet serial dates in a column not named as dates (the unit to give is said).
+        Spreadsheet serial dates in a column not named as dates (the unit to give is said); in a whole
+        log, a time or a reading that cannot be read, a time that repeats or goes back, a sensor with
+        too many bad readings.
     """
+    rows = split_rows(lines, layout.dialect, len(layout.header))
+    if whole is not None:
+        return _whole_log(layout, rows, str(source), whole)
+    return _live_rows(layout, state, rows, source, restarted)
+
+
+def _live_rows(
+    layout: LogLayout, state: TimeState, rows: list[list[str]], source: str | Path, restarted: bool
+) -> tuple[TimeState, ParsedRows]:
+    """A live log's rows one by one, as a logger writes them (the rules of the module's docstring)."""
     notes: list[str] = []
     warnings: list[str] = []
-    conversions = layout.conversions()
     numeric_scale = layout.time_scale()
     times: list[float] = []
-    rows: list[list[float]] = []
+    taken: list[list[str]] = []
     if restarted:
         state = replace(state, clock_shift=0.0)
     # the previous row's time as the clock wrote it (minutes from the first row) and its cell: a
@@ -149,8 +184,8 @@ def parse_lines(
     # restart finds its changes again
     previous_raw = None if restarted or state.last_time is None else state.last_time - state.clock_shift
     previous_cell = None if restarted else state.last_stamp
-    for line in csv.reader(io.StringIO("\n".join(lines)), delimiter=layout.dialect.delimiter):
-        if not line or all(not c.strip() for c in line):
+    for line in rows:
+        if all(not c.strip() for c in line):
             continue
         stamped = _row_time(layout, state, line, numeric_scale, source, notes)
         if stamped is None:
@@ -177,10 +212,27 @@ def parse_lines(
         )
         previous_raw, previous_cell = raw, cell
         times.append(t)
-        rows.append(_row_values(layout, line, conversions))
-    values = np.array(rows).reshape(len(rows), len(layout.sensors))
+        taken.append(line)
+    values = _readings(layout, taken)
     notes.extend(_skipped_notes(layout.sensors, np.array(times), values))
     return state, ParsedRows(np.array(times), values, tuple(notes), tuple(warnings))
+
+
+def _whole_log(layout: LogLayout, rows: list[list[str]], source: str, whole: WholeLog) -> tuple[TimeState, ParsedRows]:
+    """A whole log's rows at once (:mod:`mtident.io.whole`), and the time state after them."""
+    time, values, notes = read_whole(layout, rows, source, whole.first_row)
+    steps = np.diff(time.time_min)
+    state = TimeState(
+        time.origin,
+        float(time.time_min[-1]),
+        time.time_format,
+        time.first_stamp,
+        time.clock_shift,
+        float(steps[-1]) if len(steps) else None,
+        time.serial_days,
+        time.last_cell,
+    )
+    return state, ParsedRows(time.time_min, values, tuple(notes))
 
 
 def _row_time(
@@ -328,23 +380,20 @@ def _follow_clock_change(
     return state
 
 
-def _row_values(layout: LogLayout, line: list[str], conversions: FloatArray) -> list[float]:
-    """A row's temperatures in °C (NaN: empty, unreadable, or an open circuit's reading)."""
-    values: list[float] = []
-    for (scale, offset), index in zip(conversions, layout.sensor_columns, strict=True):
-        try:
-            value = scale * layout.dialect.number(line[index]) + offset
-        except (ValueError, IndexError):
-            value = np.nan
-        values.append(value if OPEN_CIRCUIT_LOW_C <= value <= OPEN_CIRCUIT_HIGH_C else np.nan)
+def _readings(layout: LogLayout, rows: list[list[str]]) -> FloatArray:
+    """The rows' temperatures in °C (NaN: empty, unreadable, or an open circuit's reading)."""
+    values = np.empty((len(rows), len(layout.sensors)))
+    for k, ((scale, offset), index) in enumerate(zip(layout.conversions(), layout.sensor_columns, strict=True)):
+        celsius = scale * numbers(column(rows, index), layout.dialect) + offset
+        values[:, k] = np.where((celsius >= OPEN_CIRCUIT_LOW_C) & (celsius <= OPEN_CIRCUIT_HIGH_C), celsius, np.nan)
     return values
 
 
 def _skipped_notes(sensors: tuple[str, ...], time_min: FloatArray, values: FloatArray) -> list[str]:
     """A note per sensor with readings left out (empty, not a number, or an open circuit's)."""
     notes = []
-    for name, column in zip(sensors, values.T, strict=True):
-        missing = np.flatnonzero(np.isnan(column))
+    for name, readings in zip(sensors, values.T, strict=True):
+        missing = np.flatnonzero(np.isnan(readings))
         if len(missing):
             notes.append(
                 f"sensor {name!r}: skipped {len(missing)} empty, unreadable or open-circuit reading(s) (the first at "
