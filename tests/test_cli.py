@@ -671,3 +671,22 @@ def test_the_papers_filters_interval_stays_where_a_warm_up_allows():
     low, high = sensors["T9"]["steady_state_ci95_C"]
     assert 19.0 < low <= sensors["T9"]["steady_state_C"] <= high
     assert "not below its latest readings" in sensors["T9"]["assumptions"]["model"]
+
+
+def test_identify_min_time_and_learn_turn_their_options_into_one_frozen_request(tmp_path):
+    import dataclasses
+
+    from mtident.cli_learn import learn_command, learn_request
+    from mtident.cli_thermal import identify_command, identify_request, min_time_command, min_time_request
+
+    args = ["@sample", "--sensor", "T1", "--room-wander", "0.1", "--max-time-constant", "200", "--json"]
+    request = identify_request(identify_command.make_context("identify", args).params)
+    assert request.log.file == "@sample" and request.log.sensors == ("T1",) and request.as_json
+    assert (request.robust.room_wander_C_per_h, request.robust.max_time_constant_min) == (0.1, 200.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        request.method = "lsq"  # type: ignore[misc]
+    timed = min_time_request(min_time_command.make_context("min-time", ["@sample", "--windows", "10:20:5"]).params)
+    assert timed.windows_min == (10.0, 15.0, 20.0) and timed.periods_min == (35.0, 40.0, 45.0, 50.0)
+    out = str(tmp_path / "m.toml")
+    learnt = learn_request(learn_command.make_context("learn", ["@sample", "-o", out, "--machine", "M1"]).params)
+    assert (learnt.output_path, learnt.machine, learnt.serial) == (out, "M1", "")

@@ -47,3 +47,49 @@ def test_the_thermal_package_exports_the_default_path():
     for name in ("identify", "monitor_step", "new_state", "WatchSession", "Event", "SensorCheck", "Status"):
         assert name in mtident.thermal.__all__
         assert getattr(mtident.thermal, name) is not None
+
+
+def test_an_optional_field_is_left_out_where_none_and_an_inline_one_is_written_into_its_parent():
+    from dataclasses import dataclass
+
+    import pytest
+
+    from mtident._json import json_inline, json_optional
+
+    @dataclass(frozen=True)
+    class Part:
+        lambda_per_min: float
+
+    @dataclass(frozen=True)
+    class Answer:
+        sensor: str
+        part: Part = json_inline()
+        extra: dict[str, float] = json_inline()
+        onset_min: float | None = json_optional()
+
+    out = to_json_value(Answer("T1", Part(math.nan), {"steady_state_ci99_C": 30.5}))
+    assert out == {"sensor": "T1", "lambda_per_min": None, "steady_state_ci99_C": 30.5}
+    assert to_json_value(Answer("T1", Part(0.1), {}, 12.0))["onset_min"] == 12.0
+
+    @dataclass(frozen=True)
+    class Wrong:
+        values: tuple[float, ...] = json_inline()
+
+    with pytest.raises(TypeError, match="Wrong.values: an inline field walks to a dict, not list"):
+        to_json_value(Wrong((1.0,)))
+
+
+def test_an_identification_s_json_is_its_answer_s_fields():
+    from mtident.io.logs import read_temperature_log, sample_log_path
+    from mtident.thermal import identify
+
+    log = read_temperature_log(sample_log_path("@sample"), sensors=["T1"])
+    for method in ("lsq", "robust"):
+        result = identify(log, 30.0, method)
+        answer = result.answer(0)
+        summary = result.summary(0)
+        assert summary == to_json_value(answer) and summary["sensor"] == "T1"
+        # the method's keys are written beside the common ones, not as an object of their own
+        assert "method_answer" not in summary and "lambda_per_min" in summary
+        assert answer.method_answer.assumptions.model == summary["assumptions"]["model"]
+    assert "steady_state_ci99_C" in summary and "highest_interval" not in summary

@@ -15,7 +15,57 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["finite_or_none", "to_json_value", "walk_fields"]
+__all__ = ["finite_or_none", "json_inline", "json_optional", "to_json_value", "walk_fields"]
+
+# field metadata that :func:`walk_fields` reads: a field written only where it is not None, and a
+# field whose own fields (or items) are written into its parent's object
+_OPTIONAL = "mtident_json_optional"
+_INLINE = "mtident_json_inline"
+
+
+def json_optional() -> Any:
+    """A dataclass field, None by default, that :func:`walk_fields` leaves out where it is None
+    (a key an answer has only in some cases).
+
+    Returns
+    -------
+    dataclasses.Field
+        For a field's default: ``note: str | None = json_optional()``.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass(frozen=True)
+    ... class Answer:
+    ...     sensor: str
+    ...     onset_min: float | None = json_optional()
+    >>> to_json_value(Answer("T1")), to_json_value(Answer("T1", 12.0))
+    ({'sensor': 'T1'}, {'sensor': 'T1', 'onset_min': 12.0})
+    """
+    return dataclasses.field(default=None, metadata={_OPTIONAL: True})
+
+
+def json_inline() -> Any:
+    """A dataclass field (a dataclass or a dict with string keys) whose fields or items
+    :func:`walk_fields` writes into the object of the dataclass that holds it, not as an object of
+    its own (the keys a method adds to an answer's common ones).
+
+    Returns
+    -------
+    dataclasses.Field
+        For a field's default: ``method: FirstOrderAnswer = json_inline()``; the field has no default.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass(frozen=True)
+    ... class Answer:
+    ...     sensor: str
+    ...     extra: dict[str, float] = json_inline()
+    >>> to_json_value(Answer("T1", {"steady_state_ci99_C": 30.5}))
+    {'sensor': 'T1', 'steady_state_ci99_C': 30.5}
+    """
+    return dataclasses.field(metadata={_INLINE: True})
 
 
 def finite_or_none(value: float) -> float | None:
@@ -43,7 +93,8 @@ def finite_or_none(value: float) -> float | None:
 def walk_fields(value: Any, leaf: Callable[[Any], Any], *, dict_as_pairs: bool = False) -> Any:
     """A tree of plain containers: a dataclass as a dict of its fields (in their order), a tuple
     or list as a list, a dict as a dict (or as ``[key, value]`` pairs), every other value through
-    ``leaf``.
+    ``leaf``. A field made with :func:`json_optional` is left out where it is None; one made with
+    :func:`json_inline` has its own fields or items written in its place.
 
     Parameters
     ----------
@@ -61,6 +112,11 @@ def walk_fields(value: Any, leaf: Callable[[Any], Any], *, dict_as_pairs: bool =
     object
         The walked tree.
 
+    Raises
+    ------
+    TypeError
+        A :func:`json_inline` field whose value does not walk to a dict.
+
     Examples
     --------
     >>> from dataclasses import dataclass
@@ -72,10 +128,20 @@ def walk_fields(value: Any, leaf: Callable[[Any], Any], *, dict_as_pairs: bool =
     [{'time_constant_min': '12.0', 'amplitude_C': '-3.5'}]
     """
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {
-            f.name: walk_fields(getattr(value, f.name), leaf, dict_as_pairs=dict_as_pairs)
-            for f in dataclasses.fields(value)
-        }
+        tree: dict[str, Any] = {}
+        for f in dataclasses.fields(value):
+            item = getattr(value, f.name)
+            if item is None and f.metadata.get(_OPTIONAL):
+                continue
+            walked = walk_fields(item, leaf, dict_as_pairs=dict_as_pairs)
+            if not f.metadata.get(_INLINE):
+                tree[f.name] = walked
+            elif isinstance(walked, dict):
+                tree.update(walked)
+            else:
+                msg = f"{type(value).__name__}.{f.name}: an inline field walks to a dict, not {type(walked).__name__}"
+                raise TypeError(msg)
+        return tree
     if isinstance(value, tuple | list):
         return [walk_fields(v, leaf, dict_as_pairs=dict_as_pairs) for v in value]
     if isinstance(value, dict):

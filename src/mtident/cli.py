@@ -125,17 +125,20 @@ def table_console(min_width: int = 100) -> OptionConsole:
     return OptionConsole(width=max(probe.width, min_width, 0 if probe.is_terminal else 200))
 
 
-def print_json(payload: dict[str, Any]) -> None:
+def print_json(payload: object) -> None:
     """Exactly one JSON object on stdout (the library's parameters said as options).
 
     Parameters
     ----------
-    payload : dict
-        The answer, JSON-serialisable and free of NaN and infinity (``json.dumps`` refuses them); every
-        string in it, nested ones too, has the library's parameters replaced by :func:`as_options`.
-        It is written indented by 2, keys sorted.
+    payload : dataclass or dict
+        The answer: a record, written from its fields (:func:`~mtident._json.to_json_value`: NaN and
+        infinity as null), or a dict of JSON types. Every string in it, nested ones too, has the
+        library's parameters replaced by :func:`as_options`. It is written indented by 2, keys sorted.
     """
-    click.echo(json.dumps(_said_as_options(payload), indent=2, sort_keys=True, allow_nan=False))
+    from mtident._json import to_json_value
+
+    tree = _said_as_options(to_json_value(payload))
+    click.echo(json.dumps(tree, indent=2, sort_keys=True, allow_nan=False))
 
 
 class FiniteFloatRange(click.FloatRange):

@@ -54,16 +54,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
     """
     result = modes(load_parameters(params_path))
     if as_json:
-        print_json(
-            {
-                "natural_frequencies_Hz": [float(f) for f in result.frequencies_Hz],
-                "positive_definite": result.positive_definite,
-                "damping_ratios": [float(z) for z in result.damping_ratios],
-                "mode_shapes": {
-                    name: [float(v) for v in row] for name, row in zip(COORDINATES, result.shapes, strict=True)
-                },
-            }
-        )
+        print_json(result.answer())
         return
     table = Table(title="Feed-drive modes (undamped; shapes mass-normalised)")
     table.add_column("mode")
@@ -362,9 +353,9 @@ def identify_command(
 
         plot_feed_drive_identification(result, response, plot_path, truth)
         stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
-    summary = result.summary(truth)
+    answer = result.answer(truth)
     if as_json:
-        print_json(summary)
+        print_json(answer)
         return
     held = result.reproduces_record() is not False
     table = Table(
@@ -381,8 +372,8 @@ def identify_command(
         row = [f"{name} ({UNITS[name]})", f"{getattr(guess, name):.5g}"]
         row += [f"{filtered[i]:.5g}"] if filtered is not None else []
         row += [estimate, half_width, known]
-        if truth:
-            row += [f"{getattr(truth, name):.5g}", f"{summary['error_percent'][name]:.3g}"]  # type: ignore[index]
+        if truth and answer.error_percent is not None:
+            row += [f"{getattr(truth, name):.5g}", f"{answer.error_percent[name]:.3g}"]
         table.add_row(*row)
     table_console().print(table)
     corr = Table(title="Correlation of estimated and measured responses (Nguyen-Quoc et al. Table 2)")
@@ -557,7 +548,7 @@ def plan_command(
     with stderr.status(f"predicting {len(candidates)} tests…"):
         plan = plan_tests(guess, candidates, noise_fraction, target, refine=refine)
     if as_json:
-        print_json(plan.summary())
+        print_json(plan.answer())
         return
     _print_plan(plan, measured)
 

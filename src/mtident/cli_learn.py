@@ -5,23 +5,26 @@ from __future__ import annotations
 import dataclasses
 import math
 import sys
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import click
 import numpy as np
 from rich.table import Table
 
-from mtident._json import to_json_value
 from mtident.cli import OutputPath, print_json, table_console, thermal, user_errors
 from mtident.cli_thermal import (
+    LogRequest,
     _column_layout,
     load_log_with_room,
     log_options,
+    log_request,
     max_time_constant_option,
     stderr,
 )
 from mtident.exceptions import InputError
-from mtident.thermal.robust_types import RobustSettings
+from mtident.thermal.robust_types import RobustSettings, SensorModes
 
 if TYPE_CHECKING:
     from mtident.thermal.reference import MachineReference
@@ -61,22 +64,7 @@ if TYPE_CHECKING:
 @click.option("--run-date", "run_date", metavar="DATE", default="", help="The day the run ran (2026-11-20).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def learn_command(
-    file: str,
-    sensors: tuple[str, ...],
-    time_col: str | None,
-    time_unit: str | None,
-    temperature_unit: str | None,
-    ambient_col: str | None,
-    max_tau_min: float,
-    output_path: str,
-    every_mode: bool,
-    machine: str,
-    serial: str,
-    program: str,
-    run_date: str,
-    as_json: bool,
-) -> None:
+def learn_command(**options: Any) -> None:
     """Learn each sensor's thermal modes from FILE, a warm-up that ran to equilibrium.
 
     The time constants belong to the machine's structure, not to the load: a later test of the
@@ -87,18 +75,29 @@ def learn_command(
 
     Parameters
     ----------
-    file : str
-        FILE: a log, or a shipped log's @-name.
-    sensors : tuple of str
-        --sensor (empty: all).
-    time_col, time_unit : str or None
-        --time-col and --time-unit.
-    temperature_unit : str or None
-        --unit: the unit of the temperature columns that state none.
-    ambient_col : str or None
+    **options
+        The options by click's names, each with its help above (:func:`learn_request`).
+
+    Raises
+    ------
+    InputError
+        A log that cannot be read, or no sensor whose modes could be learnt.
+    """
+    run_learn(learn_request(options))
+
+
+@dataclass(frozen=True, slots=True)
+class LearnRequest:
+    """What ``thermal learn`` was asked, grouped (:func:`learn_request`).
+
+    Attributes
+    ----------
+    log : LogRequest
+        FILE and how its columns are read.
+    room_col : str or None
         --ambient: the room sensor's column.
-    max_tau_min : float
-        --max-time-constant (min).
+    robust : RobustSettings
+        --max-time-constant.
     output_path : str
         -o: the reference file to write.
     every_mode : bool
@@ -107,25 +106,126 @@ def learn_command(
         --machine, --serial, --program and --run-date: what the run was of, written in the file.
     as_json : bool
         --json.
+    """
+
+    log: LogRequest
+    room_col: str | None
+    robust: RobustSettings
+    output_path: str
+    every_mode: bool
+    machine: str
+    serial: str
+    program: str
+    run_date: str
+    as_json: bool
+
+
+def learn_request(options: Mapping[str, Any]) -> LearnRequest:
+    """The options of ``thermal learn``, by click's names, grouped into settings.
+
+    Parameters
+    ----------
+    options : mapping
+        The command's options (their help is the command's ``--help``).
+
+    Returns
+    -------
+    LearnRequest
+    """
+    return LearnRequest(
+        log=log_request(options),
+        room_col=options["ambient_col"],
+        robust=RobustSettings(max_time_constant_min=options["max_tau_min"]),
+        output_path=options["output_path"],
+        every_mode=options["every_mode"],
+        machine=options["machine"],
+        serial=options["serial"],
+        program=options["program"],
+        run_date=options["run_date"],
+        as_json=options["as_json"],
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class MachineModelAnswer:
+    """A reference's machine model as the JSON of ``thermal learn`` says it.
+
+    Attributes
+    ----------
+    time_constants_min, box : tuple of float
+        The shared modes' time constants (min) and their relative half-widths searched.
+    gains_C : dict of str to tuple of float
+        Per sensor, its amplitude of each mode (°C).
+    room_lag_min : dict of str to float
+        Per sensor whose path from the room was learnt, its lag behind the room (min).
+    """
+
+    time_constants_min: tuple[float, ...]
+    box: tuple[float, ...]
+    gains_C: dict[str, tuple[float, ...]]
+    room_lag_min: dict[str, float]
+
+
+@dataclass(frozen=True, slots=True)
+class LearnAnswer:
+    """The JSON answer of ``thermal learn``: the reference written, its fields.
+
+    Attributes
+    ----------
+    reference : str
+        The file written.
+    source, machine, serial, program, run_date : str
+        The run's log and what it was of.
+    max_time_constant_min : float
+    room : str
+        How the room entered.
+    sensors : dict of str to SensorModes
+        Each sensor's modes learnt.
+    machine_model : MachineModelAnswer or None
+    warnings : tuple of str
+    """
+
+    reference: str
+    source: str
+    machine: str
+    serial: str
+    program: str
+    run_date: str
+    max_time_constant_min: float
+    room: str
+    sensors: dict[str, SensorModes]
+    machine_model: MachineModelAnswer | None
+    warnings: tuple[str, ...]
+
+
+def run_learn(request: LearnRequest) -> None:
+    """Learn the reference a :class:`LearnRequest` asks for, write it, and print it as a table or JSON.
+
+    Parameters
+    ----------
+    request : LearnRequest
 
     Raises
     ------
     InputError
-        A log that cannot be read, or no sensor whose modes could be learnt.
+        As :func:`learn_command`.
     """
     from mtident.thermal.reference import learn_reference, save_reference
 
-    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
+    log, room = load_log_with_room(request.log, request.room_col)
     with stderr.status(f"learning the modes of {len(log.sensors)} sensor(s)…"):
-        reference, warnings = learn_reference(log, room, RobustSettings(max_time_constant_min=max_tau_min))
-    if every_mode:
+        reference, warnings = learn_reference(log, room, request.robust)
+    if request.every_mode:
         reference = reference.holding_every_mode()
-    reference = dataclasses.replace(reference, machine=machine, serial=serial, program=program, run_date=run_date)
+    reference = dataclasses.replace(
+        reference, machine=request.machine, serial=request.serial, program=request.program, run_date=request.run_date
+    )
     for warning in warnings:
         stderr.print(f"mtident: warning: {warning}", highlight=False)
     if not reference.sensors:
         msg = f"{log.source}: no sensor's modes could be learnt; nothing written"
         raise InputError(msg)
+    output_path = request.output_path
     save_reference(reference, output_path)
     doubtful = [name for name, m in reference.sensors.items() if m.doubt is not None]
     unused = (
@@ -136,24 +236,28 @@ def learn_command(
         else ""
     )
     stderr.print(f"mtident: reference written to {output_path}{unused}", highlight=False)
-    if as_json:
+    if request.as_json:
         print_json(
-            {
-                "reference": str(output_path),
-                "source": reference.source,
-                "machine": reference.machine,
-                "serial": reference.serial,
-                "program": reference.program,
-                "run_date": reference.run_date,
-                "max_time_constant_min": reference.max_time_constant_min,
-                "room": reference.room,
-                "sensors": to_json_value(reference.sensors),
-                "machine_model": _machine_model_json(reference),
-                "warnings": warnings,
-            }
+            LearnAnswer(
+                reference=str(output_path),
+                source=reference.source,
+                machine=reference.machine,
+                serial=reference.serial,
+                program=reference.program,
+                run_date=reference.run_date,
+                max_time_constant_min=reference.max_time_constant_min,
+                room=reference.room,
+                sensors=reference.sensors,
+                machine_model=_machine_model_answer(reference),
+                warnings=tuple(warnings),
+            )
         )
-        _exit_if_none_used(reference)
-        return
+    else:
+        _learn_table(reference)
+    _exit_if_none_used(reference)
+
+
+def _learn_table(reference: MachineReference) -> None:
     table = Table(title=f"{reference.identity}: modes learnt (time constants with their box)")
     for column in ("sensor", "time constants (min)", "amplitudes (°C)", "used by later tests"):
         table.add_column(column, justify="left" if column == "sensor" else "right", **_column_layout(column))
@@ -176,23 +280,22 @@ def learn_command(
             ),
             highlight=False,
         )
-    _exit_if_none_used(reference)
 
 
-def _machine_model_json(reference: MachineReference) -> dict[str, object] | None:
+def _machine_model_answer(reference: MachineReference) -> MachineModelAnswer | None:
     model = reference.machine_model
     if model is None:
         return None
-    return {
-        "time_constants_min": list(model.time_constants_min),
-        "box": list(model.box),
-        "gains_C": {name: list(row) for name, row in zip(model.sensors, model.gains_C, strict=True)},
-        "room_lag_min": {
+    return MachineModelAnswer(
+        time_constants_min=model.time_constants_min,
+        box=model.box,
+        gains_C=dict(zip(model.sensors, model.gains_C, strict=True)),
+        room_lag_min={
             name: float(np.dot(row, model.time_constants_min))
             for name, row in zip(model.sensors, model.room_gains, strict=True)
             if all(map(math.isfinite, row))
         },
-    }
+    )
 
 
 def _exit_if_none_used(reference: MachineReference) -> None:

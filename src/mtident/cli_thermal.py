@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import math
 import shlex
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal, TypedDict
+from typing import TYPE_CHECKING, Any, Literal, TypedDict
 
 import click
 import numpy as np
@@ -29,12 +31,14 @@ from mtident.io.logs import SAMPLES, TemperatureLog, read_temperature_log, sampl
 from mtident.io.time_notes import TIME_UNITS
 from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
-from mtident.thermal.identification import Identification, MethodDetails
+from mtident.thermal.identification import SensorAnswer
+from mtident.thermal.min_time import MinTimeAnswer, MinTimeResult
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
 from mtident.thermal.robust_types import MAX_FREE_FAST, RobustSettings
 from mtident.thermal.settings import IDENTIFY_METHODS, ROBUST_METHOD
 
 if TYPE_CHECKING:
+    from mtident.io.describe import LogDescription
     from mtident.thermal.reference import MachineReference
 
 stderr = OptionConsole(stderr=True, soft_wrap=True)
@@ -80,27 +84,51 @@ def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
     return list(dict.fromkeys(name for name in names if name and name != "all"))
 
 
-def load_log(
-    file: str,
-    sensors: tuple[str, ...],
-    time_col: str | None,
-    time_unit: str | None,
-    temperature_unit: str | None = None,
-) -> TemperatureLog:
+@dataclass(frozen=True, slots=True)
+class LogRequest:
+    """FILE and how its columns are read (:func:`log_options`).
+
+    Attributes
+    ----------
+    file : str
+        FILE as given: a log, a shipped log's @-name, an MTConnect agent's URL or an OPC UA server's.
+    sensors : tuple of str
+        --sensor (empty: all).
+    time_col, time_unit, temperature_unit : str or None
+        --time-col, --time-unit and --unit.
+    """
+
+    file: str
+    sensors: tuple[str, ...]
+    time_col: str | None
+    time_unit: str | None
+    temperature_unit: str | None
+
+
+def log_request(options: Mapping[str, Any]) -> LogRequest:
+    """The options of :func:`log_options`, by click's names, as one value.
+
+    Parameters
+    ----------
+    options : mapping
+        A command's options; those of :func:`log_options` are read.
+
+    Returns
+    -------
+    LogRequest
+    """
+    return LogRequest(
+        options["file"], options["sensors"], options["time_col"], options["time_unit"], options["temperature_unit"]
+    )
+
+
+def load_log(request: LogRequest) -> TemperatureLog:
     """The log FILE names, read as the options say; its notes said on stderr.
 
     Parameters
     ----------
-    file : str
-        The FILE argument: a path, or a shipped log's @-name.
-    sensors : tuple of str
-        The --sensor values (empty: all).
-    time_col : str or None
-        The --time-col option.
-    time_unit : str or None
-        The --time-unit option.
-    temperature_unit : str or None, optional
-        The --unit option: the unit of the temperature columns that state none.
+    request : LogRequest
+        FILE, --sensor (empty: all), --time-col, --time-unit and --unit.
 
     Returns
     -------
@@ -111,43 +139,28 @@ def load_log(
     InputError
         A log that cannot be read as asked.
     """
-    path = log_path(file)
+    path = log_path(request.file)
     log = read_temperature_log(
         path,
-        time_col=time_col,
-        time_unit=time_unit,
-        sensors=asked_sensors(sensors, path) or None,
-        temperature_unit=temperature_unit,
+        time_col=request.time_col,
+        time_unit=request.time_unit,
+        sensors=asked_sensors(request.sensors, path) or None,
+        temperature_unit=request.temperature_unit,
     )
     for note in log.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
     return log
 
 
-def load_log_with_room(
-    file: str,
-    sensors: tuple[str, ...],
-    time_col: str | None,
-    time_unit: str | None,
-    room_col: str | None,
-    temperature_unit: str | None = None,
-) -> tuple[TemperatureLog, np.ndarray | None]:
+def load_log_with_room(request: LogRequest, room_col: str | None) -> tuple[TemperatureLog, np.ndarray | None]:
     """The log's sensors, and the room column split off from them when one is named.
 
     Parameters
     ----------
-    file : str
-        The FILE argument: a path, or a shipped log's @-name.
-    sensors : tuple of str
-        The --sensor values (empty: all).
-    time_col : str or None
-        The --time-col option.
-    time_unit : str or None
-        The --time-unit option.
+    request : LogRequest
+        FILE and how its columns are read; the room's column is read in the unit --unit says too.
     room_col : str or None
         The --ambient option: the room sensor's column; None without one.
-    temperature_unit : str or None, optional
-        The --unit option: the unit of the temperature columns that state none, the room's too.
 
     Returns
     -------
@@ -162,14 +175,12 @@ def load_log_with_room(
         A log that cannot be read as asked, or no sensor column besides the room column.
     """
     if room_col is None:
-        log = load_log(file, sensors, time_col, time_unit, temperature_unit)
+        log = load_log(request)
         _say_room_candidates(log.sensors, "identified as a machine sensor")
         return log, None
-    asked = asked_sensors(sensors, log_path(file))
+    asked = asked_sensors(request.sensors, log_path(request.file))
     # only the asked-for columns and the room are read: a dead column elsewhere does not matter
-    every = load_log(
-        file, tuple(dict.fromkeys([*asked, room_col])) if asked else (), time_col, time_unit, temperature_unit
-    )
+    every = load_log(replace(request, sensors=tuple(dict.fromkeys([*asked, room_col])) if asked else ()))
     log, room = every.split_room(room_col)
     return log.select([name for name in asked if name != room_col] or None), room
 
@@ -409,27 +420,7 @@ def load_reference_file(reference_path: str | None, machine: str | None = None) 
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def identify_command(
-    file: str,
-    sensors: tuple[str, ...],
-    time_col: str | None,
-    time_unit: str | None,
-    temperature_unit: str | None,
-    window_min: float,
-    method: str,
-    preset: str,
-    max_tau_min: float,
-    reference_path: str | None,
-    machine: str | None,
-    free_fast_modes: int,
-    room_wander: float,
-    horizon_min: float | None,
-    pseudo_seed: int | None,
-    ambient_col: str | None,
-    plot_path: str | None,
-    curve_path: str | None,
-    as_json: bool,
-) -> None:
+def identify_command(**options: Any) -> None:
     """Identify the temperature rise from the first WINDOW minutes of FILE and predict the rest.
 
     FILE is a CSV log (time column, one column per sensor), or @sample for the
@@ -444,153 +435,217 @@ def identify_command(
 
     Parameters
     ----------
-    file : str
-        FILE: a log, or a shipped log's @-name.
-    sensors : tuple of str
-        --sensor (empty: all).
-    time_col, time_unit : str or None
-        --time-col and --time-unit.
-    temperature_unit : str or None
-        --unit: the unit of the temperature columns that state none.
-    window_min : float
-        --window: the identification time L (min).
-    method : str
-        --method.
-    preset : str
-        --preset (first-order filters only).
-    max_tau_min : float
-        --max-time-constant (min).
-    reference_path : str or None
-        --reference.
-    machine : str or None
-        --machine: the machine the test is of.
-    free_fast_modes : int
-        --free-fast-modes.
-    room_wander : float
-        --room-wander (°C in an hour).
-    horizon_min : float or None
-        --horizon (min).
-    pseudo_seed : int or None
-        --pseudo-seed (first-order filters only).
-    ambient_col : str or None
-        --ambient: the room sensor's column.
-    plot_path, curve_path : str or None
-        --plot and --curve: the picture and the CSV to write.
-    as_json : bool
-        --json.
+    **options
+        The options by click's names, each with its help above (:func:`identify_request`).
 
     Raises
     ------
     InputError
         Options that do not go together, or a log that cannot be read (said as a one-line error).
     """
-    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
-    settings = RobustSettings(
-        max_time_constant_min=max_tau_min, room_wander_C_per_h=room_wander, free_fast_modes=free_fast_modes
+    run_identify(identify_request(options))
+
+
+@dataclass(frozen=True, slots=True)
+class IdentifyRequest:
+    """What ``thermal identify`` was asked, grouped (:func:`identify_request`).
+
+    Attributes
+    ----------
+    log : LogRequest
+        FILE and how its columns are read.
+    room_col : str or None
+        --ambient: the room sensor's column.
+    window_min : float
+        --window: the identification time L (min).
+    method, preset : str
+        --method and --preset (first-order filters only).
+    robust : RobustSettings
+        --max-time-constant, --room-wander and --free-fast-modes.
+    reference_path : str or None
+        --reference.
+    machine : str or None
+        --machine: the machine the test is of.
+    horizon_min : float or None
+        --horizon (min).
+    pseudo_seed : int or None
+        --pseudo-seed (first-order filters only).
+    plot_path, curve_path : str or None
+        --plot and --curve: the picture and the CSV to write.
+    as_json : bool
+        --json.
+    """
+
+    log: LogRequest
+    room_col: str | None
+    window_min: float
+    method: str
+    preset: str
+    robust: RobustSettings
+    reference_path: str | None
+    machine: str | None
+    horizon_min: float | None
+    pseudo_seed: int | None
+    plot_path: str | None
+    curve_path: str | None
+    as_json: bool
+
+
+def identify_request(options: Mapping[str, Any]) -> IdentifyRequest:
+    """The options of ``thermal identify``, by click's names, grouped into settings.
+
+    Parameters
+    ----------
+    options : mapping
+        The command's options (their help is the command's ``--help``).
+
+    Returns
+    -------
+    IdentifyRequest
+    """
+    return IdentifyRequest(
+        log=log_request(options),
+        room_col=options["ambient_col"],
+        window_min=options["window_min"],
+        method=options["method"],
+        preset=options["preset"],
+        robust=RobustSettings(
+            max_time_constant_min=options["max_tau_min"],
+            room_wander_C_per_h=options["room_wander"],
+            free_fast_modes=options["free_fast_modes"],
+        ),
+        reference_path=options["reference_path"],
+        machine=options["machine"],
+        horizon_min=options["horizon_min"],
+        pseudo_seed=options["pseudo_seed"],
+        plot_path=options["plot_path"],
+        curve_path=options["curve_path"],
+        as_json=options["as_json"],
     )
+
+
+@dataclass(frozen=True, slots=True)
+class IdentifiedSensors:
+    """The JSON answer of ``thermal identify`` for more than one sensor.
+
+    Attributes
+    ----------
+    sensors : tuple of SensorAnswer
+    method : str
+    window_min : float
+        The identification time L used.
+    """
+
+    sensors: tuple[SensorAnswer, ...]
+    method: str
+    window_min: float
+
+
+def run_identify(request: IdentifyRequest) -> None:
+    """Identify the log an :class:`IdentifyRequest` names, write its picture and curves, and print
+    its answer as a table or JSON.
+
+    Parameters
+    ----------
+    request : IdentifyRequest
+
+    Raises
+    ------
+    InputError
+        As :func:`identify_command`.
+    """
+    log, room = load_log_with_room(request.log, request.room_col)
     with stderr.status(f"fitting {len(log.sensors)} sensor(s)…"):
         result = identify(
             log,
-            window_min,
-            method,
-            preset,
-            horizon_min,
-            pseudo_seed,
+            request.window_min,
+            request.method,
+            request.preset,
+            request.horizon_min,
+            request.pseudo_seed,
             room,
-            settings=settings,
-            reference=load_reference_file(reference_path, machine),
-            room_sensor=ambient_col,
+            settings=request.robust,
+            reference=load_reference_file(request.reference_path, request.machine),
+            room_sensor=request.room_col,
         )
-    if method != ROBUST_METHOD:
+    if request.method != ROBUST_METHOD:
         stderr.print(
             "mtident: note: the papers' first-order model: the interval assumes a first-order machine (a slower mode "
             "not yet seen moves T∞ beyond it); --method robust covers up to four modes",
             highlight=False,
         )
-    if window_min > result.window_min and result.n_window == len(log.time_min):
+    if request.window_min > result.window_min and result.n_window == len(log.time_min):
         stderr.print(
-            f"mtident: note: the log ends at t = {result.window_min:g} min, before --window {window_min:g}: identified "
-            "from all of it",
+            f"mtident: note: the log ends at t = {result.window_min:g} min, before --window {request.window_min:g}: "
+            "identified from all of it",
             highlight=False,
         )
     for note in result.notes[len(log.notes) :]:
         stderr.print(f"mtident: warning: {note}", highlight=False)
-    if plot_path:
+    if request.plot_path:
         from mtident.report import plot_identification
 
-        plot_identification(result, plot_path)
-        stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
-    if curve_path:
-        result.curve_frame().to_csv(curve_path, index=False, float_format="%.6f")
+        plot_identification(result, request.plot_path)
+        stderr.print(f"mtident: plot written to {request.plot_path}", highlight=False)
+    if request.curve_path:
+        result.curve_frame().to_csv(request.curve_path, index=False, float_format="%.6f")
         stderr.print(
-            f"mtident: curves written to {curve_path} ({len(result.time_min)} rows to t = {result.time_min[-1]:g} min)",
+            f"mtident: curves written to {request.curve_path} ({len(result.time_min)} rows to t = "
+            f"{result.time_min[-1]:g} min)",
             highlight=False,
         )
-    summaries = [result.summary(i) for i in range(len(result.sensors))]
-    if as_json:
-        print_json(
-            summaries[0]
-            if len(summaries) == 1
-            else {"sensors": summaries, "method": method, "window_min": result.window_min}
-        )
+    answers = tuple(result.answer(i) for i in range(len(result.sensors)))
+    if request.as_json:
+        print_json(answers[0] if len(answers) == 1 else IdentifiedSensors(answers, request.method, result.window_min))
         return
-    _identify_table(log.source, result, summaries, method, preset)
+    _identify_table(log.source, request, result.window_min, answers)
 
 
 def _identify_table(
-    source: str,
-    result: Identification[MethodDetails],
-    summaries: list[dict[str, object]],
-    method: str,
-    preset: str,
+    source: str, request: IdentifyRequest, window_min: float, answers: tuple[SensorAnswer, ...]
 ) -> None:
-    how = "model-robust: up to four modes" if method == ROBUST_METHOD else f"{method}, preset {preset}: first order"
-    table = Table(title=f"{source}: identified from the first {result.window_min:g} min ({how})")
+    robust = request.method == ROBUST_METHOD
+    how = "model-robust: up to four modes" if robust else f"{request.method}, preset {request.preset}: first order"
+    table = Table(title=f"{source}: identified from the first {window_min:g} min ({how})")
     for column in ("sensor", "T∞ (°C)", "95 % interval", "t_eq (min)", "RMSE (°C)", "trusted", "measured T / t_eq"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
-    for d in summaries:
-        interval = d["steady_state_ci95_C"]
-        assert isinstance(interval, list)
-        lo, hi = interval
+    for a in answers:
+        lo, hi = a.steady_state_ci95_C
         measured = (
             "—"
-            if d["measured_final_C"] is None
-            else f"{d['measured_final_C']:.2f} / {_fmt(d['measured_equilibrium_time_min'], 0)}"
-            + (" *" if d.get("measured_settled") is False else "")
+            if not math.isfinite(a.measured_final_C)
+            else f"{a.measured_final_C:.2f} / {_fmt(a.measured_equilibrium_time_min, 0)}"
+            + (" *" if a.measured_settled is False else "")
         )
         table.add_row(
-            str(d["sensor"]),
-            _fmt(d["steady_state_C"]),
+            a.sensor,
+            _fmt(a.steady_state_C),
             f"{_fmt(lo)} to {_fmt(hi)}",
-            _fmt(d["equilibrium_time_min"], 0),
-            _fmt(d["rmse_C"], 3),
-            "yes" if d["model_ok"] else "[yellow]no[/]",
+            _fmt(a.equilibrium_time_min, 0),
+            _fmt(a.rmse_C, 3),
+            "yes" if a.model_ok else "[yellow]no[/]",
             measured,
         )
     console = table_console()
     console.print(table)
-    if any(d.get("measured_settled") is False for d in summaries):
+    if any(a.measured_settled is False for a in answers):
         console.print(
             "* the log's last quarter still moved 0.1 °C or more, or enough to leave more than 0.05 °C to come "
             "with a mode as slow as the largest time constant: it may not have settled, and its last level and "
             "95 %-rise time may be short of where it settles.",
             highlight=False,
         )
-    assumed = summaries[0]["assumptions"]
-    assert isinstance(assumed, dict)
-    if method == ROBUST_METHOD:
-        console.print(
-            f"Assumes: {assumed['model']}, time constants up to {assumed['max_time_constant_min']:g} min; room "
-            f"{assumed['room']}.",
-            highlight=False,
-        )
-        for d in summaries:
-            said = d["assumptions"]
-            assert isinstance(said, dict)
-            if said["reference"]:
-                console.print(f"  reference for {d['sensor']}: {said['reference']}", highlight=False)
-    else:
-        console.print(f"Assumes: {assumed['model']}.", highlight=False)
+    assumed = answers[0].method_answer.assumptions
+    if not robust:
+        console.print(f"Assumes: {assumed.model}.", highlight=False)
+        return
+    console.print(
+        f"Assumes: {assumed.model}, time constants up to {assumed.max_time_constant_min:g} min; room {assumed.room}.",
+        highlight=False,
+    )
+    for a in answers:
+        if a.method_answer.assumptions.reference:
+            console.print(f"  reference for {a.sensor}: {a.method_answer.assumptions.reference}", highlight=False)
 
 
 def _float_list(text: str, option: str) -> list[float]:
@@ -641,53 +696,75 @@ def _float_list(text: str, option: str) -> list[float]:
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
-def min_time_command(
-    file: str,
-    sensors: tuple[str, ...],
-    time_col: str | None,
-    time_unit: str | None,
-    temperature_unit: str | None,
-    sampling_periods: str,
-    windows: str | None,
-    method: str,
-    preset: str,
-    ambient_col: str | None,
-    plot_path: str | None,
-    as_json: bool,
-) -> None:
+def min_time_command(**options: Any) -> None:
     """Find the minimal identification time (Xia et al. 2014 §2.4): RMSE against L for several sampling periods.
 
     \f
 
     Parameters
     ----------
-    file : str
-        FILE: a log, or a shipped log's @-name.
-    sensors : tuple of str
-        --sensor (empty: all).
-    time_col, time_unit : str or None
-        --time-col and --time-unit.
-    temperature_unit : str or None
-        --unit: the unit of the temperature columns that state none.
-    sampling_periods : str
-        --sampling-periods: minutes, comma-separated.
-    windows : str or None
-        --windows: START:STOP[:STEP] minutes.
-    method, preset : str
-        --method and --preset.
-    ambient_col : str or None
-        --ambient: the room sensor's column.
-    plot_path : str or None
-        --plot.
-    as_json : bool
-        --json.
+    **options
+        The options by click's names, each with its help above (:func:`min_time_request`).
 
     Raises
     ------
     InputError
         --sampling-periods or --windows not as asked, or a log that cannot be read.
     """
-    periods = _float_list(sampling_periods, "--sampling-periods")
+    run_min_time(min_time_request(options))
+
+
+@dataclass(frozen=True, slots=True)
+class MinTimeRequest:
+    """What ``thermal min-time`` was asked, grouped (:func:`min_time_request`).
+
+    Attributes
+    ----------
+    log : LogRequest
+        FILE and how its columns are read.
+    room_col : str or None
+        --ambient: the room sensor's column.
+    periods_min : tuple of float
+        --sampling-periods (min).
+    windows_min : tuple of float or None
+        --windows: the candidate identification times L (min); None: the default.
+    method, preset : str
+        --method and --preset.
+    plot_path : str or None
+        --plot.
+    as_json : bool
+        --json.
+    """
+
+    log: LogRequest
+    room_col: str | None
+    periods_min: tuple[float, ...]
+    windows_min: tuple[float, ...] | None
+    method: str
+    preset: str
+    plot_path: str | None
+    as_json: bool
+
+
+def min_time_request(options: Mapping[str, Any]) -> MinTimeRequest:
+    """The options of ``thermal min-time``, by click's names, read and grouped into settings.
+
+    Parameters
+    ----------
+    options : mapping
+        The command's options (their help is the command's ``--help``).
+
+    Returns
+    -------
+    MinTimeRequest
+
+    Raises
+    ------
+    InputError
+        --sampling-periods or --windows not as asked.
+    """
+    periods = _float_list(options["sampling_periods"], "--sampling-periods")
+    windows = options["windows"]
     candidates = None
     if windows:
         parts = _float_list(windows.replace(":", ","), "--windows")
@@ -695,10 +772,54 @@ def min_time_command(
             msg = f"--windows: expected START:STOP[:STEP] with STOP > START; found {windows!r}"
             raise InputError(msg)
         step = parts[2] if len(parts) == 3 else 1.0
-        candidates = list(np.arange(parts[0], parts[1] + step / 2, step))
-    log, room = load_log_with_room(file, sensors, time_col, time_unit, ambient_col, temperature_unit)
+        candidates = tuple(np.arange(parts[0], parts[1] + step / 2, step))
+    return MinTimeRequest(
+        log=log_request(options),
+        room_col=options["ambient_col"],
+        periods_min=tuple(periods),
+        windows_min=candidates,
+        method=options["method"],
+        preset=options["preset"],
+        plot_path=options["plot_path"],
+        as_json=options["as_json"],
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class MinTimeSensors:
+    """The JSON answer of ``thermal min-time`` for more than one sensor.
+
+    Attributes
+    ----------
+    sensors : tuple of MinTimeAnswer
+    method : str
+    sampling_periods_min : tuple of float
+    """
+
+    sensors: tuple[MinTimeAnswer, ...]
+    method: str
+    sampling_periods_min: tuple[float, ...]
+
+
+def run_min_time(request: MinTimeRequest) -> None:
+    """Search the minimal identification time a :class:`MinTimeRequest` asks for, draw it, and
+    print the answer as a table or JSON.
+
+    Parameters
+    ----------
+    request : MinTimeRequest
+
+    Raises
+    ------
+    InputError
+        A log that cannot be read, or too short for the sampling periods.
+    """
+    log, room = load_log_with_room(request.log, request.room_col)
+    windows = None if request.windows_min is None else list(request.windows_min)
     with stderr.status("searching identification times…"):
-        result = minimal_identification_time(log, method, preset, periods, candidates, room)
+        result = minimal_identification_time(
+            log, request.method, request.preset, list(request.periods_min), windows, room
+        )
     for name, begins in zip(
         result.sensors, result.rise_begins_min if result.rise_begins_min is not None else [], strict=False
     ):
@@ -708,25 +829,25 @@ def min_time_command(
                 "after the log); fitted from there, L still counts from the log's start",
                 highlight=False,
             )
-    if plot_path:
+    if request.plot_path:
         from mtident.report import plot_min_time
 
-        plot_min_time(result, plot_path)
-        stderr.print(f"mtident: plot written to {plot_path}", highlight=False)
-    summaries = [result.summary(i) for i in range(len(result.sensors))]
-    for d in summaries:
-        for warning in d["warnings"]:  # type: ignore[attr-defined]
+        plot_min_time(result, request.plot_path)
+        stderr.print(f"mtident: plot written to {request.plot_path}", highlight=False)
+    answers = tuple(result.answer(i) for i in range(len(result.sensors)))
+    for answer in answers:
+        for warning in answer.warnings:
             stderr.print(f"mtident: warning: {warning}", highlight=False)
-    if as_json:
-        print_json(
-            summaries[0]
-            if len(summaries) == 1
-            else {"sensors": summaries, "method": method, "sampling_periods_min": periods}
-        )
+    if request.as_json:
+        print_json(answers[0] if len(answers) == 1 else MinTimeSensors(answers, request.method, request.periods_min))
         return
+    _min_time_table(log.source, request.method, result, answers)
+
+
+def _min_time_table(source: str, method: str, result: MinTimeResult, answers: tuple[MinTimeAnswer, ...]) -> None:
     table = Table(
         title=(
-            f"{log.source}: minimal identification time ({method}); choosing it took {result.measuring_time_min:g} "
+            f"{source}: minimal identification time ({method}); choosing it took {result.measuring_time_min:g} "
             "min of measurement"
         )
     )
@@ -735,15 +856,15 @@ def min_time_command(
     for p in result.periods_min:
         table.add_column(f"best L for M={p:g}", justify="right")
     table.add_column("periods agree", justify="center")
-    for i, d in enumerate(summaries):
+    for i, answer in enumerate(answers):
         # to 0.1 min: a 1-Hz log has a candidate L every second (39.9667 min)
-        minimal = d["min_identification_time_min"]
+        minimal = answer.min_identification_time_min
         best = [f"{round(float(b), 1):g}" for b in result.best_per_period_min[:, i]]
         table.add_row(
-            str(d["sensor"]),
-            f"{round(minimal, 1):g}" if isinstance(minimal, float) else "—",
+            answer.sensor,
+            f"{round(minimal, 1):g}" if math.isfinite(minimal) else "—",
             *best,
-            "yes" if d["periods_agree"] else "[yellow]no[/]",
+            "yes" if answer.periods_agree else "[yellow]no[/]",
         )
     table.caption = (
         "minimal L: the window whose relative RMSE, summed over the sampling periods M, is smallest (the papers' "
@@ -791,28 +912,29 @@ def inspect_command(
     if as_json:
         print_json(info)
         return
-    fmt, time = info["format"], info["time"]
-    assert isinstance(fmt, dict) and isinstance(time, dict)
+    _inspect_table(file, info)
+
+
+def _inspect_table(file: str, info: LogDescription) -> None:
+    fmt, time = info.format, info.time
     console = OptionConsole(soft_wrap=True)  # a line per fact, as a terminal or a file shows it
-    rows_under = fmt["rows_under_header"]
+    rows_under = fmt.rows_under_header
     text = (
-        ""
-        if str(fmt["kind"]).startswith("Excel")
-        else f", {fmt['encoding']}, {fmt['delimiter']}-separated, decimal {fmt['decimal']!r}"
+        "" if fmt.kind.startswith("Excel") else f", {fmt.encoding}, {fmt.delimiter}-separated, decimal {fmt.decimal!r}"
     )
     console.print(
-        f"[bold]{file}[/]: {fmt['kind']}{text}; header on line {fmt['header_line']}"
+        f"[bold]{file}[/]: {fmt.kind}{text}; header on line {fmt.header_line}"
         + (f", {rows_under} row(s) under it before the data" if rows_under else "")
-        + f"; units from {fmt['units_from']}",
+        + f"; units from {fmt.units_from}",
         highlight=False,
     )
-    step = time["step_min"]
+    step = time.step_min
     console.print(
-        f"time: {time['column']!r}, read as {time['read_as']} (first cell {time['first_cell']!r}); "
+        f"time: {time.column!r}, read as {time.read_as} (first cell {time.first_cell!r}); "
         + (
             "1 sample so far"
             if step is None
-            else f"{time['samples']} samples over {_fmt(time['span_min'], 1)} min, a step of "
+            else f"{time.samples} samples over {_fmt(time.span_min, 1)} min, a step of "
             + (f"{step * 60:g} s" if step < 1 else f"{_fmt(step, 2)} min")
         ),
         highlight=False,
@@ -820,23 +942,13 @@ def inspect_command(
     table = Table()
     for column in ("sensor", "unit", "missing", "first °C", "last °C", "min °C", "max °C"):
         table.add_column(column, justify="left" if column in ("sensor", "unit") else "right", **_column_layout(column))
-    sensor_rows = info["sensors"]
-    assert isinstance(sensor_rows, list)
-    for d in sensor_rows:
+    for d in info.sensors:
         table.add_row(
-            d["sensor"],
-            as_options(d["unit"]),
-            str(d["missing"]),
-            _fmt(d["first_C"]),
-            _fmt(d["last_C"]),
-            _fmt(d["min_C"]),
-            _fmt(d["max_C"]),
+            d.sensor, as_options(d.unit), str(d.missing), _fmt(d.first_C), _fmt(d.last_C), _fmt(d.min_C), _fmt(d.max_C)
         )
     console.print(table)
-    notes = info["notes"]
-    assert isinstance(notes, list)
-    for note in notes:
+    for note in info.notes:
         console.print(f"note: {note}", highlight=False)
     _say_room_candidates(
-        [str(d["sensor"]) for d in sensor_rows], "read as a sensor column", " (with identify, watch, learn or report)"
+        [d.sensor for d in info.sensors], "read as a sensor column", " (with identify, watch, learn or report)"
     )

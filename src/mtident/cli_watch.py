@@ -14,7 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Generator, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -37,6 +37,7 @@ from mtident.cli import (
 )
 from mtident.cli_sources import Recorder, network_recorder
 from mtident.cli_thermal import (
+    LogRequest,
     _column_layout,
     _fmt,
     _say_room_candidates,
@@ -45,6 +46,7 @@ from mtident.cli_thermal import (
     load_reference_file,
     log_options,
     log_path,
+    log_request,
     machine_option,
     max_time_constant_option,
     reference_option,
@@ -205,27 +207,6 @@ def monitor_settings(options: Mapping[str, Any]) -> MonitorSettings:
 
 
 @dataclass(frozen=True, slots=True)
-class LogRequest:
-    """FILE and how its columns are read (:func:`~mtident.cli_thermal.log_options`).
-
-    Attributes
-    ----------
-    file : str
-        FILE as given: a log, a shipped log's @-name, an MTConnect agent's URL or an OPC UA server's.
-    sensors : tuple of str
-        --sensor (empty: all).
-    time_col, time_unit, temperature_unit : str or None
-        --time-col, --time-unit and --unit.
-    """
-
-    file: str
-    sensors: tuple[str, ...]
-    time_col: str | None
-    time_unit: str | None
-    temperature_unit: str | None
-
-
-@dataclass(frozen=True, slots=True)
 class SourceRequest:
     """A network source's options (:func:`~mtident.cli_sources.network_recorder`).
 
@@ -295,9 +276,7 @@ def watch_request(options: Mapping[str, Any]) -> WatchRequest:
         A reference file that cannot be read.
     """
     return WatchRequest(
-        log=LogRequest(
-            options["file"], options["sensors"], options["time_col"], options["time_unit"], options["temperature_unit"]
-        ),
+        log=log_request(options),
         source=SourceRequest(
             options["device"], options["nodes"], options["items"], options["record_path"], options["from_buffer_start"]
         ),
@@ -728,7 +707,7 @@ def _publish(
     page.publish(shown)  # the answer at once; its curves once drawn
     if picture:
         buffer = io.BytesIO()
-        plot_monitor(state, session.settings).savefig(buffer, format="png", dpi=90)  # type: ignore[union-attr]
+        plot_monitor(state, session.settings).savefig(buffer, format="png", dpi=90)
         page.publish(shown, buffer.getvalue())
     return time.monotonic() if forecast else last_forecast
 
@@ -752,19 +731,23 @@ def _answer(
 ) -> None:
     """The decision: the JSON object, or the table, the verdict and what it rests on (with the
     expected stops where ``forecast``, unless ``cancel`` stops them)."""
-    outcome = session.result(with_forecast=forecast, cancel=cancel)
+    outcome = session.answer(with_forecast=forecast, cancel=cancel)
     # the comparison with the rest of a replayed log reads it again and fits: not after a SIGTERM
     hindsight = session.hindsight() if replay and not (cancel is not None and cancel()) else None
     if hindsight is not None:
-        outcome["time_saved_min"] = hindsight.time_saved_min
-        outcome["settle_time_min"] = finite_or_none(hindsight.test_settle_time_min)
+        outcome = replace(
+            outcome,
+            time_saved_min=hindsight.time_saved_min,
+            settle_time_min=hindsight.test_settle_time_min,
+            hindsight=hindsight.answer(),
+        )
         stderr.print(
             f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)}: comparing the decision with how "
             "it went on",
             highlight=False,
         )
     if as_json:
-        print_json(outcome if hindsight is None else {**outcome, "hindsight": hindsight.to_dict()})
+        print_json(outcome)
         return
     console = table_console()
     console.print(_status_table(session, path))
@@ -782,10 +765,10 @@ def _answer(
         for name in state.sensors:
             console.print(f"  reference for {name}: {assumptions(session.settings, name).reference}", highlight=False)
     if state.stopped:
-        saved = outcome.get("time_saved_min")
+        saved = outcome.time_saved_min
         gain = (
             f"; {minutes(saved)} before the readings settled within the tolerance"
-            if isinstance(saved, float) and saved > 0
+            if saved is not None and saved > 0
             else ""
         )
         console.print(f"[bold green]The test can stop at t = {minutes(state.stop_time_min)}{gain}.[/]")
@@ -794,27 +777,26 @@ def _answer(
         if hindsight is not None:
             _print_hindsight(hindsight)
         return
-    bound = outcome.get("room_bound_sensors")
-    if isinstance(bound, list) and bound:
+    bound = outcome.room_bound_sensors
+    if bound:
         console.print(
-            f"[bold yellow]Not yet, and a longer test does not bring {', '.join(map(str, bound))} within the "
-            "tolerance.[/]"
+            f"[bold yellow]Not yet, and a longer test does not bring {', '.join(bound)} within the tolerance.[/]"
         )
-        console.print(str(outcome["reason"]), highlight=False)
+        console.print(str(outcome.reason), highlight=False)
         console.print(
             "(--ambient COLUMN names the room sensor's column; --room-wander states the room's wander in °C an hour)"
         )
     else:
         console.print("[bold yellow]Not yet: keep the test running.[/]")
-        console.print(str(outcome["reason"]), highlight=False)
-    expected = outcome.get("expected_stop_time_min")
-    if isinstance(expected, float):
+        console.print(str(outcome.reason), highlight=False)
+    expected = outcome.expected_stop_time_min
+    if expected is not None and math.isfinite(expected):
         console.print(
             f"Expected stop: t ≈ {minutes(round(expected))} on the best model's course (a slower mode that still "
             "fits moves it later).",
             highlight=False,
         )
-    elif "expected_stop_time_min" in outcome and outcome.get("decision") != "stop":
+    elif expected is not None and outcome.decision != "stop":
         console.print(
             "Expected stop: none found on the best models' courses (a sensor whose interval does not come within the "
             "tolerance there, or whose status gives no course to go on: no fit yet, off its reference, a misfit).",

@@ -9,13 +9,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mtident._json import json_optional, to_json_value
 from mtident._typing import BoolArray, FloatArray
 from mtident.feeddrive.information import Consistency
 from mtident.feeddrive.model import exact_step, input_matrix, system_matrix
 from mtident.feeddrive.params import IDENTIFIED, FeedDriveParameters
 from mtident.feeddrive.simulate import Response, run_responses
 
-__all__ = ["DISTANCE_LIMIT", "IDENTIFIED_WITHIN", "MISFIT_LIMIT", "FeedDriveIdentification"]
+__all__ = ["DISTANCE_LIMIT", "IDENTIFIED_WITHIN", "MISFIT_LIMIT", "FeedDriveAnswer", "FeedDriveIdentification"]
 
 # A parameter is identified when its ±2σ interval is within ±10 % (a tenth of the prior's 2σ, 100 %).
 IDENTIFIED_WITHIN = 0.10
@@ -24,6 +25,56 @@ IDENTIFIED_WITHIN = 0.10
 # from the estimate than this squared Mahalanobis distance (χ² with 8 degrees of freedom: 99.9 % quantile).
 MISFIT_LIMIT = 1.5
 DISTANCE_LIMIT = 26.1
+
+
+@dataclass(frozen=True, slots=True)
+class FeedDriveAnswer:
+    """A feed drive's identification as its JSON object says it; a key whose field is None is left out.
+
+    Attributes
+    ----------
+    parameters, parameters_std : dict of str to float
+        The estimates and their standard deviations (SI), by name.
+    parameters_sd : dict of str to float
+        ``parameters_std`` again, for scripts written before that name was used.
+    identifiable : dict of str to bool
+    correlation : dict of str to float
+        Response name → correlation of estimated and measured response.
+    measured : tuple of str
+        The responses used.
+    guess : dict of str to float
+    preset : str
+    reproduces_record : bool or None
+        None where not checked.
+    refined : bool
+        ``parameters`` is the open-loop refinement of the filter's estimate.
+    notes : tuple of str
+    filter_parameters, filter_parameters_std : dict of str to float or None
+        The filter's own estimate, where refined.
+    open_loop_misfit : dict of str to float or None
+        Per response, the open-loop misfit in units of its noise, where checked.
+    error_percent : dict of str to float or None
+        Against the truth, where given.
+    within_2sd : dict of str to bool or None
+        Whether the ±2σ interval covers the truth, where given.
+    """
+
+    parameters: dict[str, float]
+    parameters_std: dict[str, float]
+    parameters_sd: dict[str, float]
+    identifiable: dict[str, bool]
+    correlation: dict[str, float]
+    measured: tuple[str, ...]
+    guess: dict[str, float]
+    preset: str
+    reproduces_record: bool | None
+    refined: bool
+    notes: tuple[str, ...]
+    filter_parameters: dict[str, float] | None = json_optional()
+    filter_parameters_std: dict[str, float] | None = json_optional()
+    open_loop_misfit: dict[str, float] | None = json_optional()
+    error_percent: dict[str, float] | None = json_optional()
+    within_2sd: dict[str, bool] | None = json_optional()
 
 
 @dataclass(frozen=True)
@@ -155,8 +206,48 @@ class FeedDriveIdentification:
         )
         return run_responses(fitted, phi, gamma, start, response.forces)
 
+    def answer(self, truth: FeedDriveParameters | None = None) -> FeedDriveAnswer:
+        """The answer, its fields the JSON object (parameters, parameters_std, correlation) plus extras.
+
+        Parameters
+        ----------
+        truth : FeedDriveParameters, optional
+            The true set (a simulated record's); given, the errors (:meth:`errors_percent`) and whether the
+            intervals cover it (:meth:`covers`) are added.
+
+        Returns
+        -------
+        FeedDriveAnswer
+        """
+
+        def named(values: FloatArray, names: tuple[str, ...] = IDENTIFIED) -> dict[str, float]:
+            return {n: float(v) for n, v in zip(names, values, strict=True)}
+
+        std = named(self.parameters_std)
+        filtered, filtered_std = self.filter_parameters, self.filter_parameters_std
+        return FeedDriveAnswer(
+            parameters=named(self.parameters),
+            parameters_std=std,
+            parameters_sd=std,
+            identifiable={n: bool(v) for n, v in zip(IDENTIFIED, self.identifiable, strict=True)},
+            correlation=self.correlation,
+            measured=tuple(self.measured_columns),
+            guess={n: float(getattr(self.guess, n)) for n in IDENTIFIED},
+            preset=self.preset,
+            reproduces_record=self.reproduces_record(),
+            refined=self.filter_parameters is not None,
+            notes=tuple(self.notes),
+            filter_parameters=None if filtered is None or filtered_std is None else named(filtered),
+            filter_parameters_std=None if filtered is None or filtered_std is None else named(filtered_std),
+            open_loop_misfit=None
+            if self.consistency is None
+            else named(self.consistency.misfit, tuple(self.measured_columns)),
+            error_percent=None if truth is None else self.errors_percent(truth),
+            within_2sd=None if truth is None else self.covers(truth),
+        )
+
     def summary(self, truth: FeedDriveParameters | None = None) -> dict[str, object]:
-        """The JSON object (parameters, parameters_std, correlation), plus extras.
+        """The JSON object (parameters, parameters_std, correlation), plus extras: :meth:`answer`'s fields.
 
         ``parameters_sd`` repeats ``parameters_std`` for scripts written before that name was used.
 
@@ -173,30 +264,5 @@ class FeedDriveIdentification:
             guess, notes, the filter's own estimate where refined, the open-loop misfit where checked, and with
             ``truth`` "error_percent" and "within_2sd".
         """
-        std = {n: float(v) for n, v in zip(IDENTIFIED, self.parameters_std, strict=True)}
-        out: dict[str, object] = {
-            "parameters": {n: float(v) for n, v in zip(IDENTIFIED, self.parameters, strict=True)},
-            "parameters_std": std,
-            "parameters_sd": dict(std),
-            "identifiable": {n: bool(v) for n, v in zip(IDENTIFIED, self.identifiable, strict=True)},
-            "correlation": self.correlation,
-            "measured": list(self.measured_columns),
-            "guess": {n: float(getattr(self.guess, n)) for n in IDENTIFIED},
-            "preset": self.preset,
-            "reproduces_record": self.reproduces_record(),
-            "refined": self.filter_parameters is not None,
-            "notes": list(self.notes),
-        }
-        if self.filter_parameters is not None and self.filter_parameters_std is not None:
-            out["filter_parameters"] = {n: float(v) for n, v in zip(IDENTIFIED, self.filter_parameters, strict=True)}
-            out["filter_parameters_std"] = {
-                n: float(v) for n, v in zip(IDENTIFIED, self.filter_parameters_std, strict=True)
-            }
-        if self.consistency is not None:
-            out["open_loop_misfit"] = {
-                n: float(v) for n, v in zip(self.measured_columns, self.consistency.misfit, strict=True)
-            }
-        if truth is not None:
-            out["error_percent"] = self.errors_percent(truth)
-            out["within_2sd"] = self.covers(truth)
-        return out
+        tree: dict[str, object] = to_json_value(self.answer(truth))
+        return tree

@@ -7,9 +7,36 @@ from dataclasses import dataclass
 import numpy as np
 
 from mtident._typing import FloatArray
-from mtident.feeddrive.params import FeedDriveParameters, damping_matrix, mass_matrix, stiffness_matrix, validate
+from mtident.feeddrive.params import (
+    COORDINATES,
+    FeedDriveParameters,
+    damping_matrix,
+    mass_matrix,
+    stiffness_matrix,
+    validate,
+)
 
-__all__ = ["Modes", "modes"]
+__all__ = ["Modes", "ModesAnswer", "modes"]
+
+
+@dataclass(frozen=True, slots=True)
+class ModesAnswer:
+    """The modes as the JSON of ``mtident feeddrive modes`` says them.
+
+    Attributes
+    ----------
+    natural_frequencies_Hz : tuple of float
+        Lowest first.
+    positive_definite : bool
+    damping_ratios : tuple of float
+    mode_shapes : dict of str to tuple of float
+        Per coordinate, its component in each mode.
+    """
+
+    natural_frequencies_Hz: tuple[float, ...]
+    positive_definite: bool
+    damping_ratios: tuple[float, ...]
+    mode_shapes: dict[str, tuple[float, ...]]
 
 
 @dataclass(frozen=True, slots=True)
@@ -31,6 +58,22 @@ class Modes:
     shapes: FloatArray
     damping_ratios: FloatArray
     positive_definite: bool
+
+    def answer(self) -> ModesAnswer:
+        """The modes as their JSON says them: the shapes by coordinate.
+
+        Returns
+        -------
+        ModesAnswer
+        """
+        return ModesAnswer(
+            natural_frequencies_Hz=tuple(float(f) for f in self.frequencies_Hz),
+            positive_definite=self.positive_definite,
+            damping_ratios=tuple(float(z) for z in self.damping_ratios),
+            mode_shapes={
+                name: tuple(float(v) for v in row) for name, row in zip(COORDINATES, self.shapes, strict=True)
+            },
+        )
 
 
 def modes(p: FeedDriveParameters) -> Modes:

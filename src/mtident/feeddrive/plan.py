@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from mtident._json import to_json_value
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.feeddrive.filter_problem import MEASUREMENT_SETS, filter_noise
@@ -39,6 +40,8 @@ __all__ = [
     "CandidateTest",
     "PlanPrediction",
     "ExcitationPlan",
+    "PlanAnswer",
+    "PlanRow",
     "candidate_tests",
     "predict_test",
     "plan_tests",
@@ -136,6 +139,30 @@ class PlanPrediction:
         """All eight within the target, and nothing against the test."""
         return bool(self.identified.all()) and self.reason is None
 
+    def answer(self) -> PlanRow:
+        """The prediction as the plan's JSON says it.
+
+        Returns
+        -------
+        PlanRow
+        """
+        test = self.candidate
+        return PlanRow(
+            test=test.label,
+            kind=test.excitation.kind,
+            on=COORDINATES[test.excitation.coordinate],
+            duration_s=test.duration_s,
+            sample_rate_Hz=test.sample_rate_Hz,
+            frequency_Hz=test.excitation.frequency_Hz,
+            frequency_end_Hz=test.excitation.frequency_end_Hz,
+            measured=tuple(RESPONSE_COLUMNS[i] for i in test.measured),
+            stated_std_relative={n: float(s) for n, s in zip(IDENTIFIED, self.stated_std_log, strict=True)},
+            expected_std_relative={n: float(s) for n, s in zip(IDENTIFIED, self.expected_std_log, strict=True)},
+            identified={n: bool(k) for n, k in zip(IDENTIFIED, self.identified, strict=True)},
+            reason=self.reason,
+            force_noise_tolerated=self.force_noise_tolerated,
+        )
+
 
 @dataclass(frozen=True, slots=True)
 class ExcitationPlan:
@@ -170,35 +197,94 @@ class ExcitationPlan:
     lengthened: PlanPrediction | None = None
     refine: bool = False
 
+    def answer(self) -> PlanAnswer:
+        """The plan as a record whose fields are its JSON object.
+
+        Returns
+        -------
+        PlanAnswer
+        """
+        return PlanAnswer(
+            predicts="refined" if self.refine else "filter",
+            target_2sd_relative=self.target,
+            noise_fraction=self.noise_fraction,
+            recommended=None if self.recommended is None else self.recommended.answer(),
+            lengthened=None if self.lengthened is None else self.lengthened.answer(),
+            closest=None if self.closest is None else self.closest.answer(),
+            candidates=tuple(p.answer() for p in self.predictions),
+        )
+
     def summary(self) -> dict[str, object]:
-        """A JSON-ready dict: every candidate's expected standard deviations (relative) and the recommendation."""
+        """A JSON-ready dict: every candidate's expected standard deviations (relative) and the
+        recommendation (:meth:`answer`'s fields).
 
-        def one(p: PlanPrediction) -> dict[str, object]:
-            return {
-                "test": p.candidate.label,
-                "kind": p.candidate.excitation.kind,
-                "on": COORDINATES[p.candidate.excitation.coordinate],
-                "duration_s": p.candidate.duration_s,
-                "sample_rate_Hz": p.candidate.sample_rate_Hz,
-                "frequency_Hz": p.candidate.excitation.frequency_Hz,
-                "frequency_end_Hz": p.candidate.excitation.frequency_end_Hz,
-                "measured": [RESPONSE_COLUMNS[i] for i in p.candidate.measured],
-                "stated_std_relative": {n: float(s) for n, s in zip(IDENTIFIED, p.stated_std_log, strict=True)},
-                "expected_std_relative": {n: float(s) for n, s in zip(IDENTIFIED, p.expected_std_log, strict=True)},
-                "identified": {n: bool(k) for n, k in zip(IDENTIFIED, p.identified, strict=True)},
-                "reason": p.reason,
-                "force_noise_tolerated": p.force_noise_tolerated,
-            }
+        Returns
+        -------
+        dict
+        """
+        tree: dict[str, object] = to_json_value(self.answer())
+        return tree
 
-        return {
-            "predicts": "refined" if self.refine else "filter",
-            "target_2sd_relative": self.target,
-            "noise_fraction": self.noise_fraction,
-            "recommended": None if self.recommended is None else one(self.recommended),
-            "lengthened": None if self.lengthened is None else one(self.lengthened),
-            "closest": None if self.closest is None else one(self.closest),
-            "candidates": [one(p) for p in self.predictions],
-        }
+
+@dataclass(frozen=True, slots=True)
+class PlanRow:
+    """One candidate test's prediction, as the plan's JSON says it.
+
+    Attributes
+    ----------
+    test : str
+        The test's label.
+    kind, on : str
+        The excitation and the coordinate it acts on.
+    duration_s, sample_rate_Hz, frequency_Hz, frequency_end_Hz : float
+    measured : tuple of str
+        The responses measured.
+    stated_std_relative, expected_std_relative : dict of str to float
+        Per parameter, the standard deviations of ln(parameter) stated after the test and expected over repeats.
+    identified : dict of str to bool
+    reason : str or None
+        Why the test is not recommended whatever its numbers.
+    force_noise_tolerated : float or None
+        The most white noise on the measured forces under which what it identifies stays identified.
+    """
+
+    test: str
+    kind: str
+    on: str
+    duration_s: float
+    sample_rate_Hz: float
+    frequency_Hz: float
+    frequency_end_Hz: float
+    measured: tuple[str, ...]
+    stated_std_relative: dict[str, float]
+    expected_std_relative: dict[str, float]
+    identified: dict[str, bool]
+    reason: str | None
+    force_noise_tolerated: float | None
+
+
+@dataclass(frozen=True, slots=True)
+class PlanAnswer:
+    """A test plan as its JSON object says it.
+
+    Attributes
+    ----------
+    predicts : str
+        "refined" or "filter": whose estimate the predictions are of.
+    target_2sd_relative, noise_fraction : float
+    recommended, lengthened, closest : PlanRow or None
+        As :class:`ExcitationPlan` names them.
+    candidates : tuple of PlanRow
+        Every candidate, in the order of cost.
+    """
+
+    predicts: str
+    target_2sd_relative: float
+    noise_fraction: float
+    recommended: PlanRow | None
+    lengthened: PlanRow | None
+    closest: PlanRow | None
+    candidates: tuple[PlanRow, ...]
 
 
 def _measured(measured: str | tuple[int, ...]) -> tuple[int, ...]:

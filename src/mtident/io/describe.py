@@ -10,6 +10,7 @@ with the reason.
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -19,9 +20,109 @@ from mtident.io.logs import read_temperature_log
 from mtident.io.time_notes import TIME_UNITS, time_unit_assumed, time_unit_factor
 from mtident.io.units import is_number, stated_temperature_unit
 
-__all__ = ["describe_log"]
+__all__ = ["LogDescription", "LogFormat", "SensorColumn", "TimeColumn", "describe_log"]
 
 _DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab"}
+
+
+@dataclass(frozen=True, slots=True)
+class LogFormat:
+    """What the file is and where its table begins.
+
+    Attributes
+    ----------
+    kind : str
+        "CSV text" or an Excel workbook.
+    encoding, delimiter, decimal : str
+        The text's encoding, the delimiter's name and the decimal mark.
+    lines_before_header, header_line, rows_under_header : int
+        The lines before the header, the header's line number, and the rows between it and the data.
+    units_from : str
+        Whence the units: a units row, or the column names.
+    units_in_cells : bool
+        The cells carry their unit.
+    """
+
+    kind: str
+    encoding: str
+    delimiter: str
+    decimal: str
+    lines_before_header: int
+    header_line: int
+    rows_under_header: int
+    units_from: str
+    units_in_cells: bool
+
+
+@dataclass(frozen=True, slots=True)
+class TimeColumn:
+    """How the time column is read.
+
+    Attributes
+    ----------
+    column : str
+    first_cell : str or None
+        The first cell as written.
+    read_as : str
+        As time stamps, or as numbers in a unit and whence the unit.
+    samples : int
+    span_min : float
+    step_min : float or None
+        The median step (min); None for a single sample.
+    """
+
+    column: str
+    first_cell: str | None
+    read_as: str
+    samples: int
+    span_min: float
+    step_min: float | None
+
+
+@dataclass(frozen=True, slots=True)
+class SensorColumn:
+    """One sensor column as read.
+
+    Attributes
+    ----------
+    sensor : str
+    unit : str
+        Its unit as the log states it, or as ``temperature_unit`` does where it states none.
+    samples, missing : int
+        Valid and missing samples.
+    first_C, last_C, min_C, max_C : float or None
+        Its first, last, lowest and highest valid reading (°C); None without one.
+    """
+
+    sensor: str
+    unit: str
+    samples: int
+    missing: int
+    first_C: float | None
+    last_C: float | None
+    min_C: float | None
+    max_C: float | None
+
+
+@dataclass(frozen=True, slots=True)
+class LogDescription:
+    """How a log is read: its fields are the JSON of ``mtident thermal inspect --json``.
+
+    Attributes
+    ----------
+    file : str
+    format : LogFormat
+    time : TimeColumn
+    sensors : tuple of SensorColumn
+    notes : tuple of str
+        Columns left out, conversions, rows skipped.
+    """
+
+    file: str
+    format: LogFormat
+    time: TimeColumn
+    sensors: tuple[SensorColumn, ...]
+    notes: tuple[str, ...]
 
 
 def describe_log(
@@ -30,10 +131,10 @@ def describe_log(
     time_unit: str | None = None,
     sensors: list[str] | None = None,
     temperature_unit: str | None = None,
-) -> dict[str, object]:
-    """How the log at ``path`` is read, as plain JSON types.
+) -> LogDescription:
+    """How the log at ``path`` is read (its JSON: ``to_json_value`` of the answer).
 
-    Keys: ``file``; ``format`` (what the file is, its encoding, delimiter, decimal
+    Fields: ``file``; ``format`` (what the file is, its encoding, delimiter, decimal
     mark, the lines before the header, the header line's number, the rows between
     the header and the data); ``time`` (its column, the first cell as written, how it
     is read: stamps, or numbers in a unit and whence the unit; the samples, the span
@@ -57,8 +158,8 @@ def describe_log(
 
     Returns
     -------
-    dict
-        The keys above; a value that cannot be known (a sensor without a valid reading, the
+    LogDescription
+        The fields above; a value that cannot be known (a sensor without a valid reading, the
         step of a single sample) is None. A log of a single sample is described too.
 
     Raises
@@ -79,7 +180,7 @@ def describe_log(
     steps = np.diff(log.time_min)
     time_name = log.time_column.split(" + ")[0]
     first_cell = frame[time_name].iloc[0] if time_name in frame.columns and len(frame) else None
-    per_sensor = []
+    per_sensor: list[SensorColumn] = []
     for k, name in enumerate(log.sensors):
         values = log.temperature_C[:, k]
         valid = values[np.isfinite(values)]
@@ -87,32 +188,32 @@ def describe_log(
             warnings.simplefilter("ignore", RuntimeWarning)
             low, high = (float(np.min(valid)), float(np.max(valid))) if len(valid) else (None, None)
         per_sensor.append(
-            {
-                "sensor": name,
-                "unit": dialect.unit_of(name).strip()
+            SensorColumn(
+                sensor=name,
+                unit=dialect.unit_of(name).strip()
                 or ("°C (assumed)" if stated is None else f"{stated} (`temperature_unit`)"),
-                "samples": int(len(valid)),
-                "missing": int(len(values) - len(valid)),
-                "first_C": float(valid[0]) if len(valid) else None,
-                "last_C": float(valid[-1]) if len(valid) else None,
-                "min_C": low,
-                "max_C": high,
-            }
+                samples=int(len(valid)),
+                missing=int(len(values) - len(valid)),
+                first_C=float(valid[0]) if len(valid) else None,
+                last_C=float(valid[-1]) if len(valid) else None,
+                min_C=low,
+                max_C=high,
+            )
         )
-    return {
-        "file": str(path),
-        "format": _format(dialect, kind),
-        "time": {
-            "column": log.time_column,
-            "first_cell": None if first_cell is None else str(first_cell),
-            "read_as": _time_read_as(time_name, first_cell, time_unit, dialect),
-            "samples": int(len(log.time_min)),
-            "span_min": float(log.time_min[-1] - log.time_min[0]),
-            "step_min": float(np.median(steps)) if len(steps) else None,
-        },
-        "sensors": per_sensor,
-        "notes": list(log.notes),
-    }
+    return LogDescription(
+        file=str(path),
+        format=_format(dialect, kind),
+        time=TimeColumn(
+            column=log.time_column,
+            first_cell=None if first_cell is None else str(first_cell),
+            read_as=_time_read_as(time_name, first_cell, time_unit, dialect),
+            samples=int(len(log.time_min)),
+            span_min=float(log.time_min[-1] - log.time_min[0]),
+            step_min=float(np.median(steps)) if len(steps) else None,
+        ),
+        sensors=tuple(per_sensor),
+        notes=tuple(log.notes),
+    )
 
 
 def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect: CsvDialect) -> str:
@@ -131,15 +232,15 @@ def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect:
     )
 
 
-def _format(dialect: CsvDialect, kind: str | None) -> dict[str, object]:
-    return {
-        "kind": "Excel workbook (its first sheet with a table)" if kind in ("xlsx", "xls") else "CSV text",
-        "encoding": dialect.encoding.removesuffix("-sig"),
-        "delimiter": _DELIMITER_NAMES.get(dialect.delimiter, dialect.delimiter),
-        "decimal": dialect.decimal,
-        "lines_before_header": dialect.preamble_lines,
-        "header_line": dialect.preamble_lines + 1,
-        "rows_under_header": dialect.extra_rows,
-        "units_from": dialect.units_source if dialect.units else "the column names",
-        "units_in_cells": dialect.units_in_cells,
-    }
+def _format(dialect: CsvDialect, kind: str | None) -> LogFormat:
+    return LogFormat(
+        kind="Excel workbook (its first sheet with a table)" if kind in ("xlsx", "xls") else "CSV text",
+        encoding=dialect.encoding.removesuffix("-sig"),
+        delimiter=_DELIMITER_NAMES.get(dialect.delimiter, dialect.delimiter),
+        decimal=dialect.decimal,
+        lines_before_header=dialect.preamble_lines,
+        header_line=dialect.preamble_lines + 1,
+        rows_under_header=dialect.extra_rows,
+        units_from=dialect.units_source if dialect.units else "the column names",
+        units_in_cells=dialect.units_in_cells,
+    )

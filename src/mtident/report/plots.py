@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, overload
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -425,6 +425,18 @@ def _room_on(readings: Readings, times: np.ndarray) -> np.ndarray:
         return np.full(times.shape, np.nan)
     room_on: np.ndarray = np.interp(times, readings.time_min[valid], room[valid])
     return room_on
+
+
+@overload
+def plot_monitor(
+    state: MonitorState, settings: MonitorSettings, path: None = None, expected: dict[str, float] | None = None
+) -> Figure: ...
+
+
+@overload
+def plot_monitor(
+    state: MonitorState, settings: MonitorSettings, path: str | Path, expected: dict[str, float] | None = None
+) -> Path: ...
 
 
 def plot_monitor(

@@ -34,7 +34,9 @@ from matplotlib.transforms import Bbox
 from mtident import __version__
 from mtident.exceptions import InputError
 from mtident.report.plots import draw_monitor_panel, plot_monitor
+from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import MonitorSettings, MonitorState, SensorCheck, assumptions, minutes
+from mtident.thermal.monitor_answer import SensorStatus
 from mtident.thermal.session import WatchSession
 
 __all__ = [
@@ -321,12 +323,12 @@ def build_report(
         msg = f"{session.path}: no data rows to report on"
         raise InputError(msg)
     settings = session.settings
-    outcome = session.result(with_forecast=False)
+    outcome = session.answer(with_forecast=False)
     whole = session.whole_log()
     hindsight = session.hindsight(whole)
     time_min, values, _ = whole
     lines = tuple(
-        _line(summary, state.readings.values_C[:, s], hindsight, s) for s, summary in enumerate(_sensors(outcome))
+        _line(sensor, state.readings.values_C[:, s], hindsight, s) for s, sensor in enumerate(outcome.sensors)
     )
     said = assumptions(settings, state.sensors[0], state.readings.room_C is not None)
     assumed = f"{said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
@@ -348,7 +350,6 @@ def build_report(
     elif start is None:
         started_from = "the log has no time stamps"
     figure = plot_monitor(state, settings)
-    assert isinstance(figure, Figure)
     if state.stopped:
         for s, ax in enumerate(figure.axes[: values.shape[1]]):
             _draw_rest_of_log(ax, time_min, values[:, s], state.stop_time_min, legend=s == 0)
@@ -370,13 +371,13 @@ def build_report(
         log_end_min=float(time_min[-1]) if len(time_min) else math.nan,
         gaps=reading_gaps(time_min),
         recorded_from=sidecar_words,
-        decision=str(outcome["decision"]),
+        decision=outcome.decision,
         stop_time_min=state.stop_time_min if stopped else math.nan,
-        reason=outcome["reason"] if isinstance(outcome["reason"], str) else None,
+        reason=outcome.reason,
         holding=holding,
         ways_on=ways,
         lines=lines,
-        warnings=tuple(dict.fromkeys(w for summary in _sensors(outcome) for w in summary["warnings"])),
+        warnings=tuple(dict.fromkeys(w for sensor in outcome.sensors for w in sensor.warnings)),
         assumptions=assumed,
         method=METHOD,
         tolerance_C=settings.tolerance_C,
@@ -538,17 +539,13 @@ def _draw_rest_of_log(ax: Axes, time_min: np.ndarray, values: np.ndarray, stop_m
         ax.legend(fontsize=7, loc="lower right")
 
 
-def _sensors(outcome: dict[str, Any]) -> list[dict[str, Any]]:
-    return list(outcome["sensors"])
+def _finite(value: float) -> float:
+    """NaN for a value that is not finite (an interval not yet bounded is shown as none)."""
+    return value if math.isfinite(value) else math.nan
 
 
-def _number(value: object) -> float:
-    return float(value) if isinstance(value, int | float) else math.nan
-
-
-def _line(summary: dict[str, Any], readings: np.ndarray, hindsight: Any, s: int) -> SensorLine:  # noqa: ANN401
-    ci95, decision = summary["steady_state_ci95_C"], summary["decision_interval_C"]
-    slowest = max((m["time_constant_min"] for m in summary["modes"]), default=math.nan)
+def _line(sensor: SensorStatus, readings: np.ndarray, hindsight: Hindsight | None, s: int) -> SensorLine:
+    slowest = max((m.time_constant_min for m in sensor.modes), default=math.nan)
     valid = readings[np.isfinite(readings)]
     settled = difference = settle = math.nan
     within: bool | None = None
@@ -559,15 +556,15 @@ def _line(summary: dict[str, Any], readings: np.ndarray, hindsight: Any, s: int)
         if hindsight.settle_time_min is not None:
             settle = float(hindsight.settle_time_min[s])
     return SensorLine(
-        sensor=summary["sensor"],
+        sensor=sensor.sensor,
         latest_C=float(valid[-1]) if len(valid) else math.nan,
-        steady_C=_number(summary["steady_state_C"]),
-        ci95_C=(_number(ci95[0]), _number(ci95[1])),
-        decision_interval_C=(_number(decision[0]), _number(decision[1])),
+        steady_C=_finite(sensor.steady_state_C),
+        ci95_C=(_finite(sensor.steady_state_ci95_C[0]), _finite(sensor.steady_state_ci95_C[1])),
+        decision_interval_C=(_finite(sensor.decision_interval_C[0]), _finite(sensor.decision_interval_C[1])),
         slowest_time_constant_min=float(slowest),
-        equilibrium_time_min=_number(summary["equilibrium_time_min"]),
-        status=summary["status"],
-        model_ok=bool(summary["model_ok"]),
+        equilibrium_time_min=_finite(sensor.equilibrium_time_min),
+        status=sensor.status,
+        model_ok=sensor.model_ok,
         settled_C=settled,
         difference_C=difference,
         within_tolerance=within,

@@ -7,13 +7,13 @@ as one batch. Its answer is an :class:`~mtident.thermal.identification.Identific
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.special import fdtri, stdtrit
 
-from mtident._json import finite_or_none
 from mtident._typing import BoolArray, FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog
@@ -31,6 +31,7 @@ from mtident.thermal.model import (
     transition_for,
 )
 from mtident.thermal.readings import display_resolution, noise_sigma, reading_range
+from mtident.thermal.robust_types import Assumptions
 from mtident.thermal.settings import ThermalTuning, filter_config, preset_tuning, tuning_from_data
 from mtident.ukf import (
     FilterCarry,
@@ -45,6 +46,7 @@ from mtident.ukf import (
 
 __all__ = [
     "FIRST_ORDER_ASSUMPTIONS",
+    "FirstOrderAnswer",
     "FirstOrderDetails",
     "Z95",
     "filter_window",
@@ -57,14 +59,15 @@ __all__ = [
 
 Z95 = 1.959963984540054
 
-FIRST_ORDER_ASSUMPTIONS: dict[str, object] = {
-    "model": "first order (one exponential, the papers' model): the interval assumes a first-order machine; "
+# no largest time constant: the one mode's is fitted, unbounded (infinite, written as null)
+FIRST_ORDER_ASSUMPTIONS = Assumptions(
+    max_time_constant_min=math.inf,
+    room="the room at its level in the window (or the room sensor's course, where given)",
+    reference=None,
+    model="first order (one exponential, the papers' model): the interval assumes a first-order machine; "
     "a slower mode not yet seen moves T∞ beyond it; of a warm-up that does not overshoot: a rising sensor's T∞ "
     "not below its latest readings, less four times their noise",
-    "max_time_constant_min": None,
-    "room": "the room at its level in the window (or the room sensor's course, where given)",
-    "reference": None,
-}
+)
 
 # A first-order fit to fewer minutes of rise than this is not trusted: a thermal time constant is
 # tens of minutes, and a few minutes of its rise are nearly straight (:func:`_untrusted`).
@@ -77,6 +80,32 @@ MAX_HALF_PER_RISE = 5.0
 
 
 MAX_HALF_MARGIN_C = 5.0
+
+
+@dataclass(frozen=True, slots=True)
+class FirstOrderAnswer:
+    """The first-order filters' part of one sensor's answer (its keys in the sensor's JSON object).
+
+    Attributes
+    ----------
+    lambda_per_min, lambda_sd_per_min : float
+        λ and its standard deviation.
+    time_constant_min : float or None
+        1/λ, None where λ is not positive.
+    model_fits : bool
+        The residual test passed.
+    assumptions : Assumptions
+        :data:`FIRST_ORDER_ASSUMPTIONS`.
+    residual_chi2 : float
+        The residual test's statistic.
+    """
+
+    lambda_per_min: float
+    lambda_sd_per_min: float
+    time_constant_min: float | None
+    model_fits: bool
+    assumptions: Assumptions
+    residual_chi2: float
 
 
 @dataclass(frozen=True)
@@ -118,7 +147,7 @@ class FirstOrderDetails:
     quantile: float
     untrusted: BoolArray
 
-    def summary(self, index: int) -> dict[str, object]:
+    def answer(self, index: int) -> FirstOrderAnswer:
         """λ with its standard deviation, the time constant, the residual test and what the answer assumes.
 
         Parameters
@@ -128,19 +157,17 @@ class FirstOrderDetails:
 
         Returns
         -------
-        dict
-            ``lambda_per_min``, ``lambda_sd_per_min``, ``time_constant_min``, ``model_fits``,
-            ``residual_chi2`` and ``assumptions``; None where a value is not finite.
+        FirstOrderAnswer
         """
         rate = float(self.rate_per_min[index])
-        return {
-            "lambda_per_min": finite_or_none(rate),
-            "lambda_sd_per_min": finite_or_none(self.rate_sd_per_min[index]),
-            "time_constant_min": 1.0 / rate if rate > 0 else None,
-            "model_fits": bool(self.fits[index]),
-            "assumptions": FIRST_ORDER_ASSUMPTIONS,
-            "residual_chi2": finite_or_none(self.fit_chi2[index]),
-        }
+        return FirstOrderAnswer(
+            lambda_per_min=rate,
+            lambda_sd_per_min=float(self.rate_sd_per_min[index]),
+            time_constant_min=1.0 / rate if rate > 0 else None,
+            model_fits=bool(self.fits[index]),
+            assumptions=FIRST_ORDER_ASSUMPTIONS,
+            residual_chi2=float(self.fit_chi2[index]),
+        )
 
     def describe(self) -> list[str]:
         """The first-order assumption, in a line.

@@ -25,19 +25,78 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtident._json import finite_or_none
+from mtident._json import to_json_value
 from mtident._typing import FloatArray
 from mtident.thermal.measured import measured_equilibrium
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 
-__all__ = ["Hindsight", "check_decision", "settle_times"]
+__all__ = ["Hindsight", "HindsightAnswer", "HindsightSensor", "check_decision", "settle_times"]
 
 # the room at the stop: the median of its readings this close to it (min)
 _ROOM_AROUND_STOP_MIN = 5.0
 # a reading's level for the settle time: the median of this many valid readings centred on it, so
 # that one noisy reading does not count as the sensor leaving its level
 _SETTLE_MEDIAN_READINGS = 5
+
+
+@dataclass(frozen=True, slots=True)
+class HindsightSensor:
+    """One sensor's line of :class:`HindsightAnswer` (NaN written as null: not known).
+
+    Attributes
+    ----------
+    sensor : str
+    steady_state_C : float
+        T∞ at the stop (°C).
+    room_shift_C : float
+        The room's move as the sensor follows it, added to T∞ (°C).
+    settled_C, error_C : float
+        Where the log settled, and T∞ (with the room's move) less that (°C).
+    measured_equilibrium_time_min : float
+        When the log reached 95 % of its total rise (min).
+    within_tolerance : bool or None
+        None where there is nothing to check.
+    settle_time_min : float
+        When its readings came within the tolerance of where they settled (min).
+    waited_for : bool
+        The test waits for it.
+    """
+
+    sensor: str
+    steady_state_C: float
+    room_shift_C: float
+    settled_C: float
+    error_C: float
+    measured_equilibrium_time_min: float
+    within_tolerance: bool | None
+    settle_time_min: float
+    waited_for: bool
+
+
+@dataclass(frozen=True, slots=True)
+class HindsightAnswer:
+    """The decision against the rest of the log, as its JSON object says it.
+
+    Attributes
+    ----------
+    stop_time_min, log_end_min : float
+        The stop and the log's last sample (min).
+    room_shift_C : float
+        The room's move from the stop to the log's end (°C).
+    settle_time_min : float
+        When every sensor waited for had settled within the tolerance (t_settle; NaN: not known).
+    time_saved_min : float or None
+        t_settle less the stop.
+    sensors : tuple of HindsightSensor
+    """
+
+    stop_time_min: float
+    log_end_min: float
+    room_shift_C: float
+    settle_time_min: float
+    time_saved_min: float | None
+    sensors: tuple[HindsightSensor, ...]
 
 
 @dataclass(frozen=True, slots=True)
@@ -184,8 +243,45 @@ class Hindsight:
         with np.errstate(invalid="ignore"):
             return np.abs(self.error_C) <= self.tolerance_C
 
+    def answer(self) -> HindsightAnswer:
+        """The check as a record whose fields are its JSON object.
+
+        Returns
+        -------
+        HindsightAnswer
+            The stop, the log's end, the room's shift, when the readings settled, the time saved,
+            and one entry per sensor.
+        """
+        shift = self.shift_C
+        settle = (
+            np.full(len(self.sensors), np.nan) if self.settle_time_min is None else np.asarray(self.settle_time_min)
+        )
+        waited = np.ones(len(self.sensors), dtype=bool) if self.waited is None else np.asarray(self.waited, bool)
+        within, checked = self.within, self.checked
+        return HindsightAnswer(
+            stop_time_min=self.stop_time_min,
+            log_end_min=self.log_end_min,
+            room_shift_C=self.room_shift_C,
+            settle_time_min=self.test_settle_time_min,
+            time_saved_min=self.time_saved_min,
+            sensors=tuple(
+                HindsightSensor(
+                    sensor=name,
+                    steady_state_C=float(self.steady_state_C[i]),
+                    room_shift_C=float(shift[i]),
+                    settled_C=float(self.settled_C[i]),
+                    error_C=float(self.error_C[i]),
+                    measured_equilibrium_time_min=float(self.measured_equilibrium_time_min[i]),
+                    within_tolerance=bool(within[i]) if checked[i] else None,
+                    settle_time_min=float(settle[i]),
+                    waited_for=bool(waited[i]),
+                )
+                for i, name in enumerate(self.sensors)
+            ),
+        )
+
     def to_dict(self) -> dict[str, object]:
-        """Plain JSON types (None where not known).
+        """Plain JSON types (None where not known): :meth:`answer`'s fields.
 
         Returns
         -------
@@ -194,33 +290,8 @@ class Hindsight:
             shift as it follows it, where it settled, the error, the measured equilibrium time and
             whether it was within the tolerance.
         """
-        shift = self.shift_C
-
-        settle = (
-            np.full(len(self.sensors), np.nan) if self.settle_time_min is None else np.asarray(self.settle_time_min)
-        )
-        waited = np.ones(len(self.sensors), dtype=bool) if self.waited is None else np.asarray(self.waited, bool)
-        return {
-            "stop_time_min": self.stop_time_min,
-            "log_end_min": self.log_end_min,
-            "room_shift_C": self.room_shift_C,
-            "settle_time_min": finite_or_none(self.test_settle_time_min),
-            "time_saved_min": self.time_saved_min,
-            "sensors": [
-                {
-                    "sensor": name,
-                    "steady_state_C": finite_or_none(self.steady_state_C[i]),
-                    "room_shift_C": finite_or_none(shift[i]),
-                    "settled_C": finite_or_none(self.settled_C[i]),
-                    "error_C": finite_or_none(self.error_C[i]),
-                    "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[i]),
-                    "within_tolerance": bool(self.within[i]) if self.checked[i] else None,
-                    "settle_time_min": finite_or_none(settle[i]),
-                    "waited_for": bool(waited[i]),
-                }
-                for i, name in enumerate(self.sensors)
-            ],
-        }
+        tree: dict[str, object] = to_json_value(self.answer())
+        return tree
 
 
 def check_decision(

@@ -1,6 +1,6 @@
 """A thermal identification's answer, whatever the method: each sensor's curve over the window
 and on with its 95 % band, T∞ with its interval, the verdict, what the log itself measured, and
-one sensor's summary for the JSON.
+one sensor's answer (:class:`SensorAnswer`), whose fields are its JSON object.
 
 :class:`Identification` is the one answer; what a method adds (the papers' filters' λ and
 residual test, the model-robust fit's modes) is its ``details``, behind the small
@@ -17,20 +17,32 @@ from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 import numpy as np
 
-from mtident._json import finite_or_none
+from mtident._json import json_inline, to_json_value
 from mtident._typing import BoolArray, FloatArray
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["Identification", "MethodDetails", "sensor_notes"]
+    from mtident.thermal.robust_types import Assumptions
+
+__all__ = ["Identification", "MethodAnswer", "MethodDetails", "SensorAnswer", "sensor_notes"]
+
+
+class MethodAnswer(Protocol):
+    """A method's own part of one sensor's answer: a frozen dataclass whose fields are its keys in
+    the sensor's JSON object (its λ, time constant, ...), among them what the answer assumes."""
+
+    @property
+    def assumptions(self) -> Assumptions:
+        """What the sensor's interval rests on."""
+        ...
 
 
 class MethodDetails(Protocol):
     """What one identification method adds to the common answer."""
 
-    def summary(self, index: int) -> dict[str, object]:
-        """The method's own keys of one sensor's JSON object (its λ, time constant, assumptions ...).
+    def answer(self, index: int) -> MethodAnswer:
+        """The method's own part of one sensor's answer (its λ, time constant, assumptions ...).
 
         Parameters
         ----------
@@ -39,8 +51,8 @@ class MethodDetails(Protocol):
 
         Returns
         -------
-        dict
-            JSON types; None where a value is not finite.
+        MethodAnswer
+            A frozen dataclass; its fields are the method's keys of the sensor's JSON object.
         """
         ...
 
@@ -70,6 +82,55 @@ class MethodDetails(Protocol):
 
 
 DetailsT = TypeVar("DetailsT", bound=MethodDetails, covariant=True)
+
+
+@dataclass(frozen=True, slots=True)
+class SensorAnswer:
+    """One sensor's answer, whatever the method: its fields are the sensor's JSON object (the
+    documentation's JSON page), NaN written as null.
+
+    Attributes
+    ----------
+    sensor, method, preset : str
+    window_min : float
+        Identification time L actually used.
+    steady_state_C : float
+        T∞ (NaN where not determined).
+    steady_state_ci95_C : tuple of float
+        T∞'s 95 % interval, low and high.
+    start_C, total_rise_C : float
+        The curve's start and its rise to T∞.
+    equilibrium_time_min : float
+        Predicted time to 95 % of the total rise.
+    rmse_C : float
+        Xia et al. 2014 Eq. 33 over all measured samples.
+    model_ok : bool
+        Whether the answer is trusted.
+    warnings : tuple of str
+    measured_final_C, measured_equilibrium_time_min : float
+        From the log itself where it reached equilibrium, else NaN.
+    measured_settled : bool or None
+        Whether the log settled to its measured final level (None where it has none).
+    method_answer : MethodAnswer
+        The method's own keys, written into the same object.
+    """
+
+    sensor: str
+    method: str
+    preset: str
+    window_min: float
+    steady_state_C: float
+    steady_state_ci95_C: tuple[float, float]
+    start_C: float
+    total_rise_C: float
+    equilibrium_time_min: float
+    rmse_C: float
+    model_ok: bool
+    warnings: tuple[str, ...]
+    measured_final_C: float
+    measured_equilibrium_time_min: float
+    measured_settled: bool | None
+    method_answer: MethodAnswer = json_inline()
 
 
 @dataclass(frozen=True)
@@ -186,8 +247,44 @@ class Identification(Generic[DetailsT]):
             columns[f"{name}_high95_C"] = self.band_high_C[:, s]
         return pd.DataFrame(columns)
 
+    def answer(self, index: int) -> SensorAnswer:
+        """One sensor's answer, its fields the sensor's JSON object.
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position in ``sensors``.
+
+        Returns
+        -------
+        SensorAnswer
+            T∞ with its interval, the equilibrium time, the RMSE, ``model_ok``, the sensor's
+            warnings, what the log measured, and the method's own part (its λ and time constant,
+            what the answer assumes, ...).
+        """
+        lo, hi = self.steady_state_ci95_C[index]
+        measured = float(self.measured_final_C[index])
+        return SensorAnswer(
+            sensor=self.sensors[index],
+            method=self.method,
+            preset=self.preset,
+            window_min=float(self.window_min),
+            steady_state_C=float(self.steady_state_C[index]),
+            steady_state_ci95_C=(float(lo), float(hi)),
+            start_C=float(self.start_C[index]),
+            total_rise_C=float(self.steady_state_C[index] - self.start_C[index]),
+            equilibrium_time_min=float(self.equilibrium_time_min[index]),
+            rmse_C=float(self.rmse_C[index]),
+            model_ok=bool(self.model_ok[index]),
+            warnings=tuple(self.warnings[index]),
+            measured_final_C=measured,
+            measured_equilibrium_time_min=float(self.measured_equilibrium_time_min[index]),
+            measured_settled=bool(self.measured_settled[index]) if np.isfinite(measured) else None,
+            method_answer=self.details.answer(index),
+        )
+
     def summary(self, index: int) -> dict[str, object]:
-        """The JSON object of one sensor (the documentation's JSON page).
+        """The JSON object of one sensor (the documentation's JSON page): :meth:`answer`'s fields.
 
         Parameters
         ----------
@@ -197,31 +294,10 @@ class Identification(Generic[DetailsT]):
         Returns
         -------
         dict
-            JSON types: T∞ with its interval, the equilibrium time, the RMSE, ``model_ok``, the
-            sensor's warnings, what the log measured, and the method's own keys (its λ and time
-            constant, what the answer assumes, ...); None where a value is not finite.
+            JSON types; None where a value is not finite.
         """
-        lo, hi = self.steady_state_ci95_C[index]
-        common: dict[str, object] = {
-            "sensor": self.sensors[index],
-            "method": self.method,
-            "preset": self.preset,
-            "window_min": float(self.window_min),
-            "steady_state_C": finite_or_none(self.steady_state_C[index]),
-            "steady_state_ci95_C": [finite_or_none(lo), finite_or_none(hi)],
-            "start_C": finite_or_none(self.start_C[index]),
-            "total_rise_C": finite_or_none(self.steady_state_C[index] - self.start_C[index]),
-            "equilibrium_time_min": finite_or_none(self.equilibrium_time_min[index]),
-            "rmse_C": finite_or_none(self.rmse_C[index]),
-            "model_ok": bool(self.model_ok[index]),
-            "warnings": list(self.warnings[index]),
-            "measured_final_C": finite_or_none(self.measured_final_C[index]),
-            "measured_equilibrium_time_min": finite_or_none(self.measured_equilibrium_time_min[index]),
-            "measured_settled": bool(self.measured_settled[index])
-            if np.isfinite(self.measured_final_C[index])
-            else None,
-        }
-        return common | self.details.summary(index)
+        summary: dict[str, object] = to_json_value(self.answer(index))
+        return summary
 
 
 def sensor_notes(notes: tuple[str, ...], sensor: str) -> list[str]:

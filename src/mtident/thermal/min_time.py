@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from mtident._json import finite_or_none
+from mtident._json import json_optional, to_json_value
 from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
@@ -33,12 +33,54 @@ from mtident.thermal.lsq import first_level, fit_rise, late_onset
 from mtident.thermal.measured import MIN_WINDOW_SAMPLES, rmse
 from mtident.thermal.model import heat_balance_path, rise_curve
 from mtident.thermal.readings import noise_sigma
+from mtident.thermal.robust_types import Assumptions
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, preset_tuning, tuning_from_data
 
-__all__ = ["MinTimeResult", "minimal_identification_time"]
+__all__ = ["MinTimeAnswer", "MinTimeResult", "minimal_identification_time"]
 
 # an RMSE beyond this (°C) is a filter that left the data, not a prediction error
 _EXPLODED_C = 100.0
+
+
+@dataclass(frozen=True, slots=True)
+class MinTimeAnswer:
+    """One sensor's minimal identification time: its fields are the sensor's JSON object.
+
+    Attributes
+    ----------
+    sensor, method : str
+    min_identification_time_min : float
+        The minimal L (NaN where none).
+    sampling_periods_min : tuple of float
+        The sampling periods M.
+    rmse_C : dict of str to tuple of (float, float)
+        Per period (its minutes as ``f"{M:g}"``), the RMSE curve as (L, RMSE) pairs.
+    best_per_period_min : dict of str to float
+        Per period, its own best L.
+    periods_agree : bool
+        Every period picks the same L.
+    measuring_time_needed_min : float
+        The longest sampling period.
+    model_ok : bool
+        False where the RMSE falls to the end of every period (the criterion says nothing).
+    warnings : tuple of str
+    assumptions : Assumptions
+    rise_begins_min : float or None
+        Where a warm-up that began after the log rises; left out of the JSON where it rose from the start.
+    """
+
+    sensor: str
+    method: str
+    min_identification_time_min: float
+    sampling_periods_min: tuple[float, ...]
+    rmse_C: dict[str, tuple[tuple[float, float], ...]]
+    best_per_period_min: dict[str, float]
+    periods_agree: bool
+    measuring_time_needed_min: float
+    model_ok: bool
+    warnings: tuple[str, ...]
+    assumptions: Assumptions
+    rise_begins_min: float | None = json_optional()
 
 
 @dataclass(frozen=True)
@@ -135,8 +177,47 @@ class MinTimeResult:
             )
         return said
 
+    def answer(self, index: int) -> MinTimeAnswer:
+        """One sensor's answer, with its verdict and what it assumes.
+
+        Parameters
+        ----------
+        index : int
+            The sensor's position in ``sensors``.
+
+        Returns
+        -------
+        MinTimeAnswer
+        """
+        curves = {
+            f"{period:g}": tuple(
+                (float(w), float(self.rmse_C[p, i, index]))
+                for i, w in enumerate(self.windows_min)
+                if np.isfinite(self.rmse_C[p, i, index])
+            )
+            for p, period in enumerate(self.periods_min)
+        }
+        warnings = tuple(self.warnings(index))
+        begins = np.nan if self.rise_begins_min is None else float(self.rise_begins_min[index])
+        return MinTimeAnswer(
+            sensor=self.sensors[index],
+            method=self.method,
+            min_identification_time_min=float(self.min_identification_time_min[index]),
+            sampling_periods_min=tuple(float(p) for p in self.periods_min),
+            rmse_C=curves,
+            best_per_period_min={
+                f"{p:g}": float(b) for p, b in zip(self.periods_min, self.best_per_period_min[:, index], strict=True)
+            },
+            periods_agree=bool(self.agreement[index]),
+            measuring_time_needed_min=float(self.measuring_time_min),
+            model_ok=not any(": the RMSE falls to the end" in w for w in warnings),
+            warnings=warnings,
+            assumptions=FIRST_ORDER_ASSUMPTIONS,
+            rise_begins_min=begins if np.isfinite(begins) else None,
+        )
+
     def summary(self, index: int) -> dict[str, object]:
-        """The JSON object for one sensor, with its verdict and what it assumes.
+        """The JSON object for one sensor: :meth:`answer`'s fields.
 
         Parameters
         ----------
@@ -149,34 +230,8 @@ class MinTimeResult:
             JSON types: the minimal L, each sampling period's RMSE curve and best L, whether the periods
             agree, the measuring time needed, the warnings and what the answer assumes.
         """
-        table = {}
-        for p, period in enumerate(self.periods_min):
-            rows = [
-                [float(w), float(self.rmse_C[p, i, index])]
-                for i, w in enumerate(self.windows_min)
-                if np.isfinite(self.rmse_C[p, i, index])
-            ]
-            table[f"{period:g}"] = rows
-        return {
-            "sensor": self.sensors[index],
-            "method": self.method,
-            "min_identification_time_min": finite_or_none(self.min_identification_time_min[index]),
-            "sampling_periods_min": [float(p) for p in self.periods_min],
-            "rmse_C": table,
-            "best_per_period_min": {
-                f"{p:g}": float(b) for p, b in zip(self.periods_min, self.best_per_period_min[:, index], strict=True)
-            },
-            "periods_agree": bool(self.agreement[index]),
-            "measuring_time_needed_min": float(self.measuring_time_min),
-            "model_ok": not any(": the RMSE falls to the end" in w for w in self.warnings(index)),
-            "warnings": self.warnings(index),
-            "assumptions": FIRST_ORDER_ASSUMPTIONS,
-            **(
-                {"rise_begins_min": float(self.rise_begins_min[index])}
-                if self.rise_begins_min is not None and np.isfinite(self.rise_begins_min[index])
-                else {}
-            ),
-        }
+        summary: dict[str, object] = to_json_value(self.answer(index))
+        return summary
 
 
 def minimal_identification_time(

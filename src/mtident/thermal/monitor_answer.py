@@ -1,20 +1,22 @@
-"""The live monitor's answer: the JSON a watch prints and saves (:func:`result`: the decision, the
-sensor the test waits for, and per sensor its answer, verdict and assumptions), and why a test
-cannot stop yet, with the ways on, in words.
+"""The live monitor's answer: the record whose fields are the JSON a watch prints and saves
+(:func:`answer`: the decision, the sensor the test waits for, and per sensor its answer, verdict
+and assumptions), and why a test cannot stop yet, with the ways on, in words.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
-from mtident._json import finite_or_none, to_json_value
+from mtident._json import json_optional, to_json_value
 from mtident.thermal.assumptions import describe_assumptions
+from mtident.thermal.hindsight import HindsightAnswer
+from mtident.thermal.modal_types import Mode
 from mtident.thermal.monitor_types import MonitorSettings, MonitorState, SensorCheck
 from mtident.thermal.robust import room_wander_half_width
 from mtident.thermal.robust_types import Assumptions
 
-__all__ = ["assumptions", "result"]
+__all__ = ["SensorStatus", "WatchAnswer", "answer", "assumptions", "result"]
 
 
 def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = False) -> Assumptions:
@@ -37,10 +39,121 @@ def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = Fa
     return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor, room_measured)
 
 
-def result(
-    state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None
-) -> dict[str, object]:
-    """The JSON answer: the decision, the single-sensor keys of the sensor the test
+@dataclass(frozen=True, slots=True)
+class SensorStatus:
+    """One sensor's line of the watch's answer (NaN written as null: not known).
+
+    Attributes
+    ----------
+    sensor : str
+    waited_for : bool
+        The test waits for it.
+    status : str
+        Its check's status ("collecting", "narrowing", "may stop", ...).
+    may_stop : bool
+    checked_at_min : float
+        When it was last checked (min).
+    steady_state_C : float
+        T∞ (°C).
+    steady_state_ci95_C, decision_interval_C : tuple of float
+        T∞'s 95 % interval and the decision's, low and high (°C).
+    equilibrium_time_min : float
+        Predicted time to 95 % of the total rise (min).
+    modes : tuple of Mode
+        The best model's modes.
+    model_ok : bool
+    warnings : tuple of str
+    interval_ends : str
+        In words, what sets the interval's ends.
+    assumptions : Assumptions
+    reference_used, machine_model_used : bool
+    expected_stop_time_min : float
+        Its expected stop (min; NaN where not foreseen or not asked for).
+    """
+
+    sensor: str
+    waited_for: bool
+    status: str
+    may_stop: bool
+    checked_at_min: float
+    steady_state_C: float
+    steady_state_ci95_C: tuple[float, float]
+    decision_interval_C: tuple[float, float]
+    equilibrium_time_min: float
+    modes: tuple[Mode, ...]
+    model_ok: bool
+    warnings: tuple[str, ...]
+    interval_ends: str
+    assumptions: Assumptions
+    reference_used: bool
+    machine_model_used: bool
+    expected_stop_time_min: float
+
+
+@dataclass(frozen=True, slots=True)
+class WatchAnswer:
+    """The watch's answer: its fields are its JSON object (the documentation's JSON page).
+
+    The first keys are those of one sensor's answer, of the sensor the test waits for: the
+    slowest to equilibrium once stopped, the widest interval before.
+
+    Attributes
+    ----------
+    sensor : str
+    steady_state_C : float
+    steady_state_ci95_C : tuple of float
+    equilibrium_time_min : float
+    model_ok : bool
+    warnings : tuple of str
+    assumptions : Assumptions
+        That sensor's answer.
+    stop_time_min : float or None
+        The stop; None before it.
+    decision : str
+        "stop" or "continue".
+    reason : str or None
+        Why the test cannot stop yet, and the ways on.
+    room_bound_sensors : tuple of str
+        The sensors only the room's assumed wander keeps from the tolerance.
+    waited_for : tuple of str
+    reference_dropped : bool
+    last_time_min : float
+        The latest reading's time (min).
+    tolerance_C, decision_level : float
+    sensors : tuple of SensorStatus
+    time_saved_min, settle_time_min : float or None
+        Known only in hindsight (a replay of a log that runs on past the stop).
+    expected_stop_time_min : float or None
+        The test's expected stop (NaN: none found); None where not asked for, and then left out.
+    hindsight : HindsightAnswer or None
+        The decision against the rest of a replayed log; left out where None.
+    """
+
+    sensor: str
+    steady_state_C: float
+    steady_state_ci95_C: tuple[float, float]
+    equilibrium_time_min: float
+    model_ok: bool
+    warnings: tuple[str, ...]
+    assumptions: Assumptions
+    stop_time_min: float | None
+    decision: str
+    reason: str | None
+    room_bound_sensors: tuple[str, ...]
+    waited_for: tuple[str, ...]
+    reference_dropped: bool
+    last_time_min: float
+    tolerance_C: float
+    decision_level: float
+    sensors: tuple[SensorStatus, ...]
+    time_saved_min: float | None = None
+    settle_time_min: float | None = None
+    expected_stop_time_min: float | None = json_optional()
+    hindsight: HindsightAnswer | None = json_optional()
+
+
+def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None) -> WatchAnswer:
+    """The answer: the decision, the single-sensor keys of the sensor the test
     waits for (the slowest to equilibrium once stopped, the widest interval before), and per
     sensor its answer, verdict and assumptions; ``expected``: each sensor's expected stop, where
     the caller has it.
@@ -53,15 +166,15 @@ def result(
 
     Returns
     -------
-    dict
+    WatchAnswer
     """
     if state.reference_dropped:
         settings = replace(settings, reference=None)  # the answers rest on no reference: their assumptions say so
     measured = state.readings.room_C is not None
-    sensors = [
-        _sensor_summary(c, settings, None if expected is None else expected.get(c.sensor), measured)
+    sensors = tuple(
+        _sensor_status(c, settings, math.nan if expected is None else expected.get(c.sensor, math.nan), measured)
         for c in state.checks
-    ]
+    )
     stopped = state.stopped
     waited = [c for c in state.checks if settings.waits_for(c.sensor)]
     if stopped:
@@ -69,38 +182,51 @@ def result(
     else:
         key = max(waited, key=lambda c: c.half_width_C)
     lead = sensors[state.checks.index(key)]
-    out: dict[str, object] = {
-        k: lead[k]
-        for k in (
-            "sensor",
-            "steady_state_C",
-            "steady_state_ci95_C",
-            "equilibrium_time_min",
-            "model_ok",
-            "warnings",
-            "assumptions",
-        )
-    }
-    out.update(
+    stops = None if expected is None else [expected.get(c.sensor, math.nan) for c in waited]
+    return WatchAnswer(
+        sensor=lead.sensor,
+        steady_state_C=lead.steady_state_C,
+        steady_state_ci95_C=lead.steady_state_ci95_C,
+        equilibrium_time_min=lead.equilibrium_time_min,
+        model_ok=lead.model_ok,
+        warnings=lead.warnings,
+        assumptions=lead.assumptions,
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
         reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings),
-        room_bound_sensors=[] if stopped else [c.sensor for c in waited if _room_bound(c, settings)],
-        waited_for=[c.sensor for c in waited],
+        room_bound_sensors=() if stopped else tuple(c.sensor for c in waited if _room_bound(c, settings)),
+        waited_for=tuple(c.sensor for c in waited),
         reference_dropped=state.reference_dropped,
-        last_time_min=finite_or_none(state.readings.latest_min),
+        last_time_min=state.readings.latest_min,
         tolerance_C=settings.tolerance_C,
         decision_level=settings.decision_level,
         sensors=sensors,
+        # the time saved is known only in hindsight, against when the readings settled (the session's
+        # hindsight sets it); a predicted 95 %-rise time lies far beyond where they settle within the tolerance
+        time_saved_min=None,
+        settle_time_min=None,
+        expected_stop_time_min=None if stops is None else max(stops) if all(map(math.isfinite, stops)) else math.nan,
     )
-    # the time saved is known only in hindsight, against when the readings settled (the session's
-    # hindsight sets it); a predicted 95 %-rise time lies far beyond where they settle within the tolerance
-    out["time_saved_min"] = None
-    out["settle_time_min"] = None
-    if expected is not None:
-        values = [expected.get(c.sensor, math.nan) for c in waited]
-        out["expected_stop_time_min"] = max(values) if all(math.isfinite(v) for v in values) else None
-    return out
+
+
+def result(
+    state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None
+) -> dict[str, object]:
+    """The JSON answer: :func:`answer`'s fields.
+
+    Parameters
+    ----------
+    state : MonitorState
+    settings : MonitorSettings
+    expected : dict of str to float, optional
+        Each sensor's expected stop, where the caller has it.
+
+    Returns
+    -------
+    dict
+    """
+    tree: dict[str, object] = to_json_value(answer(state, settings, expected))
+    return tree
 
 
 def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
@@ -193,25 +319,23 @@ def _room_bound(check: SensorCheck, settings: MonitorSettings) -> bool:
     return wander > 0 and _readings_half_width(check, wander) <= settings.tolerance_C
 
 
-def _sensor_summary(
-    c: SensorCheck, settings: MonitorSettings, expected: float | None, room_measured: bool
-) -> dict[str, object]:
-    return {
-        "sensor": c.sensor,
-        "waited_for": settings.waits_for(c.sensor),
-        "status": c.status,
-        "may_stop": c.may_stop,
-        "checked_at_min": finite_or_none(c.checked_min),
-        "steady_state_C": finite_or_none(c.steady_C),
-        "steady_state_ci95_C": [finite_or_none(c.low95_C), finite_or_none(c.high95_C)],
-        "decision_interval_C": [finite_or_none(c.low_C), finite_or_none(c.high_C)],
-        "equilibrium_time_min": finite_or_none(c.equilibrium_time_min),
-        "modes": [{"time_constant_min": tau, "amplitude_C": a} for tau, a in c.modes],
-        "model_ok": c.model_ok,
-        "warnings": list(c.warnings),
-        "interval_ends": c.ends,
-        "assumptions": to_json_value(assumptions(settings, c.sensor, room_measured)),
-        "reference_used": c.reference_used,
-        "machine_model_used": c.machine_used,
-        "expected_stop_time_min": None if expected is None else finite_or_none(expected),
-    }
+def _sensor_status(c: SensorCheck, settings: MonitorSettings, expected: float, room_measured: bool) -> SensorStatus:
+    return SensorStatus(
+        sensor=c.sensor,
+        waited_for=settings.waits_for(c.sensor),
+        status=c.status,
+        may_stop=c.may_stop,
+        checked_at_min=c.checked_min,
+        steady_state_C=c.steady_C,
+        steady_state_ci95_C=(c.low95_C, c.high95_C),
+        decision_interval_C=(c.low_C, c.high_C),
+        equilibrium_time_min=c.equilibrium_time_min,
+        modes=tuple(Mode(tau, a) for tau, a in c.modes),
+        model_ok=c.model_ok,
+        warnings=c.warnings,
+        interval_ends=c.ends,
+        assumptions=assumptions(settings, c.sensor, room_measured),
+        reference_used=c.reference_used,
+        machine_model_used=c.machine_used,
+        expected_stop_time_min=expected,
+    )

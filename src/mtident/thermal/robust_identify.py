@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtident._json import finite_or_none, to_json_value
+from mtident._json import json_inline
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
@@ -21,17 +21,76 @@ from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.identification import Identification
 from mtident.thermal.machine_model import combined_estimate, fit_readings, unmeasured_wander
 from mtident.thermal.measured import measured_and_settled, rmse, window_samples
+from mtident.thermal.modal_types import Mode
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_notes
 from mtident.thermal.robust import estimate_sensor, with_fragility
 from mtident.thermal.robust_types import Assumptions, RobustSettings, SensorEstimate
 from mtident.thermal.settings import ROBUST_METHOD
 
-__all__ = ["RobustDetails", "identify_robust"]
+__all__ = ["ModelAnswer", "RobustAnswer", "RobustDetails", "identify_robust"]
 
 REPORT_LEVEL = 0.95
 # the prediction runs this many of the slowest mode's time constants past the window, at least
 HORIZON_TIME_CONSTANTS = 4.0
+
+
+@dataclass(frozen=True, slots=True)
+class ModelAnswer:
+    """The best model of one sensor, as its answer's ``model`` object says it.
+
+    Attributes
+    ----------
+    status : str
+        The estimate's status ("estimated", "no rise", ...).
+    modes : tuple of Mode
+        The best model's modes (none without a fit).
+    onset_min, rise_C, noise_C : float
+        Where the warm-up begins, how far it has risen, the readings' noise.
+    interval_ends : str
+        In words, the models that set the 95 % interval's ends.
+    reference_used, machine_model_used : bool
+        The reference's time constants, or its machine model, were used.
+    spikes_left_out : int
+        Readings left out as spikes.
+    """
+
+    status: str
+    modes: tuple[Mode, ...]
+    onset_min: float
+    rise_C: float
+    noise_C: float
+    interval_ends: str
+    reference_used: bool
+    machine_model_used: bool
+    spikes_left_out: int
+
+
+@dataclass(frozen=True, slots=True)
+class RobustAnswer:
+    """The model-robust estimate's part of one sensor's answer (its keys in the sensor's JSON object).
+
+    Attributes
+    ----------
+    lambda_per_min, time_constant_min : float
+        The slowest mode's rate and time constant (NaN without a fit).
+    model_fits : bool
+        The data do not contradict the model.
+    assumptions : Assumptions
+        What the interval rests on.
+    model : ModelAnswer
+        The best model.
+    highest_interval : dict of str to (float, float)
+        T∞'s interval at the highest level computed, under its key ``steady_state_ciNN_C`` (NN the
+        level in %; a key of the JSON object itself, its name set by the level).
+    """
+
+    lambda_per_min: float
+    time_constant_min: float
+    model_fits: bool
+    assumptions: Assumptions
+    model: ModelAnswer
+    highest_interval: dict[str, tuple[float, float]] = json_inline()
 
 
 @dataclass(frozen=True)
@@ -51,7 +110,7 @@ class RobustDetails:
     estimates: tuple[SensorEstimate, ...]
     assumptions: tuple[Assumptions, ...]
 
-    def summary(self, index: int) -> dict[str, object]:
+    def answer(self, index: int) -> RobustAnswer:
         """T∞'s interval at the highest level computed, the slowest time constant, the assumptions
         and the best model's modes.
 
@@ -62,22 +121,31 @@ class RobustDetails:
 
         Returns
         -------
-        dict
-            ``steady_state_ciNN_C`` (NN the highest level, in %), ``lambda_per_min``,
-            ``time_constant_min``, ``model_fits``, ``assumptions`` and ``model``; None where a value
-            is not finite.
+        RobustAnswer
         """
         e = self.estimates[index]
-        slowest = np.nan if e.fit is None else e.fit.slowest_time_constant_min()
-        lo99, hi99 = e.interval_C.get(max(e.interval_C), (-np.inf, np.inf))
-        return {
-            f"steady_state_ci{round(100 * max(e.interval_C))}_C": [finite_or_none(lo99), finite_or_none(hi99)],
-            "lambda_per_min": finite_or_none(1.0 / slowest) if np.isfinite(slowest) else None,
-            "time_constant_min": finite_or_none(slowest),
-            "model_fits": bool(e.model_ok),
-            "assumptions": to_json_value(self.assumptions[index]),
-            "model": _model_dict(e),
-        }
+        fit = e.fit
+        slowest = np.nan if fit is None else fit.slowest_time_constant_min()
+        highest = max(e.interval_C)
+        lo, hi = e.interval_C[highest]
+        return RobustAnswer(
+            lambda_per_min=float(1.0 / slowest) if np.isfinite(slowest) else np.nan,
+            time_constant_min=float(slowest),
+            model_fits=bool(e.model_ok),
+            assumptions=self.assumptions[index],
+            model=ModelAnswer(
+                status=e.status,
+                modes=() if fit is None else fit.modes,
+                onset_min=e.onset_min,
+                rise_C=e.rise_C,
+                noise_C=e.noise_C,
+                interval_ends=e.what_sets_the_ends(REPORT_LEVEL),
+                reference_used=e.reference_used,
+                machine_model_used=e.machine_used,
+                spikes_left_out=e.spikes,
+            ),
+            highest_interval={f"steady_state_ci{round(100 * highest)}_C": (float(lo), float(hi))},
+        )
 
     def describe(self) -> list[str]:
         """What the intervals assume, and each sensor's reference.
@@ -112,21 +180,6 @@ class RobustDetails:
         """
         fit = self.estimates[index].fit
         return fit is not None and fit.room_level_C is not None
-
-
-def _model_dict(e: SensorEstimate) -> dict[str, object]:
-    fit = e.fit
-    return {
-        "status": e.status,
-        "modes": [] if fit is None else to_json_value(fit.modes),
-        "onset_min": finite_or_none(e.onset_min),
-        "rise_C": finite_or_none(e.rise_C),
-        "noise_C": finite_or_none(e.noise_C),
-        "interval_ends": e.what_sets_the_ends(REPORT_LEVEL),
-        "reference_used": e.reference_used,
-        "machine_model_used": e.machine_used,
-        "spikes_left_out": e.spikes,
-    }
 
 
 def identify_robust(

@@ -25,6 +25,7 @@ from typing import Literal
 
 import numpy as np
 
+from mtident._json import to_json_value
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError, MtidentError
 from mtident.io.follow import FollowPosition, LogFollower
@@ -38,8 +39,8 @@ from mtident.thermal.monitor import (
     minutes,
     monitor_step,
     new_state,
-    result,
 )
+from mtident.thermal.monitor_answer import WatchAnswer, answer
 from mtident.thermal.reference import reference_notes
 
 __all__ = [
@@ -621,8 +622,33 @@ class WatchSession:
                 return None
         return out
 
+    def answer(self, with_forecast: bool = True, cancel: Callable[[], bool] | None = None) -> WatchAnswer:
+        """The answer (:func:`~mtident.thermal.monitor_answer.answer`), its fields the JSON's keys.
+
+        Parameters
+        ----------
+        with_forecast : bool, optional
+            Add each sensor's expected stop while the test has not stopped (a forecast per sensor).
+        cancel : callable, optional
+            As :meth:`expected_stops`: the answer then has no expected stops.
+
+        Returns
+        -------
+        WatchAnswer
+
+        Raises
+        ------
+        InputError
+            No data rows yet, or no log file.
+        """
+        if self.state is None:
+            msg = f"{self.path}: no data rows" if self.path.is_file() else f"{self.path}: no such file"
+            raise InputError(msg)
+        expected = self.expected_stops(cancel) if with_forecast and not self.state.stopped else None
+        return answer(self.state, self.settings, expected)
+
     def result(self, with_forecast: bool = True, cancel: Callable[[], bool] | None = None) -> dict[str, object]:
-        """The JSON answer (:func:`~mtident.thermal.monitor.result`).
+        """The JSON answer: :meth:`answer`'s fields.
 
         Parameters
         ----------
@@ -640,11 +666,8 @@ class WatchSession:
         InputError
             No data rows yet, or no log file.
         """
-        if self.state is None:
-            msg = f"{self.path}: no data rows" if self.path.is_file() else f"{self.path}: no such file"
-            raise InputError(msg)
-        expected = self.expected_stops(cancel) if with_forecast and not self.state.stopped else None
-        return result(self.state, self.settings, expected)
+        tree: dict[str, object] = to_json_value(self.answer(with_forecast, cancel))
+        return tree
 
     def hindsight(self, whole: tuple[FloatArray, FloatArray, FloatArray | None] | None = None) -> Hindsight | None:
         """The decision against where the log settled, for a log that runs on past the stop (read
