@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["finite_or_none", "json_inline", "json_optional", "to_json_value", "walk_fields"]
+__all__ = ["SensorAnswers", "finite_or_none", "json_inline", "json_optional", "to_json_value", "walk_fields"]
 
 # field metadata that :func:`walk_fields` reads: a field written only where it is not None, and a
 # field whose own fields (or items) are written into its parent's object
@@ -183,6 +183,30 @@ def to_json_value(value: Any) -> Any:
     {'sensor': 'T1', 'steady_state_C': 24.5, 'interval_C': [24.1, None], 'times_min': [1.0, None]}
     """
     return walk_fields(value, _json_leaf)
+
+
+class SensorAnswers:
+    """A result of every sensor of a log whose JSON, sensor by sensor, is its answer record's fields."""
+
+    def answer(self, index: int) -> Any:
+        """The answer record, a frozen dataclass, of the sensor at ``index`` (each result has its own)."""
+        raise NotImplementedError
+
+    def summary(self, index: int) -> dict[str, object]:
+        """The JSON object of one sensor (the documentation's JSON page): :meth:`answer`'s fields.
+
+        Parameters
+        ----------
+        index : int
+            Which sensor, as for :meth:`answer`.
+
+        Returns
+        -------
+        dict
+            JSON types; None where a value is not finite.
+        """
+        summary: dict[str, object] = to_json_value(self.answer(index))
+        return summary
 
 
 def _json_leaf(value: Any) -> Any:

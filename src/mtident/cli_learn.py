@@ -15,11 +15,11 @@ from rich.table import Table
 
 from mtident.cli import OutputPath, print_json, table_console, thermal, user_errors
 from mtident.cli_thermal import (
-    LogRequest,
+    CommandRequest,
     _column_layout,
+    command_request,
     load_log_with_room,
     log_options,
-    log_request,
     max_time_constant_option,
     stderr,
 )
@@ -87,15 +87,13 @@ def learn_command(**options: Any) -> None:
 
 
 @dataclass(frozen=True, slots=True)
-class LearnRequest:
+class LearnRequest(CommandRequest):
     """What ``thermal learn`` was asked, grouped (:func:`learn_request`).
 
     Attributes
     ----------
-    log : LogRequest
-        FILE and how its columns are read.
-    room_col : str or None
-        --ambient: the room sensor's column.
+    log, room_col
+        As in :class:`CommandRequest`.
     robust : RobustSettings
         --max-time-constant.
     output_path : str
@@ -108,8 +106,6 @@ class LearnRequest:
         --json.
     """
 
-    log: LogRequest
-    room_col: str | None
     robust: RobustSettings
     output_path: str
     every_mode: bool
@@ -132,18 +128,7 @@ def learn_request(options: Mapping[str, Any]) -> LearnRequest:
     -------
     LearnRequest
     """
-    return LearnRequest(
-        log=log_request(options),
-        room_col=options["ambient_col"],
-        robust=RobustSettings(max_time_constant_min=options["max_tau_min"]),
-        output_path=options["output_path"],
-        every_mode=options["every_mode"],
-        machine=options["machine"],
-        serial=options["serial"],
-        program=options["program"],
-        run_date=options["run_date"],
-        as_json=options["as_json"],
-    )
+    return command_request(LearnRequest, options, robust=RobustSettings(max_time_constant_min=options["max_tau_min"]))
 
 
 @dataclass(frozen=True, slots=True)

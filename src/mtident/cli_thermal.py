@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 import shlex
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, TypedDict
+from typing import TYPE_CHECKING, Any, Literal, TypedDict, TypeVar
 
 import click
 import numpy as np
@@ -119,6 +119,52 @@ def log_request(options: Mapping[str, Any]) -> LogRequest:
     """
     return LogRequest(
         options["file"], options["sensors"], options["time_col"], options["time_unit"], options["temperature_unit"]
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class CommandRequest:
+    """What a command that reads a log with a room column was asked: the fields its request shares.
+
+    Attributes
+    ----------
+    log : LogRequest
+        FILE and how its columns are read.
+    room_col : str or None
+        --ambient: the room sensor's column.
+    """
+
+    log: LogRequest
+    room_col: str | None
+
+
+RequestT = TypeVar("RequestT", bound=CommandRequest)
+
+
+def command_request(request_type: type[RequestT], options: Mapping[str, Any], **settings: Any) -> RequestT:
+    """A command's options, by click's names, grouped into its request: ``log`` and ``room_col``
+    from :func:`log_request` and --ambient, the fields ``settings`` gives, every other field from
+    the option of its name.
+
+    Parameters
+    ----------
+    request_type : type
+        The command's request, a :class:`CommandRequest`.
+    options : mapping
+        The command's options (their help is the command's ``--help``).
+    **settings
+        The fields not one option of the same name: settings grouped or read from options.
+
+    Returns
+    -------
+    RequestT
+    """
+    given = {"log": log_request(options), "room_col": options["ambient_col"], **settings}
+    return request_type(
+        **{
+            field.name: given[field.name] if field.name in given else options[field.name]
+            for field in fields(request_type)
+        }
     )
 
 
@@ -447,15 +493,13 @@ def identify_command(**options: Any) -> None:
 
 
 @dataclass(frozen=True, slots=True)
-class IdentifyRequest:
+class IdentifyRequest(CommandRequest):
     """What ``thermal identify`` was asked, grouped (:func:`identify_request`).
 
     Attributes
     ----------
-    log : LogRequest
-        FILE and how its columns are read.
-    room_col : str or None
-        --ambient: the room sensor's column.
+    log, room_col
+        As in :class:`CommandRequest`.
     window_min : float
         --window: the identification time L (min).
     method, preset : str
@@ -476,8 +520,6 @@ class IdentifyRequest:
         --json.
     """
 
-    log: LogRequest
-    room_col: str | None
     window_min: float
     method: str
     preset: str
@@ -503,24 +545,14 @@ def identify_request(options: Mapping[str, Any]) -> IdentifyRequest:
     -------
     IdentifyRequest
     """
-    return IdentifyRequest(
-        log=log_request(options),
-        room_col=options["ambient_col"],
-        window_min=options["window_min"],
-        method=options["method"],
-        preset=options["preset"],
+    return command_request(
+        IdentifyRequest,
+        options,
         robust=RobustSettings(
             max_time_constant_min=options["max_tau_min"],
             room_wander_C_per_h=options["room_wander"],
             free_fast_modes=options["free_fast_modes"],
         ),
-        reference_path=options["reference_path"],
-        machine=options["machine"],
-        horizon_min=options["horizon_min"],
-        pseudo_seed=options["pseudo_seed"],
-        plot_path=options["plot_path"],
-        curve_path=options["curve_path"],
-        as_json=options["as_json"],
     )
 
 
@@ -715,15 +747,13 @@ def min_time_command(**options: Any) -> None:
 
 
 @dataclass(frozen=True, slots=True)
-class MinTimeRequest:
+class MinTimeRequest(CommandRequest):
     """What ``thermal min-time`` was asked, grouped (:func:`min_time_request`).
 
     Attributes
     ----------
-    log : LogRequest
-        FILE and how its columns are read.
-    room_col : str or None
-        --ambient: the room sensor's column.
+    log, room_col
+        As in :class:`CommandRequest`.
     periods_min : tuple of float
         --sampling-periods (min).
     windows_min : tuple of float or None
@@ -736,8 +766,6 @@ class MinTimeRequest:
         --json.
     """
 
-    log: LogRequest
-    room_col: str | None
     periods_min: tuple[float, ...]
     windows_min: tuple[float, ...] | None
     method: str
@@ -773,16 +801,7 @@ def min_time_request(options: Mapping[str, Any]) -> MinTimeRequest:
             raise InputError(msg)
         step = parts[2] if len(parts) == 3 else 1.0
         candidates = tuple(np.arange(parts[0], parts[1] + step / 2, step))
-    return MinTimeRequest(
-        log=log_request(options),
-        room_col=options["ambient_col"],
-        periods_min=tuple(periods),
-        windows_min=candidates,
-        method=options["method"],
-        preset=options["preset"],
-        plot_path=options["plot_path"],
-        as_json=options["as_json"],
-    )
+    return command_request(MinTimeRequest, options, periods_min=tuple(periods), windows_min=candidates)
 
 
 @dataclass(frozen=True, slots=True)

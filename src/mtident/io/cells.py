@@ -82,21 +82,11 @@ def split_rows(lines: Iterable[str], dialect: CsvDialect, width: int) -> list[li
     list of list of str
         One list of cells per line that is not blank.
     """
-    rows = csv.reader((line for line in lines if line.strip()), delimiter=dialect.delimiter, skipinitialspace=True)
-    return [row if len(row) >= width else row + [""] * (width - len(row)) for row in rows]
+    return list(iter_rows(lines, dialect, width))
 
 
 def iter_rows(lines: Iterable[str], dialect: CsvDialect, width: int) -> Iterator[list[str]]:
-    """:func:`split_rows` one row at a time, for a reader that may stop early.
-
-    Parameters
-    ----------
-    lines : iterable of str
-        Data lines as text, without their line breaks.
-    dialect : CsvDialect
-        How the log is written (its delimiter).
-    width : int
-        The header's number of columns.
+    """The rows of :func:`split_rows` (same parameters) one at a time, for a reader that may stop early.
 
     Yields
     ------

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 import numpy as np
 
-from mtident._json import json_inline, to_json_value
+from mtident._json import SensorAnswers, json_inline
 from mtident._typing import BoolArray, FloatArray
 
 if TYPE_CHECKING:
@@ -134,7 +134,7 @@ class SensorAnswer:
 
 
 @dataclass(frozen=True)
-class Identification(Generic[DetailsT]):
+class Identification(SensorAnswers, Generic[DetailsT]):
     """The identified warm-up of every sensor of a log, arrays with a sensor axis S.
 
     Attributes
@@ -282,22 +282,6 @@ class Identification(Generic[DetailsT]):
             measured_settled=bool(self.measured_settled[index]) if np.isfinite(measured) else None,
             method_answer=self.details.answer(index),
         )
-
-    def summary(self, index: int) -> dict[str, object]:
-        """The JSON object of one sensor (the documentation's JSON page): :meth:`answer`'s fields.
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position in ``sensors``.
-
-        Returns
-        -------
-        dict
-            JSON types; None where a value is not finite.
-        """
-        summary: dict[str, object] = to_json_value(self.answer(index))
-        return summary
 
 
 def sensor_notes(notes: tuple[str, ...], sensor: str) -> list[str]:

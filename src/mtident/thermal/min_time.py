@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from mtident._json import json_optional, to_json_value
+from mtident._json import SensorAnswers, json_optional
 from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
@@ -84,7 +84,7 @@ class MinTimeAnswer:
 
 
 @dataclass(frozen=True)
-class MinTimeResult:
+class MinTimeResult(SensorAnswers):
     """RMSE against identification time for several sampling periods, per sensor.
 
     Attributes
@@ -215,23 +215,6 @@ class MinTimeResult:
             assumptions=FIRST_ORDER_ASSUMPTIONS,
             rise_begins_min=begins if np.isfinite(begins) else None,
         )
-
-    def summary(self, index: int) -> dict[str, object]:
-        """The JSON object for one sensor: :meth:`answer`'s fields.
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position in ``sensors``.
-
-        Returns
-        -------
-        dict
-            JSON types: the minimal L, each sampling period's RMSE curve and best L, whether the periods
-            agree, the measuring time needed, the warnings and what the answer assumes.
-        """
-        summary: dict[str, object] = to_json_value(self.answer(index))
-        return summary
 
 
 def minimal_identification_time(
