@@ -295,9 +295,7 @@ def test_a_reference_run_in_a_steady_room_learns_no_room_response():
 
 def test_a_learnt_room_response_stops_a_test_in_a_daily_room_earlier_and_right():
     """The test at another split and power, in a room cycling ±0.3 °C a day: the room a known
-    input of each sensor. Without the learnt response the room's lag behind its cycle stayed open
-    (no stop in 900 min) while each sensor's fit took the room sensor's display steps for the
-    machine's; with the room as its trend there too, both stop, right, before 800 min."""
+    input of each sensor, where without it the room's lag behind its cycle stays open."""
     from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
 
     t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, _daily(0.3), seed=13)
@@ -317,7 +315,7 @@ def test_a_learnt_room_response_stops_a_test_in_a_daily_room_earlier_and_right()
             steady = np.array([c.steady_C for c in state.checks])
             assert np.all(np.abs(steady - truth) <= 0.2), label
             assert all(c.low95_C <= v <= c.high95_C for c, v in zip(state.checks, truth, strict=True)), label
-    assert stops["learnt"] < 800.0 and stops["fitted"] < 800.0, stops
+    assert stops["learnt"] < 800.0 and stops["learnt"] < 0.8 * stops["fitted"], stops
 
 
 @pytest.mark.parametrize(

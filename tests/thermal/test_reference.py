@@ -443,6 +443,22 @@ def test_a_room_sensors_display_steps_teach_a_fast_machine_no_slow_mode():
     assert all(2.5 < tau < 3.5 for tau in slowest.values()), slowest
 
 
+def test_a_room_is_taken_over_the_longest_window_it_follows_within_its_noise():
+    """A steady room flickering between two 0.05 °C steps is taken as its two-hour line (the
+    flicker gone); one wandering ±0.1 °C over a few hours, read to 0.01 °C with 0.02 °C of noise,
+    as a shorter line that follows the wander."""
+    from mtident.thermal.readings import room_input, room_trend
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 400.0, 0.5)
+    flicker = np.round((17.435 + rng.normal(0.0, 0.0076, t.size)) * 20.0) / 20.0
+    assert np.ptp(flicker) == pytest.approx(0.05) and np.ptp(room_input(t, flicker)[40:-40]) < 0.02
+    wander = 18.0 + 0.1 * np.sin(2.0 * np.pi * t / 150.0)
+    taken = room_input(t, np.round(wander + rng.normal(0.0, 0.02, t.size), 2))
+    assert np.max(np.abs(taken - wander)[40:-40]) < 0.03
+    assert np.max(np.abs(room_trend(t, wander, 120.0) - wander)[40:-40]) > 0.05  # the two-hour line would not
+
+
 def test_a_room_trend_follows_a_drift_to_the_end_through_display_steps_and_gaps():
     from mtident.thermal.readings import room_trend
 
@@ -538,3 +554,4 @@ def test_a_fit_below_the_floor_by_more_than_its_error_contradicts_a_warm_up():
     wide = SimpleNamespace(steady_C=30.44, interval_C={0.95: (25.5, 36.76)})
     assert not _below_floor(wide, 30.61)  # within its error: the floor only lifts the low end
     assert not _below_floor(fit, -np.inf)
+

@@ -42,7 +42,7 @@ from mtident.thermal.lsq import flat_lead
 from mtident.thermal.modal_search import correlation_factor, room_lag
 from mtident.thermal.modal_types import Binned, IntervalEnd, Mode, bin_samples
 from mtident.thermal.modes import equilibrium_time
-from mtident.thermal.readings import ROOM_TREND_MIN, display_resolution, noise_sigma, room_input
+from mtident.thermal.readings import ROOM_TREND_MIN, display_resolution, noise_sigma, room_trend
 from mtident.thermal.robust import MISFIT_FACTOR, RobustSettings, SensorEstimate, room_wander_half_width
 
 FAST_TIME_CONSTANTS_MIN = (0.7, 2.5)
@@ -456,7 +456,7 @@ def fit_test(
     time_min : ndarray, shape (N,)
     values : ndarray, shape (N, S)
     room_C : ndarray, shape (N,), optional
-        The room sensor as its trend (:func:`~mtident.thermal.readings.room_input`).
+        The room sensor as its trend over :data:`~mtident.thermal.readings.ROOM_TREND_MIN`.
     noise_C : ndarray, shape (S,)
     origin_min : float
         Where the warm-up begins.
@@ -883,7 +883,7 @@ def fit_readings(
         return None
     t = np.asarray(time_min, float)
     noise, origin = noise_and_origin(t, values)
-    room = None if room_C is None else room_input(t, np.asarray(room_C, float), ROOM_TREND_MIN)
+    room = None if room_C is None else room_trend(t, np.asarray(room_C, float), ROOM_TREND_MIN)
     with one_blas_thread():
         return fit_test(model, sensors, t, values, room, noise, origin, levels)
 

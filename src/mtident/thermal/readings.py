@@ -8,6 +8,7 @@ These feed every method: the first-order filters' tuning
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
@@ -32,9 +33,11 @@ __all__ = [
 ROOM_TREND_MIN = 120.0
 """The room drives the machine model (every sensor fitted together) as its local straight line
 over this window: there the room sensor's error is one error of every sensor at once."""
-ROOM_INPUT_MIN = 60.0
-"""And each sensor's own fit over this shorter one, which follows a room that wanders within
-hours (a shipped sample's room, ±0.1 °C over two to three hours, missed by 0.14 °C over two)."""
+ROOM_WINDOWS_MIN = (120.0, 60.0, 30.0, 15.0)
+"""The windows a sensor's own fit may take the room's trend over, longest first."""
+ROOM_WINDOW_SLACK = 1.25
+"""A window is short enough where the room's readings stray from its trend by no more than this
+many times their own noise (RMS)."""
 
 # Display steps a logger rounds to, coarsest first: decimal ones, and the binary ones of digital
 # sensors (a DS18B20 reads in steps of 1/16 °C at 12 bits, 1/2 °C at 9 bits).
@@ -271,15 +274,39 @@ def quick_estimate(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray
     return start, rate, steady
 
 
-def room_input(time_min: FloatArray, room_C: FloatArray, window_min: float = ROOM_INPUT_MIN) -> FloatArray:
-    """The room as a fit takes it: its sensor's readings as a local straight line
-    (:func:`room_trend`; over :data:`ROOM_INPUT_MIN` for one sensor's fit, :data:`ROOM_TREND_MIN`
-    for the machine model). The room sensor's noise and display steps are one error that every
+def room_input(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
+    """The room as a sensor's fit takes it: its readings' local straight line (:func:`room_trend`)
+    over the longest of :data:`ROOM_WINDOWS_MIN` that the room follows within its own noise (RMS,
+    display steps counted in). The room sensor's noise and display steps are one error that every
     sensor's fit shares; fed raw, a fit takes them for a slow mode (a reference run of a machine of
-    3-minute modes, in a steady room read in 0.05 °C steps, learnt modes of 150 min). A room that
-    cycles faster is followed only in part; the rest stays in the residuals, whose correlation
-    widens the interval."""
-    return room_trend(time_min, room_C, window_min)
+    3-minute modes, in a steady room read in 0.05 °C steps, learnt modes of 150 min), while a room
+    that wanders within hours must be followed (a shipped sample's room, ±0.1 °C over two to three
+    hours, was missed by 0.14 °C by a two-hour line).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min), increasing.
+    room_C : ndarray, shape (N,)
+        The room's readings (°C, NaN: missing).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+    """
+    t = np.asarray(time_min, dtype=float)
+    room = np.asarray(room_C, dtype=float)
+    valid = np.isfinite(room)
+    if np.count_nonzero(valid) < 5:
+        return room.copy()
+    step = float(display_resolution(room[:, None])[0])
+    noise = math.hypot(float(noise_sigma(room[:, None], t)[0]), step / math.sqrt(12.0))
+    trend = room
+    for window in ROOM_WINDOWS_MIN:
+        trend = room_trend(t, room, window)
+        if np.sqrt(np.mean((room[valid] - trend[valid]) ** 2)) <= ROOM_WINDOW_SLACK * noise:
+            break
+    return trend
 
 
 def _window_sums(time_min: FloatArray, valid: np.ndarray, window_min: float, *columns: FloatArray) -> list[FloatArray]:

@@ -25,7 +25,7 @@ from mtident.io.logs import TemperatureLog
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, noise_and_origin
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
-from mtident.thermal.readings import ROOM_TREND_MIN, room_input
+from mtident.thermal.readings import ROOM_TREND_MIN, room_input, room_trend
 from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
 from mtident.thermal.robust_types import DEFAULT_MAX_MODES, MAX_FREE_FAST, RobustSettings, SensorEstimate, SensorModes
 
@@ -344,7 +344,7 @@ def _learn_machine(
     if len(log.sensors) < 2:
         return None, []
     noise, origin = noise_and_origin(log.time_min, log.temperature_C)
-    room = None if room_C is None else room_input(log.time_min, room_C, ROOM_TREND_MIN)
+    room = None if room_C is None else room_trend(log.time_min, room_C, ROOM_TREND_MIN)
     args = (log.time_min, log.temperature_C, room, noise, origin)
     model = learn_machine_model(log.sensors, *args[:2], room, noise, origin, settings.max_time_constant_min)
     if model is None:
