@@ -62,6 +62,15 @@ if TYPE_CHECKING:
 @click.option("--serial", metavar="TEXT", default="", help="The machine's serial number.")
 @click.option("--program", metavar="TEXT", default="", help="The program or spindle speed the run ran (8000 rpm).")
 @click.option("--run-date", "run_date", metavar="DATE", default="", help="The day the run ran (2026-11-20).")
+@click.option(
+    "--update",
+    "update_path",
+    metavar="REFERENCE",
+    type=click.Path(dir_okay=False),
+    help="A reference learnt before from another complete run of the same machine (a reference run, or a "
+    "test that ran until its sensors settled): FILE's modes are pooled into it, narrower where the runs agree, "
+    "holding both where they do not. -o may name the same file.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
 @user_errors
 def learn_command(**options: Any) -> None:
@@ -102,6 +111,8 @@ class LearnRequest(CommandRequest):
         --every-mode: later tests allow no free mode faster than the modes learnt.
     machine, serial, program, run_date : str
         --machine, --serial, --program and --run-date: what the run was of, written in the file.
+    update_path : str or None
+        --update: the reference to pool this run's modes into.
     as_json : bool
         --json.
     """
@@ -113,6 +124,7 @@ class LearnRequest(CommandRequest):
     serial: str
     program: str
     run_date: str
+    update_path: str | None
     as_json: bool
 
 
@@ -195,16 +207,21 @@ def run_learn(request: LearnRequest) -> None:
     InputError
         As :func:`learn_command`.
     """
+    from mtident.thermal.pooling import pool_references
     from mtident.thermal.reference import learn_reference, save_reference
 
+    earlier = None if request.update_path is None else _earlier_reference(request.update_path, request.machine)
     log, room = load_log_with_room(request.log, request.room_col)
     with stderr.status(f"learning the modes of {len(log.sensors)} sensor(s)…"):
         reference, warnings = learn_reference(log, room, request.robust)
-    if request.every_mode:
-        reference = reference.holding_every_mode()
     reference = dataclasses.replace(
         reference, machine=request.machine, serial=request.serial, program=request.program, run_date=request.run_date
     )
+    if earlier is not None:
+        reference, pooled = pool_references(earlier, reference)
+        warnings += [f"pooled with {request.update_path}: {text}" for text in pooled]
+    if request.every_mode:
+        reference = reference.holding_every_mode()
     for warning in warnings:
         stderr.print(f"mtident: warning: {warning}", highlight=False)
     if not reference.sensors:
@@ -242,6 +259,20 @@ def run_learn(request: LearnRequest) -> None:
     _exit_if_none_used(reference)
 
 
+def _earlier_reference(path: str, machine: str) -> MachineReference:
+    """The reference --update names, refused where it is another machine's than --machine says."""
+    from mtident.thermal.reference import load_reference
+
+    earlier = load_reference(path)
+    if earlier.machine and machine and earlier.machine != machine:
+        msg = (
+            f"--update {path} is of machine {earlier.machine!r}, and this run of {machine!r}: "
+            "a reference pools runs of one machine (give the same --machine, or learn a new reference with -o)"
+        )
+        raise InputError(msg)
+    return earlier
+
+
 def _learn_table(reference: MachineReference) -> None:
     table = Table(title=f"{reference.identity}: modes learnt (time constants with their box)")
     for column in ("sensor", "time constants (min)", "amplitudes (°C)", "used by later tests"):
@@ -277,7 +308,7 @@ def _machine_model_answer(reference: MachineReference) -> MachineModelAnswer | N
         gains_C=dict(zip(model.sensors, model.gains_C, strict=True)),
         room_lag_min={
             name: float(np.dot(row, model.time_constants_min))
-            for name, row in zip(model.sensors, model.room_gains, strict=True)
+            for name, row in zip(model.sensors, model.room_gains or [(math.nan,)] * len(model.sensors), strict=True)
             if all(map(math.isfinite, row))
         },
     )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import re
 from dataclasses import replace
 from pathlib import Path
@@ -555,3 +556,78 @@ def test_a_fit_below_the_floor_by_more_than_its_error_contradicts_a_warm_up():
     assert not _below_floor(wide, 30.61)  # within its error: the floor only lifts the low end
     assert not _below_floor(fit, -np.inf)
 
+
+def _warm_up_csv(path: Path, seed: int) -> Path:
+    """Two sensors of one machine (modes of 12 and 150 min), 500 min logged once a minute, noisy
+    enough (0.1 °C) that one run leaves the fast mode's box wider than the least a box may be."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 501.0)
+    rise = {"A": (2.0, 6.0), "B": (-0.5, 4.0)}
+    lines = ["time_min,A,B"]
+    columns = {
+        name: 20.0 + fast * (1 - np.exp(-t / 12.0)) + slow * (1 - np.exp(-t / 150.0)) + rng.normal(0, 0.1, t.size)
+        for name, (fast, slow) in rise.items()
+    }
+    lines += [f"{v:g},{a:.2f},{b:.2f}" for v, a, b in zip(t, columns["A"], columns["B"], strict=True)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_a_second_complete_run_pools_into_the_reference_and_narrows_its_boxes(tmp_path):
+    first, second = _warm_up_csv(tmp_path / "run1.csv", 1), _warm_up_csv(tmp_path / "run2.csv", 2)
+    assert (
+        mtident("thermal", "learn", str(first), "-o", str(tmp_path / "one.toml"), "--machine", "VMC1").returncode == 0
+    )
+    out = mtident(
+        "thermal", "learn", str(second), "--update", str(tmp_path / "one.toml"), "-o", str(tmp_path / "two.toml"),
+        "--machine", "VMC1", "--json",
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    one, two = load_reference(tmp_path / "one.toml"), load_reference(tmp_path / "two.toml")
+    assert two.source == f"{first} + {second}" and json.loads(out.stdout)["source"] == two.source
+    boxes = [(one.sensors[n].box, two.sensors[n].box) for n in ("A", "B")]
+    assert one.machine_model is not None and two.machine_model is not None
+    boxes.append((one.machine_model.box, two.machine_model.box))
+    assert all(b <= a + 1e-12 for before, after in boxes for a, b in zip(before, after, strict=True)), boxes
+    assert two.sensors["A"].box[0] < one.sensors["A"].box[0] - 0.02  # the fast mode's, from 0.165
+    assert two.machine_model.box[1] < one.machine_model.box[1] - 0.05  # the model's fast mode, from 0.28
+    assert all(130.0 < max(m.time_constants_min) < 170.0 for m in two.sensors.values())
+    refused = mtident("thermal", "learn", str(second), "--update", str(tmp_path / "one.toml"), "-o",
+                      str(tmp_path / "x.toml"), "--machine", "VMC2")  # fmt: skip
+    assert refused.returncode == 2 and "is of machine 'VMC1', and this run of 'VMC2'" in refused.stderr
+    assert not (tmp_path / "x.toml").exists()
+
+
+def test_pooled_modes_narrow_where_runs_agree_and_hold_both_where_they_do_not():
+    from mtident.thermal.pooling import pool_references
+    from mtident.thermal.robust_types import SensorModes
+
+    def reference(sensors: dict[str, SensorModes]) -> MachineReference:
+        return MachineReference("run.csv", "2026-11-29", 300.0, "not measured", sensors)
+
+    first = reference(
+        {
+            "agree": SensorModes((40.0,), (0.3,)),
+            "apart": SensorModes((40.0,), (0.1,)),
+            "fewer": SensorModes((40.0,), (0.1,)),
+            "doubted": SensorModes((40.0,), (0.1,), doubt="not pinned down"),
+            "first only": SensorModes((5.0,), (0.1,)),
+        }
+    )
+    later = reference(
+        {
+            "agree": SensorModes((41.0,), (0.3,)),
+            "apart": SensorModes((80.0,), (0.1,)),
+            "fewer": SensorModes((4.0, 42.0), (0.2, 0.1)),
+            "doubted": SensorModes((60.0,), (0.2,)),
+        }
+    )
+    pooled, said = pool_references(first, later)
+    (tau,), (box,) = pooled.sensors["agree"].time_constants_min, pooled.sensors["agree"].box
+    assert 39.0 < tau < 41.0 and box == pytest.approx(math.tanh(math.atanh(0.3) / math.sqrt(2.0)), rel=0.05)
+    (tau,), (box,) = pooled.sensors["apart"].time_constants_min, pooled.sensors["apart"].box
+    assert tau * (1 - box) <= 36.0 + 1e-9 and tau * (1 + box) >= 88.0 - 1e-9
+    assert pooled.sensors["fewer"] == later.sensors["fewer"] and pooled.sensors["doubted"] == later.sensors["doubted"]
+    assert pooled.sensors["first only"] == first.sensors["first only"] and pooled.source == "run.csv + run.csv"
+    assert any(s.startswith("apart: its mode of 40 min ±10% in one run is 80 min ±10%") for s in said), said
+    assert any(s.startswith("fewer: the runs learnt 1 and 2 modes; the 2 kept") for s in said), said
