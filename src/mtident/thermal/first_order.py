@@ -715,18 +715,7 @@ def _identify(
         curve_var = np.where(before, sigma[None, :] ** 2, curve_var)
     steady = final_mean[:, 2]
     rate = final_mean[:, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan) + np.where(start.late, start.begins - tw[0], 0.0)
-    # A sensor that does not rise in the window (never heated, or not connected) is at its level;
-    # a λ fitted to its noise would give it an "equilibrium time" it never had.
-    rise = reading_range(yw)
-    no_rise = rise < rise_threshold(sigma)
-    for s in np.flatnonzero(no_rise).tolist():
-        notes.append(
-            f"sensor {log.sensors[s]!r}: no rise in the first {tw[-1]:g} min ({rise[s]:.2f} °C from lowest to "
-            "highest): no warm-up to identify; it has no equilibrium time"
-        )
-    eq_time = np.where(no_rise, np.nan, eq_time)
+    eq_time, rise, no_rise = _equilibrium_times(log.sensors, tw, yw, rate, start, sigma, notes)
     quantile = float(stdtrit(max(n_window - 3, 1), 0.975))
     _say_undetermined(log, tw, quantile * steady_sd, rise, no_rise, notes)
     untrusted = _untrusted(log, tw, start.begins, steady, quantile * steady_sd, rise, no_rise, notes)
@@ -784,6 +773,31 @@ def _identify(
             untrusted=untrusted,
         ),
     )
+
+
+def _equilibrium_times(
+    sensors: tuple[str, ...],
+    tw: FloatArray,
+    yw: FloatArray,
+    rate: FloatArray,
+    start: _WarmupStart,
+    sigma: FloatArray,
+    notes: list[str],
+) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """Each sensor's equilibrium time (from the log's start), its rise in the window, and which
+    sensors do not rise (each said in ``notes``; no equilibrium time)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eq_time = np.where(rate > 0, equilibrium_time(rate), np.nan) + np.where(start.late, start.begins - tw[0], 0.0)
+    # A sensor that does not rise in the window (never heated, or not connected) is at its level;
+    # a λ fitted to its noise would give it an "equilibrium time" it never had.
+    rise = reading_range(yw)
+    no_rise = rise < rise_threshold(sigma)
+    for s in np.flatnonzero(no_rise).tolist():
+        notes.append(
+            f"sensor {sensors[s]!r}: no rise in the first {tw[-1]:g} min ({rise[s]:.2f} °C from lowest to "
+            "highest): no warm-up to identify; it has no equilibrium time"
+        )
+    return np.where(no_rise, np.nan, eq_time), rise, no_rise
 
 
 def _warm_up_floors(

@@ -220,26 +220,17 @@ def estimate_sensor(
             settings,
             f"{len(binned)} reading{'' if len(binned) == 1 else 's'} since its warm-up began: too few for a model",
         )
-    fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, reference, notes, refine_within)
-    floor = overshoot_floor_C(fit, t[onset:], y[onset:], None if room is None else room, noise, rounding)
-    if reference_used and _below_floor(fit, floor):
-        # the reference's modes make this warm-up come down to its T∞: they are not this sensor's
-        notes.add(
-            "reference-disagrees",
-            f"with the reference's modes its T∞ would be {fit.steady_C:.2f} °C, below where it already is "
-            f"({floor:.2f} °C) by more than the fit's own error, and a warm-up does not come down: has the machine "
-            "changed, or is the reference another machine's? The answer does not use the reference",
-        )
-        fit, reference_used = _modal_fit(binned, noise, sampling_interval_min(t), settings, None, notes, refine_within)
-        floor = overshoot_floor_C(fit, t[onset:], y[onset:], None if room is None else room, noise, rounding)
-    if _below_floor(fit, floor):
-        notes.add(
-            "below-floor",
-            f"its best fit puts T∞ at {fit.steady_C:.2f} °C, below where it already is ({floor:.2f} °C) by more than "
-            "the fit's own error, and a warm-up does not come down: the fit does not describe this sensor's warm-up "
-            "(a heat input that changed, a sensor that cooled); its interval is the fit's own, not trusted",
-        )
-        floor = -np.inf
+    fit, reference_used, floor = _fit_above_floor(
+        binned,
+        (t[onset:], y[onset:], room),
+        noise,
+        rounding,
+        sampling_interval_min(t),
+        settings,
+        reference,
+        notes,
+        refine_within,
+    )
     # the floor lifts the low end, never above T∞ itself (the fit's own interval stays around it)
     readings = {q: (min(max(lo, floor), fit.steady_C), hi) for q, (lo, hi) in fit.interval_C.items()}
     intervals = _nested(_with_room_wander(fit, readings, room_C is not None, settings))
@@ -258,6 +249,46 @@ def estimate_sensor(
         int(wild.sum()),
         rounding,
     )
+
+
+def _fit_above_floor(
+    binned: Binned,
+    readings: tuple[FloatArray, FloatArray, FloatArray | None],
+    noise: float,
+    rounding: float,
+    interval: float,
+    settings: RobustSettings,
+    reference: SensorModes | None,
+    notes: _Notes,
+    refine_within: float | None,
+) -> tuple[SteadyState, bool, float]:
+    """The sensor's fit (:func:`_modal_fit`), whether it used the reference, and the floor a
+    warm-up does not come down below (``-inf`` where the fit's T∞ lies below it: not trusted).
+    A fit with the reference that puts T∞ below the floor is made again without it.
+    ``readings``: the times, readings and room since the warm-up began; ``interval``: the log's
+    sampling interval (min)."""
+    t, y, room = readings
+    fit, reference_used = _modal_fit(binned, noise, interval, settings, reference, notes, refine_within)
+    floor = overshoot_floor_C(fit, t, y, room, noise, rounding)
+    if reference_used and _below_floor(fit, floor):
+        # the reference's modes make this warm-up come down to its T∞: they are not this sensor's
+        notes.add(
+            "reference-disagrees",
+            f"with the reference's modes its T∞ would be {fit.steady_C:.2f} °C, below where it already is "
+            f"({floor:.2f} °C) by more than the fit's own error, and a warm-up does not come down: has the machine "
+            "changed, or is the reference another machine's? The answer does not use the reference",
+        )
+        fit, reference_used = _modal_fit(binned, noise, interval, settings, None, notes, refine_within)
+        floor = overshoot_floor_C(fit, t, y, room, noise, rounding)
+    if _below_floor(fit, floor):
+        notes.add(
+            "below-floor",
+            f"its best fit puts T∞ at {fit.steady_C:.2f} °C, below where it already is ({floor:.2f} °C) by more than "
+            "the fit's own error, and a warm-up does not come down: the fit does not describe this sensor's warm-up "
+            "(a heat input that changed, a sensor that cooled); its interval is the fit's own, not trusted",
+        )
+        floor = -np.inf
+    return fit, reference_used, floor
 
 
 def _modal_fit(
