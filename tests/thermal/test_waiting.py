@@ -207,6 +207,45 @@ def test_learn_splits_a_mode_that_merges_two_of_the_machines_modes():
     assert split_merged_modes(alone) == (alone, [])
 
 
+def test_learn_splits_a_merged_mode_where_only_the_machine_model_pins_the_two_down():
+    """A new user's trial: no sensor pinned the 113- and 280-min modes down alone (each sensor's
+    slowest box wide), the machine model did (±10 %, ±13 %); the PT100 kept one mode of 189 min
+    ±10 %, holding neither, without a word. The machine model's modes count as the machine's."""
+    from mtident.thermal.machine_model import MachineModel
+    from mtident.thermal.reference import split_merged_modes
+    from mtident.thermal.robust import SensorModes
+
+    sensors = {
+        "bearing": SensorModes((3.5, 35.0, 200.0), (0.1, 0.1, 0.6), (-1.0, -2.0, -3.0)),
+        "pt100": SensorModes((1.5, 189.0), (0.2, 0.1), (1.0, -5.0)),
+    }
+    model = MachineModel(("bearing", "pt100"), (280.0, 113.0, 34.7), (0.13, 0.10, 0.05), ((-1.0,) * 3, (-1.0,) * 3))
+    split, warnings = split_merged_modes(sensors, model)
+    assert split["pt100"].time_constants_min == pytest.approx((1.5, 113.0, 280.0))
+    assert split["bearing"] == sensors["bearing"]
+    assert len(warnings) == 1 and warnings[0].startswith(
+        "pt100: its mode of 189 min (±10%) lies between the machine's modes of 113 and 280 min that the machine "
+        "model pins down (bearing, pt100), and its box holds neither"
+    )
+    assert split_merged_modes(sensors) == (sensors, [])  # the sensors alone pin neither down
+
+
+def test_a_rise_a_falling_room_hides_is_no_flat_start():
+    """A new user's trial: a column rising 0.4 °C over five hours while the room fell as much read
+    flat, and with the room given its fit began at 314 min ("flat until"), the first five hours
+    left out. Against the room it rises from the start (and departs by 0.1 °C within 40 min)."""
+    from mtident.thermal.robust import estimate_sensor
+
+    t = np.arange(0.0, 600.0)
+    room = 20.0 - 0.45 * (1.0 - np.exp(-np.minimum(t, 300.0) / 150.0))
+    column = room + 0.5 * (1.0 - np.exp(-t / 150.0))
+    rng = np.random.default_rng(4)
+    readings = np.round(column + rng.normal(0.0, 0.01, t.size), 2)
+    assert np.ptp(readings[:300]) < 0.15  # flat to the eye for five hours
+    estimate = estimate_sensor("column", t, readings, np.round(room + rng.normal(0.0, 0.01, t.size), 2))
+    assert estimate.onset_min < 40.0, estimate.warnings  # where 0.1 °C above the room is first seen
+
+
 def test_the_floor_a_warm_up_sets_holds_only_for_a_rising_sensor_and_follows_a_room_that_fell():
     from mtident.thermal.robust import RobustSettings, estimate_sensor, overshoot_floor_C
 

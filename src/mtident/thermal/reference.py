@@ -325,11 +325,11 @@ def learn_reference(
                 f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the "
                 "machine may have a slower one (raise `max_time_constant_min`)"
             )
-    sensors, split = split_merged_modes(sensors)
-    warnings.extend(split)
-    room = _ROOM_MEASURED if room_C is not None else "not measured"
     model, said = _learn_machine(log, room_C, settings)
+    sensors, split = split_merged_modes(sensors, model)
+    warnings.extend(split)
     warnings.extend(said)
+    room = _ROOM_MEASURED if room_C is not None else "not measured"
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors, machine_model=model
     ), warnings
@@ -430,15 +430,37 @@ def machine_modes(sensors: dict[str, SensorModes]) -> list[_MachineMode]:
     return out
 
 
-def split_merged_modes(sensors: dict[str, SensorModes]) -> tuple[dict[str, SensorModes], list[str]]:
+_MODEL = "the machine model"
+
+
+def _model_modes(model: MachineModel | None, sensors: dict[str, SensorModes]) -> list[_MachineMode]:
+    """The machine model's modes it pins down (box at most ±30 %), each as a mode of the machine
+    that every sensor of the model and the model itself witness."""
+    if model is None:
+        return []
+    witnesses = frozenset(n for n in model.sensors if n in sensors) | {_MODEL}
+    return [
+        _MachineMode(tau, box, witnesses)
+        for tau, box in zip(model.time_constants_min, model.box, strict=True)
+        if box <= _PINNED_BOX
+    ]
+
+
+def split_merged_modes(
+    sensors: dict[str, SensorModes], model: MachineModel | None = None
+) -> tuple[dict[str, SensorModes], list[str]]:
     """Each sensor's modes against the machine's: a mode whose box holds none of the modes other
     sensors pin down, lying between two of them (at most a factor of four apart) that the sensor's
     other modes do not hold, may be the two merged (110 and 260 min learnt as one of 170 ±10 %,
-    whose box excludes both): it is replaced by the two, with their boxes, and said.
+    whose box excludes both): it is replaced by the two, with their boxes, and said. The machine
+    model's modes pinned down (box at most ±30 %) count as the machine's too: the sensors fitted
+    together pin a slow mode down that none of them does alone.
 
     Parameters
     ----------
     sensors : dict of str to SensorModes
+    model : MachineModel, optional
+        The run's machine model.
 
     Returns
     -------
@@ -447,7 +469,9 @@ def split_merged_modes(sensors: dict[str, SensorModes]) -> tuple[dict[str, Senso
     list of str
         One warning per split.
     """
-    machine = machine_modes(sensors)
+    machine = sorted(
+        machine_modes(sensors) + _model_modes(model, sensors), key=lambda mm: (mm.time_constant_min, mm.box)
+    )
     out, warnings = dict(sensors), []
     for name, m in sensors.items():
         if m.doubt is not None:
@@ -481,11 +505,13 @@ def split_merged_modes(sensors: dict[str, SensorModes]) -> tuple[dict[str, Senso
                 box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
                 amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
             )
-            who = ", ".join(sorted(low.sensors | high.sensors))
+            witnesses = low.sensors | high.sensors
+            by = "the machine model pins down" if _MODEL in witnesses else "other sensors pin down"
+            who = ", ".join(sorted(witnesses - {_MODEL}))
             warnings.append(
                 f"{name}: its mode of {tau:.3g} min (±{box:.0%}) lies between the machine's modes of "
-                f"{low.time_constant_min:.3g} and {high.time_constant_min:.3g} min that other sensors pin down "
-                f"({who}), and its box holds neither: the run may have merged the two into one. Later tests search "
+                f"{low.time_constant_min:.3g} and {high.time_constant_min:.3g} min that {by} ({who}), and its box "
+                "holds neither: the run may have merged the two into one. Later tests search "
                 f"both ({low.time_constant_min:.3g} ±{max(low.box, MIN_REFERENCE_BOX):.0%}, "
                 f"{high.time_constant_min:.3g} ±{max(high.box, MIN_REFERENCE_BOX):.0%}) for this sensor"
             )

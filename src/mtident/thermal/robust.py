@@ -206,9 +206,11 @@ def estimate_sensor(
             + (f", readings in steps of {rounding:.2g} °C" if rounding > 0 else "")
             + "): no warm-up to identify",
         )
-    lead = int(flat_lead(t, y[:, None], np.array([noise]))[0])
+    room_in = None if room_C is None else room_input(t, np.asarray(room_C, dtype=float))
+    # against the room: a rise that a falling room hides is no flat start
+    lead = int(flat_lead(t, _above_room(y, room_in)[:, None], np.array([noise]))[0])
     onset = lead if lead < len(t) else 0
-    room = None if room_C is None else room_input(t, np.asarray(room_C, dtype=float))[onset:]
+    room = None if room_in is None else room_in[onset:]
     binned = bin_samples(t[onset:], y[onset:], room)
     if len(binned) < MIN_BINS:
         return _without_fit(
@@ -249,6 +251,15 @@ def estimate_sensor(
         int(wild.sum()),
         rounding,
     )
+
+
+def _above_room(values: FloatArray, room: FloatArray | None) -> FloatArray:
+    """The readings less the room's change since its first valid level (the readings themselves
+    without a room)."""
+    if room is None or not np.isfinite(room).any():
+        return values
+    above: FloatArray = values - (room - room[np.isfinite(room)][0])
+    return above
 
 
 def _fit_above_floor(
