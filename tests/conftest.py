@@ -353,3 +353,17 @@ _FIRST_MODULES = ("test_web.py", "test_opcua.py", "test_mtconnect.py")
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     items.sort(key=lambda item: item.path.name not in _FIRST_MODULES)
+
+
+# Imported last: helpers imports this module.
+from helpers import two_mode  # noqa: E402
+
+from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def spindle_reference() -> MachineReference:
+    t = np.arange(0.0, 480.0, 1.0)
+    y = two_mode(t) + np.random.default_rng(1).normal(0.0, 0.01, t.size)
+    reference, _ = learn_reference(make_log(t, {"S": np.round(y, 2)}))
+    return reference

@@ -19,11 +19,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
-from conftest import wait_until
-from test_watch import T, csv_text, first_order, noisy, one_mode_reference
+from conftest import first_order, wait_until
+from helpers import T, _get, _log, noisy, one_mode_reference
 
-from mtident.cli import main
 from mtident.exceptions import InputError
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state, result
 from mtident.thermal.robust import RobustSettings
@@ -37,11 +35,6 @@ def _answer() -> dict[str, object]:
     state, _ = monitor_step(new_state(["S"]), T[:100], noisy(first_order(T[:100]), 41)[:, None], None, settings)
     assert state.stopped
     return {**result(state, settings), "latest_C": {"S": 23.9}}
-
-
-def _get(url: str) -> bytes:
-    with urllib.request.urlopen(url, timeout=10) as answer:
-        return bytes(answer.read())
 
 
 @pytest.fixture
@@ -95,21 +88,6 @@ def test_addresses_are_read_and_bad_ones_refused(text, expected):
     for bad in ("host:port", "127.0.0.1:70000", ":8050"):
         with pytest.raises(InputError, match="expected HOST:PORT"):
             parse_address(bad)
-
-
-@pytest.mark.slow
-def test_watch_serve_says_where_the_page_is(tmp_path):
-    log = tmp_path / "run.csv"
-    log.write_text(csv_text(T[:30], {"S": noisy(first_order(T[:30]), 42)}))
-    out = CliRunner().invoke(
-        main, ["thermal", "watch", str(log), "--replay", "--serve", "127.0.0.1:0"], catch_exceptions=False
-    )
-    assert out.exit_code == 0, out.stderr
-    assert "the live page is at http://127.0.0.1:" in out.stderr
-    bad = CliRunner().invoke(
-        main, ["thermal", "watch", str(log), "--replay", "--serve", "nowhere"], catch_exceptions=False
-    )
-    assert bad.exit_code == 2 and "expected HOST:PORT" in bad.stderr
 
 
 BROWSER = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
@@ -222,71 +200,6 @@ def _png() -> bytes:
     buffer = io.BytesIO()
     plot_monitor(state, settings).savefig(buffer, format="png")  # type: ignore[union-attr]
     return buffer.getvalue()
-
-
-def _watch_serving(args: list[str], cwd: Path) -> tuple[subprocess.Popen[str], str]:
-    """`watch ... --serve 127.0.0.1:0` in a subprocess, and the page's URL once it says it."""
-    import sys
-
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "mtident", "thermal", "watch", *args, "--serve", "127.0.0.1:0", "--json"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=cwd,
-    )
-    assert proc.stderr is not None
-    for line in proc.stderr:
-        if (found := re.search(r"the live page is at (http://\S+/)", line)) is not None:
-            return proc, found.group(1)
-    proc.kill()
-    pytest.fail(f"the watch never served its page: {proc.communicate()}")
-
-
-def _first_answer(proc: subprocess.Popen[str], url: str, within_s: float) -> dict:
-    """The page's first answer, asked for while the watch runs, within ``within_s``."""
-    deadline = time.monotonic() + within_s
-    while time.monotonic() < deadline and proc.poll() is None:
-        state = json.loads(_get(url + "state.json"))
-        if "decision" in state["answer"]:  # not the newest readings alone, which a live log's page shows first
-            return dict(state["answer"])
-        time.sleep(0.1)
-    pytest.fail(
-        f"no answer on the page within {within_s:g} s (the watch {'ended' if proc.poll() is not None else 'runs'})"
-    )
-
-
-def _log(rows: int, names: tuple[str, ...] = ("A", "B", "C")) -> str:
-    t = np.arange(0.0, float(rows))
-    return csv_text(t, {n: noisy(first_order(t, steady=24.0 + k), 70 + k) for k, n in enumerate(names)})
-
-
-def test_the_page_answers_at_once_after_a_resume_and_during_a_replay(tmp_path):
-    """A watch resumed with a long log to catch up on showed `{"version":0,"answer":{}}` until its
-    first poll ended (80 s); a replay never showed an answer at all."""
-    lines = _log(601).splitlines(keepends=True)
-    log = tmp_path / "live.csv"
-    log.write_text("".join(lines[:31]))
-    first = CliRunner().invoke(main, ["thermal", "watch", str(log), "--timeout", "0.2"], catch_exceptions=False)
-    assert first.exit_code == 0 and (tmp_path / "live.csv.watch-state.npz").is_file()
-    with open(log, "a") as out:
-        out.write("".join(lines[31:]))  # the logger went on while the watch was stopped
-    proc, url = _watch_serving([str(log), "--poll", "0.05"], tmp_path)
-    try:
-        answer = _first_answer(proc, url, 20.0)  # the resumed state's answer, before the catch-up's fits (80 s before)
-        assert answer["last_time_min"] == 29.0
-    finally:
-        proc.terminate()
-        proc.communicate(timeout=60)
-    whole = tmp_path / "whole.csv"
-    whole.write_text("".join(lines))
-    proc, url = _watch_serving([str(whole), "--replay"], tmp_path)
-    try:
-        answer = _first_answer(proc, url, 60.0)
-        assert proc.poll() is None and 0 <= float(answer["last_time_min"]) < 600  # shown while the replay runs
-    finally:
-        proc.terminate()
-        proc.communicate(timeout=60)
 
 
 class _HeldCheck:

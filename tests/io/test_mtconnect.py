@@ -9,8 +9,9 @@ import json
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import first_order
+from helpers import noisy, one_mode_reference
 from mtconnect_agent import Agent, Server
-from test_watch import first_order, noisy, one_mode_reference
 
 from mtident.cli import main
 from mtident.exceptions import InputError
@@ -19,7 +20,11 @@ from mtident.io.mtconnect import MTConnectRecorder, parse_probe, parse_streams
 from mtident.thermal.reference import save_reference
 
 MINUTES = np.arange(0.0, 400.0)
+
+
 SPINDLE = noisy(first_order(MINUTES), 31)
+
+
 BEARING = noisy(first_order(MINUTES, steady=29.0), 32)
 
 

@@ -9,18 +9,20 @@ import time
 
 import numpy as np
 import pytest
-from conftest import wait_until
-
-pytest.importorskip("asyncua", reason="the OPC UA source needs the asyncua package (mtident[opcua])")
-
 from asyncua import ua  # noqa: E402
 from asyncua.sync import Server, ThreadLoop  # noqa: E402
+from conftest import wait_until
 
 from mtident.exceptions import InputError  # noqa: E402
 from mtident.io.logs import read_temperature_log  # noqa: E402
 from mtident.io.opcua import OpcUaRecorder  # noqa: E402
 
+pytest.importorskip("asyncua", reason="the OPC UA source needs the asyncua package (mtident[opcua])")
+
+
 START = dt.datetime(2026, 11, 24, 8, 0, tzinfo=dt.UTC)
+
+
 NODES = ["ns=2;s=Spindle.T1", "ns=2;s=Spindle.T2"]
 
 

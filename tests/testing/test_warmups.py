@@ -3,21 +3,17 @@
 from __future__ import annotations
 
 import json
-import math
 from collections import Counter
-from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
+from helpers import _machines, _modal_curve
 
 from mtident.exceptions import InputError
 from mtident.testing.warmups import (
     DURATION_LIMITS_MIN,
     INTERVALS_MIN,
-    Machine,
     WarmUp,
-    load_real_curves,
     modal_amplitudes,
     random_machine,
     random_warmup,
@@ -25,18 +21,6 @@ from mtident.testing.warmups import (
     room_temperature,
     simulate,
 )
-
-REAL_DATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
-
-
-def _machines(seed: int, count: int, **kw: object) -> list[Machine]:
-    rng = np.random.default_rng(seed)
-    return [random_machine(rng, **kw) for _ in range(count)]  # type: ignore[arg-type]
-
-
-def _modal_curve(machine: Machine, run: WarmUp, t: np.ndarray) -> np.ndarray:
-    taus, amplitudes = modal_amplitudes(machine, run)
-    return run.steady_C[0] + np.exp(-np.outer(t, 1.0 / taus)) @ amplitudes
 
 
 @pytest.fixture(scope="module")
@@ -62,51 +46,6 @@ def test_room_gain_is_one(kind: str) -> None:
     np.testing.assert_allclose(run.steady_C, formula, atol=1e-9)
     np.testing.assert_allclose(run.steady_C - run.steady_C[0], room - room[0], atol=1e-9)
     assert run.room_C is not None and np.nanmax(np.abs(run.room_C - room)) < 0.3
-
-
-def test_networks_are_physical() -> None:
-    for machine in _machines(3, 60, kind="network"):
-        st = machine.structure
-        n = st["nodes"]
-        capacity = np.array(st["capacities"])
-        links = np.array(st["conductances"])
-        convection = np.array(st["convection"])
-        assert np.all(capacity > 0) and np.all(convection >= 0) and convection.sum() > 0
-        assert np.all(links >= 0) and np.allclose(links, links.T)
-        g = np.diag(links.sum(axis=1) + convection) - links
-        np.testing.assert_allclose(-g / capacity[:, None], machine.A[:n, :n], rtol=1e-9, atol=1e-12)
-        assert np.all(machine.b_heat >= 0)
-        # every node's steady rise is positive, and heat anywhere warms every node
-        assert np.all(np.linalg.solve(-machine.A, machine.b_heat) > 0)
-        assert np.all(np.linalg.inv(g) >= 0)
-        assert sum(machine.sensor) == 1.0
-
-
-def test_time_constants_in_range() -> None:
-    machines = _machines(4, 80)
-    networks = [m for m in machines if m.kind == "network"]
-    conductions = [m for m in machines if m.kind != "network"]
-    lags = [m.sensor_lag_min for m in machines if m.sensor_lag_min]
-    assert networks and conductions and lags  # the sample holds each kind, and sensors with a lag
-    for machine in networks:
-        structural = machine.structural_time_constants_min
-        assert 2.0 <= min(structural) and max(structural) <= 300.0
-        assert len(structural) == machine.structure["nodes"]
-    for machine in conductions:
-        structural = machine.structural_time_constants_min
-        assert len(structural) >= 30 and 2.0 <= max(structural) <= 300.0
-    assert all(0.2 <= lag <= 5.0 for lag in lags), lags
-    for machine in machines:
-        lag = (machine.sensor_lag_min,) if machine.sensor_lag_min else ()
-        expected = sorted(machine.structural_time_constants_min + lag)
-        np.testing.assert_allclose(sorted(machine.time_constants_min), expected, rtol=1e-9)
-    for machine in _machines(5, 20, kind="network", min_time_constant_min=10.0, max_time_constant_min=50.0):
-        assert 10.0 <= min(machine.structural_time_constants_min)
-        assert max(machine.structural_time_constants_min) <= 50.0
-    for machine in _machines(6, 10, kind="network", nodes=3, rise_C=5.0, sensor_lag_min=1.5):
-        assert machine.sensor_lag_min == 1.5 and len(machine.A) == 4
-        steady = machine.sensor @ np.linalg.solve(-machine.A, machine.b_heat)
-        assert steady == pytest.approx(5.0)
 
 
 @pytest.mark.parametrize("kind", ["network", "conduction"])
@@ -154,59 +93,6 @@ def test_steady_matches_long_simulation() -> None:
         np.testing.assert_array_equal(run.reading_C, run.clean_C)
 
 
-def test_t95() -> None:
-    rng = np.random.default_rng(10)
-    for k in range(16):
-        machine = random_machine(rng, ("network", "conduction")[k % 2])
-        run = simulate(machine, rng, interval_min=0.25, warm_start=0.3 * (k % 3 == 0), duration_min=60.0)
-        rise = run.steady_C[0] - run.start_C
-        at = _modal_curve(machine, run, np.array([run.t95_min]))[0]
-        assert abs(at - run.start_C) == pytest.approx(0.95 * abs(rise), abs=1e-9)
-        before = np.linspace(0.0, run.t95_min, 4001)[:-1]
-        assert np.all(np.abs(_modal_curve(machine, run, before) - run.start_C) < 0.95 * abs(rise))
-        assert run.t95_min == run.settings["t95_min"]
-    # first order: t95 = τ·ln 20
-    rng = np.random.default_rng(11)
-    machine = random_machine(rng, "network", nodes=1, sensor_lag_min=0.0)
-    run = simulate(machine, rng)
-    assert run.t95_min == pytest.approx(machine.time_constants_min[0] * math.log(20.0), rel=1e-9)
-    assert run.duration_min == pytest.approx(np.clip(1.5 * run.t95_min, *DURATION_LIMITS_MIN), abs=run.interval_min)
-
-
-@pytest.mark.parametrize("kind", ["network", "conduction"])
-def test_drifting_room_matches_solve_ivp(kind: str) -> None:
-    rng = np.random.default_rng(12)
-    machine = random_machine(rng, kind, sensor_lag_min=0.7)
-    drift = {"amplitude_C": 0.3, "period_min": 720.0, "phase_rad": 1.1, "slope_C_per_h": 0.05}
-    run = simulate(
-        machine,
-        rng,
-        duration_min=600.0,
-        interval_min=5.0,
-        room_drift=drift,
-        room_start_C=19.0,
-        warm_start=0.35,
-        warm_profile="heating",
-        warm_power=1.5,
-    )
-
-    def room(t: float) -> float:
-        return float(room_temperature(np.array([t]), 19.0, drift)[0])
-
-    solution = solve_ivp(
-        lambda t, x: machine.A @ x + machine.b_heat * run.power + machine.b_room * room(t),
-        (0.0, run.time_min[-1]),
-        run.initial_state_C,
-        t_eval=run.time_min,
-        method="Radau",
-        jac=lambda t, x: machine.A,
-        rtol=1e-11,
-        atol=1e-12,
-    )
-    np.testing.assert_allclose(machine.sensor @ solution.y, run.clean_C, atol=1e-7, rtol=0)
-    assert run.room_C is not None and run.settings["room_drift"]["slope_C_per_h"] == 0.05
-
-
 def test_seeds_reproducible() -> None:
     a, b = (random_warmup(np.random.default_rng(13), with_dropouts=True) for _ in range(2))
     np.testing.assert_array_equal(a.reading_C, b.reading_C)
@@ -249,24 +135,6 @@ def test_population(population: list[WarmUp]) -> None:
     assert max(run.duration_min for run in population if run.interval_min == INTERVALS_MIN[0]) <= 300.0
 
 
-def test_dropouts() -> None:
-    rng = np.random.default_rng(15)
-    machine = random_machine(rng, "network")
-    run = simulate(
-        machine,
-        rng,
-        duration_min=500.0,
-        interval_min=0.5,
-        dropout=0.1,
-        room_drift={"amplitude_C": 0.1, "period_min": 900.0},
-    )
-    lost = np.isnan(run.reading_C)
-    assert not lost[0] and 0.07 < lost.mean() < 0.13
-    assert run.room_C is not None
-    np.testing.assert_array_equal(np.isnan(run.room_C), lost)
-    assert np.all(np.isfinite(run.clean_C))
-
-
 def test_reference_run() -> None:
     rng = np.random.default_rng(16)
     for _ in range(10):
@@ -301,22 +169,3 @@ def test_bad_inputs() -> None:
         simulate(machine, rng, warm_start=0.5, warm_profile="heating", warm_power=0.4)
     with pytest.raises(InputError):
         simulate(machine, rng, room_drift={"amplitude": 0.1})
-
-
-@pytest.mark.skipif(not REAL_DATA.is_dir(), reason="../shared/realdata not beside the repository")
-def test_real_curves() -> None:
-    curves = {curve.name: curve for curve in load_real_curves(REAL_DATA)}
-    assert set(curves) == {
-        "tclab_step50_run1:T1",
-        "tclab_step50_run1:T2",
-        "tclab_step50_run3_T1:T1",
-    }
-    for name in ("tclab_step50_run1:T1", "tclab_step50_run3_T1:T1"):
-        curve = curves[name]
-        assert curve.rounding_C == pytest.approx(0.32, abs=0.01)
-        assert curve.time_min[-1] == pytest.approx(15.0, abs=0.1)
-        assert 55.0 < curve.settled_C < 65.0 and curve.last_quarter_rise < 0.01
-        assert 4.0 < curve.t95_min < 12.0
-    lagged = curves["tclab_step50_run1:T2"]
-    assert math.isnan(lagged.settled_C) and math.isnan(lagged.t95_min)
-    assert lagged.end_C - lagged.start_C > 10.0

@@ -7,7 +7,7 @@ propagated sigma points, additive Q and R, P⁺ = P⁻ − K Py Kᵀ) on the aug
 feed-drive state, with the transition integrated by classical RK4 sub-steps.
 The generic engine spends ~0.5 ms a step in numpy call overhead for a 16-state,
 12-output filter; compiled, a step costs tens of microseconds, which makes a
-2 s record at 10 kHz faster than real time. ``tests/feeddrive/test_feeddrive.py`` checks
+2 s record at 10 kHz faster than real time. ``tests/feeddrive/test_simulate.py`` checks
 that both give the same numbers.
 """
 

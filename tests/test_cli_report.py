@@ -1,21 +1,14 @@
-"""`mtident thermal report`: the write-up of a finished or stopped warm-up test."""
+"""Tests of :mod:`mtident.cli_report`."""
 
 from __future__ import annotations
 
 import re
 
 import numpy as np
-from click.testing import CliRunner
-from test_watch import T, csv_text, first_order, noisy, one_mode_reference
+from conftest import first_order
+from helpers import T, csv_text, noisy, one_mode_reference, report
 
-from mtident.cli import main
-from mtident.report.test_report import reading_gaps
 from mtident.thermal.reference import save_reference
-
-
-def report(*args: str) -> tuple[int, str, str]:
-    outcome = CliRunner().invoke(main, ["thermal", "report", *args], catch_exceptions=False)
-    return outcome.exit_code, outcome.stdout, outcome.stderr
 
 
 def logged_test(tmp_path, steady_b: float = 29.0):  # noqa: ANN001, ANN201
@@ -70,19 +63,6 @@ def test_a_test_that_cannot_stop_is_reported_with_the_reason(tmp_path):
     assert "No stop within the log (to 89 min)" in page and "<h2>Why not yet</h2>" in page and "still fits" in page
 
 
-def test_stretches_without_readings_are_said(tmp_path):
-    # a recorder stopped from minute 40 to 70: the report says so
-    t = np.concatenate([np.arange(0.0, 41.0), np.arange(70.0, 120.0)])
-    log = tmp_path / "gappy.csv"
-    log.write_text(csv_text(t, {"S": noisy(first_order(t), 24)}))
-    out = tmp_path / "gappy.html"
-    code, _, err = report(str(log), "-o", str(out))
-    assert code == 0, err
-    assert "to t = 119 min; none from 40 min to 70 min</dd>" in out.read_text(encoding="utf-8")
-    assert reading_gaps(np.arange(10.0)) == ()
-    assert reading_gaps(np.array([0.0, 1.0, 2.0, 9.0, 10.0])) == ((2.0, 9.0),)
-
-
 def test_a_recorded_log_says_where_it_was_recorded_from_and_its_state_file_is_left_alone(tmp_path):
     log, reference = logged_test(tmp_path)
     (tmp_path / "run.csv.opcua.json").write_text(
@@ -107,9 +87,6 @@ def test_report_refuses_what_it_cannot_write_or_read(tmp_path):
     assert code == 2 and "no such file" in err
     code, _, err = report(str(log), "-o", str(tmp_path / "missing" / "r.html"))
     assert code == 2 and "does not exist" in err
-
-
-# ---- for the customer: the machine, when the test began, why not yet, the table, the pages -------
 
 
 def dated_log(path, t, columns, start=None):  # noqa: ANN001, ANN201
@@ -194,26 +171,6 @@ def test_a_recorded_logs_start_is_its_first_reading_in_local_time_not_raw_utc(tm
     assert "Test of 24 Nov 2026" in page and "123456" not in page and "+00:00" not in page
 
 
-def test_log_start_reads_every_kind_of_time_stamp():
-    import datetime as dt
-    from types import SimpleNamespace
-
-    from mtident.report.test_report import log_start
-
-    def follower(origin, fmt, first="", serial=False):  # noqa: ANN001, ANN202
-        return SimpleNamespace(origin=origin, time_format=fmt, first_stamp=first, serial_days=serial)
-
-    epoch = dt.datetime(2026, 11, 26, 7, 0, 30) - dt.datetime(1970, 1, 1)
-    minutes_1970 = epoch.total_seconds() / 60.0
-    assert log_start(follower(minutes_1970, "%d.%m.%Y %H:%M:%S")) == dt.datetime(2026, 11, 26, 7, 0, 30)
-    aware = log_start(follower(minutes_1970, "ISO8601", "2026-11-26T08:00:30+01:00"))
-    assert isinstance(aware, dt.datetime) and aware.tzinfo is not None
-    assert aware == dt.datetime(2026, 11, 26, 7, 0, 30, tzinfo=dt.UTC)
-    assert log_start(follower(-36816060.0, "%H:%M:%S")) == dt.time(7, 0)
-    assert log_start(follower(46350.25 * 1440.0, None, serial=True)) == dt.datetime(2026, 11, 24, 6, 0)
-    assert log_start(follower(0.0, None)) is None and log_start(follower(None, None)) is None
-
-
 def test_why_not_yet_is_a_short_line_per_sensor_that_holds_the_test(tmp_path):
     # today: one paragraph of some 1,100 characters
     t = np.arange(0.0, 90.0)
@@ -255,30 +212,3 @@ def test_the_table_keeps_what_the_customer_reads_and_the_hindsight_says_the_time
     assert said is not None, page
     settle, at, saved = (int(g) for g in said.groups())
     assert at == stop and saved == settle - stop > 0
-
-
-def test_the_pdf_uses_its_pages_the_curves_two_to_a_row(tmp_path):
-    # today: page 2 holds one small picture of the three panels in a row, on an otherwise empty page
-    from mtident.report.test_report import build_report, summary_pages
-    from mtident.thermal.monitor import MonitorSettings
-    from mtident.thermal.session import WatchSession
-
-    t = np.arange(0.0, 90.0)
-    log = tmp_path / "three.csv"
-    log.write_text(csv_text(t, {name: noisy(first_order(t), 40 + k) for k, name in enumerate("ABC")}))
-    built = build_report(WatchSession(log, MonitorSettings(), persist=False))
-    pages = summary_pages(built)
-    panels = [[ax for ax in page.axes if ax.get_xlabel() == "time (min)"] for page in pages]
-    assert len(pages) == 2 and [len(p) for p in panels] == [2, 1]
-    for ax in panels[0]:  # a panel is about half the page wide and a fifth of it high
-        box = ax.get_position()
-        assert 0.35 < box.width < 0.5 and 0.13 < box.height < 0.25
-    # the second page holds the third panel, then the assumptions and the method
-    texts = [text.get_text() for text in pages[1].texts]
-    assert "Method" in texts and any("page 2 of 2" in text for text in texts)
-    out = tmp_path / "three.pdf"
-    from mtident.report.test_report import write_pdf
-
-    write_pdf(built, out)
-    data = out.read_bytes()
-    assert data.count(b"/Type /Page\n") + data.count(b"/Type /Page ") == 2

@@ -1,4 +1,4 @@
-"""UKF engine: filterpy equivalence, Kalman-filter equivalence, SR-UKF, batching, adaptation."""
+"""Tests of :mod:`mtident.ukf.filter`."""
 
 from __future__ import annotations
 
@@ -8,43 +8,23 @@ import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter, UnscentedKalmanFilter
 from filterpy.kalman import MerweScaledSigmaPoints as FPPoints
+from ukf_helpers import DT, THERMAL_P0, THERMAL_Q, THERMAL_R, THERMAL_X0, first, thermal_data, thermal_f
 
-from mtident.exceptions import CovarianceError, DimensionError, NegativeWeightWarning
+from mtident.exceptions import CovarianceError, DimensionError
 from mtident.ukf import (
     AdaptiveLaw,
     FadingFactor,
     FilterConfig,
     GaussianState,
     MerweScaledSigmaPoints,
-    cholesky_update,
     filter_step,
     initial_carry,
-    normalisation_from_reference,
     run_filter,
-    sigma_points,
 )
-
-DT = 1.0
 
 # filterpy 2.x redraws the sigma points from the predicted (x, P) at the end of
 # predict() (seed 001 Eq. 8); filterpy 1.4.5 reuses the propagated ones (seed 000).
 FILTERPY_REDRAWS = "self.sigmas_f = self.points_fn.sigma_points" in inspect.getsource(UnscentedKalmanFilter.predict)
-
-
-def thermal_f(points: np.ndarray) -> np.ndarray:
-    """Seed 000 Eq. 31 on sigma points (..., S, 3)."""
-    T, lam, Tinf = points[..., 0], points[..., 1], points[..., 2]
-    return np.stack([Tinf + (T - Tinf) * np.exp(-lam * DT), lam, Tinf], axis=-1)
-
-
-def first(points: np.ndarray) -> np.ndarray:
-    return points[..., :1]
-
-
-def thermal_data(seed: int = 0, steps: int = 400, sigma: float = 0.02) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    t = np.arange(1, steps + 1) * DT
-    return (26.7 - 8.8 * np.exp(-0.016 * t) + sigma * rng.standard_normal(steps))[:, None]
 
 
 def filterpy_run(ys, x0, P0, Q, R, fx, hx, alpha=1.0, beta=2.0, kappa=0.0):
@@ -61,12 +41,6 @@ def filterpy_run(ys, x0, P0, Q, R, fx, hx, alpha=1.0, beta=2.0, kappa=0.0):
         means.append(ukf.x.copy())
         covs.append(ukf.P.copy())
     return np.array(means), np.array(covs)
-
-
-THERMAL_X0 = np.array([17.9, 0.01, 30.0])
-THERMAL_P0 = np.diag([0.5**2, 0.01**2, 4.0**2])
-THERMAL_Q = np.diag([1e-6, 1e-10, 1e-8])
-THERMAL_R = np.array([[0.02**2]])
 
 
 @pytest.mark.parametrize("alpha,beta,kappa", [(1.0, 2.0, 0.0), (1.0, 2.0, 2.0)])
@@ -220,47 +194,6 @@ def test_missing_measurement_keeps_prediction():
     assert rec.covs[2, 0, 0] > rec.covs[1, 0, 0]  # no update: uncertainty grows
 
 
-def test_sigma_points_reproduce_mean_and_covariance():
-    rng = np.random.default_rng(0)
-    A = rng.standard_normal((4, 4))
-    P = A @ A.T + np.eye(4)
-    x = rng.standard_normal(4)
-    scheme = MerweScaledSigmaPoints(1.0, 2.0, 1.0)
-    w = scheme.weights(4)
-    pts = sigma_points(x, np.linalg.cholesky(P), w)
-    assert pts.shape == (9, 4)
-    mean = w.mean @ pts
-    np.testing.assert_allclose(mean, x, rtol=1e-12)
-    dev = pts - mean
-    np.testing.assert_allclose(np.einsum("s,si,sj->ij", w.cov, dev, dev), P, rtol=1e-12)
-
-
-def test_seed_004_sigma_settings_warn_negative_centre_weight():
-    with pytest.warns(NegativeWeightWarning, match="negative centre weight W0m=-2.368"):
-        w = MerweScaledSigmaPoints(0.5, 2.0, 3.0).weights(16)
-    np.testing.assert_allclose(w.mean.sum(), 1.0, rtol=1e-12)
-    assert w.mean[0] < 0 < w.cov[0]
-
-
-def test_invalid_sigma_scaling_is_refused():
-    with pytest.raises(ValueError, match="n \\+ λ"):
-        MerweScaledSigmaPoints(alpha=0.0).weights(3)
-
-
-def test_cholesky_update_and_downdate():
-    rng = np.random.default_rng(4)
-    A = rng.standard_normal((3, 3))
-    P = A @ A.T + 3 * np.eye(3)
-    v = rng.standard_normal(3)
-    L = np.linalg.cholesky(P)
-    up = cholesky_update(L, v, 1.0, "t")
-    np.testing.assert_allclose(up @ up.T, P + np.outer(v, v), rtol=1e-12)
-    down = cholesky_update(up, v, -1.0, "t")
-    np.testing.assert_allclose(down @ down.T, P, rtol=1e-10)
-    with pytest.raises(CovarianceError, match="stage 'too big'.*smallest eigenvalue -"):
-        cholesky_update(L, 10 * v, -1.0, "too big")
-
-
 def test_dimension_errors_name_the_input():
     with pytest.raises(DimensionError, match=r"process noise covariance Q: expected shape \(\.\.\., 3, 3\)"):
         initial_carry(GaussianState(THERMAL_X0, THERMAL_P0), np.eye(2), THERMAL_R, FilterConfig())
@@ -282,32 +215,6 @@ def test_non_positive_definite_initial_covariance_is_named():
         )
 
 
-# --- adaptive law -------------------------------------------------------------------------
-
-
-def _one_step(y: float, law: AdaptiveLaw, x0=THERMAL_X0, fading=None, square_root=False):
-    cfg = FilterConfig(adaptive_law=law, fading=fading, square_root=square_root)
-    carry = initial_carry(GaussianState(x0, THERMAL_P0), THERMAL_Q, THERMAL_R, cfg)
-    return carry, filter_step(carry, np.array([y]), thermal_f, first, cfg)
-
-
-@pytest.mark.parametrize("square_root", [False, True])
-@pytest.mark.parametrize("offset", [+0.3, -0.3])
-def test_adaptive_law_cases_with_linear_measurement(offset, square_root):
-    """γ has the sign of ψ here, so R must decrease; Q grows for γ < −C and shrinks for γ > C."""
-    law = AdaptiveLaw(threshold=1e-4)
-    prior_T = thermal_f(THERMAL_X0[None])[0, 0]
-    carry, (new, info) = _one_step(prior_T + offset, law, square_root=square_root)
-    assert info.adapted
-    assert new.emission_cov[0, 0] < carry.emission_cov[0, 0]
-    expected_q = 10.0 if offset < 0 else 0.1
-    np.testing.assert_allclose(new.process_cov, expected_q * carry.process_cov)
-    assert info.reached and abs(info.posterior_residual[0]) <= 1e-4
-    # R moved by a whole number of steps of R/100 (not cumulative)
-    j = (1 - new.emission_cov[0, 0] / carry.emission_cov[0, 0]) * 100
-    np.testing.assert_allclose(j, np.round(j), atol=1e-9)
-
-
 def test_adaptive_law_increases_r_when_measurement_is_nonlinear():
     """h(x) = −T flips the sign relation of γ and ψ: the cases that increase R occur."""
     law = AdaptiveLaw(threshold=1e-6, max_search_steps=5)
@@ -321,22 +228,6 @@ def test_adaptive_law_increases_r_when_measurement_is_nonlinear():
     ratio = new.emission_cov[0, 0] / carry.emission_cov[0, 0]
     assert 0.94 < ratio < 1.06 and ratio != 1.0
     assert not info.reached
-
-
-def test_adaptive_law_leaves_small_residuals_alone():
-    law = AdaptiveLaw(threshold=10.0)
-    carry, (new, info) = _one_step(18.0, law)
-    assert not info.adapted
-    np.testing.assert_array_equal(new.process_cov, carry.process_cov)
-    np.testing.assert_array_equal(new.emission_cov, carry.emission_cov)
-
-
-def test_adaptive_law_decrease_never_reaches_zero():
-    up, down = AdaptiveLaw(max_search_steps=500).search_multipliers()
-    assert down.min() > 0 and len(down) == 99 and len(up) == 500
-
-
-# --- fading factor -------------------------------------------------------------------------
 
 
 def test_fading_factor_is_one_when_residuals_match_and_grows_after_a_jump():
@@ -383,24 +274,3 @@ def test_fading_factor_with_sqrt_equals_dense():
     assert dense.fading.max() > 1.0
     np.testing.assert_allclose(sqrt.means, dense.means, rtol=1e-7)
     np.testing.assert_allclose(sqrt.covs, dense.covs, rtol=1e-6, atol=1e-14)
-
-
-def test_normalised_fading_factor():
-    lam = normalisation_from_reference(np.array([20.0]))
-    np.testing.assert_allclose(lam, [1.0])  # Eq. 29 with m = 1: the normalisation is the identity
-    ys = thermal_data(6)
-    runs = [
-        run_filter(
-            GaussianState(THERMAL_X0, THERMAL_P0),
-            ys,
-            lambda p, k: thermal_f(p),
-            first,
-            THERMAL_Q,
-            THERMAL_R,
-            FilterConfig(fading=f),
-        )
-        for f in (FadingFactor(), FadingFactor(normalisation=lam))
-    ]
-    np.testing.assert_allclose(runs[0].means, runs[1].means, rtol=1e-12)
-    two = normalisation_from_reference(np.array([1.0, 100.0]))
-    np.testing.assert_allclose(np.sum(two**2), 2.0)

@@ -1,18 +1,123 @@
-"""Reading temperature logs: units, timestamps, and every way a file can be wrong."""
+"""Tests of :mod:`mtident.io.logs`."""
 
 from __future__ import annotations
 
+import datetime as dt
+import json
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import logger_dialects, through_state_file
+from fuzz_logs_helpers import _run, exports
+from helpers import UNITS_LOG, _local_clock_log, sample_log
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from mtident.exceptions import InputError
-from mtident.io import read_temperature_log
+from mtident.io import read_temperature_log, sample_log_path
+from mtident.io.logs import TemperatureLog
+
+
+def test_the_exports_cover_what_users_produce():
+    """The generator writes every kind the issue names, more than once."""
+    kinds = [k for export in exports() for k in export.kind]
+    text = " | ".join(kinds)
+    for kind in (
+        "comma, decimal '.'",
+        "semicolon, decimal ','",
+        "tab, decimal ','",
+        "decimal commas in a comma-separated file",
+        "units row",
+        "time in s",
+        "time in h",
+        "time in min",
+        "stamps %H:%M:%S",
+        "stamps ('%d.%m.%Y', '%H:%M:%S')",
+        "utf-8-sig",
+        "cp1252",
+        "utf-16",
+        "°F",
+        "temperature unit by none",
+        "a half-written last line",
+        "cut inside a UTF-16 character",
+        "written twice",
+        "blank lines",
+        "no line end after the last row",
+        "quoted header",
+        "room column",
+    ):
+        assert text.count(kind) >= 2, kind
+    assert sum(e.doubt is not None for e in exports()) >= 5 and sum(e.refuse for e in exports()) >= 5
+
+
+def _rows(m_max: int = 20) -> str:
+    return "".join(f"{m};{22 + m / 7:.2f};{21 + m / 9:.2f}\n".replace(".", ",") for m in range(m_max))
+
+
+@pytest.mark.parametrize("cut", ["20;24,86;23,2", "20;24,86;2", "20;24,86;23,", "20;24,86;"])
+def test_a_last_line_cut_inside_its_last_reading_is_left_out_and_said(write_csv, cut):
+    """A log still being written, cut inside its last reading: every cell is there, so the line
+    was read whole, ``2`` as 2.00 °C (and a K log then lost its note that it reads as no workshop
+    does), ``23,2`` as 23.20 where 23.22 was being written, an empty cell as a sensor's missing
+    reading."""
+    log = read_temperature_log(write_csv("time_min;Spindle;Housing\n" + _rows() + cut))
+    assert len(log.time_min) == 20 and not np.isnan(log.temperature_C).any()
+    assert any(note.startswith(f"left out the last line, {cut!r}: it has no line end") for note in log.notes), log.notes
+    out = _run("thermal", "inspect", str(write_csv("time_min;Spindle;Housing\n" + _rows() + cut, "i.csv")), "--json")
+    info = json.loads(out.stdout)
+    assert info["time"]["samples"] == 20 and info["sensors"][1]["last_C"] == pytest.approx(21 + 19 / 9, abs=0.006)
+
+
+def test_a_whole_last_line_without_a_line_end_is_read(write_csv):
+    log = read_temperature_log(write_csv("time_min;Spindle;Housing\n" + _rows() + "20;24,86;23,22"))
+    assert len(log.time_min) == 21 and log.temperature_C[-1, 1] == pytest.approx(23.22)
+    assert not any("last line" in note for note in log.notes)
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le"])
+def test_a_utf16_log_cut_inside_a_character_is_read_without_its_cut_line(tmp_path, encoding):
+    """Excel's "Unicode text" of a log still being written, cut between the two bytes of a
+    character: pandas refused the whole file ("truncated data")."""
+    text = "Zeit (s)\tSpindel [°C]\tGehäuse [°C]\n" + _rows().replace(";", "\t") + "20\t24,8"
+    path = tmp_path / "live.txt"
+    path.write_bytes(text.encode(encoding) + b"6")
+    log = read_temperature_log(path)
+    assert len(log.time_min) == 20 and log.time_min[-1] == pytest.approx(19 / 60)
+    assert log.sensors == ("Spindel [°C]", "Gehäuse [°C]")
+    assert any(note.startswith("left out the last line, '20\\t24,8'") for note in log.notes), log.notes
+
+
+def test_quoted_decimal_commas_in_a_comma_separated_file_are_read(write_csv):
+    """A spreadsheet in a decimal-comma locale saving CSV with commas quotes its numbers: each
+    reading was "not a number" and the log refused; unquoted, it is refused, with the reason."""
+    rows = "".join(f'"{m / 2:.1f}","{22 + m / 7:.2f}","{21 + m / 9:.2f}"\n'.replace(".", ",") for m in range(20))
+    log = read_temperature_log(write_csv("Time [min],Spindle,Housing\n" + rows))
+    np.testing.assert_allclose(log.time_min, np.arange(20) / 2)
+    np.testing.assert_allclose(log.temperature_C[:, 1], np.round(21 + np.arange(20) / 9, 2))
+    with pytest.raises(InputError, match="likely decimal commas in a comma-separated file"):
+        read_temperature_log(write_csv("Time [min],Spindle,Housing\n" + rows.replace('"', ""), "plain.csv"))
+
+
+@pytest.mark.parametrize(
+    ("header", "thousands"), [("time_s,Spindle\n", '"1,500","22,41"\n'), ("time_s,Spindle\n", '"1,500","1,234.5"\n')]
+)
+def test_quoted_thousands_are_no_decimal_commas(write_csv, header, thousands):
+    rows = "".join(f'"{60 * m}","{22 + m / 10:.1f}"\n' for m in range(6))
+    text = header + rows.replace('"22,41"', "") + thousands
+    try:
+        log = read_temperature_log(write_csv(text))
+    except InputError:
+        return  # refused: no reading misread
+    assert log.time_min[-1] == pytest.approx(25.0)  # 1,500 s, not 1.5
+
+
+def test_a_quoted_last_line_cut_inside_a_reading_is_left_out(write_csv):
+    """A cut that leaves a quote open ("22,4): pandas refused the whole file (EOF inside string)."""
+    rows = "".join(f'"{m / 2:.1f}","{22 + m / 7:.2f}","{21 + m / 9:.2f}"\n'.replace(".", ",") for m in range(20))
+    log = read_temperature_log(write_csv("Time [min],Spindle,Housing\n" + rows + '"10,0","24,86","23'))
+    assert len(log.time_min) == 20 and any(note.startswith("left out the last line") for note in log.notes)
 
 
 def test_minutes_seconds_hours_and_timestamps(write_csv):
@@ -127,98 +232,6 @@ def test_a_time_of_day_passes_midnight_in_an_overnight_test(write_csv, tmp_path)
         read_temperature_log(write_csv("# logger\n\n# nothing yet\n"))
 
 
-def test_stamps_whose_offset_changes_when_summer_time_ends_stay_in_order(write_csv):
-    """02:50+02:00 is followed by 02:00+01:00, ten minutes later. pandas refused the mixed
-    offsets with a ValueError that reached the user as a traceback."""
-    from mtident.io.follow import LogFollower
-
-    stamps = [
-        "02:30:00+02:00",
-        "02:40:00+02:00",
-        "02:50:00+02:00",
-        "02:00:00+01:00",
-        "02:10:00+01:00",
-        "02:20:00+01:00",
-    ]
-    path = write_csv("stamp,A\n" + "".join(f"2026-10-25T{s},{20 + k / 10}\n" for k, s in enumerate(stamps)))
-    np.testing.assert_allclose(read_temperature_log(path).time_min, [0, 10, 20, 30, 40, 50])
-    np.testing.assert_allclose(LogFollower(path).poll().time_min, [0, 10, 20, 30, 40, 50])
-
-
-def _local_clock_log(
-    start: str, change_at: int, shift_h: int, rows: int = 240, step_s: int = 60, fmt: str = "%d.%m.%Y %H:%M:%S"
-) -> str:
-    """A 1-min warm-up log whose local clock (no offset written) is put back (shift_h = -1) or
-    forward (+1) by an hour before row ``change_at``."""
-    import datetime as dt
-
-    first = dt.datetime.fromisoformat(start)
-    clock = [
-        first + dt.timedelta(seconds=step_s * k) + (dt.timedelta(hours=shift_h) if k >= change_at else dt.timedelta())
-        for k in range(rows)
-    ]
-    return "time;T1\n" + "".join(
-        f"{c.strftime(fmt)};{26.7 - 8.8 * np.exp(-0.016 * k * step_s / 60):.3f}\n".replace(
-            ".", ",", 1 if fmt.startswith("%Y") else 0
-        )
-        for k, c in enumerate(clock)
-    )
-
-
-@pytest.mark.parametrize(
-    ("start", "change_at", "shift_h", "step_s", "said"),
-    [
-        (
-            "2026-10-25 00:00:00",
-            180,
-            -1,
-            60,
-            "go back an hour at row 182 ('25.10.2026 02:59:00' then '25.10.2026 02:00:00'): read as the end of "
-            "summer time",
-        ),
-        (
-            "2026-11-01 01:40:00",
-            120,
-            -1,
-            10,
-            "go back an hour at row 122 ('01.11.2026 01:59:50' then '01.11.2026 01:00:00')",
-        ),  # US, 10-s rows
-        (
-            "2026-03-29 00:00:00",
-            120,
-            1,
-            60,
-            "jump an hour at row 122 ('29.03.2026 01:59:00' then '29.03.2026 03:00:00'): read as the start of summer "
-            "time",
-        ),
-    ],
-)
-def test_a_local_clock_changed_for_summer_time_is_read_across_the_change(
-    write_csv, start, change_at, shift_h, step_s, said
-):
-    """Stamps without an offset go back an hour when summer time ends (the file was refused:
-    "time goes back"; the follower refused the repeated hour row by row) and jump an hour when it
-    begins (read as an hour's gap: the warm-up seemed to stand still for an hour). Both readers
-    now read the true elapsed time, with a note, also followed in pieces across the change."""
-    from mtident.io.follow import LogFollower
-
-    path = write_csv(_local_clock_log(start, change_at, shift_h, step_s=step_s))
-    log = read_temperature_log(path)
-    np.testing.assert_allclose(log.time_min, np.arange(240) * step_s / 60, atol=1e-9)
-    assert [n for n in log.notes if said in n] and len(log.notes) == 1
-    text = path.read_bytes()
-    live = path.with_name("live.csv")
-    cut = text.index(b"\n", len(text) * change_at // 240 - 40) + 1  # a few rows before the change
-    live.write_bytes(text[:cut])
-    follower = LogFollower(live)
-    first = follower.poll()
-    live.write_bytes(text)
-    resumed = LogFollower.resume(live, through_state_file(follower.position()), None, None)
-    second = resumed.poll()
-    np.testing.assert_allclose(np.concatenate([first.time_min, second.time_min]), log.time_min, atol=1e-9)
-    assert not second.warnings and [n for n in second.notes if said.split(" at row")[0] in n and "after t = " in n]
-
-
 def followed_in_pieces(live: Path, data: bytes, cuts: list[int]):  # noqa: ANN201 - (LogFollower, times)
     """A log written to ``live`` in pieces cut at ``cuts`` (bytes), the follower polling after each:
     the follower, and the times it read (no warning on the way)."""
@@ -248,7 +261,6 @@ def test_any_summer_time_change_reads_alike_whole_and_live(tmp_path_factory, day
     """A local clock put back or forward an hour at 02:00 or 03:00 (as Europe, North America and
     Australia do) under any sampling interval and stamp format: the file reader and the follower,
     fed in random pieces, both read the true elapsed time."""
-    import datetime as dt
 
     change = dt.datetime.fromisoformat(day) + dt.timedelta(hours=3 if back and day.startswith("2026-10") else 2)
     if step_s < 60:  # 1-s and 10-s rows: 5 min with the change 1-4 min from the start (the follower
@@ -299,46 +311,6 @@ def test_an_hour_back_that_is_no_summer_time_change_is_still_refused(write_csv):
     assert log.notes == (
         "a gap of 61 min in the readings after t = 119 min (otherwise a reading every 1 min): the fit bridges it",
     )
-
-
-def test_a_follower_restarted_after_a_summer_time_change_does_not_count_rows_twice(write_csv):
-    """The logger restarts and writes its log again from the start: the rows before and after the
-    change come again, and none is taken twice (the hour's shift is found again)."""
-    from mtident.io.follow import LogFollower
-
-    text = _local_clock_log("2026-10-25 00:00:00", 180, -1)
-    path = write_csv(text)
-    follower = LogFollower(path)
-    first = follower.poll()
-    path.unlink()
-    path.write_text(text + "25.10.2026 03:00:00;26,500\n")  # replaced, one row more
-    again = follower.poll()
-    assert len(first.time_min) == 240 and again.time_min.tolist() == [240.0]
-
-
-def test_an_elapsed_clock_past_24_hours_is_read_as_elapsed_time(write_csv):
-    """A data-acquisition program's elapsed time as hh:mm:ss (a test of more than a day: 23:50:00,
-    24:00:00, 26:10:00) was refused at 24:00:00 as "neither a number nor a time stamp"; both
-    readers read it as minutes from the start, the file reader with a note."""
-    from mtident.io.follow import LogFollower
-
-    minutes = np.arange(0, 26 * 60 + 1, 10)
-    text = "Time,Channel 1 (°C)\n" + "".join(f"{m // 60:02d}:{m % 60:02d}:00,{20 + m / 1000:.3f}\n" for m in minutes)
-    log = read_temperature_log(write_csv(text))
-    np.testing.assert_allclose(log.time_min, minutes)
-    assert log.notes == ("time column 'Time' read as hours:minutes:seconds elapsed (it runs past 24:00:00)",)
-    live = write_csv(text[: text.index("23:50:00")], "live.csv")
-    follower = LogFollower(live)
-    first = follower.poll()
-    live.write_text(text)
-    second = follower.poll()
-    np.testing.assert_allclose(np.concatenate([first.time_min, second.time_min]), minutes)
-    assert not second.warnings
-    # a cell past 24:00:00 that is no clock is still refused
-    with pytest.raises(InputError, match="row 5: '24:75:00' is neither a number nor a time stamp like the first one"):
-        read_temperature_log(
-            write_csv("Time,T1\n23:30:00,20\n23:40:00,20\n23:50:00,20\n24:75:00,20\n25:00:00,20\n25:10:00,20\n")
-        )
 
 
 def test_excel_sep_line_states_the_delimiter(write_csv):
@@ -553,7 +525,6 @@ def test_any_logger_dialect_reads_alike_whole_and_live(
     a section tag), readings with their unit in the cell, a row counter before time stamps (named,
     unnamed or under any name), read whole and followed live in random pieces, gives the plain
     file's times and temperatures (a channel the description rows call a dew point left out)."""
-    import datetime as dt
 
     decimal_comma = decimal_comma and delimiter != ","
     t = np.arange(0.0, 25.0) * 1.5
@@ -641,12 +612,6 @@ def test_any_logger_dialect_reads_alike_whole_and_live(
     assert tuple(follower.sensors or ()) == log.sensors
 
 
-UNITS_LOG = "time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n" + "".join(
-    f"{60 * m:g};{20 + 0.1 * m:.2f};{293.15 + 0.1 * m:.2f};{68 + 0.18 * m:.2f};{1000 + m:g}\n".replace(".", ",")
-    for m in range(12)
-)
-
-
 def test_a_units_row_states_the_time_unit_and_the_temperature_scale(write_csv):
     """Many loggers write a units row under the header; it was refused ("'[s]' is neither a number
     nor a time stamp"). Its time unit is used, K and °F are converted to °C, and a channel that is
@@ -666,30 +631,6 @@ def test_a_units_row_states_the_time_unit_and_the_temperature_scale(write_csv):
         read_temperature_log(write_csv(UNITS_LOG.replace("20,20", "x")))
 
 
-@pytest.mark.parametrize(
-    "cut", [5, len("time;T1;T2;T3;speed\n") + 3, len("time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n") + 4]
-)
-def test_a_live_log_reads_its_units_row_like_the_whole_file(tmp_path, cut):
-    """Also when the units row is not yet written at the first look (a cut after the header)."""
-    from mtident.io.follow import LogFollower
-
-    data = UNITS_LOG.encode()
-    cut = len(UNITS_LOG[:cut].encode())
-    live = tmp_path / "live.csv"
-    live.write_bytes(data[:cut])
-    follower = LogFollower(live)
-    first = follower.poll()
-    live.write_bytes(data)
-    second = follower.poll()
-    times = np.concatenate([first.time_min, second.time_min])
-    values = np.concatenate([first.temperature_C.reshape(-1, 3), second.temperature_C])
-    np.testing.assert_allclose(times, np.arange(12.0))
-    np.testing.assert_allclose(values, np.repeat((20 + 0.1 * np.arange(12.0))[:, None], 3, axis=1), atol=1e-9)
-    assert follower.sensors == ["T1", "T2", "T3"]
-    assert not first.warnings + second.warnings
-    assert any("speed (rpm)" in n for n in first.notes + second.notes)
-
-
 def test_a_first_row_without_readings_is_no_units_row(write_csv):
     """A time stamp with every sensor empty has no unit in it: it stays a data row."""
     log = read_temperature_log(
@@ -699,48 +640,6 @@ def test_a_first_row_without_readings_is_no_units_row(write_csv):
         )
     )
     assert len(log.time_min) == 20 and np.isnan(log.temperature_C[0]).all()
-
-
-def test_a_live_decimal_comma_log_whose_header_comes_first_reads_its_numbers(tmp_path):
-    """A logger writes its header at the start and a row a minute later; the follower took the
-    dialect from the header alone (decimal point) and read every '20,5' as NaN."""
-    from mtident.io.follow import LogFollower
-
-    live = tmp_path / "live.csv"
-    live.write_text("Zeit;Temp, Spindel;Temp, Motor\n")
-    follower = LogFollower(live)
-    assert len(follower.poll().time_min) == 0
-    live.write_text("Zeit;Temp, Spindel;Temp, Motor\n0;20,5;19,5\n1;20,6;19,6\n")
-    rows = follower.poll()
-    np.testing.assert_array_equal(rows.temperature_C, [[20.5, 19.5], [20.6, 19.6]])
-    assert follower.sensors == ["Temp, Spindel", "Temp, Motor"]
-
-
-def test_a_follower_position_resumes_through_the_state_file_and_an_older_one_is_refused(tmp_path):
-    """The position is a frozen value that the generic persistence saves (the dialect with its units
-    row); the dicts and lists older versions saved (a dialect of four, five or eight entries) are
-    refused with the way on, not read by branches of their own."""
-    from mtident.io.dialect import CsvDialect
-    from mtident.io.follow import FollowPosition, LogFollower
-
-    live = tmp_path / "live.csv"
-    live.write_text("time;T1\nmin;K\n0;293,5\n")
-    follower = LogFollower(live)
-    follower.poll()
-    position = through_state_file(follower.position())
-    assert isinstance(position, FollowPosition) and position == follower.position()
-    assert position.layout is not None and position.layout.dialect == CsvDialect(
-        ";", ",", 0, "utf-8-sig", (("time", "min"), ("T1", "K")), 1
-    )
-    with open(live, "a") as out:
-        out.write("1;293,6\n")
-    rows = LogFollower.resume(live, position, None, None).poll()
-    np.testing.assert_allclose(rows.temperature_C, [[293.6 - 273.15]])
-    older = {"offset": 20, "dialect": [";", ",", 0, "utf-8-sig", [["time", "min"], ["T1", "K"]]]}
-    with pytest.raises(
-        InputError, match=r"live.csv: the follower's position is a dict, as an older version .*start afresh"
-    ):
-        LogFollower.resume(live, older, None, None)  # type: ignore[arg-type]
 
 
 def test_a_date_and_a_time_of_day_in_two_columns_are_one_stamp(write_csv):
@@ -772,7 +671,6 @@ def test_a_room_column_splits_off_as_the_room_and_a_log_of_the_room_alone_is_ref
 
 
 def test_the_shipped_logs_by_name():
-    from mtident.io import sample_log_path
 
     assert read_temperature_log("@sample").sensors == read_temperature_log(sample_log_path()).sensors
     assert "room" in read_temperature_log("@sample-room").sensors
@@ -820,18 +718,6 @@ def test_a_time_column_in_seconds_with_a_sparse_step_gets_a_hint_before_two_days
     with live.open("a") as more:
         more.write("".join(f"{s},26.00\n" for s in range(1230, 1500, 30)))
     assert not any("read as minutes" in w for w in follower.poll().warnings)
-
-
-def test_a_whole_log_in_seconds_read_at_once_is_told_by_its_step(tmp_path):
-    """A replay reads the whole log in one poll: its span passed two days before the first rows'
-    step was looked at, so the hint said it "runs to 2900 min (2.0 days)", which a newcomer took
-    for a hint that came only after two days of readings."""
-    from mtident.io.follow import LogFollower
-
-    live = tmp_path / "whole.csv"
-    live.write_text("time,T1\n" + "".join(f"{s},{20 + 6 * (1 - np.exp(-s / 1800)):.2f}\n" for s in range(0, 28801, 20)))
-    hints = [w for w in LogFollower(live).poll().warnings if "read as minutes" in w]
-    assert len(hints) == 1 and "a reading every 20 min: if it is in seconds" in hints[0]
 
 
 def test_a_time_unit_given_against_the_columns_own_is_said(write_csv, tmp_path):
@@ -882,55 +768,6 @@ def test_a_text_column_is_no_sensor_unless_asked_for(write_csv):
         read_temperature_log(write_csv(text.replace("2,20.2", "2,oops")))
 
 
-@pytest.mark.parametrize(
-    ("fmt", "start"),
-    [
-        ("%m/%d/%Y %I:%M:%S %p", "2026-11-22 23:50"),  # a US logger (HOBO): month first, AM/PM
-        ("%d/%m/%Y %H:%M:%S", "2026-11-01 23:50"),  # day first, 01/11 -> 02/11 at midnight: not Jan 11 -> Feb 11
-        ("%m/%d/%Y %H:%M:%S", "2026-01-11 23:50"),  # month first, the same dates the other way
-        ("%d.%m.%y %H:%M", "2026-11-22 23:50"),  # two-digit year, no seconds
-        ("%H:%M", "2026-11-22 23:50"),  # a clock without seconds passes midnight
-    ],
-)
-def test_slashed_dates_am_pm_and_clocks_without_seconds(tmp_path, fmt, start):
-    """Each was refused ("neither a number nor a time stamp"); a slashed date is read month first
-    unless the first stamp or the first change of date says day first, whole and live alike."""
-    import datetime as dt
-
-    from mtident.io.follow import LogFollower
-
-    first = dt.datetime.fromisoformat(start)
-    minutes = np.arange(0.0, 30.0)
-    text = "stamp,T1\n" + "".join(
-        f"{(first + dt.timedelta(minutes=float(m))).strftime(fmt)},{20 + m / 10:.1f}\n" for m in minutes
-    )
-    path = tmp_path / "log.csv"
-    path.write_text(text)
-    np.testing.assert_allclose(read_temperature_log(path).time_min, minutes)
-    live = tmp_path / "live.csv"
-    follower = LogFollower(live)
-    times: list[float] = []
-    for cut in (60, 400, len(text)):  # the change of date comes in the last piece
-        live.write_text(text[:cut])
-        rows = follower.poll()
-        assert not rows.warnings
-        times.extend(rows.time_min)
-    np.testing.assert_allclose(times, minutes)
-
-
-def test_header_sensors_are_the_ones_the_first_poll_takes(write_csv):
-    """watch --ambient resolved the sensors from the header with its own rules (a status column was
-    kept as a sensor there, left out by the follower); it now asks the follower."""
-    from mtident.io.follow import LogFollower
-
-    path = write_csv("time,room,T1,Status\n" + "".join(f"{m},18.0,{20 + m / 10:.1f},OK\n" for m in range(10)))
-    assert LogFollower(path, None, room="room").header_sensors() == ["T1", "room"]
-    follower = LogFollower(path, None, room="room")
-    follower.poll()
-    assert follower.sensors == ["T1", "room"]
-    assert LogFollower(write_csv("time,T1\n", "empty.csv"), None).header_sensors() is None
-
-
 def test_a_short_first_row_keeps_the_header(write_csv):
     """The header is looked for further down only where a later line heads a table; a first data
     row with a cell missing (a channel not ready) must not make the rows below a "header"."""
@@ -953,7 +790,6 @@ def test_settings_before_the_header_with_as_many_cells_are_no_header(write_csv):
 @pytest.mark.parametrize("fmt", ["%d-%m-%Y %H:%M:%S", "%d-%b-%Y %H:%M:%S"])
 def test_dashed_day_first_stamps(write_csv, fmt):
     """22-11-2026 08:00:00 and 22-Nov-2026 08:00:00 (spreadsheets, LabVIEW) were refused as no time stamp."""
-    import datetime as dt
 
     start = dt.datetime(2026, 11, 30, 23, 58, 0)  # across the end of the month
     rows = "".join(f"{(start + dt.timedelta(minutes=k)).strftime(fmt)},{20 + k / 10:.2f}\n" for k in range(6))
@@ -1001,7 +837,6 @@ def test_a_time_column_in_milliseconds(write_csv, head):
 def test_a_scan_counter_and_milliseconds_after_a_colon(write_csv):
     """Keysight BenchLink's 'Scan,Time,101 (C)' with 11/22/2026 08:00:10:500: the scan counter was
     read as the time in minutes (a 10-s scan as 1 min, silently) and the stamp was text."""
-    import datetime as dt
 
     start = dt.datetime(2026, 11, 22, 8, 0, 0)
     rows = "".join(
@@ -1120,46 +955,9 @@ def test_hobo_exports_in_fahrenheit_with_event_rows_at_the_end(write_csv):
         read_temperature_log(write_csv(text.replace("8,11/22/26 08:07:00 AM", "8,11/22/26 08:06:00 AM")))
 
 
-def test_alarm_and_status_channels_are_no_sensors(write_csv, tmp_path):
-    """Keysight BenchLink writes each channel's alarm as 0 or 1 ('Alarm 101'): read as a sensor, flat,
-    it was "no rise" in watch and an identification of nothing in identify. Left out by name in
-    both readers; asked for with --sensor, it is read."""
-    from mtident.io.follow import LogFollower
-
-    text = "Scan,Time,101 (C),Alarm 101,Status\n" + "".join(
-        f"{k + 1},11/22/2026 08:{k:02d}:00:000,{20 + k / 10:.1f},0,0\n" for k in range(8)
-    )
-    path = write_csv(text)
-    log = read_temperature_log(path)
-    assert log.sensors == ("101 (C)",) and "left out, the logger's own records: Alarm 101, Status" in log.notes
-    rows = LogFollower(path).poll()
-    assert rows.temperature_C.shape == (8, 1) and any("Alarm 101, Status" in n for n in rows.notes)
-    assert read_temperature_log(path, sensors=["Alarm 101"]).sensors == ("Alarm 101",)
-
-
-def test_a_live_log_is_read_from_its_first_rows_whatever_its_layout(write_csv):
-    """The follower waited for 21 rows before it fixed the header of a log whose rows do not match
-    it cell for cell (EasyLog's serial number in the first row alone) or begin with text (a
-    receiver's name before the date): 21 minutes without an answer on a 1-min log."""
-    from mtident.io.follow import LogFollower
-
-    easylog = write_csv(
-        "Spindle,Time,Celsius(°C),Serial Number\n1,22/11/2026 08:00:00,20.5,10543212\n2,22/11/2026 08:01:00,20.6\n",
-        "easylog.csv",
-    )
-    rows = LogFollower(easylog).poll()
-    np.testing.assert_array_equal(rows.temperature_C[:, 0], [20.5, 20.6])
-    wireless = write_csv(
-        'RECEIVER,TRANSMITTER,DATE,TEMPERATURE,HUMIDITY\n"Shop","Spindle","2026-11-22 08:00",20.5,55\n', "meaco.csv"
-    )
-    follower = LogFollower(wireless)
-    assert follower.poll().temperature_C.tolist() == [[20.5]] and follower.sensors == ["TEMPERATURE"]
-
-
 def test_an_excel_workbook_reads_like_the_csv_it_holds(tmp_path):
     """Loggers' software exports .xlsx as readily as CSV; a workbook ended in a traceback
     (the csv module's "new-line character seen in unquoted field")."""
-    import datetime as dt
 
     import pandas as pd
 
@@ -1220,20 +1018,6 @@ def test_a_log_of_nothing_but_left_out_columns_says_what_it_left_out(write_csv):
         read_temperature_log(write_csv("time,Status,RH/%\n" + "".join(f"{k},1,50\n" for k in range(6))))
 
 
-def test_a_degree_marked_unit_after_a_space_converts(write_csv):
-    """'T1 °F' and 'T2_degF' (no brackets) were read as °C: a Fahrenheit log 1.8 times too warm, silently."""
-    from mtident.io.follow import LogFollower
-
-    path = write_csv(
-        "time,T1 °F,T2_degF,T3 °C\n"
-        + "".join(f"{k},{68 + 0.18 * k:.2f},{68 + 0.18 * k:.2f},{20 + k / 10:.1f}\n" for k in range(8))
-    )
-    log = read_temperature_log(path)
-    np.testing.assert_allclose(log.temperature_C, np.repeat((20 + np.arange(8) / 10)[:, None], 3, axis=1), atol=1e-9)
-    assert "sensor 'T1 °F': read in °F (its name), converted to °C" in log.notes
-    np.testing.assert_allclose(LogFollower(path).poll().temperature_C, log.temperature_C, atol=1e-9)
-
-
 def test_a_time_column_named_by_its_unit_in_words(write_csv):
     """'Elapsed hours' or 'Seconds' was read as minutes: a 40-min test at 1 min lasted 0.67 min. A
     sensor named 'T min' is still a temperature."""
@@ -1283,53 +1067,6 @@ def test_channels_named_under_a_numbering_header(write_csv):
     assert read_temperature_log(write_csv(text.replace("Spindle,Motor", "Spindle,Spindle"))).sensors == ("No.2", "No.3")
 
 
-def test_a_live_log_whose_lines_end_in_a_lone_cr(tmp_path):
-    """The follower found no complete line in a log whose lines end in a lone CR (old Macs, some
-    serial loggers): it waited for ever, where the file reader reads it."""
-    from mtident.io.follow import LogFollower
-
-    path = tmp_path / "cr.csv"
-    data = ("time,A\r" + "".join(f"{k},{20 + k / 10:.1f}\r" for k in range(8))).encode()
-    path.write_bytes(b"")
-    follower = LogFollower(path)
-    values = []
-    for a, b in ((0, 9), (9, 20), (20, len(data))):
-        with open(path, "ab") as out:
-            out.write(data[a:b])
-        values.extend(follower.poll().temperature_C.ravel())
-    np.testing.assert_allclose(values, 20 + np.arange(8) / 10)
-
-
-@pytest.mark.parametrize(
-    ("name", "room"),
-    [
-        ("room", True),
-        ("T_room", True),
-        ("Raumtemperatur", True),
-        ("AmbientTemp", True),
-        ("CH3 Ambient", True),
-        ("T_amb", True),
-        ("TAmb", True),
-        ("Tamb", True),
-        ("Air temp", True),
-        ("AirTemp", True),
-        ("Umgebung", True),
-        ("Halle", True),
-        # a room's word inside another word, and machine sensors
-        ("Chair", False),
-        ("Shall", False),
-        ("Envelope", False),
-        ("T1", False),
-        ("TC1 (Spindle)", False),
-        ("Bearing front", False),
-    ],
-)
-def test_a_column_named_as_the_room_is_told_from_machine_sensors(name, room):
-    from mtident.io.columns import room_named
-
-    assert room_named(name) is room
-
-
 def test_a_column_named_with_another_case_or_a_slip_is_pointed_to(write_csv):
     path = write_csv("time_min,Spindle,room\n" + "".join(f"{k},{20 + k / 10:.2f},19.9\n" for k in range(8)))
     with pytest.raises(
@@ -1358,22 +1095,6 @@ def test_a_time_column_in_hours_read_as_minutes_gets_a_hint(write_csv, tmp_path)
     live.write_text(text)
     follower = LogFollower(live)
     assert sum("time_unit='h'" in w for w in follower.poll().warnings) == 1
-
-
-def test_a_loggers_placeholder_is_a_missing_reading_said_by_the_file_reader_and_the_follower(write_csv, tmp_path):
-    """'---' in a cell (a common logger placeholder) stopped the run ("'---' is not a number"),
-    and watch skipped empty and open-circuit readings without the note identify gives."""
-    from mtident.io.follow import LogFollower
-
-    rows = "".join(
-        f"{k};{'---' if k == 5 else 'n/a' if k == 8 else f'{20 + k / 10:.2f}'.replace('.', ',')}\n" for k in range(30)
-    )
-    path = write_csv("time_min;A\n" + rows)
-    log = read_temperature_log(path)
-    assert log.notes == ("sensor 'A': skipped 2 empty/NaN sample(s) (rows 7, 10)",)
-    assert np.isnan(log.temperature_C[[5, 8], 0]).all()
-    said = LogFollower(Path(path)).poll().notes
-    assert "sensor 'A': skipped 2 empty, unreadable or open-circuit reading(s) (the first at t = 5 min)" in said
 
 
 def test_a_folder_given_as_a_log_is_said_to_be_a_folder(tmp_path):
@@ -1413,7 +1134,6 @@ def test_a_log_built_by_hand_is_checked_like_one_read_from_a_file():
     """A notebook user's TemperatureLog(...) skipped every check: times that went back gave T∞
     24.17 °C for 26.62 with no word, and a transposed array, a 1-D one, plain lists or a NaN time
     failed deep inside with IndexError, TypeError or ValueError."""
-    from mtident.io.logs import TemperatureLog
 
     t = np.arange(0.0, 100.0)
     y = 20.0 + 6.0 * (1.0 - np.exp(-t / 40.0))
@@ -1605,28 +1325,6 @@ def test_an_empty_file_is_said_to_be_empty(write_csv, text):
         read_temperature_log(write_csv(text))
 
 
-def test_the_file_reader_reads_its_lines_with_the_followers_function(write_csv):
-    """One log reader: the rows of a whole log are parse_lines' over the layout, read as a whole log."""
-    from mtident.io.dialect import read_lines
-    from mtident.io.layout import layout_of_head
-    from mtident.io.parse import TimeState, WholeLog, parse_lines
-
-    rows = "".join(
-        f"{k};{20 + k / 10:.2f};{'' if k == 7 else f'{21 + k / 10:.2f}'}\n".replace(".", ",") for k in range(20)
-    )
-    path = write_csv("# logger\ntime_min;A;B\n" + rows)
-    log = read_temperature_log(path)
-    lines, dialect = read_lines(path)
-    layout, _ = layout_of_head(lines[0], [dialect.cells(line) for line in lines[1:]], dialect, path)
-    state, whole = parse_lines(layout, TimeState(), lines[1:], str(path), whole=WholeLog(3))
-    _, live = parse_lines(layout, TimeState(), lines[1:], str(path))
-    np.testing.assert_array_equal(whole.time_min, log.time_min)
-    np.testing.assert_array_equal(whole.temperature_C, log.temperature_C)
-    np.testing.assert_array_equal(live.temperature_C, log.temperature_C)
-    assert whole.notes == log.notes == ("sensor 'B': skipped 1 empty/NaN sample(s) (rows 10)",)
-    assert state.last_time == live.time_min[-1] == 19.0 and whole.warnings == ()
-
-
 def test_a_dataframe_of_local_stamps_is_read_across_a_summer_time_change_like_its_csv(write_csv):
     import pandas as pd
 
@@ -1638,3 +1336,12 @@ def test_a_dataframe_of_local_stamps_is_read_across_a_summer_time_change_like_it
     np.testing.assert_array_equal(log.time_min, [0, 30, 60, 90, 120, 150])
     np.testing.assert_array_equal(log.time_min, text.time_min)
     assert "read as the end of summer time" in log.notes[0] and "at row 3" in log.notes[0]
+
+
+def test_sample_log_is_ten_sensors_four_hundred_minutes():
+    log = sample_log()
+    assert log.sensors == tuple(f"T{i}" for i in range(1, 11))
+    np.testing.assert_allclose(log.time_min, np.arange(401.0))
+    np.testing.assert_allclose(log.temperature_C[0], 17.9, atol=0.1)
+    # 0.01 °C resolution
+    np.testing.assert_allclose(log.temperature_C * 100, np.round(log.temperature_C * 100), atol=1e-6)

@@ -1,0 +1,484 @@
+"""Tests of :mod:`mtident.cli_watch`."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from conftest import first_order, wait_until
+from helpers import (
+    T,
+    _get,
+    _log,
+    csv_text,
+    mtident,
+    noisy,
+    one_mode_reference,
+    run,
+    spindle_and_column,
+    three_mode_housing,
+)
+
+from mtident.cli import main
+from mtident.persist import load_dataclass
+from mtident.thermal.reference import save_reference
+from mtident.thermal.session import (
+    SavedWatch,
+    WatchSession,
+)
+
+
+def test_watch_replays_a_workbook(tmp_path):
+    """A workbook is no live log, but --replay runs it as the CSV it holds (it was refused)."""
+    import numpy as np
+    import pandas as pd
+
+    t = np.arange(0.0, 160.0)
+    book = tmp_path / "warmup.xlsx"
+    pd.DataFrame(
+        {
+            "Time": pd.date_range("2026-11-22 08:00", periods=len(t), freq="1min"),
+            "Spindle (°C)": 26.7 - 8.8 * np.exp(-0.04 * t),
+        }
+    ).to_excel(book, index=False)
+    out = mtident(
+        "thermal",
+        "watch",
+        str(book),
+        "--replay",
+        "--room-wander",
+        "0",
+        "--state",
+        str(tmp_path / "state.json"),
+        "--json",
+    )
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result["decision"] == "stop" and abs(result["steady_state_C"] - 26.7) < 0.05
+    for extra in ((), ("--ambient", "Time")):  # with --ambient the header was read first, as garbage
+        live = mtident("thermal", "watch", str(book), "--timeout", "1", "--state", str(tmp_path / "live.json"), *extra)
+        assert (
+            live.returncode == 2
+            and "an Excel workbook is not written row by row" in live.stderr
+            and "Traceback" not in live.stderr
+        )
+
+
+def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
+    t = np.arange(0.0, 120.5, 0.5)
+    log = tmp_path / "housing.csv"
+    log.write_text(csv_text(t, {"housing": noisy(three_mode_housing(t), 15)}))
+    code, out, err = run("thermal", "watch", str(log), "--replay")
+    assert code == 0, err
+    text = " ".join(out.split())
+    assert "Not yet: keep the test running." in text and "still fits" in text
+    assert "Ways on: continue the test, or give a reference run of this machine" in text
+    assert (
+        "Assumes: a sum of up to four exponential modes (six where the readings use all four), of a warm-up that "
+        "does not overshoot: a rising sensor's T∞ not below its latest readings, less four times their noise, "
+        "time constants up to 300 min" in text
+    )
+    # the ends named in words are the interval's own (widened for the room's wander alike)
+    code, out, err = run("thermal", "watch", str(log), "--replay", "--room-wander", "0.5")
+    assert code == 0, err
+    text = " ".join(out.split())
+    said = re.search(
+        r"interval (-?[\d.]+) to (-?[\d.]+) °C, reaching beyond .*?low end (-?[\d.]+) °C.*?high end (-?[\d.]+) °C",
+        text,
+    )
+    assert said and said.group(1) == said.group(3) and said.group(2) == said.group(4), text
+
+
+def test_watch_refuses_the_options_of_a_week_ago_by_name(tmp_path):
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:20], {"S": noisy(first_order(T[:20]), 16)}))
+    for old in ("--hold", "--bin"):
+        code, _, err = run("thermal", "watch", str(log), "--replay", old, "12")
+        assert code == 2 and f"No such option '{old}'" in err, err
+
+
+def test_watch_refuses_a_missing_reference_and_a_bad_tolerance(tmp_path):
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:20], {"S": noisy(first_order(T[:20]), 17)}))
+    code, _, err = run("thermal", "watch", str(log), "--replay", "--reference", str(tmp_path / "none.toml"))
+    assert code == 2 and "no such file (learn one with `mtident thermal learn" in err
+    code, _, err = run("thermal", "watch", str(log), "--replay", "--tolerance", "nan")
+    assert code == 2 and "--tolerance" in err
+    code, _, err = run("thermal", "watch", str(log), "--replay", "--free-fast-modes", "3")
+    assert code == 2 and "--free-fast-modes" in err and "0<=x<=2" in err
+
+
+@pytest.mark.slow
+def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
+    """SIGKILL while following a live log; the logger carries on; the same command resumes."""
+    from mtident.thermal.reference import save_reference
+
+    save_reference(one_mode_reference("A"), tmp_path / "machine.toml")
+    full = tmp_path / "full.csv"
+    full.write_text(csv_text(T[:101], {"A": noisy(first_order(T[:101]), 18)}))
+    fast = ("--reference", str(tmp_path / "machine.toml"), "--free-fast-modes", "0")  # stops at about 70 min
+    code, out, err = run("thermal", "watch", str(full), "--replay", "--json", *fast)
+    assert code == 0, err
+    reference = json.loads(out)
+    assert reference["decision"] == "stop"
+    reference.pop("hindsight", None)
+
+    live = tmp_path / "live.csv"
+    lines = full.read_text().splitlines(keepends=True)
+    live.write_text("".join(lines[:20]))
+    state = tmp_path / "live-state.npz"
+    cmd = [
+        sys.executable,
+        "-m",
+        "mtident",
+        "thermal",
+        "watch",
+        str(live),
+        "--json",
+        "--state",
+        str(state),
+        "--poll",
+        "0.05",
+        "--timeout",
+        "20",
+        *fast,
+    ]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        wait_until(state.is_file, "the watch's first state file", 60)
+        with open(live, "a") as out_file:
+            out_file.write("".join(lines[20:40]))
+        # killed once it has saved some of the new rows (the state file is replaced whole)
+        wait_until(
+            lambda: load_dataclass(state, SavedWatch).monitor.readings.latest_min >= 20, "the new rows saved", 60
+        )
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    saved = load_dataclass(state, SavedWatch)
+    assert 10 <= saved.monitor.readings.latest_min < 40
+    live.write_text("".join(lines))  # the logger carries on while the monitor is down
+    out = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False)
+    assert out.returncode == 0, out.stderr
+    assert "resuming from" in out.stderr
+    assert json.loads(out.stdout) == reference
+
+
+def test_ctrl_c_inside_compiled_code_is_an_interruption_not_a_traceback(tmp_path, monkeypatch):
+    """Ctrl-C that lands while a compiled kernel runs reaches Python as that call's SystemError,
+    the KeyboardInterrupt chained to it: a newcomer's Ctrl-C 8 s into a replay printed numba's
+    traceback and exit code 1. Any other SystemError is still raised."""
+    log = tmp_path / "live.csv"
+    log.write_text(csv_text(T[:30], {"A": noisy(first_order(T[:30]), 19)}))
+    polls = []
+
+    def poll(session, redraw=None, cancel=None):  # noqa: ANN001, ANN202
+        polls.append(session)
+        if len(polls) == 1:
+            return original(session, redraw, cancel)
+        raise SystemError("<numba function> returned a result with an exception set") from KeyboardInterrupt()
+
+    original = WatchSession.poll
+    monkeypatch.setattr(WatchSession, "poll", poll)
+    code, out, err = run("thermal", "watch", str(log), "--json", "--poll", "0.05", "--timeout", "5")
+    assert code == 130 and "interrupted (Ctrl-C) at t = 29 min" in err
+    assert json.loads(out)["last_time_min"] == 29.0
+
+    def broken(session, redraw=None, cancel=None):  # noqa: ANN001, ANN202
+        raise SystemError("a fault of our own")
+
+    monkeypatch.setattr(WatchSession, "poll", broken)
+    with pytest.raises(SystemError, match="a fault of our own"):
+        run("thermal", "watch", str(log), "--replay")
+
+
+def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run("thermal", "watch", "later.csv", "--poll", "0.05", "--timeout", "0.3")
+    assert code == 2
+    assert (
+        "waiting for later.csv to appear" in err
+        and "later.csv: no such file (not created within the --timeout of 0.3 s)" in err
+    )
+
+
+def test_watch_says_it_is_waiting_for_rows_of_a_log_that_does_not_grow(tmp_path, monkeypatch):
+    """A newcomer gave a finished log without --replay, and the watch waited in silence."""
+    import mtident.thermal.session
+
+    t = np.arange(0.0, 20.0)
+    log = tmp_path / "done.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{20 + a / 10:.2f}\n" for a in t))
+    monkeypatch.setattr(mtident.thermal.session, "WAITING_HINT_S", 0.1)
+    code, _, err = run(
+        "thermal", "watch", str(log), "--poll", "0.05", "--timeout", "0.5", "--state", str(tmp_path / "s")
+    )
+    said = " ".join(err.split())
+    assert code == 0 and "waiting for new rows: none for 0.1 s (a finished log is replayed with --replay" in said
+    assert said.count("waiting for new rows") == 1
+
+
+def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsys):
+    from mtident.cli_watch import _print_hindsight
+    from mtident.thermal.hindsight import Hindsight
+
+    hindsight = Hindsight(
+        ("T1",),
+        233.0,
+        400.0,
+        np.array([30.50]),
+        np.array([30.40]),
+        np.array([258.0]),
+        0.05,
+        0.2,
+        settle_time_min=np.array([251.0]),
+    )
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert (
+        "the room moved +0.05 °C from the stop to the end; each sensor follows its course through its modes, +0.05 °C "
+        "added to T∞ at the stop" in text
+    )
+    assert "T∞ at stop + room (°C)" in text
+    # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
+    assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +251 │", text), text
+    assert "stayed within ±0.2 °C of where they settled from t = 251 min: the stop saved 18 min" in text
+
+
+def test_the_hindsight_table_says_a_sensors_late_following_of_the_room_though_the_room_is_back(capsys):
+    """A newcomer's room swung and was back at its level by the log's end: the room's move was 0.00,
+    so the column was called "T∞ at stop" while it showed T∞ plus each sensor's late following of
+    the room (48.93 beside a T∞ of 48.95)."""
+    from mtident.cli_watch import _print_hindsight
+    from mtident.thermal.hindsight import Hindsight
+
+    hindsight = Hindsight(
+        ("T1",), 435.0, 480.0, np.array([48.95]), np.array([np.nan]), np.array([np.nan]), 0.0, 0.2, np.array([-0.02])
+    )
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "T∞ at stop + room (°C)" in text and "-0.02 °C added to T∞ at the stop" in text
+    assert re.search(r"│ T1 +│ +48\.93 │", text), text
+
+
+def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_not_settle(capsys):
+    """A newcomer's three sensors: the one that settled reached 95 % at 183 min, the test stopped
+    at 270 and the others had not settled by the log's end; the check said "the rule saved no
+    time", though their 95 % times lay beyond the log."""
+    from mtident.cli_watch import _print_hindsight
+    from mtident.thermal.hindsight import Hindsight
+
+    nan = np.nan
+    hindsight = Hindsight(
+        ("front", "rear"), 270.0, 480.0, np.array([32.5, 27.4]), np.array([nan, 27.38]), np.array([nan, 183.0]), 0, 0.2
+    )
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "saved no time" not in text
+    assert "when every sensor waited for settled within the tolerance is later than the log can tell" in text
+    assert "not settled by the log's end: front" in text
+    settled = Hindsight(
+        ("rear",),
+        270.0,
+        480.0,
+        np.array([27.4]),
+        np.array([27.38]),
+        np.array([183.0]),
+        0,
+        0.2,
+        settle_time_min=np.array([240.0]),
+    )
+    _print_hindsight(settled)
+    assert "from t = 240 min, 30 min before the stop: the rule saved no time" in " ".join(
+        capsys.readouterr().out.split()
+    )
+
+
+def test_watch_says_when_no_expected_stop_was_found(tmp_path):
+    """A newcomer's unfinished run showed 'Expected stop: t ≈ … min' once and, on another log,
+    nothing at all: where no stop is found on the best models' courses, it now says so."""
+    t = np.arange(0.0, 30.0, 0.5)
+    log = tmp_path / "early.csv"
+    log.write_text(csv_text(t, {"S": noisy(20.0 + 8.0 * (1.0 - np.exp(-t / 60.0)), 5)}))
+    code, out, _ = run("thermal", "watch", str(log), "--replay", "--state", str(tmp_path / "s.npz"))
+    assert code == 0 and "Not yet" in out
+    assert "Expected stop: none found on the best models' courses" in out and "Expected stop: t ≈" not in out
+
+
+def test_sigterm_during_a_fit_ends_cleanly_at_the_next_check_and_saves_what_it_says(tmp_path):
+    """A service manager's SIGTERM while the fits run (a long poll): no traceback from inside the
+    compiled code, an end within a few seconds, and the state file holds the time the message
+    says; the same command then resumes to the decision of a run never stopped."""
+    names = ("A", "B", "C", "D")
+    full = csv_text(T[:301], {n: noisy(first_order(T[:301], steady=24.0 + k), 60 + k) for k, n in enumerate(names)})
+    lines = full.splitlines(keepends=True)
+    log = tmp_path / "live.csv"
+    log.write_text("".join(lines[:31]))
+    state = tmp_path / "live-state.npz"
+    cmd = [sys.executable, "-m", "mtident", "thermal", "watch", str(log), "--json", "--state", str(state)]
+    proc = subprocess.Popen(
+        [*cmd, "--poll", "0.05"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path
+    )
+    try:
+        wait_until(state.is_file, "the watch's first state file", timeout_s=120)
+        with open(log, "a") as out_file:
+            out_file.write("".join(lines[31:]))  # 270 rows at once: a poll of many checks
+        time.sleep(2.0)
+        proc.send_signal(signal.SIGTERM)
+        sent = time.monotonic()
+        out, err = proc.communicate(timeout=60)
+        took = time.monotonic() - sent
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "SystemError" not in err
+    assert took < 5.0, took
+    said = re.search(r"terminated \(SIGTERM\) at t = (\d+) min; the state is in", err)
+    assert said is not None, err
+    saved = load_dataclass(state, SavedWatch).monitor.readings.latest_min
+    assert f"{saved:.0f}" == said.group(1) and 30 <= saved <= 300  # mid-fit, or after the last row on a fast machine
+    assert json.loads(out)["last_time_min"] == saved
+    resumed = subprocess.run(
+        [*cmd, "--poll", "0.05", "--timeout", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+        check=False,
+    )
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resuming from" in resumed.stderr and "refused the row" not in resumed.stderr
+    whole = tmp_path / "whole.csv"
+    whole.write_text(full)
+    code, out, _ = run("thermal", "watch", str(whole), "--replay", "--json")
+    assert code == 0
+    assert json.loads(resumed.stdout)["sensors"] == json.loads(out)["sensors"]
+
+
+def test_a_sigterm_while_the_answer_is_written_is_noted_not_fatal():
+    """A SIGTERM after the following ended, while the final answer's forecasts ran, killed the
+    process outright: exit -15, no word (the state file held every reading)."""
+
+    from mtident.cli_watch import _sigterm_deferred
+
+    before = signal.getsignal(signal.SIGTERM)
+    with _sigterm_deferred() as terminated:
+        os.kill(os.getpid(), signal.SIGTERM)
+        wait_until(terminated.is_set, "the deferred SIGTERM", timeout_s=5.0, poll_s=0.01)
+    assert terminated.is_set()
+    assert signal.getsignal(signal.SIGTERM) == before
+
+
+@pytest.mark.slow
+def test_watch_serve_says_where_the_page_is(tmp_path):
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:30], {"S": noisy(first_order(T[:30]), 42)}))
+    out = CliRunner().invoke(
+        main, ["thermal", "watch", str(log), "--replay", "--serve", "127.0.0.1:0"], catch_exceptions=False
+    )
+    assert out.exit_code == 0, out.stderr
+    assert "the live page is at http://127.0.0.1:" in out.stderr
+    bad = CliRunner().invoke(
+        main, ["thermal", "watch", str(log), "--replay", "--serve", "nowhere"], catch_exceptions=False
+    )
+    assert bad.exit_code == 2 and "expected HOST:PORT" in bad.stderr
+
+
+def _watch_serving(args: list[str], cwd: Path) -> tuple[subprocess.Popen[str], str]:
+    """`watch ... --serve 127.0.0.1:0` in a subprocess, and the page's URL once it says it."""
+    import sys
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mtident", "thermal", "watch", *args, "--serve", "127.0.0.1:0", "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=cwd,
+    )
+    assert proc.stderr is not None
+    for line in proc.stderr:
+        if (found := re.search(r"the live page is at (http://\S+/)", line)) is not None:
+            return proc, found.group(1)
+    proc.kill()
+    pytest.fail(f"the watch never served its page: {proc.communicate()}")
+
+
+def _first_answer(proc: subprocess.Popen[str], url: str, within_s: float) -> dict:
+    """The page's first answer, asked for while the watch runs, within ``within_s``."""
+    deadline = time.monotonic() + within_s
+    while time.monotonic() < deadline and proc.poll() is None:
+        state = json.loads(_get(url + "state.json"))
+        if "decision" in state["answer"]:  # not the newest readings alone, which a live log's page shows first
+            return dict(state["answer"])
+        time.sleep(0.1)
+    pytest.fail(
+        f"no answer on the page within {within_s:g} s (the watch {'ended' if proc.poll() is not None else 'runs'})"
+    )
+
+
+def test_the_page_answers_at_once_after_a_resume_and_during_a_replay(tmp_path):
+    """A watch resumed with a long log to catch up on showed `{"version":0,"answer":{}}` until its
+    first poll ended (80 s); a replay never showed an answer at all."""
+    lines = _log(601).splitlines(keepends=True)
+    log = tmp_path / "live.csv"
+    log.write_text("".join(lines[:31]))
+    first = CliRunner().invoke(main, ["thermal", "watch", str(log), "--timeout", "0.2"], catch_exceptions=False)
+    assert first.exit_code == 0 and (tmp_path / "live.csv.watch-state.npz").is_file()
+    with open(log, "a") as out:
+        out.write("".join(lines[31:]))  # the logger went on while the watch was stopped
+    proc, url = _watch_serving([str(log), "--poll", "0.05"], tmp_path)
+    try:
+        answer = _first_answer(proc, url, 20.0)  # the resumed state's answer, before the catch-up's fits (80 s before)
+        assert answer["last_time_min"] == 29.0
+    finally:
+        proc.terminate()
+        proc.communicate(timeout=60)
+    whole = tmp_path / "whole.csv"
+    whole.write_text("".join(lines))
+    proc, url = _watch_serving([str(whole), "--replay"], tmp_path)
+    try:
+        answer = _first_answer(proc, url, 60.0)
+        assert proc.poll() is None and 0 <= float(answer["last_time_min"]) < 600  # shown while the replay runs
+    finally:
+        proc.terminate()
+        proc.communicate(timeout=60)
+
+
+def test_watch_says_the_time_saved_against_the_settled_readings_not_a_predicted_equilibrium(
+    tmp_path, spindle_reference
+):
+    t = np.arange(0.0, 480.0, 1.0)
+    values = spindle_and_column(t)
+    log = tmp_path / "test.csv"
+    rows = "\n".join(f"{a:g},{b:.2f},{c:.2f}" for a, (b, c) in zip(t, values, strict=True))
+    log.write_text("time_min,S,column\n" + rows + "\n")
+    save_reference(spindle_reference, tmp_path / "machine.toml")
+    out = mtident(
+        "thermal", "watch", str(log), "--replay", "--json", "--reference", str(tmp_path / "machine.toml"),
+        "--wait-for", "S", "--state", str(tmp_path / "state.npz"),
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    answer = json.loads(out.stdout)
+    assert answer["decision"] == "stop"
+    settle = answer["hindsight"]["settle_time_min"]
+    # the spindle sensor (8 and 60 min, 10 °C, −4 °C slow) is within 0.2 °C of 30 from about 60·ln 20 = 180 min
+    assert 170.0 <= settle <= 190.0
+    assert answer["settle_time_min"] == settle
+    assert answer["time_saved_min"] == pytest.approx(settle - answer["stop_time_min"])
+    text = mtident(
+        "thermal", "watch", str(log), "--replay", "--reference", str(tmp_path / "machine.toml"), "--wait-for", "S",
+        "--state", str(tmp_path / "state2.npz"),
+    ).stdout  # fmt: skip
+    assert answer["time_saved_min"] > 0
+    assert f"{answer['time_saved_min']:.0f} min before the readings settled within the tolerance" in " ".join(
+        text.split()
+    )

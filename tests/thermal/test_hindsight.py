@@ -1,0 +1,94 @@
+"""Tests of :mod:`mtident.thermal.hindsight`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import noisy
+
+from mtident.thermal.hindsight import check_decision, settle_times
+
+
+def test_the_hindsight_moves_t_inf_with_the_room_as_the_sensor_follows_it():
+    """A room falling 0.4 °C over the five hours after a stop: a sensor of one 60-min mode follows
+    it 0.08 °C behind, so the room's whole move would call a stop at the exact T∞ 0.08 °C off."""
+    from mtident.thermal.hindsight import check_decision
+    from mtident.thermal.modal_search import room_lag
+
+    t = np.arange(0.0, 601.0)
+    room = np.where(t < 300.0, 20.0, 20.0 - 0.4 * (t - 300.0) / 300.0)
+    sensor = room_lag(room, t, np.array([60.0]))[0] + 8.0 * (1.0 - np.exp(-t / 60.0))
+    values = sensor[:, None]
+    # a tolerance of 0.5 °C: a sensor still following the room by 0.2 °C in the log's last quarter
+    # is not settled to the precision of 0.2
+    followed = check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.5, room, [((60.0, -8.0),)])
+    whole = check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.5, room, None, 60.0)
+    assert np.isnan(check_decision(("S",), np.array([28.0]), 300.0, t, values, 0.2, room).error_C[0])
+    assert abs(followed.error_C[0]) < 0.005 and whole.error_C[0] < -0.07
+    assert followed.room_shift_C == whole.room_shift_C and abs(whole.room_shift_C + 0.4) < 0.01
+    assert followed.to_dict()["sensors"][0]["room_shift_C"] == pytest.approx(-0.4 + 0.08, abs=0.01)
+    # a room that rose before the stop and stayed: T∞ at the stop already holds its level, which the
+    # sensor, 0.08 °C behind at the stop, reaches by the log's end
+    room = np.where(t < 300.0, 20.0 + 0.4 * t / 300.0, 20.4)
+    sensor = room_lag(room, t, np.array([60.0]))[0] + 8.0 * (1.0 - np.exp(-t / 60.0))
+    caught_up = check_decision(("S",), np.array([28.4]), 300.0, t, sensor[:, None], 0.2, room, [((60.0, -8.0),)])
+    assert abs(caught_up.error_C[0]) < 0.005
+
+
+def test_a_log_still_rising_at_the_pace_of_a_slow_mode_is_not_called_settled():
+    """A newcomer's spindle (modes of 6, 45 and 180 min) logged for 6 h: its last quarter moved
+    0.09 °C, under half the tolerance, but 0.2 °C was still to come, and a right stop (0.03 °C
+    off the truth) was called 0.25 °C beyond the tolerance. At the pace of its 180-min mode it is
+    not settled; the same log run on to 15 h is, and the stop is within the tolerance."""
+    from mtident.thermal.hindsight import check_decision
+
+    modes = ((6.0, -5.6), (45.0, -3.7), (180.0, -1.0))
+    for end, settled in ((360.0, False), (900.0, True)):
+        t = np.arange(0.0, end + 1.0, 1.0 / 3.0)
+        truth = 30.5 + sum(a * np.exp(-t / tau) for tau, a in modes)
+        values = noisy(truth, 23)[:, None]
+        check = check_decision(("spindle",), np.array([30.53]), 274.0, t, values, 0.2, None, [modes])
+        assert np.isfinite(check.settled_C[0]) == settled
+        assert not settled or abs(check.error_C[0]) < 0.1
+        # without the stop's modes, the largest time constant allowed (300 min) sets the pace
+        assert np.isnan(check_decision(("spindle",), np.array([30.53]), 274.0, t, values, 0.2).settled_C[0]) or (
+            end == 900.0
+        )
+
+
+def test_the_settle_time_is_when_the_readings_stay_within_the_tolerance():
+    # 30 − 10·e^(−t/20) is within 0.2 °C of 30 from t = 20·ln 50 = 78.2 min on
+    t = np.arange(0.0, 300.0, 1.0)
+    y = 30.0 - 10.0 * np.exp(-t / 20.0)
+    noisy = y + np.where(np.arange(t.size) == 150, 0.5, 0.0)  # one spike is no leaving
+    times = settle_times(t, np.column_stack([y, noisy, y]), np.array([30.0, 30.0, np.nan]), 0.2)
+    assert times[0] == 79.0 and times[1] == 79.0 and np.isnan(times[2])
+
+
+def test_the_time_saved_is_against_the_latest_settle_time_of_the_sensors_waited_for():
+    t = np.arange(0.0, 600.0, 1.0)
+    fast = 30.0 - 10.0 * np.exp(-t / 20.0)  # settles at 79 min
+    slow = 28.0 - 8.0 * np.exp(-t / 60.0)  # within 0.2 °C from 60·ln 40 = 221.3 min
+    values = np.column_stack([fast, slow])
+    both = check_decision(("fast", "slow"), np.array([30.0, 28.0]), 150.0, t, values, 0.2)
+    assert both.test_settle_time_min == 222.0 and both.time_saved_min == 72.0
+    fast_only = check_decision(
+        ("fast", "slow"), np.array([30.0, 28.0]), 150.0, t, values, 0.2, waited=np.array([True, False])
+    )
+    assert fast_only.time_saved_min == 79.0 - 150.0
+    answer = fast_only.to_dict()
+    assert answer["settle_time_min"] == 79.0 and answer["time_saved_min"] == -71.0
+    assert [s["waited_for"] for s in answer["sensors"]] == [True, False]
+
+
+def test_with_a_room_sensor_the_settle_time_is_of_the_readings_above_the_room():
+    """A new user's machine in a room on a daily cycle of ±0.3 °C: the readings kept moving with
+    the room long after they had settled above it, and `time_saved_min` was null in every run."""
+    t = np.arange(0.0, 600.0, 1.0)
+    room = 20.0 + 0.4 * np.sin(2.0 * np.pi * t / 1440.0)
+    sensor = room + 10.0 - 10.0 * np.exp(-t / 20.0)  # within 0.2 °C of room + 10 from 20·ln 50 = 78.2 min
+    values = sensor[:, None]
+    without = check_decision(("S",), np.array([30.0]), 150.0, t, values, 0.2)
+    assert without.time_saved_min is None
+    with_room = check_decision(("S",), np.array([30.0]), 150.0, t, values, 0.2, room_C=room)
+    assert with_room.test_settle_time_min == 79.0 and with_room.time_saved_min == 79.0 - 150.0

@@ -1,0 +1,85 @@
+"""Tests of :mod:`mtident.thermal.identify`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import first_order, make_log
+
+from mtident.exceptions import InputError
+from mtident.io import read_temperature_log, sample_log_path
+from mtident.thermal import RobustSettings, identify, load_reference, minimal_identification_time
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda log: identify(log, 3.0, "ukf"), r"only 4 samples in the first 3 min"),
+        (
+            lambda log: identify(log, 30.0, "kalman"),
+            r"method 'kalman' is not one of: robust, ukf, aukf, fukf, afukf, lsq",
+        ),
+        (
+            lambda log: identify(log, 30.0, "ukf", preset="smith"),
+            r"preset 'smith' is not one of: data, xia2014, yu2019",
+        ),
+        (
+            lambda log: identify(log, 30.0, preset="xia2014"),
+            r"`preset` is a setting of the papers' first-order filters: give `method` ukf, aukf, fukf, afukf or lsq",
+        ),
+        (
+            lambda log: identify(log, 30.0, pseudo_measurement_seed=7),
+            r"`pseudo_measurement_seed` is a setting of the papers' first-order filters",
+        ),
+        (
+            lambda log: identify(log, 30.0, "ukf", reference=load_reference(sample_log_path("@sample-machine"))),
+            r"`reference` needs the model-robust method",
+        ),
+        (
+            lambda log: identify(log, 30.0, "lsq", settings=RobustSettings(max_time_constant_min=200.0)),
+            r"RobustSettings other than the default \(`max_time_constant_min`",
+        ),
+        (
+            lambda log: minimal_identification_time(log, periods_min=[35, 400]),
+            r"covers 59 min; the longest sampling period is 400 min",
+        ),
+        (lambda log: minimal_identification_time(log, "x"), r"method 'x' is not one of"),
+    ],
+)
+def test_errors_name_the_problem(call, message):
+    t = np.arange(0.0, 60.0)
+    with pytest.raises(InputError, match=message):
+        call(make_log(t, {"S": first_order(t)}))
+
+
+def test_identify_and_min_time_take_a_dataframe_and_refuse_what_they_cannot_use():
+    """A notebook's DataFrame is read like a CSV file (it raised AttributeError before); other
+    types and impossible windows are named."""
+    import pandas as pd
+
+    t = np.arange(0.0, 120.0)
+    rng = np.random.default_rng(8)
+    frame = pd.DataFrame({"time_min": t, "A": 26.7 - 8.8 * np.exp(-0.016 * t) + 0.02 * rng.standard_normal(len(t))})
+    from_frame = identify(frame, window_min=60, method="ukf").summary(0)
+    assert from_frame == identify(read_temperature_log(frame), window_min=60, method="ukf").summary(0)
+    low, high = from_frame["steady_state_ci95_C"]
+    assert low < 26.7 < high and high - low < 0.5
+    assert (
+        minimal_identification_time(frame).min_identification_time_min.tolist()
+        == minimal_identification_time(read_temperature_log(frame)).min_identification_time_min.tolist()
+    )
+    with pytest.raises(
+        InputError,
+        match=(
+            r"identify takes a TemperatureLog \(read_temperature_log\(path or DataFrame\)\) or a pandas DataFrame, "
+            r"not ndarray"
+        ),
+    ):
+        identify(frame.to_numpy(), window_min=30, method="ukf")  # type: ignore[arg-type]
+    for window in (-5.0, 0.0, float("nan")):
+        with pytest.raises(InputError, match="window_min must be a positive number of minutes"):
+            identify(frame, window_min=window, method="ukf")
+    with pytest.raises(InputError, match=r"periods_min must be positive numbers of minutes, not \[0\]"):
+        minimal_identification_time(frame, periods_min=[0])
+    with pytest.raises(InputError, match=r"windows_min must be positive numbers of minutes, not \[\]"):
+        minimal_identification_time(frame, windows_min=[])

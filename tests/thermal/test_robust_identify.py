@@ -1,0 +1,98 @@
+"""Tests of :mod:`mtident.thermal.robust_identify`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import PAPER_STEADY, first_order, make_log
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mtident.exceptions import InputError
+from mtident.io import read_temperature_log
+from mtident.thermal import identify
+
+
+def test_too_short_a_window_of_a_log_read_as_minutes_names_the_time_unit_too(write_csv):
+    """A log in seconds read as minutes: 90 "min" held 5 readings, and the error said only to use a
+    longer window."""
+
+    text = "time,T1\n" + "".join(f"{s},{20 + 6 * (1 - np.exp(-s / 1800)):.2f}\n" for s in range(0, 28801, 20))
+    with pytest.raises(InputError, match=r"use a longer `window_min`, or the time column's unit, `time_unit`"):
+        identify(read_temperature_log(write_csv(text)), 90.0)
+    minutes = "time,T1\n" + "".join(f"{m},{20 + m / 100:.2f}\n" for m in range(0, 120, 5))
+    with pytest.raises(InputError, match=r"use a longer `window_min`\)$"):
+        identify(read_temperature_log(write_csv(minutes)), 20.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"method": "lsq"}, "needs a UKF method with the data tuning"),
+        ({"method": "ukf", "preset": "xia2014"}, "needs a UKF method with the data tuning"),
+    ],
+)
+def test_room_input_refuses_what_models_a_steady_room(kwargs, message):
+    t = np.arange(0.0, 61.0)
+    with pytest.raises(InputError, match=message):
+        identify(make_log(t, {"A": first_order(t)}), 30.0, ambient_C=np.full(len(t), 17.9), **kwargs)
+    with pytest.raises(InputError, match="3 readings for 61 samples"):
+        identify(make_log(t, {"A": first_order(t)}), 30.0, ambient_C=np.full(3, 17.9))
+
+
+@pytest.mark.parametrize(("window", "within"), [(30.0, 0.4), (60.0, 0.1)])
+def test_the_robust_estimate_of_a_first_order_curve_is_as_accurate_as_the_papers(window, within):
+    """The point estimate is the best-fitting model's: on the papers' kind of curve as accurate as
+    the first-order filters; it is the interval that widens where the data allow more."""
+    t = np.arange(0.0, 241.0)
+    errors = []
+    for seed in range(6):
+        y = np.round(first_order(t) + 0.02 * np.random.default_rng(seed).standard_normal(len(t)), 2)
+        errors.append(identify(make_log(t, {"S": y}), window).steady_state_C[0] - PAPER_STEADY)
+    assert np.sqrt(np.mean(np.square(errors))) < within
+
+
+def test_identify_never_calls_a_risen_sensor_flat():
+    """Sensors that rose 0.5-3.5 °C were called "no rise" and left out; the robust answer reports
+    the rise and its interval whatever it is."""
+    t = np.arange(0.0, 121.0)
+    rng = np.random.default_rng(32)
+    columns = {
+        f"r{r}": 20.0 + r * (1 - np.exp(-t / 150.0)) + 0.02 * rng.standard_normal(len(t)) for r in (0.5, 1.5, 3.5)
+    }
+    result = identify(make_log(t, columns), 120.0)
+    for i in range(3):
+        summary = result.summary(i)
+        assert not any("no rise" in w for w in summary["warnings"])  # type: ignore[union-attr]
+        assert summary["model"]["rise_C"] > 0.25  # type: ignore[index]
+
+
+@settings(max_examples=5, deadline=None)
+@given(seed=st.integers(min_value=0, max_value=2**31 - 1), fraction=st.sampled_from([0.25, 0.5, 1.0]))
+def test_robust_answers_over_generated_warm_ups_are_consistent(seed, fraction):
+    """On any warm-up of the benchmark's population: the point estimate lies in its intervals, the
+    99 % interval holds the 95 %, and the summary is plain JSON."""
+    import json
+
+    from mtident.testing.warmups import random_warmup
+    from mtident.thermal.robust_identify import identify_robust
+
+    warm = random_warmup(np.random.default_rng(seed))
+    window = max(fraction * warm.t95_min, 10 * warm.interval_min)
+    result = identify_robust(make_log(warm.time_min, {"S": warm.reading_C}), window, warm.room_C)
+    estimate = result.details.estimates[0]
+    assert estimate.fit is not None, estimate.status  # every warm-up of the population rises: a model is fitted
+    (lo95, hi95), (lo99, hi99) = estimate.interval_C[0.95], estimate.interval_C[0.99]
+    assert lo99 <= lo95 <= estimate.steady_C <= hi95 <= hi99
+    json.dumps(result.summary(0), allow_nan=False)
+
+
+def test_a_robust_answer_printed_in_a_notebook_says_why_it_is_not_trusted():
+    """A newcomer's print(result) said "not trusted (see warnings)" and showed none."""
+    from mtident.thermal.robust_identify import identify_robust
+
+    t = np.arange(0.0, 60.0)
+    y = 20.0 + 5.0 * (1.0 - np.exp(-t / 80.0)) + 0.01 * np.random.default_rng(0).standard_normal(t.size)
+    text = repr(identify_robust(make_log(t, {"S": np.round(y, 2)}), 30.0))
+    assert ", not trusted:\n    - S: T∞ not determined yet (95 % interval" in text, text
+    assert "\n  assumes: a sum of up to four exponential modes" in text and "time constants up to 300 min" in text

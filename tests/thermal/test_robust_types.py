@@ -1,0 +1,45 @@
+"""Tests of :mod:`mtident.thermal.robust_types`."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from mtident.thermal.reference import MachineReference
+from mtident.thermal.robust import SensorModes
+
+
+def test_pooled_modes_narrow_where_runs_agree_and_hold_both_where_they_do_not():
+    from mtident.thermal.pooling import pool_references
+    from mtident.thermal.robust_types import SensorModes
+
+    def reference(sensors: dict[str, SensorModes]) -> MachineReference:
+        return MachineReference("run.csv", "2026-11-29", 300.0, "not measured", sensors)
+
+    first = reference(
+        {
+            "agree": SensorModes((40.0,), (0.3,)),
+            "apart": SensorModes((40.0,), (0.1,)),
+            "fewer": SensorModes((40.0,), (0.1,)),
+            "doubted": SensorModes((40.0,), (0.1,), doubt="not pinned down"),
+            "first only": SensorModes((5.0,), (0.1,)),
+        }
+    )
+    later = reference(
+        {
+            "agree": SensorModes((41.0,), (0.3,)),
+            "apart": SensorModes((80.0,), (0.1,)),
+            "fewer": SensorModes((4.0, 42.0), (0.2, 0.1)),
+            "doubted": SensorModes((60.0,), (0.2,)),
+        }
+    )
+    pooled, said = pool_references(first, later)
+    (tau,), (box,) = pooled.sensors["agree"].time_constants_min, pooled.sensors["agree"].box
+    assert 39.0 < tau < 41.0 and box == pytest.approx(math.tanh(math.atanh(0.3) / math.sqrt(2.0)), rel=0.05)
+    (tau,), (box,) = pooled.sensors["apart"].time_constants_min, pooled.sensors["apart"].box
+    assert tau * (1 - box) <= 36.0 + 1e-9 and tau * (1 + box) >= 88.0 - 1e-9
+    assert pooled.sensors["fewer"] == later.sensors["fewer"] and pooled.sensors["doubted"] == later.sensors["doubted"]
+    assert pooled.sensors["first only"] == first.sensors["first only"] and pooled.source == "run.csv + run.csv"
+    assert any(s.startswith("apart: its mode of 40 min ±10% in one run is 80 min ±10%") for s in said), said
+    assert any(s.startswith("fewer: the runs learnt 1 and 2 modes; the 2 kept") for s in said), said

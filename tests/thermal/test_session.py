@@ -1,0 +1,183 @@
+"""Tests of :mod:`mtident.thermal.session`."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+from conftest import PAPER_STEADY, first_order
+from helpers import BATCHED_SETTINGS, T, csv_text, noisy, one_mode_reference, run
+
+from mtident.persist import load_dataclass, save_dataclass
+from mtident.thermal.monitor import MonitorSettings, MonitorState
+from mtident.thermal.session import (
+    Ended,
+    FollowSettings,
+    Polled,
+    SavedWatch,
+    Watching,
+    WatchSession,
+    default_state_path,
+)
+
+
+def test_watch_reads_a_log_in_fahrenheit_as_the_unit_option_says(tmp_path):
+    """The decision of a °F log without units, with --unit F, is the one of the same log in °C; a
+    state saved with the option is not resumed without it (its readings were converted)."""
+    log = tmp_path / "run.csv"
+    curve = noisy(first_order(T[:200]), 13)
+    log.write_text(csv_text(T[:200], {"A": curve * 9 / 5 + 32}))
+    state = tmp_path / "state.npz"
+    code, out, err = run("thermal", "watch", str(log), "--replay", "--unit", "F", "--json", "--state", str(state))
+    assert code == 0, err
+    data = json.loads(out)
+    assert abs(data["steady_state_C"] - PAPER_STEADY) < 0.5, data["steady_state_C"]
+    assert "read in °F (--unit), converted to °C: A" in err
+    settings = MonitorSettings()
+    saved = WatchSession(log, settings, state_path=state, temperature_unit="F")
+    assert saved.state is not None and any("resuming from" in n for n in saved.notes)
+    again = WatchSession(log, settings, state_path=state)
+    assert again.state is None and "other settings or sensors" in again.notes[0]
+    _, values, _ = saved.whole_log()
+    np.testing.assert_allclose(values[:, 0], np.round(curve * 9 / 5 + 32, 3) * 5 / 9 - 160 / 9, atol=1e-9)
+
+
+def test_the_state_file_lives_beside_the_log_and_a_replay_starts_afresh(tmp_path):
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:180], {"S": noisy(first_order(T[:180]), 9)}))
+    options = MonitorSettings(reference=one_mode_reference("S"))
+    assert default_state_path(log) == tmp_path / "run.csv.watch-state.npz"
+    first = WatchSession(log, options)
+    first.poll()
+    assert first.state_path.is_file() and first.stopped
+    again = WatchSession(log, options)
+    assert again.state is not None and any("resuming from" in n for n in again.notes)
+    fresh = WatchSession(log, options, resume=False)
+    assert fresh.state is None and not fresh.notes
+    other = WatchSession(log, MonitorSettings(tolerance_C=0.3, reference=one_mode_reference("S")))
+    assert other.state is None and "other settings or sensors" in other.notes[0]
+
+
+def test_a_different_log_copied_over_the_same_path_is_not_resumed(tmp_path):
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:180], {"S": noisy(first_order(T[:180]), 10)}))
+    options = BATCHED_SETTINGS  # stops by about 70 min
+    session = WatchSession(log, options)
+    session.poll()
+    assert session.stopped
+    # the next test's log, longer, copied over the old one (same path, same inode)
+    with log.open("w") as out:
+        out.write(csv_text(T, {"S": noisy(first_order(T, steady=30.0), 11)}))
+    again = WatchSession(log, options)
+    assert again.state is None and "another log at the same path" in again.notes[0]
+    again.poll()
+    assert again.stopped and abs(again.state.checks[0].steady_C - 30.0) < 0.2  # type: ignore[union-attr]
+
+
+def test_an_unreadable_state_file_is_said_and_overwritten(tmp_path):
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:60], {"S": noisy(first_order(T[:60]), 12)}))
+    (tmp_path / "run.csv.watch-state.npz").write_text("not a state")
+    session = WatchSession(log, MonitorSettings())
+    assert "cannot be resumed" in session.notes[0]
+    session.poll()
+    assert isinstance(load_dataclass(session.state_path, SavedWatch), SavedWatch)
+
+
+def test_a_state_file_of_an_older_version_is_not_resumed_but_started_afresh(tmp_path):
+    """Older versions kept the follower's position as JSON text of their own (a dict, its dialect a
+    list of four, five or eight entries): such a state file is not read by branches of its own,
+    it is said and started afresh, then written as the follower's frozen position."""
+    import dataclasses
+
+    log = tmp_path / "run.csv"
+    log.write_text(csv_text(T[:60], {"S": noisy(first_order(T[:60]), 12)}))
+    first = WatchSession(log, MonitorSettings())
+    first.poll()
+    saved = load_dataclass(first.state_path, SavedWatch)
+
+    @dataclasses.dataclass(frozen=True)
+    class OlderSavedWatch:
+        log: str
+        fingerprint: str
+        fingerprint_bytes: int
+        settings_key: str
+        position: str
+        monitor: MonitorState
+
+    older = {"offset": 120, "dialect": [",", ".", 0, "utf-8-sig"], "origin": 0.0, "last_time": 59.0}
+    fields = {f.name: getattr(saved, f.name) for f in dataclasses.fields(saved)}
+    save_dataclass(first.state_path, OlderSavedWatch(**{**fields, "position": json.dumps(older)}))
+    session = WatchSession(log, MonitorSettings())
+    assert session.state is None
+    assert f"the state file {session.state_path} cannot be resumed" in session.notes[0]
+    assert "FollowPosition" in session.notes[0] and session.notes[0].endswith("starting afresh")
+    session.poll()
+    assert load_dataclass(session.state_path, SavedWatch).position == session.follower.position()
+
+
+def test_a_session_that_keeps_no_state_says_it_leaves_another_runs_state_file_alone(tmp_path):
+    """The report replays a log with a watch's state file beside it: 'starting afresh (it will be
+    overwritten)' was said, though the report writes no state."""
+    log = tmp_path / "log.csv"
+    log.write_text(csv_text(T[:40], {"S": noisy(first_order(T[:40]), 4)}))
+    first = WatchSession(log, MonitorSettings(tolerance_C=0.3))
+    first.poll()
+    first.save()
+    notes = WatchSession(log, MonitorSettings(tolerance_C=0.2), persist=False).notes
+    assert any("the log is decided from its start (the file is left as it is)" in n for n in notes)
+    assert not any("overwritten" in n for n in notes)
+    said = WatchSession(log, MonitorSettings(tolerance_C=0.2)).notes
+    assert any("starting afresh (it will be overwritten)" in n for n in said)
+
+
+def test_a_sessions_run_yields_its_polls_and_ends_by_timeout_replay_or_cancel(tmp_path):
+    """The loop the command renders lives in the library: the sensors said once, each poll, and
+    why it ended (a cancel, as SIGTERM's flag, with the state file kept for a resume)."""
+    log = tmp_path / "short.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{20 + a / 10:.2f}\n" for a in range(20)))
+
+    def kinds(follow: FollowSettings, cancel=None) -> list[object]:  # noqa: ANN001
+        session = WatchSession(log, MonitorSettings(), state_path=tmp_path / "s.npz", resume=False)
+        return [e for e in session.run(follow, cancel=cancel) if not hasattr(e, "kind")]
+
+    timed_out = kinds(FollowSettings(poll_s=0.05, timeout_s=0.2))
+    assert timed_out[0] == Watching(("S",)) and timed_out[1] == Polled(20, False)
+    assert all(e == Polled(0, False) for e in timed_out[2:-1]) and len(timed_out) > 3
+    assert isinstance(timed_out[-1], Ended) and timed_out[-1].reason == "timeout"
+    replayed = kinds(FollowSettings(replay=True))
+    assert [type(e) for e in replayed] == [Watching, Polled, Ended] and replayed[-1].reason == "replayed"
+    cancelled = kinds(FollowSettings(poll_s=0.05), cancel=lambda: True)
+    assert cancelled[-1].reason == "cancelled" and (tmp_path / "s.npz").is_file()
+
+
+def test_expected_stops_end_when_asked_within_a_forecast(tmp_path):
+    """A SIGTERM while the final answer is written: the forecasts (up to 12 s a sensor) stop at the
+    next fit of the one under way."""
+    log = tmp_path / "log.csv"
+    log.write_text(
+        csv_text(T[:161], {n: noisy(first_order(T[:161], steady=24.0 + k), 70 + k) for k, n in enumerate("AB")})
+    )
+    session = WatchSession(log, MonitorSettings(), persist=False)
+    session.poll()
+    asked = []
+    assert session.expected_stops(cancel=lambda: asked.append(1) or True) is None and 1 <= len(asked) <= 2
+    assert all(np.isfinite(v) for v in (session.expected_stops() or {"none": math.nan}).values())
+    cancelled = session.result(cancel=lambda: True)["sensors"]
+    assert all(s.get("expected_stop_time_min") is None for s in cancelled)  # type: ignore[union-attr]
+
+
+def test_a_long_replay_shows_the_test_from_its_first_checks(tmp_path):
+    """A replay showed nothing on its table or page until its first 250 rows were fed and checked."""
+    from mtident.thermal.session import FIRST_FEED_ROWS, WatchSession
+
+    t = np.arange(0.0, 400.0, 1.0)
+    log = tmp_path / "long.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{30 - 10 * np.exp(-a / 60):.2f}\n" for a in t))
+    session = WatchSession(log, MonitorSettings(), persist=False, resume=False)
+    seen: list[float] = []
+    session.poll(lambda s: seen.append(s.state.readings.latest_min))
+    assert seen[0] <= FIRST_FEED_ROWS - 1 == 24.0  # the first check, at the latest the first part's end
+    assert 24.0 in seen and 274.0 in seen  # and every 250 rows (until the test may stop), besides each check
+    assert seen == sorted(seen)
