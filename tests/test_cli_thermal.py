@@ -681,5 +681,19 @@ def test_identify_says_each_sensors_reference(tmp_path):
     out = mtident("thermal", "identify", str(log), "--window", "60", "--reference", str(tmp_path / "m.toml"))
     assert out.returncode == 0, out.stderr
     text = " ".join(out.stdout.split())
-    assert "reference for A: run.csv (2026-11-25): τ 60 min ±10%" in text
-    assert "reference for B: run.csv (2026-11-25): τ 45 min ±10%, 6 min ±10%" in text
+    # the run said once, each sensor's modes on a line of their own (a new user read ten long lines)
+    assert "reference: run.csv (2026-11-25) A: τ 60 min ±10%" in text
+    assert "B: τ 45 min ±10%, 6 min ±10%" in text and "reference for" not in text
+
+
+def test_sensors_that_take_the_same_modes_from_one_run_share_a_line():
+    from mtident.cli_thermal import reference_lines
+
+    said = [("T1", "run (2026-11-24): τ 88 min ±10%"), ("T2", "run (2026-11-24): τ 88 min ±10%")]
+    assert reference_lines([*said, ("T3", "run (2026-11-24): τ 95 min ±10%")]) == [
+        "  reference: run (2026-11-24)",
+        "    T1, T2: τ 88 min ±10%",
+        "    T3: τ 95 min ±10%",
+    ]
+    other_run = [*said, ("T3", "run.csv: no modes for this sensor")]
+    assert reference_lines(other_run) == [f"  reference for {name}: {text}" for name, text in other_run]

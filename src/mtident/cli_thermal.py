@@ -675,9 +675,35 @@ def _identify_table(
         f"Assumes: {assumed.model}, time constants up to {assumed.max_time_constant_min:g} min; room {assumed.room}.",
         highlight=False,
     )
-    for a in answers:
-        if a.method_answer.assumptions.reference:
-            console.print(f"  reference for {a.sensor}: {a.method_answer.assumptions.reference}", highlight=False)
+    said = [(a.sensor, a.method_answer.assumptions.reference) for a in answers]
+    for line in reference_lines([(name, text) for name, text in said if text]):
+        console.print(line, highlight=False)
+
+
+def reference_lines(said: list[tuple[str, str]]) -> list[str]:
+    """What each sensor's answer takes from the reference, as lines under "Assumes": the run said
+    once where every sensor's is the same run, sensors that take the same modes on one line.
+
+    Parameters
+    ----------
+    said : list of (str, str)
+        Per sensor, its name and what its answer takes from the reference (the run, ": ", then
+        its modes).
+
+    Returns
+    -------
+    list of str
+    """
+    parts = [(name, *text.partition(": ")[::2]) for name, text in said]
+    runs = {run for _, run, _ in parts}
+    if len(parts) < 2 or len(runs) > 1 or not all(modes for _, _, modes in parts):
+        return [f"  reference for {name}: {text}" for name, text in said]
+    names_by_modes: dict[str, list[str]] = {}
+    for name, _, modes in parts:
+        names_by_modes.setdefault(modes, []).append(name)
+    return [f"  reference: {runs.pop()}"] + [
+        f"    {', '.join(names)}: {modes}" for modes, names in names_by_modes.items()
+    ]
 
 
 def _float_list(text: str, option: str) -> list[float]:

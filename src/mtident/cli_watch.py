@@ -49,6 +49,7 @@ from mtident.cli_thermal import (
     log_request,
     machine_option,
     max_time_constant_option,
+    reference_lines,
     reference_option,
     stderr,
 )
@@ -762,8 +763,9 @@ def _answer(
         console.print("  reference: not used (the test contradicted it; see the warning above)", highlight=False)
     elif session.settings.reference is not None:
         # each sensor has its own modes in the reference, or none, or doubtful ones
-        for name in state.sensors:
-            console.print(f"  reference for {name}: {assumptions(session.settings, name).reference}", highlight=False)
+        taken = [(name, assumptions(session.settings, name).reference or "") for name in state.sensors]
+        for line in reference_lines(taken):
+            console.print(line, highlight=False)
     if state.stopped:
         saved = outcome.time_saved_min
         gain = (
