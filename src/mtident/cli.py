@@ -180,6 +180,28 @@ class FiniteFloatRange(click.FloatRange):
         return number
 
 
+def number_option(*decls: str, default: float, help: str, **bounds: Any) -> Callable[[F], F]:
+    """A finite-number option with its default shown in the help.
+
+    Parameters
+    ----------
+    *decls : str
+        The option's names, as for ``click.option`` ("--noise", "noise_fraction").
+    default : float
+        The value without the option.
+    help : str
+        The help text.
+    **bounds
+        The range: the arguments of :class:`FiniteFloatRange` (none: any finite number).
+
+    Returns
+    -------
+    callable
+        The ``click.option`` decorator.
+    """
+    return click.option(*decls, type=FiniteFloatRange(**bounds), default=default, show_default=True, help=help)
+
+
 class OutputPath(_PathParamType):
     """A file to write: its folder exists and is writable, and it is no folder (checked before
     the work, so that a mistyped folder does not end a long run in an error).
@@ -235,12 +257,7 @@ class PicturePath(OutputPath):
     folder used to end a long replay in an errno message about a temporary file, and 'fit.svg'
     was written as a PNG).
 
-    Attributes
-    ----------
-    name : str
-        The type's name in the help.
-    example : str
-        A file name, for the message where a folder is given.
+    Its attributes ``name`` and ``example`` are those of :class:`OutputPath`.
     """
 
     name = "picture"
@@ -249,18 +266,7 @@ class PicturePath(OutputPath):
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
         """The picture file to write, checked as an :class:`OutputPath` and for its suffix.
 
-        Parameters
-        ----------
-        value : object
-            The option's value as given (a path).
-        param : click.Parameter or None
-            The option, for the message.
-        ctx : click.Context or None
-
-        Returns
-        -------
-        str
-            The path.
+        The parameters and the value returned are those of :meth:`OutputPath.convert`.
 
         Raises
         ------

@@ -9,7 +9,15 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import FiniteFloatRange, OutputPath, PicturePath, feeddrive, print_json, table_console, user_errors
+from mtident.cli import (
+    OutputPath,
+    PicturePath,
+    feeddrive,
+    number_option,
+    print_json,
+    table_console,
+    user_errors,
+)
 from mtident.exceptions import InputError
 from mtident.feeddrive import (
     IDENTIFIED,
@@ -33,6 +41,16 @@ params_option = click.option(
     "params_path",
     type=click.Path(dir_okay=False),
     help="TOML parameter file (Nguyen-Quoc et al. Table 1 names, SI units); default: the shipped set.",
+)
+
+# the noise a fit assumes: identify's and plan's
+fit_noise_option = number_option(
+    "--noise",
+    "noise_fraction",
+    default=0.01,
+    help="Measurement noise, fraction of each response's RMS.",
+    min=0,
+    min_open=True,
 )
 
 
@@ -74,28 +92,12 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
 
 @feeddrive.command("simulate")
 @params_option
-@click.option(
-    "--duration",
-    "duration_s",
-    type=FiniteFloatRange(min=0, min_open=True),
-    default=2.0,
-    show_default=True,
-    help="Seconds.",
-)
-@click.option(
-    "--fs",
-    "sample_rate_Hz",
-    type=FiniteFloatRange(min=0, min_open=True),
-    default=10_000.0,
-    show_default=True,
-    help="Sampling rate (Hz).",
-)
-@click.option(
+@number_option("--duration", "duration_s", default=2.0, help="Seconds.", min=0, min_open=True)
+@number_option("--fs", "sample_rate_Hz", default=10_000.0, help="Sampling rate (Hz).", min=0, min_open=True)
+@number_option(
     "--impulse",
     "amplitude",
-    type=FiniteFloatRange(),
     default=20.0,
-    show_default=True,
     help="Force amplitude (N or N m), of every excitation; an impulse holds it for one sample: amplitude / fs.",
 )
 @click.option("--excitation", "kind", type=click.Choice(EXCITATION_KINDS), default="impulse", show_default=True)
@@ -107,29 +109,26 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
     show_default=True,
     help="Coordinate the force acts on (motor_rotation: motor torque T_m).",
 )
-@click.option(
+@number_option(
     "--frequency",
     "frequency_Hz",
-    type=FiniteFloatRange(min=0),
     default=100.0,
-    show_default=True,
     help="Sine frequency, or the start of a sweep's or multisine's band (Hz).",
+    min=0,
 )
-@click.option(
+@number_option(
     "--frequency-end",
     "frequency_end_Hz",
-    type=FiniteFloatRange(min=0),
     default=2000.0,
-    show_default=True,
     help="The end of a sweep's or multisine's band, or a binary sequence's (prbs) clock (Hz).",
+    min=0,
 )
-@click.option(
+@number_option(
     "--noise",
     "noise_fraction",
-    type=FiniteFloatRange(min=0),
     default=0.0,
-    show_default=True,
     help="Measurement noise, fraction of each response's RMS.",
+    min=0,
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--out", "out_path", type=OutputPath(), required=True, help="CSV to write.")
@@ -248,14 +247,7 @@ def simulate_command(
         "acceleration + motor angle and velocity."
     ),
 )
-@click.option(
-    "--noise",
-    "noise_fraction",
-    type=FiniteFloatRange(min=0, min_open=True),
-    default=0.01,
-    show_default=True,
-    help="Measurement noise, fraction of each response's RMS.",
-)
+@fit_noise_option
 @click.option(
     "--preset",
     type=click.Choice(["default", "paper"]),
@@ -467,20 +459,14 @@ def _positive_list(text: str, option: str, example: str) -> tuple[float, ...]:
     show_default=True,
     help="all: the 12 responses; realistic: table acceleration + motor angle and velocity.",
 )
-@click.option(
-    "--noise",
-    "noise_fraction",
-    type=FiniteFloatRange(min=0, min_open=True),
-    default=0.01,
-    show_default=True,
-    help="Measurement noise, fraction of each response's RMS.",
-)
-@click.option(
+@fit_noise_option
+@number_option(
     "--target",
-    type=FiniteFloatRange(min=0, min_open=True, max=1),
     default=0.10,
-    show_default=True,
     help="Identified: the stated ±2σ within this fraction of the value.",
+    min=0,
+    min_open=True,
+    max=1,
 )
 @click.option(
     "--refine/--no-refine",

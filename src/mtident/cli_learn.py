@@ -129,16 +129,8 @@ class LearnRequest(CommandRequest):
 
 
 def learn_request(options: Mapping[str, Any]) -> LearnRequest:
-    """The options of ``thermal learn``, by click's names, grouped into settings.
-
-    Parameters
-    ----------
-    options : mapping
-        The command's options (their help is the command's ``--help``).
-
-    Returns
-    -------
-    LearnRequest
+    """The options of ``thermal learn`` (a mapping by click's names, their help the command's ``--help``),
+    grouped into settings: a :class:`LearnRequest`.
     """
     return command_request(LearnRequest, options, robust=RobustSettings(max_time_constant_min=options["max_tau_min"]))
 

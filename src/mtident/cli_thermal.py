@@ -106,17 +106,8 @@ class LogRequest:
 
 
 def log_request(options: Mapping[str, Any]) -> LogRequest:
-    """The options of :func:`log_options`, by click's names, as one value.
-
-    Parameters
-    ----------
-    options : mapping
-        A command's options; those of :func:`log_options` are read.
-
-    Returns
-    -------
-    LogRequest
-    """
+    """The options of :func:`log_options`, read from a command's (a mapping by click's names), as one
+    :class:`LogRequest`."""
     return LogRequest(
         options["file"], options["sensors"], options["time_col"], options["time_unit"], options["temperature_unit"]
     )
@@ -534,16 +525,8 @@ class IdentifyRequest(CommandRequest):
 
 
 def identify_request(options: Mapping[str, Any]) -> IdentifyRequest:
-    """The options of ``thermal identify``, by click's names, grouped into settings.
-
-    Parameters
-    ----------
-    options : mapping
-        The command's options (their help is the command's ``--help``).
-
-    Returns
-    -------
-    IdentifyRequest
+    """The options of ``thermal identify`` (a mapping by click's names, their help the command's ``--help``),
+    grouped into settings: an :class:`IdentifyRequest`.
     """
     return command_request(
         IdentifyRequest,
@@ -801,16 +784,8 @@ class MinTimeRequest(CommandRequest):
 
 
 def min_time_request(options: Mapping[str, Any]) -> MinTimeRequest:
-    """The options of ``thermal min-time``, by click's names, read and grouped into settings.
-
-    Parameters
-    ----------
-    options : mapping
-        The command's options (their help is the command's ``--help``).
-
-    Returns
-    -------
-    MinTimeRequest
+    """The options of ``thermal min-time`` (a mapping by click's names, their help the command's ``--help``),
+    read and grouped into settings: a :class:`MinTimeRequest`.
 
     Raises
     ------

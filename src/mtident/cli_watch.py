@@ -82,19 +82,9 @@ _PLOT_S = 5.0
 
 
 def decision_options(func: F) -> F:
-    """The options of the stop decision, shared by watch and report.
-
-    Parameters
-    ----------
-    func : callable
-        The command's callback.
-
-    Returns
-    -------
-    callable
-        ``func`` with --tolerance, --confidence, --max-time-constant, --reference, --machine,
-        --free-fast-modes, --ambient, --room-wander and --wait-for.
-    """
+    """The options of the stop decision, shared by watch and report: ``func``, the command's callback, with
+    --tolerance, --confidence, --max-time-constant, --reference, --machine, --free-fast-modes, --ambient,
+    --room-wander and --wait-for (added as :func:`~mtident.cli_thermal.log_options` adds a log's)."""
     options = [
         click.option(
             "--tolerance",
@@ -177,16 +167,8 @@ def state_file(file: str, path: Path, given: str | None) -> Path:
 
 
 def monitor_settings(options: Mapping[str, Any]) -> MonitorSettings:
-    """The decision's settings from the options of :func:`decision_options`.
-
-    Parameters
-    ----------
-    options : mapping
-        The command's options by click's names; those of :func:`decision_options` are read.
-
-    Returns
-    -------
-    MonitorSettings
+    """The decision's settings, a :class:`MonitorSettings`, from the options of :func:`decision_options`
+    read from the command's (a mapping by click's names).
 
     Raises
     ------
@@ -260,16 +242,8 @@ class WatchRequest:
 
 
 def watch_request(options: Mapping[str, Any]) -> WatchRequest:
-    """The watch's options, by click's names, grouped into settings.
-
-    Parameters
-    ----------
-    options : mapping
-        The options of ``thermal watch`` (their help is the command's ``--help``).
-
-    Returns
-    -------
-    WatchRequest
+    """The options of ``thermal watch`` (a mapping by click's names, their help the command's ``--help``),
+    grouped into settings: a :class:`WatchRequest`.
 
     Raises
     ------

@@ -161,10 +161,7 @@ class FeedDriveIdentification:
     def covers(self, truth: FeedDriveParameters) -> dict[str, bool]:
         """Whether ±2σ around each estimate contains the truth.
 
-        Parameters
-        ----------
-        truth : FeedDriveParameters
-            The true set (a simulated record's); its K1..K4, Bt, Bb, Qb, Qm are compared.
+        ``truth`` is the true set, as for :meth:`errors_percent`.
 
         Returns
         -------

@@ -176,10 +176,7 @@ def carried_unit(cell: str) -> str | None:
 def number_without_unit(cell: str) -> str:
     """A reading's number with a known unit after it taken off ("13.1 °C": "13.1"); other cells as they are.
 
-    Parameters
-    ----------
-    cell : str
-        A cell as written in the log.
+    ``cell`` is a cell as written in the log (as for :func:`carried_unit`).
 
     Returns
     -------
@@ -210,10 +207,7 @@ def unit_key(cell: str) -> str:
 def is_number(cell: str) -> bool:
     """Whether a cell is a number (a decimal comma counts).
 
-    Parameters
-    ----------
-    cell : str
-        A cell as written in the log.
+    ``cell`` is a cell as written in the log (as for :func:`carried_unit`).
 
     Returns
     -------
@@ -298,10 +292,7 @@ def is_from_humidity(name: str) -> bool:
     """Whether a column's name (or a description row's cell) names a temperature computed from the
     air's humidity (a dew point, a wet-bulb temperature, a heat index), not one of the machine.
 
-    Parameters
-    ----------
-    name : str
-        The column name or cell as written.
+    ``name`` is the column name or cell as written (as for :func:`is_humidity`).
 
     Returns
     -------

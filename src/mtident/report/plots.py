@@ -188,18 +188,12 @@ def plot_min_time(result: MinTimeResult, path: str | Path | None = None) -> Path
         One panel per sensor: a curve per sampling period M (min), the chosen minimal
         identification time (min) marked.
     path : str or Path, optional
-        Where to write the picture, its format from the suffix (PNG without one); default:
-        return the Figure instead.
+        Where to write the picture, as for :func:`plot_identification`.
 
     Returns
     -------
     Path or Figure
-        ``path`` once written, or the Figure where no path is given.
-
-    Raises
-    ------
-    ValueError
-        ``path``'s suffix is not a picture format matplotlib writes.
+        As :func:`plot_identification` returns (and raises) for ``path``.
     """
     fig, axes = grid(len(result.sensors))
     for s, ax in enumerate(axes):
@@ -292,8 +286,7 @@ def plot_responses(
         The record: times (N,) in s and the 12 responses (N, 12). A spectrum shows a coordinate's
         acceleration, else its velocity, else its displacement: the first with no NaN.
     path : str or Path, optional
-        Where to write the picture, its format from the suffix (PNG without one); default:
-        return the Figure instead.
+        Where to write the picture, as for :func:`plot_identification`.
     modes_Hz : array_like, shape (4,), optional
         Natural frequencies (Hz): the zoom spans a few periods of the lowest and the spectra
         the band up to 1.5 × the highest. Without them the zoom is the first samples.
@@ -301,12 +294,7 @@ def plot_responses(
     Returns
     -------
     Path or Figure
-        ``path`` once written, or the Figure where no path is given.
-
-    Raises
-    ------
-    ValueError
-        ``path``'s suffix is not a picture format matplotlib writes.
+        As :func:`plot_identification` returns (and raises) for ``path``.
     """
     from mtident.feeddrive.simulate import RESPONSE_COLUMNS
 
@@ -346,20 +334,14 @@ def plot_feed_drive_identification(
         The record identified from: its forces drive the open-loop model, and its measured
         columns (``result.measured_columns``) are drawn.
     path : str or Path, optional
-        Where to write the picture, its format from the suffix (PNG without one); default:
-        return the Figure instead.
+        Where to write the picture, as for :func:`plot_identification`.
     truth : FeedDriveParameters, optional
         The true parameters (a synthetic record): drawn as a line on each convergence panel.
 
     Returns
     -------
     Path or Figure
-        ``path`` once written, or the Figure where no path is given.
-
-    Raises
-    ------
-    ValueError
-        ``path``'s suffix is not a picture format matplotlib writes.
+        As :func:`plot_identification` returns (and raises) for ``path``.
     """
     from mtident.feeddrive.modes import modes
     from mtident.feeddrive.params import IDENTIFIED
@@ -455,8 +437,7 @@ def plot_monitor(
     settings : MonitorSettings
         The settings ``state`` was decided with; the intervals drawn are the ones its checks hold.
     path : str or Path, optional
-        Where to write the picture, its format from the suffix (PNG without one); default:
-        return the Figure instead.
+        Where to write the picture, as for :func:`plot_identification`.
     expected : dict of str to float, optional
         Sensor name → expected stop (min), drawn where finite and the test has not stopped
         (:meth:`~mtident.thermal.session.WatchSession.expected_stops`).
@@ -464,12 +445,7 @@ def plot_monitor(
     Returns
     -------
     Path or Figure
-        ``path`` once written, or the Figure where no path is given.
-
-    Raises
-    ------
-    ValueError
-        ``path``'s suffix is not a picture format matplotlib writes.
+        As :func:`plot_identification` returns (and raises) for ``path``.
     """
     fig, axes = grid(len(state.sensors))
     for s, ax in enumerate(axes):
