@@ -11,9 +11,12 @@ The file may be comma-, semicolon- or tab-separated, with a decimal comma, a
 workbook, read as the CSV it holds.
 
 Its layout is fixed as the live follower fixes it (:class:`~mtident.io.layout.LogLayout`),
-and its lines become rows in the follower's function too
+and its lines become rows through the follower's entry point
 (:func:`~mtident.io.parse.parse_lines`), read as a whole log: what the follower
-passes over with a warning is an error here.
+passes over with a warning is an error here. The whole log's time column is read
+as one column (:mod:`mtident.io.whole`), the follower's row by row; the two share
+the layout, the cells (:mod:`mtident.io.cells`) and the time stamps' rules
+(:mod:`mtident.io.stamps`), not one loop.
 
 A pandas DataFrame (a notebook's table, its time as a column or as the index)
 is read the same way, as the CSV text it would be written as.
