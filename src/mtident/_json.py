@@ -15,7 +15,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SensorAnswers", "finite_or_none", "json_inline", "json_optional", "to_json_value", "walk_fields"]
+__all__ = [
+    "SensorAnswers",
+    "fields_of",
+    "finite_or_none",
+    "json_inline",
+    "json_optional",
+    "to_json_value",
+    "walk_fields",
+]
 
 # field metadata that :func:`walk_fields` reads: a field written only where it is not None, and a
 # field whose own fields (or items) are written into its parent's object
@@ -34,13 +42,7 @@ def json_optional() -> Any:
 
     Examples
     --------
-    >>> from dataclasses import dataclass
-    >>> @dataclass(frozen=True)
-    ... class Answer:
-    ...     sensor: str
-    ...     onset_min: float | None = json_optional()
-    >>> to_json_value(Answer("T1")), to_json_value(Answer("T1", 12.0))
-    ({'sensor': 'T1'}, {'sensor': 'T1', 'onset_min': 12.0})
+    :func:`json_inline`'s example has such a field, ``onset_min``.
     """
     return dataclasses.field(default=None, metadata={_OPTIONAL: True})
 
@@ -62,8 +64,11 @@ def json_inline() -> Any:
     ... class Answer:
     ...     sensor: str
     ...     extra: dict[str, float] = json_inline()
+    ...     onset_min: float | None = json_optional()
     >>> to_json_value(Answer("T1", {"steady_state_ci99_C": 30.5}))
     {'sensor': 'T1', 'steady_state_ci99_C': 30.5}
+    >>> to_json_value(Answer("T1", {}, 12.0))
+    {'sensor': 'T1', 'onset_min': 12.0}
     """
     return dataclasses.field(metadata={_INLINE: True})
 
@@ -88,6 +93,30 @@ def finite_or_none(value: float) -> float | None:
     """
     value = float(value)
     return value if math.isfinite(value) else None
+
+
+def fields_of(source: object, names: tuple[str, ...]) -> dict[str, Any]:
+    """The attributes ``names`` of ``source``, as keyword arguments: for an answer that repeats keys
+    of what it is made from under the same names (a dataclass refuses a name it lacks).
+
+    Parameters
+    ----------
+    source : object
+        The object the keys are taken from (a dataclass).
+    names : tuple of str
+        The attributes to take.
+
+    Returns
+    -------
+    dict of str to object
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> fields_of(SimpleNamespace(sensor="T1", rise_C=2.5, noise_C=0.01), ("sensor", "rise_C"))
+    {'sensor': 'T1', 'rise_C': 2.5}
+    """
+    return {name: getattr(source, name) for name in names}
 
 
 def walk_fields(value: Any, leaf: Callable[[Any], Any], *, dict_as_pairs: bool = False) -> Any:

@@ -9,15 +9,8 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mtident.cli import (
-    OutputPath,
-    PicturePath,
-    feeddrive,
-    number_option,
-    print_json,
-    table_console,
-    user_errors,
-)
+from mtident.cli import OutputPath, feeddrive, number_option, print_json, table_console, user_errors
+from mtident.cli_options import file_option, json_option, plot_option
 from mtident.exceptions import InputError
 from mtident.feeddrive import (
     IDENTIFIED,
@@ -36,10 +29,9 @@ from mtident.feeddrive.params import COORDINATES, DESCRIPTIONS, UNITS, parameter
 from mtident.feeddrive.plan import PLAN_KINDS, ExcitationPlan, candidate_tests, plan_tests
 
 stderr = Console(stderr=True, soft_wrap=True)
-params_option = click.option(
+params_option = file_option(
     "--params",
     "params_path",
-    type=click.Path(dir_okay=False),
     help="TOML parameter file (Nguyen-Quoc et al. Table 1 names, SI units); default: the shipped set.",
 )
 
@@ -56,7 +48,7 @@ fit_noise_option = number_option(
 
 @feeddrive.command("modes")
 @params_option
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @user_errors
 def modes_command(params_path: str | None, as_json: bool) -> None:
     """Natural frequencies, mode shapes and damping ratios (Nguyen-Quoc et al. Eq. 3).
@@ -132,12 +124,7 @@ def modes_command(params_path: str | None, as_json: bool) -> None:
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--out", "out_path", type=OutputPath(), required=True, help="CSV to write.")
-@click.option(
-    "--plot",
-    "plot_path",
-    type=PicturePath(),
-    help="Draw the responses to this picture (PNG; .svg or .pdf by the suffix).",
-)
+@plot_option("Draw the responses to this picture (PNG; .svg or .pdf by the suffix).")
 @user_errors
 def simulate_command(
     params_path: str | None,
@@ -225,16 +212,10 @@ def simulate_command(
 
 @feeddrive.command("identify")
 @click.argument("file", type=click.Path(dir_okay=False))
-@click.option(
-    "--params-guess",
-    "guess_path",
-    type=click.Path(dir_okay=False),
-    help="TOML starting guess (default: the shipped set ±30 %).",
-)
-@click.option(
+@file_option("--params-guess", "guess_path", help="TOML starting guess (default: the shipped set ±30 %).")
+@file_option(
     "--truth",
     "truth_path",
-    type=click.Path(dir_okay=False),
     help="TOML true parameters (simulated data): adds the error table (Nguyen-Quoc et al. Table 3).",
 )
 @click.option(
@@ -266,16 +247,10 @@ def simulate_command(
         "it fits the record within the noise."
     ),
 )
-@click.option(
-    "--plot",
-    "plot_path",
-    type=PicturePath(),
-    help=(
-        "Draw estimated vs measured responses and parameter convergence to this picture (PNG; .svg or .pdf by the "
-        "suffix)."
-    ),
+@plot_option(
+    "Draw estimated vs measured responses and parameter convergence to this picture (PNG; .svg or .pdf by the suffix)."
 )
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @user_errors
 def identify_command(
     file: str,
@@ -384,7 +359,7 @@ def identify_command(
     help="Write the set as a commented TOML file (every name, unit and meaning) to start a parameter file from.",
 )
 @click.option("--out", "out_path", type=OutputPath(), help="Write the template here instead of to stdout.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @user_errors
 def params_command(params_path: str | None, template: bool, out_path: str | None, as_json: bool) -> None:
     """The parameter names, units and values (default: Nguyen-Quoc et al.'s Table 1 with the corrected β).
@@ -434,10 +409,9 @@ def _positive_list(text: str, option: str, example: str) -> tuple[float, ...]:
 
 
 @feeddrive.command("plan")
-@click.option(
+@file_option(
     "--params-guess",
     "guess_path",
-    type=click.Path(dir_okay=False),
     help="TOML: the best knowledge of the drive, e.g. an earlier estimate (default: the shipped set).",
 )
 @click.option(
@@ -474,7 +448,7 @@ def _positive_list(text: str, option: str, example: str) -> tuple[float, ...]:
     show_default=True,
     help="Predict the estimate refined open loop, as identify gives it by default (--no-refine: the filter's own).",
 )
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @user_errors
 def plan_command(
     guess_path: str | None,

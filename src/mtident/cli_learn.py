@@ -13,7 +13,9 @@ import click
 import numpy as np
 from rich.table import Table
 
-from mtident.cli import OutputPath, print_json, table_console, thermal, user_errors
+from mtident._json import fields_of
+from mtident.cli import print_json, table_console, thermal, user_errors
+from mtident.cli_options import ambient_option, file_option, json_option, output_option
 from mtident.cli_thermal import (
     CommandRequest,
     _column_layout,
@@ -32,21 +34,9 @@ if TYPE_CHECKING:
 
 @thermal.command("learn")
 @log_options
-@click.option(
-    "--ambient",
-    "ambient_col",
-    metavar="NAME",
-    help="Room-temperature column: an input of every mode's heat balance while learning.",
-)
+@ambient_option("Room-temperature column: an input of every mode's heat balance while learning.")
 @max_time_constant_option
-@click.option(
-    "-o",
-    "--output",
-    "output_path",
-    type=OutputPath(),
-    required=True,
-    help="The reference file to write (TOML), for --reference in identify and watch.",
-)
+@output_option("The reference file to write (TOML), for --reference in identify and watch.")
 @click.option(
     "--every-mode",
     "every_mode",
@@ -62,16 +52,15 @@ if TYPE_CHECKING:
 @click.option("--serial", metavar="TEXT", default="", help="The machine's serial number.")
 @click.option("--program", metavar="TEXT", default="", help="The program or spindle speed the run ran (8000 rpm).")
 @click.option("--run-date", "run_date", metavar="DATE", default="", help="The day the run ran (2026-11-20).")
-@click.option(
+@file_option(
     "--update",
     "update_path",
     metavar="REFERENCE",
-    type=click.Path(dir_okay=False),
     help="A reference learnt before from another complete run of the same machine (a reference run, or a "
     "test that ran until its sensors settled): FILE's modes are pooled into it, narrower where the runs agree, "
     "holding both where they do not. -o may name the same file.",
 )
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @user_errors
 def learn_command(**options: Any) -> None:
     """Learn each sensor's thermal modes from FILE, a warm-up that ran to equilibrium.
@@ -187,6 +176,10 @@ class LearnAnswer:
     warnings: tuple[str, ...]
 
 
+# the reference's own fields, which the answer repeats under their names
+_REFERENCE_KEYS = ("source", "machine", "serial", "program", "run_date", "max_time_constant_min", "room", "sensors")
+
+
 def run_learn(request: LearnRequest) -> None:
     """Learn the reference a :class:`LearnRequest` asks for, write it, and print it as a table or JSON.
 
@@ -234,14 +227,7 @@ def run_learn(request: LearnRequest) -> None:
         print_json(
             LearnAnswer(
                 reference=str(output_path),
-                source=reference.source,
-                machine=reference.machine,
-                serial=reference.serial,
-                program=reference.program,
-                run_date=reference.run_date,
-                max_time_constant_min=reference.max_time_constant_min,
-                room=reference.room,
-                sensors=reference.sensors,
+                **fields_of(reference, _REFERENCE_KEYS),
                 machine_model=_machine_model_answer(reference),
                 warnings=tuple(warnings),
             )

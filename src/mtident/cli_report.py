@@ -7,7 +7,8 @@ from typing import Any
 
 import click
 
-from mtident.cli import OutputPath, thermal, user_errors
+from mtident.cli import thermal, user_errors
+from mtident.cli_options import file_option, output_option
 from mtident.cli_thermal import asked_sensors, log_options, log_path, stderr
 from mtident.cli_watch import _workbook_as_replayed_csv, decision_options, monitor_settings, state_file
 from mtident.exceptions import InputError
@@ -20,18 +21,10 @@ REPORT_FORMATS = (".html", ".htm", ".pdf")
 @thermal.command("report")
 @log_options
 @decision_options
-@click.option(
-    "-o",
-    "--output",
-    "output_path",
-    type=OutputPath(),
-    required=True,
-    help="The report: .html (one self-contained page, the figure embedded) or .pdf (A4).",
-)
-@click.option(
+@output_option("The report: .html (one self-contained page, the figure embedded) or .pdf (A4).")
+@file_option(
     "--state",
     "state_path",
-    type=click.Path(dir_okay=False),
     help="The state file of a watch of this log, to start from (default: beside the log, LOG.watch-state.npz).",
 )
 @user_errors

@@ -18,13 +18,14 @@ from mtident.cli import (
     FiniteFloatRange,
     OptionConsole,
     OutputPath,
-    PicturePath,
     as_options,
+    number_option,
     print_json,
     table_console,
     thermal,
     user_errors,
 )
+from mtident.cli_options import ambient_option, file_option, json_option, plot_option
 from mtident.exceptions import InputError
 from mtident.io.columns import room_named
 from mtident.io.logs import SAMPLES, TemperatureLog, read_temperature_log, sample_log_path
@@ -170,6 +171,7 @@ def load_log(request: LogRequest) -> TemperatureLog:
     Returns
     -------
     TemperatureLog
+        As :func:`~mtident.io.logs.read_temperature_log` reads it.
 
     Raises
     ------
@@ -309,10 +311,9 @@ def _fmt(value: object, digits: int = 2) -> str:
 
 
 # options several commands share (click decorators)
-reference_option = click.option(
+reference_option = file_option(
     "--reference",
     "reference_path",
-    type=click.Path(dir_okay=False),
     help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are "
     "searched only near those it learnt, "
     "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
@@ -412,13 +413,12 @@ def load_reference_file(reference_path: str | None, machine: str | None = None) 
 @reference_option
 @machine_option
 @free_fast_option
-@click.option(
+@number_option(
     "--room-wander",
     "room_wander",
-    type=FiniteFloatRange(min=0.0),
     default=0.05,
-    show_default=True,
     help="robust, without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk).",
+    min=0.0,
 )
 @click.option(
     "--horizon", "horizon_min", type=FiniteFloatRange(min=0, min_open=True), help="Predict to this time (min)."
@@ -431,21 +431,11 @@ def load_reference_file(reference_path: str | None, machine: str | None = None) 
         "seed."
     ),
 )
-@click.option(
-    "--ambient",
-    "ambient_col",
-    metavar="NAME",
-    help=(
-        "Room-temperature column: the room becomes an input of each sensor's heat balance; T∞ at the room's level at "
-        "the window's end."
-    ),
+@ambient_option(
+    "Room-temperature column: the room becomes an input of each sensor's heat balance; T∞ at the room's level at "
+    "the window's end."
 )
-@click.option(
-    "--plot",
-    "plot_path",
-    type=PicturePath(),
-    help="Draw measured and predicted curves to this picture (PNG; .svg or .pdf by the suffix).",
-)
+@plot_option("Draw measured and predicted curves to this picture (PNG; .svg or .pdf by the suffix).")
 @click.option(
     "--curve",
     "curve_path",
@@ -455,7 +445,7 @@ def load_reference_file(reference_path: str | None, machine: str | None = None) 
         "spreadsheet)."
     ),
 )
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option()
 @user_errors
 def identify_command(**options: Any) -> None:
     """Identify the temperature rise from the first WINDOW minutes of FILE and predict the rest.
@@ -723,19 +713,9 @@ def _float_list(text: str, option: str) -> list[float]:
     "Yu et al. 2019.",
 )
 @preset_option
-@click.option(
-    "--ambient",
-    "ambient_col",
-    metavar="NAME",
-    help="Room-temperature column: the input of each sensor's heat balance, before and after L.",
-)
-@click.option(
-    "--plot",
-    "plot_path",
-    type=PicturePath(),
-    help="Draw RMSE against identification time to this picture (PNG; .svg or .pdf by the suffix).",
-)
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@ambient_option("Room-temperature column: the input of each sensor's heat balance, before and after L.")
+@plot_option("Draw RMSE against identification time to this picture (PNG; .svg or .pdf by the suffix).")
+@json_option()
 @user_errors
 def min_time_command(**options: Any) -> None:
     """Find the minimal identification time (Xia et al. 2014 §2.4): RMSE against L for several sampling periods.
@@ -895,7 +875,7 @@ def _min_time_table(source: str, method: str, result: MinTimeResult, answers: tu
 
 @thermal.command("inspect")
 @log_options
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the summary.")
+@json_option("the summary")
 @user_errors
 def inspect_command(
     file: str,

@@ -28,13 +28,14 @@ from mtident.cli import (
     FiniteFloatRange,
     OptionConsole,
     OutputPath,
-    PicturePath,
     carried_interrupt,
+    number_option,
     print_json,
     table_console,
     thermal,
     user_errors,
 )
+from mtident.cli_options import ambient_option, file_option, plot_option
 from mtident.cli_sources import Recorder, network_recorder
 from mtident.cli_thermal import (
     LogRequest,
@@ -86,47 +87,37 @@ def decision_options(func: F) -> F:
     --tolerance, --confidence, --max-time-constant, --reference, --machine, --free-fast-modes, --ambient,
     --room-wander and --wait-for (added as :func:`~mtident.cli_thermal.log_options` adds a log's)."""
     options = [
-        click.option(
+        number_option(
             "--tolerance",
             "tolerance_C",
-            type=FiniteFloatRange(min=0, min_open=True),
             default=0.2,
-            show_default=True,
             help="A sensor may stop when every model the data allow puts T∞ within this of the estimate (°C).",
+            min=0,
+            min_open=True,
         ),
-        click.option(
+        number_option(
             "--confidence",
             "decision_level",
-            type=FiniteFloatRange(min=0.5, max=0.999),
             default=0.99,
-            show_default=True,
             help="Confidence level of the interval the decision uses.",
+            min=0.5,
+            max=0.999,
         ),
         max_time_constant_option,
         reference_option,
         machine_option,
         free_fast_option,
-        click.option(
-            "--ambient",
-            "ambient_col",
-            metavar="NAME",
-            help=(
-                "Room-temperature column: the room becomes an input of every mode's heat balance, so a drifting room "
-                "does not "
-                "fool the rule."
-            ),
+        ambient_option(
+            "Room-temperature column: the room becomes an input of every mode's heat balance, so a drifting room "
+            "does not fool the rule."
         ),
-        click.option(
+        number_option(
             "--room-wander",
             "room_wander",
-            type=FiniteFloatRange(min=0.0),
             default=0.05,
-            show_default=True,
-            help=(
-                "Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 "
-                "takes the "
-                "room as steady."
-            ),
+            help="Without --ambient: how far the unmeasured room may wander in an hour (°C, 1σ of a random walk); 0 "
+            "takes the room as steady.",
+            min=0.0,
         ),
         click.option(
             "--wait-for",
@@ -274,29 +265,12 @@ def watch_request(options: Mapping[str, Any]) -> WatchRequest:
     help="Run a finished log as if it arrived live, as fast as possible (afresh, unless --resume).",
 )
 @click.option("--resume", is_flag=True, help="With --replay: resume from the state file instead of starting afresh.")
-@click.option(
-    "--state",
-    "state_path",
-    type=click.Path(dir_okay=False),
-    help="State file for resuming (default: beside the log, LOG.watch-state.npz).",
-)
-@click.option(
-    "--poll",
-    "poll_s",
-    type=FiniteFloatRange(min=0.05),
-    default=0.5,
-    show_default=True,
-    help="Seconds between looks at a growing log.",
-)
+@file_option("--state", "state_path", help="State file for resuming (default: beside the log, LOG.watch-state.npz).")
+@number_option("--poll", "poll_s", default=0.5, help="Seconds between looks at a growing log.", min=0.05)
 @click.option(
     "--timeout", "timeout_s", type=FiniteFloatRange(min=0), help="Give up after this many seconds without a new row."
 )
-@click.option(
-    "--plot",
-    "plot_path",
-    type=PicturePath(),
-    help="Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.",
-)
+@plot_option("Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.")
 @click.option(
     "--json",
     "as_json",

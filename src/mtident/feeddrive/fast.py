@@ -381,12 +381,7 @@ def covariance_recursion(
                     acc += gamma_s[j, i, c] * u[c]
                 trans[i, 8 + j] = acc / state_scale[i]
         for i in range(8):
-            acc = 0.0
-            for c in range(8):
-                acc += phi[i, c] * x[c]
-            for c in range(4):
-                acc += gamma[i, c] * u[c]
-            x_next[i] = acc
+            x_next[i] = _state_step(phi, gamma, x, u, i)
         x[:] = x_next
         prior = trans @ cov @ trans.T + process_cov
         for r in range(m):
@@ -431,6 +426,17 @@ def _sensitivities(
 
 
 @njit(cache=True, fastmath=False)
+def _state_step(phi: FloatArray, gamma: FloatArray, x: FloatArray, u: FloatArray, i: int) -> float:
+    """Row i of the state's exact one-sample step: (Φ X + Γ u)ᵢ."""
+    acc = 0.0
+    for c in range(8):
+        acc += phi[i, c] * x[c]
+    for c in range(4):
+        acc += gamma[i, c] * u[c]
+    return acc
+
+
+@njit(cache=True, fastmath=False)
 def _advance(
     step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
     u: FloatArray,
@@ -445,12 +451,7 @@ def _advance(
     sens_next = np.empty((8, 8))
     free_next = np.empty((8, 8))
     for i in range(8):
-        acc = 0.0
-        for c in range(8):
-            acc += phi[i, c] * x[c]
-        for c in range(4):
-            acc += gamma[i, c] * u[c]
-        x_next[i] = acc
+        x_next[i] = _state_step(phi, gamma, x, u, i)
         for j in range(8):
             acc = 0.0
             for c in range(8):
@@ -492,14 +493,9 @@ def input_noise_moments(
 
     Parameters
     ----------
-    step : tuple of ndarray
-        (Φ, Γ, Φₛ, Γₛ), as in :func:`response_moments`.
-    start : ndarray, shape (8,)
-        Initial state X₀.
-    forces : ndarray, shape (N, 4)
-        Generalized forces u, held over each sample.
-    rows : tuple of ndarray
-        (c (R, 8), e (R, 4), cₛ (R, 8, 8)), as in :func:`response_moments`.
+    step, start, forces, rows
+        The step (Φ, Γ, Φₛ, Γₛ), the initial state X₀, the forces u and the output rows (c, e, cₛ), as in
+        :func:`response_moments`.
     measured : ndarray, shape (N, R)
         1 where the response is measured (its residual is fitted), else 0.
     weight : ndarray, shape (R,)

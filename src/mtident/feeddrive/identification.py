@@ -23,8 +23,7 @@ IDENTIFIED_WITHIN = 0.10
 # The consistency check (closest_consistent) says the intervals do not hold when the set they allow
 # leaves a response by more than this many times its assumed noise (RMS; 1 expected), or lies farther
 # from the estimate than this squared Mahalanobis distance (χ² with 8 degrees of freedom: 99.9 % quantile).
-MISFIT_LIMIT = 1.5
-DISTANCE_LIMIT = 26.1
+MISFIT_LIMIT, DISTANCE_LIMIT = 1.5, 26.1
 
 
 @dataclass(frozen=True, slots=True)
@@ -251,8 +250,7 @@ class FeedDriveIdentification:
         Parameters
         ----------
         truth : FeedDriveParameters, optional
-            The true set (a simulated record's); given, the errors (:meth:`errors_percent`) and whether the
-            intervals cover it (:meth:`covers`) are added.
+            As for :meth:`answer`.
 
         Returns
         -------

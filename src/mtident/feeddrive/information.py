@@ -212,16 +212,10 @@ def fisher_covariance(
 
     Parameters
     ----------
-    p : FeedDriveParameters
-    forces : ndarray, shape (N, 4)
-    h : float
-        Sampling interval (s).
-    idx : tuple of int
-        The measured responses (indices into ``RESPONSE_COLUMNS``).
+    p, forces, h, idx, system
+        As for :func:`filter_covariance`.
     noise_fraction : float
         Measurement noise standard deviation as a fraction of each response's RMS.
-    system : SensitivitySystem, optional
-        :func:`sensitivity_system` of the same ``p``, ``h`` and ``idx``, to share among records.
 
     Returns
     -------

@@ -104,11 +104,9 @@ def response_noise_from_forces(
 
     Parameters
     ----------
-    p : FeedDriveParameters
-    h : float
-        Sampling interval (s).
-    idx : tuple of int
-        The measured responses (indices into ``RESPONSE_COLUMNS``).
+    p, h, idx
+        The drive, the sampling interval (s) and the measured responses, as for
+        :func:`~mtident.feeddrive.information.sensitivity_system`.
     samples : int
         Samples in the record.
     input_sd : ndarray, shape (4,)

@@ -158,12 +158,8 @@ def choose_time_column(
 
     Parameters
     ----------
-    header : list of str
-        The column names, in file order.
-    first_row : list of str
-        The cells of the first data row, as written.
-    dialect : DialectView
-        The log's dialect (its units row, for a counter named there).
+    header, first_row, dialect
+        As for :func:`counter_before_time`.
     time_col : str or None
         The time column the user named (no counter or text columns are looked for then), or None to
         find it: the second column after a row counter, the first column of time stamps after text
@@ -300,7 +296,7 @@ def room_named(name: str) -> bool:
     Parameters
     ----------
     name : str
-        The column name as read.
+        As for :func:`event_named`.
 
     Returns
     -------

@@ -745,10 +745,8 @@ def read_csv(path: str | Path, notes: list[str] | None = None) -> tuple[pd.DataF
 
     Parameters
     ----------
-    path : str or Path
-        The file: CSV text in any dialect :func:`sniff_dialect` tells, or an Excel .xlsx workbook.
-    notes : list of str, optional
-        What was left out is appended here (a cut last line); not said where None.
+    path, notes
+        As for :func:`read_lines`.
 
     Returns
     -------

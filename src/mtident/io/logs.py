@@ -599,6 +599,7 @@ def as_temperature_log(log: object, caller: str) -> TemperatureLog:
     Returns
     -------
     TemperatureLog
+        ``log`` itself, or the DataFrame read.
 
     Raises
     ------

@@ -29,21 +29,9 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
+from mtident.io import stamps
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, numbers, split_rows
 from mtident.io.layout import LogLayout
-from mtident.io.stamps import (
-    CLOCK_DAY_ZERO_MIN,
-    IMPLAUSIBLE_STEP_MIN,
-    MINUTES_PER_DAY,
-    TIME_OF_DAY_FORMATS,
-    after_midnight,
-    clock_change,
-    clock_change_note,
-    elapsed_minutes,
-    has_utc_offset,
-    other_date_order,
-    stamp_format,
-)
 from mtident.io.time_notes import gap_said, names_a_date, serial_date_hint, serial_date_note
 from mtident.io.whole import read_whole
 
@@ -273,11 +261,11 @@ def _parse_time(
     cell; what it finds out about the time column (serial dates read as days) goes to ``notes``."""
     try:
         raw = layout.dialect.number(text)
-        scale, assumed = (MINUTES_PER_DAY, False) if state.serial_days else numeric_scale
+        scale, assumed = (stamps.MINUTES_PER_DAY, False) if state.serial_days else numeric_scale
         stamp = raw * scale
     except ValueError:
         if state.time_format is None:
-            state = replace(state, time_format=stamp_format(text), first_stamp=text.strip())
+            state = replace(state, time_format=stamps.stamp_format(text), first_stamp=text.strip())
         if state.time_format is None:
             raise
         state, stamp = _stamp_minutes(state, text.strip())
@@ -290,8 +278,8 @@ def _parse_time(
             # read in days from here on, the first row's too (it is t = 0 whatever its unit)
             assert state.origin is not None
             notes.append(serial_date_note(layout.time_name, state.origin))
-            state = replace(state, serial_days=True, origin=state.origin * MINUTES_PER_DAY)
-            stamp = raw * MINUTES_PER_DAY
+            state = replace(state, serial_days=True, origin=state.origin * stamps.MINUTES_PER_DAY)
+            stamp = raw * stamps.MINUTES_PER_DAY
         elif serial is not None:
             msg = f"{source}: {serial}"
             raise InputError(msg)
@@ -299,8 +287,8 @@ def _parse_time(
         state = replace(state, origin=stamp)
     assert state.origin is not None
     t = stamp - state.origin
-    if state.time_format in TIME_OF_DAY_FORMATS:
-        t = after_midnight(state.last_time, t)
+    if state.time_format in stamps.TIME_OF_DAY_FORMATS:
+        t = stamps.after_midnight(state.last_time, t)
     return state, t
 
 
@@ -318,20 +306,20 @@ def _stamp_minutes(state: TimeState, text: str) -> tuple[TimeState, float]:
     def minutes(cell: str, fmt: str | None) -> float:
         return float(pd.to_datetime(cell, format=fmt, utc=True).timestamp() / 60.0)
 
-    swapped = other_date_order(state.time_format)
+    swapped = stamps.other_date_order(state.time_format)
     if swapped is None or state.first_stamp is None or state.origin is None or state.last_time is None:
         try:
             return state, minutes(text, state.time_format)
         except ValueError:
-            elapsed = elapsed_minutes(text) if state.time_format in TIME_OF_DAY_FORMATS else None
+            elapsed = stamps.elapsed_minutes(text) if state.time_format in stamps.TIME_OF_DAY_FORMATS else None
             if elapsed is None:
                 raise
             # a clock past 24:00:00 is elapsed time: on from the day a time of day is read on
-            return state, CLOCK_DAY_ZERO_MIN + elapsed
+            return state, stamps.CLOCK_DAY_ZERO_MIN + elapsed
     stamp: float | None
     try:
         stamp = minutes(text, state.time_format)
-        if stamp - state.origin - state.last_time < IMPLAUSIBLE_STEP_MIN:
+        if stamp - state.origin - state.last_time < stamps.IMPLAUSIBLE_STEP_MIN:
             return state, stamp
     except ValueError:
         stamp = None
@@ -339,7 +327,7 @@ def _stamp_minutes(state: TimeState, text: str) -> tuple[TimeState, float]:
         origin, turned = minutes(state.first_stamp, swapped), minutes(text, swapped)
     except ValueError:
         origin = turned = float("nan")
-    if not 0.0 < turned - origin - state.last_time < IMPLAUSIBLE_STEP_MIN:
+    if not 0.0 < turned - origin - state.last_time < stamps.IMPLAUSIBLE_STEP_MIN:
         if stamp is None:
             raise ValueError(text)
         return state, stamp
@@ -351,8 +339,8 @@ def _local_dated_stamps(state: TimeState) -> bool:
     from UTC: the clock may change for summer time during the log."""
     return (
         state.time_format is not None
-        and state.time_format not in TIME_OF_DAY_FORMATS
-        and not has_utc_offset(state.first_stamp or "")
+        and state.time_format not in stamps.TIME_OF_DAY_FORMATS
+        and not stamps.has_utc_offset(state.first_stamp or "")
     )
 
 
@@ -364,13 +352,13 @@ def _follow_clock_change(
     if 0.0 < raw - previous_raw <= 59.0 or not _local_dated_stamps(state):
         return state
     assert state.origin is not None
-    shift = clock_change(state.origin + previous_raw, state.origin + raw, state.last_step)
+    shift = stamps.clock_change(state.origin + previous_raw, state.origin + raw, state.last_step)
     if not shift:
         return state
     state = replace(state, clock_shift=state.clock_shift + shift)
     if state.last_time is None or raw + state.clock_shift > state.last_time:
         notes.append(
-            clock_change_note(
+            stamps.clock_change_note(
                 shift,
                 f"after t = {previous_raw + state.clock_shift - shift:g} min",
                 repr(previous_cell or "the row before"),

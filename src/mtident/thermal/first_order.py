@@ -76,10 +76,7 @@ MIN_RISE_SEEN_MIN = 5.0
 
 # A T∞ interval wider than this many times the rise seen so far, plus the margin (°C), states
 # nothing physics allows of a machine part's warm-up (:func:`_untrusted`).
-MAX_HALF_PER_RISE = 5.0
-
-
-MAX_HALF_MARGIN_C = 5.0
+MAX_HALF_PER_RISE, MAX_HALF_MARGIN_C = 5.0, 5.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,17 +145,8 @@ class FirstOrderDetails:
     untrusted: BoolArray
 
     def answer(self, index: int) -> FirstOrderAnswer:
-        """λ with its standard deviation, the time constant, the residual test and what the answer assumes.
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position.
-
-        Returns
-        -------
-        FirstOrderAnswer
-        """
+        """λ with its standard deviation, the time constant, the residual test and what the answer assumes
+        (:meth:`~mtident.thermal.identification.MethodDetails.answer`)."""
         rate = float(self.rate_per_min[index])
         return FirstOrderAnswer(
             lambda_per_min=rate,
@@ -179,17 +167,8 @@ class FirstOrderDetails:
         return ["  assumes: first order (one exponential): a slower mode not yet seen moves T∞ beyond the interval"]
 
     def follows_room(self, index: int) -> bool:
-        """False: the first-order prediction holds the room at its level at L.
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position.
-
-        Returns
-        -------
-        bool
-        """
+        """False: the first-order prediction holds the room at its level at L
+        (:meth:`~mtident.thermal.identification.MethodDetails.follows_room`)."""
         return False
 
 

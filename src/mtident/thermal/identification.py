@@ -39,15 +39,13 @@ class MethodAnswer(Protocol):
 
 
 class MethodDetails(Protocol):
-    """What one identification method adds to the common answer."""
+    """What one identification method adds to the common answer.
+
+    A method's ``index`` is the sensor's position, in the log's order of sensors.
+    """
 
     def answer(self, index: int) -> MethodAnswer:
         """The method's own part of one sensor's answer (its λ, time constant, assumptions ...).
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position.
 
         Returns
         -------
@@ -68,11 +66,6 @@ class MethodDetails(Protocol):
 
     def follows_room(self, index: int) -> bool:
         """Whether the sensor's prediction after L follows the room as logged (a room input).
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position.
 
         Returns
         -------

@@ -208,10 +208,8 @@ def flat_lead(
 
     Parameters
     ----------
-    time_min : ndarray, shape (N,)
-        Sample times (min).
-    values : ndarray, shape (N, S)
-        Readings (°C, NaN: missing).
+    time_min, values
+        As for :func:`~mtident.thermal.measured.measured_and_settled`.
     sigma : ndarray, shape (S,)
         Noise level per sensor (°C).
     min_rise_C : float, optional
@@ -248,12 +246,8 @@ def late_onset(time_min: FloatArray, values: FloatArray, sigma: FloatArray) -> I
 
     Parameters
     ----------
-    time_min : ndarray, shape (N,)
-        Sample times (min).
-    values : ndarray, shape (N, S)
-        Readings (°C, NaN: missing).
-    sigma : ndarray, shape (S,)
-        Noise level per sensor (°C).
+    time_min, values, sigma
+        As for :func:`flat_lead`.
 
     Returns
     -------
@@ -270,7 +264,7 @@ def first_level(values: FloatArray) -> FloatArray:
     Parameters
     ----------
     values : ndarray, shape (N, S)
-        Readings (°C, NaN: missing).
+        Readings (°C, NaN: missing); only the first three rows are read.
 
     Returns
     -------

@@ -301,6 +301,7 @@ def _best_taus(
     return best
 
 
+@one_blas_thread()  # thousands of tiny solves: BLAS threads would only wait on one another
 def learn_machine_model(
     sensors: tuple[str, ...] | list[str],
     time_min: FloatArray,
@@ -336,19 +337,6 @@ def learn_machine_model(
     MachineModel or None
         None where fewer than two sensors have readings.
     """
-    with one_blas_thread():
-        return _learn(sensors, time_min, values, room_C, noise_C, origin_min, max_time_constant_min)
-
-
-def _learn(
-    sensors: tuple[str, ...] | list[str],
-    time_min: FloatArray,
-    values: FloatArray,
-    room_C: FloatArray | None,
-    noise_C: FloatArray,
-    origin_min: float,
-    max_time_constant_min: float,
-) -> MachineModel | None:
     binned = _bins(np.asarray(time_min, float), np.asarray(values, float), room_C, origin_min)
     keep = [s for s, b in enumerate(binned) if b is not None]
     if len(keep) < 2:

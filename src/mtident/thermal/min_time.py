@@ -87,6 +87,8 @@ class MinTimeAnswer:
 class MinTimeResult(SensorAnswers):
     """RMSE against identification time for several sampling periods, per sensor.
 
+    A method's ``index`` is the sensor's position in ``sensors``.
+
     Attributes
     ----------
     sensors : tuple of str
@@ -136,11 +138,6 @@ class MinTimeResult(SensorAnswers):
         """What the criterion's answer for one sensor does not say: a best L at the end of every
         sampling period (more data simply fit better), RMSEs that explode, periods that disagree.
 
-        Parameters
-        ----------
-        index : int
-            The sensor's position in ``sensors``.
-
         Returns
         -------
         list of str
@@ -179,11 +176,6 @@ class MinTimeResult(SensorAnswers):
 
     def answer(self, index: int) -> MinTimeAnswer:
         """One sensor's answer, with its verdict and what it assumes.
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position in ``sensors``.
 
         Returns
         -------

@@ -18,6 +18,7 @@ __all__ = [
     "SteadyState",
     "bin_index",
     "bin_samples",
+    "interval_half_width",
 ]
 
 # The slowest thermal mode a machine tool is taken to have, unless told: a machine's
@@ -156,6 +157,26 @@ class IntervalEnd:
         return max(self.modes, key=lambda m: (m.time_constant_min, abs(m.amplitude_C)), default=None)
 
 
+def interval_half_width(steady_C: float, interval_C: tuple[float, float]) -> float:
+    """The larger distance from T∞ to an end of its interval: the interval's half-width about T∞,
+    which need not be its centre.
+
+    Parameters
+    ----------
+    steady_C : float
+        T∞ (°C).
+    interval_C : (float, float)
+        The interval's low and high ends (°C).
+
+    Returns
+    -------
+    float
+        The half-width (°C).
+    """
+    lo, hi = interval_C
+    return max(steady_C - lo, hi - steady_C)
+
+
 @dataclass(frozen=True)
 class SteadyState:
     """The model-robust estimate of one sensor's steady state.
@@ -217,20 +238,9 @@ class SteadyState:
     room_gains: tuple[float, ...] = ()
 
     def half_width(self, level: float) -> float:
-        """The larger distance from T∞ to an end of the interval at ``level``.
-
-        Parameters
-        ----------
-        level : float
-            A confidence level of ``interval_C``.
-
-        Returns
-        -------
-        float
-            The half-width (°C); infinite where the interval is.
-        """
-        lo, hi = self.interval_C[level]
-        return max(self.steady_C - lo, hi - self.steady_C)
+        """:func:`interval_half_width` of the interval at ``level``, a confidence level of ``interval_C``
+        (infinite where the interval is)."""
+        return interval_half_width(self.steady_C, self.interval_C[level])
 
     def slowest_time_constant_min(self) -> float:
         """The best model's slowest time constant (NaN for a model without a mode).

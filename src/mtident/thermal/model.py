@@ -46,7 +46,7 @@ def rise_transition(points: FloatArray, dt_min: FloatArray | float) -> FloatArra
     Returns
     -------
     ndarray, shape (..., 3)
-        The states after the step.
+        The states [T, λ, T∞] after the step.
 
     Examples
     --------
@@ -79,14 +79,14 @@ def slope_transition(points: FloatArray, dt_min: FloatArray | float, room_rate: 
     points : ndarray, shape (..., 3)
         States [T, s, λ] (°C, °C/min, 1/min).
     dt_min : float or ndarray
-        The step (min), broadcast against ``points[..., 0]``.
+        As for :func:`rise_transition`.
     room_rate : float or ndarray, optional
         The room's rate over the step (°C/min); 0 for a steady room.
 
     Returns
     -------
     ndarray, shape (..., 3)
-        The states after the step.
+        After the step, the states [T, s, λ].
 
     Examples
     --------

@@ -25,6 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from mtident._json import fields_of
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.thermal.machine_model import (
@@ -52,23 +53,9 @@ from mtident.thermal.reference import reference_notes
 from mtident.thermal.robust import estimate_sensor
 from mtident.thermal.robust_types import SensorEstimate
 
-__all__ = [
-    "Event",
-    "EventKind",
-    "MonitorSettings",
-    "MonitorState",
-    "Readings",
-    "SensorCheck",
-    "Status",
-    "assumptions",
-    "expected_stop",
-    "is_within",
-    "minutes",
-    "monitor_step",
-    "new_state",
-    "result",
-    "sensor_estimate",
-]
+__all__ = ["assumptions", "expected_stop", "is_within", "monitor_step", "new_state", "result", "sensor_estimate"]
+# the types the monitor takes and gives (from monitor_types) are its names too: a caller imports the monitor alone
+__all__ += ["Event", "EventKind", "MonitorSettings", "MonitorState", "Readings", "SensorCheck", "Status", "minutes"]
 
 # a check falls due this little before its time (min): 60 µs, far below any logging interval
 _DUE_SLACK_MIN = 1e-6
@@ -421,6 +408,10 @@ def resolves_tolerance(estimate: SensorEstimate, settings: MonitorSettings) -> b
     return estimate.display_step_C < settings.tolerance_C
 
 
+# what a check repeats of its estimate, under the same names
+_ESTIMATE_KEYS = ("noise_C", "rise_C", "model_ok", "reference_used", "machine_used", "warnings")
+
+
 def _checked(
     check: SensorCheck, estimate: SensorEstimate, now: float, readings: Readings, settings: MonitorSettings
 ) -> SensorCheck:
@@ -447,12 +438,7 @@ def _checked(
         equilibrium_time_min=math.nan if fit is None else fit.equilibrium_time_min,
         origin_min=estimate.onset_min,
         modes=() if fit is None else tuple((m.time_constant_min, m.amplitude_C) for m in fit.modes),
-        noise_C=estimate.noise_C,
-        rise_C=estimate.rise_C,
-        model_ok=estimate.model_ok,
-        reference_used=estimate.reference_used,
-        machine_used=estimate.machine_used,
-        warnings=estimate.warnings,
+        **fields_of(estimate, _ESTIMATE_KEYS),
         ends=estimate.what_sets_the_ends(settings.decision_level)
         if resolves_tolerance(estimate, settings)
         else f"its readings come in steps of {estimate.display_step_C:.3g} °C, no finer than the tolerance",

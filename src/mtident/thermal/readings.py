@@ -285,10 +285,8 @@ def room_input(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
 
     Parameters
     ----------
-    time_min : ndarray, shape (N,)
-        Sample times (min), increasing.
-    room_C : ndarray, shape (N,)
-        The room's readings (°C, NaN: missing).
+    time_min, room_C
+        As for :func:`room_trend`.
 
     Returns
     -------

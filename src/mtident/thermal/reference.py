@@ -181,7 +181,7 @@ class MachineReference:
         Parameters
         ----------
         sensor : str
-            The sensor's name.
+            As for :meth:`modes`.
 
         Returns
         -------

@@ -112,17 +112,7 @@ class RobustDetails:
 
     def answer(self, index: int) -> RobustAnswer:
         """T∞'s interval at the highest level computed, the slowest time constant, the assumptions
-        and the best model's modes.
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position.
-
-        Returns
-        -------
-        RobustAnswer
-        """
+        and the best model's modes (:meth:`~mtident.thermal.identification.MethodDetails.answer`)."""
         e = self.estimates[index]
         fit = e.fit
         slowest = np.nan if fit is None else fit.slowest_time_constant_min()
@@ -167,17 +157,8 @@ class RobustDetails:
         ]
 
     def follows_room(self, index: int) -> bool:
-        """Whether the sensor's modes take the room as an input (a room sensor was given).
-
-        Parameters
-        ----------
-        index : int
-            The sensor's position.
-
-        Returns
-        -------
-        bool
-        """
+        """Whether the sensor's modes take the room as an input, a room sensor given
+        (:meth:`~mtident.thermal.identification.MethodDetails.follows_room`)."""
         fit = self.estimates[index].fit
         return fit is not None and fit.room_level_C is not None
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from mtident.thermal.modal_types import MAX_MODES
+from mtident.thermal.modal_types import MAX_MODES, interval_half_width
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, SteadyState
 
 __all__ = [
@@ -203,22 +203,11 @@ class SensorEstimate:
         return float("nan") if self.fit is None else self.fit.steady_C
 
     def half_width(self, level: float) -> float:
-        """The larger distance from T∞ to an end of the interval at ``level`` (inf without one).
-
-        Parameters
-        ----------
-        level : float
-            A confidence level of ``interval_C``.
-
-        Returns
-        -------
-        float
-            The half-width (°C).
-        """
+        """:meth:`SteadyState.half_width <mtident.thermal.modal_types.SteadyState.half_width>` of this
+        estimate's own interval at ``level`` (the room's unmeasured wander included); inf without a fit."""
         if self.fit is None:
             return float("inf")
-        lo, hi = self.interval_C[level]
-        return max(self.steady_C - lo, hi - self.steady_C)
+        return interval_half_width(self.steady_C, self.interval_C[level])
 
     def what_sets_the_ends(self, level: float) -> str:
         """In words, the models that set the interval's ends: "a mode of about 280 min with

@@ -124,6 +124,7 @@ class SourceNote:
     Attributes
     ----------
     text : str
+        The recorder's message, as the watch says it.
     """
 
     text: str
@@ -136,6 +137,7 @@ class Waiting:
     Attributes
     ----------
     idle_s : float
+        How long no new row came (s): ``WAITING_HINT_S``, when it is said.
     """
 
     idle_s: float
@@ -650,21 +652,11 @@ class WatchSession:
     def result(self, with_forecast: bool = True, cancel: Callable[[], bool] | None = None) -> dict[str, object]:
         """The JSON answer: :meth:`answer`'s fields.
 
-        Parameters
-        ----------
-        with_forecast : bool, optional
-            Add each sensor's expected stop while the test has not stopped (a forecast per sensor).
-        cancel : callable, optional
-            As :meth:`expected_stops`: the answer then has no expected stops.
+        The parameters and what it raises are those of :meth:`answer`.
 
         Returns
         -------
         dict
-
-        Raises
-        ------
-        InputError
-            No data rows yet, or no log file.
         """
         tree: dict[str, object] = to_json_value(self.answer(with_forecast, cancel))
         return tree
