@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mtident.io.dialect import CsvDialect, binary_kind, read_csv
+from mtident.io.dialect import CsvDialect, binary_kind, read_lines
 from mtident.io.logs import read_temperature_log
 from mtident.io.time_notes import TIME_UNITS, time_unit_assumed, time_unit_factor
 from mtident.io.units import is_number, stated_temperature_unit
@@ -169,7 +169,7 @@ def describe_log(
         unreadable file, no such column, a time column that does not increase.
     """
     file = Path(path)
-    frame, dialect = read_csv(file)
+    lines, dialect = read_lines(file)
     # a log just begun is worth a look too: no five samples needed here
     log = read_temperature_log(
         file, time_col=time_col, time_unit=time_unit, sensors=sensors, min_samples=1, temperature_unit=temperature_unit
@@ -179,7 +179,7 @@ def describe_log(
         kind = binary_kind(handle.read(8))
     steps = np.diff(log.time_min)
     time_name = log.time_column.split(" + ")[0]
-    first_cell = frame[time_name].iloc[0] if time_name in frame.columns and len(frame) else None
+    first_cell = _first_cell(lines, dialect, time_name)
     per_sensor: list[SensorColumn] = []
     for k, name in enumerate(log.sensors):
         values = log.temperature_C[:, k]
@@ -214,6 +214,22 @@ def describe_log(
         sensors=tuple(per_sensor),
         notes=tuple(log.notes),
     )
+
+
+def _first_cell(lines: list[str], dialect: CsvDialect, name: str) -> str | None:
+    """The first data line's cell in column ``name``, as written (None where the file has no such
+    column or no data line)."""
+    written = dialect.cells(lines[0])
+    header = [
+        dialect.names[k] if k < len(dialect.names) and dialect.names[k] != dialect.written_names[k] else cell.strip()
+        for k, cell in enumerate(written)
+    ]
+    data = next((line for line in lines[1 + dialect.extra_rows :] if line.strip()), None)
+    if name not in header or data is None:
+        return None
+    cells = dialect.cells(data)
+    k = header.index(name)
+    return cells[k].strip() if k < len(cells) else None
 
 
 def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect: CsvDialect) -> str:
