@@ -3,31 +3,14 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
-from click.testing import CliRunner
 
-from mtident.cli import main
 from mtident.feeddrive import (
     Excitation,
     FeedDriveParameters,
     Response,
 )
-
-
-@dataclass(frozen=True)
-class Outcome:
-    returncode: int
-    stdout: str
-    stderr: str
-
-
-def run(*args: str) -> Outcome:
-    """The command in-process (test_cli runs `python -m mtident` in a process of its own)."""
-    result = CliRunner().invoke(main, list(args), catch_exceptions=False)
-    return Outcome(result.exit_code, result.stdout, result.stderr)
-
 
 # A heavy, soft drive (a 400 kg table on a 20 mm lead): every mode below 110 Hz.
 HEAVY = FeedDriveParameters(

@@ -8,9 +8,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from click.testing import CliRunner
-
-from mtident.cli import main
 
 SEED = 37
 
@@ -298,15 +295,3 @@ def exports(count: int = EXPORTS, seed: int = SEED) -> Iterator[Export]:
     rng = np.random.default_rng(seed)
     for _ in range(count):
         yield make_export(rng)
-
-
-@dataclass(frozen=True)
-class Outcome:
-    code: int
-    stdout: str
-    stderr: str
-
-
-def _run(*args: str) -> Outcome:
-    result = CliRunner().invoke(main, list(args), catch_exceptions=False)
-    return Outcome(result.exit_code, result.stdout, result.stderr)

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import urllib.error
 import urllib.request
-from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from click.testing import CliRunner
@@ -52,22 +53,23 @@ UNITS_LOG = "time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n" + "".join(
 )
 
 
-def report(*args: str) -> tuple[int, str, str]:
-    outcome = CliRunner().invoke(main, ["thermal", "report", *args], catch_exceptions=False)
-    return outcome.exit_code, outcome.stdout, outcome.stderr
+class Outcome(NamedTuple):
+    """What a command run in-process ended with, named as :func:`subprocess.run` names it (and
+    unpacked as ``code, out, err``)."""
 
-
-@dataclass(frozen=True)
-class Outcome:
     returncode: int
     stdout: str
     stderr: str
 
 
 def mtident(*args: str) -> Outcome:
-    """The command in-process (a subprocess costs 1-2 s of start-up a call): exit code, stdout, stderr.
-    What a process boundary is for is tested with real processes below (`python -m mtident`, the
-    modules a command imports, matplotlib's backend) and in test_cli_watch (SIGKILL, SIGINT)."""
+    """``mtident ARGS...`` in-process, the one way the tests run a command: exit code, stdout, stderr.
+
+    An exception the command does not turn into an error message is raised, not hidden in an exit
+    code of 1. A subprocess costs 1-2 s of start-up a call; what a process boundary is for is
+    tested with real processes (marked ``slow``): `python -m mtident` (test_cli_thermal), the
+    modules a command imports (test_cli), matplotlib's backend (report/test_plots), SIGKILL,
+    SIGTERM and the live page of a watch (test_cli_watch, test_persist)."""
     result = CliRunner().invoke(main, list(args), catch_exceptions=False)
     return Outcome(result.exit_code, result.stdout, result.stderr)
 
@@ -97,12 +99,6 @@ def one_mode_reference(*names: str, tau: float = PAPER_TAU) -> MachineReference:
 
 def noisy(curve: np.ndarray, seed: int, sigma: float = 0.02) -> np.ndarray:
     return np.round(curve + sigma * np.random.default_rng(seed).standard_normal(len(curve)), 2)
-
-
-def run(*args: str) -> tuple[int, str, str]:
-    """The command in-process: exit code, stdout, stderr."""
-    outcome = CliRunner().invoke(main, list(args), catch_exceptions=False)
-    return outcome.exit_code, outcome.stdout, outcome.stderr
 
 
 def replay(
@@ -259,3 +255,19 @@ def spindle_and_column(t: np.ndarray) -> np.ndarray:
     spindle = two_mode(t, -4.0) + rng.normal(0.0, 0.01, t.size)
     column = 20.0 + 8.0 * (1.0 - np.exp(-t / 250.0)) + rng.normal(0.0, 0.01, t.size)
     return np.round(np.column_stack([spindle, column]), 2)
+
+
+def followed_in_pieces(live: Path, data: bytes, cuts: list[int]):  # noqa: ANN201 - (LogFollower, times)
+    """A log written to ``live`` in pieces cut at ``cuts`` (bytes), the follower polling after each:
+    the follower, and the times it read (no warning on the way)."""
+    from mtident.io.follow import LogFollower
+
+    live.write_bytes(b"")
+    follower, times = LogFollower(live), []
+    for a, b in zip([0, *sorted(set(cuts))], [*sorted(set(cuts)), len(data)], strict=True):
+        with open(live, "ab") as out:
+            out.write(data[a:b])
+        polled = follower.poll()
+        assert not polled.warnings
+        times.extend(polled.time_min)
+    return follower, times

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 from conftest import first_order
-from helpers import T, csv_text, noisy, one_mode_reference, report
+from helpers import T, csv_text, mtident, noisy, one_mode_reference
 
 from mtident.thermal.reference import save_reference
 
@@ -22,7 +22,9 @@ def logged_test(tmp_path, steady_b: float = 29.0):  # noqa: ANN001, ANN201
 def test_the_html_report_says_the_decision_each_sensor_and_what_it_rests_on(tmp_path):
     log, reference = logged_test(tmp_path)
     out = tmp_path / "report.html"
-    code, stdout, err = report(str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out))
+    code, stdout, err = mtident(
+        "thermal", "report", str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out)
+    )
     assert code == 0, err
     assert stdout.startswith(f"{out}: the test could stop at t = ")
     page = out.read_text(encoding="utf-8")
@@ -45,7 +47,9 @@ def _cells(page: str, column: int) -> list[str]:
 def test_the_pdf_report_has_the_summary_and_the_curves(tmp_path):
     log, reference = logged_test(tmp_path)
     out = tmp_path / "report.pdf"
-    code, _, err = report(str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out))
+    code, _, err = mtident(
+        "thermal", "report", str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out)
+    )
     assert code == 0, err
     data = out.read_bytes()
     assert data.startswith(b"%PDF") and data.count(b"/Type /Page\n") + data.count(b"/Type /Page ") >= 1
@@ -56,7 +60,7 @@ def test_a_test_that_cannot_stop_is_reported_with_the_reason(tmp_path):
     log = tmp_path / "short.csv"
     log.write_text(csv_text(t, {"S": noisy(first_order(t), 23)}))
     out = tmp_path / "short.html"
-    code, stdout, err = report(str(log), "-o", str(out))
+    code, stdout, err = mtident("thermal", "report", str(log), "-o", str(out))
     assert code == 0, err
     assert stdout.endswith("no stop within the log\n")
     page = out.read_text(encoding="utf-8")
@@ -69,8 +73,16 @@ def test_a_recorded_log_says_where_it_was_recorded_from_and_its_state_file_is_le
         '{"url": "opc.tcp://vmc1:4840", "nodes": ["ns=2;s=A", "ns=2;s=B"], "names": ["A", "B"], '
         '"origin": "2026-11-24T08:00:00+00:00", "last_stamp": {}}'
     )
-    code, _, err = report(
-        str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(tmp_path / "r.html")
+    code, _, err = mtident(
+        "thermal",
+        "report",
+        str(log),
+        "--reference",
+        str(reference),
+        "--free-fast-modes",
+        "0",
+        "-o",
+        str(tmp_path / "r.html"),
     )
     assert code == 0, err
     page = (tmp_path / "r.html").read_text(encoding="utf-8")
@@ -81,11 +93,11 @@ def test_a_recorded_log_says_where_it_was_recorded_from_and_its_state_file_is_le
 
 def test_report_refuses_what_it_cannot_write_or_read(tmp_path):
     log, _ = logged_test(tmp_path)
-    code, _, err = report(str(log), "-o", str(tmp_path / "report.docx"))
+    code, _, err = mtident("thermal", "report", str(log), "-o", str(tmp_path / "report.docx"))
     assert code == 2 and "give a name ending in .html or .pdf" in err
-    code, _, err = report(str(tmp_path / "none.csv"), "-o", str(tmp_path / "r.html"))
+    code, _, err = mtident("thermal", "report", str(tmp_path / "none.csv"), "-o", str(tmp_path / "r.html"))
     assert code == 2 and "no such file" in err
-    code, _, err = report(str(log), "-o", str(tmp_path / "missing" / "r.html"))
+    code, _, err = mtident("thermal", "report", str(log), "-o", str(tmp_path / "missing" / "r.html"))
     assert code == 2 and "does not exist" in err
 
 
@@ -124,7 +136,9 @@ def test_the_title_names_the_machine_and_program_and_t0_is_the_logs_start_in_loc
     )
     reference = named_reference(tmp_path, "A", "B")
     out = tmp_path / "report.html"
-    code, _, err = report(str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out))
+    code, _, err = mtident(
+        "thermal", "report", str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out)
+    )
     assert code == 0, err
     page = out.read_text(encoding="utf-8")
     assert "<title>Warm-up test of VMC 1 (serial S-0042)</title>" in page
@@ -134,11 +148,11 @@ def test_the_title_names_the_machine_and_program_and_t0_is_the_logs_start_in_loc
     assert "Test of 26 Nov 2026 · log run.csv" in page
     assert "<dt>t = 0</dt><dd>26 Nov 2026, 07:00 (the log&#39;s time stamps)</dd>" in page
     # --machine names the machine where no reference does; nothing known: the file name
-    code, _, err = report(str(log), "--machine", "VMC 2", "-o", str(tmp_path / "m.html"))
+    code, _, err = mtident("thermal", "report", str(log), "--machine", "VMC 2", "-o", str(tmp_path / "m.html"))
     assert code == 0, err
     assert "<h1>Warm-up test of VMC 2</h1>" in (tmp_path / "m.html").read_text(encoding="utf-8")
     numbered, _ = logged_test(tmp_path)
-    code, _, err = report(str(numbered), "-o", str(tmp_path / "n.html"))
+    code, _, err = mtident("thermal", "report", str(numbered), "-o", str(tmp_path / "n.html"))
     assert code == 0, err
     plain = (tmp_path / "n.html").read_text(encoding="utf-8")
     assert "<h1>Warm-up test: run.csv</h1>" in plain
@@ -158,7 +172,9 @@ def test_a_recorded_logs_start_is_its_first_reading_in_local_time_not_raw_utc(tm
     os.environ["TZ"] = "Europe/Berlin"
     time.tzset()
     try:
-        code, _, err = report(str(log), "--reference", str(reference), "-o", str(tmp_path / "r.html"))
+        code, _, err = mtident(
+            "thermal", "report", str(log), "--reference", str(reference), "-o", str(tmp_path / "r.html")
+        )
     finally:
         if before is None:
             del os.environ["TZ"]
@@ -179,7 +195,7 @@ def test_why_not_yet_is_a_short_line_per_sensor_that_holds_the_test(tmp_path):
     columns = {name: noisy(first_order(t, steady=26.7 + k), 30 + k) for k, name in enumerate(("A", "B", "C<&>"))}
     log.write_text(csv_text(t, columns))
     out = tmp_path / "short.html"
-    code, _, err = report(str(log), "-o", str(out))
+    code, _, err = mtident("thermal", "report", str(log), "-o", str(out))
     assert code == 0, err
     page = out.read_text(encoding="utf-8")
     items = page.split('<ul class="holding">')[1].split("</ul>")[0].split("<li>")[1:]
@@ -195,7 +211,9 @@ def test_why_not_yet_is_a_short_line_per_sensor_that_holds_the_test(tmp_path):
 def test_the_table_keeps_what_the_customer_reads_and_the_hindsight_says_the_time_saved(tmp_path):
     log, reference = logged_test(tmp_path)
     out = tmp_path / "report.html"
-    code, stdout, err = report(str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out))
+    code, stdout, err = mtident(
+        "thermal", "report", str(log), "--reference", str(reference), "--free-fast-modes", "0", "-o", str(out)
+    )
     assert code == 0, err
     page = out.read_text(encoding="utf-8")
     header = page.split("<h2>Per sensor</h2>")[1].split("</tr>")[0]

@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import make_log
-from fuzz_logs_helpers import EXPORTS, Export, Outcome, _run, exports
-from helpers import mtident, two_mode
+from fuzz_logs_helpers import EXPORTS, Export, exports
+from helpers import Outcome, mtident, two_mode
 
 import mtident.cli_thermal as cli_thermal
 from mtident.exceptions import InputError
@@ -62,8 +62,8 @@ def _check_log(export: Export, log: TemperatureLog, where: str) -> list[str]:
 def _check_refusal(out: Outcome, where: str) -> list[str]:
     """A command that gives no answer must say why in one line, with exit code 1 or 2."""
     said = [line for line in out.stderr.splitlines() if line.startswith("mtident: error:")]
-    if out.code not in (1, 2) or len(said) != 1 or "Traceback" in out.stderr + out.stdout:
-        return [f"{where}: exit {out.code} without a one-line error: {out.stderr[-400:]!r}"]
+    if out.returncode not in (1, 2) or len(said) != 1 or "Traceback" in out.stderr + out.stdout:
+        return [f"{where}: exit {out.returncode} without a one-line error: {out.stderr[-400:]!r}"]
     return []
 
 
@@ -100,11 +100,11 @@ def check_export(export: Export, path: Path, robust: bool = False) -> tuple[list
         problems += _check_log(export, log, "read_temperature_log")
     read = log is not None
 
-    table = _run("thermal", "inspect", str(path))
-    out = _run("thermal", "inspect", str(path), "--json")
-    if out.code != table.code:
-        problems.append(f"inspect: exit {table.code} for the table, {out.code} for --json")
-    if out.code == 0:
+    table = mtident("thermal", "inspect", str(path))
+    out = mtident("thermal", "inspect", str(path), "--json")
+    if out.returncode != table.returncode:
+        problems.append(f"inspect: exit {table.returncode} for the table, {out.returncode} for --json")
+    if out.returncode == 0:
         if not read:
             problems.append("inspect read what read_temperature_log refused")
         info = json.loads(out.stdout)
@@ -132,8 +132,8 @@ def check_export(export: Export, path: Path, robust: bool = False) -> tuple[list
 
     method = () if robust else ("--method", "lsq")
     with _logs_read() as logs:
-        out = _run("thermal", "identify", str(path), "--json", *method)
-    if out.code == 0:
+        out = mtident("thermal", "identify", str(path), "--json", *method)
+    if out.returncode == 0:
         problems += _check_log(export, logs[0], "identify")
         answer = json.loads(out.stdout)
         doubted = export.doubt is not None and export.doubt in out.stderr
@@ -185,7 +185,7 @@ def test_a_flat_columns_absurd_answer_is_not_trusted(write_csv):
     rows = "".join(
         f"{m},{20 + 8 * (1 - np.exp(-m / 40)):.2f},{19.8 + 0.1 * (m >= 17) + 0.1 * (m >= 37):.1f}\n" for m in range(60)
     )
-    out = _run("thermal", "identify", str(write_csv("time_min,Spindle,Room\n" + rows)), "--json", "--method", "lsq")
+    out = mtident("thermal", "identify", str(write_csv("time_min,Spindle,Room\n" + rows)), "--json", "--method", "lsq")
     room = json.loads(out.stdout)["sensors"][1]
     lo, hi = room["steady_state_ci95_C"]
     assert not room["model_ok"] or (lo is not None and hi is not None and -60 <= lo and hi <= 400), room

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from conftest import first_order, wait_until
 from helpers import (
     T,
@@ -23,12 +22,10 @@ from helpers import (
     mtident,
     noisy,
     one_mode_reference,
-    run,
     spindle_and_column,
     three_mode_housing,
 )
 
-from mtident.cli import main
 from mtident.persist import load_dataclass
 from mtident.thermal.reference import save_reference
 from mtident.thermal.session import (
@@ -77,7 +74,7 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
     t = np.arange(0.0, 120.5, 0.5)
     log = tmp_path / "housing.csv"
     log.write_text(csv_text(t, {"housing": noisy(three_mode_housing(t), 15)}))
-    code, out, err = run("thermal", "watch", str(log), "--replay")
+    code, out, err = mtident("thermal", "watch", str(log), "--replay")
     assert code == 0, err
     text = " ".join(out.split())
     assert "Not yet: keep the test running." in text and "still fits" in text
@@ -88,7 +85,7 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
         "time constants up to 300 min" in text
     )
     # the ends named in words are the interval's own (widened for the room's wander alike)
-    code, out, err = run("thermal", "watch", str(log), "--replay", "--room-wander", "0.5")
+    code, out, err = mtident("thermal", "watch", str(log), "--replay", "--room-wander", "0.5")
     assert code == 0, err
     text = " ".join(out.split())
     said = re.search(
@@ -102,18 +99,18 @@ def test_watch_refuses_the_options_of_a_week_ago_by_name(tmp_path):
     log = tmp_path / "run.csv"
     log.write_text(csv_text(T[:20], {"S": noisy(first_order(T[:20]), 16)}))
     for old in ("--hold", "--bin"):
-        code, _, err = run("thermal", "watch", str(log), "--replay", old, "12")
+        code, _, err = mtident("thermal", "watch", str(log), "--replay", old, "12")
         assert code == 2 and f"No such option '{old}'" in err, err
 
 
 def test_watch_refuses_a_missing_reference_and_a_bad_tolerance(tmp_path):
     log = tmp_path / "run.csv"
     log.write_text(csv_text(T[:20], {"S": noisy(first_order(T[:20]), 17)}))
-    code, _, err = run("thermal", "watch", str(log), "--replay", "--reference", str(tmp_path / "none.toml"))
+    code, _, err = mtident("thermal", "watch", str(log), "--replay", "--reference", str(tmp_path / "none.toml"))
     assert code == 2 and "no such file (learn one with `mtident thermal learn" in err
-    code, _, err = run("thermal", "watch", str(log), "--replay", "--tolerance", "nan")
+    code, _, err = mtident("thermal", "watch", str(log), "--replay", "--tolerance", "nan")
     assert code == 2 and "--tolerance" in err
-    code, _, err = run("thermal", "watch", str(log), "--replay", "--free-fast-modes", "3")
+    code, _, err = mtident("thermal", "watch", str(log), "--replay", "--free-fast-modes", "3")
     assert code == 2 and "--free-fast-modes" in err and "0<=x<=2" in err
 
 
@@ -126,7 +123,7 @@ def test_watch_killed_mid_run_resumes_to_the_same_decision(tmp_path):
     full = tmp_path / "full.csv"
     full.write_text(csv_text(T[:101], {"A": noisy(first_order(T[:101]), 18)}))
     fast = ("--reference", str(tmp_path / "machine.toml"), "--free-fast-modes", "0")  # stops at about 70 min
-    code, out, err = run("thermal", "watch", str(full), "--replay", "--json", *fast)
+    code, out, err = mtident("thermal", "watch", str(full), "--replay", "--json", *fast)
     assert code == 0, err
     reference = json.loads(out)
     assert reference["decision"] == "stop"
@@ -189,7 +186,7 @@ def test_ctrl_c_inside_compiled_code_is_an_interruption_not_a_traceback(tmp_path
 
     original = WatchSession.poll
     monkeypatch.setattr(WatchSession, "poll", poll)
-    code, out, err = run("thermal", "watch", str(log), "--json", "--poll", "0.05", "--timeout", "5")
+    code, out, err = mtident("thermal", "watch", str(log), "--json", "--poll", "0.05", "--timeout", "5")
     assert code == 130 and "interrupted (Ctrl-C) at t = 29 min" in err
     assert json.loads(out)["last_time_min"] == 29.0
 
@@ -198,12 +195,12 @@ def test_ctrl_c_inside_compiled_code_is_an_interruption_not_a_traceback(tmp_path
 
     monkeypatch.setattr(WatchSession, "poll", broken)
     with pytest.raises(SystemError, match="a fault of our own"):
-        run("thermal", "watch", str(log), "--replay")
+        mtident("thermal", "watch", str(log), "--replay")
 
 
 def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    code, _, err = run("thermal", "watch", "later.csv", "--poll", "0.05", "--timeout", "0.3")
+    code, _, err = mtident("thermal", "watch", "later.csv", "--poll", "0.05", "--timeout", "0.3")
     assert code == 2
     assert (
         "waiting for later.csv to appear" in err
@@ -213,13 +210,11 @@ def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypa
 
 def test_watch_says_it_is_waiting_for_rows_of_a_log_that_does_not_grow(tmp_path, monkeypatch):
     """A newcomer gave a finished log without --replay, and the watch waited in silence."""
-    import mtident.thermal.session
-
     t = np.arange(0.0, 20.0)
     log = tmp_path / "done.csv"
     log.write_text("time_min,S\n" + "".join(f"{a:g},{20 + a / 10:.2f}\n" for a in t))
-    monkeypatch.setattr(mtident.thermal.session, "WAITING_HINT_S", 0.1)
-    code, _, err = run(
+    monkeypatch.setattr("mtident.thermal.session.WAITING_HINT_S", 0.1)
+    code, _, err = mtident(
         "thermal", "watch", str(log), "--poll", "0.05", "--timeout", "0.5", "--state", str(tmp_path / "s")
     )
     said = " ".join(err.split())
@@ -309,11 +304,12 @@ def test_watch_says_when_no_expected_stop_was_found(tmp_path):
     t = np.arange(0.0, 30.0, 0.5)
     log = tmp_path / "early.csv"
     log.write_text(csv_text(t, {"S": noisy(20.0 + 8.0 * (1.0 - np.exp(-t / 60.0)), 5)}))
-    code, out, _ = run("thermal", "watch", str(log), "--replay", "--state", str(tmp_path / "s.npz"))
+    code, out, _ = mtident("thermal", "watch", str(log), "--replay", "--state", str(tmp_path / "s.npz"))
     assert code == 0 and "Not yet" in out
     assert "Expected stop: none found on the best models' courses" in out and "Expected stop: t ≈" not in out
 
 
+@pytest.mark.slow
 def test_sigterm_during_a_fit_ends_cleanly_at_the_next_check_and_saves_what_it_says(tmp_path):
     """A service manager's SIGTERM while the fits run (a long poll): no traceback from inside the
     compiled code, an end within a few seconds, and the state file holds the time the message
@@ -325,20 +321,35 @@ def test_sigterm_during_a_fit_ends_cleanly_at_the_next_check_and_saves_what_it_s
     log.write_text("".join(lines[:31]))
     state = tmp_path / "live-state.npz"
     cmd = [sys.executable, "-m", "mtident", "thermal", "watch", str(log), "--json", "--state", str(state)]
-    proc = subprocess.Popen(
-        [*cmd, "--poll", "0.05"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path
-    )
+    stderr = tmp_path / "stderr.txt"
+    with open(stderr, "w") as said_file:  # a file, not a pipe: read while the watch runs and after
+        proc = subprocess.Popen(
+            [*cmd, "--poll", "0.05", "--serve", "127.0.0.1:0"],
+            stdout=subprocess.PIPE,
+            stderr=said_file,
+            text=True,
+            cwd=tmp_path,
+        )
     try:
+        # the live page shows each check's answer as it ends: it says when the fits of the new rows run
+        page = wait_until(
+            lambda: re.search(r"the live page is at (http://\S+/)", stderr.read_text()), "the page's address", 120
+        ).group(1)
         wait_until(state.is_file, "the watch's first state file", timeout_s=120)
         with open(log, "a") as out_file:
             out_file.write("".join(lines[31:]))  # 270 rows at once: a poll of many checks
-        time.sleep(2.0)
+        wait_until(
+            lambda: json.loads(_get(page + "state.json"))["answer"].get("last_time_min", 0.0) > 29.0,
+            "a check of the new rows ended (the poll's next fits run)",
+            120,
+        )
         proc.send_signal(signal.SIGTERM)
         sent = time.monotonic()
-        out, err = proc.communicate(timeout=60)
+        out, _ = proc.communicate(timeout=60)
         took = time.monotonic() - sent
     finally:
         proc.kill()
+    err = stderr.read_text()
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "SystemError" not in err
     assert took < 5.0, took
@@ -359,7 +370,7 @@ def test_sigterm_during_a_fit_ends_cleanly_at_the_next_check_and_saves_what_it_s
     assert "resuming from" in resumed.stderr and "refused the row" not in resumed.stderr
     whole = tmp_path / "whole.csv"
     whole.write_text(full)
-    code, out, _ = run("thermal", "watch", str(whole), "--replay", "--json")
+    code, out, _ = mtident("thermal", "watch", str(whole), "--replay", "--json")
     assert code == 0
     assert json.loads(resumed.stdout)["sensors"] == json.loads(out)["sensors"]
 
@@ -382,15 +393,11 @@ def test_a_sigterm_while_the_answer_is_written_is_noted_not_fatal():
 def test_watch_serve_says_where_the_page_is(tmp_path):
     log = tmp_path / "run.csv"
     log.write_text(csv_text(T[:30], {"S": noisy(first_order(T[:30]), 42)}))
-    out = CliRunner().invoke(
-        main, ["thermal", "watch", str(log), "--replay", "--serve", "127.0.0.1:0"], catch_exceptions=False
-    )
-    assert out.exit_code == 0, out.stderr
+    out = mtident("thermal", "watch", str(log), "--replay", "--serve", "127.0.0.1:0")
+    assert out.returncode == 0, out.stderr
     assert "the live page is at http://127.0.0.1:" in out.stderr
-    bad = CliRunner().invoke(
-        main, ["thermal", "watch", str(log), "--replay", "--serve", "nowhere"], catch_exceptions=False
-    )
-    assert bad.exit_code == 2 and "expected HOST:PORT" in bad.stderr
+    bad = mtident("thermal", "watch", str(log), "--replay", "--serve", "nowhere")
+    assert bad.returncode == 2 and "expected HOST:PORT" in bad.stderr
 
 
 def _watch_serving(args: list[str], cwd: Path) -> tuple[subprocess.Popen[str], str]:
@@ -414,25 +421,25 @@ def _watch_serving(args: list[str], cwd: Path) -> tuple[subprocess.Popen[str], s
 
 def _first_answer(proc: subprocess.Popen[str], url: str, within_s: float) -> dict:
     """The page's first answer, asked for while the watch runs, within ``within_s``."""
-    deadline = time.monotonic() + within_s
-    while time.monotonic() < deadline and proc.poll() is None:
-        state = json.loads(_get(url + "state.json"))
-        if "decision" in state["answer"]:  # not the newest readings alone, which a live log's page shows first
-            return dict(state["answer"])
-        time.sleep(0.1)
-    pytest.fail(
-        f"no answer on the page within {within_s:g} s (the watch {'ended' if proc.poll() is not None else 'runs'})"
-    )
+
+    def answer() -> dict | None:
+        if proc.poll() is not None:
+            pytest.fail("the watch ended before its page showed an answer")
+        shown = json.loads(_get(url + "state.json"))["answer"]
+        return dict(shown) if "decision" in shown else None  # not the newest readings alone, shown first live
+
+    return wait_until(answer, "an answer on the page", within_s, 0.1)
 
 
+@pytest.mark.slow
 def test_the_page_answers_at_once_after_a_resume_and_during_a_replay(tmp_path):
     """A watch resumed with a long log to catch up on showed `{"version":0,"answer":{}}` until its
     first poll ended (80 s); a replay never showed an answer at all."""
     lines = _log(601).splitlines(keepends=True)
     log = tmp_path / "live.csv"
     log.write_text("".join(lines[:31]))
-    first = CliRunner().invoke(main, ["thermal", "watch", str(log), "--timeout", "0.2"], catch_exceptions=False)
-    assert first.exit_code == 0 and (tmp_path / "live.csv.watch-state.npz").is_file()
+    first = mtident("thermal", "watch", str(log), "--timeout", "0.2")
+    assert first.returncode == 0 and (tmp_path / "live.csv.watch-state.npz").is_file()
     with open(log, "a") as out:
         out.write("".join(lines[31:]))  # the logger went on while the watch was stopped
     proc, url = _watch_serving([str(log), "--poll", "0.05"], tmp_path)

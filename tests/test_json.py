@@ -7,7 +7,6 @@ import math
 from dataclasses import fields
 
 import numpy as np
-from helpers import mtident
 
 import mtident.thermal
 from mtident._json import to_json_value, walk_fields

@@ -219,7 +219,7 @@ class _HeldCheck:
         def check_due(state, settings, cancel=None):  # noqa: ANN001, ANN202
             if not self.release.is_set() and hold(state.readings.latest_min, self.done):
                 self.held.set()
-                self.release.wait(timeout=60.0)
+                self.release.wait()  # however long the test takes: the test releases it, whatever happens
             out = checked(state, settings, cancel)
             self.done.append(out[0].readings.latest_min)
             return out
@@ -228,11 +228,14 @@ class _HeldCheck:
 
 
 def _following(session, log: Path, page: LivePage, replay: bool) -> threading.Thread:  # noqa: ANN001
+    """The watch's following of ``log`` on a thread of its own: a replay ends at the log's end; a live
+    log is followed without a timeout (one counts the time the page's picture takes, seconds under
+    load) until the test sets ``cli_watch._terminating``, as a SIGTERM does."""
     from mtident.cli_watch import _follow
     from mtident.thermal.session import FollowSettings
 
     thread = threading.Thread(
-        target=_follow, args=(session, log, FollowSettings(replay, 0.05, 1.0), None, False, None, page), daemon=True
+        target=_follow, args=(session, log, FollowSettings(replay, 0.05, None), None, False, None, page), daemon=True
     )
     thread.start()
     return thread
@@ -246,7 +249,7 @@ def test_a_checks_answer_is_on_the_page_while_the_next_checks_fits_run(tmp_path,
     from mtident.thermal.session import WatchSession
 
     log = tmp_path / "whole.csv"
-    log.write_text(_log(601))
+    log.write_text(_log(121))  # within the second part fed (rows 25 to 275): its checks all publish before its end
     # the second check past the replay's first 25 rows (fed alone) is held: the first is in the same part
     held = _HeldCheck(monkeypatch, lambda now, done: now > 25 and sum(t > 25 for t in done) == 1)
     page = LivePage(log.name)
@@ -262,12 +265,13 @@ def test_a_checks_answer_is_on_the_page_while_the_next_checks_fits_run(tmp_path,
     finally:
         held.release.set()
         thread.join(timeout=120.0)
-    assert not thread.is_alive() and page.snapshot()[1]["last_time_min"] == 600.0
+    assert not thread.is_alive() and page.snapshot()[1]["last_time_min"] == 120.0
 
 
 def test_a_live_logs_new_rows_are_on_the_page_while_a_check_runs(tmp_path, monkeypatch):
     """The watch read the log only between its checks: rows written during a check's fits reached
     the page after them (the sample log written a row every 50 ms: 4.6 s at the median)."""
+    from mtident import cli_watch
     from mtident.thermal.monitor import MonitorSettings
     from mtident.thermal.session import WatchSession
 
@@ -277,19 +281,31 @@ def test_a_live_logs_new_rows_are_on_the_page_while_a_check_runs(tmp_path, monke
     held = _HeldCheck(monkeypatch, lambda now, done: True)  # the first check
     page = LivePage(log.name)
     session = WatchSession(log, MonitorSettings(), state_path=tmp_path / "state.npz")
+    stop = threading.Event()
+    monkeypatch.setattr(cli_watch, "_terminating", stop)  # the following's end, when the test has seen it all
     thread = _following(session, log, page, replay=False)
     try:
-        assert held.held.wait(timeout=60.0), "no check"
-        with open(log, "a") as out:
-            out.write("".join(lines[31:]))  # the logger writes on while the check's fits run
-        wait_until(lambda: page.snapshot()[1].get("recorded_time_min") == 60.0, "the new rows on the page")
-        latest = page.snapshot()[1]["latest_C"]
-        assert latest == dict(zip(("A", "B", "C"), map(float, lines[-1].split(",")[1:]), strict=True))
-        assert not held.done  # still within the check
+        try:
+            assert held.held.wait(timeout=60.0), "no check"
+            with open(log, "a") as out:
+                out.write("".join(lines[31:]))  # the logger writes on while the check's fits run
+            wait_until(lambda: page.snapshot()[1].get("recorded_time_min") == 60.0, "the new rows on the page")
+            latest = page.snapshot()[1]["latest_C"]
+            assert latest == dict(zip(("A", "B", "C"), map(float, lines[-1].split(",")[1:]), strict=True))
+            assert not held.done  # still within the check
+        finally:
+            held.release.set()
+        # the rows written during the check are checked once it ends (a following that ended was the flaw)
+        wait_until(
+            lambda: page.snapshot()[1].get("last_time_min") == 60.0 or not thread.is_alive(),
+            "the rows written during the check checked",
+            120,
+        )
+        assert page.snapshot()[1]["last_time_min"] == 60.0
     finally:
-        held.release.set()
+        stop.set()
         thread.join(timeout=120.0)
-    assert not thread.is_alive() and page.snapshot()[1]["last_time_min"] == 60.0
+    assert not thread.is_alive()
 
 
 def test_the_page_shows_readings_newer_than_its_answer_and_never_older():

@@ -6,9 +6,8 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
+from helpers import mtident
 
-from mtident.cli import main
 from mtident.exceptions import InputError
 from mtident.feeddrive import (
     IDENTIFIED,
@@ -111,15 +110,15 @@ def test_plan_input_errors_and_the_cli():
         "--measured",
         "realistic",
     ]
-    out = CliRunner().invoke(main, [*command, "--json"])
-    assert out.exit_code == 0, out.output
+    out = mtident(*command, "--json")
+    assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert data["recommended"] is None
     assert data["candidates"][0]["measured"] == ["a_t_m_per_s2", "theta_m_rad", "omega_m_rad_per_s"]
     assert set(data["candidates"][0]["expected_std_relative"]) == set(IDENTIFIED)
-    bad = CliRunner().invoke(main, ["feeddrive", "plan", "--durations", "0.5,x"])
-    assert bad.exit_code == 2
-    assert "--durations: expected comma-separated positive numbers such as 0.5,1,2; found '0.5,x'" in bad.output
+    bad = mtident("feeddrive", "plan", "--durations", "0.5,x")
+    assert bad.returncode == 2
+    assert "--durations: expected comma-separated positive numbers such as 0.5,1,2; found '0.5,x'" in bad.stderr
 
 
 def test_a_planned_refined_test_says_how_much_noise_on_the_measured_force_it_tolerates():

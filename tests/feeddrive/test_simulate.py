@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from feeddrive_helpers import run
+from helpers import mtident
 
 from mtident.exceptions import InputError
 from mtident.feeddrive import (
@@ -195,7 +195,7 @@ def test_a_record_whose_every_force_is_zero_is_refused_saying_so(tmp_path):
     ):
         identify_feed_drive(unforced)
     path = write_response(unforced, tmp_path / "unforced.csv")
-    out = run("feeddrive", "identify", str(path))
+    out = mtident("feeddrive", "identify", str(path))
     assert out.returncode == 2 and "every force column is zero" in out.stderr and "diverged" not in out.stderr
 
 
@@ -206,13 +206,15 @@ def test_the_first_run_says_it_compiles_the_filter_before_a_silent_minute(tmp_pa
 
     path = write_response(simulate(FeedDriveParameters(), duration_s=0.005), tmp_path / "r.csv")
     monkeypatch.setattr(fast, "compiled_cache_ready", lambda: False)
-    out = run("feeddrive", "identify", str(path), "--no-refine")
+    out = mtident("feeddrive", "identify", str(path), "--no-refine")
     assert out.returncode == 0, out.stderr
     assert "compiling the filter first (once after installing: about a minute)" in out.stderr.splitlines()[0]
     monkeypatch.setattr(fast, "compiled_cache_ready", lambda: True)
-    assert "compiling" not in run("feeddrive", "identify", str(path), "--no-refine").stderr
+    assert "compiling" not in mtident("feeddrive", "identify", str(path), "--no-refine").stderr
     monkeypatch.setattr(fast, "compiled_cache_ready", lambda: False)
-    planned = run("feeddrive", "plan", "--excitation", "impulse", "--durations", "0.25", "--fs", "10000", "--no-refine")
+    planned = mtident(
+        "feeddrive", "plan", "--excitation", "impulse", "--durations", "0.25", "--fs", "10000", "--no-refine"
+    )
     assert planned.returncode == 0, planned.stderr
     assert "predicting 2 tests: compiling the filter first" in planned.stderr.splitlines()[0]
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import first_order, logger_dialects, through_state_file
-from helpers import UNITS_LOG, T, _local_clock_log, csv_text, run
+from helpers import UNITS_LOG, T, _local_clock_log, csv_text, mtident
 
 from mtident.exceptions import InputError
 from mtident.io import read_temperature_log
@@ -418,7 +418,7 @@ def test_follower_and_watch_refuse_two_columns_of_one_name(tmp_path):
     path.write_text("time_min,T1,T1\n0,20,21\n1,20.1,21.2\n")
     with pytest.raises(InputError, match=r"log.csv: the column name 'T1' appears twice \(columns 2 and 3\)"):
         LogFollower(path).poll()
-    code, _, err = run("thermal", "watch", str(path), "--replay")
+    code, _, err = mtident("thermal", "watch", str(path), "--replay")
     assert code == 2 and "Traceback" not in err
     assert "the column name 'T1' appears twice" in err
 
@@ -472,6 +472,6 @@ def test_follower_refuses_a_column_whose_own_unit_the_stated_one_contradicts(tmp
     path.write_text("time_min,A,room [°C]\n0,68,20\n1,212,21\n")
     with pytest.raises(InputError, match=r"sensor 'room \[°C\]' is in °C by its name, but `temperature_unit='F'`"):
         LogFollower(path, sensors, room="room [°C]", temperature_unit="F").poll()
-    code, _, err = run("thermal", "watch", str(path), "--replay", "--unit", "F", "--state", str(tmp_path / "s.npz"))
+    code, _, err = mtident("thermal", "watch", str(path), "--replay", "--unit", "F", "--state", str(tmp_path / "s.npz"))
     assert code == 2 and "Traceback" not in err
     assert "sensor 'room [°C]' is in °C by its name, but --unit F says the temperatures are in °F" in err

@@ -8,12 +8,10 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
-from conftest import first_order
-from helpers import noisy, one_mode_reference
+from conftest import first_order, wait_until
+from helpers import mtident, noisy, one_mode_reference
 from mtconnect_agent import Agent, Server
 
-from mtident.cli import main
 from mtident.exceptions import InputError
 from mtident.io.logs import read_temperature_log
 from mtident.io.mtconnect import MTConnectRecorder, parse_probe, parse_streams
@@ -168,33 +166,28 @@ def test_watch_follows_an_agent_and_decides_as_the_replay_of_its_record(agent_se
     save_reference(one_mode_reference("Spindle", "Bearing"), reference)
     record = tmp_path / "vmc1.csv"
     common = ["--reference", str(reference), "--free-fast-modes", "0", "--json"]
-    live = CliRunner().invoke(
-        main,
-        ["thermal", "watch", server.url, "--device", "VMC1", "--from-buffer-start", "--record", str(record)]
-        + ["--poll", "0.05", "--timeout", "5", *common],
-        catch_exceptions=False,
-    )
-    assert live.exit_code == 0, live.stderr
+    live = mtident(
+        "thermal", "watch", server.url, "--device", "VMC1", "--from-buffer-start", "--record", str(record),
+        "--poll", "0.05", "--timeout", "5", *common,
+    )  # fmt: skip
+    assert live.returncode == 0, live.stderr
     decided = json.loads(live.stdout)
     assert decided["decision"] == "stop" and 50 <= decided["stop_time_min"] <= 80
-    replayed = CliRunner().invoke(main, ["thermal", "watch", str(record), "--replay", *common], catch_exceptions=False)
+    replayed = mtident("thermal", "watch", str(record), "--replay", *common)
     again = json.loads(replayed.stdout)
     assert again["stop_time_min"] == decided["stop_time_min"]
     assert [s["steady_state_C"] for s in again["sensors"]] == [s["steady_state_C"] for s in decided["sensors"]]
-    refused = CliRunner().invoke(main, ["thermal", "watch", server.url, "--replay"], catch_exceptions=False)
-    assert refused.exit_code == 2 and "--replay replays a log file" in refused.stderr
-    other_device = CliRunner().invoke(
-        main, ["thermal", "watch", server.url, "--device", "VMC2", "--record", str(record)], catch_exceptions=False
-    )
-    assert other_device.exit_code == 2
+    refused = mtident("thermal", "watch", server.url, "--replay")
+    assert refused.returncode == 2 and "--replay replays a log file" in refused.stderr
+    other_device = mtident("thermal", "watch", server.url, "--device", "VMC2", "--record", str(record))
+    assert other_device.returncode == 2
     assert "was recorded from" in other_device.stderr and "record to another log (--record FILE)" in other_device.stderr
 
 
+@pytest.mark.slow
 def test_recording_goes_on_while_the_fits_run(agent_server, tmp_path, monkeypatch):
     """Under load the fits held the recording up to 100 s (one thread for both): the agent is asked
     for its samples while a poll's fits run, not only between polls."""
-    import time
-
     from mtident.thermal.session import WatchSession
 
     agent, server = agent_server
@@ -203,15 +196,16 @@ def test_recording_goes_on_while_the_fits_run(agent_server, tmp_path, monkeypatc
     original = WatchSession.poll
 
     def slow(session, redraw=None, cancel=None):  # noqa: ANN001, ANN202
+        # fits that last until the agent has been asked five times more (one thread for both: never)
         before = len(agent.requests)
-        time.sleep(1.0)  # fits that take a second
+        wait_until(lambda: len(agent.requests) - before >= 5, "the agent asked while the fits run", 30.0, 0.01)
         asked_during.append(len(agent.requests) - before)
         return original(session, redraw, cancel)
 
     monkeypatch.setattr(WatchSession, "poll", slow)
     record = tmp_path / "vmc1.csv"
     args = ["thermal", "watch", server.url, "--device", "VMC1", "--from-buffer-start", "--record", str(record)]
-    out = CliRunner().invoke(main, [*args, "--poll", "0.05", "--timeout", "2.5", "--json"], catch_exceptions=False)
-    assert out.exit_code == 0, out.stderr
+    out = mtident(*args, "--poll", "0.05", "--timeout", "2.5", "--json")
+    assert out.returncode == 0, out.stderr
     assert len(asked_during) >= 2 and min(asked_during) >= 5, asked_during
     np.testing.assert_allclose(read_temperature_log(record).time_min, MINUTES[:10])

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 from conftest import first_order
-from helpers import csv_text, noisy, report
+from helpers import csv_text, mtident, noisy
 
 from mtident.report.test_report import reading_gaps
 
@@ -15,7 +15,7 @@ def test_stretches_without_readings_are_said(tmp_path):
     log = tmp_path / "gappy.csv"
     log.write_text(csv_text(t, {"S": noisy(first_order(t), 24)}))
     out = tmp_path / "gappy.html"
-    code, _, err = report(str(log), "-o", str(out))
+    code, _, err = mtident("thermal", "report", str(log), "-o", str(out))
     assert code == 0, err
     assert "to t = 119 min; none from 40 min to 70 min</dd>" in out.read_text(encoding="utf-8")
     assert reading_gaps(np.arange(10.0)) == ()

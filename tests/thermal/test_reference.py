@@ -23,9 +23,9 @@ from helpers import (
     _run_in_room,
     _truth,
     csv_text,
+    mtident,
     noisy,
     one_mode_reference,
-    run,
     two_mode,
 )
 
@@ -44,7 +44,7 @@ def test_watch_replay_json_says_the_decision_what_it_assumes_and_checks_it(tmp_p
     log.write_text(csv_text(T, {"A": noisy(first_order(T), 13), "B": noisy(first_order(T, steady=29.0), 14)}))
     reference = tmp_path / "machine.toml"
     save_reference(one_mode_reference("A", "B"), reference)
-    code, out, err = run(
+    code, out, err = mtident(
         "thermal",
         "watch",
         str(log),
@@ -87,7 +87,7 @@ def test_watch_says_each_sensors_reference_and_when_each_became_ready(tmp_path):
     log.write_text(csv_text(t, {"S": noisy(first_order(t), 1), "B": noisy(np.full(len(t), 20.0), 2)}))
     reference = tmp_path / "machine.toml"
     save_reference(one_mode_reference("S"), reference)
-    code, out, err = run(
+    code, out, err = mtident(
         "thermal", "watch", str(log), "--replay", "--reference", str(reference), "--free-fast-modes", "0"
     )
     assert code == 0, err

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 from conftest import PAPER_STEADY, first_order
-from helpers import BATCHED_SETTINGS, T, csv_text, noisy, one_mode_reference, run
+from helpers import BATCHED_SETTINGS, T, csv_text, mtident, noisy, one_mode_reference
 
 from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal.monitor import MonitorSettings, MonitorState
@@ -29,7 +29,7 @@ def test_watch_reads_a_log_in_fahrenheit_as_the_unit_option_says(tmp_path):
     curve = noisy(first_order(T[:200]), 13)
     log.write_text(csv_text(T[:200], {"A": curve * 9 / 5 + 32}))
     state = tmp_path / "state.npz"
-    code, out, err = run("thermal", "watch", str(log), "--replay", "--unit", "F", "--json", "--state", str(state))
+    code, out, err = mtident("thermal", "watch", str(log), "--replay", "--unit", "F", "--json", "--state", str(state))
     assert code == 0, err
     data = json.loads(out)
     assert abs(data["steady_state_C"] - PAPER_STEADY) < 0.5, data["steady_state_C"]

@@ -1,0 +1,48 @@
+"""Tests of :mod:`mtident.io.whole`: a whole log's readings left out, skipped and refused, each named
+by its row."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mtident.exceptions import InputError
+from mtident.io import read_temperature_log
+
+
+def test_isolated_bad_samples_are_skipped_with_a_note(write_csv):
+    rows = "".join(f"{k},{20 + k * 0.1 if k not in (3, 7) else ('' if k == 3 else 850.0)}\n" for k in range(30))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows))
+    assert np.isnan(log.temperature_C[3, 0]) and np.isnan(log.temperature_C[7, 0])
+    assert log.notes == ("sensor 'A': skipped 1 empty/NaN and 1 open-circuit sample(s) (rows 5, 9)",)
+
+
+def test_a_burnout_marker_is_an_open_circuit_sample(write_csv):
+    """Graphtec writes BURNOUT for a broken thermocouple's reading: it stopped the file reader
+    ("'BURNOUT' is not a number") where the live follower bridged it."""
+    rows = "".join(f"{k},{'BURNOUT' if k in (7, 9) else f'{20 + k / 10:.2f}'}\n" for k in range(30))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows))
+    assert log.notes == ("sensor 'A': skipped 2 open-circuit sample(s) (rows 9, 11)",)
+    assert np.isnan(log.temperature_C[[7, 9], 0]).all() and log.temperature_C[8, 0] == 20.8
+
+
+def test_a_row_written_twice_is_left_out_and_said(write_csv):
+    """A logger flushing its buffer again wrote a row twice; the run ended with 'duplicate time'.
+    The same time with other readings is still refused."""
+    rows = "".join(f"{k},{20 + k / 10:.2f}\n" for k in range(20))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows.replace("5,20.50\n", "5,20.50\n5,20.50\n")))
+    assert len(log.time_min) == 20 and "left out 1 row(s) repeating an earlier row exactly (rows 8)" in log.notes
+    with pytest.raises(InputError, match="duplicate time"):
+        read_temperature_log(write_csv("time_min,A\n" + rows.replace("5,20.50\n", "5,20.50\n5,20.60\n")))
+
+
+def test_rows_after_a_row_left_out_are_named_by_their_own_line(write_csv):
+    """A message names the row as the file numbers it: a repeated row left out before it made the
+    reader name the row above."""
+    rows = "".join(f"{k},{20 + k / 10:.2f},{21 + k / 10:.2f}\n" for k in range(20))
+    twice = rows.replace("3,20.30,21.30\n", "3,20.30,21.30\n3,20.30,21.30\n")
+    log = read_temperature_log(write_csv("time_min,A,B\n" + twice.replace("8,20.80,", "8,,")))
+    # line 1 the header, k at line k + 2, one more after the row written twice
+    assert log.notes[-1] == "sensor 'A': skipped 1 empty/NaN sample(s) (rows 11)", log.notes
+    with pytest.raises(InputError, match=r"sensor 'A', row 11: 'x' is not a number"):
+        read_temperature_log(write_csv("time_min,A,B\n" + twice.replace("8,20.80,", "8,x,"), "bad.csv"))
