@@ -551,9 +551,11 @@ class WatchSession:
                     yield Watching(self.sensors)
                 if self.last_rows:
                     last_data = time.monotonic()
+                # idle as the poll found it: the time a caller takes over Polled (a page's
+                # picture) is no time without data, and rows written meanwhile are read next
+                idle_s = time.monotonic() - last_data
                 if self.state is not None:
                     yield Polled(self.last_rows, self.stopped)
-                idle_s = time.monotonic() - last_data
                 if self.stopped or follow.replay:
                     yield Ended("stopped" if self.stopped else "replayed", idle_s)
                     return
