@@ -10,7 +10,7 @@ from conftest import PAPER_RATE, PAPER_START, PAPER_STEADY, first_order, make_lo
 
 from mtident.thermal import identify
 from mtident.thermal.lsq import cramer_rao_bound
-from mtident.thermal.readings import display_resolution, noise_sigma, quick_estimate
+from mtident.thermal.readings import display_resolution, noise_sigma, quick_estimate, room_error_C
 
 
 def test_a_room_is_taken_over_the_longest_window_it_follows_within_its_noise():
@@ -130,3 +130,13 @@ def test_a_clean_curve_logged_in_rounded_steps_is_identified_within_its_interval
     # as wide as noise of q/√12 allows (the Cramér-Rao bound of that noise), not a collapse or a blow-up
     bound = np.sqrt(cramer_rao_bound(t[:31], PAPER_START, PAPER_RATE, PAPER_STEADY, sigma)[2, 2])
     assert 0.5 * bound < result.details.steady_state_sd_C[0] < 2.0 * bound
+
+
+def test_a_coarse_room_sensors_slow_error_is_its_steps_and_a_fine_ones_none():
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 120.0)
+    room = 21.12 + 0.2 * np.sin(2 * np.pi * t / 1440.0) + rng.normal(0.0, 0.01, t.size)
+    assert room_error_C(t, np.round(room, 1)) == pytest.approx(0.1 / np.sqrt(12.0))
+    assert room_error_C(t, np.round(room * 20.0) / 20.0) == pytest.approx(0.05 / np.sqrt(12.0))
+    assert room_error_C(t, np.round(room, 2)) == 0.0
+    assert room_error_C(t[:4], np.round(room[:4], 1)) == 0.0

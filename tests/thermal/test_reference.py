@@ -445,6 +445,27 @@ def test_a_room_sensors_display_steps_teach_a_fast_machine_no_slow_mode():
     assert all(2.5 < tau < 3.5 for tau in slowest.values()), slowest
 
 
+def test_a_daily_room_read_in_coarse_steps_teaches_a_fast_machine_no_slow_mode():
+    """A room rising 0.1 °C in two hours, read in 0.1 °C steps with less noise than a step, is
+    off by up to half a step, slowly, as it crosses them; every sensor follows the true room, and
+    that error was learnt as slow modes (boxes of 3-300 min, the sensors doubted) that every later
+    test of this 2.5-minute machine then had to wait for."""
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 121.0, 1.0)
+    true_room = 21.12 + 0.2 * np.sin(2 * np.pi * t / 1440.0)
+    room = np.round((true_room + rng.normal(0.0, 0.015, t.size)) * 10.0) / 10.0
+    rises = (2.9, 2.4, 3.3, 2.0)
+    curves = [true_room + a * (1 - np.exp(-t / 2.5)) for a in rises]
+    values = np.column_stack([np.round(c + rng.normal(0, 0.008, t.size), 2) for c in curves])
+    names = ("A", "B", "C", "D")
+
+    learnt, warnings = learn_reference(TemperatureLog(t, names, values, (), "fast"), room)
+    assert set(learnt.sensors) == set(names)
+    for name, modes in learnt.sensors.items():
+        assert max(modes.time_constants_min) < 10.0 and modes.doubt is None, (name, modes, warnings)
+    assert not [w for w in warnings if "pins its own steady state" in w or "300 min" in w], warnings
+
+
 def test_a_doubt_says_why_the_run_did_not_pin_the_sensor_down():
     """A run whose T∞ was not determined was said to have modes that "do not describe it
     (residuals 1.0x as correlated as noise)", which contradicts itself; a run that pins its steady

@@ -13,6 +13,7 @@ from conftest import (
 from helpers import replay
 
 from mtident.thermal import RobustSettings
+from mtident.thermal.readings import room_error_C
 from mtident.thermal.reference import learn_reference
 from mtident.thermal.robust import SensorModes, estimate_sensor
 
@@ -361,3 +362,25 @@ def test_a_rise_a_falling_room_hides_is_no_flat_start():
     assert np.ptp(readings[:300]) < 0.15  # flat to the eye for five hours
     estimate = estimate_sensor("column", t, readings, np.round(room + rng.normal(0.0, 0.01, t.size), 2))
     assert estimate.onset_min < 40.0, estimate.warnings  # where 0.1 °C above the room is first seen
+
+
+def test_residuals_within_a_coarse_room_sensors_error_are_no_misfit_where_learning_allows_it():
+    """A room rising 0.1 °C in two hours, read in 0.1 °C steps with less noise than a step, is off
+    by up to half a step as it crosses them, slowly: a one-mode warm-up that follows the true room
+    leaves residuals four times as correlated as noise against it, and a reference run judged it a
+    misfit. Learning allows the room sensor's own error; a test does not."""
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 121.0, 1.0)
+    true_room = 21.12 + 0.2 * np.sin(2 * np.pi * t / 1440.0)
+    room = np.round((true_room + rng.normal(0.0, 0.015, t.size)) * 10.0) / 10.0
+    values = np.round(true_room + 2.9 * (1 - np.exp(-t / 2.5)) + rng.normal(0, 0.005, t.size), 2)
+    one_mode = replace(RobustSettings(), max_modes=1, more_modes_when_used=False)
+    error = room_error_C(t, room)
+
+    learning = estimate_sensor("A", t, values, room, one_mode, misfit_beyond_C=error)
+    testing = estimate_sensor("A", t, values, room, one_mode)
+
+    assert 0.02 < error < 0.04
+    assert learning.fit is not None and learning.fit.correlation_factor > 2.5
+    assert learning.model_ok and "misfit" not in learning.warning_codes
+    assert not testing.model_ok and "misfit" in testing.warning_codes

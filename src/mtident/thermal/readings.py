@@ -25,6 +25,7 @@ __all__ = [
     "reading_range",
     "rise_threshold_C",
     "sampling_interval_min",
+    "room_error_C",
     "room_input",
     "spikes",
     "step_from_grid",
@@ -305,6 +306,39 @@ def room_input(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
         if np.sqrt(np.mean((room[valid] - trend[valid]) ** 2)) <= ROOM_WINDOW_SLACK * noise:
             break
     return trend
+
+
+COARSE_ROOM_STEP_C = 0.05
+"""A room sensor read in steps this coarse or coarser hides the room's slow moves within a step."""
+
+
+def room_error_C(time_min: FloatArray, room_C: FloatArray) -> float:
+    """The slow part of a coarse room sensor's error (°C): its display step's q/√12, where the step
+    is :data:`COARSE_ROOM_STEP_C` or coarser; else 0.
+
+    A room read in 0.1 °C steps holds one value for an hour while the room moves a few
+    hundredths, and as it crosses a step its readings jump: what a fit takes as the room
+    (:func:`room_input`) is off by up to half a step, slowly, and every sensor's fit carries that
+    error, which a mode the machine does not have can take up (reference runs of 2.5-minute
+    machines in a room cycling ±0.12 °C, read in 0.1 °C steps, learnt modes of 30 to 150 min). A
+    room read in finer steps is followed by its trend within its noise.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+        Sample times (min); the step is read from the readings alone.
+    room_C : ndarray, shape (N,)
+        The room's readings (°C, NaN: missing).
+
+    Returns
+    -------
+    float
+    """
+    room = np.asarray(room_C, dtype=float)
+    if np.count_nonzero(np.isfinite(room)) < 5:
+        return 0.0
+    step = max(float(display_resolution(room[:, None])[0]), quantisation_step(room))
+    return step / math.sqrt(12.0) if step >= COARSE_ROOM_STEP_C - 1e-9 else 0.0
 
 
 def _window_sums(time_min: FloatArray, valid: np.ndarray, window_min: float, *columns: FloatArray) -> list[FloatArray]:

@@ -25,7 +25,7 @@ from mtident.io.logs import TemperatureLog
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, noise_and_origin
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
-from mtident.thermal.readings import ROOM_TREND_MIN, room_input, room_trend
+from mtident.thermal.readings import ROOM_TREND_MIN, room_error_C, room_input, room_trend
 from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
 from mtident.thermal.robust_types import DEFAULT_MAX_MODES, MAX_FREE_FAST, RobustSettings, SensorEstimate, SensorModes
 
@@ -301,7 +301,8 @@ def learn_reference(
             continue
         estimate, centres, boxes, determined = learnt.estimate, learnt.centres, learnt.boxes, learnt.determined
         fit = _fit_of(estimate)
-        doubt = _doubt(estimate, learnt.one_more, max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True)))
+        ceiling = max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True))
+        doubt = _doubt(estimate, learnt.one_more, ceiling, learnt.room_reach)
         sensors[name] = SensorModes(centres, boxes, tuple(m.amplitude_C for m in fit.modes), doubt)
         if doubt is None and len(fit.modes) > determined:
             warnings.append(
@@ -523,7 +524,7 @@ def _holds(tau: float, box: float, other: float) -> bool:
     return tau * (1.0 - box) <= other <= tau * (1.0 + box)
 
 
-def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: float) -> str | None:
+def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: float, room_reach: float) -> str | None:
     """Why a reference run did not pin a sensor down, or None: its modes misfit the run, its
     readings leave its own steady state wider than ``PINNED_HALF_WIDTH_C``, or its best fit with
     one mode more (``one_more``, chosen by BIC) has a mode slower than the learnt modes' boxes
@@ -531,6 +532,8 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
     modes than the reference's, not slower ones: a sparse run that ended while a small slow mode
     was still rising was learnt as one fast mode (its noise, read off the rise, hid the slow
     mode from the test of modes needed), and a test that trusted it stopped 0.29 °C low. The
+    slower mode must explain more than the room sensor's own error could (``room_reach``, °C²,
+    as :func:`_modes_needed`). The
     readings' interval, without the unmeasured room's wander: the wander is the future room's,
     which a later test meets with its own readings, and with it every run whose slowest mode
     exceeds an hour was doubted, however complete."""
@@ -554,7 +557,8 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
     if better is None or len(better.modes) <= len(fit.modes):
         return None
     slowest = max(m.time_constant_min for m in better.modes)
-    if slowest > ceiling_min and abs(better.steady_C - fit.steady_C) > PINNED_HALF_WIDTH_C:
+    explains = fit.rss - better.rss > room_reach
+    if slowest > ceiling_min and abs(better.steady_C - fit.steady_C) > PINNED_HALF_WIDTH_C and explains:
         return (
             f"a fit with one mode more, of about {slowest:.3g} min, slower than those learnt, describes the run better "
             f"(BIC) and puts its steady state at {better.steady_C:.2f} °C instead of {fit.steady_C:.2f} °C: the run "
@@ -566,13 +570,15 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
 @dataclass(frozen=True)
 class _Learnt:
     """One sensor's learning: the estimate with the modes kept, their boxes' centres and relative
-    half-widths, how many the run pins down, and the fit with one mode more (for the doubt)."""
+    half-widths, how many the run pins down, the fit with one mode more (for the doubt) and what
+    the room sensor's own error could explain (°C², :func:`_modes_needed`)."""
 
     estimate: SensorEstimate
     centres: tuple[float, ...]
     boxes: tuple[float, ...]
     determined: int
     one_more: SensorEstimate
+    room_reach: float
 
 
 def _learn_sensor(
@@ -589,9 +595,12 @@ def _learn_sensor(
     others' boxes, which the run itself contradicts (a slow mode of a fifth of a degree, learnt
     away, stopped a test 0.4 °C low)."""
 
+    # the room sensor's slow error shows in every fit's residuals: no misfit, and no mode needed
+    room_error = 0.0 if room_C is None else _slow_room_error(time_min, room_C)
+
     def fitted(count: int) -> SensorEstimate:
         family = replace(settings, max_modes=count, more_modes_when_used=False)
-        return estimate_sensor(name, time_min, values, room_C, family)
+        return estimate_sensor(name, time_min, values, room_C, family, misfit_beyond_C=room_error)
 
     tried: dict[int, SensorEstimate] = {}
     estimates: dict[int, SensorEstimate] = {}
@@ -611,14 +620,41 @@ def _learn_sensor(
     if not estimates:
         return why
     determined = max((c for c in estimates if np.max(sds[c]) <= MAX_MODE_SD), default=1)
-    count = max(determined, _modes_needed(_fit_of(estimates[max(estimates)])))
+    most = _fit_of(estimates[max(estimates)])
+    room_reach = 0.0 if room_C is None else _room_reach(time_min, values, room_C, most.origin_min, room_error)
+    count = max(determined, _modes_needed(most, room_reach))
     taus = [m.time_constant_min for m in _fit_of(estimates[count]).modes]
     centres, boxes = zip(
         *(_box(tau, float(sd), settings.max_time_constant_min) for tau, sd in zip(taus, sds[count], strict=True)),
         strict=True,
     )
     one_more = tried[count + 1] if count + 1 in tried else fitted(count + 1)
-    return _Learnt(estimates[count], centres, boxes, determined, one_more)
+    return _Learnt(estimates[count], centres, boxes, determined, one_more, room_reach)
+
+
+def _slow_room_error(time_min: FloatArray, room_C: FloatArray) -> float:
+    """A coarse room sensor's slow error over the run (RMS, °C): its step's q/√12
+    (:func:`~mtident.thermal.readings.room_error_C`), or less where the room's trend moved less
+    than a step (a steady room's readings are off by one constant, which no mode takes up)."""
+    error = room_error_C(time_min, room_C)
+    moved = float(np.nanmax(room_C) - np.nanmin(room_C)) if error > 0 else 0.0
+    trend = room_input(time_min, room_C) if error > 0 else room_C
+    return min(error, float(np.nanmax(trend) - np.nanmin(trend)) / math.sqrt(12.0)) if moved > 0 else 0.0
+
+
+def _room_reach(
+    time_min: FloatArray, values: FloatArray, room_C: FloatArray, origin_min: float, room_error: float
+) -> float:
+    """The most a coarse room sensor's slow error (``room_error``, RMS) could give one mode to
+    explain over the readings fitted (a residual sum of squares, °C²): all of it where the room
+    crosses at most two of its steps, less as it crosses more (the error then changes sign with
+    each step, faster than a mode follows)."""
+    fitted = (time_min >= origin_min) & np.isfinite(values) & np.isfinite(room_C)
+    if room_error <= 0.0 or not fitted.any():
+        return 0.0
+    step = room_error_C(time_min, room_C) * math.sqrt(12.0)
+    crossed = float(np.ptp(room_C[fitted]))
+    return float(np.count_nonzero(fitted)) * room_error**2 * min(1.0, 2.0 * step / max(crossed, 1e-12))
 
 
 def _spans(centres: tuple[float, ...], boxes: tuple[float, ...], skip: int) -> str:
@@ -628,12 +664,14 @@ def _spans(centres: tuple[float, ...], boxes: tuple[float, ...], skip: int) -> s
     return ", ".join(f"{centres[k] * (1 - boxes[k]):.3g}-{centres[k] * (1 + boxes[k]):.3g} min" for k in order)
 
 
-def _modes_needed(fit: SteadyState) -> int:
+def _modes_needed(fit: SteadyState, room_reach: float = 0.0) -> int:
     """The most modes that fit the run better than one mode fewer beyond chance (χ² on 2 degrees
     of freedom at ``DISAGREEMENT_LEVEL``, on the noise of the fit with the most modes: a fit with
-    too few has correlated residuals, and its noise hides what the next mode explains)."""
+    too few has correlated residuals, and its noise hides what the next mode explains) and beyond
+    ``room_reach`` (°C², a residual sum of squares): all that the room sensor's own error
+    (:func:`~mtident.thermal.readings.room_error_C`) could give a mode to explain."""
     quantile = float(chdtri(2, 1.0 - DISAGREEMENT_LEVEL))
-    gains = {k: (fit.fits[k - 1] - fit.fits[k]) / fit.noise_C**2 for k in fit.fits if k - 1 in fit.fits}
+    gains = {k: (fit.fits[k - 1] - fit.fits[k] - room_reach) / fit.noise_C**2 for k in fit.fits if k - 1 in fit.fits}
     return max((k for k, gain in gains.items() if gain > quantile), default=1)
 
 

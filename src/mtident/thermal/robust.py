@@ -12,6 +12,7 @@ as before.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import replace
 from typing import Literal
@@ -132,6 +133,7 @@ def estimate_sensor(
     reference: SensorModes | None = None,
     noise_C: float | None = None,
     refine_within: float | None = None,
+    misfit_beyond_C: float = 0.0,
 ) -> SensorEstimate:
     """The model-robust T∞ of one sensor from all its readings so far.
 
@@ -154,6 +156,11 @@ def estimate_sensor(
     refine_within : float, optional
         Refine the intervals off the search grid only where already within this (°C)
         (:func:`~mtident.thermal.modes.fit_steady_state`).
+    misfit_beyond_C : float, optional
+        Residuals correlated beyond :data:`MISFIT_FACTOR` are a misfit only where their part beyond
+        the noise exceeds this (RMS, °C): a reference run learns with the room sensor's own error
+        here (:func:`~mtident.thermal.readings.room_error_C`), which every fit's residuals show;
+        a test keeps 0, and its answer is not trusted on any such misfit.
 
     Returns
     -------
@@ -236,7 +243,10 @@ def estimate_sensor(
     # the floor lifts the low end, never above T∞ itself (the fit's own interval stays around it)
     readings = {q: (min(max(lo, floor), fit.steady_C), hi) for q, (lo, hi) in fit.interval_C.items()}
     intervals = _nested(_with_room_wander(fit, readings, room_C is not None, settings))
-    ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, notes)
+    misfit = fit.correlation_factor > MISFIT_FACTOR and (
+        misfit_beyond_C <= 0.0 or _systematic_C(fit, binned, noise) > misfit_beyond_C
+    )
+    ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, misfit, notes)
     return SensorEstimate(
         sensor,
         "estimated",
@@ -655,15 +665,24 @@ class _Notes:
         return tuple(self.texts), tuple(self.codes)
 
 
+def _systematic_C(fit: SteadyState, binned: Binned, noise: float) -> float:
+    """The residuals' part beyond the readings' noise, per reading (RMS, °C)."""
+    dof = float(binned.count.sum()) - (len(binned) - fit.dof)
+    return math.sqrt(max(fit.rss / max(dof, 1.0) - noise**2, 0.0))
+
+
 def _verdict(
     fit: SteadyState,
     intervals: dict[float, tuple[float, float]],
     rise: float,
     threshold: float,
     onset_min: float | None,
+    misfit: bool,
     notes: _Notes,
 ) -> bool:
-    """``model_ok`` of one fitted sensor; its warnings go to ``notes``."""
+    """``model_ok`` of one fitted sensor; its warnings go to ``notes``. ``misfit``: residuals
+    correlated beyond :data:`MISFIT_FACTOR` (and beyond what :func:`estimate_sensor`'s
+    ``misfit_beyond_C`` allows)."""
     ok = fit.determined and not UNTRUSTING_CODES & set(notes.codes)
     if onset_min is not None:
         notes.add(
@@ -672,7 +691,7 @@ def _verdict(
             "heat reached this sensor only then, or a partly warm sensor moved too slowly to show sooner); the modes "
             "are counted from there",
         )
-    if fit.correlation_factor > MISFIT_FACTOR:
+    if misfit:
         ok = False
         notes.add(
             "misfit",
