@@ -637,9 +637,10 @@ def _slow_room_error(time_min: FloatArray, room_C: FloatArray) -> float:
     (:func:`~mtident.thermal.readings.room_error_C`), or less where the room's trend moved less
     than a step (a steady room's readings are off by one constant, which no mode takes up)."""
     error = room_error_C(time_min, room_C)
-    moved = float(np.nanmax(room_C) - np.nanmin(room_C)) if error > 0 else 0.0
-    trend = room_input(time_min, room_C) if error > 0 else room_C
-    return min(error, float(np.nanmax(trend) - np.nanmin(trend)) / math.sqrt(12.0)) if moved > 0 else 0.0
+    if error <= 0.0:
+        return 0.0
+    trend = room_input(time_min, room_C)
+    return min(error, float(np.nanmax(trend) - np.nanmin(trend)) / math.sqrt(12.0))
 
 
 def _room_reach(
