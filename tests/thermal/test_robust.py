@@ -337,15 +337,15 @@ def test_the_floor_a_warm_up_sets_holds_only_for_a_rising_sensor_and_follows_a_r
     estimate = estimate_sensor("S", t, rising, settings=RobustSettings(room_wander_C_per_h=0.0), noise_C=0.01)
     assert estimate.fit is not None
     latest = float(np.median(rising[-5:]))
-    floor = overshoot_floor_C(estimate.fit, t, rising, None, 0.01, 0.0)
+    floor = overshoot_floor_C(estimate.fit, (t, rising, None), 0.01, 0.0)
     assert floor == pytest.approx(latest - 0.04)
     assert estimate.interval_C[0.99][0] >= floor
     # a room that stood 0.3 °C above its latest level lowers the floor by that much
     room = 20.0 + 0.3 * (t < 60.0)
-    assert overshoot_floor_C(estimate.fit, t, rising, room, 0.01, 0.0) == pytest.approx(latest - 0.34)
+    assert overshoot_floor_C(estimate.fit, (t, rising, room), 0.01, 0.0) == pytest.approx(latest - 0.34)
     # a sensor that cooled from a peak (an earlier heating at more power) sets none
     cooled = np.where(t < 60.0, rising, rising[59] - 0.02 * (t - 59.0))
-    assert overshoot_floor_C(estimate.fit, t, cooled, None, 0.01, 0.0) == -np.inf
+    assert overshoot_floor_C(estimate.fit, (t, cooled, None), 0.01, 0.0) == -np.inf
 
 
 def test_a_rise_a_falling_room_hides_is_no_flat_start():

@@ -288,9 +288,8 @@ def _fit_above_floor(
     A fit with the reference that puts T∞ below the floor is made again without it.
     ``readings``: the times, readings and room since the warm-up began; ``interval``: the log's
     sampling interval (min)."""
-    t, y, room = readings
     fit, reference_used = _modal_fit(binned, noise, interval, settings, reference, notes, refine_within)
-    floor = overshoot_floor_C(fit, t, y, room, noise, rounding)
+    floor = overshoot_floor_C(fit, readings, noise, rounding)
     if reference_used and _below_floor(fit, floor):
         # the reference's modes make this warm-up come down to its T∞: they are not this sensor's
         notes.add(
@@ -300,7 +299,7 @@ def _fit_above_floor(
             "changed, or is the reference another machine's? The answer does not use the reference",
         )
         fit, reference_used = _modal_fit(binned, noise, interval, settings, None, notes, refine_within)
-        floor = overshoot_floor_C(fit, t, y, room, noise, rounding)
+        floor = overshoot_floor_C(fit, readings, noise, rounding)
     if _below_floor(fit, floor):
         notes.add(
             "below-floor",
@@ -573,17 +572,13 @@ def _below_floor(fit: SteadyState, floor: float) -> bool:
 
 
 def overshoot_floor_C(
-    fit: SteadyState,
-    time_min: FloatArray,
-    values: FloatArray,
-    room_C: FloatArray | None,
-    noise_C: float,
-    rounding_C: float,
+    fit: SteadyState, readings: tuple[FloatArray, FloatArray, FloatArray | None], noise_C: float, rounding_C: float
 ) -> float:
-    """:func:`~mtident.thermal.measured.warm_up_floor_C` of a determined fit (−inf otherwise)."""
+    """:func:`~mtident.thermal.measured.warm_up_floor_C` of a determined fit (−inf otherwise), of
+    ``readings``: the times, readings and room since the warm-up began."""
     if not fit.determined:
         return -np.inf
-    return warm_up_floor_C(fit.steady_C, time_min, values, room_C, noise_C, rounding_C)
+    return warm_up_floor_C(fit.steady_C, *readings, noise_C, rounding_C)
 
 
 def _with_room_wander(
