@@ -464,6 +464,7 @@ def test_a_daily_room_read_in_coarse_steps_teaches_a_fast_machine_no_slow_mode()
     for name, modes in learnt.sensors.items():
         assert max(modes.time_constants_min) < 10.0 and modes.doubt is None, (name, modes, warnings)
     assert not [w for w in warnings if "pins its own steady state" in w or "300 min" in w], warnings
+    assert [w for w in warnings if "the room is read in steps of 0.1 °C" in w and "0.01 °C" in w], warnings
 
 
 def test_a_doubt_says_why_the_run_did_not_pin_the_sensor_down():

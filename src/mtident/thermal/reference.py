@@ -330,6 +330,12 @@ def learn_reference(
     sensors, split = split_merged_modes(sensors, model)
     warnings.extend(split)
     warnings.extend(said)
+    if room_C is not None and (step := room_error_C(log.time_min, room_C) * math.sqrt(12.0)) > 0:
+        warnings.append(
+            f"the room is read in steps of {step:.2g} °C: it moves within a step unseen, and its readings jump as it "
+            "crosses one, an error every sensor's fit shares (learnt modes explain only what lies beyond it). Log "
+            "the room at 0.01 °C"
+        )
     room = _ROOM_MEASURED if room_C is not None else "not measured"
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors, machine_model=model
