@@ -294,8 +294,9 @@ def learn_reference(
     settings = settings or RobustSettings()
     sensors: dict[str, SensorModes] = {}
     warnings: list[str] = []
+    room_step = 0.0 if room_C is None else room_error_C(log.time_min, room_C) * math.sqrt(12.0)
     for s, name in enumerate(log.sensors):
-        learnt = _learn_sensor(name, log.time_min, log.temperature_C[:, s], room_C, settings)
+        learnt = _learn_sensor(name, log.time_min, log.temperature_C[:, s], room_C, room_step, settings)
         if isinstance(learnt, str):
             warnings.append(f"{name}: left out of the reference ({learnt})")
             continue
@@ -330,11 +331,11 @@ def learn_reference(
     sensors, split = split_merged_modes(sensors, model)
     warnings.extend(split)
     warnings.extend(said)
-    if room_C is not None and (step := room_error_C(log.time_min, room_C) * math.sqrt(12.0)) > 0:
+    if room_step > 0:
         warnings.append(
-            f"the room is read in steps of {step:.2g} °C: it moves within a step unseen, and its readings jump as it "
-            "crosses one, an error every sensor's fit shares (learnt modes explain only what lies beyond it). Log "
-            "the room at 0.01 °C"
+            f"the room is read in steps of {room_step:.2g} °C: it moves within a step unseen, and its readings "
+            "jump as it crosses one, an error every sensor's fit shares (learnt modes explain only what lies beyond "
+            "it). Log the room at 0.01 °C"
         )
     room = _ROOM_MEASURED if room_C is not None else "not measured"
     return MachineReference(
@@ -588,7 +589,12 @@ class _Learnt:
 
 
 def _learn_sensor(
-    name: str, time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, settings: RobustSettings
+    name: str,
+    time_min: FloatArray,
+    values: FloatArray,
+    room_C: FloatArray | None,
+    room_step: float,
+    settings: RobustSettings,
 ) -> _Learnt | str:
     """The sensor's modes, their boxes' centres and widths, how many of them the run pins down,
     and the fit with one mode more; where no model fits, why (a room's column given as a sensor
@@ -599,10 +605,11 @@ def _learn_sensor(
     and left the slowest unpinned). A mode the run needs but cannot pin down stays, with the wide
     box its uncertainty gives: left out, it would tell a later test that no mode lies beyond the
     others' boxes, which the run itself contradicts (a slow mode of a fifth of a degree, learnt
-    away, stopped a test 0.4 °C low)."""
-
+    away, stopped a test 0.4 °C low). ``room_step``: a coarse room sensor's display step (0 for a
+    fine one, :func:`~mtident.thermal.readings.room_error_C`)."""
+    room_in = None if room_C is None else room_input(time_min, room_C)
     # the room sensor's slow error shows in every fit's residuals: no misfit, and no mode needed
-    room_error = 0.0 if room_C is None else _slow_room_error(time_min, room_C)
+    room_error = 0.0 if room_in is None else _slow_room_error(room_in, room_step)
 
     def fitted(count: int) -> SensorEstimate:
         family = replace(settings, max_modes=count, more_modes_when_used=False)
@@ -620,14 +627,15 @@ def _learn_sensor(
         if fit is None or len(fit.modes) < count:
             break
         first = int(np.searchsorted(time_min, fit.origin_min))
-        room = None if room_C is None else room_input(time_min, room_C)[first:]
-        binned = bin_samples(time_min[first:], values[first:], room)
+        binned = bin_samples(time_min[first:], values[first:], None if room_in is None else room_in[first:])
         estimates[count], sds[count] = estimate, np.asarray(log_time_constant_sd(binned, fit), dtype=float)
     if not estimates:
         return why
     determined = max((c for c in estimates if np.max(sds[c]) <= MAX_MODE_SD), default=1)
     most = _fit_of(estimates[max(estimates)])
-    room_reach = 0.0 if room_C is None else _room_reach(time_min, values, room_C, most.origin_min, room_error)
+    room_reach = (
+        0.0 if room_C is None else _room_reach(time_min, values, room_C, most.origin_min, room_error, room_step)
+    )
     count = max(determined, _modes_needed(most, room_reach))
     taus = [m.time_constant_min for m in _fit_of(estimates[count]).modes]
     centres, boxes = zip(
@@ -638,19 +646,17 @@ def _learn_sensor(
     return _Learnt(estimates[count], centres, boxes, determined, one_more, room_reach)
 
 
-def _slow_room_error(time_min: FloatArray, room_C: FloatArray) -> float:
-    """A coarse room sensor's slow error over the run (RMS, °C): its step's q/√12
-    (:func:`~mtident.thermal.readings.room_error_C`), or less where the room's trend moved less
-    than a step (a steady room's readings are off by one constant, which no mode takes up)."""
-    error = room_error_C(time_min, room_C)
-    if error <= 0.0:
+def _slow_room_error(room_in: FloatArray, room_step: float) -> float:
+    """A coarse room sensor's slow error over the run (RMS, °C): its step's q/√12, or less where
+    the room's trend (``room_in``, :func:`~mtident.thermal.readings.room_input`) moved less than
+    a step (a steady room's readings are off by one constant, which no mode takes up)."""
+    if room_step <= 0.0:
         return 0.0
-    trend = room_input(time_min, room_C)
-    return min(error, float(np.nanmax(trend) - np.nanmin(trend)) / math.sqrt(12.0))
+    return min(room_step, float(np.nanmax(room_in) - np.nanmin(room_in))) / math.sqrt(12.0)
 
 
 def _room_reach(
-    time_min: FloatArray, values: FloatArray, room_C: FloatArray, origin_min: float, room_error: float
+    time_min: FloatArray, values: FloatArray, room_C: FloatArray, origin_min: float, room_error: float, step: float
 ) -> float:
     """The most a coarse room sensor's slow error (``room_error``, RMS) could give one mode to
     explain over the readings fitted (a residual sum of squares, °C²): all of it where the room
@@ -659,7 +665,6 @@ def _room_reach(
     fitted = (time_min >= origin_min) & np.isfinite(values) & np.isfinite(room_C)
     if room_error <= 0.0 or not fitted.any():
         return 0.0
-    step = room_error_C(time_min, room_C) * math.sqrt(12.0)
     crossed = float(np.ptp(room_C[fitted]))
     return float(np.count_nonzero(fitted)) * room_error**2 * min(1.0, 2.0 * step / max(crossed, 1e-12))
 
