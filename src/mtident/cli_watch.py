@@ -747,9 +747,16 @@ def _answer(
             highlight=False,
         )
     elif expected is not None and outcome.decision != "stop":
+        none = [
+            s.sensor
+            for s in outcome.sensors
+            if s.waited_for and not math.isfinite(s.expected_stop_time_min or math.nan)
+        ]
+        who = f"{', '.join(none)} {'has' if len(none) == 1 else 'have'}" if none else "a sensor waited for has"
         console.print(
-            "Expected stop: none found on the best models' courses (a sensor whose interval does not come within the "
-            "tolerance there, or whose status gives no course to go on: no fit yet, off its reference, a misfit).",
+            f"Expected stop: none found; {who} none on the best model's course (its interval does not come "
+            "within the tolerance there, or its status gives no course to go on: "
+            "no fit yet, off its reference, a misfit); the others' are in the JSON (expected_stop_time_min).",
             highlight=False,
         )
 
@@ -832,14 +839,26 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         shown = _fmt(float(error)) if settled[i] else "—"
         if settled[i] and not hindsight.within[i]:
             shown = f"[yellow]{shown}[/]"
+        settle = math.nan if hindsight.settle_time_min is None else float(hindsight.settle_time_min[i])
+        level = float(hindsight.settled_C[i])
+        # the settle time is read off the readings less the room, which settle where the readings
+        # themselves keep following a moving room
+        settled_cell = _fmt(level) if math.isfinite(level) else "with the room" if math.isfinite(settle) else "not yet"
         table.add_row(
             name,
             _fmt(float(hindsight.steady_state_C[i] + hindsight.shift_C[i])),
-            _fmt(float(hindsight.settled_C[i])),
+            settled_cell,
             shown,
-            _fmt(float(hindsight.settle_time_min[i]), 0) if hindsight.settle_time_min is not None else "—",
+            _fmt(settle, 0),
         )
     table_console().print(table)
+    if any(not math.isfinite(v) for v in hindsight.settled_C) and hindsight.settle_time_min is not None:
+        if np.isfinite(np.asarray(hindsight.settle_time_min)[~np.isfinite(hindsight.settled_C)]).any():
+            OptionConsole().print(
+                "with the room: the readings keep following the room; their rise above it settled by the time shown "
+                "(no settled level to check T∞ against).",
+                highlight=False,
+            )
     timing = _settle_timing(hindsight)
     if not settled.any():
         OptionConsole().print(

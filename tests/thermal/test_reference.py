@@ -484,6 +484,23 @@ def test_a_doubt_says_why_the_run_did_not_pin_the_sensor_down():
     assert doubt(90.0, 1.0).endswith("(95 %), not to the ±0.1 °C a reference needs")
 
 
+def test_a_run_no_model_describes_is_not_told_to_run_longer():
+    """A new user's sensor behind its own lag, in a complete 900-min run, was doubted for misfit and
+    told to "learn from a run that reaches equilibrium, logged densely enough": the run it had
+    given. A misfit now points at the heat input and the sensor's mounting instead."""
+    from mtident.thermal.reference import _way_on
+    from mtident.thermal.robust import estimate_sensor
+
+    t = np.arange(0.0, 400.0, 0.5)
+    # a heat input that swings: no sum of modes follows it
+    y = two_mode(t) + 0.3 * np.sin(t / 8.0) + np.random.default_rng(4).normal(0.0, 0.01, t.size)
+    misfit = estimate_sensor("S", t, np.round(y, 2))
+    assert "misfit" in misfit.warning_codes
+    assert "a longer run alone will not help" in _way_on(misfit) and "heat input" in _way_on(misfit)
+    complete = estimate_sensor("S", t, np.round(two_mode(t), 2))
+    assert _way_on(complete).startswith("learn from a run that reaches equilibrium")
+
+
 def test_the_wide_boxes_a_run_leaves_are_named_slowest_first():
     from mtident.thermal.reference import _spans
 
@@ -543,3 +560,28 @@ def test_learn_splits_a_merged_mode_where_only_the_machine_model_pins_the_two_do
         "model pins down (bearing, pt100), and its box holds neither"
     )
     assert split_merged_modes(sensors) == (sensors, [])  # the sensors alone pin neither down
+
+
+def test_a_complete_run_in_a_daily_room_is_not_doubted_for_the_rooms_lag():
+    """A run to equilibrium (5 time constants of a 1.6 °C rise) in a room on its daily cycle: the
+    fit's free room gains stand for any lag, and its steady state came out ±0.16 °C wide, so a
+    complete run was doubted ("pins its own steady state down only to ...") and its modes dropped.
+    With the room's course taken out through the slowest mode the run pins it, and the sensor is
+    kept; in a steady room nothing changes."""
+    from mtident.thermal.modal_search import room_lag
+
+    t = np.arange(0.0, 231.0, 1.0)
+    rng = np.random.default_rng(5)
+
+    def learnt(amplitude: float) -> SensorModes:
+        room = 21.0 + amplitude * np.sin(2 * np.pi * t / 1440.0 + 5.7)
+        followed = room_lag(room, t, np.array([45.0]))[0]
+        y = followed + 1.6 * (1.0 - np.exp(-t / 45.0)) + rng.normal(0.0, 0.03, t.size)
+        room_read = np.round(room + rng.normal(0.0, 0.008, t.size), 2)
+        log = TemperatureLog(t, ("S",), np.round(y, 2)[:, None], (), "run")
+        return learn_reference(log, room_read)[0].sensors["S"]
+
+    daily = learnt(0.21)
+    assert daily.doubt is None
+    assert max(daily.time_constants_min) == pytest.approx(45.0, rel=0.1)
+    assert learnt(0.0).doubt is None

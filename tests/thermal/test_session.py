@@ -181,3 +181,21 @@ def test_a_long_replay_shows_the_test_from_its_first_checks(tmp_path):
     assert seen[0] <= FIRST_FEED_ROWS - 1 == 24.0  # the first check, at the latest the first part's end
     assert 24.0 in seen and 274.0 in seen  # and every 250 rows (until the test may stop), besides each check
     assert seen == sorted(seen)
+
+
+def test_a_room_read_in_coarse_steps_is_said_once_and_a_fine_one_not(tmp_path):
+    """A room column in 0.1 °C steps draws one warning, naming the step and the way on (log it at
+    0.01 °C), after enough readings show the step; the same room in 0.01 °C steps draws none."""
+    t = T[:120]
+    room = 21.0 + 0.3 * np.sin(t / 40.0)
+    curve = noisy(first_order(t), 5) + (room - 21.0)
+
+    def warnings(step: float) -> list[str]:
+        log = tmp_path / f"room{step:g}.csv"
+        log.write_text(csv_text(t, {"A": curve, "R": np.round(room / step) * step}))
+        session = WatchSession(log, MonitorSettings(room_sensor="R"), resume=False, persist=False)
+        return [e.text for e in session.poll() + session.poll() if e.kind == "warning"]
+
+    coarse = [w for w in warnings(0.1) if "steps of" in w]
+    assert len(coarse) == 1 and "R: the room is read in steps of 0.1 °C" in coarse[0] and "0.01 °C" in coarse[0]
+    assert not [w for w in warnings(0.01) if "steps of" in w]

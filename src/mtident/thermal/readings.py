@@ -341,6 +341,15 @@ def room_error_C(time_min: FloatArray, room_C: FloatArray) -> float:
     return step / math.sqrt(12.0) if step >= COARSE_ROOM_STEP_C - 1e-9 else 0.0
 
 
+def coarse_room_warning(step_C: float, consequence: str) -> str:
+    """What to say of a room read in steps of ``step_C`` (°C, from :func:`room_error_C`), and
+    what that costs here (``consequence``)."""
+    return (
+        f"the room is read in steps of {step_C:.2g} °C: it moves within a step unseen, and its readings jump as it "
+        f"crosses one, an error every sensor's fit shares ({consequence}). Log the room at 0.01 °C"
+    )
+
+
 def _window_sums(time_min: FloatArray, valid: np.ndarray, window_min: float, *columns: FloatArray) -> list[FloatArray]:
     """Each column's sum over the valid readings within ``window_min / 2`` of each time."""
     lo = np.searchsorted(time_min, time_min - window_min / 2.0, side="left")

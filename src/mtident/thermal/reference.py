@@ -24,8 +24,9 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, noise_and_origin
+from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
-from mtident.thermal.readings import ROOM_TREND_MIN, room_error_C, room_input, room_trend
+from mtident.thermal.readings import ROOM_TREND_MIN, coarse_room_warning, room_error_C, room_input, room_trend
 from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
 from mtident.thermal.robust_types import DEFAULT_MAX_MODES, MAX_FREE_FAST, RobustSettings, SensorEstimate, SensorModes
 
@@ -57,6 +58,10 @@ _ROOM_MEASURED = "a room sensor, an input of every mode"
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
 # the usual tolerance of a later test.
 PINNED_HALF_WIDTH_C = 0.1
+# A room whose course through a sensor's slowest mode leaves the room by this much (°C) has a lag
+# that the fit's free room gains can take for a lower or higher steady state; a steadier room's
+# course is its sensor's own error.
+ROOM_LAG_SHOWN_C = 0.025
 # The machine's modes, pooled over its sensors: pinned modes of several sensors this close (ratio)
 # are one; a sensor's mode that holds none of them in its box, between two of them at most this
 # ratio apart, may be those two merged (a sensor that shows each only a little fits one between).
@@ -303,7 +308,7 @@ def learn_reference(
         estimate, centres, boxes, determined = learnt.estimate, learnt.centres, learnt.boxes, learnt.determined
         fit = _fit_of(estimate)
         ceiling = max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True))
-        doubt = _doubt(estimate, learnt.one_more, ceiling, learnt.room_reach)
+        doubt = _doubt(estimate, learnt.one_more, ceiling, learnt.room_reach, learnt.room_followed)
         sensors[name] = SensorModes(centres, boxes, tuple(m.amplitude_C for m in fit.modes), doubt)
         if doubt is None and len(fit.modes) > determined:
             warnings.append(
@@ -317,11 +322,7 @@ def learn_reference(
                 "later tests stop later than with a run that shows every mode"
             )
         if doubt is not None:
-            warnings.append(
-                f"{name}: {doubt}. Later tests will not use this sensor's modes: learn from a run that reaches "
-                "equilibrium, logged densely enough to show every mode, in a room that drifts little (a drift of "
-                "the room through the whole run hides the steady state)"
-            )
+            warnings.append(f"{name}: {doubt}. Later tests will not use this sensor's modes: {_way_on(estimate)}")
         if max(m.time_constant_min for m in fit.modes) >= 0.98 * settings.max_time_constant_min:
             warnings.append(
                 f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the "
@@ -332,11 +333,7 @@ def learn_reference(
     warnings.extend(split)
     warnings.extend(said)
     if room_step > 0:
-        warnings.append(
-            f"the room is read in steps of {room_step:.2g} °C: it moves within a step unseen, and its readings "
-            "jump as it crosses one, an error every sensor's fit shares (learnt modes explain only what lies beyond "
-            "it). Log the room at 0.01 °C"
-        )
+        warnings.append(coarse_room_warning(room_step, "learnt modes explain only what lies beyond it"))
     room = _ROOM_MEASURED if room_C is not None else "not measured"
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors, machine_model=model
@@ -531,7 +528,13 @@ def _holds(tau: float, box: float, other: float) -> bool:
     return tau * (1.0 - box) <= other <= tau * (1.0 + box)
 
 
-def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: float, room_reach: float) -> str | None:
+def _doubt(
+    estimate: SensorEstimate,
+    one_more: SensorEstimate,
+    ceiling_min: float,
+    room_reach: float,
+    room_followed: tuple[float, float] | None = None,
+) -> str | None:
     """Why a reference run did not pin a sensor down, or None: its modes misfit the run, its
     readings leave its own steady state wider than ``PINNED_HALF_WIDTH_C``, or its best fit with
     one mode more (``one_more``, chosen by BIC) has a mode slower than the learnt modes' boxes
@@ -543,10 +546,14 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
     as :func:`_modes_needed`). The
     readings' interval, without the unmeasured room's wander: the wander is the future room's,
     which a later test meets with its own readings, and with it every run whose slowest mode
-    exceeds an hour was doubted, however complete."""
+    exceeds an hour was doubted, however complete. In a moving room the narrower of it and the
+    interval with the room's course taken out (``room_followed``, :func:`_room_followed`): the
+    fit's free room gains stand for any lag, which says nothing of whether the run settled."""
     fit = _fit_of(estimate)
     level = min(fit.interval_C)
     lo, hi = fit.interval_C[level]
+    if room_followed is not None and room_followed[1] - room_followed[0] < hi - lo:
+        lo, hi = room_followed
     if not estimate.model_ok:
         # the warnings that took the trust away, less the sensor's name each starts with
         why = [
@@ -574,6 +581,21 @@ def _doubt(estimate: SensorEstimate, one_more: SensorEstimate, ceiling_min: floa
     return None
 
 
+def _way_on(estimate: SensorEstimate) -> str:
+    """What to do about a doubted sensor: a run that misfits every model tried is no shorter or
+    sparser run's fault; a run that does not pin the steady state down is."""
+    if "misfit" in estimate.warning_codes:
+        return (
+            "the run's readings follow no sum of the modes tried, so a longer run alone will not help. Check that the "
+            "heat input stayed the same through the run and that the sensor reads the body itself (one behind a lag "
+            "of its own, in a sleeve or a loose fit, adds a mode; one the air reaches reads the room's noise too)"
+        )
+    return (
+        "learn from a run that reaches equilibrium, logged densely enough to show every mode, in a room that drifts "
+        "little (a drift of the room through the whole run hides the steady state)"
+    )
+
+
 @dataclass(frozen=True)
 class _Learnt:
     """One sensor's learning: the estimate with the modes kept, their boxes' centres and relative
@@ -586,6 +608,26 @@ class _Learnt:
     determined: int
     one_more: SensorEstimate
     room_reach: float
+    room_followed: tuple[float, float] | None = None
+
+
+def _room_followed(
+    name: str, time_min: FloatArray, values: FloatArray, room_in: FloatArray, fit: SteadyState, settings: RobustSettings
+) -> tuple[float, float] | None:
+    """The steady state's interval (at the fit's smallest level) with the room's course taken out
+    as the fit's slowest mode follows it (a body's room gains sum to one, its step response from
+    the room starting at zero): where the fit's free room gains stand for any lag, this says whether
+    the heat's own course settled. None where it cannot be fitted."""
+    if not fit.modes or not np.all(np.isfinite(room_in)):
+        return None
+    slowest = np.array([max(m.time_constant_min for m in fit.modes)])
+    course = room_lag(room_in, time_min, slowest)[0]
+    if np.max(np.abs(course - room_in)) < ROOM_LAG_SHOWN_C:
+        return None  # a room this steady leaves the lag nothing to hide
+    estimate = estimate_sensor(name, time_min, values - (course - course[0]), None, settings)
+    if estimate.fit is None:
+        return None
+    return estimate.fit.interval_C[min(estimate.fit.interval_C)]
 
 
 def _learn_sensor(
@@ -643,7 +685,11 @@ def _learn_sensor(
         strict=True,
     )
     one_more = tried[count + 1] if count + 1 in tried else fitted(count + 1)
-    return _Learnt(estimates[count], centres, boxes, determined, one_more, room_reach)
+    followed = None
+    if room_in is not None:
+        family = replace(settings, max_modes=count, more_modes_when_used=False)
+        followed = _room_followed(name, time_min, values, room_in, _fit_of(estimates[count]), family)
+    return _Learnt(estimates[count], centres, boxes, determined, one_more, room_reach, followed)
 
 
 def _slow_room_error(room_in: FloatArray, room_step: float) -> float:

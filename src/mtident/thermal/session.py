@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import os
 import threading
 import time
@@ -41,6 +42,7 @@ from mtident.thermal.monitor import (
     new_state,
 )
 from mtident.thermal.monitor_answer import WatchAnswer, answer
+from mtident.thermal.readings import coarse_room_warning, room_error_C
 from mtident.thermal.reference import reference_notes
 
 __all__ = [
@@ -64,6 +66,8 @@ FINGERPRINT_BYTES = 4096
 # rows fed to the monitor between two progress calls (a long replay's table moves on)
 FEED_ROWS = 250
 FIRST_FEED_ROWS = 25
+# the room readings after which the room sensor's display step is judged
+ROOM_STEP_READINGS = 30
 # a watch that has seen no new row for this long says it is waiting, once (a finished log given
 # without --replay otherwise waits in silence)
 WAITING_HINT_S = 60.0
@@ -318,6 +322,7 @@ class WatchSession:
         self.notes: list[str] = []
         self.last_rows = 0
         self.cancelled = False
+        self._room_step_said = False
         room = settings.room_sensor
         self._asked = None if sensors is None else [*[n for n in sensors if n != room], *([room] if room else [])]
         self._key = _settings_key(settings, sensors, time_col, time_unit, temperature_unit)
@@ -494,9 +499,25 @@ class WatchSession:
                 return events
             if progress is not None:
                 progress(self)
+        events.extend(self._coarse_room())
         if self.persist:
             self.save()
         return events
+
+    def _coarse_room(self) -> list[Event]:
+        """Once per session, a warning where the room sensor reads in coarse steps (as soon as its
+        readings show the step)."""
+        readings = None if self.state is None else self.state.readings
+        if self._room_step_said or readings is None or readings.room_C is None:
+            return []
+        if np.count_nonzero(np.isfinite(readings.room_C)) < ROOM_STEP_READINGS:
+            return []
+        self._room_step_said = True
+        step = room_error_C(readings.time_min, readings.room_C) * math.sqrt(12.0)
+        if step <= 0:
+            return []
+        text = coarse_room_warning(step, "each T∞ carries up to half a step of it")
+        return [Event("warning", np.nan, f"{self.settings.room_sensor}: {text}")]
 
     def run(
         self,
