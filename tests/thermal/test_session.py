@@ -197,5 +197,9 @@ def test_a_room_read_in_coarse_steps_is_said_once_and_a_fine_one_not(tmp_path):
         return [e.text for e in session.poll() + session.poll() if e.kind == "warning"]
 
     coarse = [w for w in warnings(0.1) if "steps of" in w]
+    session = WatchSession(tmp_path / "room0.1.csv", MonitorSettings(room_sensor="R"), resume=False, persist=False)
+    session.poll()
+    # a JSON reader sees what the terminal said
+    assert [w for w in session.result(with_forecast=False)["log_warnings"] if "steps of 0.1 °C" in w]
     assert len(coarse) == 1 and "R: the room is read in steps of 0.1 °C" in coarse[0] and "0.01 °C" in coarse[0]
     assert not [w for w in warnings(0.01) if "steps of" in w]

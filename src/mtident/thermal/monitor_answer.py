@@ -127,6 +127,10 @@ class WatchAnswer:
         The test's expected stop (NaN: none found); None where not asked for, and then left out.
     hindsight : HindsightAnswer or None
         The decision against the rest of a replayed log; left out where None.
+    log_warnings : tuple of str or None
+        What this session said of the log and the test as a whole as it read them (readings lost
+        or misread, a coarse room sensor, the reference's fit to the log), each once; left out
+        where none was said.
     """
 
     sensor: str
@@ -150,6 +154,7 @@ class WatchAnswer:
     settle_time_min: float | None = None
     expected_stop_time_min: float | None = json_optional()
     hindsight: HindsightAnswer | None = json_optional()
+    log_warnings: tuple[str, ...] | None = json_optional()
 
 
 # the single-sensor keys of the answer: those of the sensor the test waits for

@@ -294,6 +294,8 @@ class WatchSession:
         What the session found on opening (a state resumed, or one not resumed and why).
     last_rows : int
         Rows read by the last poll.
+    log_warnings : list of str
+        The warnings said so far of the log or the test as a whole, each once (the answer's).
     cancelled : bool
         A poll ended early because its ``cancel`` asked (the state then holds the rows fed up to it).
     state : MonitorState or None
@@ -323,6 +325,7 @@ class WatchSession:
         self.last_rows = 0
         self.cancelled = False
         self._room_step_said = False
+        self.log_warnings: list[str] = []
         room = settings.room_sensor
         self._asked = None if sensors is None else [*[n for n in sensors if n != room], *([room] if room else [])]
         self._key = _settings_key(settings, sensors, time_col, time_unit, temperature_unit)
@@ -462,7 +465,7 @@ class WatchSession:
                 )
                 events.extend(Event("warning", np.nan, note) for note in notes)
         if self.state is None or not len(rows.time_min):
-            return events
+            return self._kept(events)
         values, room = (
             (rows.temperature_C[:, :-1], rows.temperature_C[:, -1])
             if self.settings.room_sensor
@@ -496,12 +499,20 @@ class WatchSession:
                 time_col, time_unit = self.follower.time_col, self.follower.time_unit
                 unit = self.follower.temperature_unit
                 self.follower = LogFollower.resume(self.path, before, time_col, time_unit, unit)
-                return events
+                return self._kept(events)
             if progress is not None:
                 progress(self)
         events.extend(self._coarse_room())
         if self.persist:
             self.save()
+        return self._kept(events)
+
+    def _kept(self, events: list[Event]) -> list[Event]:
+        """The events, with their warnings about the log or the test as a whole kept once for the
+        answer (:attr:`log_warnings`): a JSON reader sees what the terminal said."""
+        for e in events:
+            if e.kind == "warning" and e.sensor is None and e.text not in self.log_warnings:
+                self.log_warnings.append(e.text)
         return events
 
     def _coarse_room(self) -> list[Event]:
@@ -670,7 +681,8 @@ class WatchSession:
             msg = f"{self.path}: no data rows" if self.path.is_file() else f"{self.path}: no such file"
             raise InputError(msg)
         expected = self.expected_stops(cancel) if with_forecast and not self.state.stopped else None
-        return answer(self.state, self.settings, expected)
+        said = answer(self.state, self.settings, expected)
+        return dataclasses.replace(said, log_warnings=tuple(self.log_warnings)) if self.log_warnings else said
 
     def result(self, with_forecast: bool = True, cancel: Callable[[], bool] | None = None) -> dict[str, object]:
         """The JSON answer: :meth:`answer`'s fields.
