@@ -747,16 +747,17 @@ def _answer(
             highlight=False,
         )
     elif expected is not None and outcome.decision != "stop":
-        none = [
-            s.sensor
-            for s in outcome.sensors
-            if s.waited_for and not math.isfinite(s.expected_stop_time_min or math.nan)
-        ]
+        waited = [s for s in outcome.sensors if s.waited_for]
+        none = [s.sensor for s in waited if not math.isfinite(s.expected_stop_time_min or math.nan)]
+        found = [s.expected_stop_time_min or math.nan for s in waited if s.sensor not in none]
         who = f"{', '.join(none)} {'has' if len(none) == 1 else 'have'}" if none else "a sensor waited for has"
+        others = (
+            f"; the others' come at t ≈ {minutes(round(min(found)))} to {minutes(round(max(found)))}" if found else ""
+        )
         console.print(
             f"Expected stop: none found; {who} none on the best model's course (its interval does not come "
             "within the tolerance there, or its status gives no course to go on: "
-            "no fit yet, off its reference, a misfit); the others' are in the JSON (expected_stop_time_min).",
+            f"no fit yet, off its reference, a misfit){others}.",
             highlight=False,
         )
 
@@ -898,7 +899,9 @@ def _settle_timing(hindsight: Hindsight) -> str:
     settle = hindsight.test_settle_time_min
     saved = hindsight.time_saved_min
     if saved is None or not np.isfinite(settle):
-        return "when every sensor waited for settled within the tolerance is later than the log can tell"
+        return (
+            "the log ends before every sensor waited for settled within the tolerance, so the time saved is not known"
+        )
     when = (
         f"the readings of every sensor waited for stayed within ±{hindsight.tolerance_C:g} °C of where they settled "
         f"from t = {minutes(settle)}"

@@ -539,6 +539,27 @@ def test_learn_splits_a_mode_that_merges_two_of_the_machines_modes():
     assert split_merged_modes(alone) == (alone, [])
 
 
+def test_a_merged_mode_of_a_sensor_with_four_modes_gets_a_box_holding_both():
+    """Two new users' PT100s behind their own lag: four modes already (the lag, two fast ones and
+    170 min between the machine's 77 and 241), so no room to split; the 170 min ±10 % stayed, said
+    nothing, and a test's T∞ came 0.22 °C off with "may stop". The box now holds both, and it is said."""
+    from mtident.thermal.reference import split_merged_modes
+    from mtident.thermal.robust import SensorModes
+
+    sensors = {
+        "pt100": SensorModes((1.8, 4.0, 43.0, 170.0), (0.3, 0.2, 0.1, 0.1), (0.5, -1.0, -2.0, -5.0)),
+        "head": SensorModes((38.0, 77.0, 241.0), (0.1, 0.1, 0.1), (-1.0, -2.0, -3.0)),
+        "base": SensorModes((3.3, 79.0, 244.0), (0.5, 0.1, 0.1), (1.0, -2.0, -3.0)),
+    }
+    out, warnings = split_merged_modes(sensors)
+    pt100 = out["pt100"]
+    assert pt100.time_constants_min == sensors["pt100"].time_constants_min
+    tau, box = pt100.time_constants_min[3], pt100.box[3]
+    assert tau * (1 - box) <= 77.0 and tau * (1 + box) >= 244.0
+    assert pt100.box[:3] == sensors["pt100"].box[:3]
+    assert len(warnings) == 1 and "pt100: its mode of 170 min" in warnings[0] and "holding both" in warnings[0]
+
+
 def test_learn_splits_a_merged_mode_where_only_the_machine_model_pins_the_two_down():
     """A new user's trial: no sensor pinned the 113- and 280-min modes down alone (each sensor's
     slowest box wide), the machine model did (±10 %, ±13 %); the PT100 kept one mode of 189 min

@@ -487,7 +487,7 @@ def split_merged_modes(
             held = [mm for mm in others if _holds(tau, box, mm.time_constant_min)]
             below = [mm for mm in others if mm.time_constant_min < tau * (1.0 - box)]
             above = [mm for mm in others if mm.time_constant_min > tau * (1.0 + box)]
-            if held or not below or not above or len(modes) + 1 > DEFAULT_MAX_MODES:
+            if held or not below or not above:
                 continue
             low, high = below[-1], above[0]
             kept = [
@@ -499,6 +499,26 @@ def split_merged_modes(
             ]
             if high.time_constant_min / low.time_constant_min > _MERGE_SPAN or kept:
                 continue
+            witnesses = low.sensors | high.sensors
+            by = "the machine model pins down" if _MODEL in witnesses else "other sensors pin down"
+            who = ", ".join(sorted(witnesses - {_MODEL}))
+            said = (
+                f"{name}: its mode of {tau:.3g} min (±{box:.0%}) lies between the machine's modes of "
+                f"{low.time_constant_min:.3g} and {high.time_constant_min:.3g} min that {by} ({who}), and its box "
+                "holds neither: the run may have merged the two into one. Later tests search "
+            )
+            if len(modes) + 1 > DEFAULT_MAX_MODES:
+                # no room for both: one mode searched over both keeps the test's interval honest
+                lowest = low.time_constant_min * (1.0 - max(low.box, MIN_REFERENCE_BOX))
+                highest = high.time_constant_min * (1.0 + max(high.box, MIN_REFERENCE_BOX))
+                wide = max(1.0 - lowest / tau, highest / tau - 1.0, box)
+                modes[i] = (tau, wide, amplitude)
+                out[name] = replace(m, box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes))
+                warnings.append(
+                    f"{said}{tau:.3g} ±{wide:.0%}, holding both, for this sensor (it has {len(modes)} modes "
+                    f"already, the most a sensor's fit takes)"
+                )
+                break
             split = [
                 (low.time_constant_min, low.box, amplitude / 2.0),
                 (high.time_constant_min, high.box, amplitude / 2.0),
@@ -510,14 +530,8 @@ def split_merged_modes(
                 box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
                 amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
             )
-            witnesses = low.sensors | high.sensors
-            by = "the machine model pins down" if _MODEL in witnesses else "other sensors pin down"
-            who = ", ".join(sorted(witnesses - {_MODEL}))
             warnings.append(
-                f"{name}: its mode of {tau:.3g} min (±{box:.0%}) lies between the machine's modes of "
-                f"{low.time_constant_min:.3g} and {high.time_constant_min:.3g} min that {by} ({who}), and its box "
-                "holds neither: the run may have merged the two into one. Later tests search "
-                f"both ({low.time_constant_min:.3g} ±{max(low.box, MIN_REFERENCE_BOX):.0%}, "
+                f"{said}both ({low.time_constant_min:.3g} ±{max(low.box, MIN_REFERENCE_BOX):.0%}, "
                 f"{high.time_constant_min:.3g} ±{max(high.box, MIN_REFERENCE_BOX):.0%}) for this sensor"
             )
             break
