@@ -279,7 +279,10 @@ def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_no
     _print_hindsight(hindsight)
     text = " ".join(capsys.readouterr().out.split())
     assert "saved no time" not in text
-    assert "the log ends before every sensor waited for settled within the tolerance, so the time saved is not known" in text
+    assert (
+        "the log ends before every sensor waited for settled within the tolerance, so the time saved is not known"
+        in text
+    )
     assert "not settled by the log's end: front" in text
     settled = Hindsight(
         ("rear",),
