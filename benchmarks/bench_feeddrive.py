@@ -50,7 +50,8 @@ from mtident.feeddrive import (
 )
 from mtident.feeddrive.identify import PRIOR_SD_LOG, filter_substeps
 from mtident.feeddrive.model import exact_step, input_matrix, parameter_basis, system_matrices, system_matrix
-from mtident.feeddrive.simulate import Response, run_responses
+from mtident.feeddrive.simulate import run_responses
+from mtident.feeddrive.synthetic import HEAVY_DRIVE, with_force_noise
 
 
 def accuracy() -> None:
@@ -139,24 +140,6 @@ def speed() -> None:
     print(f"  refined open loop (the CLI's default): mtident {t_refined:.2f} s   ratio = {t_peer / t_refined:.0f}x")
 
 
-# A heavy, soft drive (400 kg table, 20 mm lead): every mode below 110 Hz.
-HEAVY = FeedDriveParameters(
-    Mt=400.0,
-    Mb=40.0,
-    Jm=4e-3,
-    Jb=6e-3,
-    K1=1.0e7,
-    K2=1.5e7,
-    K3=700.0,
-    K4=250.0,
-    beta=0.02 / (2 * math.pi),
-    Bt=20.0,
-    Bb=20.0,
-    Qm=0.05,
-    Qb=0.05,
-)
-
-
 def rates() -> None:
     print("\nsampling rates (2 s; noise 1 %; guess 30 % off):")
     print(f"{'drive':>7} {'excitation':>10} {'fs Hz':>7}  result")
@@ -168,7 +151,7 @@ def rates() -> None:
         (FeedDriveParameters(), "shipped", Excitation("sweep", 0, 20.0, 50.0, 0.4 * fs), fs)
         for fs in (1000, 8000, 50_000)
     ]
-    cases += [(HEAVY, "heavy", Excitation("impulse", 0, 200.0), fs) for fs in (500, 1000)]
+    cases += [(HEAVY_DRIVE, "heavy", Excitation("impulse", 0, 200.0), fs) for fs in (500, 1000)]
     for truth, name, excitation, fs in cases:
         record = simulate(truth, excitation, float(fs), 2.0, noise_fraction=0.01, rng=np.random.default_rng(1))
         try:
@@ -330,12 +313,6 @@ def refine(seeds: range = range(103, 115)) -> None:
                 print(f"  {label:>8} mean/RMS z: {cells}")
 
 
-def _with_force_noise(record: Response, fraction: float, seed: int) -> Response:
-    rms = np.sqrt(np.mean(record.forces**2, axis=0))
-    noise = fraction * rms * np.random.default_rng(seed).standard_normal(record.forces.shape)
-    return Response(record.time_s, record.forces + noise, record.values)
-
-
 def force_noise(seeds: range = range(1, 21), drives: int = 6, draws: int = 8) -> None:
     print(f"\nrefined, impulse, 2 s, noise 1 % on every response, drives of seeds {seeds.start}-{seeds.stop - 1}:")
     for fraction in (0.0, 0.01):
@@ -347,7 +324,7 @@ def force_noise(seeds: range = range(1, 21), drives: int = 6, draws: int = 8) ->
             guess = random_guess(truth, rng)
             fs = max(10_000.0, math.ceil(6 * modes(guess).frequencies_Hz[-1] / 1000) * 1000)
             record = simulate(truth, Excitation(), fs, 2.0, noise_fraction=0.01, rng=np.random.default_rng(seed + 7))
-            result = identify_feed_drive(_with_force_noise(record, fraction, seed + 99991), guess, refine=True)
+            result = identify_feed_drive(with_force_noise(record, fraction, seed + 99991), guess, refine=True)
             kept += result.filter_parameters is not None
             z = np.abs(np.log(result.parameters / truth.identified())) / (result.parameters_std / result.parameters)
             within += int(np.sum(z <= 2))
@@ -371,7 +348,7 @@ def force_noise(seeds: range = range(1, 21), drives: int = 6, draws: int = 8) ->
             record = simulate(
                 truth, Excitation(), fs, 2.0, noise_fraction=0.01, rng=np.random.default_rng(1000 * d + seed)
             )
-            result = identify_feed_drive(_with_force_noise(record, 0.01, 77_000 + 1000 * d + seed), guess)
+            result = identify_feed_drive(with_force_noise(record, 0.01, 77_000 + 1000 * d + seed), guess)
             alarm, covers = not result.reproduces_record(), all(result.covers(truth).values())
             alarms, covering, alarms_covering = alarms + alarm, covering + covers, alarms_covering + (alarm and covers)
     print(

@@ -10,8 +10,8 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
@@ -24,6 +24,9 @@ __all__ = [
     "to_json_value",
     "walk_fields",
 ]
+
+# a TypedDict: the keys :func:`fields_of` takes, with their types
+_Keys = TypeVar("_Keys", bound=Mapping[str, object])
 
 # field metadata that :func:`walk_fields` reads: a field written only where it is not None, and a
 # field whose own fields (or items) are written into its parent's object
@@ -95,28 +98,37 @@ def finite_or_none(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def fields_of(source: object, names: tuple[str, ...]) -> dict[str, Any]:
-    """The attributes ``names`` of ``source``, as keyword arguments: for an answer that repeats keys
-    of what it is made from under the same names (a dataclass refuses a name it lacks).
+def fields_of(source: object, keys: type[_Keys]) -> _Keys:
+    """The attributes of ``source`` that the TypedDict ``keys`` names, as that TypedDict: for an
+    answer that repeats keys of what it is made from under the same names.
+
+    The result is typed: mypy checks each key and its type where it is used (unpacked into a
+    record's constructor, or held in a field), which a plain dict of names would not. That
+    ``source`` has each key is checked as it is read (an AttributeError names the one it lacks).
 
     Parameters
     ----------
     source : object
         The object the keys are taken from (a dataclass).
-    names : tuple of str
-        The attributes to take.
+    keys : type
+        A TypedDict: the names to take, in its order, and their types.
 
     Returns
     -------
-    dict of str to object
+    dict
+        A ``keys``.
 
     Examples
     --------
     >>> from types import SimpleNamespace
-    >>> fields_of(SimpleNamespace(sensor="T1", rise_C=2.5, noise_C=0.01), ("sensor", "rise_C"))
+    >>> from typing import TypedDict
+    >>> class Rise(TypedDict):
+    ...     sensor: str
+    ...     rise_C: float
+    >>> fields_of(SimpleNamespace(sensor="T1", rise_C=2.5, noise_C=0.01), Rise)
     {'sensor': 'T1', 'rise_C': 2.5}
     """
-    return {name: getattr(source, name) for name in names}
+    return cast(_Keys, {name: getattr(source, name) for name in keys.__annotations__})
 
 
 def walk_fields(value: Any, leaf: Callable[[Any], Any], *, dict_as_pairs: bool = False) -> Any:

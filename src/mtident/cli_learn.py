@@ -7,13 +7,13 @@ import math
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import click
 import numpy as np
 from rich.table import Table
 
-from mtident._json import fields_of
+from mtident._json import fields_of, json_inline
 from mtident.cli import print_json, table_console, thermal, user_errors
 from mtident.cli_options import ambient_option, file_option, json_option, output_option
 from mtident.cli_thermal import (
@@ -144,14 +144,11 @@ class MachineModelAnswer:
     room_lag_min: dict[str, float]
 
 
-@dataclass(frozen=True, slots=True)
-class LearnAnswer:
-    """The JSON answer of ``thermal learn``: the reference written, its fields.
+class LearntRun(TypedDict):
+    """The reference's own fields that the answer of ``thermal learn`` repeats under their names.
 
     Attributes
     ----------
-    reference : str
-        The file written.
     source, machine, serial, program, run_date : str
         The run's log and what it was of.
     max_time_constant_min : float
@@ -159,11 +156,8 @@ class LearnAnswer:
         How the room entered.
     sensors : dict of str to SensorModes
         Each sensor's modes learnt.
-    machine_model : MachineModelAnswer or None
-    warnings : tuple of str
     """
 
-    reference: str
     source: str
     machine: str
     serial: str
@@ -172,12 +166,27 @@ class LearnAnswer:
     max_time_constant_min: float
     room: str
     sensors: dict[str, SensorModes]
-    machine_model: MachineModelAnswer | None
-    warnings: tuple[str, ...]
 
 
-# the reference's own fields, which the answer repeats under their names
-_REFERENCE_KEYS = ("source", "machine", "serial", "program", "run_date", "max_time_constant_min", "room", "sensors")
+@dataclass(frozen=True, slots=True)
+class LearnAnswer:
+    """The JSON answer of ``thermal learn``: the reference written, its fields.
+
+    Attributes
+    ----------
+    reference : str
+        The file written.
+    run : LearntRun
+        The reference's own fields, written as keys of the answer.
+    machine_model : MachineModelAnswer or None
+    warnings : tuple of str
+    """
+
+    reference: str
+    run: LearntRun = json_inline()
+    # mypy takes json_inline() for a default, so the fields after it have one too
+    machine_model: MachineModelAnswer | None = None
+    warnings: tuple[str, ...] = ()
 
 
 def run_learn(request: LearnRequest) -> None:
@@ -227,7 +236,7 @@ def run_learn(request: LearnRequest) -> None:
         print_json(
             LearnAnswer(
                 reference=str(output_path),
-                **fields_of(reference, _REFERENCE_KEYS),
+                run=fields_of(reference, LearntRun),
                 machine_model=_machine_model_answer(reference),
                 warnings=tuple(warnings),
             )

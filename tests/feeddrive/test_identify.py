@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 import pytest
-from feeddrive_helpers import HEAVY, _noisy_forces, _sweep_note_of
+from feeddrive_helpers import _sweep_note_of
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -21,6 +21,7 @@ from mtident.feeddrive import (
     sampling_problem,
     simulate,
 )
+from mtident.feeddrive.synthetic import HEAVY_DRIVE, with_force_noise
 
 
 def test_paper_preset_runs_and_warns_about_the_negative_weight():
@@ -106,18 +107,20 @@ def test_a_rate_too_slow_for_the_highest_mode_is_refused_before_the_work_and_say
         identify_feed_drive(response, default_guess())
     assert "at 5000 Hz it follows modes 1-2 only" in sampling_problem(FeedDriveParameters(), 5000.0)
     # where the physics allows, 1 kHz works: every mode of the heavy drive is below a fifth of it
-    assert modes(HEAVY).frequencies_Hz.max() < 110 and sampling_problem(default_guess(HEAVY), 1000.0) is None
+    assert (
+        modes(HEAVY_DRIVE).frequencies_Hz.max() < 110 and sampling_problem(default_guess(HEAVY_DRIVE), 1000.0) is None
+    )
     record = simulate(
-        HEAVY,
+        HEAVY_DRIVE,
         Excitation("impulse", 0, 200.0),
         sample_rate_Hz=1000.0,
         duration_s=2.0,
         noise_fraction=0.01,
         rng=np.random.default_rng(1),
     )
-    result = identify_feed_drive(record, default_guess(HEAVY))
-    assert all(result.covers(HEAVY).values()) and result.reproduces_record()
-    assert max(result.errors_percent(HEAVY)[k] for k in ("K1", "K2", "K3", "K4")) < 0.1
+    result = identify_feed_drive(record, default_guess(HEAVY_DRIVE))
+    assert all(result.covers(HEAVY_DRIVE).values()) and result.reproduces_record()
+    assert max(result.errors_percent(HEAVY_DRIVE)[k] for k in ("K1", "K2", "K3", "K4")) < 0.1
 
 
 @settings(max_examples=10, deadline=None)
@@ -183,7 +186,7 @@ def test_with_noise_on_the_measured_forces_the_filters_intervals_are_widened_and
     the drive as well) holds, and the note says so."""
     truth = FeedDriveParameters()
     record = simulate(truth, noise_fraction=0.01, rng=np.random.default_rng(3))
-    result = identify_feed_drive(_noisy_forces(record, 0.01, 77_003), default_guess())
+    result = identify_feed_drive(with_force_noise(record, 0.01, 77_003), default_guess())
     assert all(result.covers(truth).values()), result.summary(truth)["error_percent"]
     assert result.reproduces_record()
     assert any(note.startswith("the measured forces carry noise (F_t_N ") for note in result.notes)

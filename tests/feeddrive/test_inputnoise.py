@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from feeddrive_helpers import _noisy_forces
 
 from mtident.feeddrive import (
     Excitation,
     FeedDriveParameters,
     simulate,
 )
+from mtident.feeddrive.synthetic import with_force_noise
 
 
 @pytest.mark.parametrize("kind", ["impulse", "step", "prbs", "sine", "sweep", "multisine"])
@@ -26,6 +26,6 @@ def test_the_force_noise_is_estimated_from_the_force_record_and_is_none_for_exac
     assert exact[0] < 1e-3 * rms and np.all(exact[1:] == 0)
     if kind in ("impulse", "step", "prbs"):
         assert exact[0] == 0.0
-    noisy = force_noise(_noisy_forces(record, 0.01, 5).forces)
+    noisy = force_noise(with_force_noise(record, 0.01, 5).forces)
     assert 0.75 * 0.01 * rms < noisy[0] < 1.25 * 0.01 * rms
     assert np.all(noisy[1:] == 0)  # a force column of zeros carries no noise at 1 % of its RMS

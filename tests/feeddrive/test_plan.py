@@ -138,8 +138,8 @@ def test_a_planned_refined_test_says_how_much_noise_on_the_measured_force_it_tol
     assert plan.summary()["recommended"]["force_noise_tolerated"] == tolerated  # type: ignore[index]
     forces = tests[0].excitation.forces(np.arange(5001) * 1e-4)
     idx = tests[0].measured
-    step, rows = sensitivity_system(truth, 1e-4, idx)
-    gram, _, _, power = run(step, np.zeros(8), forces, rows, np.full((5001, len(idx)), np.nan), True)
+    system = sensitivity_system(truth, 1e-4, idx)
+    gram, _, _, power = run(system, np.zeros(8), forces, np.full((5001, len(idx)), np.nan), True)
     weight = 1.0 / (0.01**2 * power / 5001)
     inverse = scaled_inverse(np.einsum("rij,r->ij", gram, weight))
     rms = np.sqrt(np.mean(forces**2, axis=0))

@@ -233,10 +233,10 @@ def test_the_effect_of_force_noise_on_a_fit_is_the_gradients_sensitivity_to_each
     weight = np.array([1.0, 2.0, 0.5]) / np.mean(data**2, axis=0)
     input_sd = np.array([0.3, 0.0, 0.02, 0.05])
     spread = input_noise_moments(truth, record.forces, 1e-4, idx, np.isfinite(data), weight, input_sd)
-    step, rows = sensitivity_system(truth, 1e-4, idx)
+    system = sensitivity_system(truth, 1e-4, idx)
 
     def gradient(forces: np.ndarray) -> np.ndarray:
-        return run(step, np.zeros(8), forces, rows, data, True)[1].T @ weight
+        return run(system, np.zeros(8), forces, data, True)[1].T @ weight
 
     base, brute = gradient(record.forces), np.zeros((16, 16))
     for m in range(len(record.forces)):

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from feeddrive_helpers import _noisy_forces
 
 from mtident.feeddrive import (
     Excitation,
@@ -15,6 +14,7 @@ from mtident.feeddrive import (
     random_guess,
     simulate,
 )
+from mtident.feeddrive.synthetic import with_force_noise
 
 
 def test_a_correct_estimate_is_not_called_untrustworthy_on_drives_never_seen():
@@ -42,7 +42,7 @@ def test_with_noise_on_the_measured_forces_the_refined_intervals_cover_the_drive
     guess = random_guess(truth, rng)
     fs = max(10_000.0, math.ceil(6 * modes(guess).frequencies_Hz[-1] / 1000) * 1000)
     record = simulate(truth, Excitation(), fs, 2.0, noise_fraction=0.01, rng=np.random.default_rng(9))
-    result = identify_feed_drive(_noisy_forces(record, 0.01, 2 + 99991), guess, refine=True)
+    result = identify_feed_drive(with_force_noise(record, 0.01, 2 + 99991), guess, refine=True)
     assert result.filter_parameters is not None  # refined and kept
     assert all(result.covers(truth).values()), result.summary(truth)["error_percent"]
     assert result.consistency is not None and 0.8 < float(result.consistency.misfit.max()) < 1.2

@@ -12,6 +12,7 @@ from helpers import _CONDUCTANCE, ROOM_C, SENSORS, _run, _truth
 from mtident.thermal.machine_model import (
     MachineFit,
     MachineModel,
+    MachineReadings,
     combined_estimate,
     fit_readings,
     learn_machine_model,
@@ -23,7 +24,7 @@ from mtident.thermal.robust import estimate_sensor
 
 def _model() -> MachineModel:
     t, y = _run((0.6, 0.4), 1.0, np.zeros(3), 1500.0)
-    model = learn_machine_model(SENSORS, t, y, None, np.full(4, 1e-3), 0.0, 300.0)
+    model = learn_machine_model(MachineReadings(SENSORS, t, y, None, np.full(4, 1e-3), 0.0), 300.0)
     assert model is not None
     return model
 

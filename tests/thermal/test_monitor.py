@@ -230,14 +230,41 @@ def test_the_watch_picture_draws_the_model_with_the_room_as_logged():
     assert np.max(np.abs(drawn[inside] - np.interp(drawn_t[inside], t, y))) < 0.05
 
 
-def test_watch_stops_earlier_with_the_machine_model_and_right():
+@pytest.fixture(scope="module")
+def chain_reference() -> MachineReference:
+    """A complete run of the four-sensor chain, learnt once for the tests of its machine model."""
+    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=4)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
+    assert reference.machine_model is not None
+    return reference
+
+
+def test_the_machine_model_pins_every_sensor_long_before_their_own_modes_do(chain_reference):
+    """The fits behind the decisions of the next test, which replays the whole watch (slow): at its
+    stop with the machine model, every sensor's T∞ is within the tolerance at the decision's level
+    and of the truth; each sensor's own reference modes leave one wider at 1/0.7 of that time."""
+    from mtident.thermal.robust_identify import identify_robust
+
+    split, power = (0.45, 0.55), 1.3
+    t, y = _noisy_chain(split, power, np.zeros(3), 700.0, seed=5)
+    room = np.round(ROOM_C + np.random.default_rng(9).normal(0.0, 0.01, len(t)), 2)
+    log = TemperatureLog(t, SENSORS, y, (), "test.csv")
+    machine = identify_robust(log, 250.0, room, reference=chain_reference).details.estimates
+    assert all(e.machine_used for e in machine)
+    assert all(e.half_width(0.99) <= 0.2 for e in machine)
+    np.testing.assert_allclose([e.steady_C for e in machine], _truth(split, power), atol=0.2)
+    own = identify_robust(log, 250.0 / 0.7, room, reference=replace(chain_reference, machine_model=None))
+    assert not any(e.machine_used for e in own.details.estimates)
+    assert max(e.half_width(0.99) for e in own.details.estimates) > 0.2
+
+
+@pytest.mark.slow
+def test_watch_stops_earlier_with_the_machine_model_and_right(chain_reference):
     from dataclasses import replace as replaced
 
     from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
 
-    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=4)
-    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
-    assert reference.machine_model is not None
+    reference = chain_reference
     split, power = (0.45, 0.55), 1.3
     t, y = _noisy_chain(split, power, np.zeros(3), 700.0, seed=5)
     room = np.round(ROOM_C + np.random.default_rng(9).normal(0.0, 0.01, len(t)), 2)  # logged, steady
@@ -254,15 +281,16 @@ def test_watch_stops_earlier_with_the_machine_model_and_right():
 
 
 def test_a_learnt_room_response_stops_a_test_in_a_daily_room_earlier_and_right():
-    """The test at another split and power, in a room cycling ±0.3 °C a day: the room a known
-    input of each sensor, where without it the room's lag behind its cycle stays open."""
+    """The test at another split and power (read every two minutes), in a room cycling ±0.3 °C a
+    day: the room a known input of each sensor, where without it the room's lag behind its cycle
+    stays open."""
     from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
 
     t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, _daily(0.3), seed=13)
     reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), room)
     assert reference.machine_model is not None and reference.machine_model.room_gains
     split, power = (0.45, 0.55), 1.2
-    t, y, room = _run_in_room(split, power, np.zeros(3), 900.0, _daily(0.3, phase=2.0), seed=14)
+    t, y, room = _run_in_room(split, power, np.zeros(3), 900.0, _daily(0.3, phase=2.0), seed=14, dt=2.0)
     unlearnt = replace(reference, machine_model=replace(reference.machine_model, room_gains=(), room_gain_cov=()))
     stops = {}
     for label, ref in (("learnt", reference), ("fitted", unlearnt)):
@@ -278,16 +306,14 @@ def test_a_learnt_room_response_stops_a_test_in_a_daily_room_earlier_and_right()
     assert stops["learnt"] < 800.0 and stops["learnt"] < 0.8 * stops["fitted"], stops
 
 
-def test_another_machines_reference_is_dropped_when_most_sensors_reject_its_machine_model():
+def test_another_machines_reference_is_dropped_when_most_sensors_reject_its_machine_model(chain_reference):
     """A new user's trial: the reference of a slower machine (every time constant ×1/0.45). Its
     per-sensor modes fitted most sensors by chance, and two said 'may stop' with intervals 0.1-0.8 °C
     short of the truth; the machine model's tie, rejected by most sensors, says it is not this machine."""
     from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
     from mtident.thermal.robust_identify import identify_robust
 
-    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=21)
-    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
-    assert reference.machine_model is not None
+    reference = chain_reference
     # the other machine: the same network, every rate 1/0.45 as fast
     fast = _CONDUCTANCE / 0.45
     u = _HEAT @ np.array([0.5, 0.5])

@@ -13,6 +13,8 @@ that both give the same numbers.
 
 from __future__ import annotations
 
+from typing import TypeAlias
+
 import numpy as np
 from numba import njit
 
@@ -26,6 +28,11 @@ __all__ = [
     "input_response_energy",
     "compiled_cache_ready",
 ]
+
+# (Φ (8, 8), Γ (8, 4), Φₛ (8, 8, 8), Γₛ (8, 8, 4)): the exact one-sample step of the state and of its
+# sensitivities; (c (R, 8), e (R, 4), cₛ (R, 8, 8)): the output rows of R responses
+Step: TypeAlias = tuple[FloatArray, FloatArray, FloatArray, FloatArray]
+Rows: TypeAlias = tuple[FloatArray, FloatArray, FloatArray]
 
 
 @njit(cache=True, fastmath=False)
@@ -226,34 +233,28 @@ def run_feed_drive_ukf(
 
 @njit(cache=True, fastmath=False)
 def response_moments(
-    step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
-    start: FloatArray,
-    forces: FloatArray,
-    rows: tuple[FloatArray, FloatArray, FloatArray],
-    data: FloatArray,
-    with_start: bool,
+    system: tuple[Step, Rows], start: FloatArray, forces: FloatArray, data: FloatArray, with_start: bool
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Run the state X, its sensitivities sⱼ to the log-parameters and (``with_start``) fᵢ to the
     initial state over the record, and accumulate per response r the moments of its sensitivities
     and of its residual against ``data`` (N, R), NaN where not measured.
 
-    ``step`` = (Φ (8, 8), Γ (8, 4), Φₛ (8, 8, 8), Γₛ (8, 8, 4)): X⁺ = Φ X + Γ u and
-    sⱼ⁺ = Φₛⱼ X + Φ sⱼ + Γₛⱼ u (the exact step of the augmented system is block triangular).
-    ``rows`` = (c (R, 8), e (R, 4), cₛ (R, 8, 8)): ŷ = c X + e u, ∂ŷ/∂zⱼ = c sⱼ + cₛⱼ X, ∂ŷ/∂X₀ᵢ = c fᵢ.
+    ``system`` = (step, rows), step = (Φ (8, 8), Γ (8, 4), Φₛ (8, 8, 8), Γₛ (8, 8, 4)): X⁺ = Φ X + Γ u and
+    sⱼ⁺ = Φₛⱼ X + Φ sⱼ + Γₛⱼ u (the exact step of the augmented system is block triangular);
+    rows = (c (R, 8), e (R, 4), cₛ (R, 8, 8)): ŷ = c X + e u, ∂ŷ/∂zⱼ = c sⱼ + cₛⱼ X, ∂ŷ/∂X₀ᵢ = c fᵢ.
     Returns (G (R, P, P) = Σ g gᵀ, b (R, P) = Σ g (y − ŷ), c (R,) = Σ (y − ŷ)², s (R,) = Σ ŷ²),
     P = 8 or 16, the residual sums over the measured samples only.
 
     Parameters
     ----------
-    step : tuple of ndarray
-        (Φ (8, 8), Γ (8, 4), Φₛ (8, 8, 8), Γₛ (8, 8, 4)), the exact one-sample step of the state and of
-        its sensitivities (``information.sensitivity_system``).
+    system : (step, rows)
+        step = (Φ (8, 8), Γ (8, 4), Φₛ (8, 8, 8), Γₛ (8, 8, 4)), the exact one-sample step of the state and
+        of its sensitivities; rows = (c (R, 8), e (R, 4), cₛ (R, 8, 8)), the output rows of the R responses
+        (``information.sensitivity_system``).
     start : ndarray, shape (8,)
         Initial state X₀ (SI units).
     forces : ndarray, shape (N, 4)
         Generalized forces u (N, N, N m, N m), held over each sample.
-    rows : tuple of ndarray
-        (c (R, 8), e (R, 4), cₛ (R, 8, 8)), the output rows of the R responses.
     data : ndarray, shape (N, R)
         Measured responses (SI units), NaN where not measured.
     with_start : bool
@@ -270,7 +271,7 @@ def response_moments(
     s : ndarray, shape (R,)
         Σ ŷ² over all samples.
     """
-    c_row, e_row, c_s = rows
+    step, (c_row, e_row, c_s) = system
     r_count = data.shape[1]
     p = 16 if with_start else 8
     big_g = np.zeros((r_count, p, p))
@@ -310,9 +311,9 @@ def response_moments(
 
 @njit(cache=True, fastmath=False)
 def covariance_recursion(
-    step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    step: Step,
     forces: FloatArray,
-    rows: tuple[FloatArray, FloatArray, FloatArray],
+    rows: Rows,
     state_scale: FloatArray,
     output_scale: FloatArray,
     noise: tuple[FloatArray, FloatArray, FloatArray],
@@ -438,7 +439,7 @@ def _state_step(phi: FloatArray, gamma: FloatArray, x: FloatArray, u: FloatArray
 
 @njit(cache=True, fastmath=False)
 def _advance(
-    step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    step: Step,
     u: FloatArray,
     x: FloatArray,
     sens: FloatArray,
@@ -471,11 +472,26 @@ def _advance(
 
 
 @njit(cache=True, fastmath=False)
+def _through_adjoint(
+    adjoint: FloatArray, matrix: FloatArray, row: FloatArray, output_rows: FloatArray, out: FloatArray
+) -> None:
+    """out (P, Q) = λ M + Σᵣ wᵣ gᵣ oᵣ: the adjoint λ (P, 8) through M (8, Q) (Γ or Φ), plus one sample's
+    weighted gradients ``row`` (R, P) through the output rows o (R, Q) (e or c)."""
+    for a in range(out.shape[0]):
+        for q in range(out.shape[1]):
+            acc = 0.0
+            for i in range(8):
+                acc += adjoint[a, i] * matrix[i, q]
+            for r in range(row.shape[0]):
+                acc += row[r, a] * output_rows[r, q]
+            out[a, q] = acc
+
+
+@njit(cache=True, fastmath=False)
 def input_noise_moments(
-    step: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    system: tuple[Step, Rows],
     start: FloatArray,
     forces: FloatArray,
-    rows: tuple[FloatArray, FloatArray, FloatArray],
     measured: FloatArray,
     weight: FloatArray,
     input_var: FloatArray,
@@ -493,9 +509,9 @@ def input_noise_moments(
 
     Parameters
     ----------
-    step, start, forces, rows
-        The step (Φ, Γ, Φₛ, Γₛ), the initial state X₀, the forces u and the output rows (c, e, cₛ), as in
-        :func:`response_moments`.
+    system, start, forces
+        The step (Φ, Γ, Φₛ, Γₛ) and the output rows (c, e, cₛ), the initial state X₀ and the forces u, as
+        in :func:`response_moments`.
     measured : ndarray, shape (N, R)
         1 where the response is measured (its residual is fitted), else 0.
     weight : ndarray, shape (R,)
@@ -510,8 +526,8 @@ def input_noise_moments(
     ndarray, shape (P, P)
         M.
     """
+    step, (c_row, e_row, c_s) = system
     phi, gamma, _, _ = step
-    c_row, e_row, c_s = rows
     r_count = c_row.shape[0]
     n = forces.shape[0]
     p = 16 if with_start else 8
@@ -549,14 +565,7 @@ def input_noise_moments(
             _advance(step, forces[k], x, sens, free, with_start)
         for m in range(last - 1, first - 1, -1):
             row = grads[m - first]
-            for a in range(p):
-                for q in range(4):
-                    acc = 0.0
-                    for i in range(8):
-                        acc += adjoint[a, i] * gamma[i, q]
-                    for r in range(r_count):
-                        acc += row[r, a] * e_row[r, q]
-                    a_m[a, q] = acc
+            _through_adjoint(adjoint, gamma, row, e_row, a_m)
             for a in range(p):
                 for b in range(a, p):
                     acc = 0.0
@@ -564,14 +573,7 @@ def input_noise_moments(
                         acc += a_m[a, q] * input_var[q] * a_m[b, q]
                     big_m[a, b] += acc
             # λ for the sample before: λₘ₋₁ = λₘ Φ + Σᵣ wᵣ gₘᵣ cᵣ
-            for a in range(p):
-                for i in range(8):
-                    acc = 0.0
-                    for c in range(8):
-                        acc += adjoint[a, c] * phi[c, i]
-                    for r in range(r_count):
-                        acc += row[r, a] * c_row[r, i]
-                    adjoint_next[a, i] = acc
+            _through_adjoint(adjoint, phi, row, c_row, adjoint_next)
             adjoint[:] = adjoint_next
     for a in range(p):
         for b in range(a):

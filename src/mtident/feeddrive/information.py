@@ -139,10 +139,10 @@ def response_moments(
     """
     from mtident.feeddrive.fast import response_moments as run
 
-    step, rows = sensitivity_system(p, h, idx)
+    system = sensitivity_system(p, h, idx)
     initial = np.zeros(8) if start is None else np.asarray(start, dtype=float)
     observed = np.full((len(forces), len(idx)), np.nan) if data is None else np.asarray(data, dtype=float)
-    gram, cross, residual, power = run(step, initial, np.asarray(forces, dtype=float), rows, observed, data is not None)
+    gram, cross, residual, power = run(system, initial, np.asarray(forces, dtype=float), observed, data is not None)
     count = (
         np.isfinite(observed).sum(axis=0).astype(float) if data is not None else np.full(len(idx), float(len(forces)))
     )
@@ -223,12 +223,11 @@ def fisher_covariance(
     """
     from mtident.feeddrive.fast import response_moments as run
 
-    step, rows = system or sensitivity_system(p, h, idx)
     forces = np.asarray(forces, dtype=float)
     no_data = np.full((len(forces), len(idx)), np.nan)
     # the initial state is fitted with the parameters, as the refinement does: an impulse's record
     # starts in its ring-down, and a free start takes some of the information
-    gram, _, _, power = run(step, np.zeros(8), forces, rows, no_data, True)
+    gram, _, _, power = run(system or sensitivity_system(p, h, idx), np.zeros(8), forces, no_data, True)
     variance = noise_fraction**2 * power / len(forces)
     information = np.einsum("rij,r->ij", gram, 1.0 / np.where(variance > 0, variance, np.inf))
     return scaled_inverse(information)[:8, :8]

@@ -168,14 +168,12 @@ def input_noise_moments(
     variance = np.asarray(input_sd, dtype=float) ** 2
     if not np.any(variance > 0):
         return np.zeros((16, 16))
-    step, rows = sensitivity_system(p, h, idx)
     initial = np.zeros(8) if start is None else np.asarray(start, dtype=float)
     return np.asarray(
         run(
-            step,
+            sensitivity_system(p, h, idx),
             initial,
             np.asarray(forces, dtype=float),
-            rows,
             np.asarray(measured, dtype=float),
             np.asarray(weight, dtype=float),
             variance,
@@ -223,9 +221,8 @@ def tolerated_force_noise(
     from mtident.feeddrive.fast import response_moments as run
 
     forces = np.asarray(forces, dtype=float)
-    step, rows = sensitivity_system(p, h, idx)
     no_data = np.full((len(forces), len(idx)), np.nan)
-    gram, _, _, power = run(step, np.zeros(8), forces, rows, no_data, True)
+    gram, _, _, power = run(sensitivity_system(p, h, idx), np.zeros(8), forces, no_data, True)
     variance = noise_fraction**2 * power / len(forces)
     weight = 1.0 / np.where(variance > 0, variance, np.inf)
     inverse = scaled_inverse(np.einsum("rij,r->ij", gram, weight))

@@ -16,7 +16,7 @@ from mtident.feeddrive.params import (
     validate,
 )
 
-__all__ = ["Modes", "ModesAnswer", "modes"]
+__all__ = ["Modes", "ModesAnswer", "modes", "sampling_problem"]
 
 
 @dataclass(frozen=True, slots=True)

@@ -65,14 +65,14 @@ class SensorLine:
         T∞, the estimated steady-state temperature (°C).
     ci95_C : tuple of float
         95 % interval of T∞ (°C), (low, high).
-    decision_interval_C : tuple of float
-        The interval at the decision level that is compared with the tolerance (°C), (low, high).
     slowest_time_constant_min : float
         Largest time constant of the fitted modes (min).
     equilibrium_time_min : float
         When the best model stays within 5 % of its total rise from T∞ (min from the log's start).
     status : str
         The monitor's status of the sensor ("may stop", "confirming", "narrowing", "no rise", ...).
+    decision_interval_C : tuple of float
+        The interval at the decision level that is compared with the tolerance (°C), (low, high).
     model_ok : bool
         The fit can be trusted: T∞ is determined and the residuals are not much more correlated than
         noise.
@@ -92,10 +92,10 @@ class SensorLine:
     latest_C: float
     steady_C: float
     ci95_C: tuple[float, float]
-    decision_interval_C: tuple[float, float]
     slowest_time_constant_min: float
     equilibrium_time_min: float
     status: str
+    decision_interval_C: tuple[float, float]
     model_ok: bool
     settled_C: float
     difference_C: float
@@ -157,6 +157,8 @@ class WarmupReport:
         nodes), from the recorder's sidecar file; None for a logger's file.
     decision : str
         "stop" or "continue".
+    tolerance_C, decision_level
+        The decision's settings.
     stop_time_min : float
         The stop (NaN: no stop within the log).
     reason : str or None
@@ -169,8 +171,6 @@ class WarmupReport:
     warnings : tuple of str
     assumptions : str
     method : str
-    tolerance_C, decision_level
-        The decision's settings.
     hindsight : str or None
         The verdict of the check against the rest of the log, where the log runs on past the stop.
     settle_time_min : float
@@ -199,6 +199,8 @@ class WarmupReport:
     gaps: tuple[tuple[float, float], ...]
     recorded_from: str | None
     decision: str
+    tolerance_C: float
+    decision_level: float
     stop_time_min: float
     reason: str | None
     holding: tuple[str, ...]
@@ -207,8 +209,6 @@ class WarmupReport:
     warnings: tuple[str, ...]
     assumptions: str
     method: str
-    tolerance_C: float
-    decision_level: float
     hindsight: str | None
     settle_time_min: float
     time_saved_min: float
@@ -372,6 +372,8 @@ def build_report(
         gaps=reading_gaps(time_min),
         recorded_from=sidecar_words,
         decision=outcome.decision,
+        tolerance_C=settings.tolerance_C,
+        decision_level=settings.decision_level,
         stop_time_min=state.stop_time_min if stopped else math.nan,
         reason=outcome.reason,
         holding=holding,
@@ -380,8 +382,6 @@ def build_report(
         warnings=tuple(dict.fromkeys(w for sensor in outcome.sensors for w in sensor.warnings)),
         assumptions=assumed,
         method=METHOD,
-        tolerance_C=settings.tolerance_C,
-        decision_level=settings.decision_level,
         hindsight=None if hindsight is None else _hindsight_verdict(lines, hindsight.log_end_min, settings),
         settle_time_min=settle,
         time_saved_min=math.nan if saved is None else float(saved),
@@ -560,10 +560,10 @@ def _line(sensor: SensorStatus, readings: np.ndarray, hindsight: Hindsight | Non
         latest_C=float(valid[-1]) if len(valid) else math.nan,
         steady_C=_finite(sensor.steady_state_C),
         ci95_C=(_finite(sensor.steady_state_ci95_C[0]), _finite(sensor.steady_state_ci95_C[1])),
-        decision_interval_C=(_finite(sensor.decision_interval_C[0]), _finite(sensor.decision_interval_C[1])),
         slowest_time_constant_min=float(slowest),
         equilibrium_time_min=_finite(sensor.equilibrium_time_min),
         status=sensor.status,
+        decision_interval_C=(_finite(sensor.decision_interval_C[0]), _finite(sensor.decision_interval_C[1])),
         model_ok=sensor.model_ok,
         settled_C=settled,
         difference_C=difference,

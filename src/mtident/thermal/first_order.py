@@ -704,8 +704,6 @@ def _identify(
     in_log = times <= t[-1] + 1e-9
     errors = rmse(mean_curve[in_log], y[: int(in_log.sum())])
     final_measured, eq_measured, settled = measured_and_settled(t, y, DEFAULT_MAX_TIME_CONSTANT_MIN)
-    history, history_sd = course.history, course.history_sd
-    rate_sd = np.sqrt(course.final_cov[:, 1, 1])
     quantile_half = quantile * steady_sd
     floor = _warm_up_floors(
         tw, yw, None if ambient_C is None else np.asarray(ambient_C, float)[:n_window], steady, sigma
@@ -742,12 +740,12 @@ def _identify(
             curve_sd_C=curve_sd,
             steady_state_sd_C=steady_sd,
             rate_per_min=rate,
-            rate_sd_per_min=rate_sd,
+            rate_sd_per_min=np.sqrt(course.final_cov[:, 1, 1]),
             fit_chi2=chi2,
             fit_autocorr=autocorr,
             fits=fits,
-            history=history,
-            history_sd=history_sd,
+            history=course.history,
+            history_sd=course.history_sd,
             quantile=quantile,
             untrusted=untrusted,
         ),

@@ -209,6 +209,35 @@ class MachineFit:
     contradicted: bool = False
 
 
+@dataclass(frozen=True)
+class MachineReadings:
+    """A log's readings as the machine model takes them, to learn it or to fit a test
+    (:func:`machine_readings`).
+
+    Attributes
+    ----------
+    sensors : tuple of str
+        The columns' names (fitting a test: a sensor the model does not know is left out).
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N, S)
+        The readings (°C, NaN: missing).
+    room_C : ndarray, shape (N,) or None
+        The room sensor (an input of every mode, static gain one), as its trend over
+        :data:`~mtident.thermal.readings.ROOM_TREND_MIN`.
+    noise_C : ndarray, shape (S,)
+        Each sensor's noise per reading.
+    origin_min : float
+        Where the warm-up begins.
+    """
+
+    sensors: tuple[str, ...]
+    time_min: FloatArray
+    values: FloatArray
+    room_C: FloatArray | None
+    noise_C: FloatArray
+    origin_min: float
+
+
 # ----------------------------------------------------------------------------------------------
 # Columns shared by the reference's fit and the test's
 
@@ -227,9 +256,8 @@ def _target(binned: Binned) -> FloatArray:
     return binned.value_C - (binned.room_C if binned.room_C is not None else 0.0)
 
 
-def _bins(
-    time_min: FloatArray, values: FloatArray, room_C: FloatArray | None, origin_min: float
-) -> list[Binned | None]:
+def _bins(readings: MachineReadings) -> list[Binned | None]:
+    time_min, values, room_C, origin_min = readings.time_min, readings.values, readings.room_C, readings.origin_min
     after = time_min >= origin_min
     out: list[Binned | None] = []
     for s in range(values.shape[1]):
@@ -302,15 +330,7 @@ def _best_taus(
 
 
 @one_blas_thread()  # thousands of tiny solves: BLAS threads would only wait on one another
-def learn_machine_model(
-    sensors: tuple[str, ...] | list[str],
-    time_min: FloatArray,
-    values: FloatArray,
-    room_C: FloatArray | None,
-    noise_C: FloatArray,
-    origin_min: float,
-    max_time_constant_min: float,
-) -> MachineModel | None:
+def learn_machine_model(readings: MachineReadings, max_time_constant_min: float) -> MachineModel | None:
     """Fit a complete run's sensors together with shared time constants.
 
     The number of shared modes grows while the drop in χ² beats the BIC's price of one more
@@ -318,17 +338,8 @@ def learn_machine_model(
 
     Parameters
     ----------
-    sensors : sequence of str
-        The columns' names.
-    time_min : ndarray, shape (N,)
-    values : ndarray, shape (N, S)
-        The run's readings (°C, NaN: missing).
-    room_C : ndarray, shape (N,), optional
-        The room sensor (an input of every mode, static gain one).
-    noise_C : ndarray, shape (S,)
-        Each sensor's noise per reading.
-    origin_min : float
-        Where the warm-up begins.
+    readings : MachineReadings
+        The run's readings.
     max_time_constant_min : float
         The slowest mode searched (at most half the run, which pins down nothing slower).
 
@@ -337,18 +348,18 @@ def learn_machine_model(
     MachineModel or None
         None where fewer than two sensors have readings.
     """
-    binned = _bins(np.asarray(time_min, float), np.asarray(values, float), room_C, origin_min)
+    binned = _bins(readings)
     keep = [s for s, b in enumerate(binned) if b is not None]
     if len(keep) < 2:
         return None
     bins = [b for b in binned if b is not None]
-    noise = np.maximum(np.asarray(noise_C, float)[keep], 1e-4)
+    noise = np.maximum(readings.noise_C[keep], 1e-4)
     n_rows = sum(len(b) for b in bins)
     span = max(float(b.time_min[-1]) for b in bins)
     # a run pins down no mode much slower than itself: a longer one would only stand in for the room
     bounds = (1.0, min(max_time_constant_min, 0.5 * span))
     taus, chi2 = _best_taus(bins, noise, [np.array([30.0])], bounds)
-    per_mode_params = 1 + len(bins) * (2 if room_C is not None else 1)
+    per_mode_params = 1 + len(bins) * (2 if readings.room_C is not None else 1)
     for _ in range(1, MAX_MODES):
         starts = [np.append(taus, t) for t in _START_TAUS_MIN if np.all(np.abs(np.log(taus / t)) > 0.3)]
         more, more_chi2 = _best_taus(bins, noise, starts, bounds)
@@ -356,19 +367,19 @@ def learn_machine_model(
             break
         taus, chi2 = more, more_chi2
     k = len(taus)
-    gains = np.full((len(sensors), k), math.nan)
+    gains = np.full((len(readings.sensors), k), math.nan)
     for s, b, n in zip(keep, bins, noise, strict=True):
         coef, _ = _sensor_solve(b, taus, n)
         gains[s] = coef[1 + len(FAST_TIME_CONSTANTS_MIN) : 1 + len(FAST_TIME_CONSTANTS_MIN) + k]
     sd = _log_tau_sd(bins, noise, taus)
     box = tuple(float(max(TAU_BOX_MIN, math.expm1(min(TAU_BOX_SDS * v, 1.0)))) for v in sd)
     model = MachineModel(
-        tuple(sensors),
+        readings.sensors,
         tuple(float(t) for t in taus),
         box,
         tuple(tuple(float(v) for v in row) for row in gains),
     )
-    return model if room_C is None else _with_room_response(model, keep, bins, noise)
+    return model if readings.room_C is None else _with_room_response(model, keep, bins, noise)
 
 
 def _with_room_response(model: MachineModel, keep: list[int], bins: list[Binned], noise: FloatArray) -> MachineModel:
@@ -423,15 +434,7 @@ def _log_tau_sd(bins: list[Binned], noise: FloatArray, taus: FloatArray) -> Floa
 
 
 def fit_test(
-    model: MachineModel,
-    sensors: tuple[str, ...] | list[str],
-    time_min: FloatArray,
-    values: FloatArray,
-    room_C: FloatArray | None,
-    noise_C: FloatArray,
-    origin_min: float,
-    levels: tuple[float, ...],
-    room_lag: bool = True,
+    model: MachineModel, readings: MachineReadings, levels: tuple[float, ...], room_lag: bool = True
 ) -> MachineFit | None:
     """Each sensor's T∞ and interval from the test's readings so far, every sensor fitted together
     with the model's modes.
@@ -439,15 +442,8 @@ def fit_test(
     Parameters
     ----------
     model : MachineModel
-    sensors : sequence of str
-        The columns' names (a sensor the model does not know is left out).
-    time_min : ndarray, shape (N,)
-    values : ndarray, shape (N, S)
-    room_C : ndarray, shape (N,), optional
-        The room sensor as its trend over :data:`~mtident.thermal.readings.ROOM_TREND_MIN`.
-    noise_C : ndarray, shape (S,)
-    origin_min : float
-        Where the warm-up begins.
+    readings : MachineReadings
+        The test's readings so far.
     levels : tuple of float
         The intervals' confidence levels.
     room_lag : bool, optional
@@ -460,14 +456,10 @@ def fit_test(
         None where fewer than two sensors can be fitted with the tie; ``contradicted`` where most
         of them reject it.
     """
-    t = np.asarray(time_min, float)
+    sensors, t, room_C, origin_min = readings.sensors, readings.time_min, readings.room_C, readings.origin_min
     gains = model.gains(sensors)
-    noise = np.maximum(np.asarray(noise_C, float), 1e-4)
-    fitted = {
-        s: b
-        for s, b in enumerate(_bins(t, np.asarray(values, float), room_C, origin_min))
-        if b is not None and np.all(np.isfinite(gains[s]))
-    }
+    noise = np.maximum(readings.noise_C, 1e-4)
+    fitted = {s: b for s, b in enumerate(_bins(readings)) if b is not None and np.all(np.isfinite(gains[s]))}
     taus, tau_sd = _centres(model)
     # early on, a test's fast start (a mode faster than the reference run could show) misfits the
     # model too: only readings over half the slowest mode say it is another machine
@@ -857,6 +849,17 @@ def noise_and_origin(time_min: FloatArray, values: FloatArray) -> tuple[FloatArr
     return noise, float(t[first]) if first < len(t) else float(t[0])
 
 
+def machine_readings(
+    sensors: tuple[str, ...] | list[str], time_min: FloatArray, values: FloatArray, room_C: FloatArray | None
+) -> MachineReadings:
+    """A log's readings for the machine model: their noise and origin estimated, the room smoothed
+    as every per-sensor fit smooths it."""
+    t = np.asarray(time_min, float)
+    noise, origin = noise_and_origin(t, values)
+    room = None if room_C is None else room_trend(t, np.asarray(room_C, float), ROOM_TREND_MIN)
+    return MachineReadings(tuple(sensors), t, np.asarray(values, float), room, noise, origin)
+
+
 def fit_readings(
     model: MachineModel | None,
     sensors: tuple[str, ...] | list[str],
@@ -865,15 +868,12 @@ def fit_readings(
     room_C: FloatArray | None,
     levels: tuple[float, ...],
 ) -> MachineFit | None:
-    """:func:`fit_test` on a log's readings so far: their noise and origin estimated, the room
-    smoothed as every per-sensor fit smooths it (None without a model)."""
+    """:func:`fit_test` on a log's readings so far (:func:`machine_readings`; None without a model)."""
     if model is None:
         return None
-    t = np.asarray(time_min, float)
-    noise, origin = noise_and_origin(t, values)
-    room = None if room_C is None else room_trend(t, np.asarray(room_C, float), ROOM_TREND_MIN)
+    readings = machine_readings(sensors, time_min, values, room_C)
     with one_blas_thread():
-        return fit_test(model, sensors, t, values, room, noise, origin, levels)
+        return fit_test(model, readings, levels)
 
 
 def unmeasured_wander(model: MachineModel | None, room_measured: bool, settings: RobustSettings) -> dict[float, float]:

@@ -36,7 +36,7 @@ __all__ = [
 _JITTER = 1e-11
 _DIFF_STEP = 1e-6
 
-# the arrays :func:`fit_one` takes before ``log_tau`` (u, time_min, weight, target, room), and an
+# the arrays :func:`fit_one` takes as its ``inputs`` (u, time_min, weight, target, room), and an
 # objective as :func:`objective_and_gradient` takes it (kind, threshold, sign, gap, log_mode_ratio)
 KernelInputs: TypeAlias = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
 KernelObjective: TypeAlias = tuple[float, float, float, float, float]
@@ -76,27 +76,23 @@ def lag_rows(room: FloatArray, time_min: FloatArray, tau: FloatArray) -> FloatAr
 
 @njit(cache=True)
 def fit_one(
-    u: FloatArray,
-    time_min: FloatArray,
-    weight: FloatArray,
-    target: FloatArray,
-    room: FloatArray,
-    log_tau: FloatArray,
-    penalty: FloatArray,
+    inputs: KernelInputs, log_tau: FloatArray, penalty: FloatArray
 ) -> tuple[float, FloatArray, float, FloatArray, FloatArray, FloatArray, FloatArray]:  # pragma: no cover - compiled
     """The penalised least-squares fit of one model and its slopes in log τ.
 
     Parameters
     ----------
-    u : (B,) minutes since the modes began; time_min : (B,) the bins' times (for the room's lag)
-    weight : (B,) readings per bin; target : (B,) the readings (less the room) less the centring
-    room : (B,) the room's readings, or an empty array without a room sensor
+    inputs : (u, time_min, weight, target, room)
+        u : (B,) minutes since the modes began; time_min : (B,) the bins' times (for the room's lag);
+        weight : (B,) readings per bin; target : (B,) the readings (less the room) less the centring;
+        room : (B,) the room's readings, or an empty array without a room sensor
     log_tau : (k,); penalty : (p,) the priors' weights
 
     Returns
     -------
     rss, theta (p,), var_steady, direction (p,), d_rss (k,), d_steady (k,), d_var (k,)
     """
+    u, time_min, weight, target, room = inputs
     k = log_tau.shape[0]
     n = u.shape[0]
     with_room = room.shape[0] > 0
@@ -203,7 +199,7 @@ def objective_and_gradient(
     Parameters
     ----------
     inputs : tuple
-        The arrays :func:`fit_one` takes before ``log_tau`` (u, time_min, weight, target, room).
+        The arrays :func:`fit_one` takes (u, time_min, weight, target, room).
     log_tau : ndarray, shape (k,)
     penalty : ndarray, shape (p,)
     objective : tuple
@@ -217,9 +213,8 @@ def objective_and_gradient(
     gradient : ndarray, shape (k,)
         Not-a-number slopes as zero, infinite ones as the largest float (as ``numpy.nan_to_num``).
     """
-    u, time_min, weight, target, room = inputs
     kind, threshold, sign, gap, log_mode_ratio = objective
-    rss, theta, var, _, d_rss, d_steady, d_var = fit_one(u, time_min, weight, target, room, log_tau, penalty)
+    rss, theta, var, _, d_rss, d_steady, d_var = fit_one(inputs, log_tau, penalty)
     k = log_tau.shape[0]
     if kind == RSS_OBJECTIVE:
         value = rss
@@ -292,7 +287,7 @@ def refine_log_tau(
     for _ in range(_PASSES):
         before = f
         x, f, g, spent = _quasi_newton_pass(
-            inputs, x, f, g, lower, upper, penalty, objective, max_iterations, max_evaluations - evaluations
+            inputs, penalty, objective, (lower, upper), (x, f, g), max_iterations, max_evaluations - evaluations
         )
         evaluations += spent
         if evaluations >= max_evaluations or before - f <= _FTOL * max(abs(f), abs(before), 1.0):
@@ -303,19 +298,18 @@ def refine_log_tau(
 @njit(cache=True)
 def _quasi_newton_pass(
     inputs: KernelInputs,
-    x: FloatArray,
-    f: float,
-    g: FloatArray,
-    lower: FloatArray,
-    upper: FloatArray,
     penalty: FloatArray,
     objective: KernelObjective,
+    bounds: tuple[FloatArray, FloatArray],
+    point: tuple[FloatArray, float, FloatArray],
     max_iterations: int,
     max_evaluations: int,
 ) -> tuple[FloatArray, float, FloatArray, int]:  # pragma: no cover - compiled
-    """One pass of :func:`refine_log_tau`'s search from ``x`` (value ``f``, gradient ``g``), the
-    curvature learnt afresh: the point it ends at, its value and gradient, and the evaluations it
-    spent."""
+    """One pass of :func:`refine_log_tau`'s search within ``bounds`` (lower, upper) from ``point``
+    (x, its value f and gradient g), the curvature learnt afresh: the point it ends at, its value
+    and gradient, and the evaluations it spent."""
+    lower, upper = bounds
+    x, f, g = point
     k = x.shape[0]
     evaluations = 0
     h = np.eye(k)

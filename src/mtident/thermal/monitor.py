@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
+from typing import TypedDict
 
 import numpy as np
 
@@ -408,8 +409,15 @@ def resolves_tolerance(estimate: SensorEstimate, settings: MonitorSettings) -> b
     return estimate.display_step_C < settings.tolerance_C
 
 
-# what a check repeats of its estimate, under the same names
-_ESTIMATE_KEYS = ("noise_C", "rise_C", "model_ok", "reference_used", "machine_used", "warnings")
+class _EstimateKeys(TypedDict):
+    """What a check repeats of its estimate, under the same names."""
+
+    noise_C: float
+    rise_C: float
+    model_ok: bool
+    reference_used: bool
+    machine_used: bool
+    warnings: tuple[str, ...]
 
 
 def _checked(
@@ -438,7 +446,7 @@ def _checked(
         equilibrium_time_min=math.nan if fit is None else fit.equilibrium_time_min,
         origin_min=estimate.onset_min,
         modes=() if fit is None else tuple((m.time_constant_min, m.amplitude_C) for m in fit.modes),
-        **fields_of(estimate, _ESTIMATE_KEYS),
+        **fields_of(estimate, _EstimateKeys),
         ends=estimate.what_sets_the_ends(settings.decision_level)
         if resolves_tolerance(estimate, settings)
         else f"its readings come in steps of {estimate.display_step_C:.3g} °C, no finer than the tolerance",

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from mtident._json import fields_of, json_optional, to_json_value
+from mtident._json import json_optional, to_json_value
 from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.hindsight import HindsightAnswer
 from mtident.thermal.modal_types import Mode
@@ -157,18 +157,6 @@ class WatchAnswer:
     log_warnings: tuple[str, ...] | None = json_optional()
 
 
-# the single-sensor keys of the answer: those of the sensor the test waits for
-_LEAD_KEYS = (
-    "sensor",
-    "steady_state_C",
-    "steady_state_ci95_C",
-    "equilibrium_time_min",
-    "model_ok",
-    "warnings",
-    "assumptions",
-)
-
-
 def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None) -> WatchAnswer:
     """The answer: the decision, the single-sensor keys of the sensor the test
     waits for (the slowest to equilibrium once stopped, the widest interval before), and per
@@ -201,10 +189,17 @@ def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, f
     lead = sensors[state.checks.index(key)]
     stops = None if expected is None else [expected.get(c.sensor, math.nan) for c in waited]
     return WatchAnswer(
-        **fields_of(lead, _LEAD_KEYS),
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
         reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings),
+        # the single-sensor keys: those of the sensor the test waits for
+        sensor=lead.sensor,
+        steady_state_C=lead.steady_state_C,
+        steady_state_ci95_C=lead.steady_state_ci95_C,
+        equilibrium_time_min=lead.equilibrium_time_min,
+        model_ok=lead.model_ok,
+        warnings=lead.warnings,
+        assumptions=lead.assumptions,
         room_bound_sensors=() if stopped else tuple(c.sensor for c in waited if _room_bound(c, settings)),
         waited_for=tuple(c.sensor for c in waited),
         reference_dropped=state.reference_dropped,

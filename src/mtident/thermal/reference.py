@@ -23,10 +23,10 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
-from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, noise_and_origin
+from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, machine_readings
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
-from mtident.thermal.readings import ROOM_TREND_MIN, coarse_room_warning, room_error_C, room_input, room_trend
+from mtident.thermal.readings import coarse_room_warning, room_error_C, room_input
 from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
 from mtident.thermal.robust_types import DEFAULT_MAX_MODES, MAX_FREE_FAST, RobustSettings, SensorEstimate, SensorModes
 
@@ -348,10 +348,8 @@ def _learn_machine(
     the run does not pin down the slow modes they share; and what the warnings say."""
     if len(log.sensors) < 2:
         return None, []
-    noise, origin = noise_and_origin(log.time_min, log.temperature_C)
-    room = None if room_C is None else room_trend(log.time_min, room_C, ROOM_TREND_MIN)
-    args = (log.time_min, log.temperature_C, room, noise, origin)
-    model = learn_machine_model(log.sensors, *args[:2], room, noise, origin, settings.max_time_constant_min)
+    readings = machine_readings(log.sensors, log.time_min, log.temperature_C, room_C)
+    model = learn_machine_model(readings, settings.max_time_constant_min)
     if model is None:
         return None, []
     slowest = max(model.time_constants_min)
@@ -373,7 +371,7 @@ def _learn_machine(
             f"the machine model would build {worst}'s rise from modes {np.max(cancelling):.0f} times larger that "
             "cancel: too fragile to extrapolate a test with; later tests use each sensor's modes alone"
         ]
-    itself = fit_test(model, log.sensors, *args, (0.95,), room_lag=False)
+    itself = fit_test(model, readings, (0.95,), room_lag=False)
     pinned = (
         []
         if itself is None

@@ -94,6 +94,7 @@ class SensorModes:
     Parameters
     ----------
     time_constants_min : tuple of float
+        The modes' time constants (min): the centres of the boxes a later test searches.
     box : tuple of float
         Relative half-width of each time constant's uncertainty (0.1: ±10 %).
     amplitudes_C : tuple of float

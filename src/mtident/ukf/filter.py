@@ -480,8 +480,6 @@ def filter_step(
         new_chol = None if new_chol is None or prior.chol is None else np.where(keep, new_chol, prior.chol)
         new_cov = None if new_cov is None or prior.cov is None else np.where(keep, new_cov, prior.cov)
         memory = np.where(keep, memory, carry.residual_memory)
-        innovation = np.where(observed[..., None], innovation, np.nan)
-        gamma = np.where(observed[..., None], gamma, np.nan)
     new_carry = FilterCarry(
         mean=mean,
         cov=new_cov,
@@ -492,10 +490,10 @@ def filter_step(
         updates_seen=carry.updates_seen + observed,
     )
     info = StepInfo(
-        innovation=innovation,
+        innovation=np.where(observed[..., None], innovation, np.nan),
         innovation_cov=innovation_cov,
         fading=alpha,
-        posterior_residual=gamma,
+        posterior_residual=np.where(observed[..., None], gamma, np.nan),
         adapted=adapted,
         reached=reached,
     )
