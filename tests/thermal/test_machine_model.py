@@ -77,7 +77,7 @@ def test_noise_and_origin_find_a_late_switch_on():
     assert np.all((noise > 0.005) & (noise < 0.02))
 
 
-def test_combined_estimate_takes_the_overlap_or_keeps_its_own():
+def test_combined_estimate_takes_the_overlap_or_holds_both_where_they_disagree():
     t = np.arange(0.0, 60.0, 0.5)
     y = 20.0 + 5.0 * (1.0 - np.exp(-t / 10.0))
     own = estimate_sensor("s", t, y + np.random.default_rng(1).normal(0, 0.01, len(t)))
@@ -95,8 +95,15 @@ def test_combined_estimate_takes_the_overlap_or_keeps_its_own():
     assert both.interval_C[0.99] == (max(lo, own.steady_C - 0.019), min(hi, own.steady_C + 0.021))
     assert both.fit is not None and both.fit.modes == (Mode(10.0, -5.0),)
     assert both.fit.equilibrium_time_min == pytest.approx(10.0 * math.log(20.0), rel=0.01)
+    # a new user's PT100, fitted alone, said "may stop" 0.22 °C off while the machine model held the
+    # truth outside its interval: where the two disagree neither is taken alone
     off = replace(agreeing, steady_C=np.array([hi + 1.0]))
-    assert combined_estimate(own, off, 0, {}) is own
+    disputed = combined_estimate(own, off, 0, {})
+    assert not disputed.machine_used and disputed.steady_C == own.steady_C
+    assert disputed.interval_C[0.99] == (lo, hi + 1.0 + 0.02)
+    assert disputed.interval_C[0.95][1] == pytest.approx(hi + 1.0 + 0.01)
+    assert disputed.warning_codes[-1] == "machine-disagrees"
+    assert disputed.warnings[-1].startswith(f"s: the machine model puts T∞ at {hi + 1.0:.2f} °C, outside")
 
 
 def test_a_direction_the_readings_leave_open_keeps_its_variance():

@@ -891,20 +891,22 @@ def combined_estimate(
     """The sensor's answer with the machine model's where both agree: T∞ from the machine model,
     each interval the overlap of the two.
 
-    The sensor's own interval must hold the machine model's T∞ at every level; else the sensor
-    keeps its own answer (the machine model does not fit it, or the reference does not hold for
-    it). Its own T∞ need not lie in the machine model's interval: it is the less certain of the two.
-    ``wander`` widens the machine model's half-widths by the room's unmeasured wander per level.
+    The sensor's own interval must hold the machine model's T∞ at every level; else one of the
+    two is wrong (the machine model does not fit the sensor, or the sensor's own modes miss a
+    lag or a room path), and the sensor keeps its own T∞ with each interval the hull of the two,
+    and says so. Its own T∞ need not lie in the machine model's interval: it is the less certain
+    of the two. ``wander`` widens the machine model's half-widths by the room's unmeasured wander
+    per level.
     """
     if fit is None or estimate.fit is None or not fit.used[s] or _CONTRADICTED & set(estimate.warning_codes):
         return estimate
     steady = float(fit.steady_C[s])
+    half = {level: float(fit.half_width_C[level][s]) + wander.get(level, 0.0) for level in estimate.interval_C}
+    if not all(lo <= steady <= hi for lo, hi in estimate.interval_C.values()):
+        return _disputed(estimate, steady, half)
     intervals: dict[float, tuple[float, float]] = {}
     for level, (lo, hi) in estimate.interval_C.items():
-        half = float(fit.half_width_C[level][s]) + wander.get(level, 0.0)
-        if not lo <= steady <= hi:
-            return estimate
-        intervals[level] = (max(lo, steady - half), min(hi, steady + half))
+        intervals[level] = (max(lo, steady - half[level]), min(hi, steady + half[level]))
     # the machine model determines what the sensor's own curve left open
     kept = [i for i, code in enumerate(estimate.warning_codes) if code != "undetermined"]
     modes = fit.modes[s]
@@ -926,6 +928,31 @@ def combined_estimate(
         warnings=tuple(estimate.warnings[i] for i in kept),
         warning_codes=tuple(estimate.warning_codes[i] for i in kept),
         machine_used=True,
+    )
+
+
+def _disputed(estimate: SensorEstimate, steady: float, half: dict[float, float]) -> SensorEstimate:
+    """The sensor's own answer where the machine model's T∞ lies outside its interval: each
+    interval widened to hold the machine model's too (a PT100 behind its own lag, fitted alone in
+    a room read in coarse steps, said "may stop" 0.22 °C off while the machine model held the
+    truth), and said."""
+    assert estimate.fit is not None  # combined_estimate's caller has a fit
+    intervals = {
+        level: (min(lo, steady - half[level]), max(hi, steady + half[level]))
+        for level, (lo, hi) in estimate.interval_C.items()
+    }
+    text = (
+        f"{estimate.sensor}: the machine model puts T∞ at {steady:.2f} °C, outside this sensor's own interval: "
+        "its interval holds both"
+    )
+    own = estimate.fit
+    ends = {level: _ends(own.modes, own.steady_C, lo, hi) for level, (lo, hi) in intervals.items()}
+    return replace(
+        estimate,
+        fit=replace(own, interval_C=intervals, ends=ends),
+        interval_C=intervals,
+        warnings=(*estimate.warnings, text),
+        warning_codes=(*estimate.warning_codes, "machine-disagrees"),
     )
 
 

@@ -38,6 +38,7 @@ WarningCode = Literal[
     "slower-than-allowed",
     "reference-disagrees",
     "reference-doubtful",
+    "machine-disagrees",
     "below-floor",
     "too-few-readings",
     "no-data",
