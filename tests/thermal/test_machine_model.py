@@ -115,3 +115,31 @@ def test_a_direction_the_readings_leave_open_keeps_its_variance():
     _, cov = _least_squares(X, 1.0 + 2.0 * u)
     assert cov[1, 1] > 1e6 and cov[2, 2] > 1e6
     assert cov[0, 0] < 1.0  # the level is still known
+
+
+def test_a_sensor_whose_run_shows_a_slow_mode_the_shared_ones_lack_is_named():
+    """A held-out five-node chain learnt as two shared modes (179 and 27 min): a sensor between the
+    chain's middle nodes, whose run shows a 90-min mode of -0.8 °C as well, stopped a test 0.213 °C
+    off. Such a sensor is named with its missing mode; a sensor's own fast lag is not."""
+    from mtident.thermal.machine_model import missing_modes
+
+    t = np.arange(0.0, 900.0, 1.0)
+    rng = np.random.default_rng(7)
+
+    def rise(*modes: tuple[float, float]) -> np.ndarray:
+        return 20.0 + sum(a * (1.0 - np.exp(-t / tau)) for tau, a in modes)
+
+    values = np.column_stack(
+        [
+            rise((179.0, 2.6), (27.0, 0.9)),
+            rise((179.0, 1.7), (90.0, 0.8), (27.0, -0.4)),
+            rise((179.0, 2.4), (27.0, 0.5), (1.8, 0.6)),
+        ]
+    ) + rng.normal(0.0, 0.01, (t.size, 3))
+    names = ("A", "B", "C")
+    readings = MachineReadings(names, t, np.round(values, 2), None, np.full(3, 0.01), 0.0)
+    model = MachineModel(names, (179.0, 27.0), (0.05, 0.05), ((2.6, 0.9), (1.7, -0.4), (2.4, 0.5)))
+    missing = missing_modes(model, readings)
+    assert set(missing) == {"B"}
+    tau, amplitude = missing["B"]
+    assert 60.0 < tau < 130.0 and abs(amplitude) > 0.3

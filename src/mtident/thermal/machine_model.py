@@ -88,6 +88,14 @@ _CONTRADICTED = {"misfit", "reference-disagrees"}
 MIN_LOG_SPACING = 0.2
 """Two shared modes closer than this (log ratio) are one: the pair would only cancel."""
 _START_TAUS_MIN = (1.5, 4.0, 10.0, 25.0, 60.0, 150.0, 400.0)
+MISSING_MODE_P = 1e-4
+"""A sensor's run shows a mode the shared ones lack where one more mode explains it beyond this
+chance (χ² on two degrees of freedom, searched over :data:`MISSING_MODE_GRID` time constants)."""
+MISSING_MODE_C = 0.1
+"""And carries at least this much of its rise (°C)."""
+MISSING_MODE_GRID = 16
+MISSING_MODE_SHARE = 0.1
+"""The fastest mode searched for, as a share of the slowest shared one."""
 
 
 @dataclass(frozen=True)
@@ -380,6 +388,38 @@ def learn_machine_model(readings: MachineReadings, max_time_constant_min: float)
         tuple(tuple(float(v) for v in row) for row in gains),
     )
     return model if readings.room_C is None else _with_room_response(model, keep, bins, noise)
+
+
+def missing_modes(model: MachineModel, readings: MachineReadings) -> dict[str, tuple[float, float]]:
+    """The sensors whose run shows a slow mode the shared ones lack: per sensor, the time constant
+    (min, slower than the fastest shared mode and at least :data:`MISSING_MODE_SHARE` of the
+    slowest) and amplitude (°C) of the one mode
+    more that explains its readings beyond chance
+    (:data:`MISSING_MODE_P`, over the residuals' correlation factor) with at least
+    :data:`MISSING_MODE_C` of its rise. A machine model of fewer modes than the machine (a chain's
+    middle modes) fits such a sensor's run and extrapolates its test wrongly with confidence."""
+    taus = np.array(model.time_constants_min)
+    # a mode faster than every shared one (a sensor's own lag) is the test's free fast modes' to
+    # take up; one between the shared modes or beyond them changes how a test extrapolates
+    slowest = float(taus.max())
+    fastest = max(MISSING_MODE_SHARE * slowest, float(taus.min()) * math.exp(MIN_LOG_SPACING))
+    grid = np.exp(np.linspace(math.log(fastest), math.log(1.5 * slowest), MISSING_MODE_GRID))
+    grid = grid[np.all(np.abs(np.log(grid[:, None] / taus[None, :])) > MIN_LOG_SPACING, axis=1)]
+    k = 1 + len(FAST_TIME_CONSTANTS_MIN) + len(taus)
+    out: dict[str, tuple[float, float]] = {}
+    for s, b in enumerate(_bins(readings)):
+        name = readings.sensors[s]
+        if b is None or name not in model.sensors:
+            continue
+        noise = float(readings.noise_C[s])
+        _, resid = _sensor_solve(b, taus, noise)
+        corr = correlation_factor(resid)
+        tried = [(extra, *_sensor_solve(b, np.append(taus, extra), noise)) for extra in grid]
+        drops = [(float(resid @ resid) - float(more @ more)) / corr for _, _, more in tried]
+        best = int(np.argmax(drops)) if drops else -1
+        if best >= 0 and drops[best] > chdtri(2, MISSING_MODE_P) and abs(tried[best][1][k]) >= MISSING_MODE_C:
+            out[name] = (float(tried[best][0]), float(tried[best][1][k]))
+    return out
 
 
 def _with_room_response(model: MachineModel, keep: list[int], bins: list[Binned], noise: FloatArray) -> MachineModel:

@@ -23,7 +23,13 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
-from mtident.thermal.machine_model import MachineModel, fit_test, learn_machine_model, machine_readings
+from mtident.thermal.machine_model import (
+    MachineModel,
+    fit_test,
+    learn_machine_model,
+    machine_readings,
+    missing_modes,
+)
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
 from mtident.thermal.readings import coarse_room_warning, room_error_C, room_input
@@ -377,17 +383,27 @@ def _learn_machine(
         if itself is None
         else [n for n, h in zip(log.sensors, itself.half_width_C[0.95], strict=True) if h <= PINNED_HALF_WIDTH_C]
     )
+    missing = missing_modes(model, readings)
+    shared = ", ".join(f"{tau:.3g}" for tau in model.time_constants_min)
+    lacking = [
+        f"the machine model leaves out {name}: its run shows a mode of about {tau:.3g} min ({amplitude:+.2f} °C) "
+        f"that the shared modes ({shared} min) lack, so a test would extrapolate it wrongly"
+        for name, (tau, amplitude) in missing.items()
+        if name in pinned
+    ]
+    pinned = [name for name in pinned if name not in missing]
     if len(pinned) < 2:
         return None, [
-            "the run does not pin down two or more sensors together: later tests use each sensor's modes alone"
+            *lacking,
+            "the run does not pin down two or more sensors together: later tests use each sensor's modes alone",
         ]
-    left = [name for name in log.sensors if name not in pinned]
+    left = [name for name in log.sensors if name not in pinned and name not in missing]
     said = (
         [f"the machine model leaves out {', '.join(left)}: the run does not pin their steady states down together"]
         if left
         else []
     )
-    return model.of(pinned), said
+    return model.of(pinned), [*lacking, *said]
 
 
 @dataclass(frozen=True)
