@@ -748,8 +748,9 @@ def _answer(
         )
     elif expected is not None and outcome.decision != "stop":
         waited = [s for s in outcome.sensors if s.waited_for]
-        none = [s.sensor for s in waited if not math.isfinite(s.expected_stop_time_min or math.nan)]
-        found = [s.expected_stop_time_min or math.nan for s in waited if s.sensor not in none]
+        stops = {s.sensor: s.expected_stop_time_min or math.nan for s in waited}
+        none = [name for name, stop in stops.items() if not math.isfinite(stop)]
+        found = [stop for stop in stops.values() if math.isfinite(stop)]
         who = f"{', '.join(none)} {'has' if len(none) == 1 else 'have'}" if none else "a sensor waited for has"
         others = (
             f"; the others' come at t ≈ {minutes(round(min(found)))} to {minutes(round(max(found)))}" if found else ""
@@ -835,6 +836,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "settled by (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     settled = hindsight.checked
+    cells = []
     for i, name in enumerate(hindsight.sensors):
         error = hindsight.error_C[i]
         shown = _fmt(float(error)) if settled[i] else "—"
@@ -844,22 +846,21 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         level = float(hindsight.settled_C[i])
         # the settle time is read off the readings less the room, which settle where the readings
         # themselves keep following a moving room
-        settled_cell = _fmt(level) if math.isfinite(level) else "with the room" if math.isfinite(settle) else "not yet"
+        cells.append(_fmt(level) if math.isfinite(level) else "with the room" if math.isfinite(settle) else "not yet")
         table.add_row(
             name,
             _fmt(float(hindsight.steady_state_C[i] + hindsight.shift_C[i])),
-            settled_cell,
+            cells[-1],
             shown,
             _fmt(settle, 0),
         )
     table_console().print(table)
-    if any(not math.isfinite(v) for v in hindsight.settled_C) and hindsight.settle_time_min is not None:
-        if np.isfinite(np.asarray(hindsight.settle_time_min)[~np.isfinite(hindsight.settled_C)]).any():
-            OptionConsole().print(
-                "with the room: the readings keep following the room; their rise above it settled by the time shown "
-                "(no settled level to check T∞ against).",
-                highlight=False,
-            )
+    if "with the room" in cells:
+        OptionConsole().print(
+            "with the room: the readings keep following the room; their rise above it settled by the time shown "
+            "(no settled level to check T∞ against).",
+            highlight=False,
+        )
     timing = _settle_timing(hindsight)
     if not settled.any():
         OptionConsole().print(

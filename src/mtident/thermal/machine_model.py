@@ -393,8 +393,7 @@ def learn_machine_model(readings: MachineReadings, max_time_constant_min: float)
 def missing_modes(model: MachineModel, readings: MachineReadings) -> dict[str, tuple[float, float]]:
     """The sensors whose run shows a slow mode the shared ones lack: per sensor, the time constant
     (min, slower than the fastest shared mode and at least :data:`MISSING_MODE_SHARE` of the
-    slowest) and amplitude (°C) of the one mode
-    more that explains its readings beyond chance
+    slowest) and amplitude (°C) of the one mode more that explains its readings beyond chance
     (:data:`MISSING_MODE_P`, over the residuals' correlation factor) with at least
     :data:`MISSING_MODE_C` of its rise. A machine model of fewer modes than the machine (a chain's
     middle modes) fits such a sensor's run and extrapolates its test wrongly with confidence."""
@@ -411,7 +410,7 @@ def missing_modes(model: MachineModel, readings: MachineReadings) -> dict[str, t
         name = readings.sensors[s]
         if b is None or name not in model.sensors:
             continue
-        noise = float(readings.noise_C[s])
+        noise = max(float(readings.noise_C[s]), 1e-4)  # as learn_machine_model floors it
         _, resid = _sensor_solve(b, taus, noise)
         corr = correlation_factor(resid)
         tried = [(extra, *_sensor_solve(b, np.append(taus, extra), noise)) for extra in grid]

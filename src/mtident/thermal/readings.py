@@ -25,6 +25,7 @@ __all__ = [
     "reading_range",
     "rise_threshold_C",
     "sampling_interval_min",
+    "coarse_room_step_C",
     "room_error_C",
     "room_input",
     "spikes",
@@ -312,9 +313,10 @@ COARSE_ROOM_STEP_C = 0.05
 """A room sensor read in steps this coarse or coarser hides the room's slow moves within a step."""
 
 
-def room_error_C(time_min: FloatArray, room_C: FloatArray) -> float:
-    """The slow part of a coarse room sensor's error (°C): its display step's q/√12, where the step
-    is :data:`COARSE_ROOM_STEP_C` or coarser; else 0.
+def coarse_room_step_C(time_min: FloatArray, room_C: FloatArray) -> float:
+    """A coarse room sensor's display step (°C): the step its readings come in, where it is
+    :data:`COARSE_ROOM_STEP_C` or coarser; else 0 (its slow error, :func:`room_error_C`, is the
+    step's q/√12).
 
     A room read in 0.1 °C steps holds one value for an hour while the room moves a few
     hundredths, and as it crosses a step its readings jump: what a fit takes as the room
@@ -338,11 +340,17 @@ def room_error_C(time_min: FloatArray, room_C: FloatArray) -> float:
     if np.count_nonzero(np.isfinite(room)) < 5:
         return 0.0
     step = max(float(display_resolution(room[:, None])[0]), quantisation_step(room))
-    return step / math.sqrt(12.0) if step >= COARSE_ROOM_STEP_C - 1e-9 else 0.0
+    return step if step >= COARSE_ROOM_STEP_C - 1e-9 else 0.0
+
+
+def room_error_C(time_min: FloatArray, room_C: FloatArray) -> float:
+    """The slow part of a coarse room sensor's error (°C): its display step's q/√12
+    (:func:`coarse_room_step_C`); 0 for a fine one."""
+    return coarse_room_step_C(time_min, room_C) / math.sqrt(12.0)
 
 
 def coarse_room_warning(step_C: float, consequence: str) -> str:
-    """What to say of a room read in steps of ``step_C`` (°C, from :func:`room_error_C`), and
+    """What to say of a room read in steps of ``step_C`` (°C, from :func:`coarse_room_step_C`), and
     what that costs here (``consequence``)."""
     return (
         f"the room is read in steps of {step_C:.2g} °C: it moves within a step unseen, and its readings jump as it "

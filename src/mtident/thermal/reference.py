@@ -32,7 +32,7 @@ from mtident.thermal.machine_model import (
 )
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
-from mtident.thermal.readings import coarse_room_warning, room_error_C, room_input
+from mtident.thermal.readings import coarse_room_step_C, coarse_room_warning, room_input
 from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
 from mtident.thermal.robust_types import DEFAULT_MAX_MODES, MAX_FREE_FAST, RobustSettings, SensorEstimate, SensorModes
 
@@ -305,7 +305,7 @@ def learn_reference(
     settings = settings or RobustSettings()
     sensors: dict[str, SensorModes] = {}
     warnings: list[str] = []
-    room_step = 0.0 if room_C is None else room_error_C(log.time_min, room_C) * math.sqrt(12.0)
+    room_step = 0.0 if room_C is None else coarse_room_step_C(log.time_min, room_C)
     for s, name in enumerate(log.sensors):
         learnt = _learn_sensor(name, log.time_min, log.temperature_C[:, s], room_C, room_step, settings)
         if isinstance(learnt, str):
@@ -676,14 +676,16 @@ def _learn_sensor(
     box its uncertainty gives: left out, it would tell a later test that no mode lies beyond the
     others' boxes, which the run itself contradicts (a slow mode of a fifth of a degree, learnt
     away, stopped a test 0.4 °C low). ``room_step``: a coarse room sensor's display step (0 for a
-    fine one, :func:`~mtident.thermal.readings.room_error_C`)."""
+    fine one, :func:`~mtident.thermal.readings.coarse_room_step_C`)."""
     room_in = None if room_C is None else room_input(time_min, room_C)
     # the room sensor's slow error shows in every fit's residuals: no misfit, and no mode needed
     room_error = 0.0 if room_in is None else _slow_room_error(room_in, room_step)
 
+    def family(count: int) -> RobustSettings:
+        return replace(settings, max_modes=count, more_modes_when_used=False)
+
     def fitted(count: int) -> SensorEstimate:
-        family = replace(settings, max_modes=count, more_modes_when_used=False)
-        return estimate_sensor(name, time_min, values, room_C, family, misfit_beyond_C=room_error)
+        return estimate_sensor(name, time_min, values, room_C, family(count), misfit_beyond_C=room_error)
 
     tried: dict[int, SensorEstimate] = {}
     estimates: dict[int, SensorEstimate] = {}
@@ -715,8 +717,7 @@ def _learn_sensor(
     one_more = tried[count + 1] if count + 1 in tried else fitted(count + 1)
     followed = None
     if room_in is not None:
-        family = replace(settings, max_modes=count, more_modes_when_used=False)
-        followed = _room_followed(name, time_min, values, room_in, _fit_of(estimates[count]), family)
+        followed = _room_followed(name, time_min, values, room_in, _fit_of(estimates[count]), family(count))
     return _Learnt(estimates[count], centres, boxes, determined, one_more, room_reach, followed)
 
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import math
 import os
 import threading
 import time
@@ -42,7 +41,7 @@ from mtident.thermal.monitor import (
     new_state,
 )
 from mtident.thermal.monitor_answer import WatchAnswer, answer
-from mtident.thermal.readings import coarse_room_warning, room_error_C
+from mtident.thermal.readings import coarse_room_step_C, coarse_room_warning
 from mtident.thermal.reference import reference_notes
 
 __all__ = [
@@ -446,6 +445,15 @@ class WatchSession:
         InputError
             The log has no sensor column besides the room sensor's, or the reference knows none of its sensors.
         """
+        events = self._read(progress, cancel)
+        for e in events:
+            # a JSON reader sees what the terminal said of the log or the test as a whole
+            if e.kind == "warning" and e.sensor is None and e.text not in self.log_warnings:
+                self.log_warnings.append(e.text)
+        return events
+
+    def _read(self, progress: Callable[[WatchSession], None] | None, cancel: Callable[[], bool] | None) -> list[Event]:
+        """:meth:`poll`'s work: the follower's rows fed to the monitor, and what was said."""
         before = self.follower.position()
         rows = self.follower.poll()
         if self.state is not None and len(rows.time_min) and len(self.state.readings.time_min):
@@ -465,7 +473,7 @@ class WatchSession:
                 )
                 events.extend(Event("warning", np.nan, note) for note in notes)
         if self.state is None or not len(rows.time_min):
-            return self._kept(events)
+            return events
         values, room = (
             (rows.temperature_C[:, :-1], rows.temperature_C[:, -1])
             if self.settings.room_sensor
@@ -499,20 +507,12 @@ class WatchSession:
                 time_col, time_unit = self.follower.time_col, self.follower.time_unit
                 unit = self.follower.temperature_unit
                 self.follower = LogFollower.resume(self.path, before, time_col, time_unit, unit)
-                return self._kept(events)
+                return events
             if progress is not None:
                 progress(self)
         events.extend(self._coarse_room())
         if self.persist:
             self.save()
-        return self._kept(events)
-
-    def _kept(self, events: list[Event]) -> list[Event]:
-        """The events, with their warnings about the log or the test as a whole kept once for the
-        answer (:attr:`log_warnings`): a JSON reader sees what the terminal said."""
-        for e in events:
-            if e.kind == "warning" and e.sensor is None and e.text not in self.log_warnings:
-                self.log_warnings.append(e.text)
         return events
 
     def _coarse_room(self) -> list[Event]:
@@ -524,7 +524,7 @@ class WatchSession:
         if np.count_nonzero(np.isfinite(readings.room_C)) < ROOM_STEP_READINGS:
             return []
         self._room_step_said = True
-        step = room_error_C(readings.time_min, readings.room_C) * math.sqrt(12.0)
+        step = coarse_room_step_C(readings.time_min, readings.room_C)
         if step <= 0:
             return []
         text = coarse_room_warning(step, "each T∞ carries up to half a step of it")
