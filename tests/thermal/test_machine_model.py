@@ -9,12 +9,11 @@ import numpy as np
 import pytest
 from helpers import _CONDUCTANCE, ROOM_C, SENSORS, _run, _truth
 
+from mtident.thermal.machine_answer import combined_estimate, fit_readings
 from mtident.thermal.machine_model import (
     MachineFit,
     MachineModel,
     MachineReadings,
-    combined_estimate,
-    fit_readings,
     learn_machine_model,
     noise_and_origin,
 )

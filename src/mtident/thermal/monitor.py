@@ -29,13 +29,8 @@ import numpy as np
 from mtident._json import fields_of
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.thermal.machine_model import (
-    MachineFit,
-    MachineModel,
-    combined_estimate,
-    fit_readings,
-    unmeasured_wander,
-)
+from mtident.thermal.machine_answer import combined_estimate, fit_readings, unmeasured_wander
+from mtident.thermal.machine_model import MachineFit, MachineModel
 from mtident.thermal.modes import Mode, model_curve
 from mtident.thermal.monitor_answer import assumptions, result
 from mtident.thermal.monitor_types import (

@@ -19,7 +19,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.identification import Identification
-from mtident.thermal.machine_model import combined_estimate, fit_readings, unmeasured_wander
+from mtident.thermal.machine_answer import combined_estimate, fit_readings, unmeasured_wander
 from mtident.thermal.measured import measured_and_settled, rmse, window_samples
 from mtident.thermal.modal_types import Mode
 from mtident.thermal.modes import fitted_curve
