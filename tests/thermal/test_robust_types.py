@@ -43,3 +43,27 @@ def test_pooled_modes_narrow_where_runs_agree_and_hold_both_where_they_do_not():
     assert pooled.sensors["first only"] == first.sensors["first only"] and pooled.source == "run.csv + run.csv"
     assert any(s.startswith("apart: its mode of 40 min ±10% in one run is 80 min ±10%") for s in said), said
     assert any(s.startswith("fewer: the runs learnt 1 and 2 modes; the 2 kept") for s in said), said
+
+
+def test_the_ends_say_which_way_their_slowest_mode_goes_and_by_how_much():
+    """A first-order warm-up (59 min, 8.85 °C) read for 120 min: the high end is a slow mode that
+    still rises, the low end one that falls; each is said as the mode's whole course, unsigned."""
+    import re
+
+    import numpy as np
+
+    from mtident.thermal.robust import estimate_sensor
+
+    t = np.arange(0.0, 121.0)
+    y = 20.0 + 8.85 * (1.0 - np.exp(-t / 59.0)) + np.random.default_rng(5).normal(0.0, 0.01, t.size)
+    estimate = estimate_sensor("T1", t, y)
+    assert estimate.fit is not None
+    text = estimate.what_sets_the_ends(0.99)
+    for end, phrase in zip(estimate.fit.ends[0.99], text.split("; "), strict=True):
+        slowest = end.slowest()
+        assert slowest is not None
+        course = "rising" if slowest.amplitude_C < 0 else "falling"
+        said = re.search(rf"min, {course} ([0-9.]+) °C in all, still fits", phrase)
+        assert said is not None, phrase
+        assert float(said.group(1)) == pytest.approx(abs(slowest.amplitude_C), abs=0.006)
+    assert text.startswith("low end") and "; high end" in text and "rising" in text.split("; ")[1]

@@ -212,8 +212,8 @@ class SensorEstimate:
         return interval_half_width(self.steady_C, self.interval_C[level])
 
     def what_sets_the_ends(self, level: float) -> str:
-        """In words, the models that set the interval's ends: "a mode of about 280 min with
-        −0.8 °C still fits".
+        """In words, the models that set the interval's ends: "a mode of about 280 min, rising
+        0.80 °C in all, still fits".
 
         Parameters
         ----------
@@ -235,8 +235,10 @@ class SensorEstimate:
         for end, label, value in ends:
             slowest = end.slowest()
             if slowest is not None:
+                # T = T∞ + a·e^(−t/τ): a negative amplitude is a part still rising towards T∞
+                course = "rising" if slowest.amplitude_C < 0 else "falling"
                 words.append(
-                    f"{label} end {value:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min with "
-                    f"{slowest.amplitude_C:+.2f} °C still fits"
+                    f"{label} end {value:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min, "
+                    f"{course} {abs(slowest.amplitude_C):.2f} °C in all, still fits"
                 )
         return "; ".join(words)
