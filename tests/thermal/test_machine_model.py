@@ -142,3 +142,18 @@ def test_a_sensor_whose_run_shows_a_slow_mode_the_shared_ones_lack_is_named():
     assert set(missing) == {"B"}
     tau, amplitude = missing["B"]
     assert 60.0 < tau < 130.0 and abs(amplitude) > 0.3
+
+
+def test_only_a_loose_slow_shared_mode_costs_the_machine_model():
+    """Two slow modes of 190 and 186 min learnt as 239 ±172 % and 196 ±50 % stopped a test 0.21 °C
+    off: no machine model. A close pair of 57 and 46 min under a 260-min mode, learnt as 62.6 ±30 %
+    and 39.8 ±60 %, has decayed long before the slow mode that sets the stop: kept, its loose time
+    constant profiled by the test's fit."""
+    from mtident.thermal.machine_model import loose_slow_modes
+
+    def model(taus: tuple[float, ...], box: tuple[float, ...]) -> MachineModel:
+        return MachineModel(("a", "b"), taus, box, ((1.0,) * len(taus), (0.5,) * len(taus)))
+
+    assert loose_slow_modes(model((239.0, 196.0), (1.72, 0.5))) == ["239 min ±172%"]
+    assert loose_slow_modes(model((300.0, 94.5), (0.05, 1.72))) == ["94.5 min ±172%"]
+    assert loose_slow_modes(model((261.0, 62.6, 39.8), (0.05, 0.3, 0.6))) == []

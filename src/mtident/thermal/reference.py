@@ -27,6 +27,7 @@ from mtident.thermal.machine_model import (
     MachineModel,
     fit_test,
     learn_machine_model,
+    loose_slow_modes,
     machine_readings,
     missing_modes,
 )
@@ -49,18 +50,10 @@ __all__ = [
 BOX_SDS = 3.0
 MAX_BOX_REACH = math.log(100.0)
 MAX_MODE_SD = 0.15
-# the machine model is kept only where the run pins each of its slow shared time constants (at
-# least FAST_SHARE of the slowest) within MAX_MACHINE_BOX: a test fitted with time constants the
-# run left loose extrapolates with the wrong ones, confidently (two slow modes 190 and 186 min,
-# learnt as 239 ±172 % and 196 ±50 %, stopped a test 0.21 °C off at 162 min). A faster loose one
-# (a close pair of modes well below the slowest, learnt as one) is profiled across its box by the
-# test's fit instead: it has decayed long before the slowest mode that sets the stop
-MAX_MACHINE_BOX = 0.5
 # a sensor's modal amplitudes in the machine model may add up to at most this many times its rise
 # (a remote sensor's transfer response has amplitudes of both signs; far beyond, two slow modes
 # cancel, and a test at another heat split extrapolates them wrongly: a stop 0.26 °C off)
 MAX_CANCELLING = 10.0
-FAST_SHARE = 0.3
 # how a reference learnt with a room sensor says so in its file
 _ROOM_MEASURED = "a room sensor, an input of every mode"
 # A reference run pins a sensor down when its own steady state is known within this (95 %): half
@@ -346,27 +339,6 @@ def learn_reference(
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors, machine_model=model
     ), warnings
-
-
-def loose_slow_modes(model: MachineModel) -> list[str]:
-    """The machine model's slow shared modes (at least :data:`FAST_SHARE` of the slowest) that the
-    run pins down only within more than :data:`MAX_MACHINE_BOX`, in words ("239 min ±172%"): a
-    model with any is not kept.
-
-    Parameters
-    ----------
-    model : MachineModel
-
-    Returns
-    -------
-    list of str
-    """
-    slowest = max(model.time_constants_min)
-    return [
-        f"{tau:.3g} min ±{box:.0%}"
-        for tau, box in zip(model.time_constants_min, model.box, strict=True)
-        if box > MAX_MACHINE_BOX and tau >= FAST_SHARE * slowest
-    ]
 
 
 def _learn_machine(
