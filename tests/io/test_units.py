@@ -174,6 +174,24 @@ def test_the_note_on_a_room_read_as_celsius_names_the_unit_option(write_csv):
     assert said and "`temperature_unit='F'`" in said[0], log.notes
 
 
+def test_a_log_in_celsius_read_in_a_stated_unit_is_said_to_read_outside_any_workshop(write_csv):
+    """A new user's log in °C read with --unit F: the room at -6.7 °C and a bearing's T∞ at 0.03 °C
+    were answered and trusted without a word; the note asks whether the log is in °C already (read
+    as K, the same log is refused: -253 °C is an open circuit)."""
+    log = read_temperature_log(write_csv(_without_units(lambda c: c)), temperature_unit="F")
+    assert log.temperature_C[0, 1] == pytest.approx(-6.67, abs=0.01)
+    said = [note for note in log.notes if "far outside any workshop's range" in note]
+    assert len(said) == 1 and "converted from °F as stated (`temperature_unit='F'`)" in said[0], log.notes
+    assert "'room' reads" in said[0] and "If the log is in °C already, leave the unit out" in said[0]
+
+
+def test_a_log_without_a_room_read_in_a_stated_unit_below_any_workshop_is_said_so(write_csv):
+    path = write_csv("time_min,spindle,column\n" + "".join(f"{m},{20 + m},{20 + m / 2}\n" for m in range(12)))
+    log = read_temperature_log(path, temperature_unit="F")
+    said = [note for note in log.notes if "far outside any workshop's range" in note]
+    assert len(said) == 1 and "every column reads below 5 °C (the highest -0.556)" in said[0], log.notes
+
+
 @pytest.mark.parametrize(
     ("header", "units_row", "unit", "message"),
     [

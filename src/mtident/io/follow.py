@@ -34,6 +34,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
 from mtident.io.layout import LogLayout, layout_of_head
+from mtident.io.logs import scale_note
 from mtident.io.parse import TimeState, parse_lines
 from mtident.io.time_notes import SPARSE_HINT_ROWS, unit_hint
 
@@ -127,6 +128,7 @@ class LogFollower:
     # for the one hint on a time column's unit (not saved: a resumed follower may hint again)
     _rows_taken: int = field(default=0, repr=False, compare=False)
     _unit_said: bool = field(default=False, repr=False, compare=False)
+    _scale_said: bool = field(default=False, repr=False, compare=False)
     _first_times: list[float] = field(default_factory=list, repr=False, compare=False)
 
     @property
@@ -222,10 +224,16 @@ class LogFollower:
         if new is None or self._at.layout is None:
             return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
         lines, restarted = new
-        time, rows = parse_lines(self._at.layout, self._at.time, lines, self.path, restarted)
+        layout = self._at.layout
+        time, rows = parse_lines(layout, self._at.time, lines, self.path, restarted)
         self._at = replace(self._at, time=time)
         warnings.extend(rows.warnings)
         self._hint_unit(list(rows.time_min), warnings)
+        if not self._scale_said and len(rows.time_min):
+            # as the file reader says it: readings far outside any workshop's range in the unit taken
+            self._scale_said = True
+            said = scale_note(list(layout.sensors), rows.temperature_C, layout.dialect, self.temperature_unit)
+            notes.extend([] if said is None else [said])
         return Rows(rows.time_min, rows.temperature_C, tuple(warnings), (*notes, *rows.notes))
 
     def header_sensors(self) -> list[str] | None:

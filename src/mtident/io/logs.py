@@ -377,8 +377,10 @@ def scale_note(
     """What a reader says when columns read as °C for want of a stated unit read far outside any
     workshop's range (``WORKSHOP_ROOM_C``): a column named as the room (:func:`room_named`), or
     every column above the range's top (at a warm-up's start the machine is near the room). A log in
-    °F (a room at 69) or K was taken as °C without a word. None otherwise, and where the user
-    stated the unit (``temperature_unit``).
+    °F (a room at 69) or K was taken as °C without a word. Where the user stated °F or K
+    (``temperature_unit``) and the converted readings read so far outside (a room at −6.7 °C, every
+    column below the range's bottom), the note asks whether the log was in °C already: a log in °C
+    read as °F had its room at −6.7 °C and a bearing's T∞ at 0.03 °C trusted. None otherwise.
 
     Parameters
     ----------
@@ -396,7 +398,7 @@ def scale_note(
     str or None
     """
     low, high = WORKSHOP_ROOM_C
-    if temperature_unit is not None:
+    if temperature_unit == "C":
         return None
     assumed = [k for k, name in enumerate(sensors) if not dialect.unit_of(name).strip()]
     spans = {}
@@ -405,15 +407,25 @@ def scale_note(
         if len(valid):
             spans[k] = (float(np.min(valid)), float(np.median(valid)), float(np.max(valid)))
     rooms = [k for k in spans if room_named(sensors[k]) and not low <= spans[k][1] <= high]
+    every = spans and len(spans) == len(sensors)
     if rooms:
         which = "; ".join(f"{sensors[k]!r} reads {spans[k][0]:g} to {spans[k][2]:g}" for k in rooms) + " as the room"
-    elif spans and len(spans) == len(sensors) and all(span[0] > high for span in spans.values()):
+    elif every and temperature_unit is None and all(span[0] > high for span in spans.values()):
         which = (
             f"every column reads above {high:g} °C (the lowest {min(span[0] for span in spans.values()):g}), "
             "none near the room"
         )
+    elif every and temperature_unit is not None and all(span[2] < low for span in spans.values()):
+        which = f"every column reads below {low:g} °C (the highest {max(span[2] for span in spans.values()):.3g})"
     else:
         return None
+    if temperature_unit is not None:
+        return (
+            f"readings converted from {'K' if temperature_unit == 'K' else '°' + temperature_unit} as stated "
+            f"(`temperature_unit='{temperature_unit}'`), "
+            f"but {which}: far outside any workshop's range ({low:g} to {high:g} °C). If the log is in °C already, "
+            "leave the unit out"
+        )
     return (
         f"readings taken as °C (the log states no unit), but {which}: far outside any workshop's range "
         f"({low:g} to {high:g} °C). If the log is in °F (or K), state the unit and it is converted: "
