@@ -92,3 +92,27 @@ def test_with_a_room_sensor_the_settle_time_is_of_the_readings_above_the_room():
     assert without.time_saved_min is None
     with_room = check_decision(("S",), np.array([30.0]), 150.0, t, values, 0.2, room_C=room)
     assert with_room.test_settle_time_min == 79.0 and with_room.time_saved_min == 79.0 - 150.0
+
+
+def test_a_slow_sensor_still_rising_behind_a_daily_room_is_not_called_settled():
+    """A new user's column (a 235-min mode) in a room on a daily cycle of ±0.4 °C, its log ending at
+    720 min: less the room itself, its rise and its lag behind the room cancelled, and the hindsight
+    said it had settled (here from 334 min, 0.72 °C below its course), that the rule 'saved no
+    time', beside 'the log ends before its sensors settled'. Less the room as the sensor follows it
+    (through its mode), it is still rising at the log's end: the time saved is not known."""
+    from mtident.thermal.modal_search import room_lag
+
+    t = np.arange(0.0, 721.0)
+    room = 20.0 + 0.4 * np.sin(2.0 * np.pi * (t - 720.0) / 1440.0)
+    sensor = room_lag(room, t, np.array([235.0]))[0] + 3.0 * (1.0 - np.exp(-t / 235.0))
+    said = check_decision(("S",), np.array([23.0]), 444.0, t, sensor[:, None], 0.2, room, [((235.0, -3.0),)])
+    assert np.isnan(said.settle_time_min[0]) and said.time_saved_min is None
+    # the same sensor in a steady room, logged to 1200 min, settles where its rise does: within
+    # 0.2 °C of its last readings (3 - 3·e^(-1200/235) above the room) from 616 min
+    t = np.arange(0.0, 1201.0)
+    flat = 20.0 + 3.0 * (1.0 - np.exp(-t / 235.0))
+    settled = check_decision(
+        ("S",), np.array([23.0]), 444.0, t, flat[:, None], 0.2, np.full(1201, 20.0), [((235.0, -3.0),)]
+    )
+    expected = 235.0 * np.log(3.0 / (0.2 + 3.0 * np.exp(-1200.0 / 235.0)))
+    assert settled.settle_time_min[0] == pytest.approx(expected, abs=1.0)

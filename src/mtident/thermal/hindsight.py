@@ -367,7 +367,9 @@ def check_decision(
         room_shift_C=shift,
         tolerance_C=float(tolerance_C),
         sensor_shift_C=followed,
-        settle_time_min=_settle_times(time_min, values, room_C, settled, tolerance_C, np.array(slowest, dtype=float)),
+        settle_time_min=_settle_times(
+            time_min, values, room_C, modes, settled, tolerance_C, np.array(slowest, dtype=float)
+        ),
         waited=None if waited is None else np.asarray(waited, dtype=bool),
     )
 
@@ -376,18 +378,37 @@ def _settle_times(
     time_min: FloatArray,
     values: FloatArray,
     room_C: FloatArray | None,
+    modes: Sequence[tuple[tuple[float, float], ...]] | None,
     settled_C: FloatArray,
     tolerance_C: float,
     slowest_mode_min: FloatArray,
 ) -> FloatArray:
-    """The settle times of the readings, or with a room sensor of the readings less the room: T∞
-    follows the room one to one, and a room on a daily cycle keeps the readings themselves moving
-    by more than the tolerance long after the sensor has settled above it."""
+    """The settle times of the readings, or with a room sensor of the readings less the room as
+    each sensor follows it (:func:`_room_course`): T∞ follows the room one to one, and a room on a
+    daily cycle keeps the readings themselves moving by more than the tolerance long after the
+    sensor has settled above it."""
     if room_C is None or np.isfinite(room_C).sum() < 10:
         return settle_times(time_min, values, settled_C, tolerance_C)
-    above = values - np.asarray(room_C, dtype=float)[:, None]
+    room = np.asarray(room_C, dtype=float)
+    per_sensor = modes if modes is not None else [()] * values.shape[1]
+    above = values - np.column_stack([_room_course(time_min, room, m) for m in per_sensor])
     settled_above, _ = measured_equilibrium(time_min, above, tolerance_C / 2.0, tolerance_C / 4.0, slowest_mode_min)
     return settle_times(time_min, above, settled_above, tolerance_C)
+
+
+def _room_course(time_min: FloatArray, room_C: FloatArray, modes: tuple[tuple[float, float], ...]) -> FloatArray:
+    """The room as a sensor of these modes follows it (the room lagged by each mode, weighted by
+    its share of the rise), at every time of the log; the room itself without modes. Less the room
+    itself, a slow sensor's warm-up and its lag behind a daily cycle cancelled: a column still
+    0.77 °C below its course read as settled from 421 min of a 720-min log."""
+    weights = np.abs(np.array([a for _, a in modes], dtype=float))
+    valid = np.isfinite(room_C)
+    if not len(modes) or not weights.sum() > 0:
+        return np.interp(time_min, time_min[valid], room_C[valid])
+    times, first = np.unique(time_min[valid], return_index=True)
+    lagged = room_lag(room_C[valid][first], times, np.array([tau for tau, _ in modes], dtype=float))
+    course: FloatArray = np.interp(time_min, times, weights @ lagged / weights.sum())
+    return course
 
 
 def settle_times(time_min: FloatArray, values: FloatArray, settled_C: FloatArray, tolerance_C: float) -> FloatArray:
