@@ -521,3 +521,20 @@ def test_the_hindsight_table_says_why_a_sensor_has_a_settle_time_but_no_settled_
     assert re.search(r"│ T0 +│ +31\.20 │ with the room │ +— │ +298 │", text), text
     assert re.search(r"│ T1 +│ +28\.40 │ +28\.41 │ +-0\.01 │ +— │", text), text
     assert "with the room: the readings keep following the room; their rise above it settled" in text
+
+
+def test_a_column_named_as_the_room_is_pointed_out_before_the_checks_say_anything(tmp_path):
+    """A new user left --ambient out: the note naming the option came last of 29 lines, after every
+    check's warning (a replay's first poll holds them all); it comes first now."""
+    t = np.arange(0.0, 121.0)
+    rng = np.random.default_rng(3)
+    room = 20.0 + 0.3 * np.sin(2.0 * np.pi * t / 1440.0)
+    spindle = room + 8.0 * (1.0 - np.exp(-t / 30.0)) + 0.01 * rng.standard_normal(t.size)
+    rows = [f"{a:g},{b:.3f},{c:.3f}" for a, b, c in zip(t, spindle, room, strict=True)]
+    path = tmp_path / "room.csv"
+    path.write_text("time_min,spindle,room\n" + "\n".join(rows) + "\n")
+    out = mtident("thermal", "watch", str(path), "--replay", "--json")
+    assert out.returncode == 0, out.stderr
+    said = [line for line in out.stderr.splitlines() if line.startswith("mtident:")]
+    assert said and "'room' is named as a room sensor and watched as a machine sensor" in said[0], said[:3]
+    assert sum("named as a room sensor" in line for line in said) == 1

@@ -491,8 +491,7 @@ def _follow(
             shown = _Shown(path, follow.timeout_s, plot_path, view if live else None, page)
             if page is not None and session.state is not None:
                 shown.publish(session, forecast=False)  # a resumed state: at once
-            redraw = shown.progress if live or page is not None else None
-            run = session.run(follow, redraw, _terminating.is_set, fetch)
+            run = session.run(follow, shown.progress, _terminating.is_set, fetch)
             for event in run:
                 if isinstance(event, Ended) and event.reason == "cancelled":
                     return _say_interrupted(_Terminated(), session)
@@ -544,6 +543,15 @@ class _Shown:
         self.view = view
         self.page = page
         self.last_forecast = self.last_picture = self.last_plot = 0.0
+        self.rooms_said = False
+
+    def say_rooms(self, session: WatchSession) -> None:
+        """Once the sensors are known and before the checks' warnings (a replay's first poll holds
+        them all): a column named as the room, watched as a machine sensor."""
+        if not self.rooms_said and session.sensors:
+            self.rooms_said = True
+            if session.settings.room_sensor is None:
+                _say_room_candidates(session.sensors, "watched as a machine sensor")
 
     def publish(self, session: WatchSession, forecast: bool = True, picture: bool = True) -> None:
         assert self.page is not None
@@ -552,6 +560,7 @@ class _Shown:
     def progress(self, session: WatchSession) -> None:
         """A check ended within a poll: the table and the page show its answer at once; the
         curves, which cost a picture, at most every ``_PAGE_PROGRESS_S``."""
+        self.say_rooms(session)
         if self.view is not None:
             self.view.update(_status_table(session, self.path), refresh=True)
         if self.page is not None:
@@ -566,8 +575,7 @@ class _Shown:
         elif isinstance(event, SourceNote):
             stderr.print(f"mtident: {event.text}", highlight=False)
         elif isinstance(event, Watching):
-            if session.settings.room_sensor is None:
-                _say_room_candidates(event.sensors, "watched as a machine sensor")
+            self.say_rooms(session)
             if self.page is not None and self.page.version == 0:
                 self.publish(session, forecast=False)
         elif isinstance(event, Polled):
