@@ -157,3 +157,28 @@ def test_only_a_loose_slow_shared_mode_costs_the_machine_model():
     assert loose_slow_modes(model((239.0, 196.0), (1.72, 0.5))) == ["239 min ±172%"]
     assert loose_slow_modes(model((300.0, 94.5), (0.05, 1.72))) == ["94.5 min ±172%"]
     assert loose_slow_modes(model((261.0, 62.6, 39.8), (0.05, 0.3, 0.6))) == []
+
+
+def test_a_fast_mode_whose_shape_the_run_got_wrong_is_untied_not_the_reference_dropped():
+    """A new user's reference pinned a fast pair of modes' shapes poorly, and a test at another
+    speed had most sensors reject the tie, which dropped the reference. Here the chain's 9-min mode
+    has its learnt amplitude at the housing the other way round: the tie of every mode rejects the
+    housing;
+    with the fast mode untied (each sensor's amplitude its own) it holds, and every T∞ is right."""
+    from mtident.thermal.machine_model import _fit_tied
+
+    model = _model()
+    fast = int(np.argmin(model.time_constants_min))
+    gains = np.array(model.gains_C)
+    gains[1, fast] *= -1.0
+    wrong = replace(model, gains_C=tuple(tuple(map(float, row)) for row in gains))
+    split, power = (0.3, 0.7), 1.3
+    t, y = _run(split, power, np.zeros(3), 240.0)
+    y = np.round(y + np.random.default_rng(4).normal(0.0, 0.01, y.shape), 2)
+    readings = MachineReadings(SENSORS, t, y, None, np.full(4, 0.01), 0.0)
+    every = _fit_tied(wrong, readings, (0.95, 0.99), True, np.zeros(3, bool))
+    assert every is not None and every.rejected == ("housing",)
+    fit = fit_readings(wrong, SENSORS, t, y, None, (0.95, 0.99))
+    assert fit is not None and not fit.contradicted and not fit.rejected and fit.used.all()
+    assert np.all(np.abs(fit.steady_C - _truth(split, power)) <= fit.half_width_C[0.99])
+    assert np.all(np.abs(fit.steady_C - _truth(split, power)) < 0.1)
