@@ -116,3 +116,25 @@ def test_a_slow_sensor_still_rising_behind_a_daily_room_is_not_called_settled():
     )
     expected = 235.0 * np.log(3.0 / (0.2 + 3.0 * np.exp(-1200.0 / 235.0)))
     assert settled.settle_time_min[0] == pytest.approx(expected, abs=1.0)
+
+
+def test_the_room_reaches_a_sensor_as_its_fit_says_through_its_room_gains():
+    """A sensor whose rise is mostly a 20-min mode but which follows a daily room through a
+    200-min one: weighted by the shares of the rise, the room's course misses its lag by up to
+    0.3 °C and no settle time was found in 1500 min; through the fit's gains on the room, the
+    readings above the room settle where the rise does."""
+    from mtident.thermal.modal_search import room_lag
+
+    t = np.arange(0.0, 1501.0)
+    room = 20.0 + 0.4 * np.sin(2.0 * np.pi * t / 1440.0)
+    sensor = (
+        room_lag(room, t, np.array([200.0]))[0] + 8.0 * (1.0 - np.exp(-t / 20.0)) + 0.5 * (1.0 - np.exp(-t / 200.0))
+    )
+    modes = [((20.0, -8.0), (200.0, -0.5))]
+    shares = check_decision(("S",), np.array([28.5]), 300.0, t, sensor[:, None], 0.2, room, modes)
+    gains = check_decision(
+        ("S",), np.array([28.5]), 300.0, t, sensor[:, None], 0.2, room, modes, room_gains=[(0.0, 1.0)]
+    )
+    assert np.isnan(shares.settle_time_min[0])
+    # within 0.2 °C of the settled 0.5 °C of the slow mode from 200·ln(0.5/0.2) = 183 min
+    assert gains.settle_time_min[0] == pytest.approx(200.0 * np.log(0.5 / 0.2), abs=3.0)

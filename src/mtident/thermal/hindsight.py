@@ -305,6 +305,7 @@ def check_decision(
     modes: Sequence[tuple[tuple[float, float], ...]] | None = None,
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN,
     waited: np.ndarray | None = None,
+    room_gains: Sequence[tuple[float, ...]] | None = None,
 ) -> Hindsight:
     """Compare T∞ at the stop (one per sensor, NaN for one left out) with where the whole log settled.
 
@@ -332,6 +333,11 @@ def check_decision(
         The slowest mode allowed (min), for a sensor whose modes are not given. A sensor counts
         as settled where the rise still to come at the pace of its slowest mode (its late move m
         over Δ minutes leaves m / (e^(Δ/τ) − 1)) is at most a quarter of the tolerance.
+    waited : ndarray of bool, shape (S,), optional
+        The sensors the test waits for (default: all): t_settle is the latest of theirs.
+    room_gains : sequence of tuples of float, optional
+        Each sensor's gain on the room per mode at the stop (one per mode of ``modes``): the room's
+        course through the sensor, for its settle time (without them, the modes' shares of its rise).
 
     Returns
     -------
@@ -368,7 +374,7 @@ def check_decision(
         tolerance_C=float(tolerance_C),
         sensor_shift_C=followed,
         settle_time_min=_settle_times(
-            time_min, values, room_C, modes, settled, tolerance_C, np.array(slowest, dtype=float)
+            time_min, values, room_C, modes, room_gains, settled, tolerance_C, np.array(slowest, dtype=float)
         ),
         waited=None if waited is None else np.asarray(waited, dtype=bool),
     )
@@ -379,6 +385,7 @@ def _settle_times(
     values: FloatArray,
     room_C: FloatArray | None,
     modes: Sequence[tuple[tuple[float, float], ...]] | None,
+    room_gains: Sequence[tuple[float, ...]] | None,
     settled_C: FloatArray,
     tolerance_C: float,
     slowest_mode_min: FloatArray,
@@ -391,23 +398,33 @@ def _settle_times(
         return settle_times(time_min, values, settled_C, tolerance_C)
     room = np.asarray(room_C, dtype=float)
     per_sensor = modes if modes is not None else [()] * values.shape[1]
-    above = values - np.column_stack([_room_course(time_min, room, m) for m in per_sensor])
+    gains = room_gains if room_gains is not None else [()] * values.shape[1]
+    above = values - np.column_stack(
+        [_room_course(time_min, room, m, g) for m, g in zip(per_sensor, gains, strict=True)]
+    )
     settled_above, _ = measured_equilibrium(time_min, above, tolerance_C / 2.0, tolerance_C / 4.0, slowest_mode_min)
     return settle_times(time_min, above, settled_above, tolerance_C)
 
 
-def _room_course(time_min: FloatArray, room_C: FloatArray, modes: tuple[tuple[float, float], ...]) -> FloatArray:
-    """The room as a sensor of these modes follows it (the room lagged by each mode, weighted by
-    its share of the rise), at every time of the log; the room itself without modes. Less the room
-    itself, a slow sensor's warm-up and its lag behind a daily cycle cancelled: a column still
-    0.77 °C below its course read as settled from 421 min of a 720-min log."""
+def _room_course(
+    time_min: FloatArray, room_C: FloatArray, modes: tuple[tuple[float, float], ...], gains: tuple[float, ...]
+) -> FloatArray:
+    """The room as a sensor of these modes follows it, at every time of the log: through each mode
+    by the fit's gain on the room (:func:`~mtident.thermal.modes.course_with_room`), or without
+    gains lagged by each mode weighted by its share of the rise; the room itself without modes.
+    Less the room itself, a slow sensor's warm-up and its lag behind a daily cycle cancelled: a
+    column still 0.77 °C below its course read as settled from 421 min of a 720-min log."""
     weights = np.abs(np.array([a for _, a in modes], dtype=float))
     valid = np.isfinite(room_C)
     if not len(modes) or not weights.sum() > 0:
         return np.interp(time_min, time_min[valid], room_C[valid])
     times, first = np.unique(time_min[valid], return_index=True)
-    lagged = room_lag(room_C[valid][first], times, np.array([tau for tau, _ in modes], dtype=float))
-    course: FloatArray = np.interp(time_min, times, weights @ lagged / weights.sum())
+    room = room_C[valid][first]
+    lagged = room_lag(room, times, np.array([tau for tau, _ in modes], dtype=float))
+    followed = (
+        room + np.asarray(gains) @ (lagged - room) if len(gains) == len(modes) else weights @ lagged / weights.sum()
+    )
+    course: FloatArray = np.interp(time_min, times, followed)
     return course
 
 

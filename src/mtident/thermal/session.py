@@ -728,6 +728,7 @@ class WatchSession:
             [c.modes for c in state.checks],
             self.settings.robust.max_time_constant_min,
             np.array([self.settings.waits_for(name) for name in state.sensors]),
+            [c.room_gains for c in state.checks],
         )
 
     def whole_log(self) -> tuple[FloatArray, FloatArray, FloatArray | None]:
