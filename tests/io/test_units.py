@@ -176,13 +176,16 @@ def test_the_note_on_a_room_read_as_celsius_names_the_unit_option(write_csv):
 
 def test_a_log_in_celsius_read_in_a_stated_unit_is_said_to_read_outside_any_workshop(write_csv):
     """A new user's log in °C read with --unit F: the room at -6.7 °C and a bearing's T∞ at 0.03 °C
-    were answered and trusted without a word; the note asks whether the log is in °C already (read
-    as K, the same log is refused: -253 °C is an open circuit)."""
+    were answered and trusted without a word; the note asks whether the log is in °C already. Read
+    as K, the same log is refused (-253 °C is an open circuit), the error naming the unit, not the
+    wiring."""
     log = read_temperature_log(write_csv(_without_units(lambda c: c)), temperature_unit="F")
     assert log.temperature_C[0, 1] == pytest.approx(-6.67, abs=0.01)
     said = [note for note in log.notes if "far outside any workshop's range" in note]
     assert len(said) == 1 and "converted from °F as stated (`temperature_unit='F'`)" in said[0], log.notes
     assert "'room' reads" in said[0] and "If the log is in °C already, leave the unit out" in said[0]
+    with pytest.raises(InputError, match=r"converted to °C from the unit stated, and as written they lie within"):
+        read_temperature_log(write_csv(_without_units(lambda c: c), name="again.csv"), temperature_unit="K")
 
 
 def test_a_log_without_a_room_read_in_a_stated_unit_below_any_workshop_is_said_so(write_csv):

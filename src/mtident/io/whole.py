@@ -489,7 +489,8 @@ def _sensor_readings(
     or open-circuit cell (said in ``notes``); an error naming the first cell that is no number, or
     a column mostly bad."""
     scale, offset = float(conversion[0]), float(conversion[1])
-    values: FloatArray = scale * numbers(cells, layout.dialect) + offset
+    written = numbers(cells, layout.dialect)
+    values: FloatArray = scale * written + offset
     marked_open = np.zeros(len(cells), dtype=bool)
     if np.isnan(values).any():  # what the cells that are no number hold
         at = np.flatnonzero(np.isnan(values))
@@ -505,10 +506,18 @@ def _sensor_readings(
     open_circuit = (values > OPEN_CIRCUIT_HIGH_C) | (values < OPEN_CIRCUIT_LOW_C) | marked_open
     bad = missing | open_circuit
     if np.mean(bad) > MAX_BAD_FRACTION:
+        as_written = (written >= OPEN_CIRCUIT_LOW_C) & (written <= OPEN_CIRCUIT_HIGH_C)
+        # a log in °C read as K is -253 °C: the stated unit, not the wiring
+        converted = (scale, offset) != (1.0, 0.0) and np.mean(~as_written | missing) <= MAX_BAD_FRACTION
         msg = (
             f"{source}: sensor {name!r}: {int(bad.sum())} of {len(values)} samples are empty, NaN or "
-            f"open-circuit (outside {OPEN_CIRCUIT_LOW_C:g}..{OPEN_CIRCUIT_HIGH_C:g} °C); check the wiring "
-            "or leave this sensor out with `sensors`"
+            f"open-circuit (outside {OPEN_CIRCUIT_LOW_C:g}..{OPEN_CIRCUIT_HIGH_C:g} °C); "
+            + (
+                "they were converted to °C from the unit stated, and as written they lie within that range: if the "
+                "log is in °C, leave the unit out (`temperature_unit`)"
+                if converted
+                else "check the wiring or leave this sensor out with `sensors`"
+            )
         )
         raise InputError(msg)
     if np.any(bad):
