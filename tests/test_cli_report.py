@@ -130,9 +130,11 @@ def named_reference(tmp_path, *names: str):  # noqa: ANN001, ANN201
 
 
 def test_the_title_names_the_machine_and_program_and_t0_is_the_logs_start_in_local_time(tmp_path):
-    # today: "Warm-up test: /full/path/run.csv", no machine, no program, no date, no start
+    # today: "Warm-up test: /full/path/run.csv", no machine, no program, no date, no start (the
+    # title's words need an hour of log, not a whole warm-up)
+    hour = T[:61]
     log = dated_log(
-        tmp_path / "run.csv", T, {"A": noisy(first_order(T), 21), "B": noisy(first_order(T, steady=29.0), 22)}
+        tmp_path / "run.csv", hour, {"A": noisy(first_order(hour), 21), "B": noisy(first_order(hour, steady=29.0), 22)}
     )
     reference = named_reference(tmp_path, "A", "B")
     out = tmp_path / "report.html"
