@@ -882,10 +882,13 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     beyond = [
         name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok
     ]
+    # a sensor that settled above a moving room ("with the room") has settled, with no level to check
     unsettled = [
         name
-        for name, known, decided in zip(hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), strict=True)
-        if decided and not known
+        for name, known, decided, cell in zip(
+            hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), cells, strict=True
+        )
+        if decided and not known and cell != "with the room"
     ]
     verdict = (
         f"{len(beyond)} of {int(settled.sum())} sensors settled beyond the tolerance ({hindsight.tolerance_C:g} °C) "

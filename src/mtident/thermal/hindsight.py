@@ -327,8 +327,9 @@ def check_decision(
         to the log's end (the median of its last 10 valid readings) is added to T∞. No shift
         where it has fewer than 10 valid readings or none within 5 min of the stop.
     modes : sequence of tuples of (time constant, amplitude), optional
-        Each sensor's modes at the stop: the room's move reaches it through them, weighted by
-        their shares of its rise (without them, or for a sensor with none, whole).
+        Each sensor's modes at the stop: the room's move reaches it through them, by its gains on
+        the room (``room_gains``) or else weighted by their shares of its rise (without them, or
+        for a sensor with none, whole).
     max_time_constant_min : float
         The slowest mode allowed (min), for a sensor whose modes are not given. A sensor counts
         as settled where the rise still to come at the pace of its slowest mode (its late move m
@@ -337,7 +338,7 @@ def check_decision(
         The sensors the test waits for (default: all): t_settle is the latest of theirs.
     room_gains : sequence of tuples of float, optional
         Each sensor's gain on the room per mode at the stop (one per mode of ``modes``): the room's
-        course through the sensor, for its settle time (without them, the modes' shares of its rise).
+        course through the sensor, for its move after the stop and its settle time.
 
     Returns
     -------
@@ -362,7 +363,13 @@ def check_decision(
             if modes is not None:
                 times, first = np.unique(time_min[valid], return_index=True)
                 room = room_C[valid][first]
-                followed = np.array([_followed_shift(times, room, at_stop, m, shift) for m in modes])
+                gains = room_gains if room_gains is not None else [()] * len(modes)
+                followed = np.array(
+                    [
+                        float(np.median(_room_course(times, room, m, g)[-10:])) - at_stop
+                        for m, g in zip(modes, gains, strict=True)
+                    ]
+                )
     return Hindsight(
         sensors=tuple(sensors),
         stop_time_min=float(stop_time_min),
@@ -466,20 +473,3 @@ def settle_times(time_min: FloatArray, values: FloatArray, settled_C: FloatArray
         elif beyond[-1] + 1 < len(t):
             out[s] = t[beyond[-1] + 1]
     return out
-
-
-def _followed_shift(
-    time_min: FloatArray,
-    room_C: FloatArray,
-    room_at_stop_C: float,
-    modes: tuple[tuple[float, float], ...],
-    whole: float,
-) -> float:
-    """The room's move from its level at the stop (which T∞ at the stop already holds) to where a
-    sensor of these modes has followed it by the log's end: the room (valid readings at distinct
-    times) lagged by each mode, weighted by the mode's share of the rise (``whole`` without modes)."""
-    weights = np.abs(np.array([a for _, a in modes], dtype=float))
-    if not len(modes) or not weights.sum() > 0:
-        return whole
-    lagged = room_lag(room_C, time_min, np.array([tau for tau, _ in modes], dtype=float))
-    return float(weights @ np.median(lagged[:, -10:], axis=1) / weights.sum()) - room_at_stop_C

@@ -296,7 +296,7 @@ def _fit_above_floor(
             "reference-disagrees",
             f"with the reference's modes its T∞ would be {fit.steady_C:.2f} °C, below where it already is "
             f"({floor:.2f} °C) by more than the fit's own error, and a warm-up does not come down: has the machine "
-            "changed, or is the reference another machine's? The answer does not use the reference",
+            "changed, or is the reference another machine's? This answer does not use it",
         )
         fit, reference_used = _modal_fit(binned, noise, interval, settings, None, notes, refine_within)
         floor = overshoot_floor_C(fit, readings, noise, rounding)
@@ -379,7 +379,7 @@ def _modal_fit(
         notes.add(
             "reference-disagrees",
             f"this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; {why}): has the "
-            f"machine changed, {missed} The answer does not use the reference",
+            f"machine changed, {missed} This answer does not use it",
         )
     fit, unheld = _widened_while_used(fit_of, family, settings, refine_within)
     slower = (
