@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 import sys
 import time
 from pathlib import Path
@@ -58,6 +57,7 @@ from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.testing.warmups import _network  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state, result  # noqa: E402
 from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
+from mtident.thermal.robust_types import ends_at_the_largest  # noqa: E402
 
 FIRST_SEED = 36000
 HELD_OUT = range(37000, 39000)
@@ -306,8 +306,7 @@ def holding(cases: list[dict], key: str) -> dict[str, int]:
         for p in r["sensors"]:
             if p["status"] == "may stop":
                 continue
-            taus = [float(v) for v in re.findall(r"a mode of about (\d+(?:\.\d+)?) min", p["ends"])]
-            end = "slowest-searched mode still fits" if any(t >= 0.97 * MAX_TAU_MIN for t in taus) else "faster mode"
+            end = "slowest-searched mode still fits" if ends_at_the_largest(p["ends"], MAX_TAU_MIN) else "faster mode"
             doubtful = key == "with_reference" and p["sensor"] in (c.get("reference_doubts") or [])
             label = f"{p['status']}, {end}" + (", reference doubtful" if doubtful else "")
             out[label] = out.get(label, 0) + 1

@@ -54,6 +54,19 @@ def test_a_slow_mode_not_yet_seen_keeps_the_monitor_from_stopping_wrongly():
     assert out["stop_time_min"] is None and out["decision"] == "continue"
     reason = str(out["reason"])
     assert "housing: T∞" in reason and "still fits" in reason and "give a reference run of this machine" in reason
+    # the end is a mode at the largest time constant searched: the way to say the machine has none
+    assert "a mode of about 300 min" in check.ends
+    assert "where a mode of about 300 min sets an end, and this machine has none that slow" in reason
+    assert "`max_time_constant_min`" in reason
+
+
+def test_the_largest_time_constant_is_offered_only_where_a_mode_at_it_sets_an_end():
+    from mtident.thermal.robust_types import ends_at_the_largest
+
+    assert ends_at_the_largest("low end 28.80 °C: a mode of about 300 min, rising 0.49 °C in all, still fits", 300.0)
+    assert ends_at_the_largest("high end 29.1 °C: a mode of about 292 min, rising 3 °C in all, still fits", 300.0)
+    assert not ends_at_the_largest("high end 29.1 °C: a mode of about 97 min, rising 3 °C in all, still fits", 300.0)
+    assert not ends_at_the_largest("too few readings for a model", 300.0)
 
 
 def test_fast_plus_slow_does_not_stop_with_a_wrong_answer():

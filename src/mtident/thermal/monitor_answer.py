@@ -14,7 +14,7 @@ from mtident.thermal.hindsight import HindsightAnswer
 from mtident.thermal.modal_types import Mode
 from mtident.thermal.monitor_types import MonitorSettings, MonitorState, SensorCheck
 from mtident.thermal.robust import room_wander_half_width
-from mtident.thermal.robust_types import Assumptions
+from mtident.thermal.robust_types import Assumptions, ends_at_the_largest
 
 __all__ = ["SensorStatus", "WatchAnswer", "answer", "assumptions", "result"]
 
@@ -272,6 +272,12 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
             )
     learn = ", or give a reference run of this machine (mtident thermal learn)"
     ways = "continue the test" + ("" if settings.reference is not None else learn)
+    largest = settings.robust.max_time_constant_min
+    if settings.reference is None and any(ends_at_the_largest(c.ends, largest) for c in waiting):
+        ways += (
+            f"; where a mode of about {largest:g} min sets an end, and this machine has none that slow, say the "
+            "slowest it has (`max_time_constant_min`): the answer then assumes it"
+        )
     room = (
         "state a smaller room wander if the room is steadier than assumed (0 for a steady room), or log the room "
         "beside the sensors and name it as the room sensor (the fit then follows the room instead of assuming it; "

@@ -6,6 +6,7 @@ and one sensor's answer (:class:`SensorEstimate`). The fit that makes them is
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Literal
 
@@ -242,3 +243,23 @@ class SensorEstimate:
                     f"{course} {abs(slowest.amplitude_C):.2f} °C in all, still fits"
                 )
         return "; ".join(words)
+
+
+_END_MODE = re.compile(r"a mode of about (\d+(?:\.\d+)?) min")
+
+
+def ends_at_the_largest(ends: str, max_time_constant_min: float) -> bool:
+    """Whether an interval's ends, in the words of :meth:`SensorEstimate.what_sets_the_ends`, are
+    set by a mode at the largest time constant searched: a slow mode the readings cannot yet
+    exclude, which only a reference run or a smaller stated largest time constant removes.
+
+    Parameters
+    ----------
+    ends : str
+    max_time_constant_min : float
+
+    Returns
+    -------
+    bool
+    """
+    return any(float(tau) >= 0.97 * max_time_constant_min for tau in _END_MODE.findall(ends))
