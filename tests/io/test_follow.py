@@ -479,6 +479,14 @@ def test_follower_says_a_log_in_celsius_read_in_a_stated_fahrenheit_reads_outsid
     with path.open("a") as out:
         out.write("2,35,20.2\n")
     assert not any("workshop" in note for note in follower.poll().notes)
+    # a first row without a room reading is not judged: the next rows are
+    late = tmp_path / "late.csv"
+    late.write_text("time_min,A,room\n0,20,\n")
+    follower = LogFollower(late, room="room", temperature_unit="F")
+    assert not any("workshop" in note for note in follower.poll().notes)
+    with late.open("a") as out:
+        out.write("".join(f"{m},{20 + m},20\n" for m in range(1, 30)))
+    assert sum("far outside any workshop's range" in note for note in follower.poll().notes) == 1
 
 
 @pytest.mark.parametrize("sensors", [None, ["A", "room [°C]"]])

@@ -225,3 +225,21 @@ def test_temperature_unit_leaves_a_columns_own_unit_that_agrees_and_other_quanti
     np.testing.assert_allclose(log.temperature_C[:, 1], np.arange(8.0) * 5 / 9)
     with pytest.raises(InputError, match=r"temperature unit 'X' is not one of: C, F, K"):
         read_temperature_log(write_csv("time_min,T1\n" + rows.replace(",", ";")), temperature_unit="X")
+
+
+@pytest.mark.parametrize(("unit", "said"), [("c", None), ("°C", None), ("celsius", None), ("°F", "°F"), ("F", "°F")])
+def test_a_stated_unit_is_read_as_the_reader_reads_it_in_the_note(write_csv, unit, said):
+    """A reviewer's finding: 'c', '°C' and 'celsius' were told to leave the unit out, '°F' was '°°F'."""
+    log = read_temperature_log(write_csv(_without_units(lambda c: c)), temperature_unit=unit)
+    notes = [note for note in log.notes if "far outside any workshop's range" in note]
+    if said is None:
+        assert not notes, notes
+    else:
+        assert len(notes) == 1 and f"converted from {said} as stated" in notes[0] and "°°" not in notes[0]
+
+
+def test_a_column_whose_own_unit_puts_it_out_of_range_is_not_blamed_on_a_stated_unit(write_csv):
+    path = write_csv("time_min,spindle [K],column [K]\n" + "".join(f"{m},{20 + m},{20 + m / 2}\n" for m in range(12)))
+    with pytest.raises(InputError, match="check the wiring") as refused:
+        read_temperature_log(path)
+    assert "leave the unit out" not in str(refused.value)

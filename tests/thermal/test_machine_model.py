@@ -60,9 +60,9 @@ def test_a_sensor_of_another_machine_is_rejected():
     y[:, 1] = ROOM_C + 6.0 * (1.0 - np.exp(-t / 15.0))  # a curve none of the model's modes make
     y = np.round(y + np.random.default_rng(3).normal(0.0, 0.01, y.shape), 2)
     fit = fit_readings(model, SENSORS, t, y, None, (0.95, 0.99))
-    # four sensors and three modes: which of them breaks the tie is not always clear (the housing
-    # pulls the nose off with it here), but the machine model never answers for the housing, and
-    # leaves no sensor it rejects an interval
+    # four sensors and three modes: which of them breaks the tie is not always clear (the tie of
+    # every mode rejects the nose too; with the fast mode untied only the housing), but the machine
+    # model never answers for the housing, and leaves no sensor it rejects an interval
     assert fit is not None and "housing" in fit.rejected and not fit.used[1] and fit.used[2] and fit.used[3]
     assert all(math.isinf(fit.half_width_C[0.99][SENSORS.index(name)]) for name in fit.rejected)
 

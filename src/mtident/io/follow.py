@@ -230,9 +230,10 @@ class LogFollower:
         warnings.extend(rows.warnings)
         self._hint_unit(list(rows.time_min), warnings)
         if not self._scale_said and len(rows.time_min):
-            # as the file reader says it: readings far outside any workshop's range in the unit taken
-            self._scale_said = True
+            # as the file reader says it: readings far outside any workshop's range in the unit taken,
+            # judged once every column has a reading
             said = scale_note(list(layout.sensors), rows.temperature_C, layout.dialect, self.temperature_unit)
+            self._scale_said = said is not None or bool(np.all(np.isfinite(rows.temperature_C).any(axis=0)))
             notes.extend([] if said is None else [said])
         return Rows(rows.time_min, rows.temperature_C, tuple(warnings), (*notes, *rows.notes))
 

@@ -46,7 +46,7 @@ from mtident.io.dialect import CsvDialect, read_lines
 from mtident.io.layout import LogLayout, time_columns
 from mtident.io.parse import TimeState, WholeLog, parse_lines
 from mtident.io.time_notes import read_as_minutes
-from mtident.io.units import is_number
+from mtident.io.units import is_number, stated_temperature_unit
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -398,7 +398,8 @@ def scale_note(
     str or None
     """
     low, high = WORKSHOP_ROOM_C
-    if temperature_unit == "C":
+    stated = stated_temperature_unit(temperature_unit)
+    if stated == "°C":
         return None
     assumed = [k for k, name in enumerate(sensors) if not dialect.unit_of(name).strip()]
     spans = {}
@@ -410,19 +411,18 @@ def scale_note(
     every = spans and len(spans) == len(sensors)
     if rooms:
         which = "; ".join(f"{sensors[k]!r} reads {spans[k][0]:g} to {spans[k][2]:g}" for k in rooms) + " as the room"
-    elif every and temperature_unit is None and all(span[0] > high for span in spans.values()):
+    elif every and stated is None and all(span[0] > high for span in spans.values()):
         which = (
             f"every column reads above {high:g} °C (the lowest {min(span[0] for span in spans.values()):g}), "
             "none near the room"
         )
-    elif every and temperature_unit is not None and all(span[2] < low for span in spans.values()):
+    elif every and stated is not None and all(span[2] < low for span in spans.values()):
         which = f"every column reads below {low:g} °C (the highest {max(span[2] for span in spans.values()):.3g})"
     else:
         return None
-    if temperature_unit is not None:
+    if stated is not None:
         return (
-            f"readings converted from {'K' if temperature_unit == 'K' else '°' + temperature_unit} as stated "
-            f"(`temperature_unit='{temperature_unit}'`), "
+            f"readings converted from {stated} as stated (`temperature_unit='{temperature_unit}'`), "
             f"but {which}: far outside any workshop's range ({low:g} to {high:g} °C). If the log is in °C already, "
             "leave the unit out"
         )

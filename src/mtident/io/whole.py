@@ -507,8 +507,9 @@ def _sensor_readings(
     bad = missing | open_circuit
     if np.mean(bad) > MAX_BAD_FRACTION:
         as_written = (written >= OPEN_CIRCUIT_LOW_C) & (written <= OPEN_CIRCUIT_HIGH_C)
-        # a log in °C read as K is -253 °C: the stated unit, not the wiring
-        converted = (scale, offset) != (1.0, 0.0) and np.mean(~as_written | missing) <= MAX_BAD_FRACTION
+        # a log in °C read as K is -253 °C: the unit the user stated, not the wiring
+        stated = layout.temperature_unit is not None and not layout.dialect.unit_of(name).strip()
+        converted = stated and (scale, offset) != (1.0, 0.0) and np.mean(~as_written | missing) <= MAX_BAD_FRACTION
         msg = (
             f"{source}: sensor {name!r}: {int(bad.sum())} of {len(values)} samples are empty, NaN or "
             f"open-circuit (outside {OPEN_CIRCUIT_LOW_C:g}..{OPEN_CIRCUIT_HIGH_C:g} °C); "
