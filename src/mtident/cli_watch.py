@@ -844,26 +844,30 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "settled by (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     settled = hindsight.checked
-    cells = []
+    settle_times = (
+        np.full(len(hindsight.sensors), math.nan)
+        if hindsight.settle_time_min is None
+        else np.asarray(hindsight.settle_time_min, dtype=float)
+    )
+    # the settle time is read off the readings less the room, which settle where the readings
+    # themselves keep following a moving room: no level to check T∞ against
+    with_room = ~np.isfinite(hindsight.settled_C) & np.isfinite(settle_times)
     for i, name in enumerate(hindsight.sensors):
         error = hindsight.error_C[i]
         shown = _fmt(float(error)) if settled[i] else "—"
         if settled[i] and not hindsight.within[i]:
             shown = f"[yellow]{shown}[/]"
-        settle = math.nan if hindsight.settle_time_min is None else float(hindsight.settle_time_min[i])
         level = float(hindsight.settled_C[i])
-        # the settle time is read off the readings less the room, which settle where the readings
-        # themselves keep following a moving room
-        cells.append(_fmt(level) if math.isfinite(level) else "with the room" if math.isfinite(settle) else "not yet")
+        cell = _fmt(level) if math.isfinite(level) else "with the room" if with_room[i] else "not yet"
         table.add_row(
             name,
             _fmt(float(hindsight.steady_state_C[i] + hindsight.shift_C[i])),
-            cells[-1],
+            cell,
             shown,
-            _fmt(settle, 0),
+            _fmt(float(settle_times[i]), 0),
         )
     table_console().print(table)
-    if "with the room" in cells:
+    if with_room.any():
         OptionConsole().print(
             "with the room: the readings keep following the room; their rise above it settled by the time shown "
             "(no settled level to check T∞ against).",
@@ -882,13 +886,13 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     beyond = [
         name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok
     ]
-    # a sensor that settled above a moving room ("with the room") has settled, with no level to check
+    # a sensor that settled above a moving room has settled, with no level to check
     unsettled = [
         name
-        for name, known, decided, cell in zip(
-            hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), cells, strict=True
+        for name, known, decided, room in zip(
+            hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), with_room, strict=True
         )
-        if decided and not known and cell != "with the room"
+        if decided and not known and not room
     ]
     verdict = (
         f"{len(beyond)} of {int(settled.sum())} sensors settled beyond the tolerance ({hindsight.tolerance_C:g} °C) "

@@ -353,23 +353,23 @@ def check_decision(
     settled, equilibrium = measured_equilibrium(
         time_min, values, tolerance_C / 2.0, tolerance_C / 4.0, np.array(slowest, dtype=float)
     )
+    # each sensor's course of the room (the room itself for one without modes), where one is logged
+    courses = None
+    if room_C is not None and np.isfinite(room_C).sum() >= 10:
+        gains = room_gains if room_gains is not None else [()] * len(sensors)
+        per_sensor = modes if modes is not None else [()] * len(sensors)
+        courses = np.column_stack(
+            [_room_course(time_min, room_C, m, g) for m, g in zip(per_sensor, gains, strict=True)]
+        )
     shift, followed = 0.0, None
-    if room_C is not None:
+    if room_C is not None and courses is not None:
         valid = np.isfinite(room_C)
         near = valid & (np.abs(time_min - stop_time_min) <= _ROOM_AROUND_STOP_MIN)
-        if near.any() and valid.sum() >= 10:
+        if near.any():
             at_stop = float(np.median(room_C[near]))
             shift = float(np.median(room_C[valid][-10:])) - at_stop
             if modes is not None:
-                times, first = np.unique(time_min[valid], return_index=True)
-                room = room_C[valid][first]
-                gains = room_gains if room_gains is not None else [()] * len(modes)
-                followed = np.array(
-                    [
-                        float(np.median(_room_course(times, room, m, g)[-10:])) - at_stop
-                        for m, g in zip(modes, gains, strict=True)
-                    ]
-                )
+                followed = np.median(courses[valid][-10:], axis=0) - at_stop
     return Hindsight(
         sensors=tuple(sensors),
         stop_time_min=float(stop_time_min),
@@ -380,9 +380,7 @@ def check_decision(
         room_shift_C=shift,
         tolerance_C=float(tolerance_C),
         sensor_shift_C=followed,
-        settle_time_min=_settle_times(
-            time_min, values, room_C, modes, room_gains, settled, tolerance_C, np.array(slowest, dtype=float)
-        ),
+        settle_time_min=_settle_times(time_min, values, courses, settled, tolerance_C, np.array(slowest, dtype=float)),
         waited=None if waited is None else np.asarray(waited, dtype=bool),
     )
 
@@ -390,25 +388,18 @@ def check_decision(
 def _settle_times(
     time_min: FloatArray,
     values: FloatArray,
-    room_C: FloatArray | None,
-    modes: Sequence[tuple[tuple[float, float], ...]] | None,
-    room_gains: Sequence[tuple[float, ...]] | None,
+    room_courses: FloatArray | None,
     settled_C: FloatArray,
     tolerance_C: float,
     slowest_mode_min: FloatArray,
 ) -> FloatArray:
     """The settle times of the readings, or with a room sensor of the readings less the room as
-    each sensor follows it (:func:`_room_course`): T∞ follows the room one to one, and a room on a
-    daily cycle keeps the readings themselves moving by more than the tolerance long after the
-    sensor has settled above it."""
-    if room_C is None or np.isfinite(room_C).sum() < 10:
+    each sensor follows it (``room_courses``, (N, S), :func:`_room_course`): T∞ follows the room
+    one to one, and a room on a daily cycle keeps the readings themselves moving by more than the
+    tolerance long after the sensor has settled above it."""
+    if room_courses is None:
         return settle_times(time_min, values, settled_C, tolerance_C)
-    room = np.asarray(room_C, dtype=float)
-    per_sensor = modes if modes is not None else [()] * values.shape[1]
-    gains = room_gains if room_gains is not None else [()] * values.shape[1]
-    above = values - np.column_stack(
-        [_room_course(time_min, room, m, g) for m, g in zip(per_sensor, gains, strict=True)]
-    )
+    above = values - room_courses
     settled_above, _ = measured_equilibrium(time_min, above, tolerance_C / 2.0, tolerance_C / 4.0, slowest_mode_min)
     return settle_times(time_min, above, settled_above, tolerance_C)
 

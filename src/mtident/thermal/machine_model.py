@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -255,6 +256,21 @@ class MachineReadings:
     noise_C: FloatArray
     origin_min: float
 
+    @cached_property
+    def binned(self) -> list[Binned | None]:
+        """Each sensor's readings since the warm-up began, in bins (None for one of fewer than eight
+        valid readings): binned once, for the model's learning, its checks and a test's fits."""
+        after = self.time_min >= self.origin_min
+        out: list[Binned | None] = []
+        for s in range(self.values.shape[1]):
+            y = self.values[after, s]
+            if np.count_nonzero(np.isfinite(y)) < 8:
+                out.append(None)
+                continue
+            room = None if self.room_C is None else self.room_C[after]
+            out.append(bin_samples(self.time_min[after] - self.origin_min, y, room))
+        return out
+
 
 # ----------------------------------------------------------------------------------------------
 # Columns shared by the reference's fit and the test's
@@ -272,20 +288,6 @@ def _room_columns(binned: Binned, taus: FloatArray) -> FloatArray:
 
 def _target(binned: Binned) -> FloatArray:
     return binned.value_C - (binned.room_C if binned.room_C is not None else 0.0)
-
-
-def _bins(readings: MachineReadings) -> list[Binned | None]:
-    time_min, values, room_C, origin_min = readings.time_min, readings.values, readings.room_C, readings.origin_min
-    after = time_min >= origin_min
-    out: list[Binned | None] = []
-    for s in range(values.shape[1]):
-        y = values[after, s]
-        if np.count_nonzero(np.isfinite(y)) < 8:
-            out.append(None)
-            continue
-        b = bin_samples(time_min[after] - origin_min, y, None if room_C is None else room_C[after])
-        out.append(b)
-    return out
 
 
 # ----------------------------------------------------------------------------------------------
@@ -366,7 +368,7 @@ def learn_machine_model(readings: MachineReadings, max_time_constant_min: float)
     MachineModel or None
         None where fewer than two sensors have readings.
     """
-    binned = _bins(readings)
+    binned = readings.binned
     keep = [s for s, b in enumerate(binned) if b is not None]
     if len(keep) < 2:
         return None
@@ -437,7 +439,7 @@ def missing_modes(model: MachineModel, readings: MachineReadings) -> dict[str, t
     grid = grid[np.all(np.abs(np.log(grid[:, None] / taus[None, :])) > MIN_LOG_SPACING, axis=1)]
     k = 1 + len(FAST_TIME_CONSTANTS_MIN) + len(taus)
     out: dict[str, tuple[float, float]] = {}
-    for s, b in enumerate(_bins(readings)):
+    for s, b in enumerate(readings.binned):
         name = readings.sensors[s]
         if b is None or name not in model.sensors:
             continue
@@ -553,7 +555,7 @@ def _fit_tied(
     sensors, t, room_C, origin_min = readings.sensors, readings.time_min, readings.room_C, readings.origin_min
     gains = model.gains(sensors)
     noise = np.maximum(readings.noise_C, 1e-4)
-    fitted = {s: b for s, b in enumerate(_bins(readings)) if b is not None and np.all(np.isfinite(gains[s]))}
+    fitted = {s: b for s, b in enumerate(readings.binned) if b is not None and np.all(np.isfinite(gains[s]))}
     taus, tau_sd = _centres(model)
     # early on, a test's fast start (a mode faster than the reference run could show) misfits the
     # model too: only readings over half the slowest mode say it is another machine
@@ -713,12 +715,10 @@ def _tied_solve(
     the tie uses: there the time constants cannot bend to one sensor); the second with each
     slack's prior scaled by the first's ``z`` and each log time constant a parameter too,
     linearised about the first's amplitudes, its prior sd ``tau_sd``."""
-    first = _penalised(bins, gains, noise, taus, np.ones(len(taus)), None, own=own)
+    first = _penalised(bins, gains, noise, taus, np.ones(len(taus)), None, own)
     if first is None:
         return None
-    second = _penalised(
-        bins, gains, noise, taus, np.maximum(np.abs(first.z), 0.05), (first.amplitudes, tau_sd), own=own
-    )
+    second = _penalised(bins, gains, noise, taus, np.maximum(np.abs(first.z), 0.05), (first.amplitudes, tau_sd), own)
     return None if second is None else (first, second)
 
 
@@ -773,14 +773,14 @@ def _penalised(
     taus: FloatArray,
     z_scale: FloatArray,
     linearised: tuple[FloatArray, FloatArray] | None,
+    own: np.ndarray,
     untied: int | None = None,
-    own: np.ndarray | None = None,
 ) -> _Solved | None:
     """Columns: per sensor its level and fast modes; per mode its amplitude ``z_k``; per sensor
     and mode a slack; per mode the room's factor ``η_k`` (with a room); with ``linearised``
     (the amplitudes (S, K) and each log time constant's prior sd), per mode its log time
     constant's change. Sensor ``untied`` (if given) has no prior on its slack: its amplitudes are
-    its own."""
+    its own; so has every sensor on the modes ``own`` marks (:func:`_own_amplitudes`)."""
     S, K = gains.shape
     F = len(FAST_TIME_CONSTANTS_MIN)
     with_room = any(b.room_C is not None for b in bins)
@@ -807,7 +807,6 @@ def _penalised(
         blocks.append(X * w[:, None])
         targets.append(_target(b) * w)
     slack_sd = TIE_SLACK * np.maximum(np.abs(gains) * z_scale[None, :], 1e-3)
-    own = np.zeros(K, bool) if own is None else own
     prior_cols = [i_d + s * K + k for s in range(S) for k in range(K) if s != untied and not own[k]]
     prior_sd = [slack_sd[s, k] for s in range(S) for k in range(K) if s != untied and not own[k]]
     prior_mean = [0.0] * len(prior_cols)
@@ -928,7 +927,7 @@ def _excess(
     total = float(tied.chi2_per_sensor.sum())
     out = np.zeros(len(bins))
     for s in range(len(bins)):
-        free = _penalised(bins, gains, noise, taus, np.maximum(np.abs(tied.z), 0.05), None, untied=s, own=own)
+        free = _penalised(bins, gains, noise, taus, np.maximum(np.abs(tied.z), 0.05), None, own, untied=s)
         if free is not None:
             out[s] = (total - float(free.chi2_per_sensor.sum())) / tied.corr[s]
     return out
