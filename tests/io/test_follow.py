@@ -463,30 +463,30 @@ def test_follower_reads_a_log_without_units_in_the_unit_stated_room_too(tmp_path
     kelvin = tmp_path / "kelvin.csv"
     kelvin.write_text("time_min,A\n0,293.15\n1,373.15\n")
     np.testing.assert_allclose(LogFollower(kelvin, temperature_unit="K").poll().temperature_C, [[20.0], [100.0]])
-    assert not any("workshop" in note for note in rows.notes)
+    assert not any("workshop" in text for text in (*rows.notes, *rows.warnings))
     as_celsius = LogFollower(path).poll()
     np.testing.assert_allclose(as_celsius.temperature_C[:2], [[68.0, 68.0], [212.0, 69.8]])
     # said once, at the first rows, as the file reader says it
-    assert sum("'room' reads 68 to 71.6 as the room: far outside" in note for note in as_celsius.notes) == 1
+    assert sum("'room' reads 68 to 71.6 as the room: far outside" in text for text in as_celsius.warnings) == 1
 
 
 def test_follower_says_a_log_in_celsius_read_in_a_stated_fahrenheit_reads_outside_any_workshop(tmp_path):
     path = tmp_path / "log.csv"
     path.write_text("time_min,A,room\n0,20,20\n1,30,20.1\n")
     follower = LogFollower(path, room="room", temperature_unit="F")
-    said = [note for note in follower.poll().notes if "far outside any workshop's range" in note]
+    said = [warning for warning in follower.poll().warnings if "far outside any workshop's range" in warning]
     assert len(said) == 1 and "If the log is in °C already, leave the unit out" in said[0]
     with path.open("a") as out:
         out.write("2,35,20.2\n")
-    assert not any("workshop" in note for note in follower.poll().notes)
+    assert not any("workshop" in warning for warning in follower.poll().warnings)
     # a first row without a room reading is not judged: the next rows are
     late = tmp_path / "late.csv"
     late.write_text("time_min,A,room\n0,20,\n")
     follower = LogFollower(late, room="room", temperature_unit="F")
-    assert not any("workshop" in note for note in follower.poll().notes)
+    assert not any("workshop" in warning for warning in follower.poll().warnings)
     with late.open("a") as out:
         out.write("".join(f"{m},{20 + m},20\n" for m in range(1, 30)))
-    assert sum("far outside any workshop's range" in note for note in follower.poll().notes) == 1
+    assert sum("far outside any workshop's range" in warning for warning in follower.poll().warnings) == 1
 
 
 @pytest.mark.parametrize("sensors", [None, ["A", "room [°C]"]])

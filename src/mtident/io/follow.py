@@ -234,7 +234,8 @@ class LogFollower:
             # judged once every column has a reading
             said = scale_note(list(layout.sensors), rows.temperature_C, layout.dialect, self.temperature_unit)
             self._scale_said = said is not None or bool(np.all(np.isfinite(rows.temperature_C).any(axis=0)))
-            notes.extend([] if said is None else [said])
+            # readings that may be misread: a warning, which the watch's answer carries (log_warnings)
+            warnings.extend([] if said is None else [said])
         return Rows(rows.time_min, rows.temperature_C, tuple(warnings), (*notes, *rows.notes))
 
     def header_sensors(self) -> list[str] | None:
