@@ -766,7 +766,7 @@ def _answer(
         console.print(
             f"Expected stop: none found; {who} none on the best model's course (its interval does not come "
             "within the tolerance there, or its status gives no course to go on: "
-            f"no fit yet, off its reference, a misfit){others}.",
+            f"no fit yet, off its reference, a misfit, silent){others}.",
             highlight=False,
         )
 
@@ -797,7 +797,7 @@ def _status_table(session: WatchSession, path: Path) -> Table:
             else "yellow"
             if check.status in ("confirming", "narrowing")
             else "red"
-            if check.status == "misfit"
+            if check.status in ("misfit", "silent")
             else "white"
         )
         table.add_row(

@@ -448,3 +448,26 @@ def test_a_reference_most_sensors_contradict_is_used_for_none():
     answer = result(state, settings)
     assert answer["reference_dropped"] is True
     assert all(s["assumptions"]["reference"] is None for s in answer["sensors"])
+
+
+def test_a_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_reference):
+    """A failed sensor (its readings empty from 60 min on, the others reading on) is said once as
+    silent, holds the test, and its re-checks on the same readings gain no pass; one that may stop
+    before it falls silent keeps its answer."""
+    t = np.arange(0.0, 240.0, 1.0)
+    values = spindle_and_column(t)
+    values[60:, 1] = np.nan  # the column's channel lost at 60 min
+    settings = MonitorSettings(reference=spindle_reference)
+    state, events = monitor_step(new_state(["S", "column"]), t, values, None, settings)
+    assert not state.stopped
+    column = state.checks[1]
+    assert column.status == "silent" and column.last_reading_min == 59.0 and not column.may_stop
+    said = [e for e in events if e.kind == "warning" and e.sensor == "column" and "no reading since" in e.text]
+    assert len(said) == 1 and 69.0 <= said[0].time_min <= 80.0  # at its first check 10 min on
+    assert "column: no reading since t = 59 min" in result(state, settings)["reason"]
+
+    values = spindle_and_column(t)
+    values[210:, 0] = np.nan  # the spindle's sensor, ready by then, fails
+    state, _ = monitor_step(new_state(["S", "column"]), t, values, None, settings)
+    assert state.checks[0].status == "may stop" and state.checks[0].last_reading_min == 209.0
+    assert state.checks[1].status != "silent"

@@ -272,6 +272,7 @@ _STATUS_WORDS = {
     "misfit": "readings do not follow the model",
     "off reference": "does not follow the reference run",
     "too coarse": "readings too coarse for the tolerance",
+    "silent": "no new readings (a failed sensor or channel?)",
 }
 
 

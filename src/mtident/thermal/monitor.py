@@ -32,7 +32,7 @@ from mtident.exceptions import InputError
 from mtident.thermal.machine_answer import combined_estimate, fit_readings, unmeasured_wander
 from mtident.thermal.machine_model import MachineFit, MachineModel
 from mtident.thermal.modes import Mode, model_curve
-from mtident.thermal.monitor_answer import assumptions, result
+from mtident.thermal.monitor_answer import assumptions, result, silent_words
 from mtident.thermal.monitor_types import (
     REPORT_LEVEL,
     Event,
@@ -55,6 +55,11 @@ __all__ += ["Event", "EventKind", "MonitorSettings", "MonitorState", "Readings",
 
 # a check falls due this little before its time (min): 60 µs, far below any logging interval
 _DUE_SLACK_MIN = 1e-6
+SILENT_READINGS = 10
+"""A sensor without a valid reading for this many sampling intervals while the log goes on is
+silent (a failed sensor, a lost channel)."""
+SILENT_MIN = 10.0
+"""And for at least this long (min): a logger that skips a reading or two is not a failure."""
 
 
 # checks of a sensor far from the tolerance, or waiting for the others, come this many times
@@ -234,7 +239,7 @@ def _check_due(
         if cancel is not None and cancel():
             raise _Cancelled
         estimate = combined_estimate(sensor_estimate(readings, s, state.sensors[s], used), machine, s, wander)
-        before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used)
+        before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used, s)
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
 
     waited = [s for s, name in enumerate(state.sensors) if settings.waits_for(name)]
@@ -416,14 +421,19 @@ class _EstimateKeys(TypedDict):
 
 
 def _checked(
-    check: SensorCheck, estimate: SensorEstimate, now: float, readings: Readings, settings: MonitorSettings
+    check: SensorCheck, estimate: SensorEstimate, now: float, readings: Readings, settings: MonitorSettings, s: int
 ) -> SensorCheck:
-    """The sensor's check after ``estimate``: its numbers, its run of passes, when to look again."""
+    """The sensor's check after ``estimate``: its numbers, its run of passes, when to look again.
+    A silent sensor (:func:`_last_reading`) gains no pass: the same readings checked again are
+    no new evidence."""
+    last, silent = _last_reading(readings, s)
     within = is_within(estimate, settings)
-    passes = check.passes + 1 if within else 0
+    passes = (check.passes + (0 if silent else 1)) if within else 0
     ready = passes >= settings.consecutive_checks
     fit = estimate.fit
     status = _status(estimate, within, ready) if resolves_tolerance(estimate, settings) else "too coarse"
+    if silent and not ready and estimate.fit is not None:
+        status = "silent"
     lo95, hi95 = estimate.interval_C.get(REPORT_LEVEL, (-math.inf, math.inf))
     lo, hi = estimate.interval_C.get(settings.decision_level, (-math.inf, math.inf))
     return SensorCheck(
@@ -447,7 +457,21 @@ def _checked(
         else f"its readings come in steps of {estimate.display_step_C:.3g} °C, no finer than the tolerance",
         room_level_C=math.nan if fit is None or fit.room_level_C is None else fit.room_level_C,
         room_gains=() if fit is None else fit.room_gains,
+        last_reading_min=last,
     )
+
+
+def _last_reading(readings: Readings, s: int) -> tuple[float, bool]:
+    """The time of sensor ``s``'s latest valid reading, and whether it is silent: none for
+    :data:`SILENT_READINGS` sampling intervals (at least :data:`SILENT_MIN`) while the log goes on."""
+    valid = np.flatnonzero(np.isfinite(readings.values_C[:, s]))
+    if not len(valid):
+        return math.nan, False
+    last = float(readings.time_min[valid[-1]])
+    # its own step: a sensor logged every fifth row is not silent in between
+    own = sampling_interval_min(readings.time_min[valid[-50:]]) if len(valid) > 2 else 0.0
+    quiet = max(SILENT_MIN, SILENT_READINGS * max(own, sampling_interval_min(readings.time_min)))
+    return last, readings.latest_min - last >= quiet
 
 
 def _status(estimate: SensorEstimate, within: bool, ready: bool) -> Status:
@@ -498,7 +522,9 @@ def _check_events(
         if key not in said and code not in ("undetermined", "too-few-readings", "no-rise"):
             said.add(key)
             events.append(Event("warning", now, text, after.sensor))
-    if after.status != before.status:
+    if after.status == "silent" and before.status != "silent":
+        events.append(Event("warning", now, silent_words(after), after.sensor))
+    elif after.status != before.status:
         kind: EventKind = "ready" if after.may_stop else "not ready" if before.may_stop else "check"
         bounded = math.isfinite(after.low_C) and math.isfinite(after.high_C)
         text = (

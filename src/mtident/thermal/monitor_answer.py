@@ -16,7 +16,7 @@ from mtident.thermal.monitor_types import MonitorSettings, MonitorState, SensorC
 from mtident.thermal.robust import room_wander_half_width
 from mtident.thermal.robust_types import Assumptions, ends_at_the_largest
 
-__all__ = ["SensorStatus", "WatchAnswer", "answer", "assumptions", "result"]
+__all__ = ["SensorStatus", "WatchAnswer", "answer", "assumptions", "result", "silent_words"]
 
 
 def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = False) -> Assumptions:
@@ -235,13 +235,33 @@ def result(
     return tree
 
 
+def silent_words(check: SensorCheck) -> str:
+    """What a silent sensor's status means, and the way on.
+
+    Parameters
+    ----------
+    check : SensorCheck
+
+    Returns
+    -------
+    str
+    """
+    return (
+        f"{check.sensor}: no reading since t = {check.last_reading_min:.0f} min while the others read on (a failed "
+        "sensor or a lost channel?): its answer rests on its readings up to then, and it holds the test until it "
+        "reads again; if it has failed, leave it out of the sensors the test waits for"
+    )
+
+
 def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
     """Why the test cannot stop yet, and the two ways on."""
     if not waiting:
         return "every sensor may stop; confirming at the next check"
     parts = []
     for c in waiting:
-        if c.status == "no rise":
+        if c.status == "silent":
+            parts.append(silent_words(c))
+        elif c.status == "no rise":
             parts.append(
                 f"{c.sensor}: no rise above its noise yet, which keeps the test from stopping (if the test does not "
                 "heat it, leave it out of the sensors watched; if it is the room's, name it as the room sensor)"

@@ -44,6 +44,7 @@ Status = Literal[
     "misfit",
     "off reference",
     "too coarse",
+    "silent",
 ]
 
 
@@ -205,7 +206,8 @@ class SensorCheck:
     ``passes`` counts the checks in a row that found the interval within the tolerance;
     ``status`` is one of "collecting", "no data", "no rise", "undetermined", "narrowing",
     "confirming", "may stop", "misfit", "off reference", "too coarse" (readings in steps no finer than the
-    tolerance).
+    tolerance), "silent" (no reading for a while, the others reading on: a failed sensor or a lost
+    channel; its answer rests on its readings up to then).
 
     Attributes
     ----------
@@ -248,6 +250,8 @@ class SensorCheck:
         The room's last level (°C), NaN without a room sensor.
     room_gains : tuple of float
         The best model's gain on the room per mode (with a room sensor; its course as logged).
+    last_reading_min : float
+        The time of its latest valid reading (min), NaN before the first.
     """
 
     sensor: str
@@ -273,6 +277,7 @@ class SensorCheck:
     ends: str = ""
     room_level_C: float = math.nan
     room_gains: tuple[float, ...] = ()
+    last_reading_min: float = math.nan
 
     @property
     def half_width_C(self) -> float:
