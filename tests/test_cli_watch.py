@@ -81,8 +81,8 @@ def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):
     assert "Ways on: continue the test, or give a reference run of this machine" in text
     assert (
         "Assumes: a sum of up to four exponential modes (six where the readings use all four), of a warm-up that "
-        "does not overshoot: a rising sensor's T∞ not below its latest readings, less four times their noise, "
-        "time constants up to 300 min" in text
+        "does not overshoot: a rising sensor's T∞ not below its latest readings, less four times their noise and "
+        "any fall of a logged room, time constants up to 300 min" in text
     )
     # the ends named in words are the interval's own (widened for the room's wander alike)
     code, out, err = mtident("thermal", "watch", str(log), "--replay", "--room-wander", "0.5")

@@ -66,7 +66,7 @@ FIRST_ORDER_ASSUMPTIONS = Assumptions(
     reference=None,
     model="first order (one exponential, the papers' model): the interval assumes a first-order machine; "
     "a slower mode not yet seen moves T∞ beyond it; of a warm-up that does not overshoot: a rising sensor's T∞ "
-    "not below its latest readings, less four times their noise",
+    "not below its latest readings, less four times their noise and any fall of a logged room",
 )
 
 # A first-order fit to fewer minutes of rise than this is not trusted: a thermal time constant is

@@ -140,7 +140,8 @@ class Assumptions:
     reference: str | None = None
     model: str = (
         "a sum of up to four exponential modes (six where the readings use all four), of a warm-up that does not "
-        "overshoot: a rising sensor's T∞ not below its latest readings, less four times their noise"
+        "overshoot: a rising sensor's T∞ not below its latest readings, less four times their noise and any fall "
+        "of a logged room"
     )
 
 
