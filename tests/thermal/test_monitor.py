@@ -471,3 +471,22 @@ def test_a_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_referenc
     state, _ = monitor_step(new_state(["S", "column"]), t, values, None, settings)
     assert state.checks[0].status == "may stop" and state.checks[0].last_reading_min == 209.0
     assert state.checks[1].status != "silent"
+
+
+def test_a_drifting_room_that_keeps_the_machine_model_open_is_named_as_the_reason():
+    """The chain's reference in a steady room, its test in a room falling 0.15 °C an hour: the
+    machine model counts the lag behind the room it cannot tell (the rate times the slowest time
+    constant, 268 min: 0.67 °C at one sd), and the answer says that it is the room that keeps it
+    open, with the way on."""
+    t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, lambda t: np.full_like(t, ROOM_C), seed=21)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), room)
+    assert reference.machine_model is not None and not reference.machine_model.room_gains
+    t, y, room = _run_in_room((0.5, 0.5), 0.9, np.zeros(3), 240.0, lambda t: ROOM_C - 0.0025 * t, seed=22)
+    settings = MonitorSettings(tolerance_C=0.2, reference=reference, room_sensor="room")
+    state, _ = monitor_step(new_state(list(SENSORS), with_room=True), t, y, room, settings)
+    assert not state.stopped
+    lags = [c.room_lag_C for c in state.checks if c.machine_used]
+    assert lags and all(0.3 < lag < 1.0 for lag in lags), lags
+    reason = result(state, settings)["reason"]
+    assert "the machine model's interval carries ±" in reason and "for the room's move alone" in reason
+    assert "the room's lag shrinks as the room moves less" in reason

@@ -88,6 +88,7 @@ def combined_estimate(
         warnings=tuple(estimate.warnings[i] for i in kept),
         warning_codes=tuple(estimate.warning_codes[i] for i in kept),
         machine_used=True,
+        room_lag_C=0.0 if fit.room_lag_C is None else float(fit.room_lag_C[s]),
     )
 
 

@@ -215,6 +215,9 @@ class MachineFit:
         Most of the sensors fitted reject the tie or misfit the model (residuals correlated beyond
         ``MISFIT_FACTOR``; then none is used): the test does not follow the reference's machine
         (another machine's reference, or a changed machine).
+    room_lag_C : ndarray (S,), optional
+        The part of each sensor's interval that is its lag behind a moving room (one sd, °C;
+        :func:`_room_lag_sd`, or a learnt response's error), 0 where none.
     """
 
     steady_C: FloatArray
@@ -226,6 +229,7 @@ class MachineFit:
     room_gains: tuple[tuple[float, ...], ...] = ()
     origin_min: float = 0.0
     contradicted: bool = False
+    room_lag_C: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -604,6 +608,7 @@ def _fit_tied(
         placed.rows(_modes_of(solved), ()),
         placed.rows(room_gains, ()) if room_C is not None else (),
         origin_min,
+        room_lag_C=placed.values(lag, 0.0),
     )
 
 

@@ -418,6 +418,7 @@ class _EstimateKeys(TypedDict):
     reference_used: bool
     machine_used: bool
     warnings: tuple[str, ...]
+    room_lag_C: float
 
 
 def _checked(

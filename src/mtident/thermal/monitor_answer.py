@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+from scipy.special import ndtri
+
 from mtident._json import json_optional, to_json_value
 from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.hindsight import HindsightAnswer
@@ -288,7 +290,9 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
             )
             parts.append(
                 f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level * 100:g} % {bounds}, reaching beyond "
-                f"±{settings.tolerance_C:g} °C of T∞ ({c.ends})" + _room_bound_clause(c, settings)
+                f"±{settings.tolerance_C:g} °C of T∞ ({c.ends})"
+                + _room_bound_clause(c, settings)
+                + _room_lag_clause(c, settings)
             )
     learn = ", or give a reference run of this machine (mtident thermal learn)"
     ways = "continue the test" + ("" if settings.reference is not None else learn)
@@ -303,6 +307,8 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
         "beside the sensors and name it as the room sensor (the fit then follows the room instead of assuming it; "
         "without a reference run, a slow mode may still keep the interval open)"
     )
+    if any(_room_lag_clause(c, settings) for c in waiting):
+        ways += "; the room's lag shrinks as the room moves less (it follows the room's recent rate)"
     bound = [c.sensor for c in waiting if _room_bound(c, settings)]
     slow = [c.sensor for c in waiting if _room_wander_C(c, settings) > 0 and c.sensor not in bound]
     if bound:
@@ -311,6 +317,19 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
     elif slow:
         ways += f"; for {', '.join(slow)}, also {room}"
     return "; ".join(parts) + f". Ways on: {ways}."
+
+
+def _room_lag_clause(check: SensorCheck, settings: MonitorSettings) -> str:
+    """Where the machine model's allowance for its lag behind a moving room alone takes half the
+    tolerance or more, that it does: the room then keeps the machine model from pinning T∞ down,
+    however well the readings fit (the interval shown can be narrower: the sensor's own)."""
+    lag = ndtri(0.5 + settings.decision_level / 2.0) * check.room_lag_C
+    if lag < 0.5 * settings.tolerance_C:
+        return ""
+    return (
+        f"; the machine model's interval carries ±{lag:.2f} °C for the room's move alone (a machine follows a "
+        "drifting or cycling room behind it by the room's rate times a lag that the reference run did not pin down)"
+    )
 
 
 def _room_bound_clause(check: SensorCheck, settings: MonitorSettings) -> str:

@@ -252,6 +252,9 @@ class SensorCheck:
         The best model's gain on the room per mode (with a room sensor; its course as logged).
     last_reading_min : float
         The time of its latest valid reading (min), NaN before the first.
+    room_lag_C : float
+        How far the machine model's lag behind a moving room may move T∞ (one sd, °C; part of
+        the intervals), 0 where none.
     """
 
     sensor: str
@@ -278,6 +281,7 @@ class SensorCheck:
     room_level_C: float = math.nan
     room_gains: tuple[float, ...] = ()
     last_reading_min: float = math.nan
+    room_lag_C: float = 0.0
 
     @property
     def half_width_C(self) -> float:

@@ -178,6 +178,9 @@ class SensorEstimate:
     machine_used : bool
         T∞ and the intervals come with the machine model's (every sensor fitted together with the
         reference run's modes and their proportions across the sensors).
+    room_lag_C : float
+        With the machine model, how far its lag behind a moving room may move T∞ (one sd, °C; part
+        of the intervals), 0 where the room stands still or is not logged.
     """
 
     sensor: str
@@ -194,6 +197,7 @@ class SensorEstimate:
     spikes: int = 0
     display_step_C: float = 0.0
     machine_used: bool = False
+    room_lag_C: float = 0.0
 
     @property
     def steady_C(self) -> float:
