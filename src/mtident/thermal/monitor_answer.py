@@ -308,7 +308,10 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
         "without a reference run, a slow mode may still keep the interval open)"
     )
     if any(_room_lag_clause(c, settings) for c in waiting):
-        ways += "; the room's lag shrinks as the room moves less (it follows the room's recent rate)"
+        ways += (
+            "; a machine follows a drifting or cycling room behind it by the room's rate times a lag that the "
+            "reference run did not pin down, and that allowance shrinks as the room moves less"
+        )
     bound = [c.sensor for c in waiting if _room_bound(c, settings)]
     slow = [c.sensor for c in waiting if _room_wander_C(c, settings) > 0 and c.sensor not in bound]
     if bound:
@@ -326,10 +329,7 @@ def _room_lag_clause(check: SensorCheck, settings: MonitorSettings) -> str:
     lag = ndtri(0.5 + settings.decision_level / 2.0) * check.room_lag_C
     if lag < 0.5 * settings.tolerance_C:
         return ""
-    return (
-        f"; the machine model's interval carries ±{lag:.2f} °C for the room's move alone (a machine follows a "
-        "drifting or cycling room behind it by the room's rate times a lag that the reference run did not pin down)"
-    )
+    return f"; the machine model's interval carries ±{lag:.2f} °C for the room's move alone"
 
 
 def _room_bound_clause(check: SensorCheck, settings: MonitorSettings) -> str:
