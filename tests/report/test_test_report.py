@@ -67,3 +67,13 @@ def test_the_pdf_uses_its_pages_the_curves_two_to_a_row(tmp_path):
     write_pdf(built, out)
     data = out.read_bytes()
     assert data.count(b"/Type /Page\n") + data.count(b"/Type /Page ") == 2
+
+
+def test_a_silent_sensor_is_said_so_in_the_report_with_the_way_on():
+    from mtident.report.test_report import _holding_line
+    from mtident.thermal.monitor import MonitorSettings, SensorCheck
+
+    check = SensorCheck("T3", status="silent", steady_C=30.26, low_C=29.87, high_C=30.77, last_reading_min=149.0)
+    line = _holding_line(check, MonitorSettings(), float("nan"))
+    assert line.startswith("T3: no reading since t = 149 min while the others read on")
+    assert line.endswith("leave it out of the sensors the test waits for (--wait-for).")

@@ -36,7 +36,7 @@ from mtident.exceptions import InputError
 from mtident.report.plots import draw_monitor_panel, plot_monitor
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import MonitorSettings, MonitorState, SensorCheck, assumptions, minutes
-from mtident.thermal.monitor_answer import SensorStatus
+from mtident.thermal.monitor_answer import SensorStatus, silent_words
 from mtident.thermal.session import WatchSession
 
 __all__ = [
@@ -497,6 +497,8 @@ def _holding(state: MonitorState, settings: MonitorSettings, expected: dict[str,
 def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float) -> str:
     tolerance = f"±{settings.tolerance_C:g} °C"
     level = f"{settings.decision_level * 100:g} %"
+    if c.status == "silent":
+        return silent_words(c) + " (--wait-for)."
     if c.status == "no rise":
         return (
             f"{c.sensor}: has not risen above its noise yet. If the test does not heat it, leave it out (--sensor); "
