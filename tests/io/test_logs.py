@@ -245,3 +245,20 @@ def test_sample_log_is_ten_sensors_four_hundred_minutes():
     np.testing.assert_allclose(log.temperature_C[0], 17.9, atol=0.1)
     # 0.01 °C resolution
     np.testing.assert_allclose(log.temperature_C * 100, np.round(log.temperature_C * 100), atol=1e-6)
+
+
+def test_inspect_describes_a_sensor_that_failed_and_says_who_refuses_it(write_csv):
+    """identify, learn and report refuse a sensor with more than a tenth of its samples bad; inspect,
+    which is how a user finds out, describes the log and says so."""
+    from mtident.io.describe import describe_log
+
+    path = write_csv("time_min,A,B\n" + "".join(f"{k},{20 + k},{-200 if k >= 3 else 21}\n" for k in range(8)))
+    with pytest.raises(InputError, match="sensor 'B': 5 of 8 samples are empty, NaN or open-circuit"):
+        read_temperature_log(path)
+    info = describe_log(path)
+    assert [(s.sensor, s.samples, s.missing) for s in info.sensors] == [("A", 8, 0), ("B", 3, 5)]
+    assert any(
+        note.startswith("sensor 'B': 5 of 8 samples are empty, NaN or open-circuit, more than 10%: identify, learn")
+        for note in info.notes
+    )
+    assert not any("'A'" in note for note in info.notes)

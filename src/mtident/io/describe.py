@@ -19,6 +19,7 @@ from mtident.io.dialect import CsvDialect, binary_kind, read_lines
 from mtident.io.logs import read_temperature_log
 from mtident.io.time_notes import TIME_UNITS, time_unit_assumed, time_unit_factor
 from mtident.io.units import is_number, stated_temperature_unit
+from mtident.io.whole import MAX_BAD_FRACTION
 
 __all__ = ["LogDescription", "LogFormat", "SensorColumn", "TimeColumn", "describe_log"]
 
@@ -170,9 +171,15 @@ def describe_log(
     """
     file = Path(path)
     lines, dialect = read_lines(file)
-    # a log just begun is worth a look too: no five samples needed here
+    # a log just begun is worth a look too: no five samples needed here; nor one whose sensor failed
     log = read_temperature_log(
-        file, time_col=time_col, time_unit=time_unit, sensors=sensors, min_samples=1, temperature_unit=temperature_unit
+        file,
+        time_col=time_col,
+        time_unit=time_unit,
+        sensors=sensors,
+        min_samples=1,
+        temperature_unit=temperature_unit,
+        max_bad_fraction=1.0,
     )
     stated = stated_temperature_unit(temperature_unit)
     with file.open("rb") as handle:
@@ -212,8 +219,20 @@ def describe_log(
             step_min=float(np.median(steps)) if len(steps) else None,
         ),
         sensors=tuple(per_sensor),
-        notes=tuple(log.notes),
+        notes=(*log.notes, *_mostly_bad(per_sensor)),
     )
+
+
+def _mostly_bad(columns: list[SensorColumn]) -> list[str]:
+    """A note per sensor with more than :data:`~mtident.io.whole.MAX_BAD_FRACTION` of its samples
+    bad: the commands that read a whole log refuse it, ``watch`` follows it."""
+    return [
+        f"sensor {c.sensor!r}: {c.missing} of {c.samples + c.missing} samples are empty, NaN or open-circuit, more "
+        f"than {MAX_BAD_FRACTION:.0%}: identify, learn and report refuse it (check the wiring, or leave it out with "
+        "--sensor); watch follows it, and says when it has stopped reading"
+        for c in columns
+        if c.missing > MAX_BAD_FRACTION * (c.samples + c.missing)
+    ]
 
 
 def _first_cell(lines: list[str], dialect: CsvDialect, name: str) -> str | None:

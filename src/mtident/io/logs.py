@@ -47,6 +47,7 @@ from mtident.io.layout import LogLayout, time_columns
 from mtident.io.parse import TimeState, WholeLog, parse_lines
 from mtident.io.time_notes import read_as_minutes
 from mtident.io.units import is_number, stated_temperature_unit
+from mtident.io.whole import MAX_BAD_FRACTION
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -272,6 +273,7 @@ def read_temperature_log(
     min_samples: int = 5,
     sensors: list[str] | None = None,
     temperature_unit: str | None = None,
+    max_bad_fraction: float = MAX_BAD_FRACTION,
 ) -> TemperatureLog:
     """Read and validate a CSV temperature log.
 
@@ -294,6 +296,9 @@ def read_temperature_log(
         Unit of the temperature columns that state none of their own (no units
         row, no unit in the name); default: °C. A column whose own unit is
         another temperature unit is refused.
+    max_bad_fraction : float
+        The largest share of a sensor's samples that may be bad (empty, NaN, open circuit): a
+        sensor with more is refused (1 to describe a log whatever its sensors read).
 
     Returns
     -------
@@ -312,7 +317,8 @@ def read_temperature_log(
     notes: list[str] = [renamed] if (renamed := table.dialect.renaming()) else []
     notes.extend(read_notes)
     layout = _layout(table, time_col, time_unit, min_samples, sensors, temperature_unit, notes)
-    _, rows = parse_lines(layout, TimeState(), table.lines, table.source, whole=WholeLog(table.first_row))
+    whole = WholeLog(table.first_row, max_bad_fraction)
+    _, rows = parse_lines(layout, TimeState(), table.lines, table.source, whole=whole)
     notes.extend(rows.notes)
     scale = scale_note(list(layout.sensors), rows.temperature_C, table.dialect, temperature_unit)
     clock = "" if layout.clock_column is None else f" + {layout.header[layout.clock_column]}"

@@ -33,7 +33,7 @@ from mtident.io import stamps
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, numbers, split_rows
 from mtident.io.layout import LogLayout
 from mtident.io.time_notes import gap_said, names_a_date, serial_date_hint, serial_date_note
-from mtident.io.whole import read_whole
+from mtident.io.whole import MAX_BAD_FRACTION, read_whole
 
 __all__ = ["TimeState", "ParsedRows", "WholeLog", "parse_lines", "OPEN_CIRCUIT_HIGH_C", "OPEN_CIRCUIT_LOW_C"]
 
@@ -108,6 +108,7 @@ class WholeLog:
     """
 
     first_row: int
+    max_bad_fraction: float = MAX_BAD_FRACTION
 
 
 def parse_lines(
@@ -208,7 +209,7 @@ def _live_rows(
 
 def _whole_log(layout: LogLayout, rows: list[list[str]], source: str, whole: WholeLog) -> tuple[TimeState, ParsedRows]:
     """A whole log's rows at once (:mod:`mtident.io.whole`), and the time state after them."""
-    time, values, notes = read_whole(layout, rows, source, whole.first_row)
+    time, values, notes = read_whole(layout, rows, source, whole.first_row, whole.max_bad_fraction)
     steps = np.diff(time.time_min)
     state = TimeState(
         time.origin,

@@ -141,7 +141,7 @@ class _Column:
 
 
 def read_whole(
-    layout: LogLayout, rows: list[list[str]], source: str, first_row: int
+    layout: LogLayout, rows: list[list[str]], source: str, first_row: int, max_bad_fraction: float = MAX_BAD_FRACTION
 ) -> tuple[WholeTime, FloatArray, list[str]]:
     """A whole log's times, readings and notes, from its rows.
 
@@ -155,6 +155,8 @@ def read_whole(
         The log, for the messages.
     first_row : int
         The number messages give the first row.
+    max_bad_fraction : float, optional
+        The largest share of a sensor's readings that may be bad (:data:`MAX_BAD_FRACTION`).
 
     Returns
     -------
@@ -170,7 +172,8 @@ def read_whole(
     InputError
         A time that is empty, neither a number nor a time stamp like the first, repeated or going
         back, or a reading that is no number, named with its row; a sensor with more than
-        ``MAX_BAD_FRACTION`` of its readings bad; spreadsheet serial dates in a column not named as dates.
+        ``max_bad_fraction`` of its readings bad, or more than :data:`MAX_BAD_FRACTION` only in the
+        temperature unit stated; spreadsheet serial dates in a column not named as dates.
     """
     number = np.arange(len(rows)) + first_row
     notes: list[str] = []
@@ -184,7 +187,7 @@ def read_whole(
     read = _times(layout, time, number, source, sub_second, notes)
     if (gap := gap_note(read.time_min)) is not None:
         notes.append(gap)
-    return read, _readings(layout, rows, number, source, notes), notes
+    return read, _readings(layout, rows, number, source, notes, max_bad_fraction), notes
 
 
 def _rows_kept(
@@ -464,13 +467,18 @@ def _unit_notes(layout: LogLayout, time: _Column, time_min: FloatArray, stated: 
 
 
 def _readings(
-    layout: LogLayout, rows: list[list[str]], number: np.ndarray, source: str, notes: list[str]
+    layout: LogLayout,
+    rows: list[list[str]],
+    number: np.ndarray,
+    source: str,
+    notes: list[str],
+    max_bad_fraction: float,
 ) -> FloatArray:
     """The sensors' readings in °C, NaN for an empty, placeholder or open-circuit cell (said in
     ``notes``, with the rows)."""
     conversions = layout.conversions()
     columns = [
-        _sensor_readings(name, column(rows, index), layout, conversions[k], number, source, notes)
+        _sensor_readings(name, column(rows, index), layout, conversions[k], number, source, notes, max_bad_fraction)
         for k, (name, index) in enumerate(zip(layout.sensors, layout.sensor_columns, strict=True))
     ]
     return np.column_stack(columns) if columns else np.empty((len(rows), 0))
@@ -484,6 +492,7 @@ def _sensor_readings(
     number: np.ndarray,
     source: str,
     notes: list[str],
+    max_bad_fraction: float,
 ) -> FloatArray:
     """A sensor's column in °C (by ``conversion``, (scale, offset)), NaN for an empty, placeholder
     or open-circuit cell (said in ``notes``); an error naming the first cell that is no number, or
@@ -510,6 +519,8 @@ def _sensor_readings(
         # a log in °C read as K is -253 °C: the unit the user stated, not the wiring
         stated = layout.temperature_unit is not None and not layout.dialect.unit_of(name).strip()
         converted = stated and (scale, offset) != (1.0, 0.0) and np.mean(~as_written | missing) <= MAX_BAD_FRACTION
+        if not converted and np.mean(bad) <= max_bad_fraction:
+            return _said_bad(name, values, bad, missing, open_circuit, number, notes)
         msg = (
             f"{source}: sensor {name!r}: {int(bad.sum())} of {len(values)} samples are empty, NaN or "
             f"open-circuit (outside {OPEN_CIRCUIT_LOW_C:g}..{OPEN_CIRCUIT_HIGH_C:g} °C); "
@@ -521,6 +532,19 @@ def _sensor_readings(
             )
         )
         raise InputError(msg)
+    return _said_bad(name, values, bad, missing, open_circuit, number, notes)
+
+
+def _said_bad(
+    name: str,
+    values: FloatArray,
+    bad: np.ndarray,
+    missing: np.ndarray,
+    open_circuit: np.ndarray,
+    number: np.ndarray,
+    notes: list[str],
+) -> FloatArray:
+    """The column with its bad readings NaN, and a note naming them."""
     if np.any(bad):
         rows = ", ".join(str(int(r)) for r in number[bad][:5])
         kinds = []
