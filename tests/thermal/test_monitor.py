@@ -466,6 +466,10 @@ def test_a_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_referenc
     assert len(said) == 1 and 69.0 <= said[0].time_min <= 80.0  # at its first check 10 min on
     assert "column: no reading since t = 59 min" in result(state, settings)["reason"]
 
+    values[60:, 0] = np.nan  # both channels lost: the logger is, and no sensor is said silent
+    state, _ = monitor_step(new_state(["S", "column"]), t, values, None, settings)
+    assert not any(c.status == "silent" for c in state.checks)
+
     values = spindle_and_column(t)
     values[210:, 0] = np.nan  # the spindle's sensor, ready by then, fails
     state, _ = monitor_step(new_state(["S", "column"]), t, values, None, settings)

@@ -425,11 +425,13 @@ def _checked(
     check: SensorCheck, estimate: SensorEstimate, now: float, readings: Readings, settings: MonitorSettings, s: int
 ) -> SensorCheck:
     """The sensor's check after ``estimate``: its numbers, its run of passes, when to look again.
-    A silent sensor (:func:`_last_reading`) gains no pass: the same readings checked again are
-    no new evidence."""
+    A check gains a pass only with a reading of the sensor since its last check; a silent sensor
+    (:func:`_last_reading`) says so in its status."""
     last, silent = _last_reading(readings, s)
     within = is_within(estimate, settings)
-    passes = (check.passes + (0 if silent else 1)) if within else 0
+    # a pass needs a reading since the last check: the same readings checked again are no new evidence
+    fresh = not math.isfinite(check.checked_min) or last > check.checked_min
+    passes = (check.passes + int(fresh)) if within else 0
     ready = passes >= settings.consecutive_checks
     fit = estimate.fit
     status = _status(estimate, within, ready) if resolves_tolerance(estimate, settings) else "too coarse"
@@ -464,15 +466,18 @@ def _checked(
 
 def _last_reading(readings: Readings, s: int) -> tuple[float, bool]:
     """The time of sensor ``s``'s latest valid reading, and whether it is silent: none for
-    :data:`SILENT_READINGS` sampling intervals (at least :data:`SILENT_MIN`) while the log goes on."""
-    valid = np.flatnonzero(np.isfinite(readings.values_C[:, s]))
+    :data:`SILENT_READINGS` sampling intervals (at least :data:`SILENT_MIN`) while another sensor
+    reads on (where every sensor stops, the logger has, and nothing is said of one)."""
+    finite = np.isfinite(readings.values_C)
+    valid = np.flatnonzero(finite[:, s])
     if not len(valid):
         return math.nan, False
     last = float(readings.time_min[valid[-1]])
     # its own step: a sensor logged every fifth row is not silent in between
     own = sampling_interval_min(readings.time_min[valid[-50:]]) if len(valid) > 2 else 0.0
     quiet = max(SILENT_MIN, SILENT_READINGS * max(own, sampling_interval_min(readings.time_min)))
-    return last, readings.latest_min - last >= quiet
+    others = np.flatnonzero(finite.any(axis=1))
+    return last, float(readings.time_min[others[-1]]) - last >= quiet
 
 
 def _status(estimate: SensorEstimate, within: bool, ready: bool) -> Status:
