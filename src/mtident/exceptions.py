@@ -48,12 +48,14 @@ class CovarianceError(MtidentError, ArithmeticError):
         min_eigenvalue: float,
         step: int | None = None,
         filter_name: str | None = None,
+        hint: str | None = None,
     ) -> None:
         self.stage = stage
         self.batch_index = batch_index
         self.min_eigenvalue = min_eigenvalue
         self.step = step
         self.filter_name = filter_name
+        self.hint = hint
         super().__init__(self._message())
 
     def _message(self) -> str:
@@ -69,7 +71,7 @@ class CovarianceError(MtidentError, ArithmeticError):
             f"{place}: covariance not positive definite at stage '{self.stage}' "
             f"(smallest eigenvalue {self.min_eigenvalue:.3e}); the noise covariances are "
             "probably too small for the scale of the state, or the model diverged"
-        )
+        ) + (f"; {self.hint}" if self.hint else "")
 
     def at(self, step: int, filter_name: str | None) -> CovarianceError:
         """Return the same error, now naming the step and the filter.
@@ -86,7 +88,21 @@ class CovarianceError(MtidentError, ArithmeticError):
         CovarianceError
             A new error with the same stage, batch index and smallest eigenvalue, whose message names both.
         """
-        return CovarianceError(self.stage, self.batch_index, self.min_eigenvalue, step, filter_name)
+        return CovarianceError(self.stage, self.batch_index, self.min_eigenvalue, step, filter_name, self.hint)
+
+    def hinted(self, hint: str) -> CovarianceError:
+        """Return the same error with what the caller knows of the way on.
+
+        Parameters
+        ----------
+        hint : str
+            Appended to the message.
+
+        Returns
+        -------
+        CovarianceError
+        """
+        return CovarianceError(self.stage, self.batch_index, self.min_eigenvalue, self.step, self.filter_name, hint)
 
 
 class DivergenceError(MtidentError, ArithmeticError):

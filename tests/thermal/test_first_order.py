@@ -324,3 +324,24 @@ def test_the_papers_filters_do_not_trust_an_interval_wider_than_physics_allows()
     assert not slow["model_ok"]
     assert any("not trusted: the 95 % interval of T∞" in w for w in slow["warnings"]), slow["warnings"]
     assert result.summary(0)["model_ok"]
+
+
+def test_a_papers_preset_that_diverges_on_other_readings_says_so_and_the_way_on():
+    """The papers' fading filters' noise covariances, on a 20-min warm-up read every 20 s: the
+    fading filter's estimate becomes no number, which the answer says with the preset to use (no
+    numpy warning, no note of a misfit of NaN); the adaptive fading filter's covariance fails, and
+    its error says the same."""
+    from mtident.exceptions import CovarianceError
+
+    t = np.arange(0.0, 60.0, 1.0 / 3.0)
+    y = 20.0 + 8.0 * (1.0 - np.exp(-t / 20.0)) + 0.02 * np.random.default_rng(1).standard_normal(len(t))
+    log = make_log(t, {"S": y})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = identify(log, window_min=30, method="fukf", preset="xia2014")
+    assert np.isnan(result.steady_state_C[0]) and not result.model_ok[0]
+    (note,) = result.warnings[0]
+    assert "the fukf filter diverged" in note and "preset 'data' takes them from the readings" in note
+    with pytest.raises(CovarianceError, match=r"'xia2014' preset's noise covariances .* preset 'data'"):
+        identify(log, window_min=30, method="afukf", preset="xia2014")
+    assert np.isfinite(identify(log, window_min=30, method="afukf").steady_state_C[0])

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.special import fdtri, stdtrit
 
 from mtident._typing import BoolArray, FloatArray
-from mtident.exceptions import InputError
+from mtident.exceptions import CovarianceError, InputError
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog
 from mtident.thermal.identification import Identification, sensor_notes
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
@@ -58,6 +58,12 @@ __all__ = [
 ]
 
 Z95 = 1.959963984540054
+
+# a papers' preset is their noise covariances, set for their sampling and rise
+_PRESET_HINT = (
+    "the '{preset}' preset's noise covariances were set for the paper's readings, not these: preset 'data' "
+    "takes them from the readings"
+)
 
 # no largest time constant: the one mode's is fitted, unbounded (infinite, written as null)
 FIRST_ORDER_ASSUMPTIONS = Assumptions(
@@ -262,6 +268,11 @@ def model_check(
     for s in range(residuals.shape[1]):
         ok = np.isfinite(residuals[:, s]) & np.isfinite(values[:, s])
         r = residuals[ok, s]
+        if not len(r):  # a filter that diverged leaves no residual: no fit, and no warning of numpy's
+            chi2.append(math.nan)
+            corr.append(math.nan)
+            fits.append(False)
+            continue
         dof = max(len(r) - 3, 1)
         c2 = float(np.sum((r / max(sigma[s], 1e-4)) ** 2) / dof)
         centred = r - r.mean()
@@ -573,7 +584,14 @@ def _filtered_course(
     n, sensors = len(tw), yw.shape[1]
     t_future = _future_times(t, n, window_min, horizon_min, tuning.initial_mean[:, 1])
     config = filter_config(method, tuning)
-    record, history, history_cov = filter_window(tw, yw, config, tuning, None if room_rate is None else room_rate[:n])
+    try:
+        record, history, history_cov = filter_window(
+            tw, yw, config, tuning, None if room_rate is None else room_rate[:n]
+        )
+    except CovarianceError as exc:
+        if preset == "data":
+            raise
+        raise exc.hinted(_PRESET_HINT.format(preset=preset)) from None
     history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
     # A-posteriori variance factor: R came from a noise estimate (±20 % from ~30 samples); the
     # residual variance of the best first-order fit says how far off it was, and the covariance
@@ -610,15 +628,18 @@ def _verdicts(
     log: TemperatureLog,
     tw: FloatArray,
     method: str,
+    preset: str,
     course: _Course,
     chi2: FloatArray,
     autocorr: FloatArray,
     fits: np.ndarray,
     notes: list[str],
 ) -> tuple[FloatArray, FloatArray]:
-    """The final mean (T∞ NaN where there is no approach to a steady state) and T∞'s standard
-    deviation, widened where the first-order model does not fit the window; said in ``notes``."""
-    for s in np.flatnonzero(~fits).tolist():
+    """The final mean (T∞ NaN where there is no approach to a steady state, or the filter
+    diverged) and T∞'s standard deviation, widened where the first-order model does not fit the
+    window; said in ``notes``."""
+    diverged = ~np.isfinite(course.final_mean).all(axis=1) | ~np.isfinite(course.final_cov).all(axis=(1, 2))
+    for s in np.flatnonzero(~fits & ~diverged).tolist():
         notes.append(
             f"sensor {log.sensors[s]!r}: the first-order model does not fit the window (residual χ²/dof "
             f"{chi2[s]:.2f}, lag-1 autocorrelation {autocorr[s]:.2f}); the T∞ interval was widened by "
@@ -628,7 +649,17 @@ def _verdicts(
     final_mean = course.final_mean.copy()
     rate_now = final_mean[:, 1]
     no_steady = ~(np.isfinite(rate_now) & (rate_now > 0) & np.isfinite(final_mean[:, 2]) & np.isfinite(steady_sd))
-    for s in np.flatnonzero(no_steady).tolist():
+    for s in np.flatnonzero(diverged).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: the {method} filter diverged (its estimate is no number by t = {tw[-1]:g} "
+            "min): no T∞"
+            + (
+                "; " + _PRESET_HINT.format(preset=preset)
+                if preset != "data"
+                else ", and its readings may be no warm-up"
+            )
+        )
+    for s in np.flatnonzero(no_steady & ~diverged).tolist():
         notes.append(
             f"sensor {log.sensors[s]!r}: no approach to a steady state in the first {tw[-1]:g} min "
             f"(λ = {rate_now[s]:.3g}/min with the {method} filter); T∞ is not identifiable from this window — "
@@ -684,7 +715,7 @@ def _identify(
             t, tw, yw, method, preset, tuning, window_min, horizon_min, pseudo_measurement_seed, room_rate
         )
     chi2, autocorr, fits = model_check(tw, yw, yw - course.window_fit, sigma)
-    final_mean, steady_sd = _verdicts(log, tw, method, course, chi2, autocorr, fits, notes)
+    final_mean, steady_sd = _verdicts(log, tw, method, preset, course, chi2, autocorr, fits, notes)
     mean_curve, curve_var, times = course.mean_curve, course.curve_var, course.times
     if np.any(start.late):
         # before its warm-up began the sensor stayed at its first level; the equilibrium time
