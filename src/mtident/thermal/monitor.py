@@ -452,7 +452,8 @@ def _checked(
         low_C=lo,
         high_C=hi,
         equilibrium_time_min=math.nan if fit is None else fit.equilibrium_time_min,
-        origin_min=estimate.onset_min,
+        # where its modes begin: its own warm-up's start, or the machine's where the machine model answers
+        origin_min=estimate.onset_min if fit is None else fit.origin_min,
         modes=() if fit is None else tuple((m.time_constant_min, m.amplitude_C) for m in fit.modes),
         **fields_of(estimate, _EstimateKeys),
         ends=estimate.what_sets_the_ends(settings.decision_level)

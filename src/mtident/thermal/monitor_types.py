@@ -230,7 +230,8 @@ class SensorCheck:
         When the best model stays within 5 % of its total rise from T∞ (min, from the log's start),
         NaN without a fit.
     origin_min : float
-        Where its warm-up begins (min).
+        Where its best model's modes begin (min): its warm-up's start, or the machine's (the
+        earliest sensor's) where the machine model answers.
     modes : tuple of (float, float)
         The best model's modes: time constant (min) and amplitude (°C).
     noise_C : float
