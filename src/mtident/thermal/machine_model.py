@@ -58,7 +58,12 @@ TAU_BOX_SDS = 3.0
 LOOSE_BOX = 0.3
 """A time constant whose box is wider than this is profiled, not linearised."""
 ROOM_LAG_SHARE = 1.0
-"""The share of the room's rate times the slowest time constant taken as the lag's sd."""
+"""The share of the room's rate times the slowest time constant taken as the prior sd of each
+sensor's own lag behind the room (:func:`_lag_variance`): what the readings cannot tell of it."""
+ROOM_TRUNCATION_SHARE = 0.5
+"""And this share of it, added whatever the readings tell, within the whole (the lag's variance and
+this no more than the square of the rate times the slowest time constant): a model of fewer modes
+than the machine gets the room's path into it wrong, which shows only when the room moves."""
 ROOM_RESPONSE_SHARE = 0.3
 """A learnt room response's own error (one sd): this share of the room's effect on the sensor, in
 quadrature with the reference's standard error (the model is a truncation)."""
@@ -567,6 +572,9 @@ def _fit_tied(
     lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min)) if room_lag else 0.0
     known = _known_room(model, sensors, fitted, taus, lag_sd if room_lag else None)
     fitted.update({s: bin_ for s, (bin_, _, _) in known.items()})
+    # a sensor whose room response the model knows has the room taken out and its course's error
+    # added; the others fit the room through the modes, each with a lag of its own
+    lag_share = ROOM_LAG_SHARE if room_lag else 0.0
     rejected: list[int] = []
     # the worst sensor first, one at a time: a sensor far off pulls the shared amplitudes, and
     # the others' misfit then is its doing; where most sensors reject the tie, it does not hold
@@ -579,7 +587,7 @@ def _fit_tied(
         if len(used) < 2:
             return None
         bins = [fitted[s] for s in used]
-        passes = _tied_solve(bins, gains[used], noise[used], taus, tau_sd, own)
+        passes = _tied_solve(bins, gains[used], noise[used], taus, tau_sd, own, lag_share)
         if passes is None:
             return None
         at_model, solved = passes
@@ -588,13 +596,15 @@ def _fit_tied(
         if excess[worst] <= chdtri(max(int((~own).sum()), 1), REJECT_P):
             break
         rejected.append(used[worst])
-    solved, steady, half = _profiled(bins, gains[used], noise[used], model, solved, levels, own)
+    solved, steady, half = _profiled(bins, gains[used], noise[used], model, solved, levels, own, lag_share)
     # the tie holds (the shapes), but the time constants do not: a machine of other time constants
     misfit = [sensors[s] for s, corr in zip(used, solved.corr, strict=True) if corr > MISFIT_FACTOR]
     if long_enough and 2 * (len(rejected) + len(misfit)) > len(fitted):
         return _contradicted(len(sensors), (*(sensors[s] for s in rejected), *misfit), levels, origin_min)
-    # without room_lag (the reference run itself) both are zero
-    lag = np.array([known[s][1] if s in known else lag_sd for s in used])
+    # without room_lag (the reference run itself) both are zero; the truncation's share is what
+    # the room's lag (its readings' part and this) leaves of the whole allowance
+    own_lag = np.sqrt(np.clip(np.minimum((ROOM_TRUNCATION_SHARE * lag_sd) ** 2, lag_sd**2 - solved.lag_var), 0, None))
+    lag = np.array([known[s][1] if s in known else own_lag[j] for j, s in enumerate(used)])
     half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag) for level, h in half.items()}
     room_gains = [known[s][2] if s in known else row for s, row in zip(used, _room_gains_of(solved), strict=True)]
     latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
@@ -608,7 +618,7 @@ def _fit_tied(
         placed.rows(_modes_of(solved), ()),
         placed.rows(room_gains, ()) if room_C is not None else (),
         origin_min,
-        room_lag_C=placed.values(lag, 0.0),
+        room_lag_C=placed.values(np.hypot(lag, np.sqrt(solved.lag_var)), 0.0),
     )
 
 
@@ -711,19 +721,28 @@ class _Solved:
     amplitudes: FloatArray
     fast: FloatArray
     room_gains: FloatArray
+    lag_var: FloatArray
 
 
 def _tied_solve(
-    bins: list[Binned], gains: FloatArray, noise: FloatArray, taus: FloatArray, tau_sd: FloatArray, own: np.ndarray
+    bins: list[Binned],
+    gains: FloatArray,
+    noise: FloatArray,
+    taus: FloatArray,
+    tau_sd: FloatArray,
+    own: np.ndarray,
+    lag_share: float,
 ) -> tuple[_Solved, _Solved] | None:
     """The joint penalised least squares, in two passes: the first at ``taus`` (which the test of
     the tie uses: there the time constants cannot bend to one sensor); the second with each
     slack's prior scaled by the first's ``z`` and each log time constant a parameter too,
-    linearised about the first's amplitudes, its prior sd ``tau_sd``."""
+    linearised about the first's amplitudes, its prior sd ``tau_sd``, and each sensor's own lag on
+    the room (``lag_share``) counted in its level."""
     first = _penalised(bins, gains, noise, taus, np.ones(len(taus)), None, own)
     if first is None:
         return None
-    second = _penalised(bins, gains, noise, taus, np.maximum(np.abs(first.z), 0.05), (first.amplitudes, tau_sd), own)
+    scale = np.maximum(np.abs(first.z), 0.05)
+    second = _penalised(bins, gains, noise, taus, scale, (first.amplitudes, tau_sd), own, lag_share=lag_share)
     return None if second is None else (first, second)
 
 
@@ -735,6 +754,7 @@ def _profiled(
     best: _Solved,
     levels: tuple[float, ...],
     own: np.ndarray,
+    lag_share: float,
 ) -> tuple[_Solved, FloatArray, dict[float, FloatArray]]:
     """The fit and its intervals with each loose time constant (a box wider than ``LOOSE_BOX``,
     too wide to linearise) profiled: held in turn at points across its box, the interval the hull
@@ -746,7 +766,7 @@ def _profiled(
         for f in PROFILE_POINTS:
             moved = taus.copy()
             moved[k] *= (1.0 + model.box[k]) ** f
-            solved = _tied_solve(bins, gains, noise, moved, tau_sd, own)
+            solved = _tied_solve(bins, gains, noise, moved, tau_sd, own, lag_share)
             if solved is not None:
                 candidates.append(solved[1])
     chi2 = np.array([c.chi2_per_sensor.sum() / max(float(np.max(c.corr)), 1.0) for c in candidates])
@@ -780,12 +800,14 @@ def _penalised(
     linearised: tuple[FloatArray, FloatArray] | None,
     own: np.ndarray,
     untied: int | None = None,
+    lag_share: float = 0.0,
 ) -> _Solved | None:
     """Columns: per sensor its level and fast modes; per mode its amplitude ``z_k``; per sensor
     and mode a slack; per mode the room's factor ``η_k`` (with a room); with ``linearised``
     (the amplitudes (S, K) and each log time constant's prior sd), per mode its log time
     constant's change. Sensor ``untied`` (if given) has no prior on its slack: its amplitudes are
-    its own; so has every sensor on the modes ``own`` marks (:func:`_own_amplitudes`)."""
+    its own; so has every sensor on the modes ``own`` marks (:func:`_own_amplitudes`). With
+    ``lag_share``, each sensor's level carries its own lag on the room too (:func:`_lag_variance`)."""
     S, K = gains.shape
     F = len(FAST_TIME_CONSTANTS_MIN)
     with_room = any(b.room_C is not None for b in bins)
@@ -795,6 +817,7 @@ def _penalised(
     i_tau = i_eta + (K if with_room else 0)
     n_col = i_tau + (K if linearised is not None else 0)
     blocks, targets = [], []
+    lag_columns: dict[int, FloatArray] = {}
     for s, b in enumerate(bins):
         u = b.time_min
         X = np.zeros((len(u), n_col))
@@ -803,12 +826,15 @@ def _penalised(
         e = _exp_columns(u, taus)
         X[:, i_z : i_z + K] = -gains[s][None, :] * e
         X[:, i_d + s * K : i_d + (s + 1) * K] = -e
+        w = np.sqrt(b.count) / noise[s]
         if b.room_C is not None:
-            X[:, i_eta : i_eta + K] = _room_columns(b, taus) * gains[s][None, :]
+            room = _room_columns(b, taus)
+            X[:, i_eta : i_eta + K] = room * gains[s][None, :]
+            if lag_share > 0:
+                lag_columns[s] = room[:, int(np.argmax(taus))] * w
         if linearised is not None:
             # d/d(log τ) of −a·e^(−u/τ); the room's lags move less and are left at the model's τ
             X[:, i_tau : i_tau + K] = -linearised[0][s][None, :] * e * (u[:, None] / taus[None, :])
-        w = np.sqrt(b.count) / noise[s]
         blocks.append(X * w[:, None])
         targets.append(_target(b) * w)
     slack_sd = TIE_SLACK * np.maximum(np.abs(gains) * z_scale[None, :], 1e-3)
@@ -859,7 +885,27 @@ def _penalised(
         gains * z[None, :] + coef[i_d : i_d + S * K].reshape(S, K),
         coef[i_fast : i_fast + S * F].reshape(S, F),
         gains * eta[None, :],
+        _lag_variance(blocks, lag_columns, cov, lag_share, S),
     )
+
+
+def _lag_variance(
+    blocks: list[FloatArray], columns: dict[int, FloatArray], cov: FloatArray, share: float, count: int
+) -> FloatArray:
+    """Per sensor, the variance its level would gain from one more column of its own: the room's
+    course through the slowest mode less the room (weighted as its block), its coefficient's prior
+    sd ``share`` (a lag behind a ramp of ``share`` times the rate times the slowest time constant).
+    A drift's lag cannot be told from a lower T∞ and adds its whole prior; a daily cycle's shows in
+    the readings and adds less. The level itself stays where the fit puts it: the column's own
+    estimate takes up misfit that is not the room's. One update of rank one per sensor:
+    ``v = C·Xᵀc``, ``d = cᵀc + 1/share² − cᵀX·v``; the level's variance grows by ``v_s²/d``."""
+    out = np.zeros(count)
+    for s, column in columns.items():
+        b = blocks[s].T @ column
+        v = cov @ b
+        d = float(column @ column) + share**-2 - float(b @ v)
+        out[s] = v[s] ** 2 / max(d, 1e-300)
+    return out
 
 
 def _room_lag_sd(time_min: FloatArray, room_C: FloatArray | None, slowest_min: float) -> float:
@@ -948,7 +994,8 @@ def _interval(
     steady = solved.coef[:S]
     dof_scale = np.maximum(1.0, solved.chi2_per_sensor / np.maximum(solved.rows_per_sensor - 3, 1))
     se = np.sqrt(np.clip(np.diag(solved.cov)[:S], 0, None) * dof_scale * solved.corr)
-    se = np.hypot(MODEL_ERROR_FACTOR * se, MODEL_ERROR_FLOOR_C)
+    # the room's lag is a prior's, not the readings': no model error on it
+    se = np.hypot(np.hypot(MODEL_ERROR_FACTOR * se, MODEL_ERROR_FLOOR_C), np.sqrt(solved.lag_var))
     return steady, {lv: ndtri(0.5 + lv / 2.0) * se for lv in levels}
 
 
