@@ -583,6 +583,47 @@ def test_learn_splits_a_merged_mode_where_only_the_machine_model_pins_the_two_do
     assert split_merged_modes(sensors) == (sensors, [])  # the sensors alone pin neither down
 
 
+def test_sensors_that_merged_the_same_two_modes_do_not_vouch_for_each_other():
+    """A new user's machining centre: five sensors each learnt one mode of 105-111 min for the
+    machine's 74 and 129, which the machine model pins down (72 ±9 %, 128 ±5 %); each held the
+    others' merged mode in its box, so none was split and every box excluded both. Where the
+    machine model brackets a mode and has none within its box, other sensors' modes there are no
+    witnesses: each sensor gets a box holding both (four modes already), and both merges of a
+    sensor are said."""
+    from mtident.thermal.machine_model import MachineModel
+    from mtident.thermal.reference import split_merged_modes
+    from mtident.thermal.robust import SensorModes
+
+    sensors = {
+        "nose": SensorModes((2.9, 14.7, 110.5, 237.0), (0.17, 0.1, 0.1, 0.1), (1.0, -4.1, -6.4, -7.3)),
+        "bearing": SensorModes((10.8, 105.0, 232.0), (0.1, 0.1, 0.1), (-4.5, -7.2, -9.7)),
+        "column": SensorModes((76.8, 248.0), (0.1, 0.1), (1.3, -5.7)),
+    }
+    model = MachineModel(
+        ("nose", "bearing", "column"),
+        (247.4, 128.3, 72.3, 13.2, 9.2),
+        (0.05, 0.05, 0.09, 0.12, 0.18),
+        ((-1.0,) * 5,) * 3,
+    )
+    out, warnings = split_merged_modes(sensors, model)
+    for name in ("nose", "bearing"):
+        slow = [(t, b) for t, b in zip(out[name].time_constants_min, out[name].box, strict=True) if 60 < t < 200]
+        assert (
+            len(slow) == 1 and slow[0][0] * (1 - slow[0][1]) <= 72.3 * 0.91 and slow[0][0] * (1 + slow[0][1]) >= 128.3
+        )
+    # the bearing's fast merge (10.8 between 9.2 and 13.2) is split, and its slow one widened after it
+    assert out["bearing"].time_constants_min[:2] == pytest.approx((9.2, 13.2))
+    assert [w.split(":")[0] for w in warnings] == ["nose", "bearing", "bearing"]
+    assert all(
+        "that the machine model pins down" in w and "and 128 min" in w
+        for w in warnings
+        if "min (±10%) lies" in w and "105" in w
+    )
+    assert out["column"] == sensors["column"]
+    # without the machine model the sensors vouch for each other, as before
+    assert split_merged_modes(sensors)[0]["nose"] == sensors["nose"]
+
+
 def test_a_complete_run_in_a_daily_room_is_not_doubted_for_the_rooms_lag():
     """A run to equilibrium (5 time constants of a 1.6 °C rise) in a room on its daily cycle: the
     fit's free room gains stand for any lag, and its steady state came out ±0.16 °C wide, so a

@@ -454,6 +454,17 @@ def _model_modes(model: MachineModel | None, sensors: dict[str, SensorModes]) ->
     ]
 
 
+def _model_brackets(machine: list[_MachineMode], tau: float, box: float) -> bool:
+    """Whether the machine model pins a mode below ``tau``'s box and one above it, at most
+    ``_MERGE_SPAN`` apart, and none within it."""
+    pinned = [mm.time_constant_min for mm in machine if _MODEL in mm.sensors]
+    if any(_holds(tau, box, t) for t in pinned):
+        return False
+    below = [t for t in pinned if t < tau * (1.0 - box)]
+    above = [t for t in pinned if t > tau * (1.0 + box)]
+    return bool(below and above) and min(above) / max(below) <= _MERGE_SPAN
+
+
 def split_merged_modes(
     sensors: dict[str, SensorModes], model: MachineModel | None = None
 ) -> tuple[dict[str, SensorModes], list[str]]:
@@ -485,60 +496,71 @@ def split_merged_modes(
         if m.doubt is not None:
             continue
         others = [mm for mm in machine if mm.sensors - {name}]
-        modes = list(zip(m.time_constants_min, m.box, m.amplitudes_C or (math.nan,) * len(m.box), strict=True))
-        for i, (tau, box, amplitude) in enumerate(modes):
-            held = [mm for mm in others if _holds(tau, box, mm.time_constant_min)]
-            below = [mm for mm in others if mm.time_constant_min < tau * (1.0 - box)]
-            above = [mm for mm in others if mm.time_constant_min > tau * (1.0 + box)]
-            if held or not below or not above:
-                continue
-            low, high = below[-1], above[0]
-            kept = [
-                t
-                for j, (t, b, _) in enumerate(modes)
-                if j != i
-                for mm in (low, high)
-                if _holds(t, b, mm.time_constant_min)
-            ]
-            if high.time_constant_min / low.time_constant_min > _MERGE_SPAN or kept:
-                continue
-            witnesses = low.sensors | high.sensors
-            by = "the machine model pins down" if _MODEL in witnesses else "other sensors pin down"
-            who = ", ".join(sorted(witnesses - {_MODEL}))
-            said = (
-                f"{name}: its mode of {tau:.3g} min (±{box:.0%}) lies between the machine's modes of "
-                f"{low.time_constant_min:.3g} and {high.time_constant_min:.3g} min that {by} ({who}), and its box "
-                "holds neither: the run may have merged the two into one. Later tests search "
-            )
-            if len(modes) + 1 > DEFAULT_MAX_MODES:
-                # no room for both: one mode searched over both keeps the test's interval honest
-                lowest = low.time_constant_min * (1.0 - max(low.box, MIN_REFERENCE_BOX))
-                highest = high.time_constant_min * (1.0 + max(high.box, MIN_REFERENCE_BOX))
-                wide = max(1.0 - lowest / tau, highest / tau - 1.0, box)
-                modes[i] = (tau, wide, amplitude)
-                out[name] = replace(m, box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes))
-                warnings.append(
-                    f"{said}{tau:.3g} ±{wide:.0%}, holding both, for this sensor (it has {len(modes)} modes "
-                    f"already, the most a sensor's fit takes)"
-                )
+        # one merge at a time: a sensor may have merged a fast pair and a slow one
+        for _ in range(DEFAULT_MAX_MODES):
+            split = _split_once(name, out[name], others, machine)
+            if split is None:
                 break
-            split = [
-                (low.time_constant_min, low.box, amplitude / 2.0),
-                (high.time_constant_min, high.box, amplitude / 2.0),
-            ]
-            modes = sorted(modes[:i] + split + modes[i + 1 :])
-            out[name] = replace(
-                m,
-                time_constants_min=tuple(t for t, _, _ in modes),
-                box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
-                amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
-            )
-            warnings.append(
-                f"{said}both ({low.time_constant_min:.3g} ±{max(low.box, MIN_REFERENCE_BOX):.0%}, "
-                f"{high.time_constant_min:.3g} ±{max(high.box, MIN_REFERENCE_BOX):.0%}) for this sensor"
-            )
-            break
+            out[name], said = split
+            warnings.append(said)
     return out, warnings
+
+
+def _split_once(
+    name: str, m: SensorModes, others: list[_MachineMode], machine: list[_MachineMode]
+) -> tuple[SensorModes, str] | None:
+    """:func:`split_merged_modes` for the first of the sensor's modes that may be two merged: the
+    sensor with it split (or its box widened to hold both), and what to say; None where none is."""
+    modes = list(zip(m.time_constants_min, m.box, m.amplitudes_C or (math.nan,) * len(m.box), strict=True))
+    for i, (tau, box, amplitude) in enumerate(modes):
+        held = [mm for mm in others if _holds(tau, box, mm.time_constant_min)]
+        pool = others
+        if _model_brackets(machine, tau, box):
+            # the sensors fitted together pin a mode on either side and none within: other sensors
+            # that hold this one merged the same two (five sensors each learnt 105-111 min for a
+            # machine's 74 and 129), and do not witness it
+            held = []
+            pool = [mm for mm in others if _MODEL in mm.sensors]
+        below = [mm for mm in pool if mm.time_constant_min < tau * (1.0 - box)]
+        above = [mm for mm in pool if mm.time_constant_min > tau * (1.0 + box)]
+        if held or not below or not above:
+            continue
+        low, high = below[-1], above[0]
+        kept = [
+            t for j, (t, b, _) in enumerate(modes) if j != i for mm in (low, high) if _holds(t, b, mm.time_constant_min)
+        ]
+        if high.time_constant_min / low.time_constant_min > _MERGE_SPAN or kept:
+            continue
+        witnesses = low.sensors | high.sensors
+        by = "the machine model pins down" if _MODEL in witnesses else "other sensors pin down"
+        who = ", ".join(sorted(witnesses - {_MODEL}))
+        said = (
+            f"{name}: its mode of {tau:.3g} min (±{box:.0%}) lies between the machine's modes of "
+            f"{low.time_constant_min:.3g} and {high.time_constant_min:.3g} min that {by} ({who}), and its box "
+            "holds neither: the run may have merged the two into one. Later tests search "
+        )
+        if len(modes) + 1 > DEFAULT_MAX_MODES:
+            # no room for both: one mode searched over both keeps the test's interval honest
+            lowest = low.time_constant_min * (1.0 - max(low.box, MIN_REFERENCE_BOX))
+            highest = high.time_constant_min * (1.0 + max(high.box, MIN_REFERENCE_BOX))
+            wide = max(1.0 - lowest / tau, highest / tau - 1.0, box)
+            modes[i] = (tau, wide, amplitude)
+            return replace(m, box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes)), (
+                f"{said}{tau:.3g} ±{wide:.0%}, holding both, for this sensor (it has {len(modes)} modes "
+                "already, the most a sensor's fit takes)"
+            )
+        split = [(low.time_constant_min, low.box, amplitude / 2.0), (high.time_constant_min, high.box, amplitude / 2.0)]
+        modes = sorted(modes[:i] + split + modes[i + 1 :])
+        return replace(
+            m,
+            time_constants_min=tuple(t for t, _, _ in modes),
+            box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
+            amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
+        ), (
+            f"{said}both ({low.time_constant_min:.3g} ±{max(low.box, MIN_REFERENCE_BOX):.0%}, "
+            f"{high.time_constant_min:.3g} ±{max(high.box, MIN_REFERENCE_BOX):.0%}) for this sensor"
+        )
+    return None
 
 
 def _holds(tau: float, box: float, other: float) -> bool:
