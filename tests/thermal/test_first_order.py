@@ -22,7 +22,8 @@ def test_noiseless_first_order_curve_is_recovered_exactly(method):
     result = identify(make_log(t, {"S": first_order(t)}), 60.0, method)
     np.testing.assert_allclose(result.steady_state_C, [PAPER_STEADY], rtol=1e-6)
     np.testing.assert_allclose(result.details.rate_per_min, [PAPER_RATE], rtol=1e-6)
-    assert result.details.fits.all() and not result.notes
+    # on a noiseless curve the adaptive law has nothing to do, and says so
+    assert result.details.fits.all() and all("its answer is the normal UKF's" in note for note in result.notes)
 
 
 def test_uneven_sampling_is_handled():
@@ -345,3 +346,21 @@ def test_a_papers_preset_that_diverges_on_other_readings_says_so_and_the_way_on(
     with pytest.raises(CovarianceError, match=r"'xia2014' preset's noise covariances .* preset 'data'"):
         identify(log, window_min=30, method="afukf", preset="xia2014")
     assert np.isfinite(identify(log, window_min=30, method="afukf").steady_state_C[0])
+
+
+def test_an_adaptation_that_never_acted_is_said():
+    """A new user's four filters gave one T∞ to the last bit on a sensor where neither the fading
+    factor nor the adaptive law acted; the answer says so for each filter that has them."""
+    t = np.arange(0.0, 60.0, 1.0 / 3.0)
+    y = 20.0 + 4.0 * (1.0 - np.exp(-t / 100.0)) + 0.02 * np.random.default_rng(2).standard_normal(len(t))
+    log = make_log(t, {"S": y})
+    steady = {}
+    for method in ("ukf", "aukf", "fukf", "afukf"):
+        result = identify(log, window_min=30, method=method)
+        steady[method] = result.steady_state_C[0]
+        said = [w for w in result.warnings[0] if "its answer is the normal UKF's" in w]
+        if steady[method] == steady["ukf"] and method != "ukf":
+            assert len(said) == 1 and said[0].startswith(f"sensor 'S': the {method} filter's "), method
+        else:
+            assert not said, method
+    assert len(set(steady.values())) < 4  # the case the test is about: some filter did not act

@@ -546,6 +546,8 @@ class _Course:
     final_mean: FloatArray
     final_cov: FloatArray
     window_fit: FloatArray
+    idle: np.ndarray | None = None  # (S,) a filter's fading factor and adaptive law never acted
+    idle_words: str = ""
 
 
 def _least_squares_course(
@@ -621,7 +623,23 @@ def _filtered_course(
         final_mean=final_mean,
         final_cov=final_cov,
         window_fit=window_fit,
+        idle=None if config.fading is None and config.adaptive_law is None else _idle(record),
+        idle_words=" and ".join(
+            words
+            for words, used in (
+                ("fading factor stayed 1", config.fading is not None),
+                ("adaptive law changed nothing", config.adaptive_law is not None),
+            )
+            if used
+        ),
     )
+
+
+def _idle(record: FilterRecord) -> np.ndarray:
+    """Per sensor, whether the fading factor stayed one and the adaptive law changed nothing at
+    every step of the window: the filter's answer is then the normal UKF's."""
+    idle: np.ndarray = np.all(record.fading == 1.0, axis=0) & ~np.any(record.adapted, axis=0)
+    return idle
 
 
 def _verdicts(
@@ -649,6 +667,12 @@ def _verdicts(
     final_mean = course.final_mean.copy()
     rate_now = final_mean[:, 1]
     no_steady = ~(np.isfinite(rate_now) & (rate_now > 0) & np.isfinite(final_mean[:, 2]) & np.isfinite(steady_sd))
+    if course.idle is not None:
+        for s in np.flatnonzero(course.idle & ~diverged).tolist():
+            notes.append(
+                f"sensor {log.sensors[s]!r}: the {method} filter's {course.idle_words} in the window: its answer "
+                "is the normal UKF's"
+            )
     for s in np.flatnonzero(diverged).tolist():
         notes.append(
             f"sensor {log.sensors[s]!r}: the {method} filter diverged (its estimate is no number by t = {tw[-1]:g} "
