@@ -280,8 +280,8 @@ def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_no
     text = " ".join(capsys.readouterr().out.split())
     assert "saved no time" not in text
     assert (
-        "the log ends before every sensor waited for settled within the tolerance, so the time saved is not known"
-        in text
+        "the log ends before the readings of every sensor the test waits for settled within the tolerance, "
+        "so the time it saved is not known" in text
     )
     assert "not settled by the log's end: front" in text
     settled = Hindsight(

@@ -691,7 +691,7 @@ def _float_list(text: str, option: str) -> list[float]:
     return values
 
 
-@thermal.command("min-time")
+@thermal.command("min-time", short_help="Find the minimal identification time (Xia et al. 2014).")
 @log_options
 @click.option(
     "--sampling-periods", default="35,40,45,50", show_default=True, help="Sampling periods M (min), comma-separated."
@@ -925,7 +925,8 @@ def _inspect_table(file: str, info: LogDescription) -> None:
     console.print(
         f"[bold]{file}[/]: {fmt.kind}{text}; header on line {fmt.header_line}"
         + (f", {rows_under} row(s) under it before the data" if rows_under else "")
-        + f"; units from {fmt.units_from}",
+        + ("; " if fmt.units_from.startswith("no units") else "; units from ")
+        + fmt.units_from,
         highlight=False,
     )
     step = time.step_min

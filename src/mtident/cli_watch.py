@@ -916,7 +916,8 @@ def _settle_timing(hindsight: Hindsight) -> str:
     saved = hindsight.time_saved_min
     if saved is None or not np.isfinite(settle):
         return (
-            "the log ends before every sensor waited for settled within the tolerance, so the time saved is not known"
+            "the log ends before the readings of every sensor the test waits for settled within the tolerance, "
+            "so the time it saved is not known"
         )
     when = (
         f"the readings of every sensor waited for stayed within ±{hindsight.tolerance_C:g} °C of where they settled "

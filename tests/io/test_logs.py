@@ -262,3 +262,14 @@ def test_inspect_describes_a_sensor_that_failed_and_says_who_refuses_it(write_cs
         for note in info.notes
     )
     assert not any("'A'" in note for note in info.notes)
+
+
+def test_inspect_says_where_no_column_states_a_unit(write_csv):
+    """A newcomer read 'units from the column names' above a table of '°C (assumed)'."""
+    from mtident.io.describe import describe_log
+
+    bare = write_csv("time_min,A,B\n" + "".join(f"{k},{20 + k},{21 + k}\n" for k in range(6)))
+    assert describe_log(bare).format.units_from == "no units in the log (°C assumed)"
+    assert describe_log(bare, temperature_unit="F").format.units_from == "no units in the log (°F, as stated)"
+    named = write_csv("time_min,A [°C],B [°C]\n" + "".join(f"{k},{20 + k},{21 + k}\n" for k in range(6)))
+    assert describe_log(named).format.units_from == "the column names"

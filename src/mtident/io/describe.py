@@ -39,7 +39,8 @@ class LogFormat:
     lines_before_header, header_line, rows_under_header : int
         The lines before the header, the header's line number, and the rows between it and the data.
     units_from : str
-        Whence the units: a units row, or the column names.
+        Whence the units: a units row, or the column names; "no units in the log (°C assumed)"
+        where neither states one (the unit stated instead of °C).
     units_in_cells : bool
         The cells carry their unit.
     """
@@ -209,7 +210,7 @@ def describe_log(
         )
     return LogDescription(
         file=str(path),
-        format=_format(dialect, kind),
+        format=_format(dialect, kind, any(dialect.unit_of(c.sensor).strip() for c in per_sensor), stated),
         time=TimeColumn(
             column=log.time_column,
             first_cell=None if first_cell is None else str(first_cell),
@@ -267,7 +268,10 @@ def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect:
     )
 
 
-def _format(dialect: CsvDialect, kind: str | None) -> LogFormat:
+def _format(dialect: CsvDialect, kind: str | None, names_state_units: bool, stated: str | None) -> LogFormat:
+    """The log's format; its units from a units row, the column names, or nowhere (then °C, or
+    the unit stated, is assumed)."""
+    nowhere = "no units in the log (°C assumed)" if stated is None else f"no units in the log ({stated}, as stated)"
     return LogFormat(
         kind="Excel workbook (its first sheet with a table)" if kind in ("xlsx", "xls") else "CSV text",
         encoding=dialect.encoding.removesuffix("-sig"),
@@ -276,6 +280,6 @@ def _format(dialect: CsvDialect, kind: str | None) -> LogFormat:
         lines_before_header=dialect.preamble_lines,
         header_line=dialect.preamble_lines + 1,
         rows_under_header=dialect.extra_rows,
-        units_from=dialect.units_source if dialect.units else "the column names",
+        units_from=dialect.units_source if dialect.units else "the column names" if names_state_units else nowhere,
         units_in_cells=dialect.units_in_cells,
     )
