@@ -221,8 +221,9 @@ class MachineFit:
         ``MISFIT_FACTOR``; then none is used): the test does not follow the reference's machine
         (another machine's reference, or a changed machine).
     room_lag_C : ndarray (S,), optional
-        The part of each sensor's interval that is its lag behind a moving room (one sd, °C;
-        :func:`_room_lag_sd`, or a learnt response's error), 0 where none.
+        The part of each sensor's interval that is its lag behind a moving room (one sd, °C: its
+        own lag as the fit counts it with the truncation's share, or a learnt response's error),
+        0 where none.
     """
 
     steady_C: FloatArray
