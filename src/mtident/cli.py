@@ -39,6 +39,7 @@ _OPTION_OF = {
     "window_min": "--window",
     "max_time_constant_min": "--max-time-constant",
     "ambient_C": "--ambient",
+    "room_C": "--ambient",
     "method": "--method",
     "preset": "--preset",
     "pseudo_measurement_seed": "--pseudo-seed",

@@ -205,7 +205,8 @@ def run_learn(request: LearnRequest) -> None:
     from mtident.thermal.reference import learn_reference, save_reference
 
     earlier = None if request.update_path is None else _earlier_reference(request.update_path, request.machine)
-    log, room = load_log_with_room(request.log, request.room_col)
+    # learn_reference says a column named as a room sensor itself
+    log, room = load_log_with_room(request.log, request.room_col, say_rooms=False)
     with stderr.status(f"learning the modes of {len(log.sensors)} sensor(s)…"):
         reference, warnings = learn_reference(log, room, request.robust)
     reference = dataclasses.replace(

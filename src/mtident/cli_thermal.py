@@ -191,8 +191,11 @@ def load_log(request: LogRequest) -> TemperatureLog:
     return log
 
 
-def load_log_with_room(request: LogRequest, room_col: str | None) -> tuple[TemperatureLog, np.ndarray | None]:
-    """The log's sensors, and the room column split off from them when one is named.
+def load_log_with_room(
+    request: LogRequest, room_col: str | None, say_rooms: bool = True
+) -> tuple[TemperatureLog, np.ndarray | None]:
+    """The log's sensors, and the room column split off from them when one is named; without one,
+    a note on columns named as a room sensor (``say_rooms``: where the command does not say it).
 
     Parameters
     ----------
@@ -200,6 +203,8 @@ def load_log_with_room(request: LogRequest, room_col: str | None) -> tuple[Tempe
         FILE and how its columns are read; the room's column is read in the unit --unit says too.
     room_col : str or None
         The --ambient option: the room sensor's column; None without one.
+    say_rooms : bool, optional
+        Say columns named as a room sensor where none is given.
 
     Returns
     -------
@@ -215,7 +220,8 @@ def load_log_with_room(request: LogRequest, room_col: str | None) -> tuple[Tempe
     """
     if room_col is None:
         log = load_log(request)
-        _say_room_candidates(log.sensors, "identified as a machine sensor")
+        if say_rooms:
+            _say_room_candidates(log.sensors, "identified as a machine sensor")
         return log, None
     asked = asked_sensors(request.sensors, log_path(request.file))
     # only the asked-for columns and the room are read: a dead column elsewhere does not matter

@@ -647,3 +647,20 @@ def test_a_complete_run_in_a_daily_room_is_not_doubted_for_the_rooms_lag():
     assert daily.doubt is None
     assert max(daily.time_constants_min) == pytest.approx(45.0, rel=0.1)
     assert learnt(0.0).doubt is None
+
+
+def test_learn_says_a_column_named_as_a_room_sensor_and_learnt_as_a_machine_sensor():
+    """A notebook user learnt a log with its room column among the sensors: nine misfit warnings
+    and none named the cause. The first warning now says it, with the parameter to give."""
+    t = np.arange(0.0, 300.0, 2.0)
+    rng = np.random.default_rng(7)
+    spindle = 20.0 + 8.0 * (1.0 - np.exp(-t / 40.0)) + 0.01 * rng.standard_normal(len(t))
+    room = 20.0 + 0.01 * rng.standard_normal(len(t))
+    log = TemperatureLog(t, ("spindle", "room"), np.column_stack([spindle, room]), (), "ref.csv")
+    _, warnings = learn_reference(log)
+    assert warnings[0] == (
+        "'room' is named as a room sensor and learnt as a machine sensor: if it measures the room, give it as the "
+        "room (`room_C`), and each sensor's fit takes the room's course as an input"
+    )
+    sensors, room_C = log.split_room("room")
+    assert not any("named as a room sensor" in w for w in learn_reference(sensors, room_C)[1])

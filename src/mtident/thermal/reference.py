@@ -21,6 +21,7 @@ from scipy.special import chdtri
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
+from mtident.io.columns import room_named
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import (
@@ -299,7 +300,7 @@ def learn_reference(
     """
     settings = settings or RobustSettings()
     sensors: dict[str, SensorModes] = {}
-    warnings: list[str] = []
+    warnings: list[str] = _room_candidates(log.sensors) if room_C is None else []
     room_step = 0.0 if room_C is None else coarse_room_step_C(log.time_min, room_C)
     for s, name in enumerate(log.sensors):
         learnt = _learn_sensor(name, log.time_min, log.temperature_C[:, s], room_C, room_step, settings)
@@ -463,6 +464,19 @@ def _model_brackets(machine: list[_MachineMode], tau: float, box: float) -> bool
     below = [t for t in pinned if t < tau * (1.0 - box)]
     above = [t for t in pinned if t > tau * (1.0 + box)]
     return bool(below and above) and min(above) / max(below) <= _MERGE_SPAN
+
+
+def _room_candidates(names: tuple[str, ...]) -> list[str]:
+    """A warning on columns named as a room sensor, learnt as machine sensors for want of a room:
+    a room that moves then misfits every mode (a notebook's nine misfit warnings named no cause)."""
+    rooms = [name for name in names if room_named(name)]
+    if not rooms or len(rooms) == len(names):
+        return []
+    return [
+        f"{', '.join(repr(r) for r in rooms)} {'is' if len(rooms) == 1 else 'are'} named as a room sensor and "
+        "learnt as a machine sensor: if it measures the room, give it as the room (`room_C`), and each sensor's "
+        "fit takes the room's course as an input"
+    ]
 
 
 def split_merged_modes(
