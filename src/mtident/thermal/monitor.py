@@ -283,8 +283,9 @@ def _reference_dropped(settings: MonitorSettings, now: float, why: str, sensors:
         "warning",
         now,
         f"the reference ({settings.reference.identity}) {why} ({', '.join(sensors)}): it is not used for any "
-        "sensor from now on (another machine's reference, or this machine changed since its run; learn the "
-        "reference again)",
+        "sensor from now on (another machine's reference, this machine changed since its run, or the test's "
+        "times in another unit than the reference run's; learn the reference again, or give the times' unit "
+        "(`time_unit`))",
     )
 
 

@@ -220,7 +220,8 @@ def identify_robust(
         unfit.append(
             f"the reference ({reference.identity}): its machine model is rejected by {len(machine.rejected)} of the "
             f"sensors it knows ({', '.join(machine.rejected)}): the reference is not used for any sensor (another "
-            "machine's reference, or this machine changed since its run; learn the reference again)"
+            "machine's reference, this machine changed since its run, or the test's times in another unit than the "
+            "reference run's; learn the reference again, or give the times' unit (`time_unit`))"
         )
         reference, model, machine = None, None, None
     estimates = tuple(
