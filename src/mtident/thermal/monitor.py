@@ -234,12 +234,13 @@ def _check_due(
         dropped, used, machine = True, replace(settings, reference=None), None
         checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
     wander = unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels))
+    last, silent = _last_readings(readings)
 
     def check_sensor(s: int) -> None:
         if cancel is not None and cancel():
             raise _Cancelled
         estimate = combined_estimate(sensor_estimate(readings, s, state.sensors[s], used), machine, s, wander)
-        before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used, s)
+        before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used, (last[s], silent[s]))
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
 
     waited = [s for s, name in enumerate(state.sensors) if settings.waits_for(name)]
@@ -423,12 +424,18 @@ class _EstimateKeys(TypedDict):
 
 
 def _checked(
-    check: SensorCheck, estimate: SensorEstimate, now: float, readings: Readings, settings: MonitorSettings, s: int
+    check: SensorCheck,
+    estimate: SensorEstimate,
+    now: float,
+    readings: Readings,
+    settings: MonitorSettings,
+    latest: tuple[float, bool],
 ) -> SensorCheck:
     """The sensor's check after ``estimate``: its numbers, its run of passes, when to look again.
-    A check gains a pass only with a reading of the sensor since its last check; a silent sensor
-    (:func:`_last_reading`) says so in its status."""
-    last, silent = _last_reading(readings, s)
+    ``latest``: the time of its latest valid reading and whether it is silent
+    (:func:`_last_readings`). A check gains a pass only with a reading of the sensor since its last
+    check; a silent sensor says so in its status."""
+    last, silent = latest
     within = is_within(estimate, settings)
     # a pass needs a reading since the last check: the same readings checked again are no new evidence
     fresh = not math.isfinite(check.checked_min) or last > check.checked_min
@@ -466,20 +473,28 @@ def _checked(
     )
 
 
-def _last_reading(readings: Readings, s: int) -> tuple[float, bool]:
-    """The time of sensor ``s``'s latest valid reading, and whether it is silent: none for
-    :data:`SILENT_READINGS` sampling intervals (at least :data:`SILENT_MIN`) while another sensor
-    reads on (where every sensor stops, the logger has, and nothing is said of one)."""
+def _last_readings(readings: Readings) -> tuple[list[float], list[bool]]:
+    """Per sensor, the time of its latest valid reading (NaN before the first), and whether it is
+    silent: none for :data:`SILENT_READINGS` sampling intervals (at least :data:`SILENT_MIN`) while
+    another sensor reads on (where every sensor stops, the logger has, and nothing is said of one).
+    Once a check, for every sensor it checks."""
+    t = readings.time_min
     finite = np.isfinite(readings.values_C)
-    valid = np.flatnonzero(finite[:, s])
-    if not len(valid):
-        return math.nan, False
-    last = float(readings.time_min[valid[-1]])
-    # its own step: a sensor logged every fifth row is not silent in between
-    own = sampling_interval_min(readings.time_min[valid[-50:]]) if len(valid) > 2 else 0.0
-    quiet = max(SILENT_MIN, SILENT_READINGS * max(own, sampling_interval_min(readings.time_min)))
-    others = np.flatnonzero(finite.any(axis=1))
-    return last, float(readings.time_min[others[-1]]) - last >= quiet
+    anyone = np.flatnonzero(finite.any(axis=1))
+    step = sampling_interval_min(t)
+    last: list[float] = []
+    silent: list[bool] = []
+    for column in finite.T:
+        valid = np.flatnonzero(column)
+        if not len(valid):
+            last.append(math.nan)
+            silent.append(False)
+            continue
+        # its own step: a sensor logged every fifth row is not silent in between
+        own = sampling_interval_min(t[valid[-50:]]) if len(valid) > 2 else 0.0
+        last.append(float(t[valid[-1]]))
+        silent.append(float(t[anyone[-1]]) - last[-1] >= max(SILENT_MIN, SILENT_READINGS * max(own, step)))
+    return last, silent
 
 
 def _status(estimate: SensorEstimate, within: bool, ready: bool) -> Status:

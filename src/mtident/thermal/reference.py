@@ -527,14 +527,12 @@ def _split_once(
     sensor with it split (or its box widened to hold both), and what to say; None where none is."""
     modes = list(zip(m.time_constants_min, m.box, m.amplitudes_C or (math.nan,) * len(m.box), strict=True))
     for i, (tau, box, amplitude) in enumerate(modes):
-        held = [mm for mm in others if _holds(tau, box, mm.time_constant_min)]
-        pool = others
-        if _model_brackets(machine, tau, box):
-            # the sensors fitted together pin a mode on either side and none within: other sensors
-            # that hold this one merged the same two (five sensors each learnt 105-111 min for a
-            # machine's 74 and 129), and do not witness it
-            held = []
-            pool = [mm for mm in others if _MODEL in mm.sensors]
+        # where the sensors fitted together pin a mode on either side and none within, other
+        # sensors that hold this one merged the same two (five sensors each learnt 105-111 min for a
+        # machine's 74 and 129), and witness nothing
+        bracketed = _model_brackets(machine, tau, box)
+        pool = [mm for mm in others if _MODEL in mm.sensors] if bracketed else others
+        held = [] if bracketed else [mm for mm in others if _holds(tau, box, mm.time_constant_min)]
         below = [mm for mm in pool if mm.time_constant_min < tau * (1.0 - box)]
         above = [mm for mm in pool if mm.time_constant_min > tau * (1.0 + box)]
         if held or not below or not above:
