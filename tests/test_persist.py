@@ -98,3 +98,23 @@ def test_a_state_file_from_before_a_field_with_a_default_was_added_loads_with_it
     save_dataclass(tmp_path / "after.npz", After("T1", 26.7, (0.5,)))
     with pytest.raises(StateFileError, match="room_gains"):
         load_dataclass(tmp_path / "after.npz", Before)
+
+
+def test_monitor_states_compare_without_raising_their_readings_by_value():
+    """Two monitor states compare (== raised on their readings' arrays): the readings of a state
+    read back from its file equal the ones saved, NaN equal to NaN; a state with one reading more
+    differs. A check's NaN fields follow float's rule (NaN differs from itself)."""
+    import numpy as np
+    from conftest import through_state_file
+
+    from mtident.thermal.monitor import monitor_step, new_state
+    from mtident.thermal.monitor_types import MonitorSettings
+
+    values = np.c_[first_order(T[:40]), first_order(T[:40])]
+    values[5, 1] = np.nan
+    state, _ = monitor_step(new_state(["A", "B"], with_room=True), T[:40], values, np.full(40, 20.0), MonitorSettings())
+    loaded = through_state_file(state)
+    assert loaded.readings is not state.readings and loaded.readings == state.readings
+    assert state == state
+    later, _ = monitor_step(loaded, T[40:41], values[-1:], np.array([20.0]), MonitorSettings())
+    assert later != state and later.readings != state.readings

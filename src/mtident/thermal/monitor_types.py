@@ -150,7 +150,7 @@ class MonitorSettings:
         return (REPORT_LEVEL, self.decision_level)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Readings:
     """Every reading so far: times (N,), the sensors' readings (N, S) and the room's (N,).
 
@@ -167,6 +167,19 @@ class Readings:
     time_min: FloatArray
     values_C: FloatArray
     room_C: FloatArray | None = None
+
+    # arrays compare elementwise: a state saved and loaded again equals the one saved
+    __hash__ = None  # type: ignore[assignment]
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Readings):
+            return NotImplemented
+        if (self.room_C is None) != (other.room_C is None):
+            return False
+        pairs = [(self.time_min, other.time_min), (self.values_C, other.values_C)]
+        if self.room_C is not None and other.room_C is not None:
+            pairs.append((self.room_C, other.room_C))
+        return all(a.shape == b.shape and np.array_equal(a, b, equal_nan=True) for a, b in pairs)
 
     def append(self, time_min: FloatArray, values_C: FloatArray, room_C: FloatArray | None) -> Readings:
         """These readings with more after them.
