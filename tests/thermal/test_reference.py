@@ -664,3 +664,19 @@ def test_learn_says_a_column_named_as_a_room_sensor_and_learnt_as_a_machine_sens
     )
     sensors, room_C = log.split_room("room")
     assert not any("named as a room sensor" in w for w in learn_reference(sensors, room_C)[1])
+
+
+def test_loose_slow_modes_advice_names_a_room_that_moved_during_the_run():
+    """Where a run leaves the slow modes loose, the advice names the room's move where it moved
+    (its path into the slow modes trades against their rise) and asks for a steady room; a steady
+    room, or none logged, gets the general advice."""
+    from mtident.thermal.reference import ROOM_MOVED_C, loose_mode_advice
+
+    t = np.linspace(0.0, 900.0, 901)
+    daily = 21.0 + 0.25 * np.sin(2 * np.pi * t / 1440.0)
+    daily[3] = np.nan
+    said = loose_mode_advice(daily)
+    assert re.search(r"the room moved 0\.43 °C during the run", said) and "steady room" in said
+    steady = np.full_like(t, 21.0) + np.where(np.arange(len(t)) % 2, ROOM_MOVED_C, 0.0)
+    assert loose_mode_advice(steady).startswith("learn from a run that reaches equilibrium")
+    assert loose_mode_advice(None) == loose_mode_advice(steady)

@@ -342,6 +342,24 @@ def learn_reference(
     ), warnings
 
 
+ROOM_MOVED_C = 0.15
+"""A room sensor whose readings span more than this (°C) over a reference run moved during it
+(more than one step of a room read in 0.1 °C steps)."""
+
+
+def loose_mode_advice(room_C: FloatArray | None) -> str:
+    """What to do where a reference run leaves the machine's slow modes loose, in words: where its
+    room moved, the room's path into each slow mode traded against the mode's rise."""
+    finite = np.asarray(room_C, float)[np.isfinite(room_C)] if room_C is not None else np.zeros(0)
+    span = float(np.ptp(finite)) if len(finite) else 0.0
+    if span > ROOM_MOVED_C:
+        return (
+            f"the room moved {span:.2f} °C during the run, and its path into the slow modes trades against their "
+            "rise: learn from a run in a steady room that reaches equilibrium"
+        )
+    return "learn from a run that reaches equilibrium, in a room that drifts little"
+
+
 def _learn_machine(
     log: TemperatureLog, room_C: FloatArray | None, settings: RobustSettings
 ) -> tuple[MachineModel | None, list[str]]:
@@ -357,7 +375,7 @@ def _learn_machine(
     if loose := loose_slow_modes(model):
         return None, [
             f"the run does not pin down the slow modes its sensors share ({', '.join(loose)}): later tests use "
-            "each sensor's modes alone (learn from a run that reaches equilibrium, in a room that drifts little)"
+            f"each sensor's modes alone ({loose_mode_advice(room_C)})"
         ]
     gains = np.array(model.gains_C)
     cancelling = np.abs(gains).sum(axis=1) / np.maximum(np.abs(gains.sum(axis=1)), 1e-9)
