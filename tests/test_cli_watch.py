@@ -265,6 +265,35 @@ def test_the_hindsight_table_says_a_sensors_late_following_of_the_room_though_th
     assert re.search(r"│ T1 +│ +48\.93 │", text), text
 
 
+def test_the_hindsight_check_says_why_t_settle_is_unknown_where_the_readings_levelled_in_a_moving_room(capsys):
+    """A newcomer's daily room: every sensor's readings levelled off (a settled level, within the
+    tolerance of T∞), but their rise above the room had not, so no settle time; the check said
+    "every sensor that settled (2)" and then "the log ends before the readings ... settled"."""
+    from mtident.cli_watch import _print_hindsight
+    from mtident.thermal.hindsight import Hindsight
+
+    nan = np.nan
+    hindsight = Hindsight(
+        ("S1", "S2"),
+        470.0,
+        600.0,
+        np.array([26.69, 24.01]),
+        np.array([26.69, 23.99]),
+        np.array([211.0, 261.5]),
+        0.063,
+        0.2,
+        sensor_shift_C=np.array([0.059, 0.064]),
+        settle_time_min=np.array([nan, nan]),
+    )
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "the log ends before" not in text
+    assert (
+        "the readings of S1, S2 levelled off by the log's end, but their rise above the room, as each follows it, "
+        "was still moving: when they settled within the tolerance, and so the time the stop saved, is not known"
+    ) in text
+
+
 def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_not_settle(capsys):
     """A newcomer's three sensors: the one that settled reached 95 % at 183 min, the test stopped
     at 270 and the others had not settled by the log's end; the check said "the rule saved no

@@ -909,16 +909,36 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     )
 
 
+def _settle_unknown(hindsight: Hindsight) -> str:
+    """Why t_settle is not known, in words: the log ends before the readings settled; or, with a
+    room sensor, the readings levelled off but their rise above the room as each sensor follows it
+    had not by the log's end (settle times are read off that rise: a daily room keeps the readings
+    themselves moving)."""
+    unknown = (
+        "the log ends before the readings of every sensor the test waits for settled within the tolerance, "
+        "so the time it saved is not known"
+    )
+    if hindsight.settle_time_min is None:
+        return unknown
+    waited = np.ones(len(hindsight.sensors), bool) if hindsight.waited is None else np.asarray(hindsight.waited, bool)
+    late = waited & ~np.isfinite(np.asarray(hindsight.settle_time_min, dtype=float))
+    levelled = late & np.isfinite(hindsight.settled_C)
+    if not late.any() or levelled.sum() < late.sum() or hindsight.sensor_shift_C is None:
+        return unknown
+    names = ", ".join(name for name, flag in zip(hindsight.sensors, levelled, strict=True) if flag)
+    return (
+        f"the readings of {names} levelled off by the log's end, but their rise above the room, as each follows "
+        "it, was still moving: when they settled within the tolerance, and so the time the stop saved, is not known"
+    )
+
+
 def _settle_timing(hindsight: Hindsight) -> str:
     """When the readings settled within the tolerance (t_settle, of the sensors the test waits for),
     against the stop: the time the rule saved over simply waiting."""
     settle = hindsight.test_settle_time_min
     saved = hindsight.time_saved_min
     if saved is None or not np.isfinite(settle):
-        return (
-            "the log ends before the readings of every sensor the test waits for settled within the tolerance, "
-            "so the time it saved is not known"
-        )
+        return _settle_unknown(hindsight)
     when = (
         f"the readings of every sensor waited for stayed within ±{hindsight.tolerance_C:g} °C of where they settled "
         f"from t = {minutes(settle)}"
