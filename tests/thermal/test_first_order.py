@@ -364,3 +364,17 @@ def test_an_adaptation_that_never_acted_is_said():
         else:
             assert not said, method
     assert len(set(steady.values())) < 4  # the case the test is about: some filter did not act
+
+
+def test_a_papers_preset_whose_filter_runs_away_is_not_a_misfit_of_the_model_and_has_no_rmse():
+    """A first-order warm-up (59 min, 8.85 °C, σ 0.01 °C), 30 min with the fading filters at the
+    'yu2019' preset: the estimate runs away (λ = −3.6/min, χ²/dof 1e82). The answer said
+    "the first-order model does not fit ... a two-term model may be needed" beside an RMSE of
+    1.9e39 °C; now the filter is named, with the preset's way on, and there is no RMSE."""
+    t = np.arange(0.0, 31.0)
+    y = 20.0 + 8.85 * (1.0 - np.exp(-t / 59.0)) + np.random.default_rng(1).normal(0.0, 0.01, len(t))
+    result = identify(make_log(t, {"T1": np.round(y, 3)}), window_min=30, method="afukf", preset="yu2019")
+    said = " ".join(result.notes)
+    assert "the afukf filter's final estimate does not describe the window's readings" in said
+    assert "preset 'data' takes them from the readings" in said and "two-term model" not in said
+    assert np.isnan(result.rmse_C[0]) and np.isnan(result.steady_state_C[0]) and not result.model_ok[0]

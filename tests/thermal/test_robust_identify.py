@@ -96,3 +96,18 @@ def test_a_robust_answer_printed_in_a_notebook_says_why_it_is_not_trusted():
     text = repr(identify_robust(make_log(t, {"S": np.round(y, 2)}), 30.0))
     assert ", not trusted:\n    - S: T∞ not determined yet (95 % interval" in text, text
     assert "\n  assumes: a sum of up to four exponential modes" in text and "time constants up to 300 min" in text
+
+
+def test_the_prediction_band_of_a_warm_up_never_falls_nor_leaves_the_interval():
+    """30 min of the papers' kind of curve (59 min, 8.85 °C, σ 0.01 °C): the model at the 95 %
+    interval's low end rose to 27 °C and fell back to 23.3 °C, and the band's low edge fell with
+    it, against the answer's own assumption of a warm-up that does not overshoot. Now the band's
+    edges only rise, the low edge up to the interval's low end, the high one within its high end."""
+    t = np.arange(0.0, 31.0)
+    y = 20.0 + 8.85 * (1.0 - np.exp(-t / 59.0)) + np.random.default_rng(1).normal(0.0, 0.01, len(t))
+    result = identify(make_log(t, {"T1": np.round(y, 3)}), window_min=30, horizon_min=300)
+    low, high = result.band_low_C[:, 0], result.band_high_C[:, 0]
+    lo, hi = result.steady_state_ci95_C[0]
+    assert np.all(np.diff(low) >= 0) and np.all(np.diff(high) >= 0)
+    assert low.max() <= lo + 1e-12 and high.max() <= hi + 1e-12
+    assert np.all(low <= result.curve_C[:, 0]) and np.all(result.curve_C[:, 0] <= high)

@@ -237,6 +237,12 @@ def first_order_suffices(time_min: FloatArray, values: FloatArray, level: float 
     )  # the F(1, N − 4) quantile; scipy.stats costs 0.5 s to import
 
 
+RUNAWAY_CHI2 = 1000.0
+"""A residual χ²/dof beyond this is no misfit of the model but a filter whose final estimate does
+not describe the readings it was given (a paper's preset on another log: χ²/dof 1e82 with the
+residuals' lag-1 autocorrelation 0.03; a fading filter chasing the noise of 30 readings: 1,765)."""
+
+
 def model_check(
     time_min: FloatArray, values: FloatArray, residuals: FloatArray, sigma: FloatArray
 ) -> tuple[FloatArray, FloatArray, BoolArray]:
@@ -278,8 +284,9 @@ def model_check(
         centred = r - r.mean()
         denom = float(np.sum(centred**2))
         ac = float(np.sum(centred[1:] * centred[:-1]) / denom) if denom > 0 else 0.0
-        # χ² alone only for a gross misfit: the noise level is itself an estimate (±20 %).
-        passes = c2 < 4.0 + 4.0 * np.sqrt(2.0 / dof) or ac < 3.0 / np.sqrt(len(r))
+        # χ² alone only for a gross misfit: the noise level is itself an estimate (±20 %); beyond
+        # RUNAWAY_CHI2 no misjudged noise explains it, whatever the residuals' autocorrelation
+        passes = c2 < RUNAWAY_CHI2 and (c2 < 4.0 + 4.0 * np.sqrt(2.0 / dof) or ac < 3.0 / np.sqrt(len(r)))
         if passes and len(r) >= 8:
             passes = first_order_suffices(time_min[ok], values[ok, s])
         chi2.append(c2)
@@ -657,7 +664,15 @@ def _verdicts(
     diverged) and T∞'s standard deviation, widened where the first-order model does not fit the
     window; said in ``notes``."""
     diverged = ~np.isfinite(course.final_mean).all(axis=1) | ~np.isfinite(course.final_cov).all(axis=(1, 2))
-    for s in np.flatnonzero(~fits & ~diverged).tolist():
+    with np.errstate(invalid="ignore"):
+        ran_away = ~diverged & (chi2 >= RUNAWAY_CHI2)
+    for s in np.flatnonzero(ran_away).tolist():
+        notes.append(
+            f"sensor {log.sensors[s]!r}: the {method} filter's final estimate does not describe the window's "
+            f"readings (its curve back over the window: residual χ²/dof {chi2[s]:.3g}): its answer says nothing of "
+            "the model or of T∞" + ("; " + _PRESET_HINT.format(preset=preset) if preset != "data" else "")
+        )
+    for s in np.flatnonzero(~fits & ~diverged & ~ran_away).tolist():
         notes.append(
             f"sensor {log.sensors[s]!r}: the first-order model does not fit the window (residual χ²/dof "
             f"{chi2[s]:.2f}, lag-1 autocorrelation {autocorr[s]:.2f}); the T∞ interval was widened by "
@@ -757,7 +772,9 @@ def _identify(
     measured_part = np.full((len(times), y.shape[1]), np.nan)
     measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]
     in_log = times <= t[-1] + 1e-9
-    errors = rmse(mean_curve[in_log], y[: int(in_log.sum())])
+    # without a steady state there is no prediction to measure: a course that runs away
+    # (no approach, λ < 0) has an RMSE of 1e39 °C, which says nothing the warning does not
+    errors = np.where(np.isfinite(steady), rmse(mean_curve[in_log], y[: int(in_log.sum())]), np.nan)
     final_measured, eq_measured, settled = measured_and_settled(t, y, DEFAULT_MAX_TIME_CONSTANT_MIN)
     quantile_half = quantile * steady_sd
     floor = _warm_up_floors(
@@ -882,8 +899,8 @@ def _untrusted(
         )
     for s in np.flatnonzero(wide).tolist():
         notes.append(
-            f"sensor {log.sensors[s]!r}: not trusted: the 95 % interval of T∞, {steady[s] - half[s]:.4g} to "
-            f"{steady[s] + half[s]:.4g} °C, is wider than physics allows (± {half[s]:.3g} °C for a rise of "
+            f"sensor {log.sensors[s]!r}: not trusted: the 95 % interval of T∞, {steady[s]:.4g} ± {half[s]:.3g} °C "
+            f"before a warm-up's floor lifts its low end, is wider than physics allows (for a rise of "
             f"{rise[s]:.2g} °C so far; a machine part stays within {OPEN_CIRCUIT_LOW_C:g} to {OPEN_CIRCUIT_HIGH_C:g} "
             "°C): the window's course does not determine it; use a longer `window_min`"
         )

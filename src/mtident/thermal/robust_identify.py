@@ -315,4 +315,10 @@ def _course(
     grow = np.clip((times - fit.origin_min) / max(times[-1] - fit.origin_min, 1e-9), 0.0, 1.0)
     low = np.minimum.reduce([curve, *ends]) + grow * min(lo - fit.ends[REPORT_LEVEL][0].steady_C, 0.0)
     high = np.maximum.reduce([curve, *ends]) + grow * max(hi - fit.ends[REPORT_LEVEL][1].steady_C, 0.0)
+    if e.steady_C >= fit.start_C:
+        # the answer assumes a warm-up that rises and does not overshoot: no course it allows falls
+        # or passes its T∞'s interval, so neither may the band (an end's model that rose to 27 °C
+        # and fell back to a low end of 23.3 drew a band whose low edge fell 2.6 °C)
+        low = np.minimum(np.fmax.accumulate(low), lo)
+        high = np.minimum(np.fmin.accumulate(high[::-1])[::-1], hi)
     return curve, low, high
