@@ -335,7 +335,7 @@ def test_a_loggers_placeholder_is_a_missing_reading_said_by_the_file_reader_and_
     log = read_temperature_log(path)
     assert log.notes == ("sensor 'A': skipped 2 empty/NaN sample(s) (rows 7, 10)",)
     assert np.isnan(log.temperature_C[[5, 8], 0]).all()
-    said = LogFollower(Path(path)).poll().notes
+    said = LogFollower(Path(path)).poll().warnings
     assert "sensor 'A': skipped 2 empty, unreadable or open-circuit reading(s) (the first at t = 5 min)" in said
 
 

@@ -111,3 +111,16 @@ def test_the_prediction_band_of_a_warm_up_never_falls_nor_leaves_the_interval():
     assert np.all(np.diff(low) >= 0) and np.all(np.diff(high) >= 0)
     assert low.max() <= lo + 1e-12 and high.max() <= hi + 1e-12
     assert np.all(low <= result.curve_C[:, 0]) and np.all(result.curve_C[:, 0] <= high)
+
+
+def test_readings_the_log_lost_are_among_the_sensors_warnings(write_csv):
+    """identify's JSON gave no word of 20 open-circuit readings skipped in the sensor's column (the
+    terminal's note only): each sensor's answer now carries what the log's reading said of it."""
+    t = np.arange(0.0, 201.0)
+    a = first_order(t)
+    a[120:140] = -200.0
+    rows = "\n".join(f"{ti:g},{ai:.3f},{bi:.3f}" for ti, ai, bi in zip(t, a, first_order(t), strict=True))
+    log = read_temperature_log(write_csv("time_min,A,B\n" + rows + "\n"))
+    result = identify(log, window_min=100)
+    assert [w for w in result.warnings[0] if "skipped 20 open-circuit" in w]
+    assert not [w for w in result.warnings[1] if "skipped" in w]

@@ -203,3 +203,20 @@ def test_a_room_read_in_coarse_steps_is_said_once_and_a_fine_one_not(tmp_path):
     assert [w for w in session.result(with_forecast=False)["log_warnings"] if "steps of 0.1 °C" in w]
     assert len(coarse) == 1 and "R: the room is read in steps of 0.1 °C" in coarse[0] and "0.01 °C" in coarse[0]
     assert not [w for w in warnings(0.01) if "steps of" in w]
+
+
+def test_readings_lost_are_among_the_json_answers_log_warnings(tmp_path):
+    """An open circuit for a stretch: the terminal said "skipped 20 ... reading(s)" as a note, and
+    the JSON answer's log_warnings, which the guide says holds readings lost or misread, had none."""
+    t = T[:120]
+    curve = noisy(first_order(t), 5)
+    curve[60:80] = -200.0
+    log = tmp_path / "open.csv"
+    log.write_text(csv_text(t, {"A": curve}))
+    session = WatchSession(log, MonitorSettings(), resume=False, persist=False)
+    said = [e for e in session.poll() if "skipped 20" in e.text]
+    assert len(said) == 1 and said[0].kind == "warning"
+    lost = [w for w in session.result(with_forecast=False)["log_warnings"] if "skipped 20" in w]
+    assert lost == [
+        f"sensor 'A': skipped 20 empty, unreadable or open-circuit reading(s) (the first at t = {t[60]:g} min)"
+    ]

@@ -203,7 +203,8 @@ def _live_rows(
         times.append(t)
         taken.append(line)
     values = _readings(layout, taken)
-    notes.extend(_skipped_notes(layout.sensors, np.array(times), values))
+    # readings lost are a warning: a JSON reader finds them among the watch's log_warnings
+    warnings.extend(_skipped_notes(layout.sensors, np.array(times), values))
     return state, ParsedRows(np.array(times), values, tuple(notes), tuple(warnings))
 
 

@@ -18,7 +18,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.assumptions import describe_assumptions
-from mtident.thermal.identification import Identification
+from mtident.thermal.identification import Identification, sensor_notes
 from mtident.thermal.machine_answer import combined_estimate, fit_readings, unmeasured_wander
 from mtident.thermal.measured import measured_and_settled, rmse, window_samples
 from mtident.thermal.modal_types import Mode
@@ -269,7 +269,8 @@ def identify_robust(
         equilibrium_time_min=np.array([np.nan if e.fit is None else e.fit.equilibrium_time_min for e in estimates]),
         rmse_C=rmse(curve[in_log], y[: int(in_log.sum())]),
         model_ok=np.array([e.model_ok for e in estimates], dtype=bool),
-        warnings=tuple(e.warnings for e in estimates),
+        # what the log's reading said of a sensor (readings skipped, a unit converted) is its answer's too
+        warnings=tuple((*sensor_notes(log.notes, e.sensor), *e.warnings) for e in estimates),
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
         measured_settled=settled,
