@@ -182,7 +182,7 @@ def test_an_interval_without_bounds_is_said_so_not_as_infinities():
     bounded = changed(after, low_C=29.5, high_C=30.5)
     (event,) = _check_events(before, bounded, estimate, set(), 10.0, 0.99)
     assert event.text == "S: narrowing, T∞ 30.00 °C, 99 % interval 29.50 to 30.50 °C"
-    reason = _reason([after], MonitorSettings())
+    reason = _reason([after], MonitorSettings(), new_state(["S"]).readings)
     assert "99 % interval not yet bounded, reaching beyond ±0.2 °C of T∞" in reason and "inf" not in reason
 
 
@@ -479,6 +479,25 @@ def test_a_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_referenc
     state, _ = monitor_step(new_state(["S", "column"]), t, values, None, settings)
     assert state.checks[0].status == "may stop" and state.checks[0].last_reading_min == 209.0
     assert state.checks[1].status != "silent"
+
+
+def test_a_room_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_reference):
+    """The room's channel lost at 60 min while the sensors read on: T∞ is at the room's level,
+    unknown since, so the test is held and said so once (a user's open room sensor was blamed on
+    "a mode of about 100 min" instead); with the room reading on, the same test (waiting for the
+    spindle's sensor) stops."""
+    t = np.arange(0.0, 240.0, 1.0)
+    values = spindle_and_column(t)
+    room = np.round(20.0 + np.random.default_rng(3).normal(0.0, 0.01, t.size), 2)
+    settings = MonitorSettings(reference=spindle_reference, room_sensor="room", wait_for=("S",))
+    state, _ = monitor_step(new_state(["S", "column"], with_room=True), t, values, room, settings)
+    assert state.stopped
+    room[60:] = np.nan
+    state, events = monitor_step(new_state(["S", "column"], with_room=True), t, values, room, settings)
+    assert not state.stopped
+    said = [e for e in events if e.kind == "warning" and "room (the room): no reading since t = 59 min" in e.text]
+    assert len(said) == 1 and 69.0 <= said[0].time_min <= 80.0
+    assert result(state, settings)["reason"].startswith("room (the room): no reading since t = 59 min")
 
 
 def test_a_drifting_room_that_keeps_the_machine_model_open_is_named_as_the_reason():

@@ -32,9 +32,11 @@ from mtident.exceptions import InputError
 from mtident.thermal.machine_answer import combined_estimate, fit_readings, unmeasured_wander
 from mtident.thermal.machine_model import MachineFit, MachineModel
 from mtident.thermal.modes import Mode, model_curve
-from mtident.thermal.monitor_answer import assumptions, result, silent_words
+from mtident.thermal.monitor_answer import assumptions, result, room_silent_words, silent_words
 from mtident.thermal.monitor_types import (
     REPORT_LEVEL,
+    SILENT_MIN,
+    SILENT_READINGS,
     Event,
     EventKind,
     MonitorSettings,
@@ -55,11 +57,6 @@ __all__ += ["Event", "EventKind", "MonitorSettings", "MonitorState", "Readings",
 
 # a check falls due this little before its time (min): 60 µs, far below any logging interval
 _DUE_SLACK_MIN = 1e-6
-SILENT_READINGS = 10
-"""A sensor without a valid reading for this many sampling intervals while the log goes on is
-silent (a failed sensor, a lost channel)."""
-SILENT_MIN = 10.0
-"""And for at least this long (min): a logger that skips a reading or two is not a failure."""
 
 
 # checks of a sensor far from the tolerance, or waiting for the others, come this many times
@@ -263,7 +260,12 @@ def _check_due(
         for s in waited:
             if checks[s].checked_min < now:
                 check_sensor(s)
-    stop = now if all(checks[s].may_stop for s in waited) else math.nan
+    # T∞ is at the room's latest level: a silent room sensor leaves it unknown, and holds the test
+    room_silent = math.isfinite(readings.room_silent_since())
+    if room_silent and "room silent" not in said:
+        said.add("room silent")
+        events.append(Event("warning", now, room_silent_words(readings, settings)))
+    stop = now if all(checks[s].may_stop for s in waited) and not room_silent else math.nan
     if math.isfinite(stop):
         which = "every sensor's T∞ is" if len(waited) == len(checks) else "every sensor waited for has its T∞"
         events.append(

@@ -14,7 +14,7 @@ from mtident._json import json_optional, to_json_value
 from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.hindsight import HindsightAnswer
 from mtident.thermal.modal_types import Mode
-from mtident.thermal.monitor_types import MonitorSettings, MonitorState, SensorCheck
+from mtident.thermal.monitor_types import MonitorSettings, MonitorState, Readings, SensorCheck
 from mtident.thermal.robust import room_wander_half_width
 from mtident.thermal.robust_types import Assumptions, ends_at_the_largest
 
@@ -193,7 +193,7 @@ def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, f
     return WatchAnswer(
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
-        reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings),
+        reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings, state.readings),
         # the single-sensor keys: those of the sensor the test waits for
         sensor=lead.sensor,
         steady_state_C=lead.steady_state_C,
@@ -237,6 +237,27 @@ def result(
     return tree
 
 
+def room_silent_words(readings: Readings, settings: MonitorSettings) -> str:
+    """What a silent room sensor means, and the way on.
+
+    Parameters
+    ----------
+    readings : Readings
+    settings : MonitorSettings
+
+    Returns
+    -------
+    str
+    """
+    name = settings.room_sensor or "the room sensor"
+    return (
+        f"{name} (the room): no reading since t = {readings.room_silent_since():.0f} min while the sensors read on "
+        "(a failed sensor or a lost channel?): T∞ is at the room's level, unknown since, so the test is held until "
+        "it reads again; if it has failed, watch again without it and say how far the room may wander "
+        "(`room_wander_C_per_h`)"
+    )
+
+
 def silent_words(check: SensorCheck) -> str:
     """What a silent sensor's status means, and the way on.
 
@@ -255,11 +276,12 @@ def silent_words(check: SensorCheck) -> str:
     )
 
 
-def _reason(waiting: list[SensorCheck], settings: MonitorSettings) -> str:
+def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Readings) -> str:
     """Why the test cannot stop yet, and the two ways on."""
+    silent_room = [room_silent_words(readings, settings)] if math.isfinite(readings.room_silent_since()) else []
     if not waiting:
-        return "every sensor may stop; confirming at the next check"
-    parts = []
+        return silent_room[0] if silent_room else "every sensor may stop; confirming at the next check"
+    parts = silent_room
     for c in waiting:
         if c.status == "silent":
             parts.append(silent_words(c))

@@ -17,8 +17,15 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
+from mtident.thermal.readings import sampling_interval_min
 from mtident.thermal.reference import MachineReference
 from mtident.thermal.robust_types import RobustSettings
+
+SILENT_READINGS = 10
+"""A sensor without a valid reading for this many sampling intervals while the log goes on is
+silent (a failed sensor, a lost channel)."""
+SILENT_MIN = 10.0
+"""And for at least this long (min): a logger that skips a reading or two is not a failure."""
 
 __all__ = [
     "REPORT_LEVEL",
@@ -210,6 +217,26 @@ class Readings:
             The time (min).
         """
         return float(self.time_min[-1]) if len(self.time_min) else math.nan
+
+    def room_silent_since(self) -> float:
+        """The time of the room sensor's latest valid reading where it has been silent since (no
+        valid reading for :data:`SILENT_READINGS` sampling intervals, at least :data:`SILENT_MIN`,
+        while the sensors read on); NaN where it reads, or without a room sensor.
+
+        Returns
+        -------
+        float
+            The time (min).
+        """
+        if self.room_C is None:
+            return math.nan
+        room = np.flatnonzero(np.isfinite(self.room_C))
+        sensors = np.flatnonzero(np.isfinite(self.values_C).any(axis=1))
+        if not len(room) or not len(sensors):
+            return math.nan
+        last = float(self.time_min[room[-1]])
+        gap = float(self.time_min[sensors[-1]]) - last
+        return last if gap >= max(SILENT_MIN, SILENT_READINGS * sampling_interval_min(self.time_min)) else math.nan
 
 
 @dataclass(frozen=True)
