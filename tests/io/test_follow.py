@@ -498,3 +498,26 @@ def test_follower_refuses_a_column_whose_own_unit_the_stated_one_contradicts(tmp
     code, _, err = mtident("thermal", "watch", str(path), "--replay", "--unit", "F", "--state", str(tmp_path / "s.npz"))
     assert code == 2 and "Traceback" not in err
     assert "sensor 'room [°C]' is in °C by its name, but --unit F says the temperatures are in °F" in err
+
+
+def test_a_row_cut_short_inside_the_log_is_left_out_and_said_by_the_file_reader_and_the_follower(tmp_path):
+    """'150,27.829,2' between rows of five cells (a write cut short, T2's reading cut from 25.0..)
+    was read as T2 = 2 °C and trusted, its missing cells said only as skipped readings. Both
+    readers leave the row out and say why; a logger that leaves out its last (empty) column on
+    every row keeps its rows."""
+    from mtident.io import read_temperature_log
+    from mtident.io.follow import LogFollower
+
+    rows = [f"{t:g},{20 + 0.01 * t:.3f},{25 + 0.01 * t:.3f},{29 + 0.01 * t:.3f},20.0" for t in range(40)]
+    rows[20] = "20,20.200,2"
+    path = tmp_path / "cut.csv"
+    path.write_text("time_min,T1,T2,T3,room\n" + "\n".join(rows) + "\n")
+    log = read_temperature_log(path)
+    assert 20.0 not in log.time_min and np.nanmin(log.temperature_C[:, 1]) > 24.9
+    assert [n for n in log.notes if n.startswith("left out line 22, '20,20.200,2': it has 3 cells")]
+    polled = LogFollower(path).poll()
+    assert 20.0 not in polled.time_min and np.nanmin(polled.temperature_C[:, 1]) > 24.9
+    assert [w for w in polled.warnings if "refused the row '20,20.200,2': it has 3 cells" in w]
+    evented = tmp_path / "event.csv"
+    evented.write_text("time_min,T1,event\n" + "\n".join(f"{t:g},{20 + 0.01 * t:.3f}" for t in range(40)) + "\n")
+    assert len(read_temperature_log(evented).time_min) == 40 and len(LogFollower(evented).poll().time_min) == 40

@@ -722,12 +722,60 @@ def _checked_text(data: bytes, head: bytes, dialect: CsvDialect, path: str | Pat
     if failed is not None:
         msg = f"{path}: not a readable CSV file ({str(failed).splitlines()[0]})"
         raise InputError(_TOML_GIVEN.format(path=path) if _looks_like_toml(head) else msg) from failed
-    if cut is None:
+    if cut is not None:
+        if notes is not None:
+            notes.append(cut)
+        # up to the cut line's start: a quote it leaves open ("22,4) must not swallow the rows before it
+        text = text[: max(text.rfind("\n"), text.rfind("\r")) + 1]
+    return _without_rows_cut_short(text, dialect, notes)
+
+
+def _without_rows_cut_short(text: str, dialect: CsvDialect, notes: list[str] | None) -> str:
+    """The text without its data lines cut short (:func:`rows_cut_short`), said in ``notes``."""
+    lines = _LINE_BREAK.split(text)
+    short = set(rows_cut_short(lines, dialect, dialect.head_lines))
+    if not short:
         return text
     if notes is not None:
-        notes.append(cut)
-    # up to the cut line's start: a quote it leaves open ("22,4) must not swallow the rows before it
-    return text[: max(text.rfind("\n"), text.rfind("\r")) + 1]
+        notes.extend(f"left out line {n + 1}, {cut_short_words(lines[n], dialect)}" for n in sorted(short))
+    return "\n".join(line for n, line in enumerate(lines) if n not in short)
+
+
+def rows_cut_short(lines: list[str], dialect: CsvDialect, first: int = 0) -> list[int]:
+    """The indices of the data lines (from ``first`` on) with fewer cells than the lines before and
+    after them: a write cut short inside the log (``150,27.829,2`` between rows of five cells, its
+    last reading ``2`` a cut ``25.0..``, was read as T2 = 2 °C and trusted). A logger that leaves out
+    a last empty column does so on every row, and its rows stay.
+
+    Parameters
+    ----------
+    lines : list of str
+        The log's lines, without their line breaks.
+    dialect : CsvDialect
+    first : int, optional
+        The index of the first data line.
+
+    Returns
+    -------
+    list of int
+    """
+    # delimiters counted first (one pass of str.count), cells read only where a line is short
+    data = [(n, line.count(dialect.delimiter)) for n, line in enumerate(lines) if n >= first and line.strip()]
+    return [
+        n
+        for (b, before), (n, row), (a, after) in zip(data, data[1:], data[2:], strict=False)
+        if row < min(before, after)
+        and len(dialect.cells(lines[n])) < min(len(dialect.cells(lines[b])), len(dialect.cells(lines[a])))
+    ]
+
+
+def cut_short_words(line: str, dialect: CsvDialect) -> str:
+    """A line cut short (:func:`rows_cut_short`) and why it is left out, in words."""
+    quoted = repr(line if len(line) <= _QUOTED_LINE else line[:_QUOTED_LINE] + "...")
+    return (
+        f"{quoted}: it has {len(dialect.cells(line))} cells where the lines around it have more (a write cut "
+        "short; its last reading may be cut too)"
+    )
 
 
 def _strictly_decoded(data: bytes, encoding: str) -> str:

@@ -31,6 +31,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io import stamps
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, numbers, split_rows
+from mtident.io.dialect import cut_short_words, rows_cut_short
 from mtident.io.layout import LogLayout
 from mtident.io.time_notes import gap_said, names_a_date, serial_date_hint, serial_date_note
 from mtident.io.whole import MAX_BAD_FRACTION, read_whole
@@ -151,10 +152,14 @@ def parse_lines(
         log, a time or a reading that cannot be read, a time that repeats or goes back, a sensor with
         too many bad readings.
     """
-    rows = split_rows(lines, layout.dialect, len(layout.header))
     if whole is not None:
-        return _whole_log(layout, rows, str(source), whole)
-    return _live_rows(layout, state, rows, source, restarted)
+        return _whole_log(layout, split_rows(lines, layout.dialect, len(layout.header)), str(source), whole)
+    # the file reader leaves out a row cut short inside the log (read_lines); a follower, here
+    short = set(rows_cut_short(lines, layout.dialect))
+    warnings = [f"{source}: refused the row {cut_short_words(lines[k], layout.dialect)}" for k in sorted(short)]
+    rows = split_rows((line for k, line in enumerate(lines) if k not in short), layout.dialect, len(layout.header))
+    state, parsed = _live_rows(layout, state, rows, source, restarted)
+    return state, replace(parsed, warnings=(*warnings, *parsed.warnings)) if warnings else parsed
 
 
 def _live_rows(
