@@ -174,6 +174,27 @@ def test_the_note_on_a_room_read_as_celsius_names_the_unit_option(write_csv):
     assert said and "`temperature_unit='F'`" in said[0], log.notes
 
 
+@pytest.mark.parametrize(
+    ("to_unit", "said"), [(lambda c: c * 1.8 + 32, "(in °F: 20.0 °C)"), (lambda c: c + 273.15, "(in K: 20.0 °C)")]
+)
+def test_one_column_in_another_unit_among_celsius_ones_is_said(write_csv, to_unit, said):
+    """A user's log with one sensor in °F among °C ones, no unit stated anywhere: T2 was read as
+    starting at 68 °C and its T∞ of 77 °C trusted without a word (only a room or every column far
+    out was said). A column that converted from °F (or K) would start with the others is said."""
+    rows = "".join(f"{m},{20 + 0.3 * m:.2f},{to_unit(20 + 0.2 * m):.2f},20.0\n" for m in range(30))
+    log = read_temperature_log(write_csv("time_min,T1,T2,room\n" + rows))
+    notes = [n for n in log.notes if "where the other columns start near 20.0 °C" in n]
+    assert len(notes) == 1 and "'T2' starts at" in notes[0] and said in notes[0], log.notes
+    assert "the unit in its name (T2 [°F])" in notes[0]
+    # a part already hot in °C (45 °C, which in °F would be 7.2 °C): nothing said
+    plain = "".join(f"{m},{20 + 0.3 * m:.2f},{45 + 0.2 * m:.2f},20.0\n" for m in range(30))
+    assert not [
+        n
+        for n in read_temperature_log(write_csv("time_min,T1,T2,room\n" + plain, name="hot.csv")).notes
+        if "other columns start" in n
+    ]
+
+
 def test_a_log_in_celsius_read_in_a_stated_unit_is_said_to_read_outside_any_workshop(write_csv):
     """A new user's log in °C read with --unit F: the room at -6.7 °C and a bearing's T∞ at 0.03 °C
     were answered and trusted without a word; the note asks whether the log is in °C already. Read

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -377,6 +378,40 @@ def _layout(
     )
 
 
+_START_AGREES_C = 5.0
+"""A column converted from °F or K that starts within this of the others' start (°C) is likely in
+that unit."""
+
+
+def _another_unit(sensors: list[str], values: FloatArray, assumed: list[int]) -> str | None:
+    """A note on the columns read as °C that start far above any workshop's range while the
+    others start in it, and that converted from °F (or K) would start with them: a log with one
+    sensor in °F (T2 starting at 68) was read as °C, and its T∞ of 77 °C trusted."""
+    low, high = WORKSHOP_ROOM_C
+    first = np.array([_first_valid(values[:, k]) for k in range(values.shape[1])])
+    usual = [k for k in range(len(sensors)) if low <= first[k] <= high]
+    if not usual:
+        return None
+    start = float(np.median(first[usual]))
+    odd = []
+    for k in assumed:
+        for unit, celsius in (("°F", (first[k] - 32.0) / 1.8), ("K", first[k] - 273.15)):
+            if first[k] > high and abs(celsius - start) <= _START_AGREES_C:
+                odd.append(f"{sensors[k]!r} starts at {first[k]:g} (in {unit}: {celsius:.1f} °C)")
+    if not odd:
+        return None
+    return (
+        f"readings taken as °C (the log states no unit), but {'; '.join(odd)}, where the other columns start near "
+        f"{start:.1f} °C: if a column is in °F (or K), state its unit, and it is converted: a units row under the "
+        "header (min;°C;°F) or the unit in its name (T2 [°F])"
+    )
+
+
+def _first_valid(column: FloatArray) -> float:
+    valid = column[np.isfinite(column)]
+    return float(valid[0]) if len(valid) else math.nan
+
+
 def scale_note(
     sensors: list[str], values: FloatArray, dialect: CsvDialect, temperature_unit: str | None = None
 ) -> str | None:
@@ -424,6 +459,8 @@ def scale_note(
         )
     elif every and stated is not None and all(span[2] < low for span in spans.values()):
         which = f"every column reads below {low:g} °C (the highest {max(span[2] for span in spans.values()):.3g})"
+    elif stated is None and (odd := _another_unit(sensors, values, assumed)):
+        return odd
     else:
         return None
     if stated is not None:
