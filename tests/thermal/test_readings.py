@@ -140,3 +140,21 @@ def test_a_coarse_room_sensors_slow_error_is_its_steps_and_a_fine_ones_none():
     assert room_error_C(t, np.round(room * 20.0) / 20.0) == pytest.approx(0.05 / np.sqrt(12.0))
     assert room_error_C(t, np.round(room, 2)) == 0.0
     assert room_error_C(t[:4], np.round(room[:4], 1)) == 0.0
+
+
+def test_a_spike_beside_a_skipped_reading_is_a_spike_and_a_one_sided_end_is_not_judged():
+    """An open circuit's 850 °C skipped (NaN), then 85.0 °C: the glitch's neighbour window held a
+    missing reading, so it had no median and 85.0 was kept (T∞ interval to 48.6 °C, trusted). A
+    window with most neighbours on both sides is judged; the last readings, with none after them, are not."""
+    from mtident.thermal.readings import spikes
+
+    y = 20.0 + 0.01 * np.arange(40.0)
+    y[20], y[21] = np.nan, 85.0
+    wild = spikes(y, 0.01, 0.0)
+    assert wild[21] and wild.sum() == 1
+    y[38] = 85.0  # one reading after it: a live log's end, judged when its neighbours come
+    assert not spikes(y, 0.01, 0.0)[38]
+    y[:] = 20.0 + 0.01 * np.arange(40.0)
+    y[18:21] = np.nan  # three missing in a row before it: no neighbours that side
+    y[21] = 85.0
+    assert not spikes(y, 0.01, 0.0)[21]

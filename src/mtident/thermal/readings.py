@@ -496,9 +496,21 @@ def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: i
     wild = np.zeros(len(y), dtype=bool)
     if len(y) < width:
         return wild
-    # only readings with every neighbour (a window with a missing one has no median): at a live
-    # log's end, or where a rise begins, a one-sided median trails the curve
-    median = np.median(np.lib.stride_tricks.sliding_window_view(y, width), axis=1)
+    # only readings with neighbours on both sides, most of them there: at a live log's end, or
+    # where a rise begins, a one-sided median trails the curve; a reading skipped beside a glitch
+    # (an open circuit's 850 °C, then 85.0) must not hide it
+    windows = np.lib.stride_tricks.sliding_window_view(y, width)
+    finite = np.isfinite(windows)
+    median = np.median(windows, axis=1)  # NaN where any is missing
+    gaps = ~finite.all(axis=1)
+    both = gaps & (
+        np.minimum(finite[:, :half_window].sum(axis=1), finite[:, half_window + 1 :].sum(axis=1))
+        >= max(half_window - 1, 1)
+    )
+    if both.any():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            median[both] = np.nanmedian(windows[both], axis=1)
     limit = max(8.0 * noise_C, 5.0 * rounding_C)
     with np.errstate(invalid="ignore"):
         wild[half_window : len(y) - half_window] = np.abs(y[half_window : len(y) - half_window] - median) > limit
