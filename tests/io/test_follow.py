@@ -521,3 +521,25 @@ def test_a_row_cut_short_inside_the_log_is_left_out_and_said_by_the_file_reader_
     evented = tmp_path / "event.csv"
     evented.write_text("time_min,T1,event\n" + "\n".join(f"{t:g},{20 + 0.01 * t:.3f}" for t in range(40)) + "\n")
     assert len(read_temperature_log(evented).time_min) == 40 and len(LogFollower(evented).poll().time_min) == 40
+
+
+def test_a_header_repeated_inside_the_log_is_left_out_and_said():
+    """Two logs joined into one file: the header again on line 22 made the file reader take the
+    time column for time stamps and fail at row 2 ("'0' is neither a number nor a time stamp"),
+    naming neither the line nor the cause. It is left out and said; the follower refuses it."""
+    import tempfile
+
+    from mtident.io import read_temperature_log
+    from mtident.io.follow import LogFollower
+
+    rows = [f"{t:g},{20 + 0.01 * t:.3f},{25 + 0.01 * t:.3f}" for t in range(40)]
+    rows.insert(20, "time_min,T1,T2")
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "joined.csv"
+        path.write_text("time_min,T1,T2\n" + "\n".join(rows) + "\n")
+        log = read_temperature_log(path)
+        assert (
+            len(log.time_min) == 40
+            and "left out line(s) 22: the header again (logs joined into one file?)" in log.notes
+        )
+        assert len(LogFollower(path).poll().time_min) == 40

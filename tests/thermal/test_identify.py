@@ -37,7 +37,7 @@ from mtident.thermal import RobustSettings, identify, load_reference, minimal_id
         ),
         (
             lambda log: identify(log, 30.0, "lsq", settings=RobustSettings(max_time_constant_min=200.0)),
-            r"RobustSettings other than the default \(`max_time_constant_min`",
+            r"the largest time constant, the room's wander and the free fast modes \(`max_time_constant_min`",
         ),
         (
             lambda log: minimal_identification_time(log, periods_min=[35, 400]),

@@ -731,14 +731,28 @@ def _checked_text(data: bytes, head: bytes, dialect: CsvDialect, path: str | Pat
 
 
 def _without_rows_cut_short(text: str, dialect: CsvDialect, notes: list[str] | None) -> str:
-    """The text without its data lines cut short (:func:`rows_cut_short`), said in ``notes``."""
+    """The text without its data lines cut short (:func:`rows_cut_short`) or repeating the header
+    (two logs joined: its time name read as a time made the whole column fail at its first row),
+    said in ``notes``."""
     lines = _LINE_BREAK.split(text)
     short = set(rows_cut_short(lines, dialect, dialect.head_lines))
-    if not short:
+    header = dialect.cells(lines[dialect.preamble_lines])
+    repeats = {
+        n
+        for n, line in enumerate(lines)
+        if n >= dialect.head_lines
+        and line.strip()
+        and line.count(dialect.delimiter) == len(header) - 1
+        and dialect.cells(line) == header
+    }
+    if not short and not repeats:
         return text
     if notes is not None:
         notes.extend(f"left out line {n + 1}, {cut_short_words(lines[n], dialect)}" for n in sorted(short))
-    return "\n".join(line for n, line in enumerate(lines) if n not in short)
+        if repeats:
+            where = ", ".join(str(n + 1) for n in sorted(repeats))
+            notes.append(f"left out line(s) {where}: the header again (logs joined into one file?)")
+    return "\n".join(line for n, line in enumerate(lines) if n not in short | repeats)
 
 
 def rows_cut_short(lines: list[str], dialect: CsvDialect, first: int = 0) -> list[int]:

@@ -146,9 +146,9 @@ def identify(
         raise InputError(msg)
     if settings is not None and settings != RobustSettings():
         msg = (
-            "RobustSettings other than the default (`max_time_constant_min`, `room_wander_C_per_h`, "
-            "`free_fast_modes`) are the model-robust method's (`method='robust'`): the first-order filters take "
-            "theirs from `preset`"
+            "the largest time constant, the room's wander and the free fast modes (`max_time_constant_min`, "
+            "`room_wander_C_per_h`, `free_fast_modes`) are settings of the model-robust method (`method='robust'`): "
+            "the first-order filters take theirs from `preset`"
         )
         raise InputError(msg)
     return identify_first_order(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, ambient_C)
