@@ -193,3 +193,14 @@ def test_with_noise_on_the_measured_forces_the_filters_intervals_are_widened_and
     exact = identify_feed_drive(record, default_guess(), check=False)
     assert not any("forces carry noise" in note for note in exact.notes)
     assert np.all(result.parameters_std / result.parameters >= exact.parameters_std / exact.parameters)
+
+
+def test_a_parameter_just_beyond_the_limit_is_said_with_the_digits_that_show_it():
+    """A damping 10.1 % at 2σ was said "not identified (±10 % at 2σ, beyond ±10 %)"."""
+
+    from mtident.feeddrive.identify_notes import IDENTIFIED, parameter_notes
+
+    sd = np.zeros(len(IDENTIFIED))
+    sd[-1] = 0.0506
+    (note,) = parameter_notes(sd, None)
+    assert f"{IDENTIFIED[-1]}: not identified (±10.1 % at 2σ, beyond ±10 %)" in note

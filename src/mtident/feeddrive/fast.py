@@ -632,13 +632,9 @@ def compiled_cache_ready() -> bool:
     """
     import os
 
-    loops: tuple[object, ...] = (
-        run_feed_drive_ukf,
-        response_moments,
-        covariance_recursion,
-        input_noise_moments,
-        input_response_energy,
-    )
+    # the loops every identification runs; the others (force noise, information) only some, and
+    # waiting for their caches said "compiling" before every run that never builds them
+    loops: tuple[object, ...] = (run_feed_drive_ukf, response_moments)
     # numba's cache is internal: another version may keep it otherwise, and then this says False
     files = [getattr(getattr(loop, "_cache", None), "_cache_file", None) for loop in loops]
     paths = [getattr(file, "_index_path", None) for file in files]

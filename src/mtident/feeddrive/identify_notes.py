@@ -152,7 +152,7 @@ def parameter_notes(final_sd_log: FloatArray, prior_sd_log: float | None) -> lis
             continue
         if prior_sd_log is None:
             said.append(
-                f"{name}: not identified (±{200 * sd:.2g} % at 2σ, beyond ±{100 * IDENTIFIED_WITHIN:g} %); a test plan "
+                f"{name}: not identified (±{200 * sd:.3g} % at 2σ, beyond ±{100 * IDENTIFIED_WITHIN:g} %); a test plan "
                 "says which test, if any, would identify it"
             )
         else:
