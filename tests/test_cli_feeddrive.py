@@ -158,7 +158,8 @@ def test_every_command_help_describes_its_options_without_placeholders():
         ),
         (
             ["thermal", "identify", "@sample", "--method", "lsq", "--max-time-constant", "200"],
-            "(--max-time-constant, --room-wander, --free-fast-modes) are the model-robust method's (--method robust)",
+            "(--max-time-constant, --room-wander, --free-fast-modes) are settings of the model-robust method "
+            "(--method robust)",
         ),
         (
             ["thermal", "min-time", "@sample", "--sampling-periods", "35,abc"],
