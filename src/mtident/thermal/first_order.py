@@ -526,7 +526,11 @@ class _WarmupStart:
             why = (
                 "stay at their first level (the warm-up began after the log)"
                 if is_late
-                else "rise slower than a first-order curve starts (a sensor lag, or heat still on its way)"
+                else (
+                    "rise slower than a first-order curve starts (a sensor lag, heat still on its way, or now and "
+                    "then the noise of a few readings: leaving them out costs a little width, keeping a slow start "
+                    "a bias)"
+                )
             )
             if len(which) == 1:
                 i = which[0]
