@@ -92,6 +92,8 @@ CONTRADICTION_MIN_MIN = 10.0
 """Most sensors rejecting the tie say the test is not the reference's machine only over readings
 of at least this (min) and half the slowest shared mode."""
 MAX_MODES = 6
+AT_LIMIT = 0.99
+"""A shared mode at this share of the slowest searched or beyond is at the search's limit."""
 MIN_LOG_SPACING = 0.2
 """Two shared modes closer than this (log ratio) are one: the pair would only cancel."""
 _START_TAUS_MIN = (1.5, 4.0, 10.0, 25.0, 60.0, 150.0, 400.0)
@@ -402,6 +404,9 @@ def learn_machine_model(readings: MachineReadings, max_time_constant_min: float)
         coef, _ = _sensor_solve(b, taus, n)
         gains[s] = coef[1 + len(FAST_TIME_CONSTANTS_MIN) : 1 + len(FAST_TIME_CONSTANTS_MIN) + k]
     sd = _log_tau_sd(bins, noise, taus)
+    # a mode at the slowest searched stands in for any slower one: the run does not bound it
+    # (a 300-min run's 150-min mode, its box ±5 %, stopped a test of a 150-min machine 0.18 °C off)
+    sd = np.where(taus >= AT_LIMIT * bounds[1], np.inf, sd)
     box = tuple(float(max(TAU_BOX_MIN, math.expm1(min(TAU_BOX_SDS * v, 1.0)))) for v in sd)
     model = MachineModel(
         readings.sensors,
