@@ -682,7 +682,7 @@ def test_identify_says_each_sensors_reference(tmp_path):
     assert out.returncode == 0, out.stderr
     text = " ".join(out.stdout.split())
     # the run said once, each sensor's modes on a line of their own (a new user read ten long lines)
-    assert "reference: run.csv (2026-11-25) A: τ 60 min ±10%" in text
+    assert "reference: run.csv (learnt 2026-11-25) A: τ 60 min ±10%" in text
     assert "B: τ 45 min ±10%, 6 min ±10%" in text and "reference for" not in text
 
 

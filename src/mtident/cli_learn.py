@@ -266,7 +266,7 @@ def _learn_table(reference: MachineReference) -> None:
     for column in ("sensor", "time constants (min)", "amplitudes (°C)", "used by later tests"):
         table.add_column(column, justify="left" if column == "sensor" else "right", **_column_layout(column))
     for name, m in reference.sensors.items():
-        taus = ", ".join(f"{t:.3g} ±{b:.0%}" for t, b in zip(m.time_constants_min, m.box, strict=True))
+        taus = m.box_words()
         used = "no" if m.doubt else "yes, no faster mode (--every-mode)" if m.free_fast_modes == 0 else "yes"
         table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), used)
     table_console().print(table)

@@ -92,7 +92,7 @@ def test_watch_says_each_sensors_reference_and_when_each_became_ready(tmp_path):
     )
     assert code == 0, err
     text = " ".join(out.split())
-    assert f"reference for S: reference.csv (2026-11-24): τ {PAPER_TAU:.3g} min ±10%" in text
+    assert f"reference for S: reference.csv (learnt 2026-11-24): τ {PAPER_TAU:.3g} min ±10%" in text
     assert "reference for B: reference.csv: no modes for this sensor" in text
     # the table says when each sensor was last checked (the checks fall due per sensor)
     assert "(temperatures in °C, times in min)" in text

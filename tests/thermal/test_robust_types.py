@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -43,6 +44,11 @@ def test_pooled_modes_narrow_where_runs_agree_and_hold_both_where_they_do_not():
     assert pooled.sensors["first only"] == first.sensors["first only"] and pooled.source == "run.csv + run.csv"
     assert any(s.startswith("apart: its mode of 40 min ±10% in one run is 80 min ±10%") for s in said), said
     assert any(s.startswith("fewer: the runs learnt 1 and 2 modes; the 2 kept") for s in said), said
+    # each run's date is kept (the later's alone lost the first's)
+    dated = pool_references(replace(first, run_date="2026-01-10"), replace(later, run_date="2026-01-11"))[0]
+    assert dated.run_date == "2026-01-10 + 2026-01-11"
+    same = pool_references(replace(first, run_date="2026-01-10"), replace(later, run_date="2026-01-10"))[0]
+    assert same.run_date == "2026-01-10"
 
 
 def test_the_ends_say_which_way_their_slowest_mode_goes_and_by_how_much():
@@ -67,3 +73,13 @@ def test_the_ends_say_which_way_their_slowest_mode_goes_and_by_how_much():
         assert said is not None, phrase
         assert float(said.group(1)) == pytest.approx(abs(slowest.amplitude_C), abs=0.006)
     assert text.startswith("low end") and "; high end" in text and "rising" in text.split("; ")[1]
+
+
+def test_a_wide_box_is_said_as_its_range_not_as_a_measurement():
+    """learn showed a mode it could not pin down as "152 ±98 %": the middle of 3-300 min, which reads
+    as a measurement."""
+    from mtident.thermal.robust_types import SensorModes
+
+    modes = SensorModes((6.02, 151.5, 136.0), (0.10, 0.98, 0.26))
+    assert modes.box_words() == "6.02 ±10%, 3.03-300, 136 ±26%"
+    assert modes.box_words(" min") == "6.02 min ±10%, 3.03-300 min, 136 min ±26%"

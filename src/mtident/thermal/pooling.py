@@ -61,7 +61,7 @@ def pool_references(first: MachineReference, later: MachineReference) -> tuple[M
         machine=first.machine or later.machine,
         serial=first.serial or later.serial,
         program=first.program if first.program == later.program else _both(first.program, later.program),
-        run_date=later.run_date or first.run_date,
+        run_date=first.run_date if first.run_date == later.run_date else _both(first.run_date, later.run_date),
         machine_model=model,
     )
     return pooled, said

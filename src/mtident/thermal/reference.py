@@ -199,11 +199,11 @@ class MachineReference:
         modes = self.sensors.get(sensor)
         if modes is None:
             return f"{self.source}: no modes for this sensor"
-        parts = ", ".join(f"{t:.3g} min ±{b:.0%}" for t, b in zip(modes.time_constants_min, modes.box, strict=True))
+        parts = modes.box_words(" min")
         if modes.doubt is not None:
             parts += " (doubtful)"
         said = self._said()
-        return f"{said + ': ' if said else ''}{self.source} ({self.learnt_on}): τ {parts}"
+        return f"{said + ': ' if said else ''}{self.source} (learnt {self.learnt_on}): τ {parts}"
 
     def holding_every_mode(self) -> MachineReference:
         """The same reference, said to hold every mode of the machine: later tests allow no free

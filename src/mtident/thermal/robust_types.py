@@ -89,6 +89,10 @@ class RobustSettings:
     more_modes_when_used: bool = True
 
 
+WIDE_BOX = 0.5
+"""A box this wide (relative half-width) or wider is said as its range, not as a centre ± a share."""
+
+
 @dataclass(frozen=True)
 class SensorModes:
     """A sensor's modes learnt from a reference run.
@@ -117,6 +121,24 @@ class SensorModes:
     amplitudes_C: tuple[float, ...] = ()
     doubt: str | None = None
     free_fast_modes: int | None = None
+
+    def box_words(self, unit: str = "") -> str:
+        """The time constants with their boxes, in words: ``6.03 ±10%``, and a wide box as the range
+        it is (``3-300``), whose middle is no measurement.
+
+        Parameters
+        ----------
+        unit : str, optional
+            Put after each number (" min").
+
+        Returns
+        -------
+        str
+        """
+        return ", ".join(
+            f"{t * (1 - b):.3g}-{t * (1 + b):.3g}{unit}" if b >= WIDE_BOX else f"{t:.3g}{unit} ±{b:.0%}"
+            for t, b in zip(self.time_constants_min, self.box, strict=True)
+        )
 
 
 @dataclass(frozen=True)
