@@ -77,3 +77,35 @@ def test_a_silent_sensor_is_said_so_in_the_report_with_the_way_on():
     line = _holding_line(check, MonitorSettings(), float("nan"))
     assert line.startswith("T3: no reading since t = 149 min while the others read on")
     assert line.endswith("leave it out of the sensors the test waits for (--wait-for).")
+
+
+def test_a_panel_shows_the_rest_of_the_log_its_band_and_decision_level_beneath_nothing():
+    """A user's report: the readings after the stop rose above the panel (its scale set by the
+    readings up to the stop), the decision's upper level was cut off, and the points after the stop
+    hid the model's course they are there to be compared with."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from mtident.report.plots import draw_monitor_panel
+    from mtident.report.test_report import _draw_rest_of_log
+    from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
+    from mtident.thermal.robust_types import RobustSettings
+
+    t = np.arange(0.0, 600.0, 1.0)
+    y = 20.0 + 2.0 * (1.0 - np.exp(-t / 60.0)) + np.random.default_rng(2).normal(0.0, 0.02, t.size)
+    settings = MonitorSettings(tolerance_C=0.5, robust=RobustSettings(max_time_constant_min=100.0))
+    state, _ = monitor_step(new_state(["S3"]), t[:200], y[:200, None], None, settings)
+    assert state.checks[0].high_C - state.checks[0].low_C < 2.0  # of the rise's size: drawn
+    ax = Figure().add_subplot()
+    draw_monitor_panel(ax, state, settings, 0)
+    check = state.checks[0]
+    low, high = ax.get_ylim()
+    assert low <= check.low_C and check.high_C <= high
+    _draw_rest_of_log(ax, t, y, 199.0, legend=False)
+    low, high = ax.get_ylim()
+    assert low <= y.min() and y.max() <= high
+    model = [line for line in ax.get_lines() if line.get_label().startswith("best model")]
+    after = [line for line in ax.get_lines() if line.get_label() == "after the stop"]
+    assert model and after and model[0].get_zorder() > after[0].get_zorder()

@@ -496,7 +496,7 @@ def draw_monitor_panel(
             tuple(t for t, _ in check.modes),
         )
         label = "best model, with the room as logged" if logged else "best model"
-        ax.plot(future, curve, color="tab:red", lw=1.5, label=label)
+        ax.plot(future, curve, color="tab:red", lw=1.5, label=label, zorder=3)
     if np.isfinite(check.low95_C) and np.isfinite(check.high95_C):
         ax.axhspan(check.low95_C, check.high95_C, color="tab:green", alpha=0.2, lw=0, label="T∞ 95 %")
     if np.isfinite(check.low_C) and np.isfinite(check.high_C):
@@ -515,5 +515,8 @@ def draw_monitor_panel(
         # the interval shown where it is of the rise's size; a far wider one would flatten the curve
         low, high = float(np.nanmin(measured)), float(np.nanmax(measured))
         span = max(high - low, 0.5)
-        low, high = max(min(low, check.low95_C), low - span), min(max(high, check.high95_C), high + span)
+        # the 95 % band and the decision's level both show, where they are of the rise's size
+        edges = [v for v in (check.low95_C, check.high95_C, check.low_C, check.high_C) if np.isfinite(v)]
+        low = max(min([low, *edges]), low - span)
+        high = min(max([high, *edges]), high + span)
         ax.set_ylim(low - 0.05 * span, high + 0.05 * span)

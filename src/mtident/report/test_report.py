@@ -537,7 +537,14 @@ def _draw_rest_of_log(ax: Axes, time_min: np.ndarray, values: np.ndarray, stop_m
     after = time_min > stop_min
     if not after.any():
         return
-    ax.plot(time_min[after], values[after], ".", ms=2.0, color="tab:blue", alpha=0.5, label="after the stop")
+    # beneath the model's course, which they are there to be compared with
+    ax.plot(time_min[after], values[after], ".", ms=2.0, color="tab:blue", alpha=0.5, label="after the stop", zorder=1)
+    shown = values[after][np.isfinite(values[after])]
+    if len(shown):
+        # the panel's scale was set by the readings up to the stop: the rest of the log must show too
+        low, high = ax.get_ylim()
+        margin = 0.05 * (high - low)
+        ax.set_ylim(min(low, float(shown.min()) - margin), max(high, float(shown.max()) + margin))
     if legend:
         ax.legend(fontsize=7, loc="lower right")
 
