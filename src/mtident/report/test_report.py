@@ -253,7 +253,8 @@ METHOD = (
 # the table's terms, said under it
 T_EQ_NOTE = (
     "t_eq: when the best model's curve comes within 5 % of its total rise from T∞ (min from t = 0). "
-    "95 % interval: where T∞ lies, at 95 %, by every model the readings allow."
+    "95 % interval: where T∞ lies, at 95 %, by every model the readings allow; the decision's interval, at its "
+    "level, is the one held against the tolerance."
 )
 SETTLED_NOTE = (
     "settled: where the readings after the stop came to rest; difference: T∞ at the stop (moved with the room) "
@@ -707,7 +708,9 @@ def _settled(report: WarmupReport) -> bool:
 def _table(report: WarmupReport) -> tuple[list[str], list[list[str]]]:
     """The table for the customer: header and rows (the hindsight's columns where a sensor settled)."""
     reading = "at the stop (°C)" if report.decision == "stop" else "latest (°C)"
-    header = ["sensor", reading, "T∞ (°C)", "95 % interval (°C)", "t_eq (min)", "status"]
+    # the decision's own interval beside the 95 % one: a reader checks the stop against it
+    decision = f"{report.decision_level * 100:g} % interval (°C)"
+    header = ["sensor", reading, "T∞ (°C)", "95 % interval (°C)", decision, "t_eq (min)", "status"]
     if _settled(report):
         header += ["settled (°C)", "difference (°C)", "settled by (min)"]
     rows = []
@@ -717,6 +720,7 @@ def _table(report: WarmupReport) -> tuple[list[str], list[list[str]]]:
             _fmt(line.latest_C),
             _fmt(line.steady_C),
             _interval(line.ci95_C),
+            _interval(line.decision_interval_C),
             _fmt(line.equilibrium_time_min, 0),
             status_words(line),
         ]
@@ -917,7 +921,7 @@ def summary_pages(report: WarmupReport) -> list[Figure]:
         pages.text(f"{term}: {words}", 8.0)
     pages.heading("Per sensor", keep=0.022 * (len(report.lines) + 1))
     header, rows = _table(report)
-    widths = [1.6, 1.0, 0.9, 1.7, 0.8, 2.4] + ([1.0, 1.1, 1.0] if _settled(report) else [])
+    widths = [1.6, 1.0, 0.9, 1.7, 1.7, 0.8, 2.4] + ([1.0, 1.1, 1.0] if _settled(report) else [])
     if _settled(report):
         header = [h.replace(" (", "\n(") for h in header]
     pages.table(header, rows, widths)
