@@ -921,7 +921,7 @@ def summary_pages(report: WarmupReport) -> list[Figure]:
         pages.text(f"{term}: {words}", 8.0)
     pages.heading("Per sensor", keep=0.022 * (len(report.lines) + 1))
     header, rows = _table(report)
-    widths = [1.6, 1.0, 0.9, 1.7, 1.7, 0.8, 2.4] + ([1.0, 1.1, 1.0] if _settled(report) else [])
+    widths = [1.3, 0.9, 0.8, 1.5, 1.5, 0.7, 2.8] + ([0.9, 1.0, 0.9] if _settled(report) else [])
     if _settled(report):
         header = [h.replace(" (", "\n(") for h in header]
     pages.table(header, rows, widths)
