@@ -66,3 +66,20 @@ def test_watch_of_a_numeric_log_does_not_load_pandas(loaded_modules):
     """pandas costs 0.5 s of start-up; a check for two-column time stamps loaded it for every log
     (watch's replay of the sample: 1.9 s against 1.0 s). The watch is the process's first command."""
     assert loaded_modules["watch"] == {"pandas": False}
+
+
+def test_a_ctrl_c_inside_nested_compiled_code_is_a_ctrl_c():
+    """A Ctrl-C during a fit reached Python as a SystemError of numba's unpickler, chained to
+    another of the compiled solver, chained to the KeyboardInterrupt: only one link was looked at,
+    and the user got a traceback and exit code 1 instead of "interrupted" and 130."""
+    from mtident.cli import carried_interrupt
+
+    stop = KeyboardInterrupt()
+    inner = SystemError("<function _numba_unpickle> returned a result with an exception set")
+    inner.__cause__ = stop
+    outer = SystemError("CPUDispatcher(solve_selected) returned a result with an exception set")
+    outer.__cause__ = inner
+    assert carried_interrupt(outer) is stop and carried_interrupt(inner) is stop
+    other = SystemError("a fault of its own")
+    other.__context__ = ValueError("no Ctrl-C here")
+    assert carried_interrupt(other) is None and carried_interrupt(SystemError("alone")) is None

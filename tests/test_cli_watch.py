@@ -567,3 +567,22 @@ def test_a_column_named_as_the_room_is_pointed_out_before_the_checks_say_anythin
     said = [line for line in out.stderr.splitlines() if line.startswith("mtident:")]
     assert said and "'room' is named as a room sensor and watched as a machine sensor" in said[0], said[:3]
     assert sum("named as a room sensor" in line for line in said) == 1
+
+
+def test_a_first_ctrl_c_ends_the_watch_at_its_next_safe_point_and_a_second_at_once():
+    """A Ctrl-C while the watch caught up on a long log threw into the fit and saved nothing
+    ("interrupted at t = 197 min; nothing was saved"), where SIGTERM ended it at the next safe
+    point with the state saved. The first Ctrl-C now does what SIGTERM does, said as a Ctrl-C; a
+    second one stops at once."""
+    from mtident import cli_watch
+
+    cli_watch._terminating.clear()
+    cli_watch._interrupting.clear()
+    try:
+        cli_watch._interrupt(2, None)
+        assert cli_watch._terminating.is_set() and cli_watch._interrupting.is_set()
+        with pytest.raises(KeyboardInterrupt):
+            cli_watch._interrupt(2, None)
+    finally:
+        cli_watch._terminating.clear()
+        cli_watch._interrupting.clear()

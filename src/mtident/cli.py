@@ -331,8 +331,17 @@ def carried_interrupt(error: SystemError) -> KeyboardInterrupt | None:
     KeyboardInterrupt or None
         None where the error carries no Ctrl-C (a fault of its own).
     """
-    cause = error.__cause__ or error.__context__
-    return cause if isinstance(cause, KeyboardInterrupt) else None
+    # compiled code inside compiled code chains one SystemError to another before the Ctrl-C
+    cause: BaseException | None = error
+    seen: set[int] = set()
+    while cause is not None and id(cause) not in seen:
+        seen.add(id(cause))
+        if isinstance(cause, KeyboardInterrupt):
+            return cause
+        if not isinstance(cause, SystemError):
+            return None
+        cause = cause.__cause__ or cause.__context__
+    return None
 
 
 class LazyGroup(click.Group):

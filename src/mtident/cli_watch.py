@@ -455,7 +455,11 @@ def _follow_served(
     page, served = _serve(request.serve_address, path)
     on_main = threading.current_thread() is threading.main_thread()
     _terminating.clear()
+    _interrupting.clear()
     previous = signal.signal(signal.SIGTERM, _terminate) if on_main else None
+    # a first Ctrl-C ends the watch at its next safe point, as SIGTERM does, so that what was read
+    # is saved (one while it caught up on a long log saved nothing); a second one at once
+    previous_int = signal.signal(signal.SIGINT, _interrupt) if on_main else None
     # the source is recorded on its own thread: its rows reach the log while the fits run
     recording = None if recorder is None else RecordingThread(recorder, request.follow.poll_s)
     try:
@@ -464,6 +468,7 @@ def _follow_served(
     finally:
         if on_main:
             signal.signal(signal.SIGTERM, previous)
+            signal.signal(signal.SIGINT, previous_int)
         if served is not None:
             served.stop()
         if recording is not None:
@@ -494,7 +499,7 @@ def _follow(
             run = session.run(follow, shown.progress, _terminating.is_set, fetch)
             for event in run:
                 if isinstance(event, Ended) and event.reason == "cancelled":
-                    return _say_interrupted(_Terminated(), session)
+                    return _say_interrupted(KeyboardInterrupt() if _interrupting.is_set() else _Terminated(), session)
                 shown.show(session, event)
             return False
     except KeyboardInterrupt as stop:
@@ -621,6 +626,17 @@ _terminating = threading.Event()
 
 
 def _terminate(signum: int, frame: object) -> None:  # noqa: ARG001
+    _terminating.set()
+
+
+# set by a first Ctrl-C: the watch ends as for SIGTERM, said as a Ctrl-C
+_interrupting = threading.Event()
+
+
+def _interrupt(signum: int, frame: object) -> None:  # noqa: ARG001
+    if _interrupting.is_set() or _terminating.is_set():
+        raise KeyboardInterrupt
+    _interrupting.set()
     _terminating.set()
 
 
