@@ -535,3 +535,19 @@ def test_each_checks_modes_run_from_where_they_begin_so_its_course_follows_its_r
         after = t >= c.origin_min
         course = model_curve(tuple(Mode(tau, a) for tau, a in c.modes), c.steady_C, c.origin_min, t[after])
         assert np.max(np.abs(course - y[after, s])) < 0.06, (c.sensor, c.origin_min)
+
+
+def test_a_sensor_found_silent_at_any_check_is_said_then(spindle_reference):
+    """A gap of 20 readings was never said (the sensor read again before its next spaced check), and
+    one of 60 was said 28 min after the last reading: a sensor found silent at any sensor's check
+    is checked then, and said (here at the first check after its ten minutes without a reading)."""
+    t = np.arange(0.0, 240.0, 1.0)
+    values = spindle_and_column(t)
+    values[150:170, 1] = np.nan
+    settings = MonitorSettings(reference=spindle_reference)
+    state, events = monitor_step(new_state(["S", "column"]), t, values, None, settings)
+    said = [
+        e for e in events if e.kind == "warning" and e.sensor == "column" and "no reading since t = 149 min" in e.text
+    ]
+    assert len(said) == 1 and said[0].time_min <= 166.0
+    assert state.checks[1].status != "silent"  # reading again

@@ -242,7 +242,9 @@ def _check_due(
 
     waited = [s for s, name in enumerate(state.sensors) if settings.waits_for(name)]
     for s, check in enumerate(checks):
-        if now >= check.next_check_min:
+        # a sensor that has just fallen silent is checked at once, not at its next spaced check
+        # (a 60-row gap was said 28 min after the sensor's last reading, a 20-row one never)
+        if now >= check.next_check_min or (silent[s] and check.status != "silent" and check.checked_min < now):
             check_sensor(s)
     contradicting, known = ([], 0) if dropped else _contradicting(checks, settings)
     if contradicting:
