@@ -220,3 +220,19 @@ def test_readings_lost_are_among_the_json_answers_log_warnings(tmp_path):
     assert lost == [
         f"sensor 'A': skipped 20 empty, unreadable or open-circuit reading(s) (the first at t = {t[60]:g} min)"
     ]
+
+
+def test_a_replay_says_a_last_line_without_its_end(tmp_path):
+    """A finished log whose last line has no line end: the replay left it out without a word
+    (299 rows, where inspect read 300); it is said, and carried in the JSON answer."""
+    t = T[:60]
+    log = tmp_path / "cut.csv"
+    log.write_text(csv_text(t, {"A": noisy(first_order(t), 5)}).rstrip("\n"))
+    session = WatchSession(log, MonitorSettings(), resume=False, persist=False)
+    said = [e.text for e in session.run(FollowSettings(replay=True)) if getattr(e, "kind", None) == "warning"]
+    assert [w for w in said if "left out the last line" in w and "it has no line end" in w]
+    assert [w for w in session.result(with_forecast=False)["log_warnings"] if "left out the last line" in w]
+    whole = tmp_path / "whole.csv"
+    whole.write_text(csv_text(t, {"A": noisy(first_order(t), 5)}))
+    session = WatchSession(whole, MonitorSettings(), resume=False, persist=False)
+    assert not [e for e in session.run(FollowSettings(replay=True)) if "last line" in getattr(e, "text", "")]

@@ -151,6 +151,25 @@ class LogFollower:
         """
         return self._at.layout
 
+    def unfinished_line(self) -> str | None:
+        """The text after the log's last line end, where there is any besides blanks: a line the
+        follower waits for (its end not yet written); None where there is none, or no layout yet.
+
+        Returns
+        -------
+        str or None
+        """
+        if self._at.layout is None:
+            return None
+        try:
+            with open(self.path, "rb") as handle:
+                handle.seek(self._at.offset)
+                rest = handle.read()
+        except OSError:
+            return None
+        text = self._at.layout.dialect.decode(rest).strip()
+        return text or None
+
     def position(self) -> FollowPosition:
         """Everything needed to resume (for the state file: :func:`~mtident.persist.save_dataclass`).
 

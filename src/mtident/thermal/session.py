@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import os
 import threading
 import time
@@ -588,6 +589,15 @@ class WatchSession:
                 idle_s = time.monotonic() - last_data
                 if self.state is not None:
                     yield Polled(self.last_rows, self.stopped)
+                if follow.replay and not self.stopped and (line := self.follower.unfinished_line()) is not None:
+                    # a replayed log is whole: a last line without its end is a reading lost, said
+                    text = (
+                        f"{self.path}: left out the last line, {line[:80]!r}: it has no line end (a log still being "
+                        "written, or cut); the replay ends before it"
+                    )
+                    self.log_warnings.append(text)
+                    latest = math.nan if self.state is None else self.state.readings.latest_min
+                    yield Event("warning", latest, text)
                 if self.stopped or follow.replay:
                     yield Ended("stopped" if self.stopped else "replayed", idle_s)
                     return
