@@ -35,8 +35,6 @@ from mtident.thermal.modes import Mode, model_curve
 from mtident.thermal.monitor_answer import assumptions, result, room_silent_words, silent_words
 from mtident.thermal.monitor_types import (
     REPORT_LEVEL,
-    SILENT_MIN,
-    SILENT_READINGS,
     Event,
     EventKind,
     MonitorSettings,
@@ -44,6 +42,7 @@ from mtident.thermal.monitor_types import (
     Readings,
     SensorCheck,
     Status,
+    last_valid,
     minutes,
 )
 from mtident.thermal.readings import sampling_interval_min
@@ -263,10 +262,11 @@ def _check_due(
             if checks[s].checked_min < now:
                 check_sensor(s)
     # T∞ is at the room's latest level: a silent room sensor leaves it unknown, and holds the test
-    room_silent = math.isfinite(readings.room_silent_since())
+    room_since = readings.room_silent_since()
+    room_silent = math.isfinite(room_since)
     if room_silent and "room silent" not in said:
         said.add("room silent")
-        events.append(Event("warning", now, room_silent_words(readings, settings)))
+        events.append(Event("warning", now, room_silent_words(room_since, settings)))
     stop = now if all(checks[s].may_stop for s in waited) and not room_silent else math.nan
     if math.isfinite(stop):
         which = "every sensor's T∞ is" if len(waited) == len(checks) else "every sensor waited for has its T∞"
@@ -478,27 +478,14 @@ def _checked(
 
 
 def _last_readings(readings: Readings) -> tuple[list[float], list[bool]]:
-    """Per sensor, the time of its latest valid reading (NaN before the first), and whether it is
-    silent: none for :data:`SILENT_READINGS` sampling intervals (at least :data:`SILENT_MIN`) while
-    another sensor reads on (where every sensor stops, the logger has, and nothing is said of one).
-    Once a check, for every sensor it checks."""
-    t = readings.time_min
+    """Per sensor, :func:`~mtident.thermal.monitor_types.last_valid` up to the latest reading of
+    any sensor (where every sensor stops, the logger has, and nothing is said of one). Once a
+    check, for every sensor it checks."""
     finite = np.isfinite(readings.values_C)
     anyone = np.flatnonzero(finite.any(axis=1))
-    step = sampling_interval_min(t)
-    last: list[float] = []
-    silent: list[bool] = []
-    for column in finite.T:
-        valid = np.flatnonzero(column)
-        if not len(valid):
-            last.append(math.nan)
-            silent.append(False)
-            continue
-        # its own step: a sensor logged every fifth row is not silent in between
-        own = sampling_interval_min(t[valid[-50:]]) if len(valid) > 2 else 0.0
-        last.append(float(t[valid[-1]]))
-        silent.append(float(t[anyone[-1]]) - last[-1] >= max(SILENT_MIN, SILENT_READINGS * max(own, step)))
-    return last, silent
+    latest = float(readings.time_min[anyone[-1]]) if len(anyone) else math.nan
+    pairs = [last_valid(readings.time_min, column, latest) for column in finite.T]
+    return [last for last, _ in pairs], [silent for _, silent in pairs]
 
 
 def _status(estimate: SensorEstimate, within: bool, ready: bool) -> Status:

@@ -237,12 +237,13 @@ def result(
     return tree
 
 
-def room_silent_words(readings: Readings, settings: MonitorSettings) -> str:
+def room_silent_words(since_min: float, settings: MonitorSettings) -> str:
     """What a silent room sensor means, and the way on.
 
     Parameters
     ----------
-    readings : Readings
+    since_min : float
+        Its latest valid reading (min, :meth:`Readings.room_silent_since`).
     settings : MonitorSettings
 
     Returns
@@ -251,7 +252,7 @@ def room_silent_words(readings: Readings, settings: MonitorSettings) -> str:
     """
     name = settings.room_sensor or "the room sensor"
     return (
-        f"{name} (the room): no reading since t = {readings.room_silent_since():.0f} min while the sensors read on "
+        f"{name} (the room): no reading since t = {since_min:.0f} min while the sensors read on "
         "(a failed sensor or a lost channel?): T∞ is at the room's level, unknown since, so the test is held until "
         "it reads again; if it has failed, watch again without it and say how far the room may wander "
         "(`room_wander_C_per_h`)"
@@ -278,7 +279,8 @@ def silent_words(check: SensorCheck) -> str:
 
 def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Readings) -> str:
     """Why the test cannot stop yet, and the two ways on."""
-    silent_room = [room_silent_words(readings, settings)] if math.isfinite(readings.room_silent_since()) else []
+    since = readings.room_silent_since()
+    silent_room = [room_silent_words(since, settings)] if math.isfinite(since) else []
     if not waiting:
         return silent_room[0] if silent_room else "every sensor may stop; confirming at the next check"
     parts = silent_room

@@ -27,6 +27,33 @@ silent (a failed sensor, a lost channel)."""
 SILENT_MIN = 10.0
 """And for at least this long (min): a logger that skips a reading or two is not a failure."""
 
+
+def last_valid(time_min: FloatArray, valid: np.ndarray, latest_min: float) -> tuple[float, bool]:
+    """The time of a column's latest valid reading (NaN before the first), and whether it is silent:
+    none for :data:`SILENT_READINGS` sampling intervals (its own, where it is logged more sparsely
+    than the log), at least :data:`SILENT_MIN`, up to ``latest_min`` (the others' latest reading).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    valid : ndarray of bool, shape (N,)
+        Which of the column's readings are valid.
+    latest_min : float
+
+    Returns
+    -------
+    float
+    bool
+    """
+    at = np.flatnonzero(valid)
+    if not len(at):
+        return math.nan, False
+    # its own step: a sensor logged every fifth row is not silent in between
+    own = sampling_interval_min(time_min[at[-50:]]) if len(at) > 2 else 0.0
+    last = float(time_min[at[-1]])
+    return last, latest_min - last >= max(SILENT_MIN, SILENT_READINGS * max(own, sampling_interval_min(time_min)))
+
+
 __all__ = [
     "REPORT_LEVEL",
     "Event",
@@ -228,15 +255,11 @@ class Readings:
         float
             The time (min).
         """
-        if self.room_C is None:
-            return math.nan
-        room = np.flatnonzero(np.isfinite(self.room_C))
         sensors = np.flatnonzero(np.isfinite(self.values_C).any(axis=1))
-        if not len(room) or not len(sensors):
+        if self.room_C is None or not len(sensors):
             return math.nan
-        last = float(self.time_min[room[-1]])
-        gap = float(self.time_min[sensors[-1]]) - last
-        return last if gap >= max(SILENT_MIN, SILENT_READINGS * sampling_interval_min(self.time_min)) else math.nan
+        last, silent = last_valid(self.time_min, np.isfinite(self.room_C), float(self.time_min[sensors[-1]]))
+        return last if silent else math.nan
 
 
 @dataclass(frozen=True)
