@@ -727,22 +727,24 @@ def _checked_text(data: bytes, head: bytes, dialect: CsvDialect, path: str | Pat
             notes.append(cut)
         # up to the cut line's start: a quote it leaves open ("22,4) must not swallow the rows before it
         text = text[: max(text.rfind("\n"), text.rfind("\r")) + 1]
-    return _without_rows_cut_short(text, dialect, notes)
+    return _without_stray_rows(text, dialect, notes)
 
 
-def _without_rows_cut_short(text: str, dialect: CsvDialect, notes: list[str] | None) -> str:
+def _without_stray_rows(text: str, dialect: CsvDialect, notes: list[str] | None) -> str:
     """The text without its data lines cut short (:func:`rows_cut_short`) or repeating the header
     (two logs joined: its time name read as a time made the whole column fail at its first row),
     said in ``notes``."""
     lines = _LINE_BREAK.split(text)
     short = set(rows_cut_short(lines, dialect, dialect.head_lines))
-    header = dialect.cells(lines[dialect.preamble_lines])
+    header_line = lines[dialect.preamble_lines]
+    header = dialect.cells(header_line)
+    # a cheap first look (the text before the first delimiter), cells read only where it matches
+    lead = header_line.split(dialect.delimiter, 1)[0].strip()
     repeats = {
         n
         for n, line in enumerate(lines)
         if n >= dialect.head_lines
-        and line.strip()
-        and line.count(dialect.delimiter) == len(header) - 1
+        and line.split(dialect.delimiter, 1)[0].strip() == lead
         and dialect.cells(line) == header
     }
     if not short and not repeats:
