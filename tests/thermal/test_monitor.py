@@ -40,6 +40,7 @@ from mtident.io.logs import TemperatureLog
 from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal import identify, minimal_identification_time
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
+from mtident.thermal.monitor_types import stuck_since
 from mtident.thermal.reference import MachineReference, learn_reference
 from mtident.thermal.robust import SensorModes, estimate_sensor
 
@@ -551,3 +552,41 @@ def test_a_sensor_found_silent_at_any_check_is_said_then(spindle_reference):
     ]
     assert len(said) == 1 and said[0].time_min <= 166.0
     assert state.checks[1].status != "silent"  # reading again
+
+
+def test_a_stuck_sensor_holds_the_test_and_says_why(spindle_reference):
+    """A channel that repeats its last value from 120 min on (the column's, still rising) was fitted
+    as if flat and not called stuck: twenty identical readings, where its noise was at least its
+    display step, are said once as stuck, hold the test, and give no pass."""
+    t = np.arange(0.0, 240.0, 1.0)
+    values = spindle_and_column(t)
+    values[120:, 1] = values[120, 1]
+    settings = MonitorSettings(reference=spindle_reference, wait_for=("S",))
+    state, _ = monitor_step(new_state(["S", "column"]), t, values, None, settings)
+    assert state.stopped  # the stuck sensor is not waited for
+    settings = MonitorSettings(reference=spindle_reference)
+    state, events = monitor_step(new_state(["S", "column"]), t, values, None, settings)
+    assert not state.stopped
+    column = state.checks[1]
+    assert column.status == "stuck" and column.last_reading_min == 120.0 and not column.may_stop
+    said = [e for e in events if e.kind == "warning" and e.sensor == "column" and "is the same value" in e.text]
+    assert len(said) == 1 and 139.0 <= said[0].time_min <= 150.0
+    assert "column: every reading since t = 120 min is the same value" in result(state, settings)["reason"]
+
+
+def test_a_reading_repeated_by_a_coarse_display_is_not_stuck():
+    """A settled sensor read at 0.1 °C with 0.01 °C of noise repeats its reading for hours: no
+    sign of a fault. The same run with 0.02 °C of noise at a 0.01 °C display is."""
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 300.0, 1.0)
+    curve = 30.0 - 10.0 * np.exp(-t / 20.0)
+    coarse = np.round(curve + rng.normal(0.0, 0.01, t.size), 1)
+    assert np.ptp(coarse[-60:]) == 0.0 and np.isnan(stuck_since(t, coarse))
+    fine = np.round(curve + rng.normal(0.0, 0.02, t.size), 2)
+    assert np.isnan(stuck_since(t, fine))
+    fine[250:] = fine[250]
+    assert stuck_since(t, fine) == 250.0
+    fine[250:265] = np.nan  # missing readings within the run do not break it
+    assert stuck_since(t, fine) == 265.0
+    fine[280:] = np.nan
+    assert np.isnan(stuck_since(t, fine))  # fifteen alike are not enough

@@ -274,6 +274,7 @@ _STATUS_WORDS = {
     "off reference": "does not follow the reference run",
     "too coarse": "readings too coarse for the tolerance",
     "silent": "no new readings (a failed sensor or channel?)",
+    "stuck": "the same reading over and over (a stuck sensor or channel?)",
 }
 
 
@@ -498,7 +499,7 @@ def _holding(state: MonitorState, settings: MonitorSettings, expected: dict[str,
 def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float) -> str:
     tolerance = f"±{settings.tolerance_C:g} °C"
     level = f"{settings.decision_level * 100:g} %"
-    if c.status == "silent":
+    if c.status in ("silent", "stuck"):
         return silent_words(c) + " (--wait-for)."
     if c.status == "no rise":
         return (

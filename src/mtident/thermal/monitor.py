@@ -44,6 +44,7 @@ from mtident.thermal.monitor_types import (
     Status,
     last_valid,
     minutes,
+    stuck_since,
 )
 from mtident.thermal.readings import sampling_interval_min
 from mtident.thermal.reference import reference_notes
@@ -230,20 +231,24 @@ def _check_due(
         dropped, used, machine = True, replace(settings, reference=None), None
         checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
     wander = unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels))
-    last, silent = _last_readings(readings)
+    last, silent, stuck = _last_readings(readings)
 
     def check_sensor(s: int) -> None:
         if cancel is not None and cancel():
             raise _Cancelled
         estimate = combined_estimate(sensor_estimate(readings, s, state.sensors[s], used), machine, s, wander)
-        before, checks[s] = checks[s], _checked(checks[s], estimate, now, readings, used, (last[s], silent[s]))
+        before, checks[s] = (
+            checks[s],
+            _checked(checks[s], estimate, now, readings, used, (last[s], silent[s], stuck[s])),
+        )
         events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
 
     waited = [s for s, name in enumerate(state.sensors) if settings.waits_for(name)]
     for s, check in enumerate(checks):
-        # a sensor that has just fallen silent is checked at once, not at its next spaced check
+        # a sensor that has just fallen silent (or stuck) is checked at once, not at its next spaced check
         # (a 60-row gap was said 28 min after the sensor's last reading, a 20-row one never)
-        if now >= check.next_check_min or (silent[s] and check.status != "silent" and check.checked_min < now):
+        newly = (silent[s] and check.status != "silent") or (stuck[s] and check.status != "stuck")
+        if now >= check.next_check_min or (newly and check.checked_min < now):
             check_sensor(s)
     contradicting, known = ([], 0) if dropped else _contradicting(checks, settings)
     if contradicting:
@@ -433,13 +438,13 @@ def _checked(
     now: float,
     readings: Readings,
     settings: MonitorSettings,
-    latest: tuple[float, bool],
+    latest: tuple[float, bool, bool],
 ) -> SensorCheck:
     """The sensor's check after ``estimate``: its numbers, its run of passes, when to look again.
-    ``latest``: the time of its latest valid reading and whether it is silent
-    (:func:`_last_readings`). A check gains a pass only with a reading of the sensor since its last
-    check; a silent sensor says so in its status."""
-    last, silent = latest
+    ``latest``: the time of its latest valid (for a stuck sensor: first repeated) reading and
+    whether it is silent or stuck (:func:`_last_readings`). A check gains a pass only with a new
+    reading of the sensor since its last check; a silent or stuck sensor says so in its status."""
+    last, silent, stuck = latest
     within = is_within(estimate, settings)
     # a pass needs a reading since the last check: the same readings checked again are no new evidence
     fresh = not math.isfinite(check.checked_min) or last > check.checked_min
@@ -447,8 +452,8 @@ def _checked(
     ready = passes >= settings.consecutive_checks
     fit = estimate.fit
     status = _status(estimate, within, ready) if resolves_tolerance(estimate, settings) else "too coarse"
-    if silent and not ready and estimate.fit is not None:
-        status = "silent"
+    if (silent or stuck) and not ready and estimate.fit is not None:
+        status = "silent" if silent else "stuck"
     lo95, hi95 = estimate.interval_C.get(REPORT_LEVEL, (-math.inf, math.inf))
     lo, hi = estimate.interval_C.get(settings.decision_level, (-math.inf, math.inf))
     return SensorCheck(
@@ -477,15 +482,18 @@ def _checked(
     )
 
 
-def _last_readings(readings: Readings) -> tuple[list[float], list[bool]]:
+def _last_readings(readings: Readings) -> tuple[list[float], list[bool], list[bool]]:
     """Per sensor, :func:`~mtident.thermal.monitor_types.last_valid` up to the latest reading of
-    any sensor (where every sensor stops, the logger has, and nothing is said of one). Once a
-    check, for every sensor it checks."""
+    any sensor (where every sensor stops, the logger has, and nothing is said of one), and whether
+    it is stuck (:func:`~mtident.thermal.monitor_types.stuck_since`, whose time then stands for its
+    latest reading: repeats are no new readings). Once a check, for every sensor it checks."""
     finite = np.isfinite(readings.values_C)
     anyone = np.flatnonzero(finite.any(axis=1))
     latest = float(readings.time_min[anyone[-1]]) if len(anyone) else math.nan
     pairs = [last_valid(readings.time_min, column, latest) for column in finite.T]
-    return [last for last, _ in pairs], [silent for _, silent in pairs]
+    since = [stuck_since(readings.time_min, column) for column in readings.values_C.T]
+    last = [at if math.isnan(s) else s for (at, _), s in zip(pairs, since, strict=True)]
+    return last, [silent for _, silent in pairs], [not math.isnan(s) for s in since]
 
 
 def _status(estimate: SensorEstimate, within: bool, ready: bool) -> Status:
@@ -536,7 +544,7 @@ def _check_events(
         if key not in said and code not in ("undetermined", "too-few-readings", "no-rise"):
             said.add(key)
             events.append(Event("warning", now, text, after.sensor))
-    if after.status == "silent" and before.status != "silent":
+    if after.status in ("silent", "stuck") and before.status != after.status:
         events.append(Event("warning", now, silent_words(after), after.sensor))
     elif after.status != before.status:
         kind: EventKind = "ready" if after.may_stop else "not ready" if before.may_stop else "check"

@@ -260,7 +260,7 @@ def room_silent_words(since_min: float, settings: MonitorSettings) -> str:
 
 
 def silent_words(check: SensorCheck) -> str:
-    """What a silent sensor's status means, and the way on.
+    """What a silent (or stuck) sensor's status means, and the way on.
 
     Parameters
     ----------
@@ -270,6 +270,13 @@ def silent_words(check: SensorCheck) -> str:
     -------
     str
     """
+    if check.status == "stuck":
+        return (
+            f"{check.sensor}: every reading since t = {check.last_reading_min:.0f} min is the same value, which its "
+            "noise makes no chance (a stuck sensor, or a logger channel that repeats its last value?): those readings "
+            "say nothing of its temperature, and it holds the test until it reads again; if it has failed, leave it "
+            "out of the sensors the test waits for"
+        )
     return (
         f"{check.sensor}: no reading since t = {check.last_reading_min:.0f} min while the others read on (a failed "
         "sensor or a lost channel?): its answer rests on its readings up to then, and it holds the test until it "
@@ -285,7 +292,7 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Rea
         return silent_room[0] if silent_room else "every sensor may stop; confirming at the next check"
     parts = silent_room
     for c in waiting:
-        if c.status == "silent":
+        if c.status in ("silent", "stuck"):
             parts.append(silent_words(c))
         elif c.status == "no rise":
             parts.append(
