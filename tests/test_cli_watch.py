@@ -220,6 +220,29 @@ def test_watch_says_it_is_waiting_for_rows_of_a_log_that_does_not_grow(tmp_path,
     said = " ".join(err.split())
     assert code == 0 and "waiting for new rows: none for 0.1 s (a finished log is replayed with --replay" in said
     assert said.count("waiting for new rows") == 1
+    assert "no new row for 0.5 s; the watch ends here, before the test may stop" in said
+
+
+def test_exit_code_says_a_watch_that_ended_before_the_test_may_stop(tmp_path):
+    """A script ran `watch --timeout 600 && next-step`: the watch gave up on a stalled logger and
+    exited 0, and the next step ran on an undecided test. With --exit-code it exits 3 there (a
+    timeout, or a replay that ends undecided), and 0 where the test may stop."""
+    t = np.arange(0.0, 20.0)
+    log = tmp_path / "stalled.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{20 + a / 10:.2f}\n" for a in t))
+    state = str(tmp_path / "s")
+    code, _, err = mtident("thermal", "watch", str(log), "--poll", "0.05", "--timeout", "0.3", "--state", state)
+    assert code == 0, err
+    code, _, err = mtident(
+        "thermal", "watch", str(log), "--poll", "0.05", "--timeout", "0.3", "--state", state, "--exit-code"
+    )
+    assert code == 3 and "before the test may stop" in err
+    code, _, _ = mtident("thermal", "watch", str(log), "--replay", "--state", state, "--exit-code")
+    assert code == 3
+    t = np.arange(0.0, 400.0)
+    log.write_text(csv_text(t, {"S": noisy(30.0 - 10.0 * np.exp(-t / 20.0), 3)}))
+    code, out, err = mtident("thermal", "watch", str(log), "--replay", "--state", state, "--exit-code")
+    assert code == 0 and "may stop" in out, err
 
 
 def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsys):

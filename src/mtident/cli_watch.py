@@ -230,6 +230,7 @@ class WatchRequest:
     plot_path: str | None
     as_json: bool
     serve_address: str | None
+    exit_code: bool = False
 
 
 def watch_request(options: Mapping[str, Any]) -> WatchRequest:
@@ -253,7 +254,12 @@ def watch_request(options: Mapping[str, Any]) -> WatchRequest:
         plot_path=options["plot_path"],
         as_json=options["as_json"],
         serve_address=options["serve_address"],
+        exit_code=options["exit_code"],
     )
+
+
+UNDECIDED_EXIT = 3
+"""``--exit-code``: the watch ended (the log ended, ``--timeout``) before the test may stop."""
 
 
 @thermal.command("watch")
@@ -269,6 +275,13 @@ def watch_request(options: Mapping[str, Any]) -> WatchRequest:
 @number_option("--poll", "poll_s", default=0.5, help="Seconds between looks at a growing log.", min=0.05)
 @click.option(
     "--timeout", "timeout_s", type=FiniteFloatRange(min=0), help="Give up after this many seconds without a new row."
+)
+@click.option(
+    "--exit-code",
+    "exit_code",
+    is_flag=True,
+    help=f"Exit with status {UNDECIDED_EXIT} where the watch ends (the log ended, --timeout) before the test may stop, "
+    "so that `watch ... --exit-code && next-step` goes on only after a stop.",
 )
 @plot_option("Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.")
 @click.option(
@@ -412,6 +425,8 @@ def watch(request: WatchRequest) -> None:
         )
     if interrupted or terminated.is_set():
         sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
+    if request.exit_code and not session.stopped:
+        sys.exit(UNDECIDED_EXIT)
 
 
 @contextmanager
@@ -596,7 +611,10 @@ class _Shown:
                 highlight=False,
             )
         elif event.reason == "timeout":
-            stderr.print(f"mtident: no new row for {self.timeout_s:g} s; stopping", highlight=False)
+            stderr.print(
+                f"mtident: no new row for {self.timeout_s:g} s; the watch ends here, before the test may stop",
+                highlight=False,
+            )
 
 
 def _say_interrupted(stop: KeyboardInterrupt, session: WatchSession) -> bool:
