@@ -379,3 +379,21 @@ def test_a_papers_preset_whose_filter_runs_away_is_not_a_misfit_of_the_model_and
     assert "the afukf filter's final estimate does not describe the window's readings" in said
     assert "preset 'data' takes them from the readings" in said and "two-term model" not in said
     assert np.isnan(result.rmse_C[0]) and np.isnan(result.steady_state_C[0]) and not result.model_ok[0]
+
+
+def test_the_aukf_says_its_adapted_covariance_understates_its_error():
+    """On a first-order warm-up (τ 90.3 min, σ 0.011 °C, half of t95 read) Xia's adaptive law
+    narrowed the aukf's 95 % interval to one that excludes the truth, where the normal UKF's holds
+    it: the answer says so, and names the filter whose interval holds."""
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 6 * 90.3, 1.0)
+    y = np.round(20.0 + 12.0 * (1.0 - np.exp(-t / 90.3)) + rng.normal(0.0, 0.011, t.size), 2)
+    log = make_log(t, {"S": y})
+    plain, adapted = identify(log, 1.5 * 90.3, "ukf"), identify(log, 1.5 * 90.3, "aukf")
+    low, high = plain.steady_state_ci95_C[0]
+    assert low < 32.0 < high
+    low, high = adapted.steady_state_ci95_C[0]
+    assert not low < 32.0 < high and high - low < 0.05
+    said = [n for n in adapted.notes if "adaptive law (Xia 2014) re-estimated Q and R" in n]
+    assert len(said) == 1 and "understates its error" in said[0] and "(--method ukf) holds" in said[0]
+    assert not any("understates" in n for n in plain.notes)
