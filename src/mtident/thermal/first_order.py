@@ -698,7 +698,7 @@ def _verdicts(
                     f"sensor {log.sensors[s]!r}: the aukf filter's adaptive law (Xia 2014) re-estimated Q and R from "
                     "the window's residuals, and its covariance, which the interval is made of, then understates its "
                     "error even on a first-order warm-up (the docs' measured results): the normal UKF's interval "
-                    "(--method ukf) holds"
+                    "(--method ukf) holds the truth far more often"
                 )
     for s in np.flatnonzero(diverged).tolist():
         notes.append(
