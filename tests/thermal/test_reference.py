@@ -291,7 +291,10 @@ def test_the_reference_file_round_trips(complete_run, tmp_path):
         ("[sensors.S]\ntime_constants_min = [-1.0]\nbox = [0.1]\n", "expected time_constants_min"),
         ("[sensors.S]\ntime_constants_min = [10.0, 20.0]\nbox = [0.1]\n", "as many fractions between 0 and 1"),
         # a box of 1 or more would reach down to a time constant of 0 or below
-        ("[sensors.S]\ntime_constants_min = [10.0]\nbox = [1.0]\n", "as many fractions between 0 and 1"),
+        (
+            "[sensors.S]\ntime_constants_min = [10.0]\nbox = [1.0]\n",
+            "each box is a half-width relative to its time constant, below 1",
+        ),
     ],
 )
 def test_a_bad_reference_file_is_refused_with_what_is_wrong(tmp_path, text, message):
@@ -553,11 +556,49 @@ def test_a_merged_mode_of_a_sensor_with_four_modes_gets_a_box_holding_both():
     }
     out, warnings = split_merged_modes(sensors)
     pt100 = out["pt100"]
-    assert pt100.time_constants_min == sensors["pt100"].time_constants_min
+    assert pt100.time_constants_min[:3] == sensors["pt100"].time_constants_min[:3]
     tau, box = pt100.time_constants_min[3], pt100.box[3]
-    assert tau * (1 - box) <= 77.0 and tau * (1 + box) >= 244.0
+    assert tau * (1 - box) <= 77.0 and tau * (1 + box) >= 244.0 and box < 1
     assert pt100.box[:3] == sensors["pt100"].box[:3]
     assert len(warnings) == 1 and "pt100: its mode of 170 min" in warnings[0] and "holding both" in warnings[0]
+
+
+def test_a_box_holding_two_merged_modes_reaches_no_time_constant_below_zero(tmp_path):
+    """A new user's trial: a lagged sensor's 30.8 min lay between the machine's 27.2 and 106 min
+    with four modes already; its box about 30.8 min was widened to ±275 % to reach 106 min, learn
+    showed the range as −53.8 to 115 min, and watch refused the file it wrote. The mode is searched
+    over a range from both modes' boxes, its centre moved to hold it with a box below one, and the
+    file reads back."""
+    from mtident.thermal.machine_model import MachineModel
+    from mtident.thermal.reference import MachineReference, load_reference, save_reference, split_merged_modes
+    from mtident.thermal.robust import SensorModes
+
+    sensors = {
+        "spindle_lag": SensorModes((0.9, 6.31, 30.8, 168.0), (0.4, 0.19, 0.1, 0.1), (1.0, -1.0, -2.0, -5.0)),
+        "motor": SensorModes((26.8, 105.0, 250.0), (0.1, 0.1, 0.1), (-1.0, -2.0, -3.0)),
+    }
+    model = MachineModel(("spindle_lag", "motor"), (250.2, 106.2, 27.2), (0.05, 0.05, 0.05), ((-1.0,) * 3,) * 2)
+    out, warnings = split_merged_modes(sensors, model)
+    lagged = out["spindle_lag"]
+    lows = [t * (1 - b) for t, b in zip(lagged.time_constants_min, lagged.box, strict=True)]
+    highs = [t * (1 + b) for t, b in zip(lagged.time_constants_min, lagged.box, strict=True)]
+    assert all(low > 0 for low in lows) and max(lagged.box) < 1
+    assert any(low <= 27.2 * 0.95 and high >= 106.2 * 1.05 for low, high in zip(lows, highs, strict=True))
+    assert len(warnings) == 1 and "holding both" in warnings[0] and "-" not in warnings[0].split("holding")[0][-30:-20]
+    path = tmp_path / "machine.toml"
+    save_reference(MachineReference("ref.csv", "2026-11-30", 1300.0, "steady", out), path)
+    assert load_reference(path).sensors["spindle_lag"] == lagged
+
+
+def test_a_reference_box_of_one_or_more_is_refused_with_the_way_on(tmp_path):
+    """A file an earlier learn wrote with a box of 2.75 was refused by watch with the whole raw
+    entry and no way on."""
+    from mtident.thermal.reference import load_reference
+
+    path = tmp_path / "machine.toml"
+    path.write_text("[sensors.spindle_lag]\ntime_constants_min = [6.31, 30.8]\nbox = [0.19, 2.75]\n")
+    with pytest.raises(InputError, match=r"sensor 'spindle_lag': box = \[0.19, 2.75\]: each box is a half-width"):
+        load_reference(path)
 
 
 def test_learn_splits_a_merged_mode_where_only_the_machine_model_pins_the_two_down():

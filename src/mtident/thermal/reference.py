@@ -571,13 +571,21 @@ def _split_once(
         )
         if len(modes) + 1 > DEFAULT_MAX_MODES:
             # no room for both: one mode searched over both keeps the test's interval honest
-            lowest = low.time_constant_min * (1.0 - max(low.box, MIN_REFERENCE_BOX))
-            highest = high.time_constant_min * (1.0 + max(high.box, MIN_REFERENCE_BOX))
-            wide = max(1.0 - lowest / tau, highest / tau - 1.0, box)
-            modes[i] = (tau, wide, amplitude)
-            return replace(m, box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes)), (
-                f"{said}{tau:.3g} ±{wide:.0%}, holding both, for this sensor (it has {len(modes)} modes "
-                "already, the most a sensor's fit takes)"
+            # a box about its own τ that reached from both modes' boxes went below zero (±275 % about
+            # 30.8 min: a negative time constant learn showed, a file the loader refused)
+            lowest = min(low.time_constant_min * (1.0 - max(low.box, MIN_REFERENCE_BOX)), tau * (1.0 - box))
+            highest = max(high.time_constant_min * (1.0 + max(high.box, MIN_REFERENCE_BOX)), tau * (1.0 + box))
+            centre, wide = (lowest + highest) / 2.0, (highest - lowest) / (highest + lowest)
+            modes[i] = (centre, wide, amplitude)
+            modes.sort()
+            return replace(
+                m,
+                time_constants_min=tuple(t for t, _, _ in modes),
+                box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
+                amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
+            ), (
+                f"{said}{centre:.3g} ±{wide:.0%} ({lowest:.3g}-{highest:.3g} min), holding both, for this sensor (it "
+                f"has {len(modes)} modes already, the most a sensor's fit takes)"
             )
         split = [(low.time_constant_min, low.box, amplitude / 2.0), (high.time_constant_min, high.box, amplitude / 2.0)]
         modes = sorted(modes[:i] + split + modes[i + 1 :])
@@ -1011,9 +1019,15 @@ def _sensor_modes(path: Path, name: str, entry: object) -> SensorModes:
     ok = ok and 0 < len(taus) <= DEFAULT_MAX_MODES  # type: ignore[arg-type]
     numbers = [*taus, *boxes] if ok else []  # type: ignore[misc]
     ok = ok and all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in numbers)
-    ok = ok and all(v < 1 for v in boxes)  # type: ignore[union-attr]
     free = entry.get("free_fast_modes") if isinstance(entry, dict) else None
     ok = ok and (free is None or (isinstance(free, int) and not isinstance(free, bool) and 0 <= free <= MAX_FREE_FAST))
+    if ok and not all(v < 1 for v in boxes):  # type: ignore[union-attr]
+        msg = (
+            f"{path}: sensor {name!r}: box = {boxes!r}: each box is a half-width relative to its time constant, "
+            "below 1 (a box of 1 or more reaches below zero minutes). An earlier version of `learn` could write one "
+            "where it widened a mode to hold two: learn the reference run again, or set that box below 1"
+        )
+        raise InputError(msg)
     if not ok:
         msg = (
             f"{path}: sensor {name!r}: expected time_constants_min = [1 to {DEFAULT_MAX_MODES} positive minutes], "
