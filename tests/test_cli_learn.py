@@ -124,3 +124,25 @@ def test_a_reference_names_its_machine_and_a_test_of_another_is_refused(tmp_path
         "VMC-1", "--state", str(tmp_path / "s.npz"),
     )  # fmt: skip
     assert unnamed.returncode != 0 and "does not say which machine it is of" in unnamed.stderr
+
+
+def test_learn_reads_back_the_file_it_wrote_and_says_a_fault_of_its_own(tmp_path, monkeypatch):
+    """learn wrote a reference (a box of 2.75) that watch then refused, after learn's exit 0: the
+    file is read back before learn ends, and one that does not read back is said as mtident's own
+    fault, exit 1."""
+    import mtident.thermal.reference as reference_module
+
+    t = np.arange(0.0, 401.0, 2.0)
+    y = np.round(two_mode(t) + np.random.default_rng(3).normal(0.0, 0.02, t.size), 2)
+    log = tmp_path / "run.csv"
+    log.write_text("time_min,S\n" + "".join(f"{a:g},{b:.2f}\n" for a, b in zip(t, y, strict=True)))
+    assert mtident("thermal", "learn", str(log), "-o", str(tmp_path / "m.toml")).returncode == 0
+
+    def broken(reference, path):  # noqa: ANN001, ANN202
+        Path(path).write_text("[sensors.S]\ntime_constants_min = [8.0]\nbox = [2.75]\n")
+
+    monkeypatch.setattr(reference_module, "save_reference", broken)
+    out = mtident("thermal", "learn", str(log), "-o", str(tmp_path / "m.toml"))
+    assert out.returncode == 1
+    said = " ".join(out.stderr.split())
+    assert "does not read back, a fault of mtident's (please report it, with the log)" in said and "2.75" in said

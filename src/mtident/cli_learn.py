@@ -202,7 +202,7 @@ def run_learn(request: LearnRequest) -> None:
         As :func:`learn_command`.
     """
     from mtident.thermal.pooling import pool_references
-    from mtident.thermal.reference import learn_reference, save_reference
+    from mtident.thermal.reference import learn_reference, load_reference, save_reference
 
     earlier = None if request.update_path is None else _earlier_reference(request.update_path, request.machine)
     # learn_reference says a column named as a room sensor itself
@@ -224,6 +224,16 @@ def run_learn(request: LearnRequest) -> None:
         raise InputError(msg)
     output_path = request.output_path
     save_reference(reference, output_path)
+    try:
+        # a file learn writes that identify and watch then refuse would be found a test too late
+        load_reference(output_path)
+    except InputError as exc:
+        stderr.print(
+            f"mtident: error: the reference written to {output_path} does not read back, a fault of mtident's "
+            f"(please report it, with the log): {exc}",
+            highlight=False,
+        )
+        raise SystemExit(1) from None
     doubtful = [name for name, m in reference.sensors.items() if m.doubt is not None]
     unused = (
         f"; none of its sensors will be used by later tests (each is doubtful: {', '.join(doubtful)})"
