@@ -552,6 +552,21 @@ def test_a_sensor_found_silent_at_any_check_is_said_then(spindle_reference):
     ]
     assert len(said) == 1 and said[0].time_min <= 166.0
     assert state.checks[1].status != "silent"  # reading again
+    # the answer keeps what was said of it, though its latest check has nothing to say (a user's
+    # JSON had "warnings": [] for a sensor warned of twice on stderr)
+    column = result(state, settings)["sensors"][1]
+    assert column["sensor"] == "column" and said[0].text in column["warnings"]
+    assert load_dataclass_roundtrip(state).warned == state.warned != ()
+
+
+def load_dataclass_roundtrip(state: MonitorState) -> MonitorState:
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "state.npz"
+        save_dataclass(path, state)
+        return load_dataclass(path, MonitorState)
 
 
 def test_a_stuck_sensor_holds_the_test_and_says_why(spindle_reference):

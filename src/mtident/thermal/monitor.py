@@ -202,6 +202,8 @@ def monitor_step(
             except _Cancelled:
                 break  # the readings of this check are not taken: the state is as before them
             events.extend(said)
+            warned = tuple((e.sensor, e.text) for e in said if e.kind == "warning" and e.sensor is not None)
+            fed = replace(fed, warned=fed.warned + warned) if warned else fed
             if checked is not None:
                 checked(fed)
         state = fed
@@ -283,7 +285,9 @@ def _check_due(
                 f"test can stop at t = {minutes(now)}",
             )
         )
-    return MonitorState(state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped), events
+    return MonitorState(
+        state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped, state.warned
+    ), events
 
 
 def _reference_dropped(settings: MonitorSettings, now: float, why: str, sensors: Sequence[str]) -> Event:

@@ -179,7 +179,11 @@ def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, f
         settings = replace(settings, reference=None)  # the answers rest on no reference: their assumptions say so
     measured = state.readings.room_C is not None
     sensors = tuple(
-        _sensor_status(c, settings, math.nan if expected is None else expected.get(c.sensor, math.nan), measured)
+        replace(
+            _sensor_status(c, settings, math.nan if expected is None else expected.get(c.sensor, math.nan), measured),
+            # every warning said of it, where its latest check no longer has some
+            warnings=tuple(dict.fromkeys([*(text for name, text in state.warned if name == c.sensor), *c.warnings])),
+        )
         for c in state.checks
     )
     stopped = state.stopped

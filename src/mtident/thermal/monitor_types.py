@@ -443,6 +443,9 @@ class MonitorState:
     reference_dropped : bool
         Whether the reference was dropped for every sensor, most of those it knows having
         contradicted it (another machine's, or this one changed).
+    warned : tuple of (str, str)
+        Each warning said of a sensor so far, as (sensor, text): its answer lists them, where its
+        latest check may no longer have them.
     """
 
     sensors: tuple[str, ...]
@@ -451,6 +454,7 @@ class MonitorState:
     stop_time_min: float = math.nan
     said: tuple[str, ...] = ()
     reference_dropped: bool = False
+    warned: tuple[tuple[str, str], ...] = ()
 
     @property
     def stopped(self) -> bool:
