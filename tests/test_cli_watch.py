@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -609,3 +610,34 @@ def test_a_first_ctrl_c_ends_the_watch_at_its_next_safe_point_and_a_second_at_on
     finally:
         cli_watch._terminating.clear()
         cli_watch._interrupting.clear()
+
+
+def test_the_hindsight_check_does_not_say_the_log_ended_early_where_the_readings_follow_the_room(capsys):
+    """A new user's 1,500-min log (six times the slowest mode) in a daily room: every sensor's
+    readings kept following the room, their rise above it settled by 370 min; the check said "the
+    log ends before its sensors settled"."""
+    from mtident.cli_watch import _print_hindsight
+    from mtident.thermal.hindsight import Hindsight
+
+    nan = np.nan
+    hindsight = Hindsight(
+        ("S1", "S2"),
+        689.0,
+        1500.0,
+        np.array([26.55, 24.02]),
+        np.array([nan, nan]),
+        np.array([nan, nan]),
+        0.1,
+        0.2,
+        settle_time_min=np.array([339.0, 370.0]),
+    )
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "The log ends before" not in text
+    assert (
+        "Every sensor's readings keep following the room to the log's end: no settled level: nothing to check" in text
+    )
+    hindsight = replace(hindsight, settle_time_min=np.array([339.0, nan]))
+    _print_hindsight(hindsight)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "The log ends before S2 settled" in text and "the others' readings keep following the room" in text

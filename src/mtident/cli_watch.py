@@ -909,12 +909,25 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         )
     timing = _settle_timing(hindsight)
     if not settled.any():
+        # readings that keep following a moving room have not failed to settle: the log can be long
+        late = [
+            name
+            for name, decided, room in zip(
+                hindsight.sensors, np.isfinite(hindsight.steady_state_C), with_room, strict=True
+            )
+            if decided and not room
+        ]
+        why = (
+            f"The log ends before {'its sensors' if len(late) == len(hindsight.sensors) else ', '.join(late)} settled "
+            f"(settled: moving less than {hindsight.tolerance_C / 2:g} °C over the log's last quarter, with under "
+            f"{hindsight.tolerance_C / 4:g} °C still to come at the pace of its slowest mode, a move its readings' "
+            "display step could hide counted in)"
+            + ("; the others' readings keep following the room" if with_room.any() else "")
+            if late
+            else "Every sensor's readings keep following the room to the log's end: no settled level"
+        )
         OptionConsole().print(
-            f"The log ends before its sensors settled (settled: moving less than {hindsight.tolerance_C / 2:g} °C "
-            f"over the log's last quarter, with under {hindsight.tolerance_C / 4:g} °C still to come at the pace of "
-            "its slowest mode, a move its readings' display step could hide counted in): nothing to check the "
-            "decision against" + (f"; {timing}." if timing else "."),
-            highlight=False,
+            f"{why}: nothing to check the decision against" + (f"; {timing}." if timing else "."), highlight=False
         )
         return
     beyond = [
