@@ -917,14 +917,17 @@ def inspect_command(
     try:
         info = describe_log(path, time_col, time_unit, asked_sensors(sensors, path) or None, temperature_unit)
     except InputError as exc:
-        if " row " not in str(exc) and " line " not in str(exc):
+        if (" row " not in str(exc) and " line " not in str(exc)) or "watch refuses it too" in str(exc):
             raise
         # a row refused here is refused by identify, learn and report too, but not by watch: say
         # so, where a user checks a log before trusting watch with it
-        msg = (
-            f"{exc} (identify, learn and report refuse the log too; watch, which follows a log as a logger writes "
-            "it, skips such a row or reading with a warning and reads on)"
+        watch = (
+            "watch skips a row that goes back a few steps with a warning, and refuses a log whose clock restarted"
+            if "time goes back" in str(exc)
+            else "watch, which follows a log as a logger writes it, skips such a row or reading with a warning and "
+            "reads on"
         )
+        msg = f"{exc} (identify, learn and report refuse the log too; {watch})"
         raise InputError(msg) from exc
     if as_json:
         print_json(info)

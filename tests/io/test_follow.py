@@ -409,7 +409,50 @@ def test_follower_refuses_repeated_and_backward_times(tmp_path):
     path.write_text("time_min,A\n0,20\n1,20.1\n1,20.2\n0.5,20.3\n2,20.4\n")
     rows = LogFollower(path).poll()
     np.testing.assert_allclose(rows.time_min, [0, 1, 2])
-    assert sum("repeats or goes back" in w for w in rows.warnings) == 2
+    # said once for the rows of a poll, not once a row (a duplicated block gave 21 lines)
+    assert [w for w in rows.warnings if "go back" in w] == [
+        f"{path}: refused 2 rows that repeat or go back (at t = 0.5 to 1 min, after t = 1 min)"
+    ]
+
+
+def test_follower_refuses_a_clock_that_restarted(tmp_path):
+    """A logger restarted its clock at row 200: 200 rows were refused one warning each, and its row
+    at its own 200 min (the 400th minute) was then taken as the first run's t = 200."""
+    path = tmp_path / "log.csv"
+    rows = [f"{t},{20 + t / 100:.2f}" for t in range(200)] + [f"{t},{22 + t / 100:.2f}" for t in range(201)]
+    path.write_text("time_min,A\n" + "\n".join(rows) + "\n")
+    with pytest.raises(InputError, match=r"the time went back from t = 199 min to 0 min \(a logger restarted"):
+        LogFollower(path).poll()
+
+
+def test_follower_refuses_a_header_that_changes_the_columns_and_passes_over_the_same_one(tmp_path):
+    """A logger reconfigured mid-test wrote a new header with a column added before the room's: the
+    follower read on by the first header's places, fed the room from the new column, and the test
+    stopped without a word."""
+    path = tmp_path / "log.csv"
+    head = "time_min,A,room\n" + "".join(f"{t},{20 + t / 100:.2f},18.00\n" for t in range(60))
+    path.write_text(head + "time_min,A,room\n60,20.60,18.00\n")
+    rows = LogFollower(path).poll()
+    np.testing.assert_allclose(rows.time_min, np.arange(61.0))
+    path.write_text(head + "time_min,A,B,room\n60,20.60,25.00,18.00\n")
+    with pytest.raises(
+        InputError, match=r"a new header \(time_min, A, B, room\) where the log's is \(time_min, A, room\)"
+    ):
+        LogFollower(path).poll()
+
+
+def test_follower_refuses_rows_wider_than_the_header(tmp_path):
+    """Decimal commas in a comma-separated log: the file reader refused it, the follower read each
+    row to the header's width and fed the second sensor the first one's decimals."""
+    path = tmp_path / "log.csv"
+    wide = "".join(f"{t},20,{t % 10},21,{t % 7}\n" for t in range(60, 70))
+    path.write_text("time_min,A,B\n" + "".join(f"{t},20.{t % 10},21.{t % 7}\n" for t in range(60)) + wide)
+    rows = LogFollower(path).poll()
+    np.testing.assert_allclose(rows.time_min, np.arange(60.0))
+    assert any(
+        "refused 10 row(s) with more cells than the header's 3 (the first has 5) (decimal commas" in w
+        for w in rows.warnings
+    )
 
 
 def test_follower_and_watch_refuse_two_columns_of_one_name(tmp_path):

@@ -273,3 +273,16 @@ def test_inspect_says_where_no_column_states_a_unit(write_csv):
     assert describe_log(bare, temperature_unit="F").format.units_from == "no units in the log (°F, as stated)"
     named = write_csv("time_min,A [°C],B [°C]\n" + "".join(f"{k},{20 + k},{21 + k}\n" for k in range(6)))
     assert describe_log(named).format.units_from == "the column names"
+
+
+def test_a_stray_row_in_a_numeric_time_column_is_named_where_it_is(tmp_path):
+    """A summary row at the end, or a header written again with other columns at row 202, was
+    reported as "row 2: '0' is neither a number nor a time stamp"."""
+    body = "".join(f"{t},{20 + t / 100:.2f},{21 + t / 100:.2f}\n" for t in range(200))
+    path = tmp_path / "summary.csv"
+    path.write_text("time_min,A,B\n" + body + "Max,22.00,23.00\n")
+    with pytest.raises(InputError, match=r"row 202: 'Max' is not a number, where the column's other cells are"):
+        read_temperature_log(path)
+    path.write_text("time_min,A,B\n" + body + "time_min,B,A\n200,23.00,22.00\n")
+    with pytest.raises(InputError, match=r"row 202 is a header written again with other columns"):
+        read_temperature_log(path)

@@ -158,8 +158,52 @@ def parse_lines(
     short = set(rows_cut_short(lines, layout.dialect))
     warnings = [f"{source}: refused the row {cut_short_words(lines[k], layout.dialect)}" for k in sorted(short)]
     rows = split_rows((line for k, line in enumerate(lines) if k not in short), layout.dialect, len(layout.header))
+    rows, said = _without_wide_rows(layout, _without_headers(layout, rows, source), source)
     state, parsed = _live_rows(layout, state, rows, source, restarted)
+    warnings += said
     return state, replace(parsed, warnings=(*warnings, *parsed.warnings)) if warnings else parsed
+
+
+def _without_headers(layout: LogLayout, rows: list[list[str]], source: str | Path) -> list[list[str]]:
+    """The rows less a header written again (a logger restarted): the same names are passed over;
+    other names are an error, for the rows after them would be read under the first header's names
+    (a column added before the room's fed the room's readings from it, and the test stopped)."""
+    names = [name.strip() for name in layout.header]
+    time_name = names[layout.time_column]
+    kept = []
+    for row in rows:
+        cells = [cell.strip() for cell in row]
+        if len(cells) <= layout.time_column or cells[layout.time_column] != time_name:
+            kept.append(row)
+            continue
+        written = [cell for cell in cells if cell]
+        if written != [name for name in names if name and not name.startswith("Unnamed: ")]:
+            msg = (
+                f"{source}: a new header ({', '.join(written)}) where the log's is ({', '.join(names)}): the logger's "
+                "columns changed, and the rows after it would be read under the first header's names. Watch the rows "
+                "after it as a log of their own"
+            )
+            raise InputError(msg)
+    return kept
+
+
+def _without_wide_rows(
+    layout: LogLayout, rows: list[list[str]], source: str | Path
+) -> tuple[list[list[str]], list[str]]:
+    """The rows less those with more cells than the header where the cells past it hold something
+    (the file reader refuses the log: :func:`~mtident.io.dialect.read_lines`), and one warning for
+    them: read to the header's width, a comma-separated row with decimal commas fed one sensor's
+    integer parts as its readings and its decimals as the next sensor's."""
+    width = len(layout.header)
+    wide = [row for row in rows if len(row) > width and any(cell.strip() for cell in row[width:])]
+    if not wide:
+        return rows, []
+    hint = " (decimal commas in a comma-separated log?)" if layout.dialect.delimiter == "," else ""
+    said = (
+        f"{source}: refused {len(wide)} row(s) with more cells than the header's {width} (the first has "
+        f"{len(wide[0])}){hint}: their readings would land under the wrong names"
+    )
+    return [row for row in rows if not (len(row) > width and any(cell.strip() for cell in row[width:]))], [said]
 
 
 def _live_rows(
@@ -178,6 +222,7 @@ def _live_rows(
     # restart finds its changes again
     previous_raw = None if restarted or state.last_time is None else state.last_time - state.clock_shift
     previous_cell = None if restarted else state.last_stamp
+    back: list[tuple[float, float]] = []
     for line in rows:
         if all(not c.strip() for c in line):
             continue
@@ -191,10 +236,8 @@ def _live_rows(
         t = raw + state.clock_shift
         if state.last_time is not None and t <= state.last_time:
             if not restarted:  # after a restart the old rows come again: expected, not an error
-                warnings.append(
-                    f"{source}: refused the row at t = {t:g} min: it repeats or goes back from t = "
-                    f"{state.last_time:g} min"
-                )
+                _refuse_clock_restart(state, t, source)
+                back.append((t, state.last_time))
             else:
                 previous_raw, previous_cell = raw, cell
             continue
@@ -207,10 +250,38 @@ def _live_rows(
         previous_raw, previous_cell = raw, cell
         times.append(t)
         taken.append(line)
+    if len(back) == 1:
+        warnings.append(
+            f"{source}: refused the row at t = {back[0][0]:g} min: it repeats or goes back from t = {back[0][1]:g} min"
+        )
+    elif back:
+        warnings.append(
+            f"{source}: refused {len(back)} rows that repeat or go back (at t = {min(t for t, _ in back):g} to "
+            f"{max(t for t, _ in back):g} min, after t = {back[0][1]:g} min)"
+        )
     values = _readings(layout, taken)
     # readings lost are a warning: a JSON reader finds them among the watch's log_warnings
     warnings.extend(_skipped_notes(layout.sensors, np.array(times), values))
     return state, ParsedRows(np.array(times), values, tuple(notes), tuple(warnings))
+
+
+RESTART_STEPS = 10
+"""A time that goes back by more than this many sampling steps, and by more than half the log so far,
+is a logger whose clock restarted, not a row out of order."""
+
+
+def _refuse_clock_restart(state: TimeState, t: float, source: str | Path) -> None:
+    """An error where a row's time goes back so far that the logger's clock restarted: the rows after
+    it are another run's, at times the log cannot place (read on, a restarted row at its own time
+    200 min was taken for the first run's, where it was the 400th minute)."""
+    last, step = state.last_time, state.last_step
+    if last is None or step is None or last - t <= max(RESTART_STEPS * step, 0.5 * last):
+        return
+    msg = (
+        f"{source}: the time went back from t = {last:g} min to {t:g} min (a logger restarted with its clock?): "
+        "the rows after it are another run's, at times this log cannot place. Watch them as a log of their own"
+    )
+    raise InputError(msg)
 
 
 def _whole_log(layout: LogLayout, rows: list[list[str]], source: str, whole: WholeLog) -> tuple[TimeState, ParsedRows]:

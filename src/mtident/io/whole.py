@@ -359,6 +359,7 @@ def _stamped_time(time: _Column, time_unit: str | None, number: np.ndarray, sour
         row = int(time.empty.argmax())
         msg = f"{source}: time column {time.name!r}, row {number[row]} is empty"
         raise InputError(msg)
+    _refuse_stray_time_cell(time, number, source)
     text = pd.Series([cell.strip() for cell in time.cells], dtype=object)
     fmt = stamp_format(str(text.iloc[0]))
     if time_unit is not None:
@@ -389,6 +390,38 @@ def _stamped_time(time: _Column, time_unit: str | None, number: np.ndarray, sour
     elif not has_utc_offset(str(text.iloc[0])) and len(values) > 2:
         shifted = _across_clock_changes(values, first, time, number, notes)
     return WholeTime(shifted, first, fmt, str(text.iloc[0]), float(shifted[-1] - values[-1]))
+
+
+def _refuse_stray_time_cell(time: _Column, number: np.ndarray, source: str) -> None:
+    """An error naming the first cell that is no number in a time column of numbers (nine in ten at
+    least, the first among them): the column was taken for time stamps, and the error named its
+    first row ('0' is neither a number nor a time stamp) where a summary row or a header written
+    again lay hundreds of rows on."""
+    numeric = np.array([_is_number(cell) for cell in time.cells])
+    if not len(numeric) or not numeric[0] or numeric.mean() < 0.9:
+        return
+    row = int(np.argmin(numeric))
+    if time.cells[row].strip() == time.name.strip():
+        # the same header again is left out before this (read_lines): this one names other columns
+        msg = (
+            f"{source}: row {number[row]} is a header written again with other columns (a logger restarted or "
+            "reconfigured?): the rows after it belong under its names, not the first header's; split the log there "
+            "(watch refuses it too)"
+        )
+        raise InputError(msg)
+    msg = (
+        f"{source}: time column {time.name!r}, row {number[row]}: {time.quoted(row)} is not a number, where the "
+        "column's other cells are (a summary row?): leave that row out"
+    )
+    raise InputError(msg)
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
 
 
 def _stamps(text: pd.Series, fmt: str | None) -> tuple[pd.Series, str | None]:
