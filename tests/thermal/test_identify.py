@@ -83,3 +83,16 @@ def test_identify_and_min_time_take_a_dataframe_and_refuse_what_they_cannot_use(
         minimal_identification_time(frame, periods_min=[0])
     with pytest.raises(InputError, match=r"windows_min must be positive numbers of minutes, not \[\]"):
         minimal_identification_time(frame, windows_min=[])
+
+
+def test_identify_leaves_out_a_stuck_channels_readings_and_says_so():
+    """A failed channel read 0.00 °C from 150 min on: identify took it as where the sensor settled
+    (measured final 0.00, settled, RMSE 23 °C) without a word."""
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 300.0, 1.0)
+    y = np.round(20.0 + 10.0 * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.02, t.size), 2)
+    y[150:] = 0.0
+    result = identify(make_log(t, {"S": y}), 60.0)
+    said = [n for n in result.notes if "every reading from t = 150 min to the log's end is the same value" in n]
+    assert len(said) == 1 and "'S'" in said[0] and said[0] in result.warnings[0]
+    assert result.rmse_C[0] < 0.2 and not (result.measured_final_C[0] == 0.0)

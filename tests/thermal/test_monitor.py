@@ -40,7 +40,7 @@ from mtident.io.logs import TemperatureLog
 from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal import identify, minimal_identification_time
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
-from mtident.thermal.monitor_types import stuck_since
+from mtident.thermal.readings import stuck_since
 from mtident.thermal.reference import MachineReference, learn_reference
 from mtident.thermal.robust import SensorModes, estimate_sensor
 

@@ -11,7 +11,11 @@ itself measures in :mod:`~mtident.thermal.measured`. Their names are importable 
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
@@ -35,6 +39,7 @@ from mtident.thermal.measured import (
     rmse,
     window_samples,
 )
+from mtident.thermal.readings import stuck_since
 from mtident.thermal.robust_identify import identify_robust
 from mtident.thermal.robust_types import RobustSettings
 from mtident.thermal.settings import DEFAULT_METHOD, IDENTIFY_METHODS, METHODS, ROBUST_METHOD
@@ -61,6 +66,33 @@ __all__ = [
     "sensor_notes",
     "window_samples",
 ]
+
+
+def without_stuck_readings(log: TemperatureLog) -> TemperatureLog:
+    """The log with each sensor's stuck readings at its end (:func:`~mtident.thermal.readings.stuck_since`)
+    left out, and a note naming them: a failed channel's 0.00 °C from 150 min on was read as where
+    the sensor settled (its measured final temperature 0.00, "settled", its RMSE 23 °C).
+
+    Parameters
+    ----------
+    log : TemperatureLog
+
+    Returns
+    -------
+    TemperatureLog
+    """
+    values, notes = log.temperature_C.copy(), list(log.notes)
+    for s, name in enumerate(log.sensors):
+        since = stuck_since(log.time_min, values[:, s])
+        if math.isnan(since):
+            continue
+        after = log.time_min >= since
+        notes.append(
+            f"sensor {name!r}: every reading from t = {since:g} min to the log's end is the same value, which its "
+            "noise makes no chance (a stuck sensor or a failed channel?): they are left out"
+        )
+        values[after, s] = np.nan
+    return replace(log, temperature_C=values, notes=tuple(notes)) if len(notes) > len(log.notes) else log
 
 
 def identify(
@@ -128,7 +160,7 @@ def identify(
     if method not in IDENTIFY_METHODS:
         msg = f"method {method!r} is not one of: {', '.join(IDENTIFY_METHODS)}"
         raise InputError(msg)
-    log = as_temperature_log(log, "identify")
+    log = without_stuck_readings(as_temperature_log(log, "identify"))
     if method == ROBUST_METHOD:
         if preset != "data" or pseudo_measurement_seed is not None:
             setting = "`preset`" if preset != "data" else "`pseudo_measurement_seed`"

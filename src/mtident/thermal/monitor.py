@@ -44,9 +44,8 @@ from mtident.thermal.monitor_types import (
     Status,
     last_valid,
     minutes,
-    stuck_since,
 )
-from mtident.thermal.readings import sampling_interval_min
+from mtident.thermal.readings import sampling_interval_min, stuck_since
 from mtident.thermal.reference import reference_notes
 from mtident.thermal.robust import estimate_sensor
 from mtident.thermal.robust_types import SensorEstimate
@@ -223,8 +222,11 @@ def _check_due(
     checks = list(state.checks)
     dropped = state.reference_dropped
     used = replace(settings, reference=None) if dropped else settings
+    last, silent, stuck = _last_readings(readings)
+    # a stuck sensor's repeats say nothing of its temperature: its fits leave them out
+    fitted = _without_stuck(readings, last, stuck)
     # every sensor fitted together once a check; the sensors checked take their part of it
-    machine = machine_fit(readings, state.sensors, used)
+    machine = machine_fit(fitted, state.sensors, used)
     if machine is not None and machine.contradicted:
         # the machine model is the reference's strongest claim: where most sensors reject it, the
         # per-sensor modes of the same run are not this machine's either
@@ -233,12 +235,11 @@ def _check_due(
         dropped, used, machine = True, replace(settings, reference=None), None
         checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
     wander = unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels))
-    last, silent, stuck = _last_readings(readings)
 
     def check_sensor(s: int) -> None:
         if cancel is not None and cancel():
             raise _Cancelled
-        estimate = combined_estimate(sensor_estimate(readings, s, state.sensors[s], used), machine, s, wander)
+        estimate = combined_estimate(sensor_estimate(fitted, s, state.sensors[s], used), machine, s, wander)
         before, checks[s] = (
             checks[s],
             _checked(checks[s], estimate, now, readings, used, (last[s], silent[s], stuck[s])),
@@ -489,7 +490,7 @@ def _checked(
 def _last_readings(readings: Readings) -> tuple[list[float], list[bool], list[bool]]:
     """Per sensor, :func:`~mtident.thermal.monitor_types.last_valid` up to the latest reading of
     any sensor (where every sensor stops, the logger has, and nothing is said of one), and whether
-    it is stuck (:func:`~mtident.thermal.monitor_types.stuck_since`, whose time then stands for its
+    it is stuck (:func:`~mtident.thermal.readings.stuck_since`, whose time then stands for its
     latest reading: repeats are no new readings). Once a check, for every sensor it checks."""
     finite = np.isfinite(readings.values_C)
     anyone = np.flatnonzero(finite.any(axis=1))
@@ -498,6 +499,16 @@ def _last_readings(readings: Readings) -> tuple[list[float], list[bool], list[bo
     since = [stuck_since(readings.time_min, column) for column in readings.values_C.T]
     last = [at if math.isnan(s) else s for (at, _), s in zip(pairs, since, strict=True)]
     return last, [silent for _, silent in pairs], [not math.isnan(s) for s in since]
+
+
+def _without_stuck(readings: Readings, last: list[float], stuck: list[bool]) -> Readings:
+    """The readings with each stuck sensor's repeats, from the first (``last``), left out."""
+    if not any(stuck):
+        return readings
+    values = readings.values_C.copy()
+    for s in np.flatnonzero(stuck):
+        values[readings.time_min >= last[s], s] = np.nan
+    return replace(readings, values_C=values)
 
 
 def _status(estimate: SensorEstimate, within: bool, ready: bool) -> Status:

@@ -30,6 +30,7 @@ __all__ = [
     "room_input",
     "spikes",
     "step_from_grid",
+    "stuck_since",
 ]
 
 ROOM_TREND_MIN = 120.0
@@ -515,3 +516,57 @@ def spikes(values: FloatArray, noise_C: float, rounding_C: float, half_window: i
     with np.errstate(invalid="ignore"):
         wild[half_window : len(y) - half_window] = np.abs(y[half_window : len(y) - half_window] - median) > limit
     return wild
+
+
+STUCK_MIN = 10.0
+"""A stuck run spans at least this long (min), as a silent sensor's gap does."""
+STUCK_READINGS = 20
+"""A sensor whose latest readings (at least this many, over at least :data:`STUCK_MIN`) are one
+and the same value, more alike than its noise leaves to chance (:data:`STUCK_CHANCE`), is stuck."""
+STUCK_CHANCE = 1e-7
+"""The chance below which that many readings in one display step are not noise."""
+_NOISE_BEFORE = 20
+_STUCK_NOISE_STEPS = 0.5
+"""Below this much noise (in display steps, beyond the rounding's), a repeated reading is not judged."""
+
+
+def stuck_since(time_min: FloatArray, values: FloatArray) -> float:
+    """The time from which a column's valid readings have all been exactly its latest one, where
+    its noise before them, and how often its readings before repeated themselves, make that many
+    alike no chance (below :data:`STUCK_CHANCE`): a stuck
+    sensor, a logger channel that repeats its last value. NaN where they can be chance (a display
+    coarser than the noise repeats a settled reading for hours), or where the column never varied.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N,)
+        The column's readings (°C, NaN: missing).
+
+    Returns
+    -------
+    float
+    """
+    at = np.flatnonzero(np.isfinite(values))
+    if len(at) < STUCK_READINGS + _NOISE_BEFORE or values[at[-1]] != values[at[-STUCK_READINGS]]:
+        return math.nan
+    y = values[at]
+    differs = np.flatnonzero(y != y[-1])
+    start = int(differs[-1]) + 1 if len(differs) else 0
+    alike = len(y) - start
+    if start < _NOISE_BEFORE or alike < STUCK_READINGS or time_min[at[-1]] - time_min[at[start]] < STUCK_MIN:
+        return math.nan
+    before = slice(max(start - 10 * _NOISE_BEFORE, 0), start)
+    sigma = float(noise_sigma(y[before, None], time_min[at[before]])[0])
+    step = float(display_resolution(y[:, None])[0])
+    # the noise beyond the rounding's own (q/√12): a smooth settled curve, rounded, repeats its
+    # reading by the hundred, and the rounding's share of σ says nothing of how often
+    beyond = math.sqrt(max(sigma**2 - step**2 / 12.0, 0.0))
+    if beyond <= 0.0 or beyond < _STUCK_NOISE_STEPS * step:
+        return math.nan
+    # the most readings of noise σ about a level can share is one step about it; and the readings
+    # before, as often as they repeated themselves then
+    in_one_step = math.erf(step / (2.0 * math.sqrt(2.0) * beyond))
+    repeated = float(np.mean(np.diff(y[before]) == 0.0))
+    chance = max(in_one_step, repeated) ** (alike - 1)
+    return float(time_min[at[start]]) if chance < STUCK_CHANCE else math.nan
