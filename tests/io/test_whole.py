@@ -26,6 +26,25 @@ def test_a_burnout_marker_is_an_open_circuit_sample(write_csv):
     assert np.isnan(log.temperature_C[[7, 9], 0]).all() and log.temperature_C[8, 0] == 20.8
 
 
+@pytest.mark.parametrize(
+    ("marker", "kind"),
+    [
+        ("OVL", "open-circuit"),
+        ("-OL", "open-circuit"),
+        ("O.L.", "open-circuit"),
+        ("Err", "open-circuit"),
+        ("#VALUE!", "empty/NaN"),
+        ("----", "empty/NaN"),
+    ],
+)
+def test_more_loggers_markers_are_bad_samples_not_a_refused_log(write_csv, marker, kind):
+    """A new user's loggers wrote OVL, -OL, O.L., Err, #VALUE! and ---- in place of readings: watch
+    skipped them, inspect and identify refused the whole log ("'OVL' is not a number")."""
+    rows = "".join(f"{k},{marker if k in (7, 9) else f'{20 + k / 10:.2f}'}\n" for k in range(30))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows))
+    assert log.notes == (f"sensor 'A': skipped 2 {kind} sample(s) (rows 9, 11)",)
+
+
 def test_a_row_written_twice_is_left_out_and_said(write_csv):
     """A logger flushing its buffer again wrote a row twice; the run ended with 'duplicate time'.
     The same time with other readings is still refused."""

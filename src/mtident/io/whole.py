@@ -68,11 +68,20 @@ __all__ = [
 # What loggers write in place of a reading for a broken thermocouple or an overrange (Graphtec
 # "BURNOUT"); the live follower reads any text as a missing reading.
 OPEN_CIRCUIT_TEXT = frozenset(
-    ("burnout", "burn out", "open", "ol", "over", "+over", "-over", "overrange", "under", "+++++", "-----")
+    (
+        *("burnout", "burn out", "open", "ol", "+ol", "-ol", "o.l.", "o.l", "ovl", "over", "+over", "-over"),
+        *("overrange", "overflow", "under", "underrange", "err", "error", "+++++", "-----"),
+    )
 )
 # What loggers and spreadsheets write in place of a reading they do not have (a dropped sample,
 # a channel between scans): missing, like an empty cell.
-MISSING_TEXT = frozenset(("", "-", "--", "---", "n/a", "na", "#n/a", "#na", "null", "none", "nan"))
+MISSING_TEXT = frozenset(
+    (
+        *("", "-", "--", "---", "----", "n/a", "na", "#n/a", "#na", "null", "none", "nan"),
+        # a spreadsheet's formula errors, where an export's cell had no reading to compute from
+        *("#value!", "#div/0!", "#ref!", "#num!", "#name?", "#null!"),
+    )
+)
 # Above this share of bad samples a sensor is refused rather than bridged.
 MAX_BAD_FRACTION = 0.1
 
