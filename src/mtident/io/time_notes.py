@@ -392,8 +392,11 @@ def hours_hint(header: str, span_min: float, samples: int) -> str | None:
     --------
     >>> hours_hint("t", 14.0, 1681) is not None, hours_hint("t", 14.0, 15) is None
     (True, True)
+    >>> hours_hint("Time", 6.68, 401) is not None  # a minute written in hours as 0.0167
+    True
     """
-    if samples < HOURS_HINT_SAMPLES or span_min > 60.0 or span_min / (samples - 1) > 1.0 / 60.0:
+    # a minute written in hours to four places (0.0167) is a step of 1.002 s: a second, as written
+    if samples < HOURS_HINT_SAMPLES or span_min > 60.0 or span_min / (samples - 1) > 1.05 / 60.0:
         return None
     return (
         f"{read_as_minutes(header)} and runs only to {span_min:g} min with a reading every "
