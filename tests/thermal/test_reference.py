@@ -721,3 +721,21 @@ def test_loose_slow_modes_advice_names_a_room_that_moved_during_the_run():
     steady = np.full_like(t, 21.0) + np.where(np.arange(len(t)) % 2, ROOM_MOVED_C, 0.0)
     assert loose_mode_advice(steady).startswith("learn from a run that reaches equilibrium")
     assert loose_mode_advice(None) == loose_mode_advice(steady)
+
+
+def test_a_run_learnt_without_its_room_sensor_is_told_to_name_it():
+    """A new user's run in a room that moved ±0.05 °C, learnt without its room column: every sensor
+    was doubted as a misfit, and the way on said to check the heat input; with the room named none
+    is doubted."""
+    from helpers import _daily, _run_in_room
+
+    t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, _daily(0.05), seed=4)
+    log = TemperatureLog(t, SENSORS, y, (), "ref.csv")
+    _, warnings = learn_reference(log)
+    doubted = [w for w in warnings if "Later tests will not use this sensor's modes" in w]
+    assert len(doubted) == 4
+    assert all(
+        "name its column as the room sensor (--ambient)" in w for w in doubted if "misfit" in w or "correlated" in w
+    )
+    _, warnings = learn_reference(log, room)
+    assert not any("Later tests will not use" in w for w in warnings)

@@ -324,7 +324,8 @@ def learn_reference(
                 "later tests stop later than with a run that shows every mode"
             )
         if doubt is not None:
-            warnings.append(f"{name}: {doubt}. Later tests will not use this sensor's modes: {_way_on(estimate)}")
+            way_on = _way_on(estimate, room_C is not None)
+            warnings.append(f"{name}: {doubt}. Later tests will not use this sensor's modes: {way_on}")
         if max(m.time_constant_min for m in fit.modes) >= 0.98 * settings.max_time_constant_min:
             warnings.append(
                 f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the "
@@ -658,14 +659,23 @@ def _doubt(
     return None
 
 
-def _way_on(estimate: SensorEstimate) -> str:
+def _way_on(estimate: SensorEstimate, with_room: bool = True) -> str:
     """What to do about a doubted sensor: a run that misfits every model tried is no shorter or
-    sparser run's fault; a run that does not pin the steady state down is."""
+    sparser run's fault; a run that does not pin the steady state down is. Without a room sensor, a
+    room that moved a few hundredths reads as a misfit too (a new user's steady-room run learnt
+    without its room column doubted five of six sensors, with it none)."""
     if "misfit" in estimate.warning_codes:
+        room = (
+            "; and where the room was logged, name its column as the room sensor (--ambient): a room that moves even "
+            "a few hundredths of a degree, unknown to the fit, reads as a misfit"
+            if not with_room
+            else ""
+        )
         return (
             "the run's readings follow no sum of the modes tried, so a longer run alone will not help. Check that the "
             "heat input stayed the same through the run and that the sensor reads the body itself (one behind a lag "
             "of its own, in a sleeve or a loose fit, adds a mode; one the air reaches reads the room's noise too)"
+            + room
         )
     return (
         "learn from a run that reaches equilibrium, logged densely enough to show every mode, in a room that drifts "
