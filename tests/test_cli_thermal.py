@@ -700,12 +700,13 @@ def test_sensors_that_take_the_same_modes_from_one_run_share_a_line():
 
 
 def test_inspect_says_that_watch_reads_a_log_it_refuses_for_a_bad_row(tmp_path):
-    """`inspect`, the check before trusting watch with a log, refused an 'ERR' cell without saying
-    that watch reads the same log (skipping the reading): a user took it for unreadable."""
+    """`inspect`, the check before trusting watch with a log, refused a cell that is no reading
+    (an 'ERR' then, a marker now) without saying that watch reads the same log (skipping the
+    reading): a user took it for unreadable."""
     path = tmp_path / "err.csv"
-    path.write_text("time_min,T1\n" + "".join(f"{m},{20 + m / 10:.2f}\n" if m != 5 else "5,ERR\n" for m in range(20)))
+    path.write_text("time_min,T1\n" + "".join(f"{m},{20 + m / 10:.2f}\n" if m != 5 else "5,CH1?\n" for m in range(20)))
     out = mtident("thermal", "inspect", str(path))
     assert out.returncode == 2
-    assert "row 7: 'ERR' is not a number (identify, learn and report refuse the log too; watch" in out.stderr
+    assert "row 7: 'CH1?' is not a number (identify, learn and report refuse the log too; watch" in out.stderr
     missing = mtident("thermal", "inspect", str(tmp_path / "none.csv"))
     assert missing.returncode == 2 and "reads on" not in missing.stderr
