@@ -605,3 +605,19 @@ def test_a_reading_repeated_by_a_coarse_display_is_not_stuck():
     assert stuck_since(t, fine) == 265.0
     fine[280:] = np.nan
     assert np.isnan(stuck_since(t, fine))  # fifteen alike are not enough
+
+
+def test_a_sensor_named_with_a_unit_keeps_the_reference_runs_modes(spindle_reference):
+    """A new user's test logged its column as 'T5 [°F]' where the reference run's was 'T5': the
+    reference had "no modes" for it, and the test never stopped. A name that differs by a unit at
+    its end is the same sensor."""
+    t = np.arange(0.0, 240.0, 1.0)
+    values = spindle_and_column(t)
+    plain = MonitorSettings(reference=spindle_reference, wait_for=("S",))
+    state, _ = monitor_step(new_state(["S", "column"]), t, values, None, plain)
+    named = MonitorSettings(reference=spindle_reference, wait_for=("S [°C]",))
+    renamed, _ = monitor_step(new_state(["S [°C]", "column"]), t, values, None, named)
+    assert state.stopped and renamed.stop_time_min == state.stop_time_min
+    assert renamed.checks[0].reference_used
+    assert spindle_reference.named_as(("S [°C]", "S")) is spindle_reference  # the name as it is wins
+    assert set(spindle_reference.named_as(("S/°C",)).sensors) == {"S/°C"}

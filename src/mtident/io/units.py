@@ -23,6 +23,7 @@ __all__ = [
     "is_time_or_temperature_unit",
     "celsius_conversion",
     "carried_unit",
+    "name_without_unit",
     "number_without_unit",
     "is_number",
     "is_humidity",
@@ -325,6 +326,25 @@ def unit_in_name(column: str) -> str:
         if named is not None and unit_key(named.group(1)) in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
             return named.group(1)
     return ""
+
+
+def name_without_unit(column: str) -> str:
+    """A column's name less the unit at its end (:func:`unit_in_name`): "T5 [°F]", "T5/°F" and
+    "T5 °F" all name sensor "T5"; a name without a unit is returned as it is.
+
+    Parameters
+    ----------
+    column : str
+
+    Returns
+    -------
+    str
+    """
+    for pattern in _UNITS_IN_NAME:
+        named = pattern.search(column)
+        if named is not None and unit_key(named.group(1)) in (*_TIME_UNIT_NAMES, *_TEMPERATURE_UNITS, *_OTHER_UNITS):
+            return column[: named.start(1)].rstrip(" \t[(/,_") or column
+    return column
 
 
 def time_unit_name(unit: str) -> str | None:

@@ -184,7 +184,10 @@ def monitor_step(
         )
         raise InputError(msg)
     if settings.reference is not None:
-        reference_notes(settings.reference, state.sensors, room is not None)  # refuses one of another machine
+        # a sensor named with a unit the reference run's name lacks ("T5 [°F]") is the same sensor
+        reference = settings.reference.named_as(state.sensors)
+        settings = replace(settings, reference=reference)
+        reference_notes(reference, state.sensors, room is not None)  # refuses one of another machine
     events: list[Event] = []
     start = 0
     while start < len(t) and not state.stopped:

@@ -23,6 +23,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.columns import room_named
 from mtident.io.logs import TemperatureLog
+from mtident.io.units import name_without_unit
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import (
     MachineModel,
@@ -181,6 +182,39 @@ class MachineReference:
         SensorModes or None
         """
         return self.sensors.get(sensor)
+
+    def named_as(self, sensors: tuple[str, ...] | list[str]) -> MachineReference:
+        """The reference with its sensors named as a log names them, where a name differs only by a
+        unit at its end (:func:`~mtident.io.units.name_without_unit`): a test logged with
+        "T5 [°F]" is the reference run's "T5" (it was answered without its modes, and never
+        stopped). A name the log has as it is, or that matches none or two, stays.
+
+        Parameters
+        ----------
+        sensors : sequence of str
+            The log's sensors.
+
+        Returns
+        -------
+        MachineReference
+        """
+        known = {name_without_unit(name): name for name in self.sensors}
+        renamed = {}
+        for name in sensors:
+            base = name_without_unit(name)
+            ours = known.get(base)
+            if name in self.sensors or ours is None or ours in sensors or ours in renamed:
+                continue
+            if sum(name_without_unit(other) == base for other in sensors) == 1:
+                renamed[ours] = name
+        if not renamed:
+            return self
+        model = self.machine_model
+        if model is not None:
+            model = replace(model, sensors=tuple(renamed.get(name, name) for name in model.sensors))
+        return replace(
+            self, sensors={renamed.get(name, name): m for name, m in self.sensors.items()}, machine_model=model
+        )
 
     def describe(self, sensor: str) -> str:
         """One line for the answer's assumptions.

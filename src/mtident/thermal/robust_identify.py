@@ -212,6 +212,7 @@ def identify_robust(
         msg = f"the room sensor has {len(room_C)} readings for {len(t)} samples"
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
+    reference = None if reference is None else reference.named_as(log.sensors)
     unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
     model = None if reference is None else reference.machine_model
     machine = fit_readings(model, log.sensors, t[:n], y[:n], room_window, settings.levels)

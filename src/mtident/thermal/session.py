@@ -465,8 +465,15 @@ class WatchSession:
         self.last_rows = len(rows.time_min)
         events = [Event("note", np.nan, text) for text in rows.notes]
         events += [Event("warning", np.nan, text) for text in rows.warnings]
-        if self.state is None and self.follower.sensors:
+        created = self.state is None and bool(self.follower.sensors)
+        if created and self.follower.sensors:
             self.state = self._new_state(self.follower.sensors)
+        if self.state is not None and self.settings.reference is not None:
+            # a sensor named with a unit the reference run's name lacks ("T5 [°F]") is the same sensor
+            named = self.settings.reference.named_as(self.sensors)
+            if named is not self.settings.reference:
+                self.settings = dataclasses.replace(self.settings, reference=named)
+        if created:
             reference = self.settings.reference
             if reference is not None:
                 notes = reference_notes(
