@@ -411,7 +411,7 @@ def test_follower_refuses_repeated_and_backward_times(tmp_path):
     np.testing.assert_allclose(rows.time_min, [0, 1, 2])
     # said once for the rows of a poll, not once a row (a duplicated block gave 21 lines)
     assert [w for w in rows.warnings if "go back" in w] == [
-        f"{path}: refused 2 rows that repeat or go back (at t = 0.5 to 1 min, after t = 1 min)"
+        f"{path}: refused 2 rows that repeat or go back (the first at t = 1 min after t = 1 min, the last at t = 0.5 min after t = 1 min)"
     ]
 
 
@@ -586,3 +586,17 @@ def test_a_header_repeated_inside_the_log_is_left_out_and_said():
             and "left out line(s) 22: the header again (logs joined into one file?)" in log.notes
         )
         assert len(LogFollower(path).poll().time_min) == 40
+
+
+def test_follower_says_a_twelve_hour_clock_without_am_or_pm():
+    """12:59:00 then 01:00:00: the time went back 12 hours, which the follower took for a logger
+    whose clock restarted; it is a 12-hour clock written without AM or PM."""
+    import tempfile
+    from pathlib import Path
+
+    stamps = [f"{12 + (m // 60) % 12 if m < 60 else (m // 60) % 12:02d}:{m % 60:02d}:00" for m in range(120)]
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "clock.csv"
+        path.write_text("Time,A\n" + "".join(f"{s},{20 + k / 100:.2f}\n" for k, s in enumerate(stamps)))
+        with pytest.raises(InputError, match=r"went back .* \(a 12-hour clock written without AM or PM\?\)"):
+            LogFollower(path).poll()

@@ -286,3 +286,13 @@ def test_a_stray_row_in_a_numeric_time_column_is_named_where_it_is(tmp_path):
     path.write_text("time_min,A,B\n" + body + "time_min,B,A\n200,23.00,22.00\n")
     with pytest.raises(InputError, match=r"row 202 is a header written again with other columns"):
         read_temperature_log(path)
+
+
+def test_a_header_written_again_with_more_columns_is_named_as_one(tmp_path):
+    """A logger reconfigured mid-test wrote a header with a column more: the reader said only that
+    line 62 had more cells than the header, and that watch skips such a row, where watch refuses it."""
+    body = "".join(f"{t},{20 + t / 100:.2f},{21 + t / 100:.2f}\n" for t in range(60))
+    path = tmp_path / "added.csv"
+    path.write_text("time_min,A,B\n" + body + "time_min,A,C,B\n60,20.60,25.00,21.60\n")
+    with pytest.raises(InputError, match=r"line 62 is a header written again with more columns .* \(watch refuses"):
+        read_temperature_log(path)

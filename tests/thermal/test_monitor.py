@@ -555,7 +555,9 @@ def test_a_sensor_found_silent_at_any_check_is_said_then(spindle_reference):
     # the answer keeps what was said of it, though its latest check has nothing to say (a user's
     # JSON had "warnings": [] for a sensor warned of twice on stderr)
     column = result(state, settings)["sensors"][1]
-    assert column["sensor"] == "column" and said[0].text in column["warnings"]
+    assert column["sensor"] == "column" and f"t = {said[0].time_min:g} min: {said[0].text}" in column["warnings"]
+    # the latest check's own warnings come first, undated; an earlier one it no longer bears, dated
+    assert not any(w.startswith("t = ") for w in state.checks[1].warnings)
     assert load_dataclass_roundtrip(state).warned == state.warned != ()
 
 

@@ -882,6 +882,13 @@ def _check_rows(text: str, dialect: CsvDialect, path: str | Path) -> str | None:
         if len(row) > count and any(cell.strip() for cell in row[count:]):
             number = dialect.head_lines + rows.line_num
             line = lines[number - 1]
+            if row[0].strip() and row[0].strip() == header[0].strip():
+                msg = (
+                    f"{path}: line {number} is a header written again with more columns ({', '.join(row)}; a "
+                    "logger restarted or reconfigured?): the rows after it belong under its names, not the first "
+                    "header's; split the log there (watch refuses it too)"
+                )
+                raise InputError(msg)
             quoted = repr(line if len(line) <= _QUOTED_LINE else line[:_QUOTED_LINE] + "...")
             msg = (
                 f"{path}: line {number} has {len(row)} cells where the header has {count} ({', '.join(header)}): "

@@ -256,8 +256,8 @@ def _live_rows(
         )
     elif back:
         warnings.append(
-            f"{source}: refused {len(back)} rows that repeat or go back (at t = {min(t for t, _ in back):g} to "
-            f"{max(t for t, _ in back):g} min, after t = {back[0][1]:g} min)"
+            f"{source}: refused {len(back)} rows that repeat or go back (the first at t = {back[0][0]:g} min after "
+            f"t = {back[0][1]:g} min, the last at t = {back[-1][0]:g} min after t = {back[-1][1]:g} min)"
         )
     values = _readings(layout, taken)
     # readings lost are a warning: a JSON reader finds them among the watch's log_warnings
@@ -277,10 +277,15 @@ def _refuse_clock_restart(state: TimeState, t: float, source: str | Path) -> Non
     last, step = state.last_time, state.last_step
     if last is None or step is None or last - t <= max(RESTART_STEPS * step, 0.5 * last):
         return
-    msg = (
-        f"{source}: the time went back from t = {last:g} min to {t:g} min (a logger restarted with its clock?): "
-        "the rows after it are another run's, at times this log cannot place. Watch them as a log of their own"
+    # a clock of 12 hours written without AM or PM goes back by 12 hours at 12:59 to 01:00
+    twelve = abs(last - t - 720.0) <= 2.0 * step + 1.0
+    why = "a 12-hour clock written without AM or PM?" if twelve else "a logger restarted with its clock?"
+    way_on = (
+        "log the time with AM/PM or on a 24-hour clock"
+        if twelve
+        else "the rows after it are another run's, at times this log cannot place. Watch them as a log of their own"
     )
+    msg = f"{source}: the time went back from t = {last:g} min to {t:g} min ({why}): {way_on}"
     raise InputError(msg)
 
 

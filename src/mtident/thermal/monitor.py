@@ -204,7 +204,11 @@ def monitor_step(
             except _Cancelled:
                 break  # the readings of this check are not taken: the state is as before them
             events.extend(said)
-            warned = tuple((e.sensor, e.text) for e in said if e.kind == "warning" and e.sensor is not None)
+            warned = tuple(
+                (e.sensor, f"t = {minutes(e.time_min)}: {e.text}")
+                for e in said
+                if e.kind == "warning" and e.sensor is not None
+            )
             fed = replace(fed, warned=fed.warned + warned) if warned else fed
             if checked is not None:
                 checked(fed)

@@ -181,8 +181,7 @@ def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, f
     sensors = tuple(
         replace(
             _sensor_status(c, settings, math.nan if expected is None else expected.get(c.sensor, math.nan), measured),
-            # every warning said of it, where its latest check no longer has some
-            warnings=tuple(dict.fromkeys([*(text for name, text in state.warned if name == c.sensor), *c.warnings])),
+            warnings=_said_of(c, state.warned),
         )
         for c in state.checks
     )
@@ -396,6 +395,15 @@ def _room_wander_C(check: SensorCheck, settings: MonitorSettings) -> float:
 def _readings_half_width(check: SensorCheck, wander: float) -> float:
     """The decision interval's half-width less the room's wander (added in quadrature)."""
     return math.sqrt(max(check.half_width_C**2 - wander**2, 0.0))
+
+
+def _said_of(check: SensorCheck, warned: tuple[tuple[str, str], ...]) -> tuple[str, ...]:
+    """A sensor's warnings: its latest check's, then each said of it earlier that the latest check
+    no longer has, with when it was said (as stderr said it): a warning its latest answer no longer
+    bears (the reference not followed at 230 min, followed again since) reads as of its time."""
+    current = set(check.warnings)
+    earlier = [text for name, text in warned if name == check.sensor and text.split(": ", 1)[-1] not in current]
+    return tuple(dict.fromkeys([*check.warnings, *earlier]))
 
 
 def _room_bound(check: SensorCheck, settings: MonitorSettings) -> bool:
