@@ -641,3 +641,14 @@ def test_the_hindsight_check_does_not_say_the_log_ended_early_where_the_readings
     _print_hindsight(hindsight)
     text = " ".join(capsys.readouterr().out.split())
     assert "The log ends before S2 settled" in text and "the others' readings keep following the room" in text
+
+
+def test_watch_that_refused_every_row_is_an_error_not_an_answer(tmp_path):
+    """A comma-separated log with decimal commas: every row was refused, and watch answered
+    "continue the test" with exit 0, having read nothing."""
+    log = tmp_path / "comma.csv"
+    log.write_text("time_min,A,B\n" + "".join(f"{t},20,{t % 10},21,{t % 7}\n" for t in range(60)))
+    code, out, err = mtident("thermal", "watch", str(log), "--replay", "--state", str(tmp_path / "s"))
+    assert code == 2 and out == ""
+    assert "refused 60 row(s) with more cells than the header's 3" in err
+    assert "comma.csv: no data rows read (where rows were refused, the warnings above say why)" in " ".join(err.split())

@@ -394,11 +394,12 @@ def watch(request: WatchRequest) -> None:
         stderr.print(f"mtident: waiting for {path} to appear (the logger has not created it yet)", highlight=False)
     live = sys.stdout.isatty() and not request.as_json
     interrupted = _follow_served(session, path, request, live, recorder)
-    if session.state is None:
+    if session.state is None or not len(session.state.readings.time_min):
         if interrupted:
             sys.exit(130)
         msg = (
             f"{path}: no data rows"
+            + (" read (where rows were refused, the warnings above say why)" if session.state is not None else "")
             if path.is_file()
             else f"{path}: no such file (not created within the --timeout of {follow.timeout_s:g} s)"
         )
