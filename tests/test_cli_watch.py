@@ -27,12 +27,20 @@ from helpers import (
     three_mode_housing,
 )
 
+from mtident.cli_watch import _print_hindsight
 from mtident.persist import load_dataclass
+from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.reference import save_reference
 from mtident.thermal.session import (
     SavedWatch,
     WatchSession,
 )
+
+
+def _printed_hindsight(hindsight: Hindsight, capsys: pytest.CaptureFixture[str]) -> str:
+    """What the hindsight check prints, its whitespace folded."""
+    _print_hindsight(hindsight)
+    return " ".join(capsys.readouterr().out.split())
 
 
 def test_watch_replays_a_workbook(tmp_path):
@@ -247,9 +255,6 @@ def test_exit_code_says_a_watch_that_ended_before_the_test_may_stop(tmp_path):
 
 
 def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsys):
-    from mtident.cli_watch import _print_hindsight
-    from mtident.thermal.hindsight import Hindsight
-
     hindsight = Hindsight(
         ("T1",),
         233.0,
@@ -261,8 +266,7 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
         0.2,
         settle_time_min=np.array([251.0]),
     )
-    _print_hindsight(hindsight)
-    text = " ".join(capsys.readouterr().out.split())
+    text = _printed_hindsight(hindsight, capsys)
     assert (
         "the room moved +0.05 °C from the stop to the end; each sensor follows its course through its modes, +0.05 °C "
         "added to T∞ at the stop" in text
@@ -277,14 +281,10 @@ def test_the_hindsight_table_says_a_sensors_late_following_of_the_room_though_th
     """A newcomer's room swung and was back at its level by the log's end: the room's move was 0.00,
     so the column was called "T∞ at stop" while it showed T∞ plus each sensor's late following of
     the room (48.93 beside a T∞ of 48.95)."""
-    from mtident.cli_watch import _print_hindsight
-    from mtident.thermal.hindsight import Hindsight
-
     hindsight = Hindsight(
         ("T1",), 435.0, 480.0, np.array([48.95]), np.array([np.nan]), np.array([np.nan]), 0.0, 0.2, np.array([-0.02])
     )
-    _print_hindsight(hindsight)
-    text = " ".join(capsys.readouterr().out.split())
+    text = _printed_hindsight(hindsight, capsys)
     assert "T∞ at stop + room (°C)" in text and "-0.02 °C added to T∞ at the stop" in text
     assert re.search(r"│ T1 +│ +48\.93 │", text), text
 
@@ -293,9 +293,6 @@ def test_the_hindsight_check_says_why_t_settle_is_unknown_where_the_readings_lev
     """A newcomer's daily room: every sensor's readings levelled off (a settled level, within the
     tolerance of T∞), but their rise above the room had not, so no settle time; the check said
     "every sensor that settled (2)" and then "the log ends before the readings ... settled"."""
-    from mtident.cli_watch import _print_hindsight
-    from mtident.thermal.hindsight import Hindsight
-
     nan = np.nan
     hindsight = Hindsight(
         ("S1", "S2"),
@@ -309,8 +306,7 @@ def test_the_hindsight_check_says_why_t_settle_is_unknown_where_the_readings_lev
         sensor_shift_C=np.array([0.059, 0.064]),
         settle_time_min=np.array([nan, nan]),
     )
-    _print_hindsight(hindsight)
-    text = " ".join(capsys.readouterr().out.split())
+    text = _printed_hindsight(hindsight, capsys)
     assert "the log ends before" not in text
     assert (
         "the readings of S1, S2 levelled off by the log's end, but their rise above the room, as each follows it, "
@@ -322,15 +318,11 @@ def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_no
     """A newcomer's three sensors: the one that settled reached 95 % at 183 min, the test stopped
     at 270 and the others had not settled by the log's end; the check said "the rule saved no
     time", though their 95 % times lay beyond the log."""
-    from mtident.cli_watch import _print_hindsight
-    from mtident.thermal.hindsight import Hindsight
-
     nan = np.nan
     hindsight = Hindsight(
         ("front", "rear"), 270.0, 480.0, np.array([32.5, 27.4]), np.array([nan, 27.38]), np.array([nan, 183.0]), 0, 0.2
     )
-    _print_hindsight(hindsight)
-    text = " ".join(capsys.readouterr().out.split())
+    text = _printed_hindsight(hindsight, capsys)
     assert "saved no time" not in text
     assert (
         "the log ends before the readings of every sensor the test waits for settled within the tolerance, "
@@ -348,10 +340,7 @@ def test_the_hindsight_check_does_not_say_no_time_was_saved_when_a_sensor_did_no
         0.2,
         settle_time_min=np.array([240.0]),
     )
-    _print_hindsight(settled)
-    assert "from t = 240 min, 30 min before the stop: the rule saved no time" in " ".join(
-        capsys.readouterr().out.split()
-    )
+    assert "from t = 240 min, 30 min before the stop: the rule saved no time" in _printed_hindsight(settled, capsys)
 
 
 def test_watch_says_when_no_expected_stop_was_found(tmp_path):
@@ -554,9 +543,6 @@ def test_watch_says_the_time_saved_against_the_settled_readings_not_a_predicted_
 def test_the_hindsight_table_says_why_a_sensor_has_a_settle_time_but_no_settled_level(capsys):
     """A newcomer's daily room: the readings kept following the room (no settled level: "—") while
     their rise above the room settled at 297.5 min, shown beside it without a word."""
-    from mtident.cli_watch import _print_hindsight
-    from mtident.thermal.hindsight import Hindsight
-
     nan = np.nan
     hindsight = Hindsight(
         ("T0", "T1"),
@@ -569,8 +555,7 @@ def test_the_hindsight_table_says_why_a_sensor_has_a_settle_time_but_no_settled_
         0.2,
         settle_time_min=np.array([297.5, nan]),
     )
-    _print_hindsight(hindsight)
-    text = " ".join(capsys.readouterr().out.split())
+    text = _printed_hindsight(hindsight, capsys)
     assert re.search(r"│ T0 +│ +31\.20 │ with the room │ +— │ +298 │", text), text
     assert re.search(r"│ T1 +│ +28\.40 │ +28\.41 │ +-0\.01 │ +— │", text), text
     assert "with the room: the readings keep following the room; their rise above it settled" in text
@@ -616,9 +601,6 @@ def test_the_hindsight_check_does_not_say_the_log_ended_early_where_the_readings
     """A new user's 1,500-min log (six times the slowest mode) in a daily room: every sensor's
     readings kept following the room, their rise above it settled by 370 min; the check said "the
     log ends before its sensors settled"."""
-    from mtident.cli_watch import _print_hindsight
-    from mtident.thermal.hindsight import Hindsight
-
     nan = np.nan
     hindsight = Hindsight(
         ("S1", "S2"),
@@ -631,15 +613,13 @@ def test_the_hindsight_check_does_not_say_the_log_ended_early_where_the_readings
         0.2,
         settle_time_min=np.array([339.0, 370.0]),
     )
-    _print_hindsight(hindsight)
-    text = " ".join(capsys.readouterr().out.split())
+    text = _printed_hindsight(hindsight, capsys)
     assert "The log ends before" not in text
     assert (
         "Every sensor's readings keep following the room to the log's end: no settled level: nothing to check" in text
     )
     hindsight = replace(hindsight, settle_time_min=np.array([339.0, nan]))
-    _print_hindsight(hindsight)
-    text = " ".join(capsys.readouterr().out.split())
+    text = _printed_hindsight(hindsight, capsys)
     assert "The log ends before S2 settled" in text and "the others' readings keep following the room" in text
 
 

@@ -757,6 +757,28 @@ def _without_stray_rows(text: str, dialect: CsvDialect, notes: list[str] | None)
     return "\n".join(line for n, line in enumerate(lines) if n not in short | repeats)
 
 
+def header_again_words(path: str | Path, where: str, columns: str = "other columns (") -> str:
+    """A header written again with other columns than the first's, refused by every reader, in words.
+
+    Parameters
+    ----------
+    path : str or Path
+        The log.
+    where : str
+        Its line or row ("line 202").
+    columns : str, optional
+        What its columns are, up to the question that follows ("more columns (time_min, A, B; ").
+
+    Returns
+    -------
+    str
+    """
+    return (
+        f"{path}: {where} is a header written again with {columns}a logger restarted or reconfigured?): the rows "
+        "after it belong under its names, not the first header's; split the log there (watch refuses it too)"
+    )
+
+
 def rows_cut_short(lines: list[str], dialect: CsvDialect, first: int = 0) -> list[int]:
     """The indices of the data lines (from ``first`` on) with fewer cells than the lines before and
     after them: a write cut short inside the log (``150,27.829,2`` between rows of five cells, its
@@ -883,12 +905,7 @@ def _check_rows(text: str, dialect: CsvDialect, path: str | Path) -> str | None:
             number = dialect.head_lines + rows.line_num
             line = lines[number - 1]
             if row[0].strip() and row[0].strip() == header[0].strip():
-                msg = (
-                    f"{path}: line {number} is a header written again with more columns ({', '.join(row)}; a "
-                    "logger restarted or reconfigured?): the rows after it belong under its names, not the first "
-                    "header's; split the log there (watch refuses it too)"
-                )
-                raise InputError(msg)
+                raise InputError(header_again_words(path, f"line {number}", f"more columns ({', '.join(row)}; "))
             quoted = repr(line if len(line) <= _QUOTED_LINE else line[:_QUOTED_LINE] + "...")
             msg = (
                 f"{path}: line {number} has {len(row)} cells where the header has {count} ({', '.join(header)}): "

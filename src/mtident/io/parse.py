@@ -195,15 +195,16 @@ def _without_wide_rows(
     them: read to the header's width, a comma-separated row with decimal commas fed one sensor's
     integer parts as its readings and its decimals as the next sensor's."""
     width = len(layout.header)
-    wide = [row for row in rows if len(row) > width and any(cell.strip() for cell in row[width:])]
-    if not wide:
+    too_wide = [len(row) > width and any(cell.strip() for cell in row[width:]) for row in rows]
+    if not any(too_wide):
         return rows, []
+    wide = [row for row, refused in zip(rows, too_wide, strict=True) if refused]
     hint = " (decimal commas in a comma-separated log?)" if layout.dialect.delimiter == "," else ""
     said = (
         f"{source}: refused {len(wide)} row(s) with more cells than the header's {width} (the first has "
         f"{len(wide[0])}){hint}: their readings would land under the wrong names"
     )
-    return [row for row in rows if not (len(row) > width and any(cell.strip() for cell in row[width:]))], [said]
+    return [row for row, refused in zip(rows, too_wide, strict=True) if not refused], [said]
 
 
 def _live_rows(

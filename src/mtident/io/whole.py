@@ -26,6 +26,7 @@ import numpy as np
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, empty_cells, numbers, plain_numbers
+from mtident.io.dialect import header_again_words
 from mtident.io.layout import LogLayout
 from mtident.io.stamps import (
     CLOCK_DAY_ZERO_MIN,
@@ -406,31 +407,18 @@ def _refuse_stray_time_cell(time: _Column, number: np.ndarray, source: str) -> N
     least, the first among them): the column was taken for time stamps, and the error named its
     first row ('0' is neither a number nor a time stamp) where a summary row or a header written
     again lay hundreds of rows on."""
-    numeric = np.array([_is_number(cell) for cell in time.cells])
+    numeric = np.array([plain_numbers([cell], ".") for cell in time.cells])
     if not len(numeric) or not numeric[0] or numeric.mean() < 0.9:
         return
     row = int(np.argmin(numeric))
     if time.cells[row].strip() == time.name.strip():
         # the same header again is left out before this (read_lines): this one names other columns
-        msg = (
-            f"{source}: row {number[row]} is a header written again with other columns (a logger restarted or "
-            "reconfigured?): the rows after it belong under its names, not the first header's; split the log there "
-            "(watch refuses it too)"
-        )
-        raise InputError(msg)
+        raise InputError(header_again_words(source, f"row {number[row]}"))
     msg = (
         f"{source}: time column {time.name!r}, row {number[row]}: {time.quoted(row)} is not a number, where the "
         "column's other cells are (a summary row?): leave that row out"
     )
     raise InputError(msg)
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
 
 
 def _stamps(text: pd.Series, fmt: str | None) -> tuple[pd.Series, str | None]:

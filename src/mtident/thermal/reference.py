@@ -591,18 +591,14 @@ def _split_once(
         if held or not below or not above:
             continue
         low, high = below[-1], above[0]
-        kept = [
-            mm
-            for j, (t, b, _) in enumerate(modes)
-            if j != i
-            for mm in (low, high)
-            if _holds(t, b, mm.time_constant_min)
+        others_hold = [
+            any(_holds(t, b, mm.time_constant_min) for j, (t, b, _) in enumerate(modes) if j != i) for mm in (low, high)
         ]
         if high.time_constant_min / low.time_constant_min > _MERGE_SPAN:
             continue
-        if kept:
-            if bracketed and len({id(mm) for mm in kept}) == 1:
-                return _displaced(name, m, modes, i, high if kept[0] is low else low)
+        if any(others_hold):
+            if bracketed and not all(others_hold):
+                return _displaced(name, m, modes, i, high if others_hold[0] else low)
             continue
         witnesses = low.sensors | high.sensors
         by = "the machine model pins down" if _MODEL in witnesses else "other sensors pin down"
@@ -614,30 +610,15 @@ def _split_once(
         )
         if len(modes) + 1 > DEFAULT_MAX_MODES:
             # no room for both: one mode searched over both keeps the test's interval honest
-            # a box about its own τ that reached from both modes' boxes went below zero (±275 % about
-            # 30.8 min: a negative time constant learn showed, a file the loader refused)
             lowest = min(low.time_constant_min * (1.0 - max(low.box, MIN_REFERENCE_BOX)), tau * (1.0 - box))
             highest = max(high.time_constant_min * (1.0 + max(high.box, MIN_REFERENCE_BOX)), tau * (1.0 + box))
-            centre, wide = (lowest + highest) / 2.0, (highest - lowest) / (highest + lowest)
-            modes[i] = (centre, wide, amplitude)
-            modes.sort()
-            return replace(
-                m,
-                time_constants_min=tuple(t for t, _, _ in modes),
-                box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
-                amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
-            ), (
+            centre, wide = _spanning(lowest, highest)
+            return _with_modes(m, [*modes[:i], (centre, wide, amplitude), *modes[i + 1 :]]), (
                 f"{said}{centre:.3g} ±{wide:.0%} ({lowest:.3g}-{highest:.3g} min), holding both, for this sensor (it "
                 f"has {len(modes)} modes already, the most a sensor's fit takes)"
             )
         split = [(low.time_constant_min, low.box, amplitude / 2.0), (high.time_constant_min, high.box, amplitude / 2.0)]
-        modes = sorted(modes[:i] + split + modes[i + 1 :])
-        return replace(
-            m,
-            time_constants_min=tuple(t for t, _, _ in modes),
-            box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
-            amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
-        ), (
+        return _with_modes(m, modes[:i] + split + modes[i + 1 :]), (
             f"{said}both ({low.time_constant_min:.3g} ±{max(low.box, MIN_REFERENCE_BOX):.0%}, "
             f"{high.time_constant_min:.3g} ±{max(high.box, MIN_REFERENCE_BOX):.0%}) for this sensor"
         )
@@ -655,19 +636,31 @@ def _displaced(
     other_box = max(missed.box, MIN_REFERENCE_BOX)
     lowest = min(tau * (1.0 - box), missed.time_constant_min * (1.0 - other_box))
     highest = max(tau * (1.0 + box), missed.time_constant_min * (1.0 + other_box))
-    centre, wide = (lowest + highest) / 2.0, (highest - lowest) / (highest + lowest)
-    modes = sorted([*modes[:i], (centre, wide, amplitude), *modes[i + 1 :]])
+    centre, wide = _spanning(lowest, highest)
     said = (
         f"{name}: its mode of {tau:.3g} min (±{box:.0%}) lies beside the machine model's mode of "
         f"{missed.time_constant_min:.3g} min, which none of its modes holds: the run may have placed that mode "
         f"there. Later tests search {centre:.3g} ±{wide:.0%} ({lowest:.3g}-{highest:.3g} min) for this sensor"
     )
+    return _with_modes(m, [*modes[:i], (centre, wide, amplitude), *modes[i + 1 :]]), said
+
+
+def _spanning(lowest: float, highest: float) -> tuple[float, float]:
+    """The time constant and relative box that span ``lowest`` to ``highest`` (min): a box about a
+    mode's own time constant that reached both went below zero (±275 % about 30.8 min)."""
+    return (lowest + highest) / 2.0, (highest - lowest) / (highest + lowest)
+
+
+def _with_modes(m: SensorModes, modes: list[tuple[float, float, float]]) -> SensorModes:
+    """The sensor with these modes (time constant, box, amplitude), in order of time constant, each
+    box at least :data:`MIN_REFERENCE_BOX`."""
+    modes = sorted(modes)
     return replace(
         m,
         time_constants_min=tuple(t for t, _, _ in modes),
         box=tuple(max(b, MIN_REFERENCE_BOX) for _, b, _ in modes),
         amplitudes_C=tuple(a for _, _, a in modes) if m.amplitudes_C else (),
-    ), said
+    )
 
 
 def _holds(tau: float, box: float, other: float) -> bool:

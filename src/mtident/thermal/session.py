@@ -465,9 +465,9 @@ class WatchSession:
         self.last_rows = len(rows.time_min)
         events = [Event("note", np.nan, text) for text in rows.notes]
         events += [Event("warning", np.nan, text) for text in rows.warnings]
-        created = self.state is None and bool(self.follower.sensors)
-        if created and self.follower.sensors:
-            self.state = self._new_state(self.follower.sensors)
+        created = False
+        if self.state is None and self.follower.sensors:
+            self.state, created = self._new_state(self.follower.sensors), True
         if self.state is not None and self.settings.reference is not None:
             # a sensor named with a unit the reference run's name lacks ("T5 [°F]") is the same sensor
             named = self.settings.reference.named_as(self.sensors)
