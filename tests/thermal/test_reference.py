@@ -307,7 +307,7 @@ def test_a_bad_reference_file_is_refused_with_what_is_wrong(tmp_path, text, mess
 def test_a_reference_that_learnt_the_room_as_a_machine_sensor_is_said():
     """A newcomer learnt the reference without naming the room's column, so T_Raum was learnt as
     a machine sensor; watching with T_Raum as the room sensor then said nothing."""
-    from mtident.thermal.reference import reference_notes
+    from mtident.thermal.reference import reference_for_log
     from mtident.thermal.robust_identify import identify_robust
 
     t = np.arange(0.0, 61.0)
@@ -315,8 +315,8 @@ def test_a_reference_that_learnt_the_room_as_a_machine_sensor_is_said():
     modes = {"T1": SensorModes((60.0,), (0.1,)), "T_Raum": SensorModes((200.0,), (0.5,))}
     learnt = MachineReference("run.csv", "2026-11-27", 300.0, "not measured", modes)
     said = "the reference (run.csv) learnt 'T_Raum', this test's room sensor, as a machine sensor"
-    assert reference_notes(learnt, ("T1",), True, "T_Raum")[0].startswith(said)
-    assert reference_notes(learnt, ("T1",), True, "room") == []
+    assert reference_for_log(learnt, ("T1",), True, "T_Raum")[1][0].startswith(said)
+    assert reference_for_log(learnt, ("T1",), True, "room")[1] == []
     room = np.full(t.size, 20.0)
     result = identify_robust(make_log(t, {"T1": y}), 60.0, room_C=room, reference=learnt, room_sensor="T_Raum")
     assert sum(note.startswith(said) for note in result.notes) == 1
@@ -325,7 +325,7 @@ def test_a_reference_that_learnt_the_room_as_a_machine_sensor_is_said():
 def test_a_reference_learnt_with_a_room_sensor_used_without_one_is_said(tmp_path):
     """A new user learnt the reference with the room's column and watched the test without it:
     nothing said that the answer then rests on the room's stated wander."""
-    from mtident.thermal.reference import reference_notes
+    from mtident.thermal.reference import reference_for_log
     from mtident.thermal.robust_identify import identify_robust
 
     t = np.arange(0.0, 61.0)
@@ -333,8 +333,8 @@ def test_a_reference_learnt_with_a_room_sensor_used_without_one_is_said(tmp_path
     modes = {"T1": SensorModes((60.0,), (0.1,))}
     with_room = MachineReference("run.csv", "2026-11-25", 300.0, "a room sensor, an input of every mode", modes)
     said = "the reference (run.csv) was learnt with a room sensor, and this test has none"
-    assert reference_notes(with_room, ("T1",), with_room=True) == []
-    assert reference_notes(replace(with_room, room="not measured"), ("T1",), with_room=False) == []
+    assert reference_for_log(with_room, ("T1",), with_room=True)[1] == []
+    assert reference_for_log(replace(with_room, room="not measured"), ("T1",), with_room=False)[1] == []
     result = identify_robust(make_log(t, {"T1": y}), 60.0, reference=with_room)
     assert sum(note.startswith(said) for note in result.notes) == 1
     room = np.full(t.size, 20.0)

@@ -46,7 +46,7 @@ from mtident.thermal.monitor_types import (
     minutes,
 )
 from mtident.thermal.readings import sampling_interval_min, stuck_since
-from mtident.thermal.reference import reference_notes
+from mtident.thermal.reference import reference_for_log
 from mtident.thermal.robust import estimate_sensor
 from mtident.thermal.robust_types import SensorEstimate
 
@@ -184,10 +184,9 @@ def monitor_step(
         )
         raise InputError(msg)
     if settings.reference is not None:
-        # a sensor named with a unit the reference run's name lacks ("T5 [°F]") is the same sensor
-        reference = settings.reference.named_as(state.sensors)
+        # refuses one of another machine; the notes are the caller's to say, once
+        reference, _ = reference_for_log(settings.reference, state.sensors, room is not None)
         settings = replace(settings, reference=reference)
-        reference_notes(reference, state.sensors, room is not None)  # refuses one of another machine
     events: list[Event] = []
     start = 0
     while start < len(t) and not state.stopped:

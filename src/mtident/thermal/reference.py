@@ -43,7 +43,7 @@ __all__ = [
     "MachineReference",
     "learn_reference",
     "load_reference",
-    "reference_notes",
+    "reference_for_log",
     "save_reference",
 ]
 
@@ -251,10 +251,11 @@ class MachineReference:
         return replace(self, sensors=sensors)
 
 
-def reference_notes(
+def reference_for_log(
     reference: MachineReference, sensors: tuple[str, ...], with_room: bool, room_sensor: str | None = None
-) -> list[str]:
-    """What a test should be told of how its reference fits it, or an error where it fits none of
+) -> tuple[MachineReference, list[str]]:
+    """The reference with its sensors named as the log names them (:meth:`MachineReference.named_as`),
+    and what a test should be told of how it fits, or an error where it fits none of
     the log's sensors (another machine's, or columns renamed since: a test answered without it all
     through is not what was asked for). The notes: sensors of its log the reference has no modes
     for (a column renamed since the reference run is answered without its modes, and only its
@@ -275,6 +276,8 @@ def reference_notes(
 
     Returns
     -------
+    MachineReference
+        The reference as the log names its sensors.
     list of str
         The notes, none where the reference fits.
 
@@ -283,6 +286,7 @@ def reference_notes(
     InputError
         The reference has modes for none of the log's sensors.
     """
+    reference = reference.named_as(sensors)
     notes = []
     missing = [name for name in sensors if name not in reference.sensors]
     if sensors and len(missing) == len(sensors):
@@ -309,7 +313,7 @@ def reference_notes(
             f"the reference ({reference.source}) learnt {room_sensor!r}, this test's room sensor, as a machine sensor, "
             "and the others without the room as an input: learn it again with that column given as the room sensor"
         )
-    return notes
+    return reference, notes
 
 
 def learn_reference(

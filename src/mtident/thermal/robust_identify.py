@@ -23,7 +23,7 @@ from mtident.thermal.machine_answer import combined_estimate, fit_readings, unme
 from mtident.thermal.measured import measured_and_settled, rmse, window_samples
 from mtident.thermal.modal_types import Mode
 from mtident.thermal.modes import fitted_curve
-from mtident.thermal.reference import MachineReference, reference_notes
+from mtident.thermal.reference import MachineReference, reference_for_log
 from mtident.thermal.robust import estimate_sensor, with_fragility
 from mtident.thermal.robust_types import Assumptions, RobustSettings, SensorEstimate
 from mtident.thermal.settings import ROBUST_METHOD
@@ -212,8 +212,9 @@ def identify_robust(
         msg = f"the room sensor has {len(room_C)} readings for {len(t)} samples"
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
-    reference = None if reference is None else reference.named_as(log.sensors)
-    unfit = [] if reference is None else reference_notes(reference, log.sensors, room_C is not None, room_sensor)
+    unfit: list[str] = []
+    if reference is not None:
+        reference, unfit = reference_for_log(reference, log.sensors, room_C is not None, room_sensor)
     model = None if reference is None else reference.machine_model
     machine = fit_readings(model, log.sensors, t[:n], y[:n], room_window, settings.levels)
     if machine is not None and machine.contradicted:

@@ -43,7 +43,7 @@ from mtident.thermal.monitor import (
 )
 from mtident.thermal.monitor_answer import WatchAnswer, answer
 from mtident.thermal.readings import coarse_room_step_C, coarse_room_warning
-from mtident.thermal.reference import reference_notes
+from mtident.thermal.reference import reference_for_log
 
 __all__ = [
     "Ended",
@@ -469,16 +469,12 @@ class WatchSession:
         if self.state is None and self.follower.sensors:
             self.state, created = self._new_state(self.follower.sensors), True
         if self.state is not None and self.settings.reference is not None:
-            # a sensor named with a unit the reference run's name lacks ("T5 [°F]") is the same sensor
-            named = self.settings.reference.named_as(self.sensors)
-            if named is not self.settings.reference:
-                self.settings = dataclasses.replace(self.settings, reference=named)
-        if created:
-            reference = self.settings.reference
-            if reference is not None:
-                notes = reference_notes(
-                    reference, self.sensors, bool(self.settings.room_sensor), self.settings.room_sensor
-                )
+            # a resumed watch's settings are named again too: they are not saved with the state
+            named, notes = reference_for_log(
+                self.settings.reference, self.sensors, bool(self.settings.room_sensor), self.settings.room_sensor
+            )
+            self.settings = dataclasses.replace(self.settings, reference=named)
+            if created:
                 events.extend(Event("warning", np.nan, note) for note in notes)
         if self.state is None or not len(rows.time_min):
             return events
