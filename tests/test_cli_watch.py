@@ -43,6 +43,21 @@ def _printed_hindsight(hindsight: Hindsight, capsys: pytest.CaptureFixture[str])
     return " ".join(capsys.readouterr().out.split())
 
 
+def test_a_replayed_workbooks_warnings_name_the_workbook(tmp_path):
+    """A workbook is replayed as the CSV it holds, written to a temporary folder: its warnings named
+    that copy (/tmp/mtident-znqtcjd6/wb2.csv), a file the user never made and cannot open."""
+    import numpy as np
+    import pandas as pd
+
+    t = np.arange(0.0, 160.0)
+    book = tmp_path / "warmup.xlsx"
+    pd.DataFrame({"t": 60.0 * t, "Spindle": 26.7 - 8.8 * np.exp(-0.04 * t)}).to_excel(book, index=False)
+    out = mtident("thermal", "watch", str(book), "--replay", "--state", str(tmp_path / "state.json"), "--json")
+    said = f"{book}: time column 't' is read as minutes"
+    assert said in out.stderr and "mtident-" not in out.stderr
+    assert any(warning.startswith(said) for warning in json.loads(out.stdout)["log_warnings"])
+
+
 def test_watch_replays_a_workbook(tmp_path):
     """A workbook is no live log, but --replay runs it as the CSV it holds (it was refused)."""
     import numpy as np

@@ -376,8 +376,9 @@ def watch(request: WatchRequest) -> None:
     if follow.replay and not path.is_file():
         msg = f"{path}: no such file"
         raise InputError(msg)
+    read = _workbook_as_replayed_csv(path) if follow.replay else path
     session = WatchSession(
-        _workbook_as_replayed_csv(path) if follow.replay else path,
+        read,
         request.decision,
         sensors=asked_sensors(request.log.sensors, path) or None,
         time_col=request.log.time_col,
@@ -385,6 +386,7 @@ def watch(request: WatchRequest) -> None:
         temperature_unit=request.log.temperature_unit,
         state_path=state_file(str(path) if recorder else file, path, request.state_path),
         resume=request.resume or not follow.replay,
+        shown_as=path,
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)

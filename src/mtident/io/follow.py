@@ -116,6 +116,9 @@ class LogFollower:
     temperature_unit : str or None
         Unit of the temperature columns that state none of their own ("C", "F" or "K"); None: °C. A
         column whose own unit is another temperature unit is refused.
+    shown_as : Path or None
+        The file the messages name, where ``path`` is a copy of it (an Excel workbook replayed as
+        the CSV it holds); None: ``path``.
     """
 
     path: Path
@@ -124,12 +127,18 @@ class LogFollower:
     time_unit: str | None = None
     room: str | None = None
     temperature_unit: str | None = None
+    shown_as: Path | None = None
     _at: FollowPosition = field(default_factory=FollowPosition, repr=False)
     # for the one hint on a time column's unit (not saved: a resumed follower may hint again)
     _rows_taken: int = field(default=0, repr=False, compare=False)
     _unit_said: bool = field(default=False, repr=False, compare=False)
     _scale_said: bool = field(default=False, repr=False, compare=False)
     _first_times: list[float] = field(default_factory=list, repr=False, compare=False)
+
+    @property
+    def source(self) -> Path:
+        """The file the messages name."""
+        return self.shown_as or self.path
 
     @property
     def dialect(self) -> CsvDialect | None:
@@ -188,6 +197,7 @@ class LogFollower:
         time_col: str | None,
         time_unit: str | None,
         temperature_unit: str | None = None,
+        shown_as: Path | None = None,
     ) -> LogFollower:
         """A follower that continues from a saved position.
 
@@ -203,6 +213,8 @@ class LogFollower:
             Unit of a numeric time column ("ms", "s", "min", "h", "d"), None to take it from the log.
         temperature_unit : str or None, optional
             Unit of the temperature columns that state none of their own ("C", "F" or "K"); None: °C.
+        shown_as : Path or None, optional
+            The file the messages name (:class:`LogFollower`).
 
         Returns
         -------
@@ -216,16 +228,16 @@ class LogFollower:
         """
         if not isinstance(position, FollowPosition):
             msg = (
-                f"{path}: the follower's position is a {type(position).__name__}, as an older version of mtident "
-                "saved it, which this one does not read: start afresh (delete the state file, or run without "
-                "resuming)"
+                f"{shown_as or path}: the follower's position is a {type(position).__name__}, as an older version "
+                "of mtident saved it, which this one does not read: start afresh (delete the state file, or run "
+                "without resuming)"
             )
             raise InputError(msg)
         layout = position.layout
         if layout is not None:
             layout = replace(layout, time_unit=time_unit, temperature_unit=temperature_unit)
         sensors = None if position.sensors is None else list(position.sensors)
-        follower = cls(path, sensors, time_col, time_unit, position.room, temperature_unit)
+        follower = cls(path, sensors, time_col, time_unit, position.room, temperature_unit, shown_as)
         follower._at = replace(position, layout=layout)
         return follower
 
@@ -244,7 +256,7 @@ class LogFollower:
             return Rows(np.empty(0), np.empty((0, len(self.sensors or []))), tuple(warnings))
         lines, restarted = new
         layout = self._at.layout
-        time, rows = parse_lines(layout, self._at.time, lines, self.path, restarted)
+        time, rows = parse_lines(layout, self._at.time, lines, self.source, restarted)
         self._at = replace(self._at, time=time)
         warnings.extend(rows.warnings)
         self._hint_unit(list(rows.time_min), warnings)
@@ -293,7 +305,7 @@ class LogFollower:
         self._first_times = (self._first_times + times)[:SPARSE_HINT_ROWS]
         hint = unit_hint(layout.time_name, np.array(self._first_times), times[-1], self._rows_taken)
         if hint is not None:
-            warnings.append(f"{self.path}: {hint}")
+            warnings.append(f"{self.source}: {hint}")
             self._unit_said = True
 
     def _new_lines(self, warnings: list[str], notes: list[str]) -> tuple[list[str], bool] | None:
@@ -309,7 +321,7 @@ class LogFollower:
         restarted = at.identity is not None and (identity != at.identity or stat.st_size < at.offset)
         if restarted:
             warnings.append(
-                f"{self.path}: the log was truncated or replaced (logger restarted?); reading it again from the "
+                f"{self.source}: the log was truncated or replaced (logger restarted?); reading it again from the "
                 "start, skipping rows already counted"
             )
             at = replace(at, offset=0)
@@ -345,7 +357,7 @@ class LogFollower:
             header_line,
             rows_so_far,
             dialect,
-            self.path,
+            self.source,
             time_col=self.time_col,
             sensors=self.sensors,
             room=self.room,
@@ -358,17 +370,17 @@ class LogFollower:
         kind = binary_kind(head)
         if kind in ("xlsx", "xls"):
             msg = (
-                f"{self.path}: an Excel workbook is not written row by row; watch follows the CSV a logger "
+                f"{self.source}: an Excel workbook is not written row by row; watch follows the CSV a logger "
                 "writes (identify and min-time read the workbook, and a replay replays it)"
             )
             raise InputError(msg)
         if kind is not None:
-            msg = f"{self.path}: not a text file; watch follows the CSV text a logger writes"
+            msg = f"{self.source}: not a text file; watch follows the CSV text a logger writes"
             raise InputError(msg)
         try:
             return sniff_dialect(head, wait_for_row=True)
         except csv.Error as exc:
-            msg = f"{self.path}: not a readable CSV file ({exc})"
+            msg = f"{self.source}: not a readable CSV file ({exc})"
             raise InputError(msg) from exc
 
 

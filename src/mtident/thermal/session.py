@@ -287,6 +287,9 @@ class WatchSession:
         report of a log that a watch may still follow does).
     resume : bool
         Resume from the state file where it belongs to this log and these settings.
+    shown_as : Path, optional
+        The file the messages name, where ``log`` is a copy of it (an Excel workbook replayed as
+        the CSV it holds; default: ``log``).
 
     Attributes
     ----------
@@ -316,8 +319,10 @@ class WatchSession:
         state_path: Path | None = None,
         resume: bool = True,
         persist: bool = True,
+        shown_as: Path | None = None,
     ) -> None:
         self.path = Path(log)
+        self.shown = Path(shown_as) if shown_as is not None else self.path
         self.persist = persist
         self.settings = settings
         self.state_path = Path(state_path) if state_path is not None else default_state_path(self.path)
@@ -333,7 +338,13 @@ class WatchSession:
         self.state: MonitorState | None = None
         self._saved: MonitorState | None = None  # the state the state file holds (None: none written)
         self.follower = LogFollower(
-            self.path, self._asked, time_col, time_unit, room=room, temperature_unit=temperature_unit
+            self.path,
+            self._asked,
+            time_col,
+            time_unit,
+            room=room,
+            temperature_unit=temperature_unit,
+            shown_as=shown_as,
         )
         if resume and self.state_path.is_file():
             self._resume(time_col, time_unit)
@@ -350,7 +361,7 @@ class WatchSession:
             )
             return
         differs = []
-        if saved.log != str(self.path.resolve()):
+        if saved.log != str(self.shown.resolve()):
             differs.append(f"another log ({saved.log})")
         elif log_fingerprint(self.path, saved.fingerprint_bytes)[0] != saved.fingerprint:
             differs.append("another log at the same path (its first lines differ)")
@@ -365,7 +376,7 @@ class WatchSession:
             self.notes.append(f"the state file {self.state_path} was written for {' and '.join(differs)}; {afresh}")
             return
         self.follower = LogFollower.resume(
-            self.path, saved.position, time_col, time_unit, self.follower.temperature_unit
+            self.path, saved.position, time_col, time_unit, self.follower.temperature_unit, shown_as=self.shown
         )
         self.state = self._saved = saved.monitor
         self._fingerprint = (saved.fingerprint, saved.fingerprint_bytes)
@@ -387,7 +398,7 @@ class WatchSession:
             self._fingerprint = log_fingerprint(self.path)
         position = self.follower.position() if position_before is None else position_before
         save_dataclass(
-            self.state_path, SavedWatch(str(self.path.resolve()), *self._fingerprint, self._key, position, self.state)
+            self.state_path, SavedWatch(str(self.shown.resolve()), *self._fingerprint, self._key, position, self.state)
         )
         self._saved = self.state
 
@@ -510,7 +521,7 @@ class WatchSession:
                 # the rest of the rows are read again by the next poll (as by a resumed watch)
                 time_col, time_unit = self.follower.time_col, self.follower.time_unit
                 unit = self.follower.temperature_unit
-                self.follower = LogFollower.resume(self.path, before, time_col, time_unit, unit)
+                self.follower = LogFollower.resume(self.path, before, time_col, time_unit, unit, shown_as=self.shown)
                 return events
             if progress is not None:
                 progress(self)
@@ -595,7 +606,7 @@ class WatchSession:
                 if follow.replay and not self.stopped and (line := self.follower.unfinished_line()) is not None:
                     # a replayed log is whole: a last line without its end is a reading lost, said
                     text = (
-                        f"{self.path}: left out the last line, {line[:80]!r}: it has no line end (a log still being "
+                        f"{self.shown}: left out the last line, {line[:80]!r}: it has no line end (a log still being "
                         "written, or cut); the replay ends before it"
                     )
                     self.log_warnings.append(text)
@@ -624,7 +635,7 @@ class WatchSession:
         room = self.settings.room_sensor
         watched = [name for name in columns if name != room]
         if not watched:
-            msg = f"{self.path}: no sensor column besides the room sensor {room!r}"
+            msg = f"{self.shown}: no sensor column besides the room sensor {room!r}"
             raise InputError(msg)
         return new_state(watched, with_room=room is not None)
 
@@ -644,6 +655,7 @@ class WatchSession:
             follower.time_unit,
             room=self.settings.room_sensor,
             temperature_unit=follower.temperature_unit,
+            shown_as=self.shown,
         )
 
     # -- answers -----------------------------------------------------------------------------
@@ -691,7 +703,7 @@ class WatchSession:
             No data rows yet, or no log file.
         """
         if self.state is None:
-            msg = f"{self.path}: no data rows" if self.path.is_file() else f"{self.path}: no such file"
+            msg = f"{self.shown}: no data rows" if self.path.is_file() else f"{self.shown}: no such file"
             raise InputError(msg)
         expected = self.expected_stops(cancel) if with_forecast and not self.state.stopped else None
         said = answer(self.state, self.settings, expected)
@@ -768,6 +780,7 @@ class WatchSession:
             self.follower.time_unit,
             room=room,
             temperature_unit=self.follower.temperature_unit,
+            shown_as=self.shown,
         ).poll()
         if room:
             return rows.time_min, rows.temperature_C[:, :-1], rows.temperature_C[:, -1]
