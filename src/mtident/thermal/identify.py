@@ -15,8 +15,6 @@ import math
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
@@ -39,7 +37,7 @@ from mtident.thermal.measured import (
     rmse,
     window_samples,
 )
-from mtident.thermal.readings import stuck_since
+from mtident.thermal.readings import without_stuck
 from mtident.thermal.robust_identify import identify_robust
 from mtident.thermal.robust_types import RobustSettings
 from mtident.thermal.settings import DEFAULT_METHOD, IDENTIFY_METHODS, METHODS, ROBUST_METHOD
@@ -81,18 +79,14 @@ def without_stuck_readings(log: TemperatureLog) -> TemperatureLog:
     -------
     TemperatureLog
     """
-    values, notes = log.temperature_C.copy(), list(log.notes)
-    for s, name in enumerate(log.sensors):
-        since = stuck_since(log.time_min, values[:, s])
-        if math.isnan(since):
-            continue
-        after = log.time_min >= since
-        notes.append(
-            f"sensor {name!r}: every reading from t = {since:g} min to the log's end is the same value, which its "
-            "noise makes no chance (a stuck sensor or a failed channel?): they are left out"
-        )
-        values[after, s] = np.nan
-    return replace(log, temperature_C=values, notes=tuple(notes)) if len(notes) > len(log.notes) else log
+    values, since = without_stuck(log.time_min, log.temperature_C)
+    notes = [
+        f"sensor {name!r}: every reading from t = {start:g} min to the log's end is the same value, which its "
+        "noise makes no chance (a stuck sensor or a failed channel?): they are left out"
+        for name, start in zip(log.sensors, since, strict=True)
+        if not math.isnan(start)
+    ]
+    return replace(log, temperature_C=values, notes=(*log.notes, *notes)) if notes else log
 
 
 def identify(

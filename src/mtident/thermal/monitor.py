@@ -45,7 +45,7 @@ from mtident.thermal.monitor_types import (
     last_valid,
     minutes,
 )
-from mtident.thermal.readings import sampling_interval_min, stuck_since
+from mtident.thermal.readings import sampling_interval_min, without_stuck
 from mtident.thermal.reference import reference_for_log
 from mtident.thermal.robust import estimate_sensor
 from mtident.thermal.robust_types import SensorEstimate
@@ -228,9 +228,10 @@ def _check_due(
     checks = list(state.checks)
     dropped = state.reference_dropped
     used = replace(settings, reference=None) if dropped else settings
-    last, silent, stuck = _last_readings(readings)
     # a stuck sensor's repeats say nothing of its temperature: its fits leave them out
-    fitted = _without_stuck(readings, last, stuck)
+    values, since = without_stuck(readings.time_min, readings.values_C)
+    fitted = readings if values is readings.values_C else replace(readings, values_C=values)
+    last, silent, stuck = _last_readings(readings, since)
     # every sensor fitted together once a check; the sensors checked take their part of it
     machine = machine_fit(fitted, state.sensors, used)
     if machine is not None and machine.contradicted:
@@ -493,28 +494,17 @@ def _checked(
     )
 
 
-def _last_readings(readings: Readings) -> tuple[list[float], list[bool], list[bool]]:
+def _last_readings(readings: Readings, stuck_since: list[float]) -> tuple[list[float], list[bool], list[bool]]:
     """Per sensor, :func:`~mtident.thermal.monitor_types.last_valid` up to the latest reading of
     any sensor (where every sensor stops, the logger has, and nothing is said of one), and whether
-    it is stuck (:func:`~mtident.thermal.readings.stuck_since`, whose time then stands for its
-    latest reading: repeats are no new readings). Once a check, for every sensor it checks."""
+    it is stuck (``stuck_since`` not NaN, :func:`~mtident.thermal.readings.without_stuck`; that time
+    then stands for its latest reading: repeats are no new readings)."""
     finite = np.isfinite(readings.values_C)
     anyone = np.flatnonzero(finite.any(axis=1))
     latest = float(readings.time_min[anyone[-1]]) if len(anyone) else math.nan
     pairs = [last_valid(readings.time_min, column, latest) for column in finite.T]
-    since = [stuck_since(readings.time_min, column) for column in readings.values_C.T]
-    last = [at if math.isnan(s) else s for (at, _), s in zip(pairs, since, strict=True)]
-    return last, [silent for _, silent in pairs], [not math.isnan(s) for s in since]
-
-
-def _without_stuck(readings: Readings, last: list[float], stuck: list[bool]) -> Readings:
-    """The readings with each stuck sensor's repeats, from the first (``last``), left out."""
-    if not any(stuck):
-        return readings
-    values = readings.values_C.copy()
-    for s in np.flatnonzero(stuck):
-        values[readings.time_min >= last[s], s] = np.nan
-    return replace(readings, values_C=values)
+    last = [at if math.isnan(s) else s for (at, _), s in zip(pairs, stuck_since, strict=True)]
+    return last, [silent for _, silent in pairs], [not math.isnan(s) for s in stuck_since]
 
 
 def _status(estimate: SensorEstimate, within: bool, ready: bool) -> Status:

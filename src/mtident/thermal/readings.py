@@ -31,6 +31,7 @@ __all__ = [
     "spikes",
     "step_from_grid",
     "stuck_since",
+    "without_stuck",
 ]
 
 ROOM_TREND_MIN = 120.0
@@ -570,3 +571,30 @@ def stuck_since(time_min: FloatArray, values: FloatArray) -> float:
     repeated = float(np.mean(np.diff(y[before]) == 0.0))
     chance = max(in_one_step, repeated) ** (alike - 1)
     return float(time_min[at[start]]) if chance < STUCK_CHANCE else math.nan
+
+
+def without_stuck(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, list[float]]:
+    """The readings with each column's stuck repeats (:func:`stuck_since` on) missing: they say
+    nothing of its temperature (a failed channel's 0.00 °C was fitted as where it settled).
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N, S)
+        The readings (°C, NaN: missing).
+
+    Returns
+    -------
+    values : ndarray, shape (N, S)
+        The readings, the stuck repeats NaN (the same array where none is stuck).
+    since : list of float
+        Per column, when its repeats began (NaN: not stuck).
+    """
+    since = [stuck_since(time_min, column) for column in np.asarray(values).T]
+    if all(math.isnan(s) for s in since):
+        return values, since
+    out = np.array(values, dtype=float)
+    for s, start in enumerate(since):
+        if not math.isnan(start):
+            out[time_min >= start, s] = np.nan
+    return out, since
