@@ -56,6 +56,18 @@ def test_a_log_still_rising_at_the_pace_of_a_slow_mode_is_not_called_settled():
         )
 
 
+def test_a_sensor_stuck_after_the_stop_is_not_taken_as_settled_at_its_stuck_value():
+    """A new user's motor sensor stuck at 400 min, after the test had stopped right (T∞ within
+    0.05 °C): the check against the rest of the log took its repeated value as where it settled
+    and called the stop 1.16 °C beyond the tolerance. Its readings before the repeats settle where
+    T∞ said."""
+    t = np.arange(0.0, 900.0)
+    values = noisy(30.0 - 8.0 * np.exp(-t / 40.0), 5)
+    values[t >= 400.0] = 28.84  # 1.16 °C below where it settles, for good
+    check = check_decision(("motor",), np.array([30.02]), 300.0, t, values[:, None], 0.2, None, [((40.0, -8.0),)])
+    assert abs(check.settled_C[0] - 30.0) < 0.05 and abs(check.error_C[0]) < 0.1
+
+
 def test_the_settle_time_is_when_the_readings_stay_within_the_tolerance():
     # 30 − 10·e^(−t/20) is within 0.2 °C of 30 from t = 20·ln 50 = 78.2 min on
     t = np.arange(0.0, 300.0, 1.0)

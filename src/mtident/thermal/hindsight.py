@@ -30,6 +30,7 @@ from mtident._typing import FloatArray
 from mtident.thermal.measured import measured_equilibrium
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
+from mtident.thermal.readings import without_stuck
 
 __all__ = ["Hindsight", "HindsightAnswer", "HindsightSensor", "check_decision", "settle_times"]
 
@@ -344,6 +345,9 @@ def check_decision(
     -------
     Hindsight
     """
+    # a stuck sensor's repeats are no temperature: a channel that failed after the stop at its
+    # last value was taken as where the sensor settled, and the stop blamed for 1.16 °C
+    values, _ = without_stuck(time_min, values)
     # a sensor still moving by half the tolerance, or with more than a quarter of it still to come
     # at the pace of its slowest mode, is not settled to the precision the check needs
     slowest = [
