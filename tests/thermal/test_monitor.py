@@ -453,6 +453,8 @@ def test_a_reference_most_sensors_contradict_is_used_for_none():
     answer = result(state, settings)
     assert answer["reference_dropped"] is True
     assert all(s["assumptions"]["reference"] is None for s in answer["sensors"])
+    # a reference was given: the way on is to learn it again, not to give one
+    assert "learn the reference again" in answer["reason"] and "give a reference run" not in answer["reason"]
 
 
 def test_a_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_reference):

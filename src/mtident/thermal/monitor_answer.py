@@ -196,7 +196,9 @@ def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, f
     return WatchAnswer(
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
-        reason=None if stopped else _reason([c for c in waited if not c.may_stop], settings, state.readings),
+        reason=None
+        if stopped
+        else _reason([c for c in waited if not c.may_stop], settings, state.readings, state.reference_dropped),
         # the single-sensor keys: those of the sensor the test waits for
         sensor=lead.sensor,
         steady_state_C=lead.steady_state_C,
@@ -287,7 +289,7 @@ def silent_words(check: SensorCheck) -> str:
     )
 
 
-def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Readings) -> str:
+def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Readings, dropped: bool = False) -> str:
     """Why the test cannot stop yet, and the two ways on."""
     since = readings.room_silent_since()
     silent_room = [room_silent_words(since, settings)] if math.isfinite(since) else []
@@ -328,7 +330,11 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Rea
                 + _room_bound_clause(c, settings)
                 + _room_lag_clause(c, settings)
             )
-    learn = ", or give a reference run of this machine (mtident thermal learn)"
+    learn = (
+        ", or learn the reference again from a complete run of this machine as it is now (mtident thermal learn)"
+        if dropped
+        else ", or give a reference run of this machine (mtident thermal learn)"
+    )
     ways = "continue the test" + ("" if settings.reference is not None else learn)
     largest = settings.robust.max_time_constant_min
     if settings.reference is None and any(ends_at_the_largest(c.ends, largest) for c in waiting):

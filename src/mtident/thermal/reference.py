@@ -446,7 +446,11 @@ def _learn_machine(
         ]
     left = [name for name in log.sensors if name not in pinned and name not in missing]
     said = (
-        [f"the machine model leaves out {', '.join(left)}: the run does not pin their steady states down together"]
+        [
+            f"the machine model leaves out {', '.join(left)}: the run does not pin "
+            + ("its steady state" if len(left) == 1 else "their steady states")
+            + " down together with the others'"
+        ]
         if left
         else []
     )
