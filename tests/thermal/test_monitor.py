@@ -479,9 +479,19 @@ def test_a_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_referenc
 
     values = spindle_and_column(t)
     values[210:, 0] = np.nan  # the spindle's sensor, ready by then, fails
-    state, _ = monitor_step(new_state(["S", "column"]), t, values, None, settings)
+    state, events = monitor_step(new_state(["S", "column"]), t, values, None, settings)
     assert state.checks[0].status == "may stop" and state.checks[0].last_reading_min == 209.0
     assert state.checks[1].status != "silent"
+    # its answer stands, but the failure is said (it was passed over without a word), once
+    said = [e.text for e in events if e.kind == "warning" and e.sensor == "S"]
+    assert sum(text.startswith("S: no reading since t = 209 min") for text in said) == 1
+
+    values = spindle_and_column(t)
+    values[200:, 0] = values[199, 0]  # or sticks at its last value
+    state, events = monitor_step(new_state(["S", "column"]), t, values, None, settings)
+    assert state.checks[0].status == "may stop"
+    said = [e.text for e in events if e.kind == "warning" and e.sensor == "S"]
+    assert sum(text.startswith("S: every reading since t = 199 min is the same value") for text in said) == 1
 
 
 def test_a_room_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_reference):

@@ -260,6 +260,10 @@ def _check_due(
         newly = (silent[s] and check.status != "silent") or (stuck[s] and check.status != "stuck")
         if now >= check.next_check_min or (newly and check.checked_min < now):
             check_sensor(s)
+        if (silent[s] or stuck[s]) and checks[s].may_stop and f"failed after: {checks[s].sensor}" not in said:
+            # its answer stands on its readings before, but a failed sensor is said, never passed over
+            said.add(f"failed after: {checks[s].sensor}")
+            events.append(Event("warning", now, _failed_after_words(checks[s], stuck[s], last[s]), checks[s].sensor))
     contradicting, known = ([], 0) if dropped else _contradicting(checks, settings)
     if contradicting:
         # the sensors that follow it are the exception: a reference of another machine fits a few by chance
@@ -296,6 +300,20 @@ def _check_due(
     return MonitorState(
         state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped, state.warned
     ), events
+
+
+def _failed_after_words(check: SensorCheck, stuck: bool, since_min: float) -> str:
+    """What to say of a sensor that may stop and then fell silent or stuck."""
+    what = (
+        f"every reading since t = {since_min:.0f} min is the same value, which its noise makes no chance (a stuck "
+        "sensor, or a logger channel that repeats its last value?)"
+        if stuck
+        else f"no reading since t = {since_min:.0f} min while the others read on (a failed sensor or a lost channel?)"
+    )
+    return (
+        f"{check.sensor}: {what}; it may stop on its readings before (T∞ {check.steady_C:.2f} °C), which the "
+        "decision keeps: check the sensor before the next test"
+    )
 
 
 def _reference_dropped(settings: MonitorSettings, now: float, why: str, sensors: Sequence[str]) -> Event:
