@@ -797,13 +797,21 @@ def _tied_solve(
     linearised about the first's amplitudes, its prior sd ``tau_sd``, and each sensor's own lag on
     the room (``lag_share``) counted in its level; the room's path delayed by ``room_delay_min``
     (:func:`_room_columns`)."""
-    delay = room_delay_min
-    first = _penalised(bins, gains, noise, taus, np.ones(len(taus)), None, own, room_delay_min=delay)
+    first = _penalised(bins, gains, noise, taus, np.ones(len(taus)), None, own, room_delay_min=room_delay_min)
     if first is None:
         return None
     scale = np.maximum(np.abs(first.z), 0.05)
-    linear = (first.amplitudes, tau_sd)
-    second = _penalised(bins, gains, noise, taus, scale, linear, own, lag_share=lag_share, room_delay_min=delay)
+    second = _penalised(
+        bins,
+        gains,
+        noise,
+        taus,
+        scale,
+        (first.amplitudes, tau_sd),
+        own,
+        lag_share=lag_share,
+        room_delay_min=room_delay_min,
+    )
     return None if second is None else (first, second)
 
 

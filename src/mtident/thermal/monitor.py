@@ -32,7 +32,7 @@ from mtident.exceptions import InputError
 from mtident.thermal.machine_answer import combined_estimate, fit_readings, unmeasured_wander
 from mtident.thermal.machine_model import MachineFit, MachineModel
 from mtident.thermal.modes import Mode, model_curve
-from mtident.thermal.monitor_answer import assumptions, result, room_silent_words, silent_words
+from mtident.thermal.monitor_answer import assumptions, failure_words, result, room_silent_words, silent_words
 from mtident.thermal.monitor_types import (
     REPORT_LEVEL,
     Event,
@@ -304,15 +304,9 @@ def _check_due(
 
 def _failed_after_words(check: SensorCheck, stuck: bool, since_min: float) -> str:
     """What to say of a sensor that may stop and then fell silent or stuck."""
-    what = (
-        f"every reading since t = {since_min:.0f} min is the same value, which its noise makes no chance (a stuck "
-        "sensor, or a logger channel that repeats its last value?)"
-        if stuck
-        else f"no reading since t = {since_min:.0f} min while the others read on (a failed sensor or a lost channel?)"
-    )
     return (
-        f"{check.sensor}: {what}; it may stop on its readings before (T∞ {check.steady_C:.2f} °C), which the "
-        "decision keeps: check the sensor before the next test"
+        f"{check.sensor}: {failure_words(stuck, since_min)}; it may stop on its readings before (T∞ "
+        f"{check.steady_C:.2f} °C), which the decision keeps: check the sensor before the next test"
     )
 
 

@@ -18,7 +18,7 @@ from mtident.thermal.monitor_types import MonitorSettings, MonitorState, Reading
 from mtident.thermal.robust import room_wander_half_width
 from mtident.thermal.robust_types import Assumptions, ends_at_the_largest
 
-__all__ = ["SensorStatus", "WatchAnswer", "answer", "assumptions", "result", "silent_words"]
+__all__ = ["SensorStatus", "WatchAnswer", "answer", "assumptions", "failure_words", "result", "silent_words"]
 
 
 def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = False) -> Assumptions:
@@ -275,18 +275,26 @@ def silent_words(check: SensorCheck) -> str:
     -------
     str
     """
+    what = failure_words(check.status == "stuck", check.last_reading_min)
     if check.status == "stuck":
         return (
-            f"{check.sensor}: every reading since t = {check.last_reading_min:.0f} min is the same value, which its "
-            "noise makes no chance (a stuck sensor, or a logger channel that repeats its last value?): those readings "
-            "say nothing of its temperature, and it holds the test until it reads again; if it has failed, leave it "
-            "out of the sensors the test waits for"
+            f"{check.sensor}: {what}: those readings say nothing of its temperature, and it holds the test until it "
+            "reads again; if it has failed, leave it out of the sensors the test waits for"
         )
     return (
-        f"{check.sensor}: no reading since t = {check.last_reading_min:.0f} min while the others read on (a failed "
-        "sensor or a lost channel?): its answer rests on its readings up to then, and it holds the test until it "
+        f"{check.sensor}: {what}: its answer rests on its readings up to then, and it holds the test until it "
         "reads again; if it has failed, leave it out of the sensors the test waits for"
     )
+
+
+def failure_words(stuck: bool, since_min: float) -> str:
+    """How a sensor failed, and since when: stuck (the same value over and over) or silent."""
+    if stuck:
+        return (
+            f"every reading since t = {since_min:.0f} min is the same value, which its noise makes no chance (a "
+            "stuck sensor, or a logger channel that repeats its last value?)"
+        )
+    return f"no reading since t = {since_min:.0f} min while the others read on (a failed sensor or a lost channel?)"
 
 
 def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Readings, dropped: bool = False) -> str:
