@@ -555,6 +555,47 @@ def test_watch_says_the_time_saved_against_the_settled_readings_not_a_predicted_
     )
 
 
+def test_the_hindsight_check_says_a_sensor_stuck_before_it_settled_is_stuck_not_unsettled(capsys):
+    """A long log whose slow sensor stuck at 400 min, before its readings had settled: the check
+    said "not settled by the log's end" and that the log ended before the readings settled, as if
+    the log were too short; the sensor had failed."""
+    nan = np.nan
+    hindsight = Hindsight(
+        ("spindle", "column"),
+        300.0,
+        1200.0,
+        np.array([32.5, 27.4]),
+        np.array([32.49, nan]),
+        np.array([200.0, nan]),
+        0,
+        0.2,
+        settle_time_min=np.array([250.0, nan]),
+        stuck_since_min=np.array([nan, 400.0]),
+    )
+    text = _printed_hindsight(hindsight, capsys)
+    assert "not settled by the log's end" not in text and "the log ends before" not in text
+    assert "stuck from 400 min" in text
+    assert (
+        "stuck at one value before they settled (their repeats say nothing of the temperature): column from t = "
+        in text
+    )
+    assert "column stuck before settling, so when the readings of every sensor the test waits for settled" in text
+    alone = Hindsight(
+        ("column",),
+        300.0,
+        1200.0,
+        np.array([27.4]),
+        np.array([nan]),
+        np.array([nan]),
+        0,
+        0.2,
+        settle_time_min=np.array([nan]),
+        stuck_since_min=np.array([400.0]),
+    )
+    text = _printed_hindsight(alone, capsys)
+    assert "The log ends before" not in text and "Every sensor's readings are stuck at one value" in text
+
+
 def test_the_hindsight_table_says_why_a_sensor_has_a_settle_time_but_no_settled_level(capsys):
     """A newcomer's daily room: the readings kept following the room (no settled level: "—") while
     their rise above the room settled at 297.5 min, shown beside it without a word."""

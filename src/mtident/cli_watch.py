@@ -889,13 +889,23 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     # the settle time is read off the readings less the room, which settle where the readings
     # themselves keep following a moving room: no level to check T∞ against
     with_room = ~np.isfinite(hindsight.settled_C) & np.isfinite(settle_times)
+    # a sensor that stuck before it settled has no level: its failure, not the log's length
+    stuck = ~settled & np.isfinite(hindsight.stuck_since) & ~with_room
     for i, name in enumerate(hindsight.sensors):
         error = hindsight.error_C[i]
         shown = _fmt(float(error)) if settled[i] else "—"
         if settled[i] and not hindsight.within[i]:
             shown = f"[yellow]{shown}[/]"
         level = float(hindsight.settled_C[i])
-        cell = _fmt(level) if math.isfinite(level) else "with the room" if with_room[i] else "not yet"
+        cell = (
+            _fmt(level)
+            if math.isfinite(level)
+            else "with the room"
+            if with_room[i]
+            else f"stuck from {hindsight.stuck_since[i]:.0f} min"
+            if stuck[i]
+            else "not yet"
+        )
         table.add_row(
             name,
             _fmt(float(hindsight.steady_state_C[i] + hindsight.shift_C[i])),
@@ -911,14 +921,20 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             highlight=False,
         )
     timing = _settle_timing(hindsight)
+    stuck_words = (
+        "stuck at one value before they settled (their repeats say nothing of the temperature): "
+        + ", ".join(f"{name} from t = {minutes(float(since))}" for name, since in _stuck(hindsight, stuck))
+        if stuck.any()
+        else ""
+    )
     if not settled.any():
         # readings that keep following a moving room have not failed to settle: the log can be long
         late = [
             name
-            for name, decided, room in zip(
-                hindsight.sensors, np.isfinite(hindsight.steady_state_C), with_room, strict=True
+            for name, decided, room, failed in zip(
+                hindsight.sensors, np.isfinite(hindsight.steady_state_C), with_room, stuck, strict=True
             )
-            if decided and not room
+            if decided and not room and not failed
         ]
         why = (
             f"The log ends before {'its sensors' if len(late) == len(hindsight.sensors) else ', '.join(late)} settled "
@@ -926,7 +942,12 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             f"{hindsight.tolerance_C / 4:g} °C still to come at the pace of its slowest mode, a move its readings' "
             "display step could hide counted in)"
             + ("; the others' readings keep following the room" if with_room.any() else "")
+            + (f"; {stuck_words}" if stuck_words else "")
             if late
+            else f"Every sensor's readings are {stuck_words}"
+            if stuck_words and not with_room.any()
+            else "Every sensor's readings keep following the room to the log's end, or stuck: no settled level"
+            if stuck_words
             else "Every sensor's readings keep following the room to the log's end: no settled level"
         )
         OptionConsole().print(
@@ -939,10 +960,10 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     # a sensor that settled above a moving room has settled, with no level to check
     unsettled = [
         name
-        for name, known, decided, room in zip(
-            hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), with_room, strict=True
+        for name, known, decided, room, failed in zip(
+            hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), with_room, stuck, strict=True
         )
-        if decided and not known and not room
+        if decided and not known and not room and not failed
     ]
     verdict = (
         f"{len(beyond)} of {int(settled.sum())} sensors settled beyond the tolerance ({hindsight.tolerance_C:g} °C) "
@@ -954,9 +975,20 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         )
     )
     not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
+    failed = f"; {stuck_words}" if stuck_words else ""
     OptionConsole().print(
-        f"{verdict[0].upper()}{verdict[1:]}" + (f"; {timing}" if timing else "") + f"{not_settled}.", highlight=False
+        f"{verdict[0].upper()}{verdict[1:]}" + (f"; {timing}" if timing else "") + f"{not_settled}{failed}.",
+        highlight=False,
     )
+
+
+def _stuck(hindsight: Hindsight, stuck: np.ndarray) -> list[tuple[str, float]]:
+    """The sensors ``stuck`` marks and when each stuck."""
+    return [
+        (name, float(since))
+        for name, since, flag in zip(hindsight.sensors, hindsight.stuck_since, stuck, strict=True)
+        if flag
+    ]
 
 
 def _settle_unknown(hindsight: Hindsight) -> str:
@@ -972,6 +1004,13 @@ def _settle_unknown(hindsight: Hindsight) -> str:
         return unknown
     waited = np.ones(len(hindsight.sensors), bool) if hindsight.waited is None else np.asarray(hindsight.waited, bool)
     late = waited & ~np.isfinite(np.asarray(hindsight.settle_time_min, dtype=float))
+    failed = late & np.isfinite(hindsight.stuck_since)
+    if failed.any():
+        names = ", ".join(name for name, flag in zip(hindsight.sensors, failed, strict=True) if flag)
+        return (
+            f"{names} stuck before settling, so when the readings of every sensor the test waits for settled, and "
+            "the time the stop saved, is not known"
+        )
     levelled = late & np.isfinite(hindsight.settled_C)
     if not late.any() or levelled.sum() < late.sum() or hindsight.sensor_shift_C is None:
         return unknown

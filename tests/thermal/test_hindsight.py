@@ -68,6 +68,22 @@ def test_a_sensor_stuck_after_the_stop_is_not_taken_as_settled_at_its_stuck_valu
     assert abs(check.settled_C[0] - 30.0) < 0.05 and abs(check.error_C[0]) < 0.1
 
 
+def test_a_sensor_stuck_before_it_settled_is_said_stuck_in_the_check():
+    """A slow sensor (a 180-min mode) stuck at 300 min of a 15-h log: its repeats are left out,
+    so it has no settled level, and the check says it stuck rather than that it did not settle."""
+    t = np.arange(0.0, 900.0)
+    values = noisy(30.0 - 8.0 * np.exp(-t / 180.0), 7)
+    values[t >= 300.0] = values[t == 300.0][0]
+    check = check_decision(("column",), np.array([30.0]), 250.0, t, values[:, None], 0.2, None, [((180.0, -8.0),)])
+    assert np.isnan(check.settled_C[0]) and check.stuck_since[0] == 300.0
+    assert "column: stuck from 300 min, before it settled: nothing to check" in repr(check)
+    assert check.to_dict()["sensors"][0]["stuck_since_min"] == 300.0
+    fine = check_decision(
+        ("column",), np.array([30.0]), 250.0, t, noisy(30.0 - 8.0 * np.exp(-t / 180.0), 7)[:, None], 0.2
+    )
+    assert fine.to_dict()["sensors"][0]["stuck_since_min"] is None and np.isnan(fine.stuck_since[0])
+
+
 def test_the_settle_time_is_when_the_readings_stay_within_the_tolerance():
     # 30 − 10·e^(−t/20) is within 0.2 °C of 30 from t = 20·ln 50 = 78.2 min on
     t = np.arange(0.0, 300.0, 1.0)

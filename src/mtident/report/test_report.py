@@ -385,7 +385,7 @@ def build_report(
         warnings=tuple(dict.fromkeys(w for sensor in outcome.sensors for w in sensor.warnings)),
         assumptions=assumed,
         method=METHOD,
-        hindsight=None if hindsight is None else _hindsight_verdict(lines, hindsight.log_end_min, settings),
+        hindsight=None if hindsight is None else _hindsight_verdict(lines, hindsight, settings),
         settle_time_min=settle,
         time_saved_min=math.nan if saved is None else float(saved),
         figure_png=_png(figure),
@@ -584,19 +584,27 @@ def _line(sensor: SensorStatus, readings: np.ndarray, hindsight: Hindsight | Non
     )
 
 
-def _hindsight_verdict(lines: tuple[SensorLine, ...], log_end_min: float, settings: MonitorSettings) -> str:
+def _hindsight_verdict(lines: tuple[SensorLine, ...], hindsight: Hindsight, settings: MonitorSettings) -> str:
+    log_end_min = hindsight.log_end_min
     checked = [line for line in lines if line.within_tolerance is not None]
+    # a sensor that stuck before it settled has no level to check: said as its failure
+    stuck = [
+        f"{name} from {minutes(float(since))}"
+        for name, since, known in zip(hindsight.sensors, hindsight.stuck_since, hindsight.checked, strict=True)
+        if np.isfinite(since) and not known
+    ]
+    failed = f" Stuck at one value before settling (nothing to check): {', '.join(stuck)}." if stuck else ""
     if not checked:
-        return f"The log runs on to {minutes(log_end_min)}, but no sensor settled by its end: nothing to check."
+        return f"The log runs on to {minutes(log_end_min)}, but no sensor settled by its end: nothing to check.{failed}"
     beyond = [line.sensor for line in checked if not line.within_tolerance]
     if beyond:
         return (
             f"Against the rest of the log (to {minutes(log_end_min)}): {', '.join(beyond)} settled beyond the "
-            f"tolerance ({settings.tolerance_C:g} °C) of T∞ at the stop."
+            f"tolerance ({settings.tolerance_C:g} °C) of T∞ at the stop.{failed}"
         )
     return (
         f"Against the rest of the log (to {minutes(log_end_min)}): every sensor that settled ({len(checked)}) "
-        f"is within the tolerance ({settings.tolerance_C:g} °C) of T∞ at the stop."
+        f"is within the tolerance ({settings.tolerance_C:g} °C) of T∞ at the stop.{failed}"
     )
 
 

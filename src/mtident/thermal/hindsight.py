@@ -20,6 +20,7 @@ followed.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -62,6 +63,9 @@ class HindsightSensor:
         When its readings came within the tolerance of where they settled (min).
     waited_for : bool
         The test waits for it.
+    stuck_since_min : float
+        When its readings stuck at one value for good (min; NaN: they did not): the repeats say
+        nothing of its temperature and are left out of the check.
     """
 
     sensor: str
@@ -73,6 +77,7 @@ class HindsightSensor:
     within_tolerance: bool | None
     settle_time_min: float
     waited_for: bool
+    stuck_since_min: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -134,6 +139,10 @@ class Hindsight:
         room; NaN where the log did not settle); default: not known.
     waited : ndarray of bool, shape (S,), optional
         The sensors the test waits for (default: every one).
+    stuck_since_min : ndarray, shape (S,), optional
+        When each sensor's readings stuck at one value for good (min; NaN: they did not; default:
+        none did). Its repeats are left out: a sensor that stuck before it settled has no level to
+        check, and that is the sensor's failure, not the log's being short.
     """
 
     sensors: tuple[str, ...]
@@ -147,6 +156,7 @@ class Hindsight:
     sensor_shift_C: FloatArray | None = None
     settle_time_min: FloatArray | None = None
     waited: np.ndarray | None = None
+    stuck_since_min: FloatArray | None = None
 
     @property
     def test_settle_time_min(self) -> float:
@@ -198,9 +208,12 @@ class Hindsight:
         ]
         for i, name in enumerate(self.sensors):
             if not self.checked[i]:
+                since = self.stuck_since[i]
                 why = (
                     "left out of the decision"
                     if not np.isfinite(self.steady_state_C[i])
+                    else f"stuck from {since:g} min, before it settled: nothing to check"
+                    if np.isfinite(since)
                     else "not settled by the log's end"
                 )
                 lines.append(f"  {name}: {why}")
@@ -211,6 +224,18 @@ class Hindsight:
                 f"{self.error_C[i]:+.3f} °C, {verdict}"
             )
         return "\n".join(lines)
+
+    @property
+    def stuck_since(self) -> FloatArray:
+        """When each sensor's readings stuck for good (min, NaN where they did not).
+
+        Returns
+        -------
+        ndarray, shape (S,)
+        """
+        if self.stuck_since_min is None:
+            return np.full(len(self.sensors), np.nan)
+        return np.asarray(self.stuck_since_min, dtype=float)
 
     @property
     def error_C(self) -> FloatArray:
@@ -276,6 +301,7 @@ class Hindsight:
                     within_tolerance=bool(within[i]) if checked[i] else None,
                     settle_time_min=float(settle[i]),
                     waited_for=bool(waited[i]),
+                    stuck_since_min=float(self.stuck_since[i]),
                 )
                 for i, name in enumerate(self.sensors)
             ),
@@ -347,7 +373,7 @@ def check_decision(
     """
     # a stuck sensor's repeats are no temperature: a channel that failed after the stop at its
     # last value was taken as where the sensor settled, and the stop blamed for 1.16 °C
-    values, _ = without_stuck(time_min, values)
+    values, stuck = without_stuck(time_min, values)
     # a sensor still moving by half the tolerance, or with more than a quarter of it still to come
     # at the pace of its slowest mode, is not settled to the precision the check needs
     slowest = [
@@ -386,6 +412,7 @@ def check_decision(
         sensor_shift_C=followed,
         settle_time_min=_settle_times(time_min, values, courses, settled, tolerance_C, np.array(slowest, dtype=float)),
         waited=None if waited is None else np.asarray(waited, dtype=bool),
+        stuck_since_min=None if all(math.isnan(v) for v in stuck) else np.array(stuck, dtype=float),
     )
 
 
