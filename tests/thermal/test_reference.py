@@ -767,3 +767,23 @@ def test_a_mode_beside_a_machine_mode_no_other_of_its_modes_holds_is_searched_to
     assert out["housing"] == sensors["housing"]
     assert [w.split(":")[0] for w in warnings] == ["motor"]
     assert "lies beside the machine model's mode of 246 min, which none of its modes holds" in warnings[0]
+
+
+def test_learn_warns_of_a_mode_whose_box_reaches_the_largest_time_constant_searched():
+    """A column of one 288-min mode, learnt to 40 h with the default 300-min limit: its box reaches
+    the limit, so the run cannot tell it from a mode at 300 min or a slower one, but the warning
+    fired only for a mode fitted at 294 min or more."""
+    t = np.arange(0.0, 2400.0, 2.0)
+    y = noisy(20.0 + 8.0 * (1 - np.exp(-t / 288.0)), 3)
+    reference, warnings = learn_reference(TemperatureLog(t, ("column",), y[:, None], (), "ref.csv"))
+    (centre,) = reference.sensors["column"].time_constants_min
+    assert 280.0 < centre < 294.0
+    assert any(
+        w.startswith(f"column: a mode of {centre:.3g} min ±")
+        and "reaches the largest time constant searched (300 min)" in w
+        for w in warnings
+    ), warnings
+    # a mode well inside the limit, pinned down, is not warned of
+    y = noisy(20.0 + 8.0 * (1 - np.exp(-t / 150.0)), 3)
+    _, warnings = learn_reference(TemperatureLog(t, ("column",), y[:, None], (), "ref.csv"))
+    assert not any("largest time constant searched" in w for w in warnings), warnings

@@ -364,10 +364,19 @@ def learn_reference(
         if doubt is not None:
             way_on = _way_on(estimate, room_C is not None)
             warnings.append(f"{name}: {doubt}. Later tests will not use this sensor's modes: {way_on}")
-        if max(m.time_constant_min for m in fit.modes) >= 0.98 * settings.max_time_constant_min:
+        limit = settings.max_time_constant_min
+        if max(m.time_constant_min for m in fit.modes) >= 0.98 * limit:
             warnings.append(
-                f"{name}: a mode at the largest time constant searched ({settings.max_time_constant_min:g} min): the "
+                f"{name}: a mode at the largest time constant searched ({limit:g} min): the "
                 "machine may have a slower one (raise `max_time_constant_min`)"
+            )
+        elif ceiling >= 0.98 * limit:
+            # a box that reaches the limit holds a mode the run cannot tell from one at it
+            centre, box = max(zip(centres, boxes, strict=True), key=lambda cb: cb[0] * (1.0 + cb[1]))
+            warnings.append(
+                f"{name}: a mode of {centre:.3g} min ±{box:.0%}, which reaches the largest time constant searched "
+                f"({limit:g} min): the run cannot tell it from one at that limit, and the machine may have a "
+                "slower one (raise `max_time_constant_min`)"
             )
     model, said = _learn_machine(log, room_C, settings)
     sensors, split = split_merged_modes(sensors, model)
