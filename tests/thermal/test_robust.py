@@ -384,3 +384,19 @@ def test_residuals_within_a_coarse_room_sensors_error_are_no_misfit_where_learni
     assert learning.fit is not None and learning.fit.correlation_factor > 2.5
     assert learning.model_ok and "misfit" not in learning.warning_codes
     assert not testing.model_ok and "misfit" in testing.warning_codes
+
+
+def test_a_check_far_from_the_tolerance_puts_t_inf_where_the_readings_go_not_below_them():
+    """The papers' first-order curve (τ 62.5 min, σ 0.02 °C) at 200 min, its interval still far
+    wider than the tolerance (the grid's answer, not refined): the grid's coarse best of one mode
+    left BIC three modes that overshoot, T∞ 26.13 °C for a truth of 26.7, below the rising
+    sensor's latest readings (26.35). The estimate's model is fitted off the grid."""
+    from conftest import first_order
+    from helpers import T, noisy
+
+    y = noisy(first_order(T[:200]), 13)
+    estimate = estimate_sensor("A", T[:200], y, None, RobustSettings(), refine_within=0.2)
+    assert estimate.fit is not None and not all(estimate.fit.refined.values())
+    assert abs(estimate.fit.steady_C - 26.7) < 0.05, estimate.fit.modes
+    low, high = estimate.interval_C[0.95]
+    assert low >= y[-5:].mean() - 0.2 and low <= 26.7 <= high
