@@ -236,3 +236,24 @@ def test_a_replay_says_a_last_line_without_its_end(tmp_path):
     whole.write_text(csv_text(t, {"A": noisy(first_order(t), 5)}))
     session = WatchSession(whole, MonitorSettings(), resume=False, persist=False)
     assert not [e for e in session.run(FollowSettings(replay=True)) if "last line" in getattr(e, "text", "")]
+
+
+def test_a_replay_that_ends_before_the_stop_answers_on_every_reading(tmp_path):
+    """Checks come spaced out (a sensor far from the tolerance every few tens of minutes): a log
+    that ended before the test could stop gave the last answer of a check made before its end, a
+    slow sensor's T∞ fitted on readings up to an hour short of it. Where the log ends, every sensor
+    is checked on all of it."""
+    t = np.arange(0.0, 241.0)
+    log = tmp_path / "run.csv"
+    log.write_text(
+        csv_text(
+            t, {"slow": noisy(30.0 - 10.0 * np.exp(-t / 150.0), 4), "fast": noisy(28.0 - 8.0 * np.exp(-t / 20.0), 5)}
+        )
+    )
+    session = WatchSession(log, MonitorSettings(), persist=False)
+    spaced = WatchSession(log, MonitorSettings(), persist=False)
+    spaced.poll()
+    assert spaced.state is not None and min(c.checked_min for c in spaced.state.checks) < 240.0
+    ended = [e for e in session.run(FollowSettings(replay=True)) if isinstance(e, Ended)]
+    assert ended[-1].reason == "replayed" and not session.stopped
+    assert session.state is not None and all(c.checked_min == 240.0 for c in session.state.checks)

@@ -50,7 +50,16 @@ from mtident.thermal.reference import reference_for_log
 from mtident.thermal.robust import estimate_sensor
 from mtident.thermal.robust_types import SensorEstimate
 
-__all__ = ["assumptions", "expected_stop", "is_within", "monitor_step", "new_state", "result", "sensor_estimate"]
+__all__ = [
+    "assumptions",
+    "check_every_sensor",
+    "expected_stop",
+    "is_within",
+    "monitor_step",
+    "new_state",
+    "result",
+    "sensor_estimate",
+]
 # the types the monitor takes and gives (from monitor_types) are its names too: a caller imports the monitor alone
 __all__ += ["Event", "EventKind", "MonitorSettings", "MonitorState", "Readings", "SensorCheck", "Status", "minutes"]
 
@@ -203,17 +212,56 @@ def monitor_step(
             except _Cancelled:
                 break  # the readings of this check are not taken: the state is as before them
             events.extend(said)
-            warned = tuple(
-                (e.sensor, f"t = {minutes(e.time_min)}: {e.text}")
-                for e in said
-                if e.kind == "warning" and e.sensor is not None
-            )
-            fed = replace(fed, warned=fed.warned + warned) if warned else fed
+            fed = _with_warned(fed, said)
             if checked is not None:
                 checked(fed)
         state = fed
         start = part.stop
     return state, events
+
+
+def check_every_sensor(
+    state: MonitorState, settings: MonitorSettings, cancel: Callable[[], bool] | None = None
+) -> tuple[MonitorState, list[Event]]:
+    """Check every sensor not yet checked at the latest reading: where a log ends (a replay, a
+    timeout) before the test may stop, its answer stands on every reading, not on checks spaced
+    out before it (a slow sensor's T∞ was last fitted 70 min before the log's end).
+
+    Parameters
+    ----------
+    state : MonitorState
+    settings : MonitorSettings
+    cancel : callable, optional
+        As :func:`monitor_step`: once it returns True the state is returned as it was.
+
+    Returns
+    -------
+    MonitorState
+    list of Event
+        The checks' events, as :func:`monitor_step` gives them (a stop, where every sensor now may).
+    """
+    now = state.readings.latest_min
+    if state.stopped or not len(state.readings.time_min) or all(c.checked_min >= now for c in state.checks):
+        return state, []
+    if settings.reference is not None:
+        reference, _ = reference_for_log(settings.reference, state.sensors, state.readings.room_C is not None)
+        settings = replace(settings, reference=reference)
+    due = replace(state, checks=tuple(replace(c, next_check_min=min(c.next_check_min, now)) for c in state.checks))
+    try:
+        checked, events = _check_due(due, settings, cancel)
+    except _Cancelled:
+        return state, []
+    return _with_warned(checked, events), events
+
+
+def _with_warned(state: MonitorState, events: list[Event]) -> MonitorState:
+    """The state with the check's warnings of a sensor kept (an answer says them per sensor)."""
+    warned = tuple(
+        (e.sensor, f"t = {minutes(e.time_min)}: {e.text}")
+        for e in events
+        if e.kind == "warning" and e.sensor is not None
+    )
+    return replace(state, warned=state.warned + warned) if warned else state
 
 
 def _check_due(

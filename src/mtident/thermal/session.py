@@ -36,6 +36,7 @@ from mtident.thermal.monitor import (
     Event,
     MonitorSettings,
     MonitorState,
+    check_every_sensor,
     expected_stop,
     minutes,
     monitor_step,
@@ -530,6 +531,27 @@ class WatchSession:
             self.save()
         return events
 
+    def catch_up(self, cancel: Callable[[], bool] | None = None) -> list[Event]:
+        """Where the log ended before the test may stop, check every sensor on every reading
+        (:func:`~mtident.thermal.monitor.check_every_sensor`) and save: the last answer is of the
+        whole log, not of checks spaced out before its end.
+
+        Parameters
+        ----------
+        cancel : callable, optional
+            As :meth:`poll`: the checks are then left undone.
+
+        Returns
+        -------
+        list of Event
+        """
+        if self.state is None or self.stopped:
+            return []
+        self.state, events = check_every_sensor(self.state, self.settings, cancel)
+        if events and self.persist:
+            self.save()
+        return events
+
     def _coarse_room(self) -> list[Event]:
         """Once per session, a warning where the room sensor reads in coarse steps (as soon as its
         readings show the step)."""
@@ -613,9 +635,11 @@ class WatchSession:
                     latest = math.nan if self.state is None else self.state.readings.latest_min
                     yield Event("warning", latest, text)
                 if self.stopped or follow.replay:
+                    yield from self.catch_up(cancel)
                     yield Ended("stopped" if self.stopped else "replayed", idle_s)
                     return
                 if follow.timeout_s is not None and idle_s > follow.timeout_s:
+                    yield from self.catch_up(cancel)
                     yield Ended("timeout", idle_s)
                     return
                 if not said_waiting and idle_s > WAITING_HINT_S:
