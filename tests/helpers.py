@@ -53,6 +53,22 @@ UNITS_LOG = "time;T1;T2;T3;speed\n[s];°C;K;°F;rpm\n" + "".join(
 )
 
 
+def workbook_of_runs(path: Path, minutes: float = 60.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An Excel workbook of four sheets at ``path``: a logger's "Details" (no table), two runs' tables,
+    "Run 1" (sensor A, from 20 °C) and "Run 2" (sensor B, from 25 °C; and a room column "Umgebung"),
+    and an empty "Spare". Returns the minutes and the readings of A and of B."""
+    import pandas as pd
+
+    t = np.arange(0.0, minutes + 1)
+    a, b = 24.0 - 4.0 * np.exp(-t / 20.0), 31.0 - 6.0 * np.exp(-t / 25.0)
+    with pd.ExcelWriter(path) as writer:
+        pd.DataFrame([["Device", "UX120-006M"]]).to_excel(writer, sheet_name="Details", index=False, header=False)
+        pd.DataFrame({"time_min": t, "A": a}).to_excel(writer, sheet_name="Run 1", index=False)
+        pd.DataFrame({"time_min": t, "B": b, "Umgebung": 20.0}).to_excel(writer, sheet_name="Run 2", index=False)
+        pd.DataFrame().to_excel(writer, sheet_name="Spare", index=False)
+    return t, a, b
+
+
 class Outcome(NamedTuple):
     """What a command run in-process ended with, named as :func:`subprocess.run` names it (and
     unpacked as ``code, out, err``)."""

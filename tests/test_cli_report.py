@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 from conftest import first_order
-from helpers import T, csv_text, mtident, noisy, one_mode_reference
+from helpers import T, csv_text, mtident, noisy, one_mode_reference, workbook_of_runs
 
 from mtident.thermal.reference import save_reference
 
@@ -234,3 +234,24 @@ def test_the_table_keeps_what_the_customer_reads_and_the_hindsight_says_the_time
     assert said is not None, page
     settle, at, saved = (int(g) for g in said.groups())
     assert at == stop and saved == settle - stop > 0
+
+
+def test_a_workbooks_report_names_the_workbook_its_sheet_and_a_room_column(tmp_path):
+    """A workbook is reported from the CSV its sheet holds, written to a temporary folder: the report
+    named that copy (/tmp/mtident-.../runs.csv) as the log; which sheet of several was read went
+    unsaid, and so did a column named as the room, reported as a machine sensor."""
+    book = tmp_path / "runs.xlsx"
+    workbook_of_runs(book, minutes=120.0)
+    out = tmp_path / "report.html"
+    code, _, err = mtident("thermal", "report", str(book), "--room-wander", "0", "-o", str(out))
+    assert code == 0, err
+    assert f"mtident: warning: {book}: read sheet 'Run 1' of 4 (the first that holds a table)" in err
+    code, _, err = mtident("thermal", "report", str(book), "--sheet", "Run 2", "--room-wander", "0", "-o", str(out))
+    assert code == 0, err
+    page = out.read_text(encoding="utf-8")
+    assert str(book) in page and "mtident-" not in page
+    assert "read sheet" not in err
+    assert (
+        "mtident: note: 'Umgebung' is named as a room sensor and reported as a machine sensor; if it measures the "
+        "room, --ambient Umgebung makes it the input of each sensor's heat balance"
+    ) in err

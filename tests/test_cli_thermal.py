@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from conftest import make_log
 from fuzz_logs_helpers import EXPORTS, Export, exports
-from helpers import Outcome, mtident, two_mode
+from helpers import Outcome, mtident, two_mode, workbook_of_runs
 
 import mtident.cli_thermal as cli_thermal
 from mtident.exceptions import InputError
@@ -404,6 +404,94 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     out = mtident("thermal", "min-time", str(path), "--ambient", "room", "--json")
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["min_identification_time_min"] > 0
+
+
+def test_a_room_column_that_sensor_leaves_unread_is_pointed_out(tmp_path):
+    """--sensor naming the machine's sensors left a room column unread without a word (the note on a
+    room column came only where it was read as a sensor): the room was an assumption unawares."""
+    t = np.arange(0.0, 61.0)
+    path = tmp_path / "hall.csv"
+    path.write_text(
+        "time_min,spindle,room temp (C)\n"
+        + "".join(f"{tk:g},{26.7 - 8.8 * np.exp(-0.016 * tk):.3f},20.0\n" for tk in t)
+    )
+    said = (
+        "mtident: note: 'room temp (C)' is named as a room sensor and not read (--sensor names the sensors read); if "
+        "it measures the room, --ambient 'room temp (C)'{commands} makes it the input of each sensor's heat balance"
+    )
+    for command, commands in (
+        (("identify", "--method", "lsq"), ""),
+        (("min-time",), ""),
+        (("inspect",), " (with identify, watch, learn or report)"),  # inspect takes no --ambient
+    ):
+        out = mtident("thermal", command[0], str(path), "--sensor", "spindle", *command[1:])
+        assert out.returncode == 0, out.stderr
+        assert said.format(commands=commands) in out.stderr, (command, out.stderr)
+    # named as the room, or read as a sensor (the note of before), it is not said to be unread
+    for extra in (("--ambient", "room temp (C)", "--method", "ukf"), ("--method", "lsq")):
+        out = mtident("thermal", "identify", str(path), "--window", "40", *extra)
+        assert out.returncode == 0, out.stderr
+        assert "not read (--sensor" not in out.stderr
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("identify",),
+        ("min-time", "--sensor", "A"),
+        ("inspect",),
+        ("learn", "-o", "{tmp}/m.toml"),
+        ("report", "-o", "{tmp}/r.html"),
+        ("watch", "--replay", "--state", "{tmp}/s.json"),
+    ],
+)
+def test_every_command_that_reads_a_log_takes_the_sheet_of_a_workbook(tmp_path, command):
+    """Each command that reads a temperature log takes --sheet; a sheet the workbook lacks is an
+    error naming the sheets it has."""
+    book = tmp_path / "runs.xlsx"
+    workbook_of_runs(book)
+    args = [arg.format(tmp=tmp_path) for arg in command]
+    out = mtident("thermal", args[0], str(book), *args[1:], "--sheet", "Run 3")
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert (
+        f"mtident: error: {book}: no sheet 'Run 3'; the workbook's sheets: 1 'Details', 2 'Run 1', 3 'Run 2', "
+        "4 'Spare' (--sheet NAME takes a sheet's name or its number, from 1)"
+    ) in out.stderr
+
+
+def test_identify_reads_the_sheet_named_and_says_which_it_read_where_none_is(tmp_path):
+    """A workbook's first sheet with a table was read without a word, whatever sheet held the test."""
+    book = tmp_path / "runs.xlsx"
+    workbook_of_runs(book)
+    out = mtident("thermal", "identify", str(book), "--window", "40", "--method", "lsq", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["sensor"] == "A"
+    assert (
+        f"mtident: note: {book}: read sheet 'Run 1' of 4 (the first that holds a table); not read: 'Details' "
+        "(no table), 'Run 2' (a table too), 'Spare' (empty); --sheet NAME reads another (its name, or its number "
+        "from 1)"
+    ) in out.stderr
+    for sheet in ("Run 2", "3"):
+        out = mtident("thermal", "identify", str(book), "--sheet", sheet, "--window", "40", "--method", "lsq", "--json")
+        assert out.returncode == 0, out.stderr
+        answers = {d["sensor"]: d for d in json.loads(out.stdout)["sensors"]}
+        assert list(answers) == ["B", "Umgebung"] and "read sheet" not in out.stderr
+        # B rises from 25 to 31 °C (τ = 25 min, no noise): its T∞ is the sheet's, not A's 24 °C
+        assert abs(answers["B"]["steady_state_C"] - 31.0) < 0.05
+        assert "'Umgebung' is named as a room sensor and identified as a machine sensor" in out.stderr
+    out = mtident("thermal", "inspect", str(book), "--sheet", "Run 2", "--json")
+    assert out.returncode == 0, out.stderr
+    info = json.loads(out.stdout)
+    assert info["format"]["kind"] == "Excel workbook (the sheet --sheet names: 'Run 2')"
+    assert [d["sensor"] for d in info["sensors"]] == ["B", "Umgebung"]
+    csv = tmp_path / "runs.csv"
+    csv.write_text("time_min,T1\n" + "".join(f"{m},{20 + m / 10}\n" for m in range(12)))
+    out = mtident("thermal", "identify", str(csv), "--sheet", "2")
+    assert (
+        out.returncode == 2
+        and (f"{csv}: --sheet 2 names a sheet of an Excel workbook, but this log is CSV text; leave it out")
+        in out.stderr
+    )
 
 
 def test_min_time_table_gives_l_to_a_tenth_of_a_minute_for_a_fast_log(tmp_path):

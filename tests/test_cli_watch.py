@@ -25,6 +25,7 @@ from helpers import (
     one_mode_reference,
     spindle_and_column,
     three_mode_housing,
+    workbook_of_runs,
 )
 
 from mtident.cli_watch import _print_hindsight
@@ -92,6 +93,58 @@ def test_watch_replays_a_workbook(tmp_path):
             and "an Excel workbook is not written row by row" in live.stderr
             and "Traceback" not in live.stderr
         )
+
+
+def test_a_replayed_workbook_of_several_sheets_says_the_sheet_it_read_and_replays_the_one_named(tmp_path):
+    """watch --replay read a workbook's first sheet with a table without a word; --sheet picks
+    another, and a live watch, which follows CSV text, refuses it."""
+    book = tmp_path / "runs.xlsx"
+    workbook_of_runs(book, minutes=120.0)
+    out = mtident(
+        "thermal", "watch", str(book), "--replay", "--room-wander", "0", "--state", str(tmp_path / "a.json"), "--json"
+    )
+    assert out.returncode == 0, out.stderr
+    said = (
+        f"{book}: read sheet 'Run 1' of 4 (the first that holds a table); not read: 'Details' (no table), 'Run 2' "
+        "(a table too), 'Spare' (empty); --sheet NAME reads another (its name, or its number from 1)"
+    )
+    assert f"mtident: warning: {said}" in out.stderr
+    result = json.loads(out.stdout)
+    assert said in result["log_warnings"] and [d["sensor"] for d in result["sensors"]] == ["A"]
+    out = mtident(
+        "thermal",
+        "watch",
+        str(book),
+        "--replay",
+        "--sheet",
+        "Run 2",
+        "--sensor",
+        "B",
+        "--room-wander",
+        "0",
+        "--state",
+        str(tmp_path / "b.json"),
+        "--json",
+    )
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert [d["sensor"] for d in result["sensors"]] == ["B"] and "read sheet" not in out.stderr
+    assert not any("read sheet" in w for w in result.get("log_warnings") or [])
+    # B settles at 31 °C, A at 24 °C: the stop's T∞ is the sheet's
+    assert result["decision"] == "stop" and abs(result["steady_state_C"] - 31.0) < 0.2
+    # the room column that --sensor left unread is pointed out, as identify does
+    assert "'Umgebung' is named as a room sensor and not read (--sensor names the sensors read)" in out.stderr
+    live = mtident(
+        "thermal", "watch", str(book), "--sheet", "Run 2", "--timeout", "1", "--state", str(tmp_path / "c.json")
+    )
+    assert (
+        live.returncode == 2
+        and (
+            "--sheet Run 2: a sheet of an Excel workbook is replayed (--replay); a live log is the CSV text a logger "
+            "writes, which has no sheets"
+        )
+        in live.stderr
+    )
 
 
 def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):

@@ -9,7 +9,7 @@ import click
 
 from mtident.cli import thermal, user_errors
 from mtident.cli_options import file_option, output_option
-from mtident.cli_thermal import asked_sensors, log_options, log_path, stderr
+from mtident.cli_thermal import _say_room_candidates, asked_sensors, log_options, log_path, stderr, unread_rooms_of
 from mtident.cli_watch import _workbook_as_replayed_csv, decision_options, monitor_settings, state_file
 from mtident.exceptions import InputError
 from mtident.thermal.monitor import minutes
@@ -62,18 +62,22 @@ def report_command(**options: Any) -> None:
         msg = f"{path}: no such file"
         raise InputError(msg)
     settings = monitor_settings(options)
+    read, sheet_notes = _workbook_as_replayed_csv(path, options["sheet"])
     session = WatchSession(
-        _workbook_as_replayed_csv(path),
+        read,
         settings,
-        sensors=asked_sensors(options["sensors"], path) or None,
+        sensors=asked_sensors(options["sensors"], path, options["sheet"]) or None,
         time_col=options["time_col"],
         time_unit=options["time_unit"],
         temperature_unit=options["temperature_unit"],
         state_path=state_file(file, path, options["state_path"]),
         persist=False,  # a watch may still follow this log: its state file is its own
+        shown_as=path,  # a workbook is read as a temporary copy of the CSV it holds: the report names the workbook
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)
+    for note in sheet_notes:
+        stderr.print(f"mtident: warning: {note}", highlight=False)
     from mtident.report.test_report import build_report, write_html, write_pdf
 
     with stderr.status("reading the log…") as status:
@@ -83,6 +87,9 @@ def report_command(**options: Any) -> None:
                 status.update(f"deciding: t = {minutes(current.state.readings.latest_min)} of the log")
 
         report = build_report(session, progress, options["machine"])
+    if settings.room_sensor is None:  # as watch says it: a room column was reported as a machine sensor, or not read
+        unread = unread_rooms_of(read, session.sensors) if session.asked is not None else []
+        _say_room_candidates(session.sensors, "reported as a machine sensor", unread=unread)
     written = write_pdf(report, output) if output.suffix.lower() == ".pdf" else write_html(report, output)
     verdict = (
         f"the test could stop at t = {minutes(report.stop_time_min)}"

@@ -27,7 +27,7 @@ from mtident.cli import (
 )
 from mtident.cli_options import ambient_option, file_option, json_option, plot_option
 from mtident.exceptions import InputError
-from mtident.io.columns import room_named
+from mtident.io.columns import room_named, unread_rooms
 from mtident.io.logs import SAMPLES, TemperatureLog, read_temperature_log, sample_log_path
 from mtident.io.time_notes import TIME_UNITS
 from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
@@ -60,7 +60,7 @@ def log_path(file: str) -> Path:
     return sample_log_path(file) if file in SAMPLES else Path(file)
 
 
-def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
+def asked_sensors(sensors: tuple[str, ...], path: Path, sheet: str | None = None) -> list[str]:
     """The --sensor names, repeated or comma-separated, each once; empty for all ("all" or none given).
 
     An entry that is a column of the log as it stands is one name, commas and
@@ -72,6 +72,8 @@ def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
         The --sensor values as given.
     path : Path
         The log: a --sensor value that names one of its columns is one name, commas and all.
+    sheet : str or None, optional
+        --sheet: the sheet of a workbook whose columns those are.
 
     Returns
     -------
@@ -80,7 +82,7 @@ def asked_sensors(sensors: tuple[str, ...], path: Path) -> list[str]:
     """
     from mtident.io.dialect import header_names
 
-    columns = set(header_names(path)) if sensors and path.is_file() else set()
+    columns = set(header_names(path, sheet)) if sensors and path.is_file() else set()
     names = (name.strip() for entry in sensors for name in ([entry] if entry.strip() in columns else entry.split(",")))
     return list(dict.fromkeys(name for name in names if name and name != "all"))
 
@@ -97,6 +99,8 @@ class LogRequest:
         --sensor (empty: all).
     time_col, time_unit, temperature_unit : str or None
         --time-col, --time-unit and --unit.
+    sheet : str or None
+        --sheet: an Excel workbook's sheet, by name or number from 1 (None: its first with a table).
     """
 
     file: str
@@ -104,13 +108,19 @@ class LogRequest:
     time_col: str | None
     time_unit: str | None
     temperature_unit: str | None
+    sheet: str | None = None
 
 
 def log_request(options: Mapping[str, Any]) -> LogRequest:
     """The options of :func:`log_options`, read from a command's (a mapping by click's names), as one
     :class:`LogRequest`."""
     return LogRequest(
-        options["file"], options["sensors"], options["time_col"], options["time_unit"], options["temperature_unit"]
+        options["file"],
+        options["sensors"],
+        options["time_col"],
+        options["time_unit"],
+        options["temperature_unit"],
+        options["sheet"],
     )
 
 
@@ -166,7 +176,7 @@ def load_log(request: LogRequest) -> TemperatureLog:
     Parameters
     ----------
     request : LogRequest
-        FILE, --sensor (empty: all), --time-col, --time-unit and --unit.
+        FILE, --sensor (empty: all), --time-col, --time-unit, --unit and --sheet.
 
     Returns
     -------
@@ -183,8 +193,9 @@ def load_log(request: LogRequest) -> TemperatureLog:
         path,
         time_col=request.time_col,
         time_unit=request.time_unit,
-        sensors=asked_sensors(request.sensors, path) or None,
+        sensors=asked_sensors(request.sensors, path, request.sheet) or None,
         temperature_unit=request.temperature_unit,
+        sheet=request.sheet,
     )
     for note in log.notes:
         stderr.print(f"mtident: note: {note}", highlight=False)
@@ -204,7 +215,8 @@ def load_log_with_room(
     room_col : str or None
         The --ambient option: the room sensor's column; None without one.
     say_rooms : bool, optional
-        Say columns named as a room sensor where none is given.
+        Say columns named as a room sensor, read as sensors, where none is given (a room column that
+        --sensor left unread is said regardless).
 
     Returns
     -------
@@ -220,33 +232,72 @@ def load_log_with_room(
     """
     if room_col is None:
         log = load_log(request)
-        if say_rooms:
-            _say_room_candidates(log.sensors, "identified as a machine sensor")
+        # a room column --sensor left unread is said here whatever the command says of the sensors
+        named = any(name.strip() not in ("", "all") for entry in request.sensors for name in entry.split(","))
+        unread = unread_rooms_of(log_path(request.file), log.sensors, request.sheet) if named else []
+        _say_room_candidates(log.sensors if say_rooms else (), "identified as a machine sensor", unread=unread)
         return log, None
-    asked = asked_sensors(request.sensors, log_path(request.file))
+    asked = asked_sensors(request.sensors, log_path(request.file), request.sheet)
     # only the asked-for columns and the room are read: a dead column elsewhere does not matter
     every = load_log(replace(request, sensors=tuple(dict.fromkeys([*asked, room_col])) if asked else ()))
     log, room = every.split_room(room_col)
     return log.select([name for name in asked if name != room_col] or None), room
 
 
-def _say_room_candidates(sensors: tuple[str, ...] | list[str], taken_as: str, commands: str = "") -> None:
+def unread_rooms_of(path: Path, read: tuple[str, ...] | list[str], sheet: str | None = None) -> list[str]:
+    """The columns of the log at ``path`` named as a room sensor and not among ``read``, the sensors
+    --sensor named (:func:`~mtident.io.columns.unread_rooms`); none where its header cannot be read.
+
+    Parameters
+    ----------
+    path : Path
+        The log (a workbook's sheet by ``sheet``).
+    read : tuple of str or list of str
+        The sensor columns read.
+    sheet : str or None, optional
+        --sheet.
+
+    Returns
+    -------
+    list of str
+    """
+    from mtident.io.dialect import header_names
+
+    if not path.is_file():
+        return []
+    try:
+        header = header_names(path, sheet)
+    except InputError:  # the reader has said what is wrong with the log
+        return []
+    return unread_rooms(header, read)
+
+
+def _say_room_candidates(
+    sensors: tuple[str, ...] | list[str], taken_as: str, commands: str = "", unread: list[str] | None = None
+) -> None:
     """A note on columns named as a room sensor when no --ambient was given: the room is then an
     assumption (steady, or wandering by --room-wander), and a drifting one biases T∞. ``commands``
-    names the commands that take --ambient where the caller is not one of them."""
+    names the commands that take --ambient where the caller is not one of them; ``unread`` are such
+    columns that --sensor left unread (:func:`unread_rooms_of`)."""
     rooms = [name for name in sensors if room_named(name)]
     if rooms and len(rooms) < len(sensors):
-        stderr.print(
-            f"mtident: note: {', '.join(repr(r) for r in rooms)} {'is' if len(rooms) == 1 else 'are'} named as a room "
-            f"sensor and {taken_as}; "
-            f"if it measures the room, --ambient {shlex.quote(rooms[0])}{commands} makes it the input of each "
-            "sensor's heat balance (a drifting room then stays out of T∞)",
-            highlight=False,
-        )
+        _say_rooms(rooms, taken_as, commands)
+    if unread:
+        _say_rooms(unread, "not read (--sensor names the sensors read)", commands)
+
+
+def _say_rooms(rooms: list[str], taken_as: str, commands: str) -> None:
+    stderr.print(
+        f"mtident: note: {', '.join(repr(r) for r in rooms)} {'is' if len(rooms) == 1 else 'are'} named as a room "
+        f"sensor and {taken_as}; "
+        f"if it measures the room, --ambient {shlex.quote(rooms[0])}{commands} makes it the input of each "
+        "sensor's heat balance (a drifting room then stays out of T∞)",
+        highlight=False,
+    )
 
 
 def log_options(func: F) -> F:
-    """Add a log's argument and options to a command: FILE, --sensor, --time-col, --time-unit and --unit.
+    """Add a log's argument and options to a command: FILE, --sensor, --time-col, --time-unit, --unit and --sheet.
 
     Parameters
     ----------
@@ -258,6 +309,14 @@ def log_options(func: F) -> F:
     callable
         ``func`` with the argument and the options.
     """
+    func = click.option(
+        "--sheet",
+        metavar="NAME|N",
+        help=(
+            "Excel workbook: the sheet to read, by name or number (from 1). Default: the first sheet that holds a "
+            "table; a workbook with other sheets gets a note naming the sheet read and the others."
+        ),
+    )(func)
     func = click.option(
         "--unit",
         "temperature_unit",
@@ -889,6 +948,7 @@ def inspect_command(
     time_col: str | None,
     time_unit: str | None,
     temperature_unit: str | None,
+    sheet: str | None,
     as_json: bool,
 ) -> None:
     """Show how FILE is read: its format, the header line, the time column and step, each
@@ -908,14 +968,17 @@ def inspect_command(
         --time-col and --time-unit.
     temperature_unit : str or None
         --unit: the unit of the temperature columns that state none.
+    sheet : str or None
+        --sheet: an Excel workbook's sheet.
     as_json : bool
         --json.
     """
     from mtident.io.describe import describe_log
 
     path = log_path(file)
+    asked = asked_sensors(sensors, path, sheet)
     try:
-        info = describe_log(path, time_col, time_unit, asked_sensors(sensors, path) or None, temperature_unit)
+        info = describe_log(path, time_col, time_unit, asked or None, temperature_unit, sheet)
     except InputError as exc:
         if (" row " not in str(exc) and " line " not in str(exc)) or "watch refuses it too" in str(exc):
             raise
@@ -932,10 +995,10 @@ def inspect_command(
     if as_json:
         print_json(info)
         return
-    _inspect_table(file, info)
+    _inspect_table(file, info, unread_rooms_of(path, asked, sheet) if asked else [])
 
 
-def _inspect_table(file: str, info: LogDescription) -> None:
+def _inspect_table(file: str, info: LogDescription, unread: list[str] | None = None) -> None:
     fmt, time = info.format, info.time
     console = OptionConsole(soft_wrap=True)  # a line per fact, as a terminal or a file shows it
     rows_under = fmt.rows_under_header
@@ -971,5 +1034,8 @@ def _inspect_table(file: str, info: LogDescription) -> None:
     for note in info.notes:
         console.print(f"note: {note}", highlight=False)
     _say_room_candidates(
-        [d.sensor for d in info.sensors], "read as a sensor column", " (with identify, watch, learn or report)"
+        [d.sensor for d in info.sensors],
+        "read as a sensor column",
+        " (with identify, watch, learn or report)",
+        unread=unread,
     )

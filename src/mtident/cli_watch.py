@@ -53,6 +53,7 @@ from mtident.cli_thermal import (
     reference_lines,
     reference_option,
     stderr,
+    unread_rooms_of,
 )
 from mtident.exceptions import InputError
 from mtident.io.logs import SAMPLES
@@ -376,11 +377,18 @@ def watch(request: WatchRequest) -> None:
     if follow.replay and not path.is_file():
         msg = f"{path}: no such file"
         raise InputError(msg)
-    read = _workbook_as_replayed_csv(path) if follow.replay else path
+    sheet = request.log.sheet
+    if sheet is not None and not follow.replay:
+        msg = (
+            f"--sheet {sheet}: a sheet of an Excel workbook is replayed (--replay); a live log is the CSV text a "
+            "logger writes, which has no sheets"
+        )
+        raise InputError(msg)
+    read, sheet_notes = _workbook_as_replayed_csv(path, sheet) if follow.replay else (path, [])
     session = WatchSession(
         read,
         request.decision,
-        sensors=asked_sensors(request.log.sensors, path) or None,
+        sensors=asked_sensors(request.log.sensors, path, sheet) or None,
         time_col=request.log.time_col,
         time_unit=request.log.time_unit,
         temperature_unit=request.log.temperature_unit,
@@ -390,6 +398,9 @@ def watch(request: WatchRequest) -> None:
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)
+    for note in sheet_notes:  # the sheet a workbook's readings came from: the JSON answer carries it too
+        stderr.print(f"mtident: warning: {note}", highlight=False)
+        session.log_warnings.append(note)
     if recorder is not None:
         stderr.print(f"mtident: recording {file} to {path}", highlight=False)
     elif not path.is_file():
@@ -574,7 +585,9 @@ class _Shown:
         if not self.rooms_said and session.sensors:
             self.rooms_said = True
             if session.settings.room_sensor is None:
-                _say_room_candidates(session.sensors, "watched as a machine sensor")
+                # the followed file: a workbook's sheet is followed as the CSV it holds
+                unread = unread_rooms_of(session.path, session.sensors) if session.asked is not None else []
+                _say_room_candidates(session.sensors, "watched as a machine sensor", unread=unread)
 
     def publish(self, session: WatchSession, forecast: bool = True, picture: bool = True) -> None:
         assert self.page is not None
@@ -1050,20 +1063,26 @@ class _Nothing:
         return None
 
 
-def _workbook_as_replayed_csv(path: Path) -> Path:
-    """``path``, or for an Excel workbook the CSV it holds, written to a temporary folder to be
-    replayed (:func:`~mtident.io.dialect.workbook_as_csv`)."""
+def _workbook_as_replayed_csv(path: Path, sheet: str | None = None) -> tuple[Path, list[str]]:
+    """``path``, or for an Excel workbook the CSV its sheet holds (``sheet``, --sheet, else its first
+    with a table), written to a temporary folder to be replayed
+    (:func:`~mtident.io.dialect.workbook_as_csv`); and the reader's notes: which sheet of several was
+    read. InputError for a sheet the workbook lacks, or one named for a CSV log."""
     import atexit
     import shutil
     import tempfile
 
-    from mtident.io.dialect import binary_kind, workbook_as_csv
+    from mtident.io.dialect import binary_kind, no_sheets, workbook_as_csv
 
     with path.open("rb") as handle:
         if binary_kind(handle.read(8)) not in ("xlsx", "xls"):
-            return path
+            if sheet is not None:
+                raise InputError(no_sheets(path, sheet))
+            return path, []
+    notes: list[str] = []
+    data = workbook_as_csv(path, path, sheet, notes)
     folder = Path(tempfile.mkdtemp(prefix="mtident-"))
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
     copy = folder / f"{path.stem}.csv"
-    copy.write_bytes(workbook_as_csv(path, path))
-    return copy
+    copy.write_bytes(data)
+    return copy, notes

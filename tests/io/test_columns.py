@@ -26,7 +26,21 @@ from mtident.io import read_temperature_log
         ("AirTemp", True),
         ("Umgebung", True),
         ("Halle", True),
+        ("Raum", True),
+        ("ambient_T", True),
+        ("Hall", True),
+        ("room temp (C)", True),
+        ("environment", True),
+        ("Raumluft", True),
+        ("Werkhalle", True),
+        ("Werkstatt", True),
+        ("Surroundings", True),
+        ("T_surr", True),
+        ("Tenv", True),
+        ("T_Umg", True),
         # a room's word inside another word, and machine sensors
+        ("Bauraum", False),  # the machine's work space
+        ("Arbeitsraum", False),
         ("Chair", False),
         ("Shall", False),
         ("Envelope", False),
@@ -39,6 +53,16 @@ def test_a_column_named_as_the_room_is_told_from_machine_sensors(name, room):
     from mtident.io.columns import room_named
 
     assert room_named(name) is room
+
+
+def test_a_room_column_left_unread_is_found_unless_its_name_says_it_is_no_temperature():
+    """A room column that --sensor left out was passed over without a word; a room's humidity, a
+    column in % named after the room is no room sensor."""
+    from mtident.io.columns import unread_rooms
+
+    header = ["Zeit", "T1", "T2", "Umgebung", "Room humidity", "Raumfeuchte", "Hall [%]", "T_amb [°F]"]
+    assert unread_rooms(header, ["T1"]) == ["Umgebung", "T_amb [°F]"]
+    assert unread_rooms(header, ("T1", "Umgebung", "T_amb [°F]")) == []
 
 
 def test_time_column_by_name(write_csv):

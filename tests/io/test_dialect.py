@@ -11,7 +11,7 @@ import re
 import numpy as np
 import pytest
 from conftest import logger_dialects, through_state_file
-from helpers import followed_in_pieces, mtident
+from helpers import followed_in_pieces, mtident, workbook_of_runs
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -390,6 +390,59 @@ def test_an_excel_workbook_reads_like_the_csv_it_holds(tmp_path):
     (tmp_path / "broken.xlsx").write_bytes(b"PK\x03\x04" + b"x" * 100)
     with pytest.raises(InputError, match="not a readable Excel workbook"):
         read_temperature_log(tmp_path / "broken.xlsx")
+
+
+def test_a_workbook_of_several_sheets_says_the_sheet_it_read_and_reads_the_one_named(tmp_path):
+    """A workbook's first sheet with a table was read without a word: a user whose readings were
+    on its second sheet got the first's answer. The sheet read, the others and how to pick one are
+    said; a sheet is named by name (case aside) or number from 1."""
+    from mtident.io.dialect import header_names
+
+    book = tmp_path / "runs.xlsx"
+    _, _, b = workbook_of_runs(book)
+    log = read_temperature_log(book)
+    assert log.sensors == ("A",)
+    assert log.notes == (
+        f"{book}: read sheet 'Run 1' of 4 (the first that holds a table); not read: 'Details' (no table), "
+        "'Run 2' (a table too), 'Spare' (empty); `sheet='NAME'` reads another (its name, or its number from 1)",
+    )
+    for sheet in ("Run 2", "run 2", " Run 2 ", 3, "3"):
+        log = read_temperature_log(book, sheet=sheet)
+        assert log.sensors == ("B", "Umgebung") and log.notes == (), sheet
+        np.testing.assert_allclose(log.temperature_C[:, 0], b, atol=1e-9)
+    assert header_names(book, "Run 2") == ["time_min", "B", "Umgebung"] and header_names(book) == ["time_min", "A"]
+    listed = re.escape("the workbook's sheets: 1 'Details', 2 'Run 1', 3 'Run 2', 4 'Spare' (`sheet='NAME'`")
+    with pytest.raises(InputError, match=rf"runs.xlsx: no sheet 'Run 3'; {listed}"):
+        read_temperature_log(book, sheet="Run 3")
+    for number in (5, "0"):
+        with pytest.raises(InputError, match=rf"no sheet number {number} \(counted from 1\); {listed}"):
+            read_temperature_log(book, sheet=number)
+
+
+def test_a_sheet_named_where_there_are_no_sheets_is_refused(write_csv, tmp_path):
+    """An option that changes nothing is not passed over: a CSV log or a DataFrame has no sheets."""
+    import pandas as pd
+
+    path = write_csv("time_min,T1\n" + "".join(f"{m},{20 + m / 10}\n" for m in range(6)))
+    with pytest.raises(
+        InputError, match=r"log.csv: `sheet='2'` names a sheet of an Excel workbook, but this log is CSV"
+    ):
+        read_temperature_log(path, sheet=2)
+    with pytest.raises(InputError, match="a DataFrame has none"):
+        read_temperature_log(pd.DataFrame({"time_min": range(6), "T1": 20.0}), sheet="Data")
+
+
+def test_a_workbook_whose_other_sheets_are_empty_reads_its_table_without_a_note(tmp_path):
+    """Excel's new workbooks held three sheets, two of them empty: nothing to choose, nothing said."""
+    import pandas as pd
+
+    book = tmp_path / "one.xlsx"
+    with pd.ExcelWriter(book) as writer:
+        pd.DataFrame({"time_min": range(6), "T1": 20.0}).to_excel(writer, sheet_name="Sheet1", index=False)
+        for name in ("Sheet2", "Sheet3"):
+            pd.DataFrame().to_excel(writer, sheet_name=name, index=False)
+    log = read_temperature_log(book)
+    assert log.sensors == ("T1",) and log.notes == ()
 
 
 def test_other_files_and_line_ends(write_csv, tmp_path):

@@ -22,6 +22,7 @@ from mtident.io.units import (
     is_humidity,
     is_number,
     stated_temperature_unit,
+    unit_in_name,
     unit_key,
 )
 
@@ -38,6 +39,7 @@ __all__ = [
     "sensor_unit",
     "check_unique_names",
     "room_named",
+    "unread_rooms",
 ]
 
 
@@ -273,20 +275,27 @@ def event_named(name: str) -> bool:
 
 
 # Names of a room sensor: inside a name ("T_room", "Raumtemperatur", "AmbientTemp") and as a word
-# of its own (camelCase split), where a shorter one would hide in other words ("Chair", "Shall").
+# of its own (camelCase split), where a shorter one would hide in other words ("Chair", "Shall");
+# "raum" alone is no part: "Bauraum" and "Arbeitsraum" are the machine's work space.
 _ROOM_NAME_PARTS = (
     "room",
     "ambient",
     "ambiant",
     "umgebung",
     "raumtemp",
+    "raumluft",
     "hallentemp",
+    "hallenluft",
+    "werkhalle",
     "lufttemp",
     "environment",
+    "surrounding",
     "室温",
     "周囲",
 )
-_ROOM_NAME_WORDS = frozenset({"amb", "tamb", "air", "env", "raum", "halle", "hall", "luft", "umg"})
+_ROOM_NAME_WORDS = frozenset(
+    {"amb", "tamb", "air", "env", "tenv", "raum", "halle", "hall", "luft", "umg", "tumg", "surr", "werkstatt"}
+)
 
 
 def room_named(name: str) -> bool:
@@ -310,6 +319,34 @@ def room_named(name: str) -> bool:
     split = re.sub(r"([a-z])([A-Z])|([A-Z])([A-Z][a-z])", r"\1\3 \2\4", name)  # "AirTemp", "TAmb"
     words = re.findall(r"[a-z]+", split.lower())
     return any(word in _ROOM_NAME_WORDS for word in words)
+
+
+def unread_rooms(header: list[str], read: list[str] | tuple[str, ...]) -> list[str]:
+    """The columns of a log named as a room sensor (:func:`room_named`) that were not read, where the
+    sensors read were named (``--sensor``): without ``--ambient`` such a room was passed over without
+    a word, and a drifting room biases T∞.
+
+    Parameters
+    ----------
+    header : list of str
+        The log's column names.
+    read : list of str or tuple of str
+        The columns read as sensors.
+
+    Returns
+    -------
+    list of str
+        Those columns, in file order, but for one whose name says it is no temperature (a time, the
+        logger's own record, a humidity or a value computed from it, a unit such as "%").
+    """
+    return [
+        name
+        for name in header
+        if name not in read
+        and room_named(name)
+        and not (time_named(name) or event_named(name) or is_humidity(name) or is_from_humidity(name))
+        and celsius_conversion(unit_in_name(name)) is not None
+    ]
 
 
 def sensor_unit(name: str, dialect: DialectView, temperature_unit: str | None = None) -> str:

@@ -133,6 +133,7 @@ def describe_log(
     time_unit: str | None = None,
     sensors: list[str] | None = None,
     temperature_unit: str | None = None,
+    sheet: str | int | None = None,
 ) -> LogDescription:
     """How the log at ``path`` is read (its JSON: ``to_json_value`` of the answer).
 
@@ -157,6 +158,8 @@ def describe_log(
         The sensor columns to describe, in this order (default: all).
     temperature_unit : {"C", "F", "K"}, optional
         Unit of the temperature columns that state none of their own (default: °C).
+    sheet : str or int, optional
+        An Excel workbook's sheet, by name or number from 1 (default: its first sheet with a table).
 
     Returns
     -------
@@ -171,7 +174,7 @@ def describe_log(
         unreadable file, no such column, a time column that does not increase.
     """
     file = Path(path)
-    lines, dialect = read_lines(file)
+    lines, dialect = read_lines(file, sheet=sheet)
     # a log just begun is worth a look too: no five samples needed here; nor one whose sensor failed
     log = read_temperature_log(
         file,
@@ -181,6 +184,7 @@ def describe_log(
         min_samples=1,
         temperature_unit=temperature_unit,
         max_bad_fraction=1.0,
+        sheet=sheet,
     )
     stated = stated_temperature_unit(temperature_unit)
     with file.open("rb") as handle:
@@ -210,7 +214,7 @@ def describe_log(
         )
     return LogDescription(
         file=str(path),
-        format=_format(dialect, kind, any(dialect.unit_of(c.sensor).strip() for c in per_sensor), stated),
+        format=_format(dialect, kind, any(dialect.unit_of(c.sensor).strip() for c in per_sensor), stated, sheet),
         time=TimeColumn(
             column=log.time_column,
             first_cell=None if first_cell is None else str(first_cell),
@@ -268,12 +272,15 @@ def _time_read_as(name: str, first_cell: object, time_unit: str | None, dialect:
     )
 
 
-def _format(dialect: CsvDialect, kind: str | None, names_state_units: bool, stated: str | None) -> LogFormat:
+def _format(
+    dialect: CsvDialect, kind: str | None, names_state_units: bool, stated: str | None, sheet: str | int | None
+) -> LogFormat:
     """The log's format; its units from a units row, the column names, or nowhere (then °C, or
     the unit stated, is assumed)."""
     nowhere = "no units in the log (°C assumed)" if stated is None else f"no units in the log ({stated}, as stated)"
+    which = "its first sheet with a table" if sheet is None else f"the sheet `sheet` names: {str(sheet)!r}"
     return LogFormat(
-        kind="Excel workbook (its first sheet with a table)" if kind in ("xlsx", "xls") else "CSV text",
+        kind=f"Excel workbook ({which})" if kind in ("xlsx", "xls") else "CSV text",
         encoding=dialect.encoding.removesuffix("-sig"),
         delimiter=_DELIMITER_NAMES.get(dialect.delimiter, dialect.delimiter),
         decimal=dialect.decimal,

@@ -25,6 +25,7 @@ import io
 import math
 import re
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -52,6 +53,8 @@ __all__ = [
     "read_csv",
     "read_lines",
     "binary_kind",
+    "workbook_as_csv",
+    "no_sheets",
     "HEAD_BYTES",
 ]
 
@@ -611,25 +614,33 @@ def _delimiter(header: str, rows: list[str]) -> str:
     return ranked[0] if ranked else ","
 
 
-def header_names(file: Path) -> list[str]:
+def header_names(file: Path, sheet: str | int | None = None) -> list[str]:
     """The column names of a log, read from its head only (a live log may be large); [] while
     its header line is incomplete.
 
     Parameters
     ----------
     file : Path
-        The log: CSV text, or an Excel .xlsx workbook (its first sheet with a table).
+        The log: CSV text, or an Excel .xlsx workbook (the sheet ``sheet`` names, else its first
+        sheet with a table).
+    sheet : str or int, optional
+        A workbook's sheet, as for :func:`workbook_as_csv`; not looked at for CSV text.
 
     Returns
     -------
     list of str
         The names as the log's dialect reads them (a T&D logger's channel names where it gives them),
         empty names left out.
+
+    Raises
+    ------
+    InputError
+        A workbook that does not open, or has no sheet ``sheet``.
     """
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     if binary_kind(head) in ("xlsx", "xls"):
-        head = workbook_as_csv(file, file)[:HEAD_BYTES]
+        head = workbook_as_csv(file, file, sheet)[:HEAD_BYTES]
     dialect = sniff_dialect(head)
     if dialect is None:
         return []
@@ -640,7 +651,9 @@ def _header_line(head: bytes, dialect: CsvDialect) -> str:
     return _LINE_BREAK.split(dialect.decode(head))[dialect.preamble_lines]
 
 
-def read_lines(path: str | Path, notes: list[str] | None = None) -> tuple[list[str], CsvDialect]:
+def read_lines(
+    path: str | Path, notes: list[str] | None = None, sheet: str | int | None = None
+) -> tuple[list[str], CsvDialect]:
     """A whole log file's lines from its header line on, read in its own dialect; InputError,
     naming ``path`` as given, if it is missing or no CSV.
 
@@ -652,7 +665,11 @@ def read_lines(path: str | Path, notes: list[str] | None = None) -> tuple[list[s
     path : str or Path
         The file: CSV text in any dialect :func:`sniff_dialect` tells, or an Excel .xlsx workbook.
     notes : list of str, optional
-        What was left out is appended here (a cut last line); not said where None.
+        What was left out is appended here (a cut last line), and which sheet of a workbook of
+        several was read (:func:`workbook_as_csv`); not said where None.
+    sheet : str or int, optional
+        A workbook's sheet to read, by name or number (from 1); default: its first sheet with a table.
+        Refused for CSV text.
 
     Returns
     -------
@@ -666,7 +683,8 @@ def read_lines(path: str | Path, notes: list[str] | None = None) -> tuple[list[s
     ------
     InputError
         The file is missing, binary or an .xls workbook, has no header line or two columns of one name,
-        a row with more cells than the header, or text its encoding cannot read.
+        a row with more cells than the header, or text its encoding cannot read; a workbook has no sheet
+        ``sheet``, or ``sheet`` is given for CSV text.
     """
     file = Path(path)
     if not file.is_file():
@@ -677,11 +695,13 @@ def read_lines(path: str | Path, notes: list[str] | None = None) -> tuple[list[s
     kind = binary_kind(head)
     data = None
     if kind in ("xlsx", "xls"):
-        data = workbook_as_csv(file, path)
+        data = workbook_as_csv(file, path, sheet, notes)
         head = data[:HEAD_BYTES]
     elif kind is not None:
         msg = f"{path}: not a text file; a log is read as CSV text (or as an Excel .xlsx workbook)"
         raise InputError(msg)
+    elif sheet is not None:  # an option that would change nothing is not passed over without a word
+        raise InputError(no_sheets(path, sheet))
     # the whole file fits in the head: its last line is complete even without a newline
     whole = len(head) < HEAD_BYTES
     try:
@@ -982,10 +1002,15 @@ def binary_kind(head: bytes) -> str | None:
     return None
 
 
-def workbook_as_csv(file: Path, path: str | Path) -> bytes:
-    """The first sheet of an Excel workbook that holds a table (rows that begin like data rows;
-    a logger's "Details" sheet before its data is passed over) as the CSV text a logger would have
-    written, so that it is read like one: preamble, header, units row, time stamps and all.
+def workbook_as_csv(
+    file: Path, path: str | Path, sheet: str | int | None = None, notes: list[str] | None = None
+) -> bytes:
+    """A sheet of an Excel workbook as the CSV text a logger would have written, so that it is read
+    like one: preamble, header, units row, time stamps and all. The sheet is the one ``sheet``
+    names, else the first that holds a table (rows that begin like data rows; a logger's "Details"
+    sheet before its data is passed over). Where the workbook has other sheets with something in
+    them and none was named, ``notes`` is told which sheet was read, the others and how to pick one:
+    readings on a later sheet were read from the first without a word.
 
     Parameters
     ----------
@@ -993,6 +1018,11 @@ def workbook_as_csv(file: Path, path: str | Path) -> bytes:
         The workbook (.xlsx).
     path : str or Path
         Its name as the user gave it, for the messages.
+    sheet : str or int, optional
+        The sheet to read: its name (case aside), or its number from 1 as Excel's tabs are counted
+        (a string of digits that is no sheet's name is a number too).
+    notes : list of str, optional
+        Which sheet was read, where the workbook has several and ``sheet`` is None, is appended here.
 
     Returns
     -------
@@ -1002,7 +1032,8 @@ def workbook_as_csv(file: Path, path: str | Path) -> bytes:
     Raises
     ------
     InputError
-        An old .xls workbook, or one that does not open.
+        An old .xls workbook, one that does not open, or no sheet ``sheet`` (the message names the
+        sheets there are).
     """
     import pandas as pd
 
@@ -1034,9 +1065,82 @@ def workbook_as_csv(file: Path, path: str | Path) -> bytes:
             writer.writerow([cell(v) for v in row])
         return out.getvalue()
 
-    texts = [text(sheet) for sheet in sheets.values()]
-    tables = [t for t in texts if sum(_data_like(line) for line in t.splitlines()[:200]) >= 2]
-    return (tables or texts or [""])[0].encode()
+    texts = {str(name): text(frame) for name, frame in sheets.items()}
+    if sheet is not None:
+        return texts[_named_sheet(list(texts), sheet, path)].encode()
+    tables = [name for name, t in texts.items() if sum(_data_like(line) for line in t.splitlines()[:200]) >= 2]
+    read = (tables or list(texts) or [""])[0]
+    if notes is not None and any(t.strip(", \n") for name, t in texts.items() if name != read):
+        notes.append(_sheet_note(path, read, texts, tables))
+    return texts.get(read, "").encode()
+
+
+def no_sheets(path: str | Path, sheet: str | int) -> str:
+    """The message for a sheet named for a log that is CSV text, which has none.
+
+    Parameters
+    ----------
+    path : str or Path
+        The log, as the user gave it.
+    sheet : str or int
+        The sheet named.
+
+    Returns
+    -------
+    str
+    """
+    return f"{path}: `sheet='{sheet}'` names a sheet of an Excel workbook, but this log is CSV text; leave it out"
+
+
+_SHEETS_LISTED = 12
+"""The most sheets a message lists by name (a workbook of a sheet per day has dozens)."""
+
+
+def _sheet_list(names: list[str], said: Callable[[str], str] = repr) -> str:
+    """Sheets for a message, at most :data:`_SHEETS_LISTED` of them, then how many more."""
+    listed = [said(name) for name in names[:_SHEETS_LISTED]]
+    more = len(names) - len(listed)
+    return ", ".join(listed) + (f" and {more} more" if more else "")
+
+
+def _named_sheet(names: list[str], sheet: str | int, path: str | Path) -> str:
+    """The name of the sheet ``sheet`` names (:func:`workbook_as_csv`); InputError naming the sheets
+    there are where none is."""
+    number: int | None
+    wanted = str(sheet).strip()
+    if isinstance(sheet, str):
+        # Excel keeps sheet names unique regardless of case
+        same = [n for n in names if n == wanted] or [n for n in names if n.strip().casefold() == wanted.casefold()]
+        if same:
+            return same[0]
+        number = int(wanted) if wanted.isdecimal() else None
+    else:
+        number = int(sheet)
+    if number is not None and 1 <= number <= len(names):
+        return names[number - 1]
+    numbered = _sheet_list(names, lambda n: f"{names.index(n) + 1} {n!r}")
+    which = f"no sheet {wanted!r}" if number is None else f"no sheet number {number} (counted from 1)"
+    msg = (
+        f"{path}: {which}; the workbook's sheets: {numbered} (`sheet='NAME'` takes a sheet's name or its number, "
+        "from 1)"
+    )
+    raise InputError(msg)
+
+
+def _sheet_note(path: str | Path, read: str, texts: dict[str, str], tables: list[str]) -> str:
+    """What a reader says of a workbook of several sheets when none was named: the sheet read, the
+    others, and how to read another."""
+    why = "the first that holds a table" if tables else "none holds a table: the first"
+
+    def other(name: str) -> str:
+        what = "a table too" if name in tables else "no table" if texts[name].strip(", \n") else "empty"
+        return f"{name!r} ({what})"
+
+    others = _sheet_list([name for name in texts if name != read], other)
+    return (
+        f"{path}: read sheet {read!r} of {len(texts)} ({why}); not read: {others}; `sheet='NAME'` reads another "
+        "(its name, or its number from 1)"
+    )
 
 
 def _decodes(data: bytes, encoding: str = "utf-8-sig") -> bool:

@@ -275,6 +275,7 @@ def read_temperature_log(
     sensors: list[str] | None = None,
     temperature_unit: str | None = None,
     max_bad_fraction: float = MAX_BAD_FRACTION,
+    sheet: str | int | None = None,
 ) -> TemperatureLog:
     """Read and validate a CSV temperature log.
 
@@ -300,6 +301,9 @@ def read_temperature_log(
     max_bad_fraction : float
         The largest share of a sensor's samples that may be bad (empty, NaN, open circuit): a
         sensor with more is refused (1 to describe a log whatever its sensors read).
+    sheet : str or int, optional
+        An Excel workbook's sheet to read: its name, or its number from 1 (default: the first sheet
+        that holds a table; where the workbook has others, a note says which was read and which not).
 
     Returns
     -------
@@ -311,10 +315,11 @@ def read_temperature_log(
         Missing or unreadable file, no such column, no sensor column, non-numeric
         cells, time not increasing or duplicated, too few samples, too many bad
         samples in a sensor, a column's own unit that ``temperature_unit``
-        contradicts.
+        contradicts, a workbook without the sheet ``sheet`` (the message names its sheets), or
+        ``sheet`` given for a log that is no workbook.
     """
     read_notes: list[str] = []
-    table = _as_table(path, read_notes)
+    table = _as_table(path, read_notes, sheet)
     notes: list[str] = [renamed] if (renamed := table.dialect.renaming()) else []
     notes.extend(read_notes)
     layout = _layout(table, time_col, time_unit, min_samples, sensors, temperature_unit, notes)
@@ -506,18 +511,21 @@ class _LogTable:
     first_row: int
 
 
-def _as_table(path: str | Path | pd.DataFrame, notes: list[str]) -> _LogTable:
+def _as_table(path: str | Path | pd.DataFrame, notes: list[str], sheet: str | int | None = None) -> _LogTable:
     """The log as lines with its column names; what the file's reader left out goes to ``notes``
-    (a cut last line)."""
+    (a cut last line, a workbook's sheets not read)."""
     import sys
 
     pandas = sys.modules.get("pandas")  # a DataFrame can come only where pandas was imported
     if pandas is not None and isinstance(path, pandas.DataFrame):
+        if sheet is not None:
+            msg = f"`sheet='{sheet}'` names a sheet of an Excel workbook; a DataFrame has none: leave it out"
+            raise InputError(msg)
         table = _frame_table(path)
     else:
         if isinstance(path, str) and path in SAMPLES:
             path = sample_log_path(path)
-        table = _file_table(path, notes)
+        table = _file_table(path, notes, sheet)
     if len(table.columns) < 2:
         msg = (
             f"{table.source}: need a time column and at least one sensor column, separated by ',', ';' or tabs; found "
@@ -527,9 +535,9 @@ def _as_table(path: str | Path | pd.DataFrame, notes: list[str]) -> _LogTable:
     return table
 
 
-def _file_table(path: str | Path, notes: list[str]) -> _LogTable:
+def _file_table(path: str | Path, notes: list[str], sheet: str | int | None = None) -> _LogTable:
     """A CSV file (or an Excel workbook's sheet, as the CSV it holds) as a table."""
-    lines, dialect = read_lines(path, notes)
+    lines, dialect = read_lines(path, notes, sheet)
     if not lines:
         msg = (
             f"{path}: an empty file; a log is CSV text, a header line (a time column and a column per sensor) and "

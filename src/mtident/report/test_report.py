@@ -323,7 +323,7 @@ def build_report(
             break
     state = session.state
     if state is None:
-        msg = f"{session.path}: no data rows to report on"
+        msg = f"{session.shown}: no data rows to report on"
         raise InputError(msg)
     settings = session.settings
     outcome = session.answer(with_forecast=False)
@@ -361,7 +361,7 @@ def build_report(
     settle = math.nan if hindsight is None else hindsight.test_settle_time_min
     saved = None if hindsight is None else hindsight.time_saved_min
     return WarmupReport(
-        source=str(session.path),
+        source=str(session.shown),
         machine=machine or (used.machine if used is not None else ""),
         serial=used.serial if used is not None and (not machine or machine == used.machine) else "",
         program=used.program if used is not None and (not machine or machine == used.machine) else "",

@@ -412,6 +412,17 @@ class WatchSession:
     # -- following ---------------------------------------------------------------------------
 
     @property
+    def asked(self) -> list[str] | None:
+        """The sensor columns asked for (the room sensor's last), None where every temperature column
+        is read.
+
+        Returns
+        -------
+        list of str or None
+        """
+        return None if self._asked is None else list(self._asked)
+
+    @property
     def sensors(self) -> tuple[str, ...]:
         """The sensors watched (empty before the log's header is read).
 
