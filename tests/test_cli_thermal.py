@@ -475,7 +475,10 @@ def test_identify_reads_the_sheet_named_and_says_which_it_read_where_none_is(tmp
         out = mtident("thermal", "identify", str(book), "--sheet", sheet, "--window", "40", "--method", "lsq", "--json")
         assert out.returncode == 0, out.stderr
         answers = {d["sensor"]: d for d in json.loads(out.stdout)["sensors"]}
-        assert list(answers) == ["B", "Umgebung"] and "read sheet" not in out.stderr
+        assert list(answers) == ["B", "Umgebung"]
+        # a sheet named by number is said by name: pandas counts from 0, the option from 1
+        said = "read sheet 'Run 2', number 3 of 4 (counted from 1)"
+        assert (said in out.stderr) == (sheet == "3") and "not read:" not in out.stderr
         # B rises from 25 to 31 °C (τ = 25 min, no noise): its T∞ is the sheet's, not A's 24 °C
         assert abs(answers["B"]["steady_state_C"] - 31.0) < 0.05
         assert "'Umgebung' is named as a room sensor and identified as a machine sensor" in out.stderr

@@ -406,9 +406,15 @@ def test_a_workbook_of_several_sheets_says_the_sheet_it_read_and_reads_the_one_n
         f"{book}: read sheet 'Run 1' of 4 (the first that holds a table); not read: 'Details' (no table), "
         "'Run 2' (a table too), 'Spare' (empty); `sheet='NAME'` reads another (its name, or its number from 1)",
     )
-    for sheet in ("Run 2", "run 2", " Run 2 ", 3, "3"):
+    for sheet in ("Run 2", "run 2", " Run 2 "):
         log = read_temperature_log(book, sheet=sheet)
         assert log.sensors == ("B", "Umgebung") and log.notes == (), sheet
+    # a number counts from 1, where pandas counts from 0: the sheet read is said by name
+    for sheet in (3, "3"):
+        log = read_temperature_log(book, sheet=sheet)
+        assert log.sensors == ("B", "Umgebung") and log.notes == (
+            f"{book}: read sheet 'Run 2', number 3 of 4 (counted from 1)",
+        )
         np.testing.assert_allclose(log.temperature_C[:, 0], b, atol=1e-9)
     assert header_names(book, "Run 2") == ["time_min", "B", "Umgebung"] and header_names(book) == ["time_min", "A"]
     listed = re.escape("the workbook's sheets: 1 'Details', 2 'Run 1', 3 'Run 2', 4 'Spare' (`sheet='NAME'`")

@@ -1067,7 +1067,11 @@ def workbook_as_csv(
 
     texts = {str(name): text(frame) for name, frame in sheets.items()}
     if sheet is not None:
-        return texts[_named_sheet(list(texts), sheet, path)].encode()
+        name = _named_sheet(list(texts), sheet, path)
+        if notes is not None and name.strip().casefold() != str(sheet).strip().casefold() and len(texts) > 1:
+            # a number counts Excel's tabs from 1, where pandas counts from 0: the sheet read is said
+            notes.append(f"{path}: read sheet {name!r}, number {str(sheet).strip()} of {len(texts)} (counted from 1)")
+        return texts[name].encode()
     tables = [name for name, t in texts.items() if sum(_data_like(line) for line in t.splitlines()[:200]) >= 2]
     read = (tables or list(texts) or [""])[0]
     if notes is not None and any(t.strip(", \n") for name, t in texts.items() if name != read):
