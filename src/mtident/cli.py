@@ -47,6 +47,7 @@ _OPTION_OF = {
     "reference": "--reference",
     "room_wander_C_per_h": "--room-wander",
     "free_fast_modes": "--free-fast-modes",
+    "wait_for": "--wait-for",
 }
 _PARAMETER = re.compile(r"`(\w+)(?:=(?:'([^']*)'|\[([^\]]*)\]))?`")
 

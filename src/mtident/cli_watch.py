@@ -816,7 +816,7 @@ def _answer(
         console.print(
             f"Expected stop: none found; {who} none on the best model's course (its interval does not come "
             "within the tolerance there, or its status gives no course to go on: "
-            f"no fit yet, off its reference, a misfit, silent){others}.",
+            f"no fit yet, off its reference, a misfit, silent, stuck){others}.",
             highlight=False,
         )
 

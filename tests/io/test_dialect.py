@@ -417,6 +417,10 @@ def test_a_workbook_of_several_sheets_says_the_sheet_it_read_and_reads_the_one_n
         )
         np.testing.assert_allclose(log.temperature_C[:, 0], b, atol=1e-9)
     assert header_names(book, "Run 2") == ["time_min", "B", "Umgebung"] and header_names(book) == ["time_min", "A"]
+    # a logger's details sheet named is refused for what it is, not as a log too short
+    for sheet in ("Details", 1):
+        with pytest.raises(InputError, match=r"sheet 'Details' holds no table of readings .*: 'Run 1', 'Run 2'$"):
+            read_temperature_log(book, sheet=sheet)
     listed = re.escape("the workbook's sheets: 1 'Details', 2 'Run 1', 3 'Run 2', 4 'Spare' (`sheet='NAME'`")
     with pytest.raises(InputError, match=rf"runs.xlsx: no sheet 'Run 3'; {listed}"):
         read_temperature_log(book, sheet="Run 3")

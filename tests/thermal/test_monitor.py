@@ -654,7 +654,11 @@ def test_a_stuck_sensor_holds_the_test_and_says_why(spindle_reference):
     assert column.status == "stuck" and column.last_reading_min == 120.0 and not column.may_stop
     said = [e for e in events if e.kind == "warning" and e.sensor == "column" and "is the same value" in e.text]
     assert len(said) == 1 and 139.0 <= said[0].time_min <= 150.0
-    assert "column: every reading since t = 120 min is the same value" in result(state, settings)["reason"]
+    reason = result(state, settings)["reason"]
+    assert "column: every reading since t = 120 min is the same value" in reason
+    # the way on for a failed sensor is to mend it or not wait for it; no room or time advice for it
+    assert "check column (its readings say nothing of its temperature now), or leave it out of the sensors" in reason
+    assert "`wait_for` the others" in reason and "for column, also state a smaller room wander" not in reason
 
 
 def test_a_reading_repeated_by_a_coarse_display_is_not_stuck():

@@ -1066,13 +1066,20 @@ def workbook_as_csv(
         return out.getvalue()
 
     texts = {str(name): text(frame) for name, frame in sheets.items()}
+    tables = [name for name, t in texts.items() if sum(_data_like(line) for line in t.splitlines()[:200]) >= 2]
     if sheet is not None:
         name = _named_sheet(list(texts), sheet, path)
+        if tables and name not in tables:
+            # a sheet of a logger's details read as a log is refused for what it is, not for being short
+            msg = (
+                f"{path}: sheet {name!r} holds no table of readings (no rows that begin like data rows); the sheets "
+                f"that do: {_sheet_list(tables)}"
+            )
+            raise InputError(msg)
         if notes is not None and name.strip().casefold() != str(sheet).strip().casefold() and len(texts) > 1:
             # a number counts Excel's tabs from 1, where pandas counts from 0: the sheet read is said
             notes.append(f"{path}: read sheet {name!r}, number {str(sheet).strip()} of {len(texts)} (counted from 1)")
         return texts[name].encode()
-    tables = [name for name, t in texts.items() if sum(_data_like(line) for line in t.splitlines()[:200]) >= 2]
     read = (tables or list(texts) or [""])[0]
     if notes is not None and any(t.strip(", \n") for name, t in texts.items() if name != read):
         notes.append(_sheet_note(path, read, texts, tables))

@@ -279,11 +279,11 @@ def silent_words(check: SensorCheck) -> str:
     if check.status == "stuck":
         return (
             f"{check.sensor}: {what}: those readings say nothing of its temperature, and it holds the test until it "
-            "reads again; if it has failed, leave it out of the sensors the test waits for"
+            "reads again; if it has failed, leave it out of the sensors the test waits for (`wait_for` the others)"
         )
     return (
         f"{check.sensor}: {what}: its answer rests on its readings up to then, and it holds the test until it "
-        "reads again; if it has failed, leave it out of the sensors the test waits for"
+        "reads again; if it has failed, leave it out of the sensors the test waits for (`wait_for` the others)"
     )
 
 
@@ -343,6 +343,15 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Rea
         if dropped
         else ", or give a reference run of this machine (mtident thermal learn)"
     )
+    failed = [c.sensor for c in waiting if c.status in ("silent", "stuck")]
+    # a failed sensor's interval does not narrow with time, a room, or a reference: it is to be mended or left out
+    waiting = [c for c in waiting if c.sensor not in failed]
+    mend = (
+        f"check {', '.join(failed)} (its readings say nothing of its temperature now), or leave "
+        f"{'it' if len(failed) == 1 else 'them'} out of the sensors the test waits for (`wait_for` the others)"
+    )
+    if not waiting:
+        return "; ".join(parts) + f". Ways on: {mend}."
     ways = "continue the test" + ("" if settings.reference is not None else learn)
     largest = settings.robust.max_time_constant_min
     if settings.reference is None and any(ends_at_the_largest(c.ends, largest) for c in waiting):
@@ -367,6 +376,8 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Rea
         ways = f"for {', '.join(bound)}, {room}" + (f"; for the others, {ways}" if others else "")
     elif slow:
         ways += f"; for {', '.join(slow)}, also {room}"
+    if failed:
+        ways += f"; {mend}"
     return "; ".join(parts) + f". Ways on: {ways}."
 
 
