@@ -145,6 +145,14 @@ def test_a_replayed_workbook_of_several_sheets_says_the_sheet_it_read_and_replay
         )
         in live.stderr
     )
+    # without --state, each sheet keeps a state file of its own beside the workbook
+    for sheet in ("Run 1", "Run 2"):
+        out = mtident("thermal", "watch", str(book), "--replay", "--sheet", sheet, "--room-wander", "0")
+        assert out.returncode == 0, out.stderr
+    assert {p.name for p in tmp_path.glob("*.watch-state.npz")} == {
+        "runs.xlsx.Run_1.watch-state.npz",
+        "runs.xlsx.Run_2.watch-state.npz",
+    }
 
 
 def test_watch_that_cannot_stop_says_why_and_the_ways_on(tmp_path):

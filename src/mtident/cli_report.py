@@ -70,7 +70,7 @@ def report_command(**options: Any) -> None:
         time_col=options["time_col"],
         time_unit=options["time_unit"],
         temperature_unit=options["temperature_unit"],
-        state_path=state_file(file, path, options["state_path"]),
+        state_path=state_file(file, path, options["state_path"], options["sheet"]),
         persist=False,  # a watch may still follow this log: its state file is its own
         shown_as=path,  # a workbook is read as a temporary copy of the CSV it holds: the report names the workbook
     )

@@ -8,6 +8,7 @@ tables, a picture and the JSON answer.
 from __future__ import annotations
 
 import math
+import re
 import signal
 import sys
 import threading
@@ -136,9 +137,10 @@ def decision_options(func: F) -> F:
     return func
 
 
-def state_file(file: str, path: Path, given: str | None) -> Path:
-    """The state file: the one given, else beside the log; for a shipped sample, in the current
-    folder (not inside the installed package).
+def state_file(file: str, path: Path, given: str | None, sheet: str | None = None) -> Path:
+    """The state file: the one given, else beside the log (a workbook's sheet named: one of its
+    own, ``LOG.SHEET.watch-state.npz``); for a shipped sample, in the current folder (not inside
+    the installed package).
 
     Parameters
     ----------
@@ -148,6 +150,8 @@ def state_file(file: str, path: Path, given: str | None) -> Path:
         The log.
     given : str or None
         The --state option.
+    sheet : str or None, optional
+        The --sheet option.
 
     Returns
     -------
@@ -155,6 +159,10 @@ def state_file(file: str, path: Path, given: str | None) -> Path:
     """
     if given:
         return Path(given)
+    if sheet is not None:
+        # each sheet of a workbook is a log of its own: one state file would be taken over by the other
+        named = re.sub(r"[^\w.-]+", "_", sheet.strip())
+        path = path.with_name(f"{path.name}.{named}")
     return Path.cwd() / default_state_path(path).name if file in SAMPLES else default_state_path(path)
 
 
@@ -392,7 +400,7 @@ def watch(request: WatchRequest) -> None:
         time_col=request.log.time_col,
         time_unit=request.log.time_unit,
         temperature_unit=request.log.temperature_unit,
-        state_path=state_file(str(path) if recorder else file, path, request.state_path),
+        state_path=state_file(str(path) if recorder else file, path, request.state_path, sheet),
         resume=request.resume or not follow.replay,
         shown_as=path,
     )
