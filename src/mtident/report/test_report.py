@@ -500,7 +500,7 @@ def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float
     tolerance = f"±{settings.tolerance_C:g} °C"
     level = f"{settings.decision_level * 100:g} %"
     if c.status in ("silent", "stuck"):
-        return silent_words(c) + " (--wait-for)."
+        return silent_words(c, "--wait-for") + "."
     if c.status == "no rise":
         return (
             f"{c.sensor}: has not risen above its noise yet. If the test does not heat it, leave it out (--sensor); "

@@ -264,12 +264,14 @@ def room_silent_words(since_min: float, settings: MonitorSettings) -> str:
     )
 
 
-def silent_words(check: SensorCheck) -> str:
+def silent_words(check: SensorCheck, option: str = "`wait_for` the others") -> str:
     """What a silent (or stuck) sensor's status means, and the way on.
 
     Parameters
     ----------
     check : SensorCheck
+    option : str, optional
+        How to leave it out, as the reader says it (a report: the command line's option).
 
     Returns
     -------
@@ -279,11 +281,11 @@ def silent_words(check: SensorCheck) -> str:
     if check.status == "stuck":
         return (
             f"{check.sensor}: {what}: those readings say nothing of its temperature, and it holds the test until it "
-            "reads again; if it has failed, leave it out of the sensors the test waits for (`wait_for` the others)"
+            f"reads again; if it has failed, leave it out of the sensors the test waits for ({option})"
         )
     return (
         f"{check.sensor}: {what}: its answer rests on its readings up to then, and it holds the test until it "
-        "reads again; if it has failed, leave it out of the sensors the test waits for (`wait_for` the others)"
+        f"reads again; if it has failed, leave it out of the sensors the test waits for ({option})"
     )
 
 
