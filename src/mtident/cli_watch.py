@@ -802,6 +802,13 @@ def _answer(
         console.print(
             "(--ambient COLUMN names the room sensor's column; --room-wander states the room's wander in °C an hour)"
         )
+    elif replay:
+        # a replayed log is whole: there is no running test to keep on
+        console.print(
+            f"[bold yellow]Not yet: the log ends at t = {minutes(state.readings.latest_min)}, before the test may "
+            "stop.[/]"
+        )
+        console.print(str(outcome.reason), highlight=False)
     else:
         console.print("[bold yellow]Not yet: keep the test running.[/]")
         console.print(str(outcome.reason), highlight=False)
