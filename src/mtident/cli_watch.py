@@ -964,20 +964,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             )
             if decided and not room and not failed
         ]
-        why = (
-            f"The log ends before {'its sensors' if len(late) == len(hindsight.sensors) else ', '.join(late)} settled "
-            f"(settled: moving less than {hindsight.tolerance_C / 2:g} °C over the log's last quarter, with under "
-            f"{hindsight.tolerance_C / 4:g} °C still to come at the pace of its slowest mode, a move its readings' "
-            "display step could hide counted in)"
-            + ("; the others' readings keep following the room" if with_room.any() else "")
-            + (f"; {stuck_words}" if stuck_words else "")
-            if late
-            else f"Every sensor's readings are {stuck_words}"
-            if stuck_words and not with_room.any()
-            else "Every sensor's readings keep following the room to the log's end, or stuck: no settled level"
-            if stuck_words
-            else "Every sensor's readings keep following the room to the log's end: no settled level"
-        )
+        why = _no_level_words(hindsight, late, bool(with_room.any()), stuck_words)
         OptionConsole().print(
             f"{why}: nothing to check the decision against" + (f"; {timing}." if timing else "."), highlight=False
         )
@@ -1008,6 +995,25 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         f"{verdict[0].upper()}{verdict[1:]}" + (f"; {timing}" if timing else "") + f"{not_settled}{failed}.",
         highlight=False,
     )
+
+
+def _no_level_words(hindsight: Hindsight, late: list[str], with_room: bool, stuck_words: str) -> str:
+    """Why no sensor has a settled level to check T∞ against: the log ends before the ``late`` ones
+    settled, the others follow the room, or stuck (``stuck_words``)."""
+    if late:
+        who = "its sensors" if len(late) == len(hindsight.sensors) else ", ".join(late)
+        return (
+            f"The log ends before {who} settled (settled: moving less than {hindsight.tolerance_C / 2:g} °C over the "
+            f"log's last quarter, with under {hindsight.tolerance_C / 4:g} °C still to come at the pace of its "
+            "slowest mode, a move its readings' display step could hide counted in)"
+            + ("; the others' readings keep following the room" if with_room else "")
+            + (f"; {stuck_words}" if stuck_words else "")
+        )
+    if stuck_words and not with_room:
+        return f"Every sensor's readings are {stuck_words}"
+    if stuck_words:
+        return "Every sensor's readings keep following the room to the log's end, or stuck: no settled level"
+    return "Every sensor's readings keep following the room to the log's end: no settled level"
 
 
 def _stuck(hindsight: Hindsight, stuck: np.ndarray) -> list[tuple[str, float]]:

@@ -192,10 +192,7 @@ def monitor_step(
             f"({', '.join(state.sensors)})"
         )
         raise InputError(msg)
-    if settings.reference is not None:
-        # refuses one of another machine; the notes are the caller's to say, once
-        reference, _ = reference_for_log(settings.reference, state.sensors, room is not None)
-        settings = replace(settings, reference=reference)
+    settings = _named_reference(settings, state.sensors, room is not None)
     events: list[Event] = []
     start = 0
     while start < len(t) and not state.stopped:
@@ -243,15 +240,22 @@ def check_every_sensor(
     now = state.readings.latest_min
     if state.stopped or not len(state.readings.time_min) or all(c.checked_min >= now for c in state.checks):
         return state, []
-    if settings.reference is not None:
-        reference, _ = reference_for_log(settings.reference, state.sensors, state.readings.room_C is not None)
-        settings = replace(settings, reference=reference)
+    settings = _named_reference(settings, state.sensors, state.readings.room_C is not None)
     due = replace(state, checks=tuple(replace(c, next_check_min=min(c.next_check_min, now)) for c in state.checks))
     try:
         checked, events = _check_due(due, settings, cancel)
     except _Cancelled:
         return state, []
     return _with_warned(checked, events), events
+
+
+def _named_reference(settings: MonitorSettings, sensors: tuple[str, ...], with_room: bool) -> MonitorSettings:
+    """The settings with the reference as this log's sensors name it (one of another machine
+    refused); the notes are the caller's to say, once."""
+    if settings.reference is None:
+        return settings
+    reference, _ = reference_for_log(settings.reference, sensors, with_room)
+    return replace(settings, reference=reference)
 
 
 def _with_warned(state: MonitorState, events: list[Event]) -> MonitorState:
