@@ -249,7 +249,7 @@ def test_a_workbooks_report_names_the_workbook_its_sheet_and_a_room_column(tmp_p
     code, _, err = mtident("thermal", "report", str(book), "--sheet", "Run 2", "--room-wander", "0", "-o", str(out))
     assert code == 0, err
     page = out.read_text(encoding="utf-8")
-    assert str(book) in page and "mtident-" not in page
+    assert str(book) in page and "runs.xlsx, sheet &#39;Run 2&#39;" in page and "mtident-" not in page
     assert "read sheet" not in err
     assert (
         "mtident: note: 'Umgebung' is named as a room sensor and reported as a machine sensor; if it measures the "

@@ -465,7 +465,8 @@ def test_identify_reads_the_sheet_named_and_says_which_it_read_where_none_is(tmp
     workbook_of_runs(book)
     out = mtident("thermal", "identify", str(book), "--window", "40", "--method", "lsq", "--json")
     assert out.returncode == 0, out.stderr
-    assert json.loads(out.stdout)["sensor"] == "A"
+    answer = json.loads(out.stdout)
+    assert answer["sensor"] == "A" and answer["log"] == f"{book}, sheet 'Run 1'"
     assert (
         f"mtident: note: {book}: read sheet 'Run 1' of 4 (the first that holds a table); not read: 'Details' "
         "(no table), 'Run 2' (a table too), 'Spare' (empty); --sheet NAME reads another (its name, or its number "
@@ -475,6 +476,7 @@ def test_identify_reads_the_sheet_named_and_says_which_it_read_where_none_is(tmp
         out = mtident("thermal", "identify", str(book), "--sheet", sheet, "--window", "40", "--method", "lsq", "--json")
         assert out.returncode == 0, out.stderr
         answers = {d["sensor"]: d for d in json.loads(out.stdout)["sensors"]}
+        assert json.loads(out.stdout)["log"] == f"{book}, sheet 'Run 2'"
         assert list(answers) == ["B", "Umgebung"]
         # a sheet named by number is said by name: pandas counts from 0, the option from 1
         said = "read sheet 'Run 2', number 3 of 4 (counted from 1)"
@@ -482,6 +484,10 @@ def test_identify_reads_the_sheet_named_and_says_which_it_read_where_none_is(tmp
         # B rises from 25 to 31 °C (τ = 25 min, no noise): its T∞ is the sheet's, not A's 24 °C
         assert abs(answers["B"]["steady_state_C"] - 31.0) < 0.05
         assert "'Umgebung' is named as a room sensor and identified as a machine sensor" in out.stderr
+    # the log's name in titles, messages and a reference's source names the sheet of a workbook of several
+    assert read_temperature_log(book, sheet="3").source == f"{book}, sheet 'Run 2'"
+    out = mtident("thermal", "identify", str(book), "--sheet", "Run 2", "--sensor", "A")
+    assert out.returncode == 2 and f"mtident: error: {book}, sheet 'Run 2': no sensor column 'A'" in out.stderr
     out = mtident("thermal", "inspect", str(book), "--sheet", "Run 2", "--json")
     assert out.returncode == 0, out.stderr
     info = json.loads(out.stdout)

@@ -28,9 +28,10 @@ from helpers import (
     workbook_of_runs,
 )
 
-from mtident.cli_watch import _print_hindsight
+from mtident.cli_watch import _print_hindsight, _status_words
 from mtident.persist import load_dataclass
 from mtident.thermal.hindsight import Hindsight
+from mtident.thermal.monitor import new_state
 from mtident.thermal.reference import save_reference
 from mtident.thermal.session import (
     SavedWatch,
@@ -750,3 +751,12 @@ def test_watch_that_refused_every_row_is_an_error_not_an_answer(tmp_path):
     assert code == 2 and out == ""
     assert "refused 60 row(s) with more cells than the header's 3" in err
     assert "comma.csv: no data rows read (where rows were refused, the warnings above say why)" in " ".join(err.split())
+
+
+def test_a_failed_sensors_status_says_since_when():
+    """A stuck sensor's row showed its repeated value as "latest" and the log's end as "checked",
+    as if it read on: its status says since when its readings say nothing."""
+    check = new_state(["T1"]).checks[0]
+    assert _status_words(replace(check, status="stuck", last_reading_min=149.0)) == "stuck from 149 min"
+    assert _status_words(replace(check, status="silent", last_reading_min=380.0)) == "silent from 380 min"
+    assert _status_words(replace(check, status="narrowing", last_reading_min=380.0)) == "narrowing"

@@ -62,7 +62,7 @@ def report_command(**options: Any) -> None:
         msg = f"{path}: no such file"
         raise InputError(msg)
     settings = monitor_settings(options)
-    read, sheet_notes = _workbook_as_replayed_csv(path, options["sheet"])
+    read, sheet_read, sheet_notes = _workbook_as_replayed_csv(path, options["sheet"])
     session = WatchSession(
         read,
         settings,
@@ -73,6 +73,7 @@ def report_command(**options: Any) -> None:
         state_path=state_file(file, path, options["state_path"], options["sheet"]),
         persist=False,  # a watch may still follow this log: its state file is its own
         shown_as=path,  # a workbook is read as a temporary copy of the CSV it holds: the report names the workbook
+        sheet=sheet_read,
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)

@@ -604,11 +604,14 @@ class IdentifiedSensors:
     method : str
     window_min : float
         The identification time L used.
+    log : str
+        The log read (and the sheet of a workbook of several).
     """
 
     sensors: tuple[SensorAnswer, ...]
     method: str
     window_min: float
+    log: str
 
 
 def run_identify(request: IdentifyRequest) -> None:
@@ -664,9 +667,10 @@ def run_identify(request: IdentifyRequest) -> None:
             f"{result.time_min[-1]:g} min)",
             highlight=False,
         )
-    answers = tuple(result.answer(i) for i in range(len(result.sensors)))
+    answers = tuple(replace(result.answer(i), log=log.source) for i in range(len(result.sensors)))
     if request.as_json:
-        print_json(answers[0] if len(answers) == 1 else IdentifiedSensors(answers, request.method, result.window_min))
+        several = IdentifiedSensors(answers, request.method, result.window_min, log.source)
+        print_json(answers[0] if len(answers) == 1 else several)
         return
     _identify_table(log.source, request, result.window_min, answers)
 

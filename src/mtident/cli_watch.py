@@ -57,10 +57,11 @@ from mtident.cli_thermal import (
     unread_rooms_of,
 )
 from mtident.exceptions import InputError
-from mtident.io.logs import SAMPLES
+from mtident.io.logs import SAMPLES, log_name
 from mtident.io.record import RecordingThread
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
+from mtident.thermal.monitor_types import SensorCheck
 from mtident.thermal.robust import RobustSettings
 from mtident.thermal.session import (
     Ended,
@@ -392,7 +393,7 @@ def watch(request: WatchRequest) -> None:
             "logger writes, which has no sheets"
         )
         raise InputError(msg)
-    read, sheet_notes = _workbook_as_replayed_csv(path, sheet) if follow.replay else (path, [])
+    read, sheet_read, sheet_notes = _workbook_as_replayed_csv(path, sheet) if follow.replay else (path, "", [])
     session = WatchSession(
         read,
         request.decision,
@@ -403,6 +404,7 @@ def watch(request: WatchRequest) -> None:
         state_path=state_file(str(path) if recorder else file, path, request.state_path, sheet),
         resume=request.resume or not follow.replay,
         shown_as=path,
+        sheet=sheet_read,
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)
@@ -842,7 +844,7 @@ def _status_table(session: WatchSession, path: Path) -> Table:
     status."""
     state = session.state
     where = "before the first sample" if state is None else f"at t = {minutes(state.readings.latest_min)}"
-    table = Table(title=f"{path.name}: {where} (temperatures in °C, times in min)")
+    table = Table(title=f"{log_name(path.name, session.sheet)}: {where} (temperatures in °C, times in min)")
     level = f"{session.settings.decision_level * 100:g} %"
     columns = ("sensor", "latest", "checked", "T∞", "95 % interval", f"{level} interval", "t_eq")
     for column in (*columns, "status"):
@@ -873,9 +875,17 @@ def _status_table(session: WatchSession, path: Path) -> Table:
             f"{_fmt(check.low95_C)} to {_fmt(check.high95_C)}",
             f"{_fmt(check.low_C)} to {_fmt(check.high_C)}",
             _fmt(check.equilibrium_time_min, 0),
-            f"[{colour}]{check.status}[/]",
+            f"[{colour}]{_status_words(check)}[/]",
         )
     return table
+
+
+def _status_words(check: SensorCheck) -> str:
+    """The status, and for a sensor that failed since when: its "latest" reading is a stuck
+    sensor's repeat, or a silent one's last, not where the sensor is now."""
+    if check.status in ("stuck", "silent") and math.isfinite(check.last_reading_min):
+        return f"{check.status} from {minutes(check.last_reading_min)}"
+    return check.status
 
 
 def _plot(session: WatchSession, plot_path: str) -> None:
@@ -1084,11 +1094,12 @@ class _Nothing:
         return None
 
 
-def _workbook_as_replayed_csv(path: Path, sheet: str | None = None) -> tuple[Path, list[str]]:
+def _workbook_as_replayed_csv(path: Path, sheet: str | None = None) -> tuple[Path, str, list[str]]:
     """``path``, or for an Excel workbook the CSV its sheet holds (``sheet``, --sheet, else its first
     with a table), written to a temporary folder to be replayed
-    (:func:`~mtident.io.dialect.workbook_as_csv`); and the reader's notes: which sheet of several was
-    read. InputError for a sheet the workbook lacks, or one named for a CSV log."""
+    (:func:`~mtident.io.dialect.workbook_as_csv`); the sheet read, where the workbook has several
+    (else ""); and the reader's notes: which sheet of several was read. InputError for a sheet the
+    workbook lacks, or one named for a CSV log."""
     import atexit
     import shutil
     import tempfile
@@ -1099,11 +1110,11 @@ def _workbook_as_replayed_csv(path: Path, sheet: str | None = None) -> tuple[Pat
         if binary_kind(handle.read(8)) not in ("xlsx", "xls"):
             if sheet is not None:
                 raise InputError(no_sheets(path, sheet))
-            return path, []
+            return path, "", []
     notes: list[str] = []
-    data = workbook_as_csv(path, path, sheet, notes)
+    name, data = workbook_as_csv(path, path, sheet, notes)
     folder = Path(tempfile.mkdtemp(prefix="mtident-"))
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
     copy = folder / f"{path.stem}.csv"
     copy.write_bytes(data)
-    return copy, notes
+    return copy, name, notes

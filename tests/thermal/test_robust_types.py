@@ -51,9 +51,12 @@ def test_pooled_modes_narrow_where_runs_agree_and_hold_both_where_they_do_not():
     assert same.run_date == "2026-01-10"
 
 
-def test_the_ends_say_which_way_their_slowest_mode_goes_and_by_how_much():
+def test_the_ends_say_what_is_left_of_their_slowest_mode_and_of_the_others():
     """A first-order warm-up (59 min, 8.85 °C) read for 120 min: the high end is a slow mode that
-    still rises, the low end one that falls; each is said as the mode's whole course, unsigned."""
+    still rises, the low end one that falls; each is said as what is left of it after the last
+    reading, and the faster modes going the other way by how far they go, so that the two add up
+    to the end's distance from where the model stands now."""
+    import math
     import re
 
     import numpy as np
@@ -63,16 +66,25 @@ def test_the_ends_say_which_way_their_slowest_mode_goes_and_by_how_much():
     t = np.arange(0.0, 121.0)
     y = 20.0 + 8.85 * (1.0 - np.exp(-t / 59.0)) + np.random.default_rng(5).normal(0.0, 0.01, t.size)
     estimate = estimate_sensor("T1", t, y)
-    assert estimate.fit is not None
+    assert estimate.fit is not None and estimate.last_min == 120.0
     text = estimate.what_sets_the_ends(0.99)
+    elapsed = 120.0 - estimate.fit.origin_min
     for end, phrase in zip(estimate.fit.ends[0.99], text.split("; "), strict=True):
         slowest = end.slowest()
         assert slowest is not None
-        course = "rising" if slowest.amplitude_C < 0 else "falling"
-        said = re.search(rf"min, {course} ([0-9.]+) °C in all, still fits", phrase)
+        own = -slowest.amplitude_C * math.exp(-elapsed / slowest.time_constant_min)
+        course = "rise" if own > 0 else "fall"
+        said = re.search(rf"still fits, with ([0-9.]+) °C of {course} still to come after t = 120 min", phrase)
         assert said is not None, phrase
-        assert float(said.group(1)) == pytest.approx(abs(slowest.amplitude_C), abs=0.006)
-    assert text.startswith("low end") and "; high end" in text and "rising" in text.split("; ")[1]
+        assert float(said.group(1)) == pytest.approx(abs(own), abs=0.006)
+        left = sum(-m.amplitude_C * math.exp(-elapsed / m.time_constant_min) for m in end.modes)
+        others = re.search(r"faster modes (rising|falling) ([0-9.]+) °C meanwhile", phrase)
+        if others is not None:
+            sign = 1.0 if others.group(1) == "rising" else -1.0
+            assert own + sign * float(others.group(2)) == pytest.approx(left, abs=0.012)
+        else:
+            assert left == pytest.approx(own, abs=0.012) or own * (left - own) > 0
+    assert text.startswith("low end") and "; high end" in text and "of rise" in text.split("; ")[1]
 
 
 def test_a_wide_box_is_said_as_its_range_not_as_a_measurement():

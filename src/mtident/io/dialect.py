@@ -110,6 +110,9 @@ class CsvDialect:
         The columns' names where the header numbers the channels (``No.3``) and the row
         under it names them (``Spindle``), as a T&D logger writes the names a user gave;
         empty where the header's own names stand.
+    sheet : str
+        The sheet of an Excel workbook of several that the text comes from ("" for CSV text, or a
+        workbook of one sheet): messages name it beside the file.
     """
 
     delimiter: str = ","
@@ -127,6 +130,7 @@ class CsvDialect:
     written_names: tuple[str, ...] = ()  # the header's own names, where ``names`` replace them
     # columns the rows under the header describe as computed from the humidity ("Property: Dew Point")
     from_humidity: tuple[str, ...] = ()
+    sheet: str = ""
 
     def cells(self, line: str) -> list[str]:
         """The cells of one line (a header), stripped; quotes removed.
@@ -640,7 +644,7 @@ def header_names(file: Path, sheet: str | int | None = None) -> list[str]:
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     if binary_kind(head) in ("xlsx", "xls"):
-        head = workbook_as_csv(file, file, sheet)[:HEAD_BYTES]
+        head = workbook_as_csv(file, file, sheet)[1][:HEAD_BYTES]
     dialect = sniff_dialect(head)
     if dialect is None:
         return []
@@ -693,9 +697,9 @@ def read_lines(
     with file.open("rb") as handle:
         head = handle.read(HEAD_BYTES)
     kind = binary_kind(head)
-    data = None
+    data, sheet_read = None, ""
     if kind in ("xlsx", "xls"):
-        data = workbook_as_csv(file, path, sheet, notes)
+        sheet_read, data = workbook_as_csv(file, path, sheet, notes)
         head = data[:HEAD_BYTES]
     elif kind is not None:
         msg = f"{path}: not a text file; a log is read as CSV text (or as an Excel .xlsx workbook)"
@@ -722,7 +726,7 @@ def read_lines(
             data = whole_characters
     check_unique_names(dialect.header(_header_line(head, dialect)), path)
     text = _checked_text(file.read_bytes() if data is None else data, head, dialect, path, notes)
-    return _LINE_BREAK.split(text)[dialect.preamble_lines :], dialect
+    return _LINE_BREAK.split(text)[dialect.preamble_lines :], replace(dialect, sheet=sheet_read)
 
 
 def _checked_text(data: bytes, head: bytes, dialect: CsvDialect, path: str | Path, notes: list[str] | None) -> str:
@@ -1004,7 +1008,7 @@ def binary_kind(head: bytes) -> str | None:
 
 def workbook_as_csv(
     file: Path, path: str | Path, sheet: str | int | None = None, notes: list[str] | None = None
-) -> bytes:
+) -> tuple[str, bytes]:
     """A sheet of an Excel workbook as the CSV text a logger would have written, so that it is read
     like one: preamble, header, units row, time stamps and all. The sheet is the one ``sheet``
     names, else the first that holds a table (rows that begin like data rows; a logger's "Details"
@@ -1026,7 +1030,9 @@ def workbook_as_csv(
 
     Returns
     -------
-    bytes
+    name : str
+        The sheet read, where the workbook has more than one (to name it beside the file); else "".
+    text : bytes
         UTF-8 CSV text; dates and times of day as ISO 8601 text, empty cells empty.
 
     Raises
@@ -1079,11 +1085,11 @@ def workbook_as_csv(
         if notes is not None and name.strip().casefold() != str(sheet).strip().casefold() and len(texts) > 1:
             # a number counts Excel's tabs from 1, where pandas counts from 0: the sheet read is said
             notes.append(f"{path}: read sheet {name!r}, number {str(sheet).strip()} of {len(texts)} (counted from 1)")
-        return texts[name].encode()
+        return (name if len(texts) > 1 else ""), texts[name].encode()
     read = (tables or list(texts) or [""])[0]
     if notes is not None and any(t.strip(", \n") for name, t in texts.items() if name != read):
         notes.append(_sheet_note(path, read, texts, tables))
-    return texts.get(read, "").encode()
+    return (read if len(texts) > 1 else ""), texts.get(read, "").encode()
 
 
 def no_sheets(path: str | Path, sheet: str | int) -> str:

@@ -535,6 +535,23 @@ def _as_table(path: str | Path | pd.DataFrame, notes: list[str], sheet: str | in
     return table
 
 
+def log_name(path: str | Path, sheet: str = "") -> str:
+    """A log's name in messages and titles: the file as given, and the sheet of a workbook of several.
+
+    Parameters
+    ----------
+    path : str or Path
+    sheet : str, optional
+        The sheet read ("" for CSV text, or a workbook of one sheet).
+
+    Returns
+    -------
+    str
+        ``"log.xlsx, sheet 'Run 2'"``, or the path alone.
+    """
+    return f"{path}, sheet {sheet!r}" if sheet else str(path)
+
+
 def _file_table(path: str | Path, notes: list[str], sheet: str | int | None = None) -> _LogTable:
     """A CSV file (or an Excel workbook's sheet, as the CSV it holds) as a table."""
     lines, dialect = read_lines(path, notes, sheet)
@@ -556,7 +573,7 @@ def _file_table(path: str | Path, notes: list[str], sheet: str | int | None = No
     unnamed = [k for k, name in enumerate(header) if name.startswith("Unnamed: ")]
     written_in = _columns_written(data, dialect, len(header), unnamed)
     columns = tuple(k for k in range(len(header)) if k not in unnamed or k in written_in)
-    return _LogTable(dialect, header, columns, data, str(path), 1 + dialect.head_lines)
+    return _LogTable(dialect, header, columns, data, log_name(path, dialect.sheet), 1 + dialect.head_lines)
 
 
 def _distinct(names: list[str]) -> list[str]:

@@ -33,6 +33,7 @@ from matplotlib.transforms import Bbox
 
 from mtident import __version__
 from mtident.exceptions import InputError
+from mtident.io.logs import log_name
 from mtident.report.plots import draw_monitor_panel, plot_monitor
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import MonitorSettings, MonitorState, SensorCheck, assumptions, minutes
@@ -361,7 +362,7 @@ def build_report(
     settle = math.nan if hindsight is None else hindsight.test_settle_time_min
     saved = None if hindsight is None else hindsight.time_saved_min
     return WarmupReport(
-        source=str(session.shown),
+        source=log_name(session.shown, session.sheet),
         machine=machine or (used.machine if used is not None else ""),
         serial=used.serial if used is not None and (not machine or machine == used.machine) else "",
         program=used.program if used is not None and (not machine or machine == used.machine) else "",

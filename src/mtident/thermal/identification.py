@@ -106,6 +106,9 @@ class SensorAnswer:
         Whether the log settled to its measured final level (None where it has none).
     method_answer : MethodAnswer
         The method's own keys, written into the same object.
+    log : str
+        The log the readings are from, as given (and the sheet of a workbook of several); "" where
+        none was named (a DataFrame).
     """
 
     sensor: str
@@ -124,6 +127,7 @@ class SensorAnswer:
     measured_equilibrium_time_min: float
     measured_settled: bool | None
     method_answer: MethodAnswer = json_inline()
+    log: str = ""
 
 
 @dataclass(frozen=True)

@@ -260,6 +260,7 @@ def estimate_sensor(
         reference_used,
         int(wild.sum()),
         rounding,
+        last_min=float(t[np.isfinite(y)][-1]),
     )
 
 

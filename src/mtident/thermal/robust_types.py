@@ -6,6 +6,7 @@ and one sensor's answer (:class:`SensorEstimate`). The fit that makes them is
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import Literal
@@ -203,6 +204,8 @@ class SensorEstimate:
     room_lag_C : float
         With the machine model, how far its lag behind a moving room may move T∞ (one sd, °C; part
         of the intervals), 0 where the room stands still or is not logged.
+    last_min : float
+        The time of the last reading fitted (min; NaN where none was).
     """
 
     sensor: str
@@ -220,6 +223,7 @@ class SensorEstimate:
     display_step_C: float = 0.0
     machine_used: bool = False
     room_lag_C: float = 0.0
+    last_min: float = float("nan")
 
     @property
     def steady_C(self) -> float:
@@ -240,8 +244,13 @@ class SensorEstimate:
         return interval_half_width(self.steady_C, self.interval_C[level])
 
     def what_sets_the_ends(self, level: float) -> str:
-        """In words, the models that set the interval's ends: "a mode of about 280 min, rising
-        0.80 °C in all, still fits".
+        """In words, the models that set the interval's ends: "a mode of about 280 min still fits,
+        with 0.45 °C of rise still to come after t = 120 min".
+
+        A slow mode at an end is said by what is left of it after the last reading, and faster modes
+        that go the other way meanwhile by how far they go: its whole course from the warm-up's
+        start can be several times the rise so far, or a fall, which read as nonsense beside a
+        sensor that rose.
 
         Parameters
         ----------
@@ -260,15 +269,26 @@ class SensorEstimate:
         # each end as the interval states it (widened for the room's wander where it is not
         # measured), so that the sentence and the interval beside it agree
         ends = zip(self.fit.ends[level], ("low", "high"), self.interval_C[level], strict=True)
+        elapsed = max(self.last_min - self.fit.origin_min, 0.0) if math.isfinite(self.last_min) else 0.0
+        after = f" after t = {self.last_min:.0f} min" if math.isfinite(self.last_min) else ""
         for end, label, value in ends:
             slowest = end.slowest()
-            if slowest is not None:
-                # T = T∞ + a·e^(−t/τ): a negative amplitude is a part still rising towards T∞
-                course = "rising" if slowest.amplitude_C < 0 else "falling"
-                words.append(
-                    f"{label} end {value:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min, "
-                    f"{course} {abs(slowest.amplitude_C):.2f} °C in all, still fits"
-                )
+            if slowest is None:
+                continue
+            # T = T∞ + a·e^(−t/τ): what is left of a mode, counted as a rise, is −a·e^(−t/τ)
+            left = [-m.amplitude_C * math.exp(-elapsed / m.time_constant_min) for m in end.modes]
+            own = -slowest.amplitude_C * math.exp(-elapsed / slowest.time_constant_min)
+            others = sum(left) - own
+            course = "rise" if own > 0 else "fall"
+            meanwhile = (
+                f" (faster modes {'falling' if others < 0 else 'rising'} {abs(others):.2f} °C meanwhile)"
+                if own * others < 0 and abs(others) >= 0.01
+                else ""
+            )
+            words.append(
+                f"{label} end {value:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min still fits, "
+                f"with {abs(own):.2f} °C of {course} still to come{after}{meanwhile}"
+            )
         return "; ".join(words)
 
 

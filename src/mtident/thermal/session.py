@@ -291,6 +291,8 @@ class WatchSession:
     shown_as : Path, optional
         The file the messages name, where ``log`` is a copy of it (an Excel workbook replayed as
         the CSV it holds; default: ``log``).
+    sheet : str, optional
+        The sheet of ``shown_as`` that ``log`` holds, where the workbook has several: titles name it.
 
     Attributes
     ----------
@@ -321,9 +323,11 @@ class WatchSession:
         resume: bool = True,
         persist: bool = True,
         shown_as: Path | None = None,
+        sheet: str = "",
     ) -> None:
         self.path = Path(log)
         self.shown = Path(shown_as) if shown_as is not None else self.path
+        self.sheet = sheet
         self.persist = persist
         self.settings = settings
         self.state_path = Path(state_path) if state_path is not None else default_state_path(self.path)

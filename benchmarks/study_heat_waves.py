@@ -1,0 +1,121 @@
+"""Does a warm-up's rate of rise, once falling, grow again? A study of one physics the model-robust
+interval does not use yet (issue 36, "the intervals obey the physics").
+
+Without a reference, the interval's far end is often a course that the readings cannot tell from
+the best model: a slow mode still rising while faster modes fall back by about as much, so that
+the readings stay flat now and rise again later. Its rate of rise is near zero now and grows
+again: a second wave of heat. A warm-up at constant power from one heat source, seen where the
+heat enters, never does that (its modal amplitudes are all of one sign); heat from a second
+source that reaches the sensor late can. This study measures how often, and how far, on two
+populations:
+
+* the machine benchmark's development machines (:mod:`_machines`, the test's heat input and
+  initial state, the room held steady): per sensor, the rise that comes after the rate has
+  fallen, beyond a rate that never grows again ("extra", °C);
+* adversarial chains of 3-20 nodes with two heat sources at the two ends, most of the heat at
+  the far end (50-97 %), the sensor at or near the small source: "extra", and the largest ratio
+  of a later rate to the lowest rate since the rate's peak ("regrowth").
+
+Run: python benchmarks/study_heat_waves.py [--first-seed 36000 --cases 100] [--chains 300]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy.linalg import expm
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _machines import draw_case, states  # noqa: E402
+
+
+def waves(rate: np.ndarray, dt: float) -> tuple[float, float]:
+    """The rise after the rate's peak beyond a rate that never grows again (°C), and the largest
+    ratio of a later rate to the lowest since the peak (rates above 1e-5 °C/min)."""
+    after = rate[int(np.argmax(rate)) :]
+    lowest = np.minimum.accumulate(after)
+    later = np.maximum.accumulate(after[::-1])[::-1]
+    seen = lowest > 1e-5
+    regrowth = float(np.max(later[seen] / lowest[seen])) if seen.any() else 1.0
+    return float(np.sum(after - lowest) * dt), regrowth
+
+
+def benchmark_machines(first: int, count: int) -> list[tuple[float, float]]:
+    out = []
+    for seed in range(first, first + count):
+        case = draw_case(seed)
+        plant = case.plant
+        dt = 0.25
+        n = int(min(6.0 * max(plant.time_constants_min) + 100.0, 3000.0) / dt) + 1
+        curves = states(plant, case.test_power, case.test_split, case.room.steady_version(), case.x0, dt, n) @ plant.C.T
+        out += [waves(np.gradient(curves[:, s], dt), dt) for s in range(curves.shape[1])]
+    return out
+
+
+def two_source_chains(count: int, rng: np.random.Generator) -> list[tuple[float, float]]:
+    out = []
+    for _ in range(count):
+        n = int(rng.choice([3, 4, 5, 8, 12, 20]))
+        capacity = np.exp(rng.uniform(np.log(0.3), np.log(30.0), n))
+        links = np.exp(rng.uniform(np.log(0.02), np.log(3.0), n - 1))
+        convection = np.exp(rng.uniform(np.log(0.002), np.log(0.5), n))
+        laplacian = np.zeros((n, n))
+        for i, g in enumerate(links):
+            laplacian[[i, i + 1], [i, i + 1]] += g
+            laplacian[[i, i + 1], [i + 1, i]] -= g
+        A = -(laplacian + np.diag(convection)) / capacity[:, None]
+        taus = -1.0 / np.linalg.eigvals(A).real
+        if taus.max() > 300.0:
+            continue
+        far = rng.uniform(0.5, 0.97)
+        heat = np.zeros(n)
+        heat[0], heat[-1] = 1.0 - far, far
+        b = heat / capacity
+        dt = 0.25
+        steps = int((5.0 * taus.max() + 50.0) / dt)
+        phi = expm(A * dt)
+        forced = np.linalg.solve(A, (phi - np.eye(n)) @ b)
+        x, xs = np.zeros(n), np.empty((steps, n))
+        for k in range(steps):
+            xs[k] = x
+            x = phi @ x + forced
+        scale = 10.0 / np.linalg.solve(-A, b).max()  # the largest rise 10 °C
+        out += [waves(np.gradient(xs[:, s] * scale, dt), dt) for s in range(min(n, 3))]
+    return out
+
+
+def summary(name: str, rows: list[tuple[float, float]]) -> None:
+    extra = np.array([r[0] for r in rows])
+    regrowth = np.array([r[1] for r in rows])
+    print(f"{name}: {len(rows)} sensors")
+    print(
+        "  extra rise after the rate fell, °C: "
+        + ", ".join(f"> {x:g}: {int((extra > x).sum())}" for x in (0.005, 0.05, 0.2))
+    )
+    print(
+        "  regrowth of the rate: "
+        + ", ".join(f"> {x:g}: {int((regrowth > x).sum())}" for x in (1.01, 1.5, 2.0, 3.0))
+        + f"; largest {regrowth.max():.2f}"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--first-seed", type=int, default=36000, help="development machines only (36000-36099)")
+    parser.add_argument("--cases", type=int, default=100)
+    parser.add_argument("--chains", type=int, default=300)
+    args = parser.parse_args()
+    summary(
+        f"benchmark machines {args.first_seed}-{args.first_seed + args.cases - 1}",
+        benchmark_machines(args.first_seed, args.cases),
+    )
+    summary("two-source chains", two_source_chains(args.chains, np.random.default_rng(1)))
+
+
+if __name__ == "__main__":
+    main()
