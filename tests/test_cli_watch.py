@@ -677,7 +677,7 @@ def test_the_hindsight_table_says_why_a_sensor_has_a_settle_time_but_no_settled_
     text = _printed_hindsight(hindsight, capsys)
     assert re.search(r"│ T0 +│ +31\.20 │ with the room │ +— │ +298 │", text), text
     assert re.search(r"│ T1 +│ +28\.40 │ +28\.41 │ +-0\.01 │ +— │", text), text
-    assert "with the room: the readings keep following the room; their rise above it settled" in text
+    assert "with the room: the readings keep following the room; from the time shown they stayed within" in text
 
 
 def test_a_column_named_as_the_room_is_pointed_out_before_the_checks_say_anything(tmp_path):
@@ -760,3 +760,21 @@ def test_a_failed_sensors_status_says_since_when():
     assert _status_words(replace(check, status="stuck", last_reading_min=149.0)) == "stuck from 149 min"
     assert _status_words(replace(check, status="silent", last_reading_min=380.0)) == "silent from 380 min"
     assert _status_words(replace(check, status="narrowing", last_reading_min=380.0)) == "narrowing"
+
+
+def test_a_replay_into_a_pipe_says_how_far_it_has_read(tmp_path, monkeypatch):
+    """Into a pipe or a file there is no live table: a replay whose checks took half a minute said
+    nothing until its first sensor might stop. It now says how far it has read, at most every
+    ``_PIPE_PROGRESS_S`` (here every check)."""
+    import mtident.cli_watch as cli_watch
+
+    monkeypatch.setattr(cli_watch, "_PIPE_PROGRESS_S", 0.0)
+    t = np.arange(0.0, 160.0)
+    log = tmp_path / "w.csv"
+    log.write_text(csv_text(t, {"S": noisy(26.7 - 8.8 * np.exp(-t / 25.0), 1)}))
+    code, _, err = mtident(
+        "thermal", "watch", str(log), "--replay", "--room-wander", "0", "--state", str(tmp_path / "s")
+    )
+    assert code == 0, err
+    said = re.findall(r"mtident: replayed to t = (\d+) min; (\d) of 1 sensor may stop", err)
+    assert len(said) >= 2 and [int(t) for t, _ in said] == sorted(int(t) for t, _ in said)

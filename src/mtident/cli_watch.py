@@ -83,6 +83,8 @@ if TYPE_CHECKING:
 _SAID = ("note", "warning", "ready", "not ready", "stop")
 # the --plot picture is drawn again this often at most (s), and at the stop
 _PLOT_S = 5.0
+# a replay without a live table (a pipe, a file, --json) says how far it has read this often (s)
+_PIPE_PROGRESS_S = 15.0
 
 
 def decision_options(func: F) -> F:
@@ -532,7 +534,7 @@ def _follow(
     run = None
     try:
         with Live(console=OptionConsole(), auto_refresh=False, transient=False) if live else _Nothing() as view:
-            shown = _Shown(path, follow.timeout_s, plot_path, view if live else None, page)
+            shown = _Shown(path, follow.timeout_s, plot_path, view if live else None, page, follow.replay)
             if page is not None and session.state is not None:
                 shown.publish(session, forecast=False)  # a resumed state: at once
             run = session.run(follow, shown.progress, _terminating.is_set, fetch)
@@ -576,17 +578,28 @@ class _Shown:
         Where the table is redrawn (None: not a terminal, or JSON).
     page : LivePage or None
         --serve's page.
+    replay : bool
+        --replay: without a table to redraw, a line says how far the replay has read every
+        ``_PIPE_PROGRESS_S`` (a slow sensor's checks can take minutes without an event to say).
     """
 
     def __init__(
-        self, path: Path, timeout_s: float | None, plot_path: str | None, view: Any, page: LivePage | None
+        self,
+        path: Path,
+        timeout_s: float | None,
+        plot_path: str | None,
+        view: Any,
+        page: LivePage | None,
+        replay: bool = False,
     ) -> None:
         self.path = path
         self.timeout_s = math.nan if timeout_s is None else timeout_s
         self.plot_path = plot_path
         self.view = view
         self.page = page
+        self.replay = replay
         self.last_forecast = self.last_picture = self.last_plot = 0.0
+        self.last_line = time.monotonic()
         self.rooms_said = False
 
     def say_rooms(self, session: WatchSession) -> None:
@@ -609,6 +622,14 @@ class _Shown:
         self.say_rooms(session)
         if self.view is not None:
             self.view.update(_status_table(session, self.path), refresh=True)
+        elif self.replay and session.state is not None and time.monotonic() - self.last_line > _PIPE_PROGRESS_S:
+            self.last_line = time.monotonic()
+            ready, count = sum(check.may_stop for check in session.state.checks), len(session.state.checks)
+            stderr.print(
+                f"mtident: replayed to t = {minutes(session.state.readings.latest_min)}; {ready} of {count} "
+                f"sensor{'' if count == 1 else 's'} may stop",
+                highlight=False,
+            )
         if self.page is not None:
             picture = time.monotonic() - self.last_picture > _PAGE_PROGRESS_S
             _publish(self.page, session, self.last_forecast, forecast=False, picture=picture)
@@ -954,8 +975,9 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     table_console().print(table)
     if with_room.any():
         OptionConsole().print(
-            "with the room: the readings keep following the room; their rise above it settled by the time shown "
-            "(no settled level to check T∞ against).",
+            "with the room: the readings keep following the room; from the time shown they stayed within the "
+            "tolerance of their equilibrium at the room's level (or, where they lag the room by more than that to "
+            "the log's end, their rise above the room as they follow it did): no settled level to check T∞ against.",
             highlight=False,
         )
     timing = _settle_timing(hindsight)

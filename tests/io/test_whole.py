@@ -17,6 +17,14 @@ def test_isolated_bad_samples_are_skipped_with_a_note(write_csv):
     assert log.notes == ("sensor 'A': skipped 1 empty/NaN and 1 open-circuit sample(s) (rows 5, 9)",)
 
 
+def test_a_stretch_of_lost_readings_is_said_as_one_run_of_rows(write_csv):
+    """A sensor blank for 40 readings was said as its first five rows, "rows 42, 43, 44, 45, 46,
+    ...", which reads as five lost readings."""
+    rows = "".join(f"{k},{'' if 40 <= k < 80 or k == 90 else 20 + k * 0.01}\n" for k in range(500))
+    log = read_temperature_log(write_csv("time_min,A\n" + rows))
+    assert log.notes == ("sensor 'A': skipped 41 empty/NaN sample(s) (rows 42-81, 92)",)
+
+
 def test_a_burnout_marker_is_an_open_circuit_sample(write_csv):
     """Graphtec writes BURNOUT for a broken thermocouple's reading: it stopped the file reader
     ("'BURNOUT' is not a number") where the live follower bridged it."""

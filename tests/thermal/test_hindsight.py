@@ -166,3 +166,22 @@ def test_the_room_reaches_a_sensor_as_its_fit_says_through_its_room_gains():
     assert np.isnan(shares.settle_time_min[0])
     # within 0.2 °C of the settled 0.5 °C of the slow mode from 200·ln(0.5/0.2) = 183 min
     assert gains.settle_time_min[0] == pytest.approx(200.0 * np.log(0.5 / 0.2), abs=3.0)
+
+
+def test_a_sensor_lagging_a_moving_room_settles_when_its_readings_reach_the_equilibrium_at_the_rooms_level():
+    """A trial's daily room: the settle time was that of the readings less the room as each sensor
+    follows it, 236.5 min, when the readings were still 0.28-0.38 °C below their equilibrium at the
+    room's level (they came within 0.2 °C at 382 min), so a right stop at 349 min was said to save
+    no time. A sensor whose own warm-up (8 °C, 20 min) ends by 74 min lags a room rising 0.5 °C an
+    hour to 200 min by a 60-min mode: 0.5 °C behind, within 0.2 °C from 200 + 60·ln(2.5) = 255 min."""
+    from mtident.thermal.modal_search import room_lag
+
+    t = np.arange(0.0, 601.0)
+    room = 20.0 + np.minimum(t, 200.0) * 0.5 / 60.0
+    sensor = room_lag(room, t, np.array([60.0]))[0] + 8.0 * (1.0 - np.exp(-t / 20.0))
+    modes = [((20.0, -8.0), (60.0, 0.0))]
+    hindsight = check_decision(
+        ("S",), np.array([29.67]), 150.0, t, sensor[:, None], 0.2, room, modes, room_gains=[(0.0, 1.0)]
+    )
+    assert hindsight.settle_time_min[0] == pytest.approx(200.0 + 60.0 * np.log(2.5), abs=3.0)
+    assert hindsight.time_saved_min == pytest.approx(255.0 - 150.0, abs=3.0)

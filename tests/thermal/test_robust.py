@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -400,3 +401,36 @@ def test_a_check_far_from_the_tolerance_puts_t_inf_where_the_readings_go_not_bel
     assert abs(estimate.fit.steady_C - 26.7) < 0.05, estimate.fit.modes
     low, high = estimate.interval_C[0.95]
     assert low >= y[-5:].mean() - 0.2 and low <= 26.7 <= high
+
+
+def test_readings_that_came_down_from_their_highest_are_said_to_be_no_warm_up():
+    """A spindle stopped at 120 min: the readings fall back 5.4 °C, and the fit of the whole log
+    said only that its interval was wide. Now a warning says the readings came down, from where
+    and when, and asks whether the heat input fell; a plain warm-up, and one whose readings less a
+    logged rising room dip by less than the room's range, get none."""
+    t = np.arange(0.0, 200.0)
+    peak = 20.0 + 6.0 * (1.0 - np.exp(-120.0 / 30.0))
+    y = np.where(t < 120.0, 20.0 + 6.0 * (1.0 - np.exp(-t / 30.0)), 20.0 + (peak - 20.0) * np.exp(-(t - 120.0) / 30.0))
+    y = np.round(y + np.random.default_rng(3).normal(0.0, 0.01, t.size), 2)
+    estimate = estimate_sensor("A", t, y)
+    said = [w for w, code in zip(estimate.warnings, estimate.warning_codes, strict=True) if code == "came-down"]
+    assert len(said) == 1
+    fall = re.search(
+        r"A: its readings came down ([0-9.]+) °C from their highest \(([0-9.]+) °C at t = (\d+) min\)", said[0]
+    )
+    assert fall is not None, said[0]
+    assert float(fall.group(1)) == pytest.approx(peak - y[-5:].mean(), abs=0.05)
+    assert float(fall.group(2)) == pytest.approx(peak, abs=0.05) and 117 <= int(fall.group(3)) <= 120
+    assert "did the heat input fall (the spindle stopped or slowed), or the room cooled" in said[0]
+    warm = np.round(20.0 + 6.0 * (1.0 - np.exp(-t / 30.0)) + np.random.default_rng(3).normal(0.0, 0.01, t.size), 2)
+    assert "came-down" not in estimate_sensor("A", t, warm).warning_codes
+    # a 2-°C warm-up in a room that rose 0.5 °C at 170-190 min, followed 30 min late: at the log's
+    # end the readings less the room's change are about 0.27 °C down, beyond a tenth of the rise,
+    # with no change of heat
+    room = 20.0 + np.clip((t - 170.0) / 20.0, 0.0, 1.0) * 0.5
+    late = 0.5 * (1.0 - np.exp(-np.clip(t - 180.0, 0.0, None) / 30.0))
+    noisy = np.round(
+        20.0 + 2.0 * (1.0 - np.exp(-t / 30.0)) + late + np.random.default_rng(4).normal(0.0, 0.01, t.size), 2
+    )
+    assert "came-down" not in estimate_sensor("A", t, noisy, room).warning_codes
+    assert "came-down" in estimate_sensor("A", t, noisy - (room - 20.0)).warning_codes  # the same dip, no room

@@ -576,14 +576,22 @@ def _said_bad(
 ) -> FloatArray:
     """The column with its bad readings NaN, and a note naming them."""
     if np.any(bad):
-        rows = ", ".join(str(int(r)) for r in number[bad][:5])
+        runs = _row_runs(number[bad])
+        rows = ", ".join(runs[:5]) + (", ..." if len(runs) > 5 else "")
         kinds = []
         if missing.any():
             kinds.append(f"{int(missing.sum())} empty/NaN")
         if open_circuit.any():
             kinds.append(f"{int(open_circuit.sum())} open-circuit")
-        notes.append(
-            f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows {rows}{', ...' if bad.sum() > 5 else ''})"
-        )
+        notes.append(f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows {rows})")
         values = np.where(bad, np.nan, values)
     return values
+
+
+def _row_runs(rows: np.ndarray) -> list[str]:
+    """Row numbers as runs of consecutive rows: "202-281" for a stretch of 80 lost readings, which
+    as a list of its first five rows read as five."""
+    if not len(rows):
+        return []
+    breaks = np.flatnonzero(np.diff(rows) != 1) + 1
+    return [f"{int(run[0])}" if len(run) == 1 else f"{int(run[0])}-{int(run[-1])}" for run in np.split(rows, breaks)]

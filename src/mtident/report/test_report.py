@@ -596,7 +596,9 @@ def _hindsight_verdict(lines: tuple[SensorLine, ...], hindsight: Hindsight, sett
     ]
     failed = f" Stuck at one value before settling (nothing to check): {', '.join(stuck)}." if stuck else ""
     if not checked:
-        return f"The log runs on to {minutes(log_end_min)}, but no sensor settled by its end: nothing to check.{failed}"
+        following = hindsight.settle_time_min is not None and bool(np.isfinite(hindsight.settle_time_min).any())
+        why = "its readings keep following the room to its end" if following else "no sensor settled by its end"
+        return f"The log runs on to {minutes(log_end_min)}, but {why}: no settled level to check T∞ against.{failed}"
     beyond = [line.sensor for line in checked if not line.within_tolerance]
     if beyond:
         return (

@@ -135,8 +135,8 @@ class Hindsight:
         (default: the room's move for every sensor).
     settle_time_min : ndarray, shape (S,), optional
         When each sensor's readings came within the tolerance of where they settled, to stay
-        (:func:`settle_times`; with a room sensor, the readings less the room, as T∞ follows the
-        room; NaN where the log did not settle); default: not known.
+        (:func:`settle_times`; with a room sensor, of their equilibrium at the room's level at the
+        time, as T∞ follows the room; NaN where the log did not settle); default: not known.
     waited : ndarray of bool, shape (S,), optional
         The sensors the test waits for (default: every one).
     stuck_since_min : ndarray, shape (S,), optional
@@ -410,7 +410,9 @@ def check_decision(
         room_shift_C=shift,
         tolerance_C=float(tolerance_C),
         sensor_shift_C=followed,
-        settle_time_min=_settle_times(time_min, values, courses, settled, tolerance_C, np.array(slowest, dtype=float)),
+        settle_time_min=_settle_times(
+            time_min, values, courses, room_C, settled, tolerance_C, np.array(slowest, dtype=float)
+        ),
         waited=None if waited is None else np.asarray(waited, dtype=bool),
         stuck_since_min=None if all(math.isnan(v) for v in stuck) else np.array(stuck, dtype=float),
     )
@@ -420,19 +422,31 @@ def _settle_times(
     time_min: FloatArray,
     values: FloatArray,
     room_courses: FloatArray | None,
+    room_C: FloatArray | None,
     settled_C: FloatArray,
     tolerance_C: float,
     slowest_mode_min: FloatArray,
 ) -> FloatArray:
-    """The settle times of the readings, or with a room sensor of the readings less the room as
-    each sensor follows it (``room_courses``, (N, S), :func:`_room_course`): T∞ follows the room
-    one to one, and a room on a daily cycle keeps the readings themselves moving by more than the
-    tolerance long after the sensor has settled above it."""
-    if room_courses is None:
+    """The settle times of the readings: with a room sensor, when each sensor's readings stayed
+    within the tolerance of its equilibrium at the room's level at the time, the benchmark's
+    t_settle. Where each settles above the room is the level of its readings less the room as it
+    follows it (``room_courses``, (N, S), :func:`_room_course`): T∞ follows the room one to one,
+    and a room on a daily cycle keeps the readings themselves moving by more than the tolerance
+    long after the sensor has settled above it. The readings are held against that level plus the
+    room itself, not its course: a sensor that lags a moving room by more than the tolerance is
+    not settled, however long ago its own warm-up was (less the course, a daily room's lag read
+    as settled 150 min before the readings came within the tolerance of the truth). Where the
+    readings never come that close by the log's end, the time their rise above the room as they
+    follow it settled stands in."""
+    if room_courses is None or room_C is None:
         return settle_times(time_min, values, settled_C, tolerance_C)
     above = values - room_courses
     settled_above, _ = measured_equilibrium(time_min, above, tolerance_C / 2.0, tolerance_C / 4.0, slowest_mode_min)
-    return settle_times(time_min, above, settled_above, tolerance_C)
+    room_now = _room_course(time_min, room_C, (), ())
+    behind = settle_times(time_min, values - room_now[:, None], settled_above, tolerance_C)
+    # a sensor that lags a daily room by more than the tolerance to the log's end: its rise above the
+    # room as it follows it, as the benchmark's t_settle takes the same test in a steady room then
+    return np.where(np.isfinite(behind), behind, settle_times(time_min, above, settled_above, tolerance_C))
 
 
 def _room_course(

@@ -985,7 +985,8 @@ def _lag_variance(
         b = blocks[s].T @ column
         v = cov @ b
         d = float(column @ column) + share**-2 - float(b @ v)
-        out[s] = v[s] ** 2 / max(d, 1e-300)
+        with np.errstate(over="ignore"):  # a column the others nearly make leaves the level unbounded: inf
+            out[s] = v[s] ** 2 / max(d, 1e-300)
     return out
 
 

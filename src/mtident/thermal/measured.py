@@ -7,6 +7,7 @@ curve against every reading (Xia et al. 2014, Eq. 33), and the measured final te
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -260,3 +261,52 @@ def warm_up_floor_C(
         room = room_C[ok]
         excursion = max(float(np.max(room)) - float(room[-1]), 0.0)
     return latest - margin - excursion
+
+
+@dataclass(frozen=True)
+class Fall:
+    """How far a sensor's readings came down from their highest level.
+
+    Attributes
+    ----------
+    fall_C : float
+        The highest level less the latest (°C; levels are medians of a few readings, 0 where the
+        readings never came down).
+    highest_C : float
+        The highest level (°C).
+    highest_min : float
+        When it was read (min).
+    rise_C : float
+        The highest level less the first (°C).
+    """
+
+    fall_C: float
+    highest_C: float
+    highest_min: float
+    rise_C: float
+
+
+def fall_from_highest(time_min: FloatArray, values: FloatArray) -> Fall | None:
+    """How far ``values`` came down from their highest level: a warm-up at constant heat in a
+    steady room never does (:func:`warm_up_floor_C`), so a fall says that the heat input fell
+    (a spindle stopped or slowed) or the room cooled. None for fewer than twice
+    ``_LATEST_READINGS`` valid readings.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N,)
+        The readings (°C, NaN: missing), less the room's change where a room sensor is logged.
+
+    Returns
+    -------
+    Fall or None
+    """
+    ok = np.isfinite(values)
+    if ok.sum() < 2 * _LATEST_READINGS:
+        return None
+    levels = np.median(np.lib.stride_tricks.sliding_window_view(values[ok], _LATEST_READINGS), axis=1)
+    top = int(np.argmax(levels))
+    window = slice(top, top + _LATEST_READINGS)
+    at = time_min[ok][window][int(np.argmax(values[ok][window]))]
+    return Fall(float(levels[top] - levels[-1]), float(levels[top]), float(at), float(levels[top] - levels[0]))

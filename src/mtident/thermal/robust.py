@@ -22,7 +22,7 @@ from scipy.special import chdtri, ndtri
 
 from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
-from mtident.thermal.measured import warm_up_floor_C
+from mtident.thermal.measured import fall_from_highest, warm_up_floor_C
 from mtident.thermal.modes import (
     Binned,
     ModeFamily,
@@ -240,6 +240,7 @@ def estimate_sensor(
         notes,
         refine_within,
     )
+    _say_a_fall(t[onset:], _above_room(y, room_in)[onset:], noise, rounding, room, notes)
     # the floor lifts the low end, never above T∞ itself (the fit's own interval stays around it)
     readings = {q: (min(max(lo, floor), fit.steady_C), hi) for q, (lo, hi) in fit.interval_C.items()}
     intervals = _nested(_with_room_wander(fit, readings, room_C is not None, settings))
@@ -310,6 +311,38 @@ def _fit_above_floor(
         )
         floor = -np.inf
     return fit, reference_used, floor
+
+
+# a fall from the highest level said: beyond this many times the floor's margin, and this share of the rise
+_FALL_MARGINS = 2.0
+_FALL_SHARE = 0.1
+
+
+def _say_a_fall(
+    time_min: FloatArray,
+    values: FloatArray,
+    noise: float,
+    rounding: float,
+    room_C: FloatArray | None,
+    notes: _Notes,
+) -> None:
+    """A warning where the readings (less the logged room's change) came down from their highest
+    level by more than their noise and a tenth of their rise: the answer then fits a curve that no
+    warm-up at constant heat makes, which a newcomer took for one (the interval alone said it). A
+    logged room's range is allowed besides: the machine follows the room late, so its readings less
+    the room's change move by up to that much without any change of heat."""
+    fall = fall_from_highest(time_min, values)
+    span = 0.0 if room_C is None or not np.isfinite(room_C).any() else float(np.nanmax(room_C) - np.nanmin(room_C))
+    margin = 4.0 * noise + rounding
+    if fall is None or fall.fall_C <= max(_FALL_MARGINS * margin, _FALL_SHARE * fall.rise_C) + span:
+        return
+    room = "" if room_C is not None else ", or the room cooled (log it: --ambient)"
+    notes.add(
+        "came-down",
+        f"its readings came down {fall.fall_C:.2f} °C from their highest ({fall.highest_C:.2f} °C at t = "
+        f"{fall.highest_min:.0f} min): a warm-up at constant heat does not; did the heat input fall (the spindle "
+        f"stopped or slowed){room}? The answer fits these readings as they are, not a warm-up",
+    )
 
 
 def _modal_fit(

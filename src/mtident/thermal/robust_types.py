@@ -42,6 +42,7 @@ WarningCode = Literal[
     "reference-doubtful",
     "machine-disagrees",
     "below-floor",
+    "came-down",
     "too-few-readings",
     "no-data",
     "no-rise",
