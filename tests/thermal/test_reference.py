@@ -787,3 +787,19 @@ def test_learn_warns_of_a_mode_whose_box_reaches_the_largest_time_constant_searc
     y = noisy(20.0 + 8.0 * (1 - np.exp(-t / 150.0)), 3)
     _, warnings = learn_reference(TemperatureLog(t, ("column",), y[:, None], (), "ref.csv"))
     assert not any("largest time constant searched" in w for w in warnings), warnings
+
+
+def test_sensors_whose_run_pins_down_too_few_modes_are_said_in_one_warning():
+    """A clean six-sensor run printed one such warning per sensor among thirteen: a new user read
+    a good reference as a list of alarms. One sensor keeps its own line; several share one."""
+    from mtident.thermal.reference import _loose_modes_words
+
+    assert _loose_modes_words({}) == []
+    (one,) = _loose_modes_words({"bed": (2, 1, "37.8-176 min")})
+    assert one == (
+        "bed: the run needs 2 modes beyond chance but pins down only 1; the other is kept with the wide box the run "
+        "leaves it (37.8-176 min), so later tests stop later than with a run that shows every mode"
+    )
+    (both,) = _loose_modes_words({"bed": (2, 1, "37.8-176 min"), "mid": (3, 2, "0.909-5.3 min")})
+    assert both.startswith("the run needs more modes beyond chance than it pins down for 2 sensors")
+    assert both.endswith(": bed (1 of 2: 37.8-176 min), mid (2 of 3: 0.909-5.3 min)")

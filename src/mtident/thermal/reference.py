@@ -338,6 +338,7 @@ def learn_reference(
     """
     settings = settings or RobustSettings()
     sensors: dict[str, SensorModes] = {}
+    loose: dict[str, tuple[int, int, str]] = {}
     warnings: list[str] = _room_candidates(log.sensors) if room_C is None else []
     room_step = 0.0 if room_C is None else coarse_room_step_C(log.time_min, room_C)
     for s, name in enumerate(log.sensors):
@@ -351,16 +352,7 @@ def learn_reference(
         doubt = _doubt(estimate, learnt.one_more, ceiling, learnt.room_reach, learnt.room_followed)
         sensors[name] = SensorModes(centres, boxes, tuple(m.amplitude_C for m in fit.modes), doubt)
         if doubt is None and len(fit.modes) > determined:
-            warnings.append(
-                f"{name}: the run needs {len(fit.modes)} modes beyond chance but pins down only {determined}; "
-                + (
-                    "the other is kept with the wide box the run leaves it"
-                    if len(fit.modes) - determined == 1
-                    else "the others are kept with the wide boxes the run leaves them"
-                )
-                + f" ({_spans(centres, boxes, determined)}), so "
-                "later tests stop later than with a run that shows every mode"
-            )
+            loose[name] = (len(fit.modes), determined, _spans(centres, boxes, determined))
         if doubt is not None:
             way_on = _way_on(estimate, room_C is not None)
             warnings.append(f"{name}: {doubt}. Later tests will not use this sensor's modes: {way_on}")
@@ -378,6 +370,7 @@ def learn_reference(
                 f"({limit:g} min): the run cannot tell it from one at that limit, and the machine may have a "
                 "slower one (raise `max_time_constant_min`)"
             )
+    warnings[len(warnings) : len(warnings)] = _loose_modes_words(loose)
     model, said = _learn_machine(log, room_C, settings)
     sensors, split = split_merged_modes(sensors, model)
     warnings.extend(split)
@@ -879,6 +872,29 @@ def _room_reach(
         return 0.0
     crossed = float(np.ptp(room_C[fitted]))
     return float(np.count_nonzero(fitted)) * room_error**2 * min(1.0, 2.0 * step / max(crossed, 1e-12))
+
+
+def _loose_modes_words(loose: dict[str, tuple[int, int, str]]) -> list[str]:
+    """The warning for sensors whose run needs more modes beyond chance than it pins down (per
+    sensor: the modes needed, those pinned down, the loose ones' boxes): one line for all of them,
+    where one per sensor made a clean run of six sensors read as six alarms."""
+    if not loose:
+        return []
+    later = "so later tests stop later than with a run that shows every mode"
+    if len(loose) == 1:
+        ((name, (needed, determined, spans)),) = loose.items()
+        kept = (
+            "the other is kept with the wide box the run leaves it"
+            if needed - determined == 1
+            else "the others are kept with the wide boxes the run leaves them"
+        )
+        needs = f"the run needs {needed} modes beyond chance but pins down only {determined}"
+        return [f"{name}: {needs}; {kept} ({spans}), {later}"]
+    each = ", ".join(f"{name} ({pinned} of {needed}: {spans})" for name, (needed, pinned, spans) in loose.items())
+    return [
+        f"the run needs more modes beyond chance than it pins down for {len(loose)} sensors; the others are kept "
+        f"with the wide boxes the run leaves them, {later}: {each}"
+    ]
 
 
 def _spans(centres: tuple[float, ...], boxes: tuple[float, ...], skip: int) -> str:
