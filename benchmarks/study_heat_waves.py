@@ -20,7 +20,8 @@ Whether such a rule would narrow the interval is measured on the papers' kind of
 order, 59 min, 8.85 °C, σ 0.01 °C, 1-min readings): the 99 % profile hull's high end over sums of
 four modes on a grid of 16 time constants (1.5-300 min), without the rule, with "a later rate at
 most K times an earlier one" (from 60 min on, to 2500 min) and a rate that never falls below 0,
-each model's amplitudes and T∞ solved by SLSQP within the residual threshold.
+each model's amplitudes and T∞ solved by SLSQP within the residual threshold; and over three
+modes on a finer grid, free and with every mode rising (a sensor where the only heat enters).
 
 Run: python benchmarks/study_heat_waves.py [--first-seed 36000 --cases 100] [--chains 300] [--papers-curve]
 """
@@ -34,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy.linalg import expm
-from scipy.optimize import minimize
+from scipy.optimize import lsq_linear, minimize
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -138,6 +139,33 @@ def papers_curve_high_end(t_now: float, regrowth: float | None, sigma: float = 0
     return best
 
 
+def rising_modes_high_end(t_now: float, sigma: float = 0.01) -> tuple[float, float]:
+    """The 99 % hull's high end (°C) of the papers' kind of curve read to ``t_now``, over sums of
+    three modes on a grid of 40 time constants (1.5-300 min): free, and with every mode rising (a
+    sensor where the only heat enters: its modal amplitudes all of one sign)."""
+    t = np.arange(0.0, t_now + 1.0)
+    y = 20.0 + 8.85 * (1.0 - np.exp(-t / 59.0)) + np.random.default_rng(1).normal(0.0, sigma, t.size)
+    free, rising = [], []
+    for combo in itertools.combinations(np.geomspace(1.5, 300.0, 40), 3):
+        X = np.column_stack([np.ones_like(t)] + [np.exp(-t / tau) for tau in combo])
+        inverse = np.linalg.inv(X.T @ X)
+        beta = inverse @ X.T @ y
+        free.append((X, beta, float(np.sum((y - X @ beta) ** 2)), inverse[0, 0]))
+        bounded = lsq_linear(X, y, bounds=([-np.inf] * 4, [np.inf] + [0.0] * 3)).x
+        rising.append((X, bounded, float(np.sum((y - X @ bounded) ** 2))))
+    threshold = min(f[2] for f in free) + 6.63 * sigma**2
+    free_end = max(b[0] + np.sqrt(max(threshold - rss, 0.0) * v) for _, b, rss, v in free if rss <= threshold)
+    best = -np.inf
+    for X, b, _ in sorted((r for r in rising if r[2] <= threshold), key=lambda r: -r[1][0])[:150]:
+        within = {"type": "ineq", "fun": lambda v, X=X: (threshold - np.sum((y - X @ v) ** 2)) / sigma**2}
+        v = minimize(
+            lambda v: -v[0], b, constraints=[within], bounds=[(None, None)] + [(None, 0.0)] * 3, method="SLSQP"
+        ).x
+        if np.sum((y - X @ v) ** 2) <= threshold + 1e-9 and (v[1:] <= 1e-9).all():
+            best = max(best, float(v[0]))
+    return float(free_end), best
+
+
 def summary(name: str, rows: list[tuple[float, float]]) -> None:
     extra = np.array([r[0] for r in rows])
     regrowth = np.array([r[1] for r in rows])
@@ -164,6 +192,9 @@ def main() -> None:
         for t_now in (200.0, 265.0, 300.0):
             ends = {k: papers_curve_high_end(t_now, k) for k in (None, 3.0, 1.0)}
             print(f"t = {t_now:g} min (truth 28.85): " + ", ".join(f"rule {k}: {v:.2f}" for k, v in ends.items()))
+        for t_now in (120.0, 150.0, 200.0, 265.0):
+            free, rising = rising_modes_high_end(t_now)
+            print(f"t = {t_now:g} min, three modes: free {free:.2f}, every mode rising {rising:.2f} (truth 28.85)")
         return
     summary(
         f"benchmark machines {args.first_seed}-{args.first_seed + args.cases - 1}",

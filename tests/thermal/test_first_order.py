@@ -401,3 +401,32 @@ def test_the_aukf_says_its_adapted_covariance_understates_its_error():
         and "(--method ukf) holds the truth far more often" in said[0]
     )
     assert not any("understates" in n for n in plain.notes)
+
+
+def test_a_rate_faster_than_the_readings_is_not_trusted():
+    """On a real 1-s log in 0.32 °C steps the fading filters ran λ up to 1e74/min and took the latest
+    reading as T∞ with an interval of zero width, trusted, below where the sensor went on to read."""
+    from mtident.thermal.first_order import _faster_than_readings
+
+    tw = np.arange(0.0, 8.0, 1.0 / 60.0)
+    notes: list[str] = []
+    fast = _faster_than_readings(("T1", "T2", "T3"), tw, np.array([8.2e47, 0.05, np.nan]), "afukf", notes)
+    assert fast.tolist() == [True, False, False] and len(notes) == 1
+    assert notes[0].startswith("sensor 'T1': not trusted: the afukf filter's rate λ = 8.2e+47/min is a time constant")
+    assert "shorter than the readings' interval (0.0167 min)" in notes[0]
+    # at the readings' own pace (λ·interval = 1) a mode is still one the readings can show
+    assert not _faster_than_readings(("T1",), tw, np.array([59.0]), "ukf", [])[0]
+
+
+def test_a_flat_sensors_first_order_answer_is_not_trusted():
+    """A flat column's T∞ was trusted by the papers' filters beside their own "no warm-up to identify"."""
+    import pandas as pd
+
+    from mtident.thermal import identify
+
+    t = np.arange(0.0, 120.0)
+    frame = pd.DataFrame(
+        {"time_min": t, "flat": np.round(20.0 + np.random.default_rng(0).normal(0.0, 0.01, t.size), 2)}
+    )
+    answer = identify(frame, window_min=60, method="ukf").answer(0)
+    assert not answer.model_ok and any("no warm-up to identify" in w for w in answer.warnings)

@@ -83,6 +83,13 @@ def test_identify_and_min_time_take_a_dataframe_and_refuse_what_they_cannot_use(
         minimal_identification_time(frame, periods_min=[0])
     with pytest.raises(InputError, match=r"windows_min must be positive numbers of minutes, not \[\]"):
         minimal_identification_time(frame, windows_min=[])
+    with pytest.raises(InputError, match=r"windows_min must be positive numbers of minutes, not 'x'"):
+        minimal_identification_time(frame, windows_min="x")  # type: ignore[arg-type]
+    # an L at or beyond the longest period broadcast a curve into too short an array (a traceback)
+    with pytest.raises(InputError, match=r"shorter than the longest sampling period \(35 min\).*: 2 \(40-60 min\)"):
+        minimal_identification_time(frame, periods_min=[35.0], windows_min=[20.0, 40.0, 60.0])
+    # one number, or an array, is taken as the list it stands for
+    assert list(minimal_identification_time(frame, "lsq", periods_min=35).periods_min) == [35.0]
 
 
 def test_identify_leaves_out_a_stuck_channels_readings_and_says_so():
@@ -96,3 +103,26 @@ def test_identify_leaves_out_a_stuck_channels_readings_and_says_so():
     said = [n for n in result.notes if "every reading from t = 150 min to the log's end is the same value" in n]
     assert len(said) == 1 and "'S'" in said[0] and said[0] in result.warnings[0]
     assert result.rmse_C[0] < 0.2 and not (result.measured_final_C[0] == 0.0)
+
+
+def test_a_notebooks_wrong_arguments_are_refused_by_name():
+    """A new user's notebook: a string window raised a numpy TypeError, a negative largest time
+    constant an OverflowError deep in the search, a negative horizon an IndexError, a list of rows a
+    pathlib TypeError, and one sensor's name was split into its letters."""
+    from mtident.io import read_temperature_log
+    from mtident.thermal import RobustSettings
+
+    log = read_temperature_log("@sample", sensors="T1")
+    assert log.sensors == ("T1",)
+    with pytest.raises(InputError, match=r"window_min must be a positive number of minutes, not 'x'"):
+        identify(log, window_min="x")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"horizon_min must be a number of minutes, 0 or more, not -10"):
+        identify(log, window_min=60, horizon_min=-10)
+    with pytest.raises(InputError, match=r"`max_time_constant_min` must be a finite number of minutes, 1 or more"):
+        RobustSettings(max_time_constant_min=-1.0)
+    with pytest.raises(InputError, match=r"`room_wander_C_per_h` must be a finite number of °C in an hour, 0 or more"):
+        RobustSettings(room_wander_C_per_h=-1.0)
+    with pytest.raises(InputError, match=r"`levels` must be confidence levels between 0 and 1"):
+        RobustSettings(levels=(95.0,))
+    with pytest.raises(InputError, match=r"a file's path or a pandas DataFrame .*, not list"):
+        read_temperature_log([[0.0, 20.0], [1.0, 21.0]])  # type: ignore[arg-type]

@@ -94,3 +94,22 @@ def test_min_time_with_a_room_sensor_predicts_with_the_measured_room():
     np.testing.assert_allclose(steady.rmse_C, plain.rmse_C, rtol=1e-12)
     with pytest.raises(InputError, match="needs a UKF method"):
         minimal_identification_time(log, "lsq", periods_min=[60.0], ambient_C=room_sensor)
+
+
+def test_a_flat_sensor_has_no_identification_time_to_trust():
+    """A column that does not rise got an L chosen from its noise, trusted, without a word."""
+    import pandas as pd
+
+    t = np.arange(0.0, 120.0)
+    frame = pd.DataFrame(
+        {
+            "time_min": t,
+            "flat": np.round(20.0 + np.random.default_rng(0).normal(0.0, 0.01, t.size), 2),
+            "rising": np.round(20.0 + 8.0 * (1.0 - np.exp(-t / 20.0)), 2),
+        }
+    )
+    result = minimal_identification_time(frame, "lsq")
+    flat, rising = result.answer(0), result.answer(1)
+    assert not flat.model_ok
+    assert flat.warnings == ("flat: no rise above its noise within the longest sampling period: no warm-up to time",)
+    assert not any("no rise" in w for w in rising.warnings)

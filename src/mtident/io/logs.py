@@ -318,6 +318,8 @@ def read_temperature_log(
         contradicts, a workbook without the sheet ``sheet`` (the message names its sheets), or
         ``sheet`` given for a log that is no workbook.
     """
+    if isinstance(sensors, str):  # one name, not its letters ("no sensor column 'T'")
+        sensors = [sensors]
     read_notes: list[str] = []
     table = _as_table(path, read_notes, sheet)
     notes: list[str] = [renamed] if (renamed := table.dialect.renaming()) else []
@@ -523,6 +525,12 @@ def _as_table(path: str | Path | pd.DataFrame, notes: list[str], sheet: str | in
             raise InputError(msg)
         table = _frame_table(path)
     else:
+        if not isinstance(path, (str, Path)):
+            msg = (
+                f"a log is read from a file's path or a pandas DataFrame (time column first, a column per sensor), "
+                f"not {type(path).__name__}"
+            )
+            raise InputError(msg)
         if isinstance(path, str) and path in SAMPLES:
             path = sample_log_path(path)
         table = _file_table(path, notes, sheet)

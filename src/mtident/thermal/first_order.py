@@ -30,7 +30,7 @@ from mtident.thermal.model import (
     to_physical,
     transition_for,
 )
-from mtident.thermal.readings import display_resolution, noise_sigma, reading_range
+from mtident.thermal.readings import display_resolution, noise_sigma, reading_range, sampling_interval_min
 from mtident.thermal.robust_types import Assumptions
 from mtident.thermal.settings import ThermalTuning, filter_config, preset_tuning, tuning_from_data
 from mtident.ukf import (
@@ -780,6 +780,7 @@ def _identify(
     quantile = float(stdtrit(max(n_window - 3, 1), 0.975))
     _say_undetermined(log, tw, quantile * steady_sd, rise, no_rise, notes)
     untrusted = _untrusted(log, tw, start.begins, steady, quantile * steady_sd, rise, no_rise, notes)
+    untrusted |= _faster_than_readings(log.sensors, tw, rate, method, notes)
     n_log = len(t)
     measured_part = np.full((len(times), y.shape[1]), np.nan)
     measured_part[: min(n_log, len(times))] = y[: min(n_log, len(times))]
@@ -813,8 +814,9 @@ def _identify(
         start_C=mean_curve[0],
         equilibrium_time_min=eq_time,
         rmse_C=errors,
-        # a residual test passed, T∞ determined, and an answer physics allows
-        model_ok=fits & np.isfinite(ci95).all(axis=1) & ~untrusted,
+        # a residual test passed, T∞ determined, an answer physics allows, and a warm-up to answer for
+        # (a flat column's T∞ was trusted beside its own "no warm-up to identify")
+        model_ok=fits & np.isfinite(ci95).all(axis=1) & ~untrusted & ~no_rise,
         warnings=tuple(tuple(sensor_notes(notes_said, name)) for name in log.sensors),
         measured_final_C=final_measured,
         measured_equilibrium_time_min=eq_measured,
@@ -873,6 +875,25 @@ def _warm_up_floors(
             for s in range(yw.shape[1])
         ]
     )
+
+
+def _faster_than_readings(
+    sensors: tuple[str, ...], tw: FloatArray, rate: FloatArray, method: str, notes: list[str]
+) -> np.ndarray:
+    """Which sensors' rate λ makes a time constant shorter than the readings' interval, each said
+    in ``notes``: no mode the readings can show. On a real 1-s log with 0.32 °C steps the fading
+    filters ran λ up to 1e74/min, took the latest reading as T∞ with an interval of zero width, and
+    called it trusted, below where the sensor went on to read."""
+    interval = sampling_interval_min(tw)
+    with np.errstate(invalid="ignore", over="ignore"):
+        fast = np.isfinite(rate) & (rate * interval > 1.0)
+    for s in np.flatnonzero(fast).tolist():
+        notes.append(
+            f"sensor {sensors[s]!r}: not trusted: the {method} filter's rate λ = {rate[s]:.3g}/min is a time constant "
+            f"of {1.0 / rate[s]:.2g} min, shorter than the readings' interval ({interval:.3g} min): no mode the "
+            "readings can show; the filter has taken its latest readings as T∞, and its interval says nothing"
+        )
+    return np.asarray(fast, dtype=bool)
 
 
 def _untrusted(

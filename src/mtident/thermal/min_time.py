@@ -20,6 +20,7 @@ than ``MIN_WINDOW_SAMPLES`` samples of the rise is no candidate for that sensor.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -32,7 +33,7 @@ from mtident.thermal.first_order import FIRST_ORDER_ASSUMPTIONS, filter_window, 
 from mtident.thermal.lsq import first_level, fit_rise, late_onset
 from mtident.thermal.measured import MIN_WINDOW_SAMPLES, rmse
 from mtident.thermal.model import heat_balance_path, rise_curve
-from mtident.thermal.readings import noise_sigma
+from mtident.thermal.readings import noise_sigma, quantisation_step, rise_threshold_C
 from mtident.thermal.robust_types import Assumptions
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, preset_tuning, tuning_from_data
 
@@ -111,6 +112,9 @@ class MinTimeResult(SensorAnswers):
     rise_begins_min : ndarray, shape (S,), optional
         Where a warm-up that began after the log starts its rise (min), NaN for one that rose
         from the log's start (data tuning only).
+    no_rise : ndarray of bool, shape (S,), optional
+        Sensors whose readings over the longest period do not rise above their noise: no warm-up,
+        so no identification time to choose (default: none).
     """
 
     sensors: tuple[str, ...]
@@ -123,6 +127,7 @@ class MinTimeResult(SensorAnswers):
     agreement: FloatArray
     measuring_time_min: float
     rise_begins_min: FloatArray | None = None
+    no_rise: np.ndarray | None = None
 
     def __repr__(self) -> str:
         chosen = ", ".join(
@@ -144,6 +149,9 @@ class MinTimeResult(SensorAnswers):
             Empty where there is nothing to say.
         """
         name = self.sensors[index]
+        if self.no_rise is not None and self.no_rise[index]:
+            # a flat column's L was chosen from noise, and trusted
+            return [f"{name}: no rise above its noise within the longest sampling period: no warm-up to time"]
         said = []
         step = float(np.median(np.diff(self.windows_min))) if len(self.windows_min) > 1 else 1.0
         last = [float(self.windows_min[self.windows_min < p].max(initial=-np.inf)) for p in self.periods_min]
@@ -202,7 +210,8 @@ class MinTimeResult(SensorAnswers):
             },
             periods_agree=bool(self.agreement[index]),
             measuring_time_needed_min=float(self.measuring_time_min),
-            model_ok=not any(": the RMSE falls to the end" in w for w in warnings),
+            model_ok=not any(": the RMSE falls to the end" in w for w in warnings)
+            and not (self.no_rise is not None and bool(self.no_rise[index])),
             warnings=warnings,
             assumptions=FIRST_ORDER_ASSUMPTIONS,
             rise_begins_min=begins if np.isfinite(begins) else None,
@@ -250,16 +259,36 @@ def minimal_identification_time(
         msg = f"method {method!r} is not one of: {', '.join(METHODS)}"
         raise InputError(msg)
     log = as_temperature_log(log, "minimal_identification_time")
-    for name, values in (("periods_min", periods_min), ("windows_min", windows_min)):
-        if values is not None and not (
-            len(values) and np.all(np.isfinite(values)) and np.all(np.asarray(values, dtype=float) > 0)
-        ):
-            msg = f"{name} must be positive numbers of minutes, not {values!r}"
-            raise InputError(msg)
+    periods = _minutes("periods_min", periods_min)
+    windows = _minutes("windows_min", windows_min)
+    longest = max(periods) if periods else 50.0
+    if windows is not None and max(windows) >= longest:
+        beyond = [w for w in windows if w >= longest]
+        said = f"{beyond[0]:g} min" if len(beyond) == 1 else f"{len(beyond)} ({min(beyond):g}-{max(beyond):g} min)"
+        msg = (
+            f"identification times (--windows, `windows_min`) must be shorter than the longest sampling period "
+            f"({longest:g} min), whose RMSE judges each: {said} are not"
+        )
+        raise InputError(msg)
     room_rate = room_input(log, ambient_C, method, preset)
     # A diverging filter (the papers' presets can) shows as an infinite RMSE, not as numpy warnings.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return _search(log, method, preset, periods_min, windows_min, room_rate)
+        return _search(log, method, preset, periods, windows, room_rate)
+
+
+def _minutes(name: str, values: object) -> list[float] | None:
+    """``values`` (one number or several) as a list of minutes; InputError naming ``name`` where
+    they are not all positive finite numbers."""
+    if values is None:
+        return None
+    try:
+        minutes = [float(v) for v in np.atleast_1d(np.asarray(values, dtype=float))]
+    except (TypeError, ValueError):
+        minutes = []
+    if not minutes or not all(math.isfinite(v) and v > 0 for v in minutes):
+        msg = f"{name} must be positive numbers of minutes, not {values!r}"
+        raise InputError(msg)
+    return minutes
 
 
 def _search(
@@ -351,8 +380,31 @@ def _search(
     chosen = np.where(agreement, best[0], overall)
     begins = np.where(onsets > 0, t[onsets], np.nan)
     return MinTimeResult(
-        log.sensors, method, candidates, periods, table, best, chosen, agreement, float(periods[-1]), begins
+        log.sensors,
+        method,
+        candidates,
+        periods,
+        table,
+        best,
+        chosen,
+        agreement,
+        float(periods[-1]),
+        begins,
+        _no_rise(t[:n_total], y[:n_total]),
     )
+
+
+def _no_rise(time_min: FloatArray, values: FloatArray) -> np.ndarray:
+    """Per sensor, whether its readings stay within a rise's threshold of their first level."""
+    noise = noise_sigma(values, time_min)
+    flat = np.zeros(values.shape[1], dtype=bool)
+    for s in range(values.shape[1]):
+        y = values[np.isfinite(values[:, s]), s]
+        if len(y):
+            step = quantisation_step(y)
+            threshold = rise_threshold_C(max(float(noise[s]), step / np.sqrt(12.0)), step)
+            flat[s] = float(np.max(np.abs(y - np.median(y[:3])))) < threshold
+    return flat
 
 
 def _prior(

@@ -11,6 +11,7 @@ import re
 from dataclasses import dataclass
 from typing import Literal
 
+from mtident.exceptions import InputError
 from mtident.thermal.modal_types import MAX_MODES, interval_half_width
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, SteadyState
 
@@ -89,6 +90,26 @@ class RobustSettings:
     max_modes: int = DEFAULT_MAX_MODES
     free_fast_modes: int = MAX_FREE_FAST
     more_modes_when_used: bool = True
+
+    def __post_init__(self) -> None:
+        # a notebook builds these directly: a negative time constant overflowed deep in the search
+        checks = (
+            ("max_time_constant_min", self.max_time_constant_min, "a finite number of minutes, 1 or more", 1.0),
+            ("room_wander_C_per_h", self.room_wander_C_per_h, "a finite number of °C in an hour, 0 or more", 0.0),
+            ("max_modes", self.max_modes, "a whole number, 1 or more", 1.0),
+            ("free_fast_modes", self.free_fast_modes, "a whole number, 0 or more", 0.0),
+        )
+        for name, value, right, least in checks:
+            try:
+                ok = math.isfinite(float(value)) and float(value) >= least
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                msg = f"RobustSettings: `{name}` must be {right}, not {value!r}"
+                raise InputError(msg)
+        if not self.levels or not all(0.0 < float(q) < 1.0 for q in self.levels):
+            msg = f"RobustSettings: `levels` must be confidence levels between 0 and 1, not {self.levels!r}"
+            raise InputError(msg)
 
 
 WIDE_BOX = 0.5
