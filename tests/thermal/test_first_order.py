@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import math
 import re
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -430,3 +432,45 @@ def test_a_flat_sensors_first_order_answer_is_not_trusted():
     )
     answer = identify(frame, window_min=60, method="ukf").answer(0)
     assert not answer.model_ok and any("no warm-up to identify" in w for w in answer.warnings)
+
+
+REAL_DATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
+
+
+@pytest.mark.skipif(not REAL_DATA.is_dir(), reason="../shared/realdata not beside the repository")
+def test_one_sensors_broken_down_filter_does_not_stop_the_others():
+    """On a real 1-s log the fading filter's forecast of T1 broke down (a covariance not positive
+    definite) and the whole two-sensor identification ended in that error; T2 alone was answered."""
+    from mtident.io import read_temperature_log
+    from mtident.thermal import identify
+
+    log = read_temperature_log(REAL_DATA / "tclab_step50_run1.csv", time_unit="s", sensors=["T1", "T2"])
+    result = identify(log, window_min=10, method="fukf")
+    assert not result.model_ok.any()
+    assert math.isnan(result.steady_state_C[0]) and result.steady_state_C[1] == pytest.approx(33.8, abs=0.05)
+    assert any("no approach to a steady state" in w for w in result.answer(0).warnings)
+
+
+def test_a_sensor_whose_filter_breaks_down_in_the_window_is_left_out_and_said(monkeypatch):
+    """The window's filter raised for one sensor and stopped every other's answer: it is run again
+    without that sensor's readings, which gets no estimate and the error's words."""
+    import mtident.thermal.first_order as first_order_module
+    from mtident.exceptions import CovarianceError
+
+    real = first_order_module.filter_window
+    calls: list[int] = []
+
+    def breaks_once(time_min, values, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        calls.append(int(np.isnan(values[:, 1]).all()))
+        if not calls[-1]:
+            raise CovarianceError("update: gain", (1,), -1e-3, step=7, filter_name="ukf")
+        return real(time_min, values, *args, **kwargs)
+
+    monkeypatch.setattr(first_order_module, "filter_window", breaks_once)
+    log = sample_log().select(["T1", "T9"])
+    result = identify(log, window_min=60, method="ukf")
+    assert calls == [0, 1]
+    assert np.isfinite(result.steady_state_C[0]) and math.isnan(result.steady_state_C[1])
+    assert not result.model_ok[1]
+    said = result.answer(1).warnings
+    assert any("filter 'ukf'" in w and "the other sensors are answered without it" in w for w in said), said

@@ -559,6 +559,37 @@ class _Course:
     window_fit: FloatArray
     idle: np.ndarray | None = None  # (S,) a filter's fading factor and adaptive law never acted
     idle_words: str = ""
+    failed: tuple[tuple[int, str], ...] = ()  # sensors whose filter broke down, with the error's words
+
+
+def _filter_each_sensor(
+    tw: FloatArray,
+    yw: FloatArray,
+    config: FilterConfig,
+    tuning: ThermalTuning,
+    preset: str,
+    room_rate: FloatArray | None,
+) -> tuple[FilterRecord, FloatArray, FloatArray, tuple[tuple[int, str], ...]]:
+    """:func:`filter_window` over every sensor at once; where one sensor's covariance breaks down
+    the others go on without it (its readings left out, its breakdown returned with the error's
+    words): one sensor's failure stopped a whole log's identification. A single sensor's failure,
+    or one the error does not place, is raised (with the preset's hint for the papers' presets)."""
+    values = yw.copy()
+    failed: list[tuple[int, str]] = []
+    while True:
+        try:
+            record, history, history_cov = filter_window(
+                tw, values, config, tuning, None if room_rate is None else room_rate[: len(tw)]
+            )
+            return record, history, history_cov, tuple(failed)
+        except CovarianceError as exc:
+            where = exc.batch_index[0] if exc.batch_index else None
+            if where is None or yw.shape[1] - len(failed) <= 1 or any(s == where for s, _ in failed):
+                if preset == "data":
+                    raise
+                raise exc.hinted(_PRESET_HINT.format(preset=preset)) from None
+            failed.append((int(where), str(exc)))
+            values[:, where] = np.nan
 
 
 def _least_squares_course(
@@ -597,14 +628,10 @@ def _filtered_course(
     n, sensors = len(tw), yw.shape[1]
     t_future = _future_times(t, n, window_min, horizon_min, tuning.initial_mean[:, 1])
     config = filter_config(method, tuning)
-    try:
-        record, history, history_cov = filter_window(
-            tw, yw, config, tuning, None if room_rate is None else room_rate[:n]
-        )
-    except CovarianceError as exc:
-        if preset == "data":
-            raise
-        raise exc.hinted(_PRESET_HINT.format(preset=preset)) from None
+    record, history, history_cov, failed = _filter_each_sensor(tw, yw, config, tuning, preset, room_rate)
+    for sensor, _ in failed:  # its filter broke down: no course and no estimate (said, with the error)
+        history[:, sensor] = np.nan
+        history_cov[:, sensor] = np.nan
     history_sd = np.sqrt(np.diagonal(history_cov, axis1=-2, axis2=-1))
     # A-posteriori variance factor: R came from a noise estimate (±20 % from ~30 samples); the
     # residual variance of the best first-order fit says how far off it was, and the covariance
@@ -634,6 +661,7 @@ def _filtered_course(
         final_mean=final_mean,
         final_cov=final_cov,
         window_fit=window_fit,
+        failed=failed,
         idle=None if config.fading is None and config.adaptive_law is None else _idle(record),
         idle_words=" and ".join(
             words
@@ -766,6 +794,8 @@ def _identify(
             t, tw, yw, method, preset, tuning, window_min, horizon_min, pseudo_measurement_seed, room_rate
         )
     chi2, autocorr, fits = model_check(tw, yw, yw - course.window_fit, sigma)
+    for sensor, error in course.failed:
+        notes.append(f"sensor {log.sensors[sensor]!r}: {error}; the other sensors are answered without it")
     final_mean, steady_sd = _verdicts(log, tw, method, preset, course, chi2, autocorr, fits, notes)
     mean_curve, curve_var, times = course.mean_curve, course.curve_var, course.times
     if np.any(start.late):
@@ -987,10 +1017,23 @@ def _predict_after_window(
     normal = replace(config, adaptive_law=None, square_root=False)
     if seed is None:
         mean = rise_curve((t_future - t_last)[:, None], physical_mean[:, 0], physical_mean[:, 1], physical_mean[:, 2])
-        predicted = forecast(
-            GaussianState(carry.mean, carry.covariance()), transition, carry.process_cov, len(dts), normal
-        )
-        return mean, predicted.cov[:, :, 0, 0]
+        belief = GaussianState(carry.mean, carry.covariance())
+        try:
+            variance = forecast(belief, transition, carry.process_cov, len(dts), normal).cov[:, :, 0, 0]
+        except CovarianceError:
+            if S == 1:
+                raise
+            # one sensor's state past any forecast: each sensor's own, no number where it breaks down
+            variance = np.full((len(dts), S), np.nan)
+            for one in range(S):
+                alone = GaussianState(belief.mean[one : one + 1], belief.cov[one : one + 1])
+                try:
+                    own = forecast(alone, transition, carry.process_cov[one : one + 1], len(dts), normal)
+                except CovarianceError:
+                    mean[:, one] = np.nan
+                    continue
+                variance[:, one] = own.cov[:, 0, 0, 0]
+        return mean, variance
     # Xia et al. 2014 Eqs 21-22: sₖ = f(x̂ₖ₋₁) + q·randn, yₖ = h(sₖ) + r·randn, then a normal UKF update.
     rng = np.random.default_rng(seed)
     q_sd = np.sqrt(np.diagonal(carry.process_cov, axis1=-2, axis2=-1))
