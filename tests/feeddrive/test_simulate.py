@@ -246,3 +246,22 @@ def test_the_effect_of_force_noise_on_a_fit_is_the_gradients_sensitivity_to_each
             a = (gradient(moved) - base) / 1e-3
             brute += input_sd[q] ** 2 * np.outer(a, a)
     np.testing.assert_allclose(spread, brute, rtol=1e-5, atol=1e-8 * np.max(np.abs(brute)))
+
+
+def test_noise_needs_a_generator_and_a_share_of_zero_or_more():
+    """``rng=0`` raised AttributeError ('int' object has no attribute 'standard_normal'), and a
+    negative noise share was taken."""
+    drive = FeedDriveParameters()
+    with pytest.raises(InputError, match=r"needs a seeded generator \(rng=np.random.default_rng\(seed\)\), not int"):
+        simulate(drive, duration_s=0.01, noise_fraction=0.01, rng=0)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"noise_fraction must be 0 or more"):
+        simulate(drive, duration_s=0.01, noise_fraction=-0.1, rng=np.random.default_rng(0))
+
+
+def test_a_drive_that_is_no_parameter_set_is_refused_by_name():
+    """``modes({"K1": 1})`` raised AttributeError ('dict' object has no attribute 'Mt'), and a
+    stiffness given as text a TypeError from math."""
+    with pytest.raises(InputError, match=r"a feed drive is given as FeedDriveParameters .*, not dict"):
+        modes({"K1": 1.0})  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"parameter K1 = '1e8': must be a number \(N/m\)"):
+        modes(FeedDriveParameters(K1="1e8"))  # type: ignore[arg-type]

@@ -24,6 +24,7 @@ uses β = 0.01/(2π), which reproduces the paper's frequencies.
 from __future__ import annotations
 
 import math
+import numbers
 import tomllib
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
@@ -241,14 +242,26 @@ def validate(p: FeedDriveParameters) -> FeedDriveParameters:
     UnstableModelError
         K is not positive definite (the model would be unstable).
     """
+    if not isinstance(p, FeedDriveParameters):
+        msg = (
+            f"a feed drive is given as FeedDriveParameters (FeedDriveParameters(K1=..., ...) or "
+            f"load_parameters(path)), not {type(p).__name__}"
+        )
+        raise InputError(msg)
     for name in ("Mt", "Mb", "Jm", "Jb", "K1", "K2", "K3", "K4", "beta"):
         value = getattr(p, name)
-        if not (math.isfinite(value) and value > 0):
+        if not isinstance(value, numbers.Real) or isinstance(value, bool):
+            msg = f"parameter {name} = {value!r}: must be a number ({UNITS[name]})"
+            raise InputError(msg)
+        if not (math.isfinite(value) and float(value) > 0):
             msg = f"parameter {name} = {value!r}: must be a positive number ({UNITS[name]})"
             raise InputError(msg)
     for name in ("Bt", "Bb", "Qm", "Qb"):
         value = getattr(p, name)
-        if not (math.isfinite(value) and value >= 0):
+        if not isinstance(value, numbers.Real) or isinstance(value, bool):
+            msg = f"parameter {name} = {value!r}: must be a number ({UNITS[name]})"
+            raise InputError(msg)
+        if not (math.isfinite(value) and float(value) >= 0):
             msg = f"parameter {name} = {value!r}: damping must be zero or positive ({UNITS[name]})"
             raise InputError(msg)
     if p.K2 <= p.K1:

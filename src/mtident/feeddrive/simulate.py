@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -161,8 +162,13 @@ def simulate(
     if sample_rate_Hz <= 0 or duration_s <= 0:
         msg = f"sample rate {sample_rate_Hz} Hz and duration {duration_s} s must be positive"
         raise InputError(msg)
-    if noise_fraction > 0 and rng is None:
-        msg = "measurement noise needs a seeded generator (rng=np.random.default_rng(seed))"
+    if not (math.isfinite(noise_fraction) and noise_fraction >= 0):
+        msg = f"noise_fraction must be 0 or more (a share of each response's RMS), not {noise_fraction!r}"
+        raise InputError(msg)
+    if noise_fraction > 0 and not isinstance(rng, np.random.Generator):
+        msg = "measurement noise needs a seeded generator (rng=np.random.default_rng(seed))" + (
+            "" if rng is None else f", not {type(rng).__name__}"
+        )
         raise InputError(msg)
     excitation = excitation or Excitation()
     h = 1.0 / sample_rate_Hz
