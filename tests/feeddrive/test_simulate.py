@@ -265,3 +265,11 @@ def test_a_drive_that_is_no_parameter_set_is_refused_by_name():
         modes({"K1": 1.0})  # type: ignore[arg-type]
     with pytest.raises(InputError, match=r"parameter K1 = '1e8': must be a number \(N/m\)"):
         modes(FeedDriveParameters(K1="1e8"))  # type: ignore[arg-type]
+
+
+def test_a_record_that_is_no_response_is_refused_by_name():
+    """A DataFrame of the record raised AttributeError ('forces') from inside pandas."""
+    import pandas as pd
+
+    with pytest.raises(InputError, match=r"a feed drive's record is a Response .*, not DataFrame"):
+        identify_feed_drive(pd.DataFrame({"time_s": [0.0, 0.001]}))  # type: ignore[arg-type]

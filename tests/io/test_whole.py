@@ -73,3 +73,12 @@ def test_rows_after_a_row_left_out_are_named_by_their_own_line(write_csv):
     assert log.notes[-1] == "sensor 'A': skipped 1 empty/NaN sample(s) (rows 11)", log.notes
     with pytest.raises(InputError, match=r"sensor 'A', row 11: 'x' is not a number"):
         read_temperature_log(write_csv("time_min,A,B\n" + twice.replace("8,20.80,", "8,x,"), "bad.csv"))
+
+
+def test_a_reading_limit_that_means_nothing_is_refused(write_csv):
+    """``min_samples=-1`` and ``max_bad_fraction=2`` were taken without a word."""
+    path = write_csv("time_min,A\n" + "".join(f"{k},{20 + k * 0.1}\n" for k in range(10)))
+    with pytest.raises(InputError, match=r"min_samples must be a whole number, 1 or more, not -1"):
+        read_temperature_log(path, min_samples=-1)
+    with pytest.raises(InputError, match=r"max_bad_fraction must be a share between 0 and 1, not 2"):
+        read_temperature_log(path, max_bad_fraction=2)

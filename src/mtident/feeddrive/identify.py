@@ -155,6 +155,12 @@ def identify_feed_drive(
     DivergenceError
         The filter's numbers stopped being finite on a record it accepted.
     """
+    if not isinstance(response, Response):  # a DataFrame raised AttributeError deep in pandas
+        msg = (
+            f"a feed drive's record is a Response (read_response(path), or simulate(...)), not "
+            f"{type(response).__name__}"
+        )
+        raise InputError(msg)
     guess = validate(guess or default_guess())
     if not np.any(response.forces):
         # the filter then follows noise about rest: it diverged, or kept a guess far from the drive

@@ -320,6 +320,12 @@ def read_temperature_log(
     """
     if isinstance(sensors, str):  # one name, not its letters ("no sensor column 'T'")
         sensors = [sensors]
+    if not (isinstance(min_samples, int) and min_samples >= 1):
+        msg = f"min_samples must be a whole number, 1 or more, not {min_samples!r}"
+        raise InputError(msg)
+    if not (isinstance(max_bad_fraction, (int, float)) and 0.0 <= max_bad_fraction <= 1.0):
+        msg = f"max_bad_fraction must be a share between 0 and 1, not {max_bad_fraction!r}"
+        raise InputError(msg)
     read_notes: list[str] = []
     table = _as_table(path, read_notes, sheet)
     notes: list[str] = [renamed] if (renamed := table.dialect.renaming()) else []
