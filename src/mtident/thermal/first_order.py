@@ -19,7 +19,7 @@ from mtident.exceptions import CovarianceError, InputError
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog
 from mtident.thermal.identification import Identification, sensor_notes
 from mtident.thermal.lsq import first_level, first_order_onset, fit_rise, late_onset, rise_threshold
-from mtident.thermal.measured import measured_and_settled, rmse, warm_up_floor_C, window_samples
+from mtident.thermal.measured import measured_and_settled, minutes_given, rmse, warm_up_floor_C, window_samples
 from mtident.thermal.modal_types import DEFAULT_MAX_TIME_CONSTANT_MIN
 from mtident.thermal.model import (
     equilibrium_time,
@@ -486,9 +486,7 @@ def identify_first_order(
         A window that is not a positive number of minutes or holds too few samples, or a room
         sensor the method or preset cannot take.
     """
-    if not (np.isfinite(window_min) and window_min > 0):
-        msg = f"window_min must be a positive number of minutes, not {window_min!r}"
-        raise InputError(msg)
+    window_min = minutes_given("window_min", window_min, "a positive number of minutes", strictly=True)
     room_rate = room_input(log, ambient_C, method, preset)
     # A diverging filter (the papers' presets can) is reported in the notes, not as numpy warnings.
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):

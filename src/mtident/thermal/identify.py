@@ -34,6 +34,7 @@ from mtident.thermal.measured import (
     SETTLED_MOVE_C,
     measured_and_settled,
     measured_equilibrium,
+    minutes_given,
     rmse,
     window_samples,
 )
@@ -154,9 +155,8 @@ def identify(
     if method not in IDENTIFY_METHODS:
         msg = f"method {method!r} is not one of: {', '.join(IDENTIFY_METHODS)}"
         raise InputError(msg)
-    window_min = _minutes_given("window_min", window_min, "a positive number of minutes", strictly=True)
     if horizon_min is not None:
-        horizon_min = _minutes_given("horizon_min", horizon_min, "a number of minutes, 0 or more", strictly=False)
+        horizon_min = minutes_given("horizon_min", horizon_min, "a number of minutes, 0 or more", strictly=False)
     log = without_stuck_readings(as_temperature_log(log, "identify"))
     if method == ROBUST_METHOD:
         if preset != "data" or pseudo_measurement_seed is not None:
@@ -181,16 +181,3 @@ def identify(
         )
         raise InputError(msg)
     return identify_first_order(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, ambient_C)
-
-
-def _minutes_given(name: str, value: object, right: str, strictly: bool) -> float:
-    """``value`` as a float; InputError naming ``name`` where it is no finite number above 0 (or at
-    least 0 where not ``strictly``): a string or a negative horizon raised deep inside numpy."""
-    try:
-        minutes = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        minutes = math.nan
-    if not (math.isfinite(minutes) and (minutes > 0 if strictly else minutes >= 0)):
-        msg = f"{name} must be {right}, not {value!r}"
-        raise InputError(msg)
-    return minutes

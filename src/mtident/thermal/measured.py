@@ -207,6 +207,12 @@ _LATEST_READINGS = 5
 _FLOOR_NOISES = 4.0
 
 
+def _levels(values: FloatArray) -> FloatArray:
+    """The readings' levels: medians of each run of ``_LATEST_READINGS`` valid readings."""
+    levels: FloatArray = np.median(np.lib.stride_tricks.sliding_window_view(values, _LATEST_READINGS), axis=1)
+    return levels
+
+
 def warm_up_floor_C(
     steady_C: float,
     time_min: FloatArray,
@@ -248,9 +254,8 @@ def warm_up_floor_C(
     ok = np.isfinite(values) if room_C is None else np.isfinite(values) & np.isfinite(room_C)
     if ok.sum() < 2 * _LATEST_READINGS or not np.isfinite(steady_C):
         return -np.inf
-    y = values[ok]
     # levels as medians of a few readings, so that one noisy reading neither sets nor breaks the floor
-    levels = np.median(np.lib.stride_tricks.sliding_window_view(y, _LATEST_READINGS), axis=1)
+    levels = _levels(values[ok])
     latest, highest, first = float(levels[-1]), float(levels.max()), float(levels[0])
     margin = _FLOOR_NOISES * noise_C + rounding_C
     heated = steady_C > first and latest > first + margin
@@ -305,8 +310,22 @@ def fall_from_highest(time_min: FloatArray, values: FloatArray) -> Fall | None:
     ok = np.isfinite(values)
     if ok.sum() < 2 * _LATEST_READINGS:
         return None
-    levels = np.median(np.lib.stride_tricks.sliding_window_view(values[ok], _LATEST_READINGS), axis=1)
+    levels = _levels(values[ok])
     top = int(np.argmax(levels))
     window = slice(top, top + _LATEST_READINGS)
     at = time_min[ok][window][int(np.argmax(values[ok][window]))]
     return Fall(float(levels[top] - levels[-1]), float(levels[top]), float(at), float(levels[top] - levels[0]))
+
+
+def minutes_given(name: str, value: object, right: str, strictly: bool) -> float:
+    """``value`` as a float; InputError naming ``name`` and what is ``right`` where it is no finite
+    number above 0 (or at least 0 where not ``strictly``): a string or a negative horizon raised
+    deep inside numpy."""
+    try:
+        minutes = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        minutes = math.nan
+    if not (math.isfinite(minutes) and (minutes > 0 if strictly else minutes >= 0)):
+        msg = f"{name} must be {right}, not {value!r}"
+        raise InputError(msg)
+    return minutes

@@ -30,10 +30,10 @@ from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.first_order import FIRST_ORDER_ASSUMPTIONS, filter_window, room_input
-from mtident.thermal.lsq import first_level, fit_rise, late_onset
+from mtident.thermal.lsq import first_level, fit_rise, late_onset, rise_threshold
 from mtident.thermal.measured import MIN_WINDOW_SAMPLES, rmse
 from mtident.thermal.model import heat_balance_path, rise_curve
-from mtident.thermal.readings import noise_sigma, quantisation_step, rise_threshold_C
+from mtident.thermal.readings import noise_sigma, reading_range
 from mtident.thermal.robust_types import Assumptions
 from mtident.thermal.settings import METHODS, ThermalTuning, filter_config, preset_tuning, tuning_from_data
 
@@ -395,16 +395,10 @@ def _search(
 
 
 def _no_rise(time_min: FloatArray, values: FloatArray) -> np.ndarray:
-    """Per sensor, whether its readings stay within a rise's threshold of their first level."""
-    noise = noise_sigma(values, time_min)
-    flat = np.zeros(values.shape[1], dtype=bool)
-    for s in range(values.shape[1]):
-        y = values[np.isfinite(values[:, s]), s]
-        if len(y):
-            step = quantisation_step(y)
-            threshold = rise_threshold_C(max(float(noise[s]), step / np.sqrt(12.0)), step)
-            flat[s] = float(np.max(np.abs(y - np.median(y[:3])))) < threshold
-    return flat
+    """Per sensor, whether its readings do not rise: identify's first-order rule (their range
+    below :func:`~mtident.thermal.lsq.rise_threshold` of their noise)."""
+    no_rise: np.ndarray = reading_range(values) < rise_threshold(noise_sigma(values, time_min))
+    return no_rise
 
 
 def _prior(

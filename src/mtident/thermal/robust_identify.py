@@ -20,7 +20,7 @@ from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.identification import Identification, sensor_notes
 from mtident.thermal.machine_answer import combined_estimate, fit_readings, unmeasured_wander
-from mtident.thermal.measured import measured_and_settled, rmse, window_samples
+from mtident.thermal.measured import measured_and_settled, minutes_given, rmse, window_samples
 from mtident.thermal.modal_types import Mode
 from mtident.thermal.modes import fitted_curve
 from mtident.thermal.reference import MachineReference, reference_for_log
@@ -203,9 +203,7 @@ def identify_robust(
     """
     log = as_temperature_log(log, "identify")
     settings = settings or RobustSettings()
-    if not (np.isfinite(window_min) and window_min > 0):
-        msg = f"window_min must be a positive number of minutes, not {window_min!r}"
-        raise InputError(msg)
+    window_min = minutes_given("window_min", window_min, "a positive number of minutes", strictly=True)
     n = window_samples(log, window_min)
     t, y = log.time_min, log.temperature_C
     if room_C is not None and len(room_C) != len(t):
