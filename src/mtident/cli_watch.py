@@ -946,7 +946,9 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         else np.asarray(hindsight.settle_time_min, dtype=float)
     )
     # the settle time is read off the readings less the room, which settle where the readings
-    # themselves keep following a moving room: no level to check T∞ against
+    # themselves keep following a moving room: checked against their rise above the room as they
+    # follow it where the sensor's modes at the stop give that course, else no level to check
+    followed = hindsight.followed_room
     with_room = ~np.isfinite(hindsight.settled_C) & np.isfinite(settle_times)
     # a sensor that stuck before it settled has no level: its failure, not the log's length
     stuck = ~settled & np.isfinite(hindsight.stuck_since) & ~with_room
@@ -957,7 +959,9 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             shown = f"[yellow]{shown}[/]"
         level = float(hindsight.settled_C[i])
         cell = (
-            _fmt(level)
+            f"{_fmt(level)} (room)"
+            if followed[i]
+            else _fmt(level)
             if math.isfinite(level)
             else "with the room"
             if with_room[i]
@@ -973,6 +977,12 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             _fmt(float(settle_times[i]), 0),
         )
     table_console().print(table)
+    if followed.any():
+        OptionConsole().print(
+            "(room): the readings keep following the room; where their rise above the room, as they follow it "
+            "through the sensor's modes at the stop, settled, at the room's course at the log's end.",
+            highlight=False,
+        )
     if with_room.any():
         OptionConsole().print(
             "with the room: the readings keep following the room; from the time shown they stayed within the "
@@ -1001,9 +1011,6 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             f"{why}: nothing to check the decision against" + (f"; {timing}." if timing else "."), highlight=False
         )
         return
-    beyond = [
-        name for name, ok, known in zip(hindsight.sensors, hindsight.within, settled, strict=True) if known and not ok
-    ]
     # a sensor that settled above a moving room has settled, with no level to check
     unsettled = [
         name
@@ -1012,15 +1019,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         )
         if decided and not known and not room and not failed
     ]
-    verdict = (
-        f"{len(beyond)} of {int(settled.sum())} sensors settled beyond the tolerance ({hindsight.tolerance_C:g} °C) "
-        f"of T∞ at the stop: {', '.join(beyond)}"
-        if beyond
-        else (
-            f"every sensor that settled ({int(settled.sum())}) is within the tolerance ({hindsight.tolerance_C:g} °C) "
-            "of T∞ at the stop"
-        )
-    )
+    verdict = hindsight.verdict_words()
     not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
     failed = f"; {stuck_words}" if stuck_words else ""
     OptionConsole().print(

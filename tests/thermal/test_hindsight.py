@@ -185,3 +185,28 @@ def test_a_sensor_lagging_a_moving_room_settles_when_its_readings_reach_the_equi
     )
     assert hindsight.settle_time_min[0] == pytest.approx(200.0 + 60.0 * np.log(2.5), abs=3.0)
     assert hindsight.time_saved_min == pytest.approx(255.0 - 150.0, abs=3.0)
+
+
+def test_a_sensor_that_keeps_following_a_daily_room_is_checked_against_its_rise_above_the_room():
+    """A trial's daily room (±0.3 °C): every sensor's readings kept following the room to the log's
+    end, so the check said "no settled level to check T∞ against" beside a right stop. A sensor of
+    8 °C over a 40-min mode following the room through a 120-min mode: its rise above the room as it
+    follows it settles at 8 °C, so T∞ at the stop (8 °C above the room then) checks within 0.01 °C,
+    and a T∞ 0.3 °C high is called beyond the tolerance."""
+    from mtident.thermal.modal_search import room_lag
+
+    t = np.arange(0.0, 901.0)
+    room = 20.0 + 0.3 * np.sin(2.0 * np.pi * (t - 900.0) / 1440.0)  # rising fastest at the log's end
+    sensor = room_lag(room, t, np.array([120.0]))[0] + 8.0 * (1.0 - np.exp(-t / 40.0))
+    modes = [((40.0, -8.0), (120.0, 0.0))]
+    right, wrong = (
+        check_decision(("S",), np.array([level]), 300.0, t, sensor[:, None], 0.2, room, modes, room_gains=[(0.0, 1.0)])
+        for level in (room[300] + 8.0, room[300] + 8.3)
+    )
+    steady = check_decision(("S",), np.array([28.0]), 300.0, t, sensor[:, None], 0.2)
+    assert np.isnan(steady.settled_C[0])  # the readings themselves keep moving with the room
+    assert right.followed_room[0] and abs(right.error_C[0]) < 0.01 and right.within[0]
+    assert wrong.error_C[0] == pytest.approx(0.3, abs=0.01) and not wrong.within[0]
+    assert right.to_dict()["sensors"][0]["settled_with_room"] is True
+    # without the sensor's modes at the stop there is no course to take out: nothing to check
+    assert not check_decision(("S",), np.array([28.0]), 300.0, t, sensor[:, None], 0.2, room).checked[0]

@@ -87,6 +87,9 @@ class SensorLine:
     settle_time_min : float
         When the readings came within the tolerance of where they settled, to stay (min), NaN where
         not known.
+    settled_with_room : bool
+        The readings keep following a moving room: ``settled_C`` is where their rise above the room,
+        as the sensor follows it, settled, at the room's course at the log's end.
     """
 
     sensor: str
@@ -102,6 +105,7 @@ class SensorLine:
     difference_C: float
     within_tolerance: bool | None
     settle_time_min: float = math.nan
+    settled_with_room: bool = False
 
     @property
     def rate_per_min(self) -> float:
@@ -258,8 +262,10 @@ T_EQ_NOTE = (
     "level, is the one held against the tolerance."
 )
 SETTLED_NOTE = (
-    "settled: where the readings after the stop came to rest; difference: T∞ at the stop (moved with the room) "
-    "less that; settled by: when the readings came within the tolerance of it, to stay."
+    "settled: where the readings after the stop came to rest (room: readings that keep following the room, where "
+    "their rise above it, as the sensor follows it, came to rest, at the room's level at the log's end); "
+    "difference: T∞ at the stop (moved with the room) less that; settled by: when the readings came within the "
+    "tolerance of it, to stay."
 )
 
 # the monitor's statuses in words for the customer
@@ -386,7 +392,7 @@ def build_report(
         warnings=tuple(dict.fromkeys(w for sensor in outcome.sensors for w in sensor.warnings)),
         assumptions=assumed,
         method=METHOD,
-        hindsight=None if hindsight is None else _hindsight_verdict(lines, hindsight, settings),
+        hindsight=None if hindsight is None else _hindsight_verdict(hindsight),
         settle_time_min=settle,
         time_saved_min=math.nan if saved is None else float(saved),
         figure_png=_png(figure),
@@ -562,6 +568,7 @@ def _line(sensor: SensorStatus, readings: np.ndarray, hindsight: Hindsight | Non
     valid = readings[np.isfinite(readings)]
     settled = difference = settle = math.nan
     within: bool | None = None
+    with_room = hindsight is not None and bool(hindsight.checked[s] and hindsight.followed_room[s])
     if hindsight is not None and bool(hindsight.checked[s]):
         settled = float(hindsight.settled_C[s])
         difference = float(hindsight.error_C[s])
@@ -582,12 +589,12 @@ def _line(sensor: SensorStatus, readings: np.ndarray, hindsight: Hindsight | Non
         difference_C=difference,
         within_tolerance=within,
         settle_time_min=settle,
+        settled_with_room=with_room,
     )
 
 
-def _hindsight_verdict(lines: tuple[SensorLine, ...], hindsight: Hindsight, settings: MonitorSettings) -> str:
+def _hindsight_verdict(hindsight: Hindsight) -> str:
     log_end_min = hindsight.log_end_min
-    checked = [line for line in lines if line.within_tolerance is not None]
     # a sensor that stuck before it settled has no level to check: said as its failure
     stuck = [
         f"{name} from {minutes(float(since))}"
@@ -595,20 +602,12 @@ def _hindsight_verdict(lines: tuple[SensorLine, ...], hindsight: Hindsight, sett
         if np.isfinite(since) and not known
     ]
     failed = f" Stuck at one value before settling (nothing to check): {', '.join(stuck)}." if stuck else ""
-    if not checked:
+    verdict = hindsight.verdict_words()
+    if not verdict:
         following = hindsight.settle_time_min is not None and bool(np.isfinite(hindsight.settle_time_min).any())
         why = "its readings keep following the room to its end" if following else "no sensor settled by its end"
         return f"The log runs on to {minutes(log_end_min)}, but {why}: no settled level to check T∞ against.{failed}"
-    beyond = [line.sensor for line in checked if not line.within_tolerance]
-    if beyond:
-        return (
-            f"Against the rest of the log (to {minutes(log_end_min)}): {', '.join(beyond)} settled beyond the "
-            f"tolerance ({settings.tolerance_C:g} °C) of T∞ at the stop.{failed}"
-        )
-    return (
-        f"Against the rest of the log (to {minutes(log_end_min)}): every sensor that settled ({len(checked)}) "
-        f"is within the tolerance ({settings.tolerance_C:g} °C) of T∞ at the stop.{failed}"
-    )
+    return f"Against the rest of the log (to {minutes(log_end_min)}): {verdict}.{failed}"
 
 
 def saved_words(report: WarmupReport) -> str | None:
@@ -737,7 +736,8 @@ def _table(report: WarmupReport) -> tuple[list[str], list[list[str]]]:
             status_words(line),
         ]
         if _settled(report):
-            row += [_fmt(line.settled_C), _signed(line.difference_C), _fmt(line.settle_time_min, 0)]
+            settled = _fmt(line.settled_C) + (" (room)" if line.settled_with_room else "")
+            row += [settled, _signed(line.difference_C), _fmt(line.settle_time_min, 0)]
         rows.append(row)
     return header, rows
 

@@ -66,6 +66,9 @@ class HindsightSensor:
     stuck_since_min : float
         When its readings stuck at one value for good (min; NaN: they did not): the repeats say
         nothing of its temperature and are left out of the check.
+    settled_with_room : bool
+        Its readings keep following a moving room: ``settled_C`` is where its rise above the room,
+        as it follows it, settled, at the room's course at the log's end.
     """
 
     sensor: str
@@ -78,6 +81,7 @@ class HindsightSensor:
     settle_time_min: float
     waited_for: bool
     stuck_since_min: float
+    settled_with_room: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -143,6 +147,10 @@ class Hindsight:
         When each sensor's readings stuck at one value for good (min; NaN: they did not; default:
         none did). Its repeats are left out: a sensor that stuck before it settled has no level to
         check, and that is the sensor's failure, not the log's being short.
+    with_room : ndarray of bool, shape (S,), optional
+        The sensors whose readings keep following a moving room: their ``settled_C`` is where
+        their rise above the room, as they follow it through their modes at the stop, settled, at
+        the room's course at the log's end (default: none).
     """
 
     sensors: tuple[str, ...]
@@ -157,6 +165,7 @@ class Hindsight:
     settle_time_min: FloatArray | None = None
     waited: np.ndarray | None = None
     stuck_since_min: FloatArray | None = None
+    with_room: np.ndarray | None = None
 
     @property
     def test_settle_time_min(self) -> float:
@@ -226,6 +235,19 @@ class Hindsight:
         return "\n".join(lines)
 
     @property
+    def followed_room(self) -> np.ndarray:
+        """Whether each sensor's settled level is its rise above the room as it follows it (its
+        readings keep following a moving room).
+
+        Returns
+        -------
+        ndarray of bool, shape (S,)
+        """
+        if self.with_room is None:
+            return np.zeros(len(self.sensors), dtype=bool)
+        return np.asarray(self.with_room, dtype=bool)
+
+    @property
     def stuck_since(self) -> FloatArray:
         """When each sensor's readings stuck for good (min, NaN where they did not).
 
@@ -269,6 +291,28 @@ class Hindsight:
         with np.errstate(invalid="ignore"):
             return np.abs(self.error_C) <= self.tolerance_C
 
+    def verdict_words(self) -> str:
+        """Whether the sensors that settled did so within the tolerance of T∞ at the stop, in words
+        (a clause, lower case; empty where none settled).
+
+        Returns
+        -------
+        str
+        """
+        checked = self.checked
+        if not checked.any():
+            return ""
+        beyond = [name for name, ok, known in zip(self.sensors, self.within, checked, strict=True) if known and not ok]
+        if beyond:
+            return (
+                f"{len(beyond)} of {int(checked.sum())} sensors settled beyond the tolerance ({self.tolerance_C:g} °C) "
+                f"of T∞ at the stop: {', '.join(beyond)}"
+            )
+        return (
+            f"every sensor that settled ({int(checked.sum())}) is within the tolerance ({self.tolerance_C:g} °C) "
+            "of T∞ at the stop"
+        )
+
     def answer(self) -> HindsightAnswer:
         """The check as a record whose fields are its JSON object.
 
@@ -302,6 +346,7 @@ class Hindsight:
                     settle_time_min=float(settle[i]),
                     waited_for=bool(waited[i]),
                     stuck_since_min=float(self.stuck_since[i]),
+                    settled_with_room=bool(self.followed_room[i]),
                 )
                 for i, name in enumerate(self.sensors)
             ),
@@ -376,13 +421,15 @@ def check_decision(
     values, stuck = without_stuck(time_min, values)
     # a sensor still moving by half the tolerance, or with more than a quarter of it still to come
     # at the pace of its slowest mode, is not settled to the precision the check needs
-    slowest = [
-        min(max((tau for tau, _ in m), default=max_time_constant_min), max_time_constant_min)
-        for m in (modes if modes is not None else [()] * len(sensors))
-    ]
-    settled, equilibrium = measured_equilibrium(
-        time_min, values, tolerance_C / 2.0, tolerance_C / 4.0, np.array(slowest, dtype=float)
+    slowest_min = np.array(
+        [
+            min(max((tau for tau, _ in m), default=max_time_constant_min), max_time_constant_min)
+            for m in (modes if modes is not None else [()] * len(sensors))
+        ],
+        dtype=float,
     )
+    settling = (tolerance_C / 2.0, tolerance_C / 4.0)
+    settled, equilibrium = measured_equilibrium(time_min, values, *settling, slowest_min)
     # each sensor's course of the room (the room itself for one without modes), where one is logged
     courses = None
     if room_C is not None and np.isfinite(room_C).sum() >= 10:
@@ -391,15 +438,22 @@ def check_decision(
         courses = np.column_stack(
             [_room_course(time_min, room_C, m, g) for m, g in zip(per_sensor, gains, strict=True)]
         )
-    shift, followed = 0.0, None
-    if room_C is not None and courses is not None:
+    shift, followed, with_room = 0.0, None, None
+    # where each settles above the room, as it follows it (readings that keep following a moving room)
+    above = None if courses is None else measured_equilibrium(time_min, values - courses, *settling, slowest_min)[0]
+    if room_C is not None and courses is not None and above is not None:
         valid = np.isfinite(room_C)
         near = valid & (np.abs(time_min - stop_time_min) <= _ROOM_AROUND_STOP_MIN)
         if near.any():
             at_stop = float(np.median(room_C[near]))
             shift = float(np.median(room_C[valid][-10:])) - at_stop
             if modes is not None:
-                followed = np.median(courses[valid][-10:], axis=0) - at_stop
+                course_end = np.median(courses[valid][-10:], axis=0)
+                followed = course_end - at_stop
+                # T∞ at the stop, moved as the sensor follows the room, against its rise above the room
+                # as it follows it, at the log's end: a daily cycle keeps the readings themselves moving
+                with_room = ~np.isfinite(settled) & np.isfinite(above)
+                settled = np.where(with_room, above + course_end, settled)
     return Hindsight(
         sensors=tuple(sensors),
         stop_time_min=float(stop_time_min),
@@ -410,11 +464,10 @@ def check_decision(
         room_shift_C=shift,
         tolerance_C=float(tolerance_C),
         sensor_shift_C=followed,
-        settle_time_min=_settle_times(
-            time_min, values, courses, room_C, settled, tolerance_C, np.array(slowest, dtype=float)
-        ),
+        settle_time_min=_settle_times(time_min, values, courses, above, room_C, settled, tolerance_C),
         waited=None if waited is None else np.asarray(waited, dtype=bool),
         stuck_since_min=None if all(math.isnan(v) for v in stuck) else np.array(stuck, dtype=float),
+        with_room=with_room if with_room is not None and with_room.any() else None,
     )
 
 
@@ -422,10 +475,10 @@ def _settle_times(
     time_min: FloatArray,
     values: FloatArray,
     room_courses: FloatArray | None,
+    settled_above: FloatArray | None,
     room_C: FloatArray | None,
     settled_C: FloatArray,
     tolerance_C: float,
-    slowest_mode_min: FloatArray,
 ) -> FloatArray:
     """The settle times of the readings: with a room sensor, when each sensor's readings stayed
     within the tolerance of its equilibrium at the room's level at the time, the benchmark's
@@ -437,11 +490,10 @@ def _settle_times(
     not settled, however long ago its own warm-up was (less the course, a daily room's lag read
     as settled 150 min before the readings came within the tolerance of the truth). Where the
     readings never come that close by the log's end, the time their rise above the room as they
-    follow it settled stands in."""
-    if room_courses is None or room_C is None:
+    follow it settled stands in (``settled_above``: where it settled)."""
+    if room_courses is None or settled_above is None or room_C is None:
         return settle_times(time_min, values, settled_C, tolerance_C)
     above = values - room_courses
-    settled_above, _ = measured_equilibrium(time_min, above, tolerance_C / 2.0, tolerance_C / 4.0, slowest_mode_min)
     room_now = _room_course(time_min, room_C, (), ())
     behind = settle_times(time_min, values - room_now[:, None], settled_above, tolerance_C)
     # a sensor that lags a daily room by more than the tolerance to the log's end: its rise above the
