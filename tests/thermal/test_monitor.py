@@ -567,6 +567,27 @@ def test_a_one_mode_model_does_not_say_how_a_moving_room_reaches_the_machine():
     assert all(check.low_C <= truth[at] <= check.high_C for check in state.checks)
 
 
+def test_a_daily_room_that_shows_the_models_path_does_not_keep_the_truncations_allowance():
+    """The chain's reference in a steady room (no room response learnt), its test at another split
+    and power in a room cycling ±0.3 °C a day. Half the room's rate times the slowest time constant
+    (268 min) was kept for the model's truncation whatever the readings said: the tests stopped at
+    418 min, near a turn of the cycle, and not at all in 900 min at another phase. The readings fit
+    the model's path; held to what they ask of it, the tests stop at 302 and 662 min, right."""
+    t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, lambda t: np.full_like(t, ROOM_C), seed=21)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), room)
+    assert reference.machine_model is not None and not reference.machine_model.room_gains
+    split, power = (0.45, 0.55), 1.2
+    for phase, by in ((0.0, 350.0), (4.0, 700.0)):
+        t, y, room = _run_in_room(split, power, np.zeros(3), 900.0, _daily(0.3, phase=phase), seed=14, dt=2.0)
+        settings = MonitorSettings(tolerance_C=0.2, reference=reference, room_sensor="room")
+        state, _ = monitor_step(new_state(list(SENSORS), with_room=True), t, y, room, settings)
+        assert state.stopped and state.stop_time_min < by, (phase, state.stop_time_min)
+        truth = _truth(split, power) - ROOM_C + _daily(0.3, phase=phase)(state.stop_time_min)
+        assert all(check.machine_used for check in state.checks)
+        assert all(abs(check.steady_C - v) < 0.1 for check, v in zip(state.checks, truth, strict=True))
+        assert all(check.low95_C <= v <= check.high95_C for check, v in zip(state.checks, truth, strict=True))
+
+
 def test_a_drifting_room_that_keeps_the_machine_model_open_is_named_as_the_reason():
     """The chain's reference in a steady room, its test in a room falling 0.15 °C an hour: the
     machine model counts the lag behind the room it cannot tell (the rate times the slowest time

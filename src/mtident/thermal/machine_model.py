@@ -64,9 +64,12 @@ ROOM_LAG_SHARE = 1.0
 """The share of the room's rate times the slowest time constant taken as the prior sd of each
 sensor's own lag behind the room (:func:`_lag_variance`): what the readings cannot tell of it."""
 ROOM_TRUNCATION_SHARE = 0.5
-"""And this share of it, added whatever the readings tell, within the whole (the lag's variance and
+"""And at most this share of it for the model's truncation, within the whole (the lag's variance and
 this no more than the square of the rate times the slowest time constant): a model of fewer modes
-than the machine gets the room's path into it wrong, which shows only when the room moves."""
+than the machine gets the room's path into it wrong, which shows only when the room moves. It is
+no more than the readings ask: the shift of the level that fitting the lag would make
+(:func:`_lag_variance`), where the room's course has shown the path (a daily cycle's readings fit
+the model's path, and the whole share held such tests open until a turn of the cycle)."""
 ROOM_RESPONSE_SHARE = 0.3
 """A learnt room response's own error (one sd): this share of the room's effect on the sensor, in
 quadrature with the reference's standard error (the model is a truncation)."""
@@ -649,8 +652,10 @@ def _fit_tied(
     if long_enough and 2 * (len(rejected) + len(misfit)) > len(fitted):
         return _contradicted(len(sensors), (*(sensors[s] for s in rejected), *misfit), levels, origin_min)
     # without room_lag (the reference run itself) both are zero; the truncation's share is what
-    # the room's lag (its readings' part and this) leaves of the whole allowance
-    own_lag = np.sqrt(np.clip(np.minimum((ROOM_TRUNCATION_SHARE * lag_sd) ** 2, lag_sd**2 - solved.lag_var), 0, None))
+    # the room's lag (its readings' part and this) leaves of the whole allowance, and no more than
+    # the readings ask the path to move the level by
+    whole = np.sqrt(np.clip(np.minimum((ROOM_TRUNCATION_SHARE * lag_sd) ** 2, lag_sd**2 - solved.lag_var), 0, None))
+    own_lag = np.minimum(whole, np.abs(solved.lag_shift))
     lag = np.array([known[s][1] if s in known else own_lag[j] for j, s in enumerate(used)])
     half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag) for level, h in half.items()}
     room_gains = [known[s][2] if s in known else row for s, row in zip(used, _room_gains_of(solved), strict=True)]
@@ -779,6 +784,7 @@ class _Solved:
     fast: FloatArray
     room_gains: FloatArray
     lag_var: FloatArray
+    lag_shift: FloatArray
 
 
 def _tied_solve(
@@ -966,28 +972,38 @@ def _penalised(
         gains * z[None, :] + coef[i_d : i_d + S * K].reshape(S, K),
         coef[i_fast : i_fast + S * F].reshape(S, F),
         gains * eta[None, :],
-        _lag_variance(blocks, lag_columns, cov, lag_share, S),
+        *_lag_variance(blocks, targets, coef, lag_columns, cov, lag_share, S),
     )
 
 
 def _lag_variance(
-    blocks: list[FloatArray], columns: dict[int, FloatArray], cov: FloatArray, share: float, count: int
-) -> FloatArray:
+    blocks: list[FloatArray],
+    targets: list[FloatArray],
+    coef: FloatArray,
+    columns: dict[int, FloatArray],
+    cov: FloatArray,
+    share: float,
+    count: int,
+) -> tuple[FloatArray, FloatArray]:
     """Per sensor, the variance its level would gain from one more column of its own: the room's
     course through the slowest mode less the room (weighted as its block), its coefficient's prior
-    sd ``share`` (a lag behind a ramp of ``share`` times the rate times the slowest time constant).
-    A drift's lag cannot be told from a lower T∞ and adds its whole prior; a daily cycle's shows in
-    the readings and adds less. The level itself stays where the fit puts it: the column's own
-    estimate takes up misfit that is not the room's. One update of rank one per sensor:
-    ``v = C·Xᵀc``, ``d = cᵀc + 1/share² − cᵀX·v``; the level's variance grows by ``v_s²/d``."""
+    sd ``share`` (a lag behind a ramp of ``share`` times the rate times the slowest time constant),
+    and the shift of the level that column's fit would make. A drift's lag cannot be told from a
+    lower T∞ and adds its whole prior; a daily cycle's shows in the readings and adds less. The
+    level itself stays where the fit puts it: the column's own estimate takes up misfit that is not
+    the room's. One update of rank one per sensor: ``v = C·Xᵀc``, ``d = cᵀc + 1/share² − cᵀX·v``;
+    the level's variance grows by ``v_s²/d``, and it would move by ``−v_s·cᵀr/d`` (``r``: the
+    sensor's weighted residuals)."""
     out = np.zeros(count)
+    shift = np.zeros(count)
     for s, column in columns.items():
         b = blocks[s].T @ column
         v = cov @ b
         d = float(column @ column) + share**-2 - float(b @ v)
         with np.errstate(over="ignore"):  # a column the others nearly make leaves the level unbounded: inf
             out[s] = v[s] ** 2 / max(d, 1e-300)
-    return out
+            shift[s] = -v[s] * float(column @ (targets[s] - blocks[s] @ coef)) / max(d, 1e-300)
+    return out, shift
 
 
 def _room_lag_sd(time_min: FloatArray, room_C: FloatArray | None, slowest_min: float) -> float:
