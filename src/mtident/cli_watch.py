@@ -1000,26 +1000,12 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     )
     if not settled.any():
         # readings that keep following a moving room have not failed to settle: the log can be long
-        late = [
-            name
-            for name, decided, room, failed in zip(
-                hindsight.sensors, np.isfinite(hindsight.steady_state_C), with_room, stuck, strict=True
-            )
-            if decided and not room and not failed
-        ]
-        why = no_level_words(hindsight, late, bool(with_room.any()), stuck_words)
+        why = no_level_words(hindsight, hindsight.not_settled, bool(with_room.any()), stuck_words)
         OptionConsole().print(
             f"{why}: nothing to check the decision against" + (f"; {timing}." if timing else "."), highlight=False
         )
         return
-    # a sensor that settled above a moving room has settled, with no level to check
-    unsettled = [
-        name
-        for name, known, decided, room, failed in zip(
-            hindsight.sensors, settled, np.isfinite(hindsight.steady_state_C), with_room, stuck, strict=True
-        )
-        if decided and not known and not room and not failed
-    ]
+    unsettled = hindsight.not_settled
     verdict = hindsight.verdict_words()
     not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
     failed = f"; {stuck_words}" if stuck_words else ""

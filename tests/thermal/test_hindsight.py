@@ -210,3 +210,23 @@ def test_a_sensor_that_keeps_following_a_daily_room_is_checked_against_its_rise_
     assert right.to_dict()["sensors"][0]["settled_with_room"] is True
     # without the sensor's modes at the stop there is no course to take out: nothing to check
     assert not check_decision(("S",), np.array([28.0]), 300.0, t, sensor[:, None], 0.2, room).checked[0]
+
+
+def test_a_sensor_of_a_small_rise_following_a_daily_room_is_settled_to_the_checks_precision():
+    """A new user's column rose 0.6 °C above a room cycling ±0.3 °C a day; its readings moved
+    0.07 °C over the log's last quarter with the room, more than 5 % of its rise, so the check said
+    it had "not yet" settled and the time saved was not known, though it stayed within 0.05 °C of
+    its equilibrium for the last 100 min. The check's precision is the tolerance's."""
+    from mtident.thermal.measured import measured_equilibrium
+    from mtident.thermal.modal_search import room_lag
+
+    t = np.arange(0.0, 901.0)
+    room = 20.0 + 0.3 * np.sin(2.0 * np.pi * (t - 900.0) / 1440.0)
+    column = room_lag(room, t, np.array([200.0]))[0] + 0.6 * (1.0 - np.exp(-t / 50.0))
+    assert np.isnan(measured_equilibrium(t, column[:, None], 0.1, 0.05, 200.0)[0][0])  # 5 % of its rise
+    modes = [((50.0, -0.6), (150.0, 0.0))]  # its course through a slow mode a little off
+    check = check_decision(
+        ("column",), np.array([room[300] + 0.6]), 300.0, t, column[:, None], 0.2, room, modes, room_gains=[(0.0, 1.0)]
+    )
+    assert check.checked[0] and check.within[0] and abs(check.error_C[0]) < 0.02
+    assert check.time_saved_min is not None and not check.not_settled

@@ -187,6 +187,18 @@ def test_an_interval_without_bounds_is_said_so_not_as_infinities():
     assert "99 % interval not yet bounded, reaching beyond ±0.2 °C of T∞" in reason and "inf" not in reason
 
 
+def test_a_sensor_confirming_its_stop_is_not_said_to_reach_beyond_the_tolerance():
+    """A new user's bearing, "confirming" with a 99 % interval of 23.63 to 23.77 °C around 23.70,
+    was said to reach "beyond ±0.2 °C of T∞" in the reason the test could not stop."""
+    from mtident.thermal.monitor import SensorCheck
+    from mtident.thermal.monitor_answer import _reason
+
+    check = SensorCheck("bearing", status="confirming", steady_C=23.70, low_C=23.63, high_C=23.77, model_ok=True)
+    reason = _reason([check], MonitorSettings(), new_state(["bearing"]).readings)
+    assert "beyond" not in reason
+    assert "bearing: T∞ 23.70 °C, 99 % interval 23.63 to 23.77 °C, within ±0.2 °C of T∞ at its latest check" in reason
+
+
 def test_a_string_of_sensors_and_unnamed_room_readings_are_taken_as_meant():
     """new_state("T1") made two sensors, "T" and "1", and failed only at the first readings; room
     readings given without naming the room sensor were used, yet every answer said the room was

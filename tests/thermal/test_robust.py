@@ -141,6 +141,26 @@ def test_a_fit_below_the_floor_by_more_than_its_error_contradicts_a_warm_up():
     assert not _below_floor(fit, -np.inf)
 
 
+REAL_DATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
+
+
+@pytest.mark.skipif(not REAL_DATA.is_dir(), reason="../shared/realdata not beside the repository")
+def test_a_fit_too_wide_to_say_anything_whose_t_inf_comes_down_below_the_readings_is_said_to():
+    """A real 1-s TCLab log 4 min into its warm-up, at 53.14 °C: its best fit came down to T∞
+    31.34 °C (a mode of 15 min falling 54 °C), said only "not determined", with a 95 % interval
+    from 31.30 °C, below where the sensor already was, against the floor the answer states: now
+    said, the interval held around the fit's T∞."""
+    from mtident.io.logs import read_temperature_log
+
+    log = read_temperature_log(REAL_DATA / "tclab_step50_run1.csv", time_unit="s", sensors=["T1"])
+    early = log.time_min <= 4.0
+    estimate = estimate_sensor("T1", log.time_min[early], log.temperature_C[early, 0])
+    assert not estimate.model_ok and {"below-floor", "undetermined"} <= set(estimate.warning_codes)
+    assert "below where it already is (52.14 °C)" in estimate.warnings[0]
+    for lo, hi in estimate.interval_C.values():
+        assert estimate.steady_C - 0.1 < lo <= estimate.steady_C < 52.0 < hi
+
+
 @pytest.mark.parametrize("every_min", [10.0, 15.0])
 def test_readings_ten_minutes_apart_rising_from_the_first_are_fitted_from_it(every_min):
     """Readings 10 min or more apart put the median of the first three on the rise, so the first

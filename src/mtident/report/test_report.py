@@ -607,7 +607,9 @@ def _hindsight_verdict(hindsight: Hindsight) -> str:
         following = hindsight.settle_time_min is not None and bool(np.isfinite(hindsight.settle_time_min).any())
         why = "its readings keep following the room to its end" if following else "no sensor settled by its end"
         return f"The log runs on to {minutes(log_end_min)}, but {why}: no settled level to check T∞ against.{failed}"
-    return f"Against the rest of the log (to {minutes(log_end_min)}): {verdict}.{failed}"
+    unsettled = hindsight.not_settled
+    late = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
+    return f"Against the rest of the log (to {minutes(log_end_min)}): {verdict}{late}.{failed}"
 
 
 def saved_words(report: WarmupReport) -> str | None:

@@ -291,6 +291,29 @@ class Hindsight:
         with np.errstate(invalid="ignore"):
             return np.abs(self.error_C) <= self.tolerance_C
 
+    @property
+    def not_settled(self) -> list[str]:
+        """The sensors in the decision with no level to check by the log's end: their readings did not
+        settle, nor their rise above the room as they follow it, and they did not stick.
+
+        Returns
+        -------
+        list of str
+        """
+        settle = (
+            np.full(len(self.sensors), np.nan) if self.settle_time_min is None else np.asarray(self.settle_time_min)
+        )
+        # readings that keep following a moving room, their settle time known, have not failed to settle
+        following = ~np.isfinite(self.settled_C) & np.isfinite(settle)
+        stuck = np.isfinite(self.stuck_since)
+        return [
+            name
+            for name, decided, known, room, failed in zip(
+                self.sensors, np.isfinite(self.steady_state_C), self.checked, following, stuck, strict=True
+            )
+            if decided and not known and not room and not failed
+        ]
+
     def verdict_words(self) -> str:
         """Whether the sensors that settled did so within the tolerance of T∞ at the stop, in words
         (a clause, lower case; empty where none settled).
@@ -428,8 +451,10 @@ def check_decision(
         ],
         dtype=float,
     )
-    settling = (tolerance_C / 2.0, tolerance_C / 4.0)
-    settled, equilibrium = measured_equilibrium(time_min, values, *settling, slowest_min)
+    # settled to the check's precision: the tolerance's bounds, not a share of the rise (a column that
+    # rose 0.6 °C, moving 0.07 °C with a daily room, was "not yet" settled, and the time saved unknown)
+    settling = {"max_late_move_C": tolerance_C / 2.0, "max_remaining_C": tolerance_C / 4.0, "max_late_share": np.inf}
+    settled, equilibrium = measured_equilibrium(time_min, values, slowest_mode_min=slowest_min, **settling)
     # each sensor's course of the room (the room itself for one without modes), where one is logged
     courses = None
     if room_C is not None and np.isfinite(room_C).sum() >= 10:
@@ -440,7 +465,11 @@ def check_decision(
         )
     shift, followed, with_room = 0.0, None, None
     # where each settles above the room, as it follows it (readings that keep following a moving room)
-    above = None if courses is None else measured_equilibrium(time_min, values - courses, *settling, slowest_min)[0]
+    above = (
+        None
+        if courses is None
+        else measured_equilibrium(time_min, values - courses, slowest_mode_min=slowest_min, **settling)[0]
+    )
     if room_C is not None and courses is not None and above is not None:
         valid = np.isfinite(room_C)
         near = valid & (np.abs(time_min - stop_time_min) <= _ROOM_AROUND_STOP_MIN)

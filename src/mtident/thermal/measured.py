@@ -91,12 +91,13 @@ def measured_equilibrium(
     max_late_move_C: float = math.inf,
     max_remaining_C: float = math.inf,
     slowest_mode_min: float | FloatArray = DEFAULT_MAX_TIME_CONSTANT_MIN,
+    max_late_share: float = 0.05,
 ) -> tuple[FloatArray, FloatArray]:
     """Final temperature and 95 %-rise time read off a log that ran to equilibrium.
 
     The final temperature is the median of the last 10 samples; the log counts as
-    having reached equilibrium when its last quarter rose by less than 5 % of the
-    total rise and less than ``max_late_move_C`` (the mean of its last sixteenth against that of
+    having reached equilibrium when its last quarter rose by less than ``max_late_share`` (5 %) of
+    the total rise and less than ``max_late_move_C`` (the mean of its last sixteenth against that of
     the sixteenth a quarter before its end), and when the rise still to come that this late move
     allows is at most ``max_remaining_C``. Otherwise NaN. A log still moving
     within those bounds gives a final temperature, and a 95 %-rise time, short of
@@ -119,6 +120,10 @@ def measured_equilibrium(
     slowest_mode_min : float or ndarray, shape (S,)
         The slowest mode the rise still to come is bounded with (min), one for every sensor or
         each its own.
+    max_late_share : float
+        The most the last quarter may move, as a share of the total rise (inf: only the bounds in
+        °C hold, as for a check against a tolerance, where a sensor that rose 0.6 °C moving 0.07 °C
+        with a daily room is settled to the check's precision).
 
     Returns
     -------
@@ -156,7 +161,7 @@ def measured_equilibrium(
         pace = float(tau) if math.isfinite(tau) and tau > 0 else DEFAULT_MAX_TIME_CONSTANT_MIN
         to_come = (max(abs(late_rise) - noise, 0.0) + hidden) / max(math.expm1(apart / pace), 1e-12)
         rise = final - start
-        if rise == 0 or abs(late_rise) > min(0.05 * abs(rise), max_late_move_C) or to_come > max_remaining_C:
+        if rise == 0 or abs(late_rise) > min(max_late_share * abs(rise), max_late_move_C) or to_come > max_remaining_C:
             finals.append(np.nan)
             times.append(np.nan)
             continue

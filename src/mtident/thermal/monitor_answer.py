@@ -328,6 +328,13 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Rea
                 f"{c.high_C:.2f} °C, within ±{settings.tolerance_C:g} °C of T∞, but its model is not trusted (its "
                 "warnings say why)"
             )
+        elif c.half_width_C <= settings.tolerance_C:
+            # within the tolerance at its latest check, the second in a row still to come
+            parts.append(
+                f"{c.sensor}: T∞ {c.steady_C:.2f} °C, {settings.decision_level * 100:g} % interval {c.low_C:.2f} to "
+                f"{c.high_C:.2f} °C, within ±{settings.tolerance_C:g} °C of T∞ at its latest check; confirming at its "
+                "next"
+            )
         else:
             bounds = (
                 f"interval {c.low_C:.2f} to {c.high_C:.2f} °C"

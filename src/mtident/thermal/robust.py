@@ -239,6 +239,7 @@ def estimate_sensor(
         reference,
         notes,
         refine_within,
+        max(rise, threshold),
     )
     _say_a_fall(t[onset:], _above_room(y, room_in)[onset:], noise, rounding, room, notes)
     # the floor lifts the low end, never above T∞ itself (the fit's own interval stays around it)
@@ -284,12 +285,13 @@ def _fit_above_floor(
     reference: SensorModes | None,
     notes: _Notes,
     refine_within: float | None,
+    rise: float,
 ) -> tuple[SteadyState, bool, float]:
     """The sensor's fit (:func:`_modal_fit`), whether it used the reference, and the floor a
     warm-up does not come down below (``-inf`` where the fit's T∞ lies below it: not trusted).
     A fit with the reference that puts T∞ below the floor is made again without it.
     ``readings``: the times, readings and room since the warm-up began; ``interval``: the log's
-    sampling interval (min)."""
+    sampling interval (min); ``rise``: the rise so far (an interval wider says nothing)."""
     fit, reference_used = _modal_fit(binned, noise, interval, settings, reference, notes, refine_within)
     floor = overshoot_floor_C(fit, readings, noise, rounding)
     if reference_used and _below_floor(fit, floor):
@@ -302,7 +304,14 @@ def _fit_above_floor(
         )
         fit, reference_used = _modal_fit(binned, noise, interval, settings, None, notes, refine_within)
         floor = overshoot_floor_C(fit, readings, noise, rounding)
-    if _below_floor(fit, floor):
+    if _below_floor(fit, floor, rise) and _wider_than(fit, rise):
+        notes.add(
+            "below-floor",
+            f"its best fit puts T∞ at {fit.steady_C:.2f} °C, below where it already is ({floor:.2f} °C), and a "
+            "warm-up does not come down: too few readings yet to tell where it settles (a T∞ below its readings is "
+            "the fit's, not the sensor's)",
+        )
+    elif _below_floor(fit, floor):
         notes.add(
             "below-floor",
             f"its best fit puts T∞ at {fit.steady_C:.2f} °C, below where it already is ({floor:.2f} °C) by more than "
@@ -595,14 +604,26 @@ def _taus(taus: tuple[float, ...]) -> str:
     return "τ " + ", ".join(f"{x:.3g}" for x in taus) + " min"
 
 
-def _below_floor(fit: SteadyState, floor: float) -> bool:
+def _below_floor(fit: SteadyState, floor: float, rise: float | None = None) -> bool:
     """Whether the fit's T∞ lies below the floor by more than one of its standard errors (from
-    its narrowest interval's upper half-width): the fit describes a warm-up that comes down."""
+    its narrowest interval's upper half-width): the fit describes a warm-up that comes down. With
+    the ``rise`` so far, a fit whose interval is wider than it lies below the floor by any amount:
+    its error says nothing (a real 1-s log 4 min into its warm-up, at 53.1 °C, was given T∞ 31.3 °C
+    with an interval of 31.3 to 258 °C, a curve that comes down by 22 °C, said only "not
+    determined")."""
     if not np.isfinite(floor) or not fit.interval_C:
         return False
+    if rise is not None and _wider_than(fit, rise):
+        return bool(floor > fit.steady_C)
     level = min(fit.interval_C)
     se = (fit.interval_C[level][1] - fit.steady_C) / float(ndtri(0.5 + level / 2.0))
     return bool(floor > fit.steady_C + max(se, 0.0))
+
+
+def _wider_than(fit: SteadyState, rise: float) -> bool:
+    """Whether the fit's narrowest interval is wider than the ``rise`` so far (or unbounded)."""
+    lo, hi = fit.interval_C[min(fit.interval_C)]
+    return not np.isfinite(hi - lo) or hi - lo > rise
 
 
 def overshoot_floor_C(
@@ -626,10 +647,10 @@ def _with_room_wander(
     out = {}
     for q, (lo, hi) in readings.items():
         extra = room_wander_half_width(fit.slowest_time_constant_min(), q, settings)
-        out[q] = (
-            fit.steady_C - float(np.hypot(fit.steady_C - lo, extra)),
-            fit.steady_C + float(np.hypot(hi - fit.steady_C, extra)),
-        )
+        # each end moves out by what the wander adds to its distance from T∞ in quadrature (a low
+        # end lifted above a T∞ that comes down, to where the sensor already is, by the wander itself)
+        below, above = max(fit.steady_C - lo, 0.0), max(hi - fit.steady_C, 0.0)
+        out[q] = (lo - float(np.hypot(below, extra) - below), hi + float(np.hypot(above, extra) - above))
     return out
 
 
