@@ -256,7 +256,7 @@ def test_a_checks_answer_is_on_the_page_while_the_next_checks_fits_run(tmp_path,
     session = WatchSession(log, MonitorSettings(), state_path=tmp_path / "state.npz", resume=False)
     thread = _following(session, log, page, replay=True)
     try:
-        assert held.held.wait(timeout=60.0), "no check past the first 25 rows"
+        assert held.held.wait(timeout=180.0), "no check past the first 25 rows"
         first = held.done[-1]
         shown = wait_until(
             lambda: page.snapshot()[1].get("last_time_min") == first, "the ended check's answer on the page"
@@ -286,7 +286,7 @@ def test_a_live_logs_new_rows_are_on_the_page_while_a_check_runs(tmp_path, monke
     thread = _following(session, log, page, replay=False)
     try:
         try:
-            assert held.held.wait(timeout=60.0), "no check"
+            assert held.held.wait(timeout=180.0), "no check"
             with open(log, "a") as out:
                 out.write("".join(lines[31:]))  # the logger writes on while the check's fits run
             wait_until(lambda: page.snapshot()[1].get("recorded_time_min") == 60.0, "the new rows on the page")
