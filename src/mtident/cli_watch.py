@@ -949,8 +949,8 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     # the settle time is read off the readings less the room, which settle where the readings
     # themselves keep following a moving room: checked against their rise above the room as they
     # follow it where the sensor's modes at the stop give that course, else no level to check
-    followed = hindsight.followed_room
-    with_room = ~np.isfinite(hindsight.settled_C) & np.isfinite(settle_times)
+    followed = hindsight.settled_with_room
+    with_room = hindsight.following_room
     # a sensor that stuck before it settled has no level: its failure, not the log's length
     stuck = ~settled & np.isfinite(hindsight.stuck_since) & ~with_room
     for i, name in enumerate(hindsight.sensors):

@@ -205,7 +205,7 @@ def test_a_sensor_that_keeps_following_a_daily_room_is_checked_against_its_rise_
     )
     steady = check_decision(("S",), np.array([28.0]), 300.0, t, sensor[:, None], 0.2)
     assert np.isnan(steady.settled_C[0])  # the readings themselves keep moving with the room
-    assert right.followed_room[0] and abs(right.error_C[0]) < 0.01 and right.within[0]
+    assert right.settled_with_room[0] and abs(right.error_C[0]) < 0.01 and right.within[0]
     assert wrong.error_C[0] == pytest.approx(0.3, abs=0.01) and not wrong.within[0]
     assert right.to_dict()["sensors"][0]["settled_with_room"] is True
     # without the sensor's modes at the stop there is no course to take out: nothing to check

@@ -568,7 +568,7 @@ def _line(sensor: SensorStatus, readings: np.ndarray, hindsight: Hindsight | Non
     valid = readings[np.isfinite(readings)]
     settled = difference = settle = math.nan
     within: bool | None = None
-    with_room = hindsight is not None and bool(hindsight.checked[s] and hindsight.followed_room[s])
+    with_room = hindsight is not None and bool(hindsight.checked[s] and hindsight.settled_with_room[s])
     if hindsight is not None and bool(hindsight.checked[s]):
         settled = float(hindsight.settled_C[s])
         difference = float(hindsight.error_C[s])

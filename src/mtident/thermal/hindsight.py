@@ -147,7 +147,7 @@ class Hindsight:
         When each sensor's readings stuck at one value for good (min; NaN: they did not; default:
         none did). Its repeats are left out: a sensor that stuck before it settled has no level to
         check, and that is the sensor's failure, not the log's being short.
-    with_room : ndarray of bool, shape (S,), optional
+    settled_above_room : ndarray of bool, shape (S,), optional
         The sensors whose readings keep following a moving room: their ``settled_C`` is where
         their rise above the room, as they follow it through their modes at the stop, settled, at
         the room's course at the log's end (default: none).
@@ -165,7 +165,7 @@ class Hindsight:
     settle_time_min: FloatArray | None = None
     waited: np.ndarray | None = None
     stuck_since_min: FloatArray | None = None
-    with_room: np.ndarray | None = None
+    settled_above_room: np.ndarray | None = None
 
     @property
     def test_settle_time_min(self) -> float:
@@ -235,7 +235,7 @@ class Hindsight:
         return "\n".join(lines)
 
     @property
-    def followed_room(self) -> np.ndarray:
+    def settled_with_room(self) -> np.ndarray:
         """Whether each sensor's settled level is its rise above the room as it follows it (its
         readings keep following a moving room).
 
@@ -243,9 +243,23 @@ class Hindsight:
         -------
         ndarray of bool, shape (S,)
         """
-        if self.with_room is None:
+        if self.settled_above_room is None:
             return np.zeros(len(self.sensors), dtype=bool)
-        return np.asarray(self.with_room, dtype=bool)
+        return np.asarray(self.settled_above_room, dtype=bool)
+
+    @property
+    def following_room(self) -> np.ndarray:
+        """Whether each sensor's readings keep following a moving room with no level to check: a
+        settle time known (of its rise above the room), no settled level.
+
+        Returns
+        -------
+        ndarray of bool, shape (S,)
+        """
+        if self.settle_time_min is None:
+            return np.zeros(len(self.sensors), dtype=bool)
+        following: np.ndarray = ~np.isfinite(self.settled_C) & np.isfinite(np.asarray(self.settle_time_min, float))
+        return following
 
     @property
     def stuck_since(self) -> FloatArray:
@@ -300,16 +314,12 @@ class Hindsight:
         -------
         list of str
         """
-        settle = (
-            np.full(len(self.sensors), np.nan) if self.settle_time_min is None else np.asarray(self.settle_time_min)
-        )
         # readings that keep following a moving room, their settle time known, have not failed to settle
-        following = ~np.isfinite(self.settled_C) & np.isfinite(settle)
         stuck = np.isfinite(self.stuck_since)
         return [
             name
             for name, decided, known, room, failed in zip(
-                self.sensors, np.isfinite(self.steady_state_C), self.checked, following, stuck, strict=True
+                self.sensors, np.isfinite(self.steady_state_C), self.checked, self.following_room, stuck, strict=True
             )
             if decided and not known and not room and not failed
         ]
@@ -369,7 +379,7 @@ class Hindsight:
                     settle_time_min=float(settle[i]),
                     waited_for=bool(waited[i]),
                     stuck_since_min=float(self.stuck_since[i]),
-                    settled_with_room=bool(self.followed_room[i]),
+                    settled_with_room=bool(self.settled_with_room[i]),
                 )
                 for i, name in enumerate(self.sensors)
             ),
@@ -496,7 +506,7 @@ def check_decision(
         settle_time_min=_settle_times(time_min, values, courses, above, room_C, settled, tolerance_C),
         waited=None if waited is None else np.asarray(waited, dtype=bool),
         stuck_since_min=None if all(math.isnan(v) for v in stuck) else np.array(stuck, dtype=float),
-        with_room=with_room if with_room is not None and with_room.any() else None,
+        settled_above_room=with_room if with_room is not None and with_room.any() else None,
     )
 
 
