@@ -602,6 +602,7 @@ class _Shown:
         self.last_forecast = self.last_picture = self.last_plot = 0.0
         self.last_line = time.monotonic()
         self.rooms_said = False
+        self.replay_said = False
 
     def say_rooms(self, session: WatchSession) -> None:
         """Once the sensors are known and before the checks' warnings (a replay's first poll holds
@@ -626,9 +627,12 @@ class _Shown:
         elif self.replay and session.state is not None and time.monotonic() - self.last_line > _PIPE_PROGRESS_S:
             self.last_line = time.monotonic()
             ready, count = sum(check.may_stop for check in session.state.checks), len(session.state.checks)
+            # the checks' own lines come when the replay's read of the log ends, after these
+            later = "" if self.replay_said else " (what each check said follows once the log is read)"
+            self.replay_said = True
             stderr.print(
                 f"mtident: replayed to t = {minutes(session.state.readings.latest_min)}; {ready} of {count} "
-                f"sensor{'' if count == 1 else 's'} may stop",
+                f"sensor{'' if count == 1 else 's'} may stop{later}",
                 highlight=False,
             )
         if self.page is not None:

@@ -15,18 +15,51 @@ from mtident.thermal.readings import display_resolution, noise_sigma, quick_esti
 
 def test_a_room_is_taken_over_the_longest_window_it_follows_within_its_noise():
     """A steady room flickering between two 0.05 °C steps is taken as its two-hour line (the
-    flicker gone); one wandering ±0.1 °C over a few hours, read to 0.01 °C with 0.02 °C of noise,
-    as a shorter line that follows the wander."""
+    flicker gone); one wandering ±0.1 °C within an hour and a half, read to 0.01 °C with 0.02 °C of
+    noise, over a shorter window that follows the wander."""
     from mtident.thermal.readings import room_input, room_trend
 
     rng = np.random.default_rng(5)
     t = np.arange(0.0, 400.0, 0.5)
     flicker = np.round((17.435 + rng.normal(0.0, 0.0076, t.size)) * 20.0) / 20.0
     assert np.ptp(flicker) == pytest.approx(0.05) and np.ptp(room_input(t, flicker)[40:-40]) < 0.02
-    wander = 18.0 + 0.1 * np.sin(2.0 * np.pi * t / 150.0)
+    wander = 18.0 + 0.1 * np.sin(2.0 * np.pi * t / 80.0)
     taken = room_input(t, np.round(wander + rng.normal(0.0, 0.02, t.size), 2))
     assert np.max(np.abs(taken - wander)[40:-40]) < 0.03
-    assert np.max(np.abs(room_trend(t, wander, 120.0) - wander)[40:-40]) > 0.05  # the two-hour line would not
+    assert np.max(np.abs(room_trend(t, wander, 120.0) - wander)[40:-40]) > 0.05  # the two-hour one would not
+
+
+def test_a_daily_room_cycle_keeps_its_swing_in_the_two_hour_trend():
+    """A straight line over two hours takes about 1 % off a daily cycle's swing (0.0034 °C of a
+    ±0.3 °C cycle), which hundreds of readings make a significant slow error of every fit; the
+    local parabola keeps it."""
+    from mtident.thermal.readings import room_trend
+
+    t = np.arange(0.0, 600.0, 0.5)
+    cycle = 20.0 + 0.3 * np.sin(2.0 * np.pi * (t + 300.0) / 1440.0)
+    assert np.max(np.abs(room_trend(t, cycle, 120.0) - cycle)) < 2e-4
+
+
+def test_a_room_trend_bends_with_a_noisy_daily_cycle_but_hardly_with_a_steady_rooms_noise(monkeypatch):
+    """Read at 0.01 °C with 0.01 °C of noise: in a daily cycle the trend's error is under 0.6 times
+    the straight line's (its bias gone); in a steady room, where the line is right, the curvature's
+    term adds little of the noise a full parabola would (the parabola's error is 1.6 times the
+    line's)."""
+    from mtident.thermal import readings
+
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 600.0, 0.5)
+    cycle = 20.0 + 0.3 * np.sin(2.0 * np.pi * (t + 300.0) / 1440.0)
+    courses = {"daily": cycle, "steady": np.full(t.size, 20.0)}
+    read = {kind: np.round(course + rng.normal(0.0, 0.01, t.size), 2) for kind, course in courses.items()}
+
+    def error(kind: str, shrink: float) -> float:
+        monkeypatch.setattr(readings, "CURVATURE_SHRINK", shrink)
+        return float(np.sqrt(np.mean((readings.room_trend(t, read[kind], 120.0) - courses[kind]) ** 2)))
+
+    line, parabola, trend = ({kind: error(kind, k) for kind in courses} for k in (1e12, 0.0, 2.0))
+    assert trend["daily"] < 0.6 * line["daily"]
+    assert parabola["steady"] > 1.4 * line["steady"] and trend["steady"] < 1.25 * line["steady"]
 
 
 def test_a_room_trend_follows_a_drift_to_the_end_through_display_steps_and_gaps():
