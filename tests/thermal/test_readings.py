@@ -60,6 +60,13 @@ def test_a_room_trend_bends_with_a_noisy_daily_cycle_but_hardly_with_a_steady_ro
     line, parabola, trend = ({kind: error(kind, k) for kind in courses} for k in (1e12, 0.0, 2.0))
     assert trend["daily"] < 0.6 * line["daily"]
     assert parabola["steady"] > 1.4 * line["steady"] and trend["steady"] < 1.25 * line["steady"]
+    # a log of 40 days (480 windows) keeps the line: the window's moments would be rounding there
+    days = np.arange(0.0, 40 * 1440.0, 10.0)
+    long_cycle = np.round(20.0 + 0.3 * np.sin(2.0 * np.pi * days / 1440.0) + rng.normal(0.0, 0.01, days.size), 2)
+    monkeypatch.setattr(readings, "CURVATURE_SHRINK", 0.0)
+    bent = readings.room_trend(days, long_cycle, 120.0)
+    monkeypatch.setattr(readings, "CURVATURE_SHRINK", 1e12)
+    np.testing.assert_allclose(bent, readings.room_trend(days, long_cycle, 120.0), atol=1e-9)
 
 
 def test_a_room_trend_follows_a_drift_to_the_end_through_display_steps_and_gaps():

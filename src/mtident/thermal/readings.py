@@ -44,6 +44,8 @@ CURVATURE_SHRINK = 2.0
 """A room trend's curvature is shrunk by this many times its variance over its square: at zero
 curvature the trend keeps a seventh of the noise a parabola adds, and a curvature four times its
 uncertainty a tenth of the squared error a line leaves (:func:`room_trend`)."""
+CURVATURE_SPAN = 150.0
+"""A log longer than this many trend windows (12.5 days of two-hour windows) keeps the straight line."""
 ROOM_WINDOW_SLACK = 1.25
 """A window is short enough where the room's readings stray from its trend by no more than this
 many times their own noise (RMS)."""
@@ -420,7 +422,8 @@ def room_trend(time_min: FloatArray, room_C: FloatArray, window_min: float, nois
         return room.copy()
     noise = room_noise_C(t, room) if noise_C is None else noise_C
     # times scaled to [0, 1] keep the window sums of u⁴ well within double precision
-    u = (t - t[0]) / max(float(t[-1] - t[0]), 1e-9)
+    span = max(float(t[-1] - t[0]), 1e-9)
+    u = (t - t[0]) / span
     n, s1, s2, s3, s4, sy, s1y, s2y = _window_sums(
         t, valid, window_min, np.ones_like(u), u, u**2, u**3, u**4, room, u * room, u * u * room
     )
@@ -438,7 +441,9 @@ def room_trend(time_min: FloatArray, room_C: FloatArray, window_min: float, nois
         line = sy / n + slope * v
         # the curvature's term: v² less its part along 1 and v, q(v) = v² − c2/n − (c3/c2)·v
         q_norm = np.where(sloped, c4 - c2**2 / n - c3**2 / c2, 0.0)
-        curved = sloped & (n >= 3) & (q_norm > 1e-9 * np.maximum(c4, 1e-300))
+        # the window's fourth moment about its mean comes from the log's, which it is a (window/span)⁴
+        # share of: beyond CURVATURE_SPAN windows, rounding would swamp it
+        curved = (span <= CURVATURE_SPAN * window_min) & sloped & (n >= 3) & (q_norm > 1e-9 * np.maximum(c4, 1e-300))
         curvature = np.where(curved, (d2 - c2 / n * sy - c3 / c2 * d1) / q_norm, 0.0)
         variance = np.where(curved, noise**2 / q_norm, 0.0)
         kept = np.where(curved, np.maximum(0.0, 1.0 - CURVATURE_SHRINK * variance / curvature**2), 0.0)
