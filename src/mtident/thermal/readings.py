@@ -320,8 +320,9 @@ def room_input(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
 def room_noise_C(time_min: FloatArray, room_C: FloatArray) -> float:
     """A room sensor's error about its course (°C): its noise (:func:`noise_sigma`) and its display
     step's q/√12 together."""
-    step = float(display_resolution(np.asarray(room_C, dtype=float)[:, None])[0])
-    return math.hypot(float(noise_sigma(np.asarray(room_C, dtype=float)[:, None], time_min)[0]), step / math.sqrt(12.0))
+    column = np.asarray(room_C, dtype=float)[:, None]
+    step = float(display_resolution(column)[0])
+    return math.hypot(float(noise_sigma(column, time_min)[0]), step / math.sqrt(12.0))
 
 
 COARSE_ROOM_STEP_C = 0.05
@@ -421,7 +422,8 @@ def room_trend(time_min: FloatArray, room_C: FloatArray, window_min: float, nois
     if not len(t):
         return room.copy()
     noise = room_noise_C(t, room) if noise_C is None else noise_C
-    # times scaled to [0, 1] keep the window sums of u⁴ well within double precision
+    # times scaled to [0, 1]; the window's moments are still a (window/span)⁴ share of the log's
+    # (CURVATURE_SPAN below)
     span = max(float(t[-1] - t[0]), 1e-9)
     u = (t - t[0]) / span
     n, s1, s2, s3, s4, sy, s1y, s2y = _window_sums(
