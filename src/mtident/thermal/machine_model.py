@@ -72,10 +72,11 @@ no more than the readings ask: the shift of the level that fitting the lag would
 the model's path, and the whole share held such tests open until a turn of the cycle)."""
 ROOM_RESPONSE_SHARE = 0.3
 """A learnt room response's own error (one sd): this share of the room's effect on the sensor, in
-quadrature with the reference's standard error (the model is a truncation)."""
+quadrature with the reference's standard error (the model is a truncation); of it a test counts
+what its readings cannot tell and no more than they ask (:func:`_learnt_allowance`)."""
 ROOM_RESPONSE_LAG_SHARE = 0.5
 """And this share of the lag's sd without a learnt response (:data:`ROOM_LAG_SHARE`): the drift's
-lag, which a reference's daily cycle does not show."""
+lag, which a reference's daily cycle does not show; counted likewise."""
 ROOM_STATIC_SD = 0.05
 """The prior sd of a sensor's static gain on the room (one) in its learnt room gains."""
 ROOM_SHOWN_C = 0.05
@@ -619,7 +620,7 @@ def _fit_tied(
     long_enough = t[-1] - origin_min >= max(CONTRADICTION_MIN_MIN, 0.5 * max(model.time_constants_min))
     lag_sd = _room_lag_sd(t, room_C, max(model.time_constants_min)) if room_lag else 0.0
     known = _known_room(model, sensors, fitted, taus, lag_sd if room_lag else None)
-    fitted.update({s: bin_ for s, (bin_, _, _) in known.items()})
+    fitted.update({s: k.binned for s, k in known.items()})
     # a sensor whose room response the model knows has the room taken out and its course's error
     # added; the others fit the room through the modes, each with a lag of its own
     lag_share = ROOM_LAG_SHARE if room_lag else 0.0
@@ -635,7 +636,8 @@ def _fit_tied(
         if len(used) < 2:
             return None
         bins = [fitted[s] for s in used]
-        passes = _tied_solve(bins, gains[used], noise[used], taus, tau_sd, own, lag_share)
+        known_lag = {j: (known[s].lag_column, known[s].course) for j, s in enumerate(used) if s in known}
+        passes = _tied_solve(bins, gains[used], noise[used], taus, tau_sd, own, lag_share, known_lag)
         if passes is None:
             return None
         at_model, solved = passes
@@ -644,7 +646,7 @@ def _fit_tied(
         if excess[worst] <= chdtri(max(int((~own).sum()), 1), REJECT_P):
             break
         rejected.append(used[worst])
-    solved, steady, half = _profiled(bins, gains[used], noise[used], model, solved, levels, own, lag_share)
+    solved, steady, half = _profiled(bins, gains[used], noise[used], model, solved, levels, own, lag_share, known_lag)
     if _departed(solved.taus, taus, tau_sd):
         return None
     # the tie holds (the shapes), but the time constants do not: a machine of other time constants
@@ -655,10 +657,16 @@ def _fit_tied(
     # the room's lag (its readings' part and this) leaves of the whole allowance, and no more than
     # the readings ask the path to move the level by
     whole = np.sqrt(np.clip(np.minimum((ROOM_TRUNCATION_SHARE * lag_sd) ** 2, lag_sd**2 - solved.lag_var), 0, None))
-    own_lag = np.minimum(whole, np.abs(solved.lag_shift))
-    lag = np.array([known[s][1] if s in known else own_lag[j] for j, s in enumerate(used)])
+    lag = np.array(
+        [
+            _learnt_allowance(known[s], lag_sd, solved, j) if s in known else min(whole[j], abs(solved.lag_shift[j]))
+            for j, s in enumerate(used)
+        ]
+    )
     half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag) for level, h in half.items()}
-    room_gains = [known[s][2] if s in known else row for s, row in zip(used, _room_gains_of(solved), strict=True)]
+    room_gains = [
+        known[s].room_gains if s in known else row for s, row in zip(used, _room_gains_of(solved), strict=True)
+    ]
     latest_room = 0.0 if room_C is None else float(np.asarray(room_C)[np.isfinite(room_C)][-1])
     placed = _Placed(len(sensors), used)
     return MachineFit(
@@ -684,39 +692,81 @@ def _departed(fitted: FloatArray, taus: FloatArray, tau_sd: FloatArray) -> bool:
     return bool(np.any(np.abs(np.log(fitted[held] / taus[held])) > TAU_DEPARTURE_SDS * tau_sd[held]))
 
 
+def _learnt_allowance(known: _KnownRoom, lag_sd: float, solved: _Solved, j: int) -> float:
+    """How far a learnt room path may put sensor ``j``'s level off (one sd, °C), besides the lag's
+    variance the fit counts: the reference's standard error, and of the course's scale error and a
+    drift's lag each what the readings cannot tell (the variance one more column would add) and
+    of the rest of its allowance no more than they ask (the shift that column would make). A daily
+    cycle's readings show the path and leave little of either; a drift's cannot, and leave both."""
+    lag_whole = math.sqrt(max((ROOM_RESPONSE_LAG_SHARE * lag_sd) ** 2 - solved.lag_var[j], 0.0))
+    scale_whole = math.sqrt(max(known.share_sd**2 - solved.response_var[j], 0.0))
+    return math.hypot(
+        known.late_sd,
+        math.sqrt(solved.response_var[j]),
+        min(scale_whole, abs(solved.response_shift[j])),
+        min(lag_whole, abs(solved.lag_shift[j])),
+    )
+
+
+@dataclass(frozen=True)
+class _KnownRoom:
+    """A sensor whose room response the model knows: its readings with the room's course through
+    that response taken out; how far that course may be off (one sd, °C, the most over the later
+    half of the readings; none in the reference run itself) by the reference's standard error and
+    by :data:`ROOM_RESPONSE_SHARE` of itself; its room gains per mode (its fast modes none); the
+    room's course through the slowest mode less the room (the column a lag of its own on a drift
+    would take) and the course itself (the column of an error in its scale)."""
+
+    binned: Binned
+    late_sd: float
+    share_sd: float
+    room_gains: tuple[float, ...]
+    lag_column: FloatArray
+    course: FloatArray
+
+
 def _known_room(
     model: MachineModel,
     sensors: tuple[str, ...] | list[str],
     fitted: dict[int, Binned],
     taus: FloatArray,
     lag_sd: float | None,
-) -> dict[int, tuple[Binned, float, tuple[float, ...]]]:
-    """The sensors whose room response the model knows well enough here: per sensor its readings
-    with the room's course through that response taken out (no room left to fit), how far that
-    course may be off (one sd, °C) and its room gains per mode (its fast modes none).
+) -> dict[int, _KnownRoom]:
+    """The sensors whose room response the model knows well enough here.
 
-    The course may be off by the reference's standard error, :data:`ROOM_RESPONSE_SHARE` of
-    itself (the most over the later half of the readings), and :data:`ROOM_RESPONSE_LAG_SHARE` of
-    ``lag_sd``, the lag counted without a learnt response: a reference run's room shows the
-    response at its own frequencies (a daily cycle), and a drift's lag is the response at none,
-    which a machine whose room reaches a sensor through a chain of bodies sets beyond the slowest
-    time constant. A sensor whose course would be less certain than ``lag_sd`` is left to the
-    fitted room factors; ``lag_sd`` None: the reference run itself, every learnt response used."""
+    The course may be off by the reference's standard error and :data:`ROOM_RESPONSE_SHARE` of
+    itself (the most over the later half of the readings), and by a lag of its own of up to
+    :data:`ROOM_RESPONSE_LAG_SHARE` of ``lag_sd``, the lag counted without a learnt response: a
+    reference run's room shows the response at its own frequencies (a daily cycle), and a drift's
+    lag is the response at none, which a machine whose room reaches a sensor through a chain of
+    bodies sets beyond the slowest time constant (how much of it the readings ask for:
+    :func:`_fit_tied`). A sensor whose course could be less certain than ``lag_sd`` is left to
+    the fitted room factors; ``lag_sd`` None: the reference run itself, every learnt response
+    used."""
     if not model.room_gains:
         return {}
     gains, cov = model.room_response(sensors)
-    out: dict[int, tuple[Binned, float, tuple[float, ...]]] = {}
+    slowest = int(np.argmax(taus))
+    out: dict[int, _KnownRoom] = {}
     for s, b in fitted.items():
         if b.room_C is None or not np.all(np.isfinite(gains[s])):
             continue
         R = _room_columns(b, taus)
         course = R @ gains[s]
-        sd = np.hypot(np.sqrt(np.clip(np.einsum("bk,kl,bl->b", R, cov[s], R), 0, None)), ROOM_RESPONSE_SHARE * course)
-        late = float(np.max(sd[b.time_min >= 0.5 * b.time_min[-1]]))
-        off = 0.0 if lag_sd is None else math.hypot(late, ROOM_RESPONSE_LAG_SHARE * lag_sd)
-        if lag_sd is None or off < lag_sd:
+        se = np.sqrt(np.clip(np.einsum("bk,kl,bl->b", R, cov[s], R), 0, None))
+        sd = np.hypot(se, ROOM_RESPONSE_SHARE * course)
+        later = b.time_min >= 0.5 * b.time_min[-1]
+        late = float(np.max(sd[later]))
+        if lag_sd is None or math.hypot(late, ROOM_RESPONSE_LAG_SHARE * lag_sd) < lag_sd:
             row = (*map(float, gains[s]), *(0.0,) * len(FAST_TIME_CONSTANTS_MIN))
-            out[s] = (replace(b, value_C=b.value_C - b.room_C - course, room_C=None), off, row)
+            out[s] = _KnownRoom(
+                replace(b, value_C=b.value_C - b.room_C - course, room_C=None),
+                0.0 if lag_sd is None else float(np.max(se[later])),
+                0.0 if lag_sd is None else ROOM_RESPONSE_SHARE * float(np.max(np.abs(course[later]))),
+                row,
+                R[:, slowest],
+                course,
+            )
     return out
 
 
@@ -785,6 +835,8 @@ class _Solved:
     room_gains: FloatArray
     lag_var: FloatArray
     lag_shift: FloatArray
+    response_var: FloatArray
+    response_shift: FloatArray
 
 
 def _tied_solve(
@@ -795,6 +847,7 @@ def _tied_solve(
     tau_sd: FloatArray,
     own: np.ndarray,
     lag_share: float,
+    known_lag: dict[int, tuple[FloatArray, FloatArray]],
     room_delay_min: float = 0.0,
 ) -> tuple[_Solved, _Solved] | None:
     """The joint penalised least squares, in two passes: the first at ``taus`` (which the test of
@@ -816,6 +869,7 @@ def _tied_solve(
         (first.amplitudes, tau_sd),
         own,
         lag_share=lag_share,
+        known_lag=known_lag,
         room_delay_min=room_delay_min,
     )
     return None if second is None else (first, second)
@@ -830,6 +884,7 @@ def _profiled(
     levels: tuple[float, ...],
     own: np.ndarray,
     lag_share: float,
+    known_lag: dict[int, tuple[FloatArray, FloatArray]],
 ) -> tuple[_Solved, FloatArray, dict[float, FloatArray]]:
     """The fit and its intervals with each loose time constant (a box wider than ``LOOSE_BOX``,
     too wide to linearise) profiled: held in turn at points across its box, the interval the hull
@@ -843,7 +898,7 @@ def _profiled(
         for f in PROFILE_POINTS:
             moved = taus.copy()
             moved[k] *= (1.0 + model.box[k]) ** f
-            solved = _tied_solve(bins, gains, noise, moved, tau_sd, own, lag_share)
+            solved = _tied_solve(bins, gains, noise, moved, tau_sd, own, lag_share, known_lag)
             if solved is not None:
                 candidates.append(solved[1])
     stated = len(candidates)
@@ -851,7 +906,7 @@ def _profiled(
     # with more, the factors mix the modes into a later path or an earlier one
     if len(taus) == 1 and any(b.room_C is not None for b in bins):
         for share in ROOM_PATH_DELAYS:
-            solved = _tied_solve(bins, gains, noise, taus, tau_sd, own, lag_share, share * float(taus.max()))
+            solved = _tied_solve(bins, gains, noise, taus, tau_sd, own, lag_share, known_lag, share * float(taus.max()))
             if solved is not None:
                 candidates.append(solved[1])
     chi2 = np.array([c.chi2_per_sensor.sum() / max(float(np.max(c.corr)), 1.0) for c in candidates])
@@ -887,6 +942,7 @@ def _penalised(
     own: np.ndarray,
     untied: int | None = None,
     lag_share: float = 0.0,
+    known_lag: dict[int, tuple[FloatArray, FloatArray]] | None = None,
     room_delay_min: float = 0.0,
 ) -> _Solved | None:
     """Columns: per sensor its level and fast modes; per mode its amplitude ``z_k``; per sensor
@@ -894,7 +950,10 @@ def _penalised(
     (the amplitudes (S, K) and each log time constant's prior sd), per mode its log time
     constant's change. Sensor ``untied`` (if given) has no prior on its slack: its amplitudes are
     its own; so has every sensor on the modes ``own`` marks (:func:`_own_amplitudes`). With
-    ``lag_share``, each sensor's level carries its own lag on the room too (:func:`_lag_variance`)."""
+    ``lag_share``, each sensor's level carries its own lag on the room too (:func:`_lag_variance`);
+    one whose room response is known (its lag's column and course in ``known_lag``) a lag beyond
+    that response, at :data:`ROOM_RESPONSE_LAG_SHARE` of the share, and an error in the course's
+    scale, at :data:`ROOM_RESPONSE_SHARE`."""
     S, K = gains.shape
     F = len(FAST_TIME_CONSTANTS_MIN)
     with_room = any(b.room_C is not None for b in bins)
@@ -904,7 +963,8 @@ def _penalised(
     i_tau = i_eta + (K if with_room else 0)
     n_col = i_tau + (K if linearised is not None else 0)
     blocks, targets = [], []
-    lag_columns: dict[int, FloatArray] = {}
+    lag_columns: dict[int, tuple[FloatArray, float]] = {}
+    response_columns: dict[int, tuple[FloatArray, float]] = {}
     for s, b in enumerate(bins):
         u = b.time_min
         X = np.zeros((len(u), n_col))
@@ -918,7 +978,10 @@ def _penalised(
             room = _room_columns(b, taus, room_delay_min)
             X[:, i_eta : i_eta + K] = room * gains[s][None, :]
             if lag_share > 0:
-                lag_columns[s] = room[:, int(np.argmax(taus))] * w
+                lag_columns[s] = (room[:, int(np.argmax(taus))] * w, lag_share)
+        elif lag_share > 0 and known_lag and s in known_lag:
+            lag_columns[s] = (known_lag[s][0] * w, ROOM_RESPONSE_LAG_SHARE * lag_share)
+            response_columns[s] = (known_lag[s][1] * w, ROOM_RESPONSE_SHARE)
         if linearised is not None:
             # d/d(log τ) of −a·e^(−u/τ); the room's lags move less and are left at the model's τ
             X[:, i_tau : i_tau + K] = -linearised[0][s][None, :] * e * (u[:, None] / taus[None, :])
@@ -972,7 +1035,8 @@ def _penalised(
         gains * z[None, :] + coef[i_d : i_d + S * K].reshape(S, K),
         coef[i_fast : i_fast + S * F].reshape(S, F),
         gains * eta[None, :],
-        *_lag_variance(blocks, targets, coef, lag_columns, cov, lag_share, S),
+        *_lag_variance(blocks, targets, coef, lag_columns, cov, S),
+        *_lag_variance(blocks, targets, coef, response_columns, cov, S),
     )
 
 
@@ -980,23 +1044,23 @@ def _lag_variance(
     blocks: list[FloatArray],
     targets: list[FloatArray],
     coef: FloatArray,
-    columns: dict[int, FloatArray],
+    columns: dict[int, tuple[FloatArray, float]],
     cov: FloatArray,
-    share: float,
     count: int,
 ) -> tuple[FloatArray, FloatArray]:
-    """Per sensor, the variance its level would gain from one more column of its own: the room's
-    course through the slowest mode less the room (weighted as its block), its coefficient's prior
-    sd ``share`` (a lag behind a ramp of ``share`` times the rate times the slowest time constant),
-    and the shift of the level that column's fit would make. A drift's lag cannot be told from a
-    lower T∞ and adds its whole prior; a daily cycle's shows in the readings and adds less. The
+    """Per sensor, the variance its level would gain from one more column of its own (weighted as
+    its block), such as the room's course through the slowest mode less the room, with its
+    coefficient's prior sd ``share`` (a lag behind a ramp of ``share`` times the rate times the
+    slowest time constant), and the shift of the level that column's fit would make. A drift's lag
+    cannot be told from a lower T∞ and adds its whole prior; a daily cycle's shows in the readings
+    and adds less. The
     level itself stays where the fit puts it: the column's own estimate takes up misfit that is not
     the room's. One update of rank one per sensor: ``v = C·Xᵀc``, ``d = cᵀc + 1/share² − cᵀX·v``;
     the level's variance grows by ``v_s²/d``, and it would move by ``−v_s·cᵀr/d`` (``r``: the
     sensor's weighted residuals)."""
     out = np.zeros(count)
     shift = np.zeros(count)
-    for s, column in columns.items():
+    for s, (column, share) in columns.items():
         b = blocks[s].T @ column
         v = cov @ b
         d = float(column @ column) + share**-2 - float(b @ v)
