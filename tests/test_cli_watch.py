@@ -346,8 +346,8 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     )
     text = _printed_hindsight(hindsight, capsys)
     assert (
-        "the room moved +0.05 °C from the stop to the end; each sensor follows its course through its modes, +0.05 °C "
-        "added to T∞ at the stop" in text
+        "the room moved +0.05 °C from the stop to the end; each sensor follows the room late, through its modes (its "
+        "moves before the stop too), +0.05 °C added to T∞ at the stop" in text
     )
     assert "T∞ at stop + room (°C)" in text
     # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
@@ -429,11 +429,23 @@ def test_watch_says_when_no_expected_stop_was_found(tmp_path):
     t = np.arange(0.0, 30.0, 0.5)
     log = tmp_path / "early.csv"
     log.write_text(csv_text(t, {"S": noisy(20.0 + 8.0 * (1.0 - np.exp(-t / 60.0)), 5)}))
-    code, out, _ = mtident("thermal", "watch", str(log), "--replay", "--state", str(tmp_path / "s.npz"))
+    code, out, err = mtident("thermal", "watch", str(log), "--replay", "--state", str(tmp_path / "s.npz"))
     assert code == 0 and "Not yet" in out
+    # and where it left its state (a newcomer found the file beside the log unannounced)
+    assert f"the state is in {tmp_path / 's.npz'}; --resume continues from there" in " ".join(err.split()), err
     text = " ".join(out.split())
-    assert "Expected stop: none found; S has none on the best model's course" in text, text
+    assert "Expected stop: none found; S (undetermined) has none on the best model's course" in text, text
     assert "Expected stop: t ≈" not in out
+
+
+def test_the_other_sensors_expected_stops_read_as_one_or_a_range():
+    """A newcomer's trial read 'the others' come at t ≈ 913 min to 913 min' of one sensor."""
+    from mtident.cli_watch import _others_stops
+
+    assert _others_stops([]) == ""
+    assert _others_stops([913]) == "; the other's comes at t ≈ 913 min"
+    assert _others_stops([913, 913]) == "; the others' come at t ≈ 913 min"
+    assert _others_stops([800, 913]) == "; the others' come at t ≈ 800 min to 913 min"
 
 
 @pytest.mark.slow

@@ -452,6 +452,9 @@ def watch(request: WatchRequest) -> None:
         )
     if interrupted or terminated.is_set():
         sys.exit(130)  # a shell's convention for SIGINT: the test was not decided here
+    if session.state_path.is_file():
+        resumes = "--resume continues from there" if follow.replay else "the same command resumes from there"
+        stderr.print(f"mtident: the state is in {session.state_path}; {resumes} (--state: elsewhere)", highlight=False)
     if request.exit_code and not session.stopped:
         sys.exit(UNDECIDED_EXIT)
 
@@ -850,18 +853,26 @@ def _answer(
     elif expected is not None and outcome.decision != "stop":
         waited = [s for s in outcome.sensors if s.waited_for]
         stops = {s.sensor: s.expected_stop_time_min or math.nan for s in waited}
-        none = [name for name, stop in stops.items() if not math.isfinite(stop)]
-        found = [stop for stop in stops.values() if math.isfinite(stop)]
+        status = {s.sensor: s.status for s in waited}
+        none = [f"{name} ({status[name]})" for name, stop in stops.items() if not math.isfinite(stop)]
+        found = sorted(round(stop) for stop in stops.values() if math.isfinite(stop))
         who = f"{', '.join(none)} {'has' if len(none) == 1 else 'have'}" if none else "a sensor waited for has"
-        others = (
-            f"; the others' come at t ≈ {minutes(round(min(found)))} to {minutes(round(max(found)))}" if found else ""
-        )
         console.print(
-            f"Expected stop: none found; {who} none on the best model's course (its interval does not come "
-            "within the tolerance there, or its status gives no course to go on: "
-            f"no fit yet, off its reference, a misfit, silent, stuck){others}.",
+            f"Expected stop: none found; {who} none on the best model's course (the interval does not come "
+            f"within the tolerance there, or the status gives no course to go on){_others_stops(found)}.",
             highlight=False,
         )
+
+
+def _others_stops(found: list[int]) -> str:
+    """Where the other sensors waited for expect their stops (``found``: sorted minutes)."""
+    if not found:
+        return ""
+    if len(found) == 1:
+        return f"; the other's comes at t ≈ {minutes(found[0])}"
+    if found[0] == found[-1]:
+        return f"; the others' come at t ≈ {minutes(found[0])}"
+    return f"; the others' come at t ≈ {minutes(found[0])} to {minutes(found[-1])}"
 
 
 def _status_table(session: WatchSession, path: Path) -> Table:
@@ -934,8 +945,8 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     # a room level again at the end can still have moved the sensors, which follow it late
     moved = bool(len(added) and np.any(added != 0.0))
     room = (
-        f"; the room moved {shift:+.2f} °C from the stop to the end; each sensor follows its course through "
-        f"its modes, {_span(added)} °C added to T∞ at the stop"
+        f"; the room moved {shift:+.2f} °C from the stop to the end; each sensor follows the room late, through "
+        f"its modes (its moves before the stop too), {_span(added)} °C added to T∞ at the stop"
         if moved
         else ""
     )
