@@ -789,6 +789,24 @@ def test_learn_warns_of_a_mode_whose_box_reaches_the_largest_time_constant_searc
     assert not any("largest time constant searched" in w for w in warnings), warnings
 
 
+def test_a_sensors_mode_reaching_the_limit_is_one_line_where_the_machine_model_pins_the_slowest_below_it():
+    """A newcomer's clean run of a machine whose slowest mode is 239 min: four sensors' own fits
+    each advised a larger limit, while the machine model pinned the mode at 232 min."""
+    from mtident.thermal.machine_model import MachineModel
+    from mtident.thermal.reference import _reaching_words
+
+    reaching = {"motor": "motor: a mode ... (raise)", "column": "column: a mode ... (raise)", "spare": "spare: (raise)"}
+    model = MachineModel(("motor", "column"), (246.3, 104.9, 26.8), (0.05, 0.05, 0.08), ((-1.0,) * 3,) * 2)
+    words = _reaching_words(reaching, model, 300.0)
+    assert words[0] == "spare: (raise)" and len(words) == 2
+    assert words[1].startswith("motor, column: their own fit leaves the slowest mode loose up to the largest time")
+    assert "the machine model pins it at 246 min ±5%" in words[1] and "raise" not in words[1]
+    # a model whose slowest box reaches the limit, or none: each sensor's own warning
+    loose = MachineModel(("motor", "column"), (290.0, 104.9), (0.05, 0.05), ((-1.0,) * 2,) * 2)
+    assert _reaching_words(reaching, loose, 300.0) == list(reaching.values())
+    assert _reaching_words(reaching, None, 300.0) == list(reaching.values())
+
+
 def test_sensors_whose_run_pins_down_too_few_modes_are_said_in_one_warning():
     """A clean six-sensor run printed one such warning per sensor among thirteen: a new user read
     a good reference as a list of alarms. One sensor keeps its own line; several share one."""

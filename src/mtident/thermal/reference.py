@@ -339,6 +339,7 @@ def learn_reference(
     settings = settings or RobustSettings()
     sensors: dict[str, SensorModes] = {}
     loose: dict[str, tuple[int, int, str]] = {}
+    reaching: dict[str, str] = {}
     warnings: list[str] = _room_candidates(log.sensors) if room_C is None else []
     room_step = 0.0 if room_C is None else coarse_room_step_C(log.time_min, room_C)
     for s, name in enumerate(log.sensors):
@@ -365,13 +366,14 @@ def learn_reference(
         elif ceiling >= 0.98 * limit:
             # a box that reaches the limit holds a mode the run cannot tell from one at it
             centre, box = max(zip(centres, boxes, strict=True), key=lambda cb: cb[0] * (1.0 + cb[1]))
-            warnings.append(
+            reaching[name] = (
                 f"{name}: a mode of {centre:.3g} min ±{box:.0%}, which reaches the largest time constant searched "
                 f"({limit:g} min): the run cannot tell it from one at that limit, and the machine may have a "
                 "slower one (raise `max_time_constant_min`)"
             )
     warnings[len(warnings) : len(warnings)] = _loose_modes_words(loose)
     model, said = _learn_machine(log, room_C, settings)
+    warnings.extend(_reaching_words(reaching, model, settings.max_time_constant_min))
     sensors, split = split_merged_modes(sensors, model)
     warnings.extend(split)
     warnings.extend(said)
@@ -381,6 +383,27 @@ def learn_reference(
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors, machine_model=model
     ), warnings
+
+
+def _reaching_words(reaching: dict[str, str], model: MachineModel | None, limit_min: float) -> list[str]:
+    """The warnings of sensors whose own slowest mode's box reaches the largest time constant
+    searched; those the machine model holds, where it pins its slowest mode below that limit, in
+    one line: the model's modes are what a test uses, and the machine has no slower mode that the
+    run shows (a newcomer's clean run gave four such warnings, each advising a larger limit, for a
+    machine whose slowest mode of 239 min the model pinned at 232)."""
+    if model is None or max(t * (1.0 + b) for t, b in zip(model.time_constants_min, model.box, strict=True)) >= (
+        0.98 * limit_min
+    ):
+        return list(reaching.values())
+    held = [name for name in reaching if name in model.sensors]
+    slowest = int(np.argmax(model.time_constants_min))
+    pinned = (
+        f"{', '.join(held)}: {'its' if len(held) == 1 else 'their'} own fit leaves the slowest mode loose up to the "
+        f"largest time constant searched ({limit_min:g} min), but the machine model pins it at "
+        f"{model.time_constants_min[slowest]:.3g} min ±{model.box[slowest]:.0%}; a test uses the model (the sensor's "
+        "own modes, their box held, only where a test falls back on them)"
+    )
+    return [words for name, words in reaching.items() if name not in held] + ([pinned] if held else [])
 
 
 ROOM_MOVED_C = 0.15

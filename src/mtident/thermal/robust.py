@@ -737,9 +737,9 @@ def _verdict(
     if onset_min is not None:
         notes.add(
             "late-start",
-            f"flat until t = {round(onset_min, 1):g} min, within its noise (the warm-up began after the log, its "
-            "heat reached this sensor only then, or a partly warm sensor moved too slowly to show sooner); the modes "
-            "are counted from there",
+            f"flat until t = {round(onset_min, 1):g} min, within its noise (the heat reached this sensor only then, "
+            "as it reaches one far from the heat; the warm-up began after the log; or a partly warm sensor moved too "
+            "slowly to show sooner); the modes are counted from there",
         )
     if misfit:
         ok = False
