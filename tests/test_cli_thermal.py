@@ -792,6 +792,16 @@ def test_sensors_that_take_the_same_modes_from_one_run_share_a_line():
         "    T1, T2: τ 88 min ±10%",
         "    T3: τ 95 min ±10%",
     ]
+    # the machine model's words once (a newcomer read one 60-word sentence six times)
+    model = "; and the machine model: every sensor fitted together, its 3 shared modes"
+    held = [(name, text + model) for name, text in said] + [("T3", "run (2026-11-24): τ 95 min ±10%")]
+    assert reference_lines(held) == [
+        "  reference: run (2026-11-24)",
+        "    T1, T2: τ 88 min ±10% (and the machine model)",
+        "    T3: τ 95 min ±10%",
+        "    and the machine model, for T1, T2: every sensor fitted together, its 3 shared modes",
+    ]
+    assert reference_lines(held[:2])[-1].startswith("    and the machine model, for every sensor above: every")
     other_run = [*said, ("T3", "run.csv: no modes for this sensor")]
     assert reference_lines(other_run) == [f"  reference for {name}: {text}" for name, text in other_run]
 

@@ -722,9 +722,14 @@ def _identify_table(
         console.print(line, highlight=False)
 
 
+MACHINE_MARK = "; and the machine model: "
+"""Where a sensor's reference words go on to the machine model's (:func:`~mtident.thermal.assumptions.assumptions`)."""
+
+
 def reference_lines(said: list[tuple[str, str]]) -> list[str]:
     """What each sensor's answer takes from the reference, as lines under "Assumes": the run said
-    once where every sensor's is the same run, sensors that take the same modes on one line.
+    once where every sensor's is the same run, sensors that take the same modes on one line, the
+    machine model's words once below them.
 
     Parameters
     ----------
@@ -740,12 +745,19 @@ def reference_lines(said: list[tuple[str, str]]) -> list[str]:
     runs = {run for _, run, _ in parts}
     if len(parts) < 2 or len(runs) > 1 or not all(modes for _, _, modes in parts):
         return [f"  reference for {name}: {text}" for name, text in said]
+    # the machine model's words, the same for every sensor it holds, said once below them
+    model_words = {modes.partition(MACHINE_MARK)[2] for _, _, modes in parts if MACHINE_MARK in modes}
+    shared = model_words.pop() if len(model_words) == 1 else ""
     names_by_modes: dict[str, list[str]] = {}
+    held: list[str] = []
     for name, _, modes in parts:
+        if shared and modes.endswith(MACHINE_MARK + shared):
+            modes, held = modes[: -len(MACHINE_MARK + shared)] + " (and the machine model)", [*held, name]
         names_by_modes.setdefault(modes, []).append(name)
-    return [f"  reference: {runs.pop()}"] + [
-        f"    {', '.join(names)}: {modes}" for modes, names in names_by_modes.items()
-    ]
+    lines = [f"  reference: {runs.pop()}"]
+    lines += [f"    {', '.join(names)}: {modes}" for modes, names in names_by_modes.items()]
+    every = "every sensor above" if len(held) == len(parts) else ", ".join(held)
+    return lines + ([f"    and the machine model, for {every}: {shared}"] if shared else [])
 
 
 def _float_list(text: str, option: str) -> list[float]:
