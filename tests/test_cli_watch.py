@@ -790,3 +790,27 @@ def test_a_replay_into_a_pipe_says_how_far_it_has_read(tmp_path, monkeypatch):
     assert code == 0, err
     said = re.findall(r"mtident: replayed to t = (\d+) min; (\d) of 1 sensor may stop", err)
     assert len(said) >= 2 and [int(t) for t, _ in said] == sorted(int(t) for t, _ in said)
+
+
+def test_a_replays_plot_draws_the_readings_after_the_stop_apart(monkeypatch, tmp_path):
+    """A newcomer's replayed test stopped at 465 min of a 600-min log, and its picture ended at
+    the stop: the readings after it, which show how the answer held, are drawn apart."""
+    from types import SimpleNamespace
+
+    import mtident.report.plots as plots
+    from mtident.cli_watch import _plot
+    from mtident.thermal.monitor import MonitorSettings, monitor_step
+
+    t = np.arange(0.0, 400.0, 1.0)
+    y = noisy(20.0 + 5.0 * (1.0 - np.exp(-t / 20.0)), 7)[:, None]
+    settings = MonitorSettings()
+    state, _ = monitor_step(new_state(["S"]), t, y, None, settings)
+    assert state.stopped and state.stop_time_min < 300.0
+    drawn = {}
+    monkeypatch.setattr(plots, "plot_monitor", lambda *args, after=None: drawn.update(after=after))
+    _plot(SimpleNamespace(state=state, settings=settings, whole_log=lambda: (t, y, None)), str(tmp_path / "w.png"))
+    after_t, after_y = drawn["after"]
+    assert after_t[0] > state.stop_time_min and after_t[-1] == t[-1] and after_y.shape == (len(after_t), 1)
+    monkeypatch.undo()  # the real one draws them, labelled
+    figure = plots.plot_monitor(state, settings, after=(after_t, after_y))
+    assert any(line.get_label() == "after the stop" for line in figure.axes[0].get_lines())

@@ -928,8 +928,15 @@ def _status_words(check: SensorCheck) -> str:
 def _plot(session: WatchSession, plot_path: str) -> None:
     from mtident.report.plots import plot_monitor
 
-    assert session.state is not None
-    plot_monitor(session.state, session.settings, plot_path)
+    state = session.state
+    assert state is not None
+    after = None
+    if state.stopped:
+        # a replayed log runs on past the stop: the readings after it show how the answer held
+        time_min, values, _ = session.whole_log()
+        later = time_min > state.stop_time_min
+        after = (time_min[later], values[later]) if later.any() else None
+    plot_monitor(state, session.settings, plot_path, after=after)
 
 
 def _span(values: np.ndarray) -> str:

@@ -411,13 +411,21 @@ def _room_on(readings: Readings, times: np.ndarray) -> np.ndarray:
 
 @overload
 def plot_monitor(
-    state: MonitorState, settings: MonitorSettings, path: None = None, expected: dict[str, float] | None = None
+    state: MonitorState,
+    settings: MonitorSettings,
+    path: None = None,
+    expected: dict[str, float] | None = None,
+    after: tuple[FloatArray, FloatArray] | None = None,
 ) -> Figure: ...
 
 
 @overload
 def plot_monitor(
-    state: MonitorState, settings: MonitorSettings, path: str | Path, expected: dict[str, float] | None = None
+    state: MonitorState,
+    settings: MonitorSettings,
+    path: str | Path,
+    expected: dict[str, float] | None = None,
+    after: tuple[FloatArray, FloatArray] | None = None,
 ) -> Path: ...
 
 
@@ -426,6 +434,7 @@ def plot_monitor(
     settings: MonitorSettings,
     path: str | Path | None = None,
     expected: dict[str, float] | None = None,
+    after: tuple[FloatArray, FloatArray] | None = None,
 ) -> Path | Figure:
     """Each sensor's readings so far, its best model's course on from there, the T∞ intervals
     (95 % and the decision's), and the stop or the expected stop.
@@ -441,6 +450,8 @@ def plot_monitor(
     expected : dict of str to float, optional
         Sensor name → expected stop (min), drawn where finite and the test has not stopped
         (:meth:`~mtident.thermal.session.WatchSession.expected_stops`).
+    after : (ndarray (T,), ndarray (T, S)), optional
+        A replayed log's readings after the stop (min, °C), drawn apart from those the decision saw.
 
     Returns
     -------
@@ -450,6 +461,8 @@ def plot_monitor(
     fig, axes = grid(len(state.sensors))
     for s, ax in enumerate(axes):
         draw_monitor_panel(ax, state, settings, s, expected)
+        if after is not None and len(after[0]):
+            ax.plot(after[0], after[1][:, s], ".", ms=2.5, color="tab:blue", alpha=0.4, label="after the stop")
         if s == 0:
             ax.legend(fontsize=7, loc="lower right")
     return _save(fig, path, 100)
