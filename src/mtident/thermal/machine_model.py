@@ -712,8 +712,9 @@ def _learnt_allowance(known: _KnownRoom, lag_sd: float, solved: _Solved, j: int)
 class _KnownRoom:
     """A sensor whose room response the model knows: its readings with the room's course through
     that response taken out; how far that course may be off (one sd, °C, the most over the later
-    half of the readings; none in the reference run itself) by the reference's standard error and
-    by :data:`ROOM_RESPONSE_SHARE` of itself; its room gains per mode (its fast modes none); the
+    half of the readings; none in the reference run itself) by the reference's standard error
+    (``late_sd``) and by :data:`ROOM_RESPONSE_SHARE` of itself (``share_sd``); its room gains per
+    mode (its fast modes none); the
     room's course through the slowest mode less the room (the column a lag of its own on a drift
     would take) and the course itself (the column of an error in its scale)."""
 
@@ -739,8 +740,8 @@ def _known_room(
     :data:`ROOM_RESPONSE_LAG_SHARE` of ``lag_sd``, the lag counted without a learnt response: a
     reference run's room shows the response at its own frequencies (a daily cycle), and a drift's
     lag is the response at none, which a machine whose room reaches a sensor through a chain of
-    bodies sets beyond the slowest time constant (how much of it the readings ask for:
-    :func:`_fit_tied`). A sensor whose course could be less certain than ``lag_sd`` is left to
+    bodies sets beyond the slowest time constant (how much of each a test counts:
+    :func:`_learnt_allowance`). A sensor whose course could be less certain than ``lag_sd`` is left to
     the fitted room factors; ``lag_sd`` None: the reference run itself, every learnt response
     used."""
     if not model.room_gains:
