@@ -32,6 +32,7 @@ from mtident.io.logs import SAMPLES, TemperatureLog, read_temperature_log, sampl
 from mtident.io.time_notes import TIME_UNITS
 from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
+from mtident.thermal.assumptions import MACHINE_MARK
 from mtident.thermal.identification import SensorAnswer
 from mtident.thermal.min_time import MinTimeAnswer, MinTimeResult
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
@@ -722,10 +723,6 @@ def _identify_table(
         console.print(line, highlight=False)
 
 
-MACHINE_MARK = "; and the machine model: "
-"""Where a sensor's reference words go on to the machine model's (:func:`~mtident.thermal.assumptions.assumptions`)."""
-
-
 def reference_lines(said: list[tuple[str, str]]) -> list[str]:
     """What each sensor's answer takes from the reference, as lines under "Assumes": the run said
     once where every sensor's is the same run, sensors that take the same modes on one line, the
@@ -746,13 +743,14 @@ def reference_lines(said: list[tuple[str, str]]) -> list[str]:
     if len(parts) < 2 or len(runs) > 1 or not all(modes for _, _, modes in parts):
         return [f"  reference for {name}: {text}" for name, text in said]
     # the machine model's words, the same for every sensor it holds, said once below them
-    model_words = {modes.partition(MACHINE_MARK)[2] for _, _, modes in parts if MACHINE_MARK in modes}
+    mark = MACHINE_MARK + "the machine model: "
+    model_words = {modes.partition(mark)[2] for _, _, modes in parts if mark in modes}
     shared = model_words.pop() if len(model_words) == 1 else ""
     names_by_modes: dict[str, list[str]] = {}
     held: list[str] = []
     for name, _, modes in parts:
-        if shared and modes.endswith(MACHINE_MARK + shared):
-            modes, held = modes[: -len(MACHINE_MARK + shared)] + " (and the machine model)", [*held, name]
+        if shared and modes.endswith(mark + shared):
+            modes, held = modes[: -len(mark + shared)] + " (and the machine model)", [*held, name]
         names_by_modes.setdefault(modes, []).append(name)
     lines = [f"  reference: {runs.pop()}"]
     lines += [f"    {', '.join(names)}: {modes}" for modes, names in names_by_modes.items()]

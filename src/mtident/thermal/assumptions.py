@@ -73,6 +73,11 @@ def describe_assumptions(
     )
 
 
+MACHINE_MARK = "; and "
+"""Where a sensor's reference words go on to the machine model's (``MachineModel.describe``), which
+a listing of many sensors says once (:func:`mtident.cli_thermal.reference_lines`)."""
+
+
 def _machine_words(reference: MachineReference, sensor: str) -> str:
     model = reference.machine_model
-    return "" if model is None or sensor not in model.sensors else f"; and {model.describe()}"
+    return "" if model is None or sensor not in model.sensors else f"{MACHINE_MARK}{model.describe()}"

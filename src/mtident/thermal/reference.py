@@ -363,7 +363,7 @@ def learn_reference(
                 f"{name}: a mode at the largest time constant searched ({limit:g} min): the "
                 "machine may have a slower one (raise `max_time_constant_min`)"
             )
-        elif ceiling >= 0.98 * limit:
+        elif _reaches(centres, boxes, limit):
             # a box that reaches the limit holds a mode the run cannot tell from one at it
             centre, box = max(zip(centres, boxes, strict=True), key=lambda cb: cb[0] * (1.0 + cb[1]))
             reaching[name] = (
@@ -385,15 +385,18 @@ def learn_reference(
     ), warnings
 
 
+def _reaches(centres: tuple[float, ...], boxes: tuple[float, ...], limit_min: float) -> bool:
+    """Whether a box of these modes reaches the largest time constant searched (within 2 %)."""
+    return max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True)) >= 0.98 * limit_min
+
+
 def _reaching_words(reaching: dict[str, str], model: MachineModel | None, limit_min: float) -> list[str]:
     """The warnings of sensors whose own slowest mode's box reaches the largest time constant
     searched; those the machine model holds, where it pins its slowest mode below that limit, in
     one line: the model's modes are what a test uses, and the machine has no slower mode that the
     run shows (a newcomer's clean run gave four such warnings, each advising a larger limit, for a
     machine whose slowest mode of 239 min the model pinned at 232)."""
-    if model is None or max(t * (1.0 + b) for t, b in zip(model.time_constants_min, model.box, strict=True)) >= (
-        0.98 * limit_min
-    ):
+    if model is None or _reaches(model.time_constants_min, model.box, limit_min):
         return list(reaching.values())
     held = [name for name in reaching if name in model.sensors]
     slowest = int(np.argmax(model.time_constants_min))
