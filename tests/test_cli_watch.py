@@ -814,3 +814,26 @@ def test_a_replays_plot_draws_the_readings_after_the_stop_apart(monkeypatch, tmp
     monkeypatch.undo()  # the real one draws them, labelled
     figure = plots.plot_monitor(state, settings, after=(after_t, after_y))
     assert any(line.get_label() == "after the stop" for line in figure.axes[0].get_lines())
+
+
+def test_a_replay_that_stops_reads_the_whole_log_again_once_for_its_picture_and_hindsight(monkeypatch, tmp_path):
+    """The picture's readings after the stop and the hindsight table came from two reads of the
+    whole log; both take the one read."""
+    import mtident.report.plots as plots
+    from mtident.thermal.session import WatchSession
+
+    reads = []
+    whole_log = WatchSession.whole_log
+    monkeypatch.setattr(WatchSession, "whole_log", lambda self: reads.append(1) or whole_log(self))
+    drawn = {}
+    monkeypatch.setattr(plots, "plot_monitor", lambda *args, after=None: drawn.update(after=after))
+    t = np.arange(0.0, 400.0)
+    log = tmp_path / "w.csv"
+    log.write_text(csv_text(t, {"S": noisy(20.0 + 5.0 * (1.0 - np.exp(-t / 20.0)), 7)}))
+    code, out, err = mtident(
+        "thermal", "watch", str(log), "--replay", "--room-wander", "0", "--state", str(tmp_path / "s"),
+        "--plot", str(tmp_path / "w.png"),
+    )  # fmt: skip
+    assert code == 0, err
+    assert "can stop" in out and "Against the rest of the log" in out
+    assert len(reads) == 1 and drawn["after"][0][-1] == t[-1]

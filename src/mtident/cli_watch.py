@@ -432,8 +432,10 @@ def watch(request: WatchRequest) -> None:
         raise InputError(msg)
     # a SIGTERM while the answer is written ends the command once it is written, with a word
     with _sigterm_deferred() as terminated:
+        # the picture's readings after the stop and the replay's hindsight come from one read of the log
+        whole = session.whole_log() if session.state.stopped and (request.plot_path or follow.replay) else None
         if request.plot_path:
-            _plot(session, request.plot_path)
+            _plot(session, request.plot_path, whole)
         # interrupted: the answer without the expected stops, whose forecasts take seconds
         _answer(
             session,
@@ -443,6 +445,7 @@ def watch(request: WatchRequest) -> None:
             live=live and not follow.replay,
             forecast=not interrupted,
             cancel=terminated.is_set,
+            whole=whole,
         )
     if terminated.is_set() and not interrupted:
         stderr.print(
@@ -656,7 +659,9 @@ class _Shown:
         elif isinstance(event, Polled):
             if self.page is not None and (event.rows or event.stopped):
                 self.publish(session)
-            if self.plot_path and (time.monotonic() - self.last_plot > _PLOT_S or event.stopped):
+            # a replay's stop is drawn once the answer is written, from the log's one read after it
+            drawn_after = self.replay and event.stopped
+            if self.plot_path and not drawn_after and (time.monotonic() - self.last_plot > _PLOT_S or event.stopped):
                 _plot(session, self.plot_path)
                 self.last_plot = time.monotonic()
         elif isinstance(event, Waiting):
@@ -774,12 +779,14 @@ def _answer(
     live: bool,
     forecast: bool = True,
     cancel: Callable[[], bool] | None = None,
+    whole: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None,
 ) -> None:
     """The decision: the JSON object, or the table, the verdict and what it rests on (with the
-    expected stops where ``forecast``, unless ``cancel`` stops them)."""
+    expected stops where ``forecast``, unless ``cancel`` stops them); ``whole``: the log already
+    read again whole (:meth:`WatchSession.whole_log`), for the replay's hindsight."""
     outcome = session.answer(with_forecast=forecast, cancel=cancel)
-    # the comparison with the rest of a replayed log reads it again and fits: not after a SIGTERM
-    hindsight = session.hindsight() if replay and not (cancel is not None and cancel()) else None
+    # the comparison with the rest of a replayed log fits again: not after a SIGTERM
+    hindsight = session.hindsight(whole) if replay and not (cancel is not None and cancel()) else None
     if hindsight is not None:
         outcome = replace(
             outcome,
@@ -925,7 +932,10 @@ def _status_words(check: SensorCheck) -> str:
     return check.status
 
 
-def _plot(session: WatchSession, plot_path: str) -> None:
+def _plot(
+    session: WatchSession, plot_path: str, whole: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None
+) -> None:
+    """The monitor's picture; ``whole``: the log already read again whole, else read here once stopped."""
     from mtident.report.plots import plot_monitor
 
     state = session.state
@@ -933,7 +943,7 @@ def _plot(session: WatchSession, plot_path: str) -> None:
     after = None
     if state.stopped:
         # a replayed log runs on past the stop: the readings after it show how the answer held
-        time_min, values, _ = session.whole_log()
+        time_min, values, _ = session.whole_log() if whole is None else whole
         later = time_min > state.stop_time_min
         after = (time_min[later], values[later]) if later.any() else None
     plot_monitor(state, session.settings, plot_path, after=after)
