@@ -283,3 +283,34 @@ def test_a_learnt_room_path_the_test_rejects_is_fitted_again_not_the_reference_r
     t, y, room, _ = _five_nodes((2.85, 0.95), 646.0, 20.6, 0.4, 2.2, warm, seed=23)
     fit = fit_readings(model, names, t, y, room, (0.95, 0.99))
     assert isinstance(fit, MachineFit) and not fit.contradicted
+
+
+@pytest.mark.parametrize("rate_C_per_h", [0.0, 0.15])
+def test_the_room_factors_part_of_a_level_is_what_holding_them_takes_away(monkeypatch, rate_C_per_h):
+    """The part of a sensor's level variance that the room factors carry (which a one-mode model's
+    interval does not widen for the model's error) is the Schur complement's: the level's variance less its
+    variance with the factors held at their prior (sd 1e-6). In a drifting room, whose course
+    through a mode is that mode's shape and a level, it is most of the level's variance; in a
+    steady room none of it."""
+    from helpers import _run_in_room
+
+    import mtident.thermal.machine_model as mm
+
+    model = _model()
+    t, y, room = _run_in_room((0.45, 0.55), 1.2, np.zeros(3), 90.0, lambda t: ROOM_C + rate_C_per_h / 60.0 * t, 5)
+    readings = mm.machine_readings(SENSORS, t, y, room)
+    bins = list(readings.binned)
+    args = (bins, model.gains(SENSORS), np.maximum(readings.noise_C, 1e-4), *mm._centres(model)[:1])
+    own = np.zeros(len(model.time_constants_min), bool)
+    free = mm._penalised(*args, np.ones(len(own)), None, own)
+    monkeypatch.setattr(mm, "ROOM_PRIOR_SHARE", 0.0)
+    monkeypatch.setattr(mm, "ROOM_PRIOR_GAIN", 1e-6 * np.max(np.abs(model.gains(SENSORS)), axis=0).min())
+    held = mm._penalised(*args, np.ones(len(own)), None, own)
+    assert free is not None and held is not None
+    S = len(SENSORS)
+    level = np.diag(free.cov)[:S]
+    np.testing.assert_allclose(free.room_factor_var, level - np.diag(held.cov)[:S], rtol=1e-3, atol=1e-12)
+    if rate_C_per_h:
+        assert np.all(free.room_factor_var > 0.5 * level)
+    else:
+        assert np.all(free.room_factor_var < 0.01 * level)

@@ -332,6 +332,41 @@ def test_a_learnt_room_response_narrows_a_drift_and_a_cycle_stops_either_way_and
     assert np.all(lag["learnt"] >= 0.95 * ROOM_RESPONSE_LAG_SHARE * drift_lag), (lag, drift_lag)
 
 
+def _one_body_in_a_drift(minutes: float, rate_C_per_h: float, seed: int):  # noqa: ANN202
+    """Six sensors of one body (one mode of 20 min, the room entering it with static gain one), read
+    every 10 s (σ 0.01-0.045 °C, to 0.01 °C), in a room drifting ``rate_C_per_h``; and each T∞ at
+    the room's level at every reading."""
+    t = np.arange(0.0, minutes + 1 / 12, 1 / 6)
+    rise, tau = np.array([2.5, 3.0, 2.8, 1.6, 2.2, 3.1]), 20.0
+    room = ROOM_C + rate_C_per_h / 60.0 * t
+    lagged = ROOM_C + rate_C_per_h / 60.0 * (t - tau * (1.0 - np.exp(-t / tau)))
+    x = lagged[:, None] + rise[None, :] * (1.0 - np.exp(-t / tau))[:, None]
+    rng = np.random.default_rng(seed)
+    y = np.round(x + rng.normal(0.0, 1.0, x.shape) * np.array([0.045, 0.02, 0.013, 0.04, 0.03, 0.01]), 2)
+    return t, y, np.round(room + rng.normal(0.0, 0.005, t.shape), 2), room[:, None] + rise[None, :]
+
+
+def test_a_one_mode_machine_in_a_drifting_room_stops_once_its_room_path_is_held_not_widened_twice():
+    """A one-mode machine's interval holds its room path delayed by up to two time constants (the
+    later paths a chain gives): the part of its level's variance the room factors carry is not
+    widened again for the model's error. Learnt in a steady room, the test in a room drifting
+    0.08 °C an hour stops by 30 min (1.5 time constants; widened twice: 73 min), every T∞ within
+    0.03 °C and inside its 99 % interval."""
+    names = [f"S{i}" for i in range(1, 7)]
+    t, y, room, _ = _one_body_in_a_drift(300.0, 0.0, 1)
+    reference, _ = learn_reference(TemperatureLog(t, tuple(names), y, (), "ref.csv"), room)
+    assert reference.machine_model is not None and len(reference.machine_model.time_constants_min) == 1
+    t, y, room, truth = _one_body_in_a_drift(90.0, 0.08, 2)
+    settings = MonitorSettings(tolerance_C=0.2, reference=reference, room_sensor="room")
+    state, _ = monitor_step(new_state(names, with_room=True), t, y, room, settings)
+    assert state.stopped and state.stop_time_min <= 30.0
+    at = int(np.searchsorted(t, state.stop_time_min))
+    error = np.array([c.steady_C for c in state.checks]) - truth[at]
+    assert np.all(np.abs(error) <= 0.03), error
+    assert np.all(np.abs(error) <= np.array([c.half_width_C for c in state.checks]))
+    assert all(c.machine_used for c in state.checks)
+
+
 def test_another_machines_reference_is_dropped_when_most_sensors_reject_its_machine_model(chain_reference):
     """A new user's trial: the reference of a slower machine (every time constant ×1/0.45). Its
     per-sensor modes fitted most sensors by chance, and two said 'may stop' with intervals 0.1-0.8 °C

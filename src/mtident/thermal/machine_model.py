@@ -678,7 +678,7 @@ def _fit_tied(
         placed.rows(_modes_of(solved), ()),
         placed.rows(room_gains, ()) if room_C is not None else (),
         origin_min,
-        room_lag_C=placed.values(np.hypot(lag, np.sqrt(solved.lag_var)), 0.0),
+        room_lag_C=placed.values(np.hypot(lag, np.sqrt(solved.lag_var + solved.room_factor_var)), 0.0),
     )
 
 
@@ -838,6 +838,7 @@ class _Solved:
     lag_shift: FloatArray
     response_var: FloatArray
     response_shift: FloatArray
+    room_factor_var: FloatArray
 
 
 def _tied_solve(
@@ -1038,7 +1039,18 @@ def _penalised(
         gains * eta[None, :],
         *_lag_variance(blocks, targets, coef, lag_columns, cov, S),
         *_lag_variance(blocks, targets, coef, response_columns, cov, S),
+        _room_factor_variance(cov, S, slice(i_eta, i_tau)) if with_room else np.zeros(S),
     )
+
+
+def _room_factor_variance(cov: FloatArray, count: int, factors: slice) -> FloatArray:
+    """Per sensor, the part of its level's variance that the room factors carry: what is left of
+    their prior where the readings cannot tell the room's path (a drift's: its course through a mode
+    is that mode's shape and a level), ``C_lη·C_ηη⁻¹·C_ηl``."""
+    across = cov[:count, factors]
+    carried = np.einsum("sk,sk->s", across, np.linalg.solve(cov[factors, factors], across.T).T)
+    out: FloatArray = np.clip(carried, 0.0, np.diag(cov)[:count])
+    return out
 
 
 def _lag_variance(
@@ -1151,14 +1163,21 @@ def _interval(
     bins: list[Binned], solved: _Solved, levels: tuple[float, ...]
 ) -> tuple[FloatArray, dict[float, FloatArray]]:
     """Each sensor's level and its half-width per level: the covariance's, scaled by the sensor's
-    χ² per degree of freedom where above one and by its residuals' correlation factor, widened
-    for the model's own error (:data:`MODEL_ERROR_FACTOR`, :data:`MODEL_ERROR_FLOOR_C`)."""
+    χ² per degree of freedom where above one and by its residuals' correlation factor; the part
+    the readings set widened for the model's own error (:data:`MODEL_ERROR_FACTOR`,
+    :data:`MODEL_ERROR_FLOOR_C`); the room's lag not, nor, in a model of one mode, the part the
+    room factors carry (:func:`_room_factor_variance`): where the readings cannot tell the room's
+    path (a drift), their prior and the later paths the hull holds already say how far it may be
+    off."""
     S = len(bins)
     steady = solved.coef[:S]
-    dof_scale = np.maximum(1.0, solved.chi2_per_sensor / np.maximum(solved.rows_per_sensor - 3, 1))
-    se = np.sqrt(np.clip(np.diag(solved.cov)[:S], 0, None) * dof_scale * solved.corr)
+    dof_scale = np.maximum(1.0, solved.chi2_per_sensor / np.maximum(solved.rows_per_sensor - 3, 1)) * solved.corr
+    # one mode's room path is held in the hull at later paths too (ROOM_PATH_DELAYS); with more,
+    # the factors are the only freedom the path has, and a truncated model's path is off as its heat's
+    path = solved.room_factor_var if len(solved.taus) == 1 else np.zeros(S)
+    se = np.sqrt(np.clip(np.diag(solved.cov)[:S] - path, 0, None) * dof_scale)
     # the room's lag is a prior's, not the readings': no model error on it
-    se = np.hypot(np.hypot(MODEL_ERROR_FACTOR * se, MODEL_ERROR_FLOOR_C), np.sqrt(solved.lag_var))
+    se = np.hypot(np.hypot(MODEL_ERROR_FACTOR * se, MODEL_ERROR_FLOOR_C), np.sqrt(path * dof_scale + solved.lag_var))
     return steady, {lv: ndtri(0.5 + lv / 2.0) * se for lv in levels}
 
 
