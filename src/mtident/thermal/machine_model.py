@@ -838,7 +838,21 @@ class _Solved:
     lag_shift: FloatArray
     response_var: FloatArray
     response_shift: FloatArray
-    room_factor_var: FloatArray
+    room_factors: slice
+    """The room factors' columns of ``coef`` and ``cov`` (none without a room)."""
+
+    @cached_property
+    def room_factor_var(self) -> FloatArray:
+        """Per sensor, the part of its level's variance that the room factors carry: what is left
+        of their prior where the readings cannot tell the room's path (a drift's: its course through
+        a mode is that mode's shape and a level), ``C_lη·C_ηη⁻¹·C_ηl``."""
+        count, factors = len(self.chi2_per_sensor), self.room_factors
+        if factors.start == factors.stop:
+            return np.zeros(count)
+        across = self.cov[:count, factors]
+        carried = np.einsum("sk,sk->s", across, np.linalg.solve(self.cov[factors, factors], across.T).T)
+        out: FloatArray = np.clip(carried, 0.0, np.diag(self.cov)[:count])
+        return out
 
 
 def _tied_solve(
@@ -1039,18 +1053,8 @@ def _penalised(
         gains * eta[None, :],
         *_lag_variance(blocks, targets, coef, lag_columns, cov, S),
         *_lag_variance(blocks, targets, coef, response_columns, cov, S),
-        _room_factor_variance(cov, S, slice(i_eta, i_tau)) if with_room else np.zeros(S),
+        slice(i_eta, i_tau),
     )
-
-
-def _room_factor_variance(cov: FloatArray, count: int, factors: slice) -> FloatArray:
-    """Per sensor, the part of its level's variance that the room factors carry: what is left of
-    their prior where the readings cannot tell the room's path (a drift's: its course through a mode
-    is that mode's shape and a level), ``C_lη·C_ηη⁻¹·C_ηl``."""
-    across = cov[:count, factors]
-    carried = np.einsum("sk,sk->s", across, np.linalg.solve(cov[factors, factors], across.T).T)
-    out: FloatArray = np.clip(carried, 0.0, np.diag(cov)[:count])
-    return out
 
 
 def _lag_variance(
@@ -1166,7 +1170,7 @@ def _interval(
     χ² per degree of freedom where above one and by its residuals' correlation factor; the part
     the readings set widened for the model's own error (:data:`MODEL_ERROR_FACTOR`,
     :data:`MODEL_ERROR_FLOOR_C`); the room's lag not, nor, in a model of one mode, the part the
-    room factors carry (:func:`_room_factor_variance`): where the readings cannot tell the room's
+    room factors carry (:attr:`_Solved.room_factor_var`): where the readings cannot tell the room's
     path (a drift), their prior and the later paths the hull holds already say how far it may be
     off."""
     S = len(bins)
