@@ -52,6 +52,9 @@ __all__ = [
 BOX_SDS = 3.0
 MAX_BOX_REACH = math.log(100.0)
 MAX_MODE_SD = 0.15
+# a mode, or a mode's box, within 2 % of the largest time constant searched is at that limit: the
+# run cannot tell it from a slower one
+AT_LIMIT_SHARE = 0.98
 # a sensor's modal amplitudes in the machine model may add up to at most this many times its rise
 # (a remote sensor's transfer response has amplitudes of both signs; far beyond, two slow modes
 # cancel, and a test at another heat split extrapolates them wrongly: a stop 0.26 °C off)
@@ -349,7 +352,7 @@ def learn_reference(
             continue
         estimate, centres, boxes, determined = learnt.estimate, learnt.centres, learnt.boxes, learnt.determined
         fit = _fit_of(estimate)
-        ceiling = max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True))
+        ceiling = _ceiling_min(centres, boxes)
         doubt = _doubt(estimate, learnt.one_more, ceiling, learnt.room_reach, learnt.room_followed)
         sensors[name] = SensorModes(centres, boxes, tuple(m.amplitude_C for m in fit.modes), doubt)
         if doubt is None and len(fit.modes) > determined:
@@ -358,12 +361,12 @@ def learn_reference(
             way_on = _way_on(estimate, room_C is not None)
             warnings.append(f"{name}: {doubt}. Later tests will not use this sensor's modes: {way_on}")
         limit = settings.max_time_constant_min
-        if max(m.time_constant_min for m in fit.modes) >= 0.98 * limit:
+        if max(m.time_constant_min for m in fit.modes) >= AT_LIMIT_SHARE * limit:
             warnings.append(
                 f"{name}: a mode at the largest time constant searched ({limit:g} min): the "
                 "machine may have a slower one (raise `max_time_constant_min`)"
             )
-        elif _reaches(centres, boxes, limit):
+        elif ceiling >= AT_LIMIT_SHARE * limit:
             # a box that reaches the limit holds a mode the run cannot tell from one at it
             centre, box = max(zip(centres, boxes, strict=True), key=lambda cb: cb[0] * (1.0 + cb[1]))
             reaching[name] = (
@@ -385,9 +388,9 @@ def learn_reference(
     ), warnings
 
 
-def _reaches(centres: tuple[float, ...], boxes: tuple[float, ...], limit_min: float) -> bool:
-    """Whether a box of these modes reaches the largest time constant searched (within 2 %)."""
-    return max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True)) >= 0.98 * limit_min
+def _ceiling_min(centres: tuple[float, ...], boxes: tuple[float, ...]) -> float:
+    """The slowest time constant these modes' boxes hold (min)."""
+    return max(c * (1.0 + b) for c, b in zip(centres, boxes, strict=True))
 
 
 def _reaching_words(reaching: dict[str, str], model: MachineModel | None, limit_min: float) -> list[str]:
@@ -396,7 +399,7 @@ def _reaching_words(reaching: dict[str, str], model: MachineModel | None, limit_
     one line: the model's modes are what a test uses, and the machine has no slower mode that the
     run shows (a newcomer's clean run gave four such warnings, each advising a larger limit, for a
     machine whose slowest mode of 239 min the model pinned at 232)."""
-    if model is None or _reaches(model.time_constants_min, model.box, limit_min):
+    if model is None or _ceiling_min(model.time_constants_min, model.box) >= AT_LIMIT_SHARE * limit_min:
         return list(reaching.values())
     held = [name for name in reaching if name in model.sensors]
     slowest = int(np.argmax(model.time_constants_min))
