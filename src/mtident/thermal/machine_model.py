@@ -42,7 +42,7 @@ from mtident._typing import FloatArray
 from mtident.thermal.lsq import flat_lead
 from mtident.thermal.modal_search import correlation_factor, room_lag
 from mtident.thermal.modal_types import Binned, Mode, bin_samples
-from mtident.thermal.readings import ROOM_TREND_MIN, display_resolution, noise_sigma, room_trend
+from mtident.thermal.readings import ROOM_LEVEL_FLOOR_C, ROOM_TREND_MIN, display_resolution, noise_sigma, room_trend
 from mtident.thermal.robust import MISFIT_FACTOR
 
 FAST_TIME_CONSTANTS_MIN = (0.7, 2.5)
@@ -100,8 +100,6 @@ MODEL_ERROR_FACTOR = 1.8
 machine, time constants learnt at another heat split), and its error shows in the extrapolation,
 not in the residuals. Calibrated on the development machines (their 95 % intervals at the stop
 covered 88 % without it)."""
-MODEL_ERROR_FLOOR_C = 0.015
-"""And at least this (°C, one sd, in quadrature): the room sensor's and the readings' resolution."""
 PROFILE_POINTS = (-1.0, -0.5, 0.5, 1.0)
 REJECT_P = 1e-3
 CONTRADICTION_MIN_MIN = 10.0
@@ -1169,7 +1167,7 @@ def _interval(
     """Each sensor's level and its half-width per level: the covariance's, scaled by the sensor's
     χ² per degree of freedom where above one and by its residuals' correlation factor; the part
     the readings set widened for the model's own error (:data:`MODEL_ERROR_FACTOR`,
-    :data:`MODEL_ERROR_FLOOR_C`); the room's lag not, nor, in a model of one mode, the part the
+    :data:`~mtident.thermal.readings.ROOM_LEVEL_FLOOR_C`); the room's lag not, nor, in a model of one mode, the part the
     room factors carry (:attr:`_Solved.room_factor_var`): where the readings cannot tell the room's
     path (a drift), their prior and the later paths the hull holds already say how far it may be
     off."""
@@ -1181,7 +1179,7 @@ def _interval(
     path = solved.room_factor_var if len(solved.taus) == 1 else np.zeros(S)
     se = np.sqrt(np.clip(np.diag(solved.cov)[:S] - path, 0, None) * dof_scale)
     # the room's lag is a prior's, not the readings': no model error on it
-    se = np.hypot(np.hypot(MODEL_ERROR_FACTOR * se, MODEL_ERROR_FLOOR_C), np.sqrt(path * dof_scale + solved.lag_var))
+    se = np.hypot(np.hypot(MODEL_ERROR_FACTOR * se, ROOM_LEVEL_FLOOR_C), np.sqrt(path * dof_scale + solved.lag_var))
     return steady, {lv: ndtri(0.5 + lv / 2.0) * se for lv in levels}
 
 

@@ -325,6 +325,14 @@ def room_noise_C(time_min: FloatArray, room_C: FloatArray) -> float:
     return math.hypot(float(noise_sigma(column, time_min)[0]), step / math.sqrt(12.0))
 
 
+ROOM_LEVEL_FLOOR_C = 0.015
+"""The least error (one sd, °C) of a sensor's T∞ at the room's level, where a room sensor sets that
+level: the room sensor's and the readings' resolution, which no length of readings narrows (the
+room's last level is a trend of readings in display steps, and the truth moves with the room's
+true level). Every interval at the room's level carries it in quadrature, a machine model's and a
+sensor's own fit's alike."""
+
+
 COARSE_ROOM_STEP_C = 0.05
 """A room sensor read in steps this coarse or coarser hides the room's slow moves within a step."""
 

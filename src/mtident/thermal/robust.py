@@ -32,6 +32,7 @@ from mtident.thermal.modes import (
     fit_steady_state,
 )
 from mtident.thermal.readings import (
+    ROOM_LEVEL_FLOOR_C,
     display_resolution,
     noise_sigma,
     quantisation_step,
@@ -639,19 +640,29 @@ def overshoot_floor_C(
 def _with_room_wander(
     fit: SteadyState, readings: dict[float, tuple[float, float]], room_measured: bool, settings: RobustSettings
 ) -> dict[float, tuple[float, float]]:
-    """The intervals the readings give, widened by the unmeasured room's wander: the room's random
-    walk over the last slowest-mode time constant (since the warm-up began) is not yet in the
-    readings, and moves the steady state at the room's level with it."""
-    if room_measured or settings.room_wander_C_per_h <= 0 or not fit.determined:
+    """The intervals the readings give, widened by what the room adds that they cannot narrow: an
+    unmeasured room's wander (its random walk over the last slowest-mode time constant, since the
+    warm-up began, is not yet in the readings, and moves the steady state at the room's level with
+    it), or a measured room's level error (:data:`~mtident.thermal.readings.ROOM_LEVEL_FLOOR_C`)."""
+    if not fit.determined or not (room_measured or settings.room_wander_C_per_h > 0):
         return dict(readings)
     out = {}
     for q, (lo, hi) in readings.items():
-        extra = room_wander_half_width(fit.slowest_time_constant_min(), q, settings)
-        # each end moves out by what the wander adds to its distance from T∞ in quadrature (a low
-        # end lifted above a T∞ that comes down, to where the sensor already is, by the wander itself)
+        extra = (
+            float(ndtri(0.5 + q / 2.0)) * ROOM_LEVEL_FLOOR_C
+            if room_measured
+            else room_wander_half_width(fit.slowest_time_constant_min(), q, settings)
+        )
+        # each end moves out by what the room adds to its distance from T∞ in quadrature (a low
+        # end lifted above a T∞ that comes down, to where the sensor already is, by the room's part itself)
         below, above = max(fit.steady_C - lo, 0.0), max(hi - fit.steady_C, 0.0)
-        out[q] = (lo - float(np.hypot(below, extra) - below), hi + float(np.hypot(above, extra) - above))
+        out[q] = (fit.steady_C - _in_quadrature(below, extra), fit.steady_C + _in_quadrature(above, extra))
     return out
+
+
+def _in_quadrature(distance: float, extra: float) -> float:
+    """An interval end's distance from T∞ with ``extra`` added in quadrature (an open end stays open)."""
+    return float(np.hypot(distance, extra)) if np.isfinite(distance) else distance
 
 
 def room_wander_half_width(slowest_time_constant_min: float, level: float, settings: RobustSettings) -> float:

@@ -207,7 +207,7 @@ class SensorEstimate:
     noise_C : float
         The readings' noise (per reading).
     interval_C : dict of float to (float, float)
-        T∞'s interval per level, the room's unmeasured wander included.
+        T∞'s interval per level, the room's unmeasured wander or a logged room's level error included.
     model_ok : bool
         False where the data contradict the model or T∞ is not determined.
     warnings : tuple of str
