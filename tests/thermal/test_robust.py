@@ -475,3 +475,26 @@ def test_a_level_at_the_room_s_keeps_the_room_sensor_s_resolution():
         assert logged.fit.steady_C - logged.fit.interval_C[level][0] < 0.001
         below = logged.fit.steady_C - logged.interval_C[level][0]
         assert below == pytest.approx(z * ROOM_LEVEL_FLOOR_C, rel=0.05)
+
+
+def test_a_late_start_against_the_room_says_so():
+    """A new user's bed sensor rose 0.7 °C with the room, and the answer said "flat until t = 427
+    min": flat against the room, which the words now say (without a room, "flat until")."""
+    t = np.arange(0.0, 300.0)
+    rng = np.random.default_rng(5)
+    room = 20.0 + 0.3 * t / 300.0
+    late = np.where(t < 60.0, 0.0, 2.0 * (1.0 - np.exp(-np.maximum(t - 60.0, 0.0) / 40.0)))
+    y = np.round(room + late + rng.normal(0.0, 0.01, t.size), 2)
+    with_room = estimate_sensor("bed", t, y, np.round(room + rng.normal(0.0, 0.01, t.size), 2))
+    assert [w for w in with_room.warnings if w.startswith("bed: flat against the room until t = ")], with_room.warnings
+    alone = estimate_sensor("bed", t, np.round(20.0 + late + rng.normal(0.0, 0.01, t.size), 2))
+    assert [w for w in alone.warnings if w.startswith("bed: flat until t = ")], alone.warnings
+
+
+def test_two_temperatures_are_said_to_as_many_decimals_as_tell_them_apart():
+    """"below where it already is": T∞ 20.79 °C below 20.79 °C, in a new user's trial."""
+    from mtident.thermal.robust import _apart
+
+    assert _apart(20.7912, 20.7937) == ("20.791", "20.794")
+    assert _apart(20.5, 20.79) == ("20.50", "20.79")
+    assert _apart(20.79001, 20.79002) == ("20.7900", "20.7900")

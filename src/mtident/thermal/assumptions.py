@@ -18,6 +18,7 @@ def describe_assumptions(
     reference: MachineReference | None,
     sensor: str,
     room_measured: bool = False,
+    machine_used: bool = True,
 ) -> Assumptions:
     """What a sensor's interval rests on, in words.
 
@@ -33,6 +34,10 @@ def describe_assumptions(
         The sensor whose reference modes are described.
     room_measured : bool
         Room readings were given (under ``room_sensor``'s name, or unnamed).
+    machine_used : bool
+        The sensor's answer comes with the reference's machine model (the words then say it);
+        False where the answer is its own fit's (a sensor identified alone, or one the model left
+        out).
 
     Returns
     -------
@@ -69,7 +74,7 @@ def describe_assumptions(
     return Assumptions(
         settings.max_time_constant_min,
         room,
-        f"{reference.describe(sensor)}; {faster}{_machine_words(reference, sensor)}",
+        f"{reference.describe(sensor)}; {faster}{_machine_words(reference, sensor) if machine_used else ''}",
     )
 
 

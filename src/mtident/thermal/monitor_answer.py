@@ -21,7 +21,9 @@ from mtident.thermal.robust_types import Assumptions, ends_at_the_largest
 __all__ = ["SensorStatus", "WatchAnswer", "answer", "assumptions", "failure_words", "result", "silent_words"]
 
 
-def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = False) -> Assumptions:
+def assumptions(
+    settings: MonitorSettings, sensor: str, room_measured: bool = False, machine_used: bool = True
+) -> Assumptions:
     """What a sensor's interval rests on, as the answer says it.
 
     Parameters
@@ -32,13 +34,17 @@ def assumptions(settings: MonitorSettings, sensor: str, room_measured: bool = Fa
         The sensor whose reference modes, if any, are described.
     room_measured : bool
         The monitor is given the room's readings (named or not by ``settings.room_sensor``).
+    machine_used : bool
+        The sensor's answer comes with the machine model (default: what the reference holds).
 
     Returns
     -------
     Assumptions
         The model, the largest time constant (min), how the room entered, and the reference.
     """
-    return describe_assumptions(settings.robust, settings.room_sensor, settings.reference, sensor, room_measured)
+    return describe_assumptions(
+        settings.robust, settings.room_sensor, settings.reference, sensor, room_measured, machine_used
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -462,7 +468,7 @@ def _sensor_status(c: SensorCheck, settings: MonitorSettings, expected: float, r
         model_ok=c.model_ok,
         warnings=c.warnings,
         interval_ends=c.ends,
-        assumptions=assumptions(settings, c.sensor, room_measured),
+        assumptions=assumptions(settings, c.sensor, room_measured, c.machine_used),
         reference_used=c.reference_used,
         machine_model_used=c.machine_used,
         expected_stop_time_min=expected,

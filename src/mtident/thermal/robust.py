@@ -249,7 +249,7 @@ def estimate_sensor(
     misfit = fit.correlation_factor > MISFIT_FACTOR and (
         misfit_beyond_C <= 0.0 or _systematic_C(fit, binned, noise) > misfit_beyond_C
     )
-    ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, misfit, notes)
+    ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, misfit, notes, room is not None)
     return SensorEstimate(
         sensor,
         "estimated",
@@ -297,30 +297,40 @@ def _fit_above_floor(
     floor = overshoot_floor_C(fit, readings, noise, rounding)
     if reference_used and _below_floor(fit, floor):
         # the reference's modes make this warm-up come down to its T∞: they are not this sensor's
+        steady, already = _apart(fit.steady_C, floor)
         notes.add(
             "reference-disagrees",
-            f"with the reference's modes its T∞ would be {fit.steady_C:.2f} °C, below where it already is "
-            f"({floor:.2f} °C) by more than the fit's own error, and a warm-up does not come down: has the machine "
-            "changed, or is the reference another machine's? This answer does not use it",
+            f"with the reference's modes its T∞ would be {steady} °C, below where it already is ({already} °C) by "
+            "more than the fit's own error, and a warm-up does not come down: has the machine changed, or is the "
+            "reference another machine's? This answer does not use it",
         )
         fit, reference_used = _modal_fit(binned, noise, interval, settings, None, notes, refine_within)
         floor = overshoot_floor_C(fit, readings, noise, rounding)
+    steady, already = _apart(fit.steady_C, floor)
     if _below_floor(fit, floor, rise) and _wider_than(fit, rise):
         notes.add(
             "below-floor",
-            f"its best fit puts T∞ at {fit.steady_C:.2f} °C, below where it already is ({floor:.2f} °C), and a "
-            "warm-up does not come down: too few readings yet to tell where it settles (a T∞ below its readings is "
-            "the fit's, not the sensor's)",
+            f"its best fit puts T∞ at {steady} °C, below where it already is ({already} °C), and a warm-up does not "
+            "come down: too few readings yet to tell where it settles (a T∞ below its readings is the fit's, not the "
+            "sensor's)",
         )
     elif _below_floor(fit, floor):
         notes.add(
             "below-floor",
-            f"its best fit puts T∞ at {fit.steady_C:.2f} °C, below where it already is ({floor:.2f} °C) by more than "
-            "the fit's own error, and a warm-up does not come down: the fit does not describe this sensor's warm-up "
-            "(a heat input that changed, a sensor that cooled); its interval is the fit's own, not trusted",
+            f"its best fit puts T∞ at {steady} °C, below where it already is ({already} °C) by more than the fit's "
+            "own error, and a warm-up does not come down: the fit does not describe this sensor's warm-up (a heat "
+            "input that changed, a sensor that cooled); its interval is the fit's own, not trusted",
         )
         floor = -np.inf
     return fit, reference_used, floor
+
+
+def _apart(low: float, high: float) -> tuple[str, str]:
+    """Two temperatures (°C) to as many decimals (two to four) as it takes to tell them apart."""
+    for decimals in (2, 3):
+        if f"{low:.{decimals}f}" != f"{high:.{decimals}f}":
+            return f"{low:.{decimals}f}", f"{high:.{decimals}f}"
+    return f"{low:.4f}", f"{high:.4f}"
 
 
 # a fall from the highest level said: beyond this many times the floor's margin, and this share of the rise
@@ -740,15 +750,17 @@ def _verdict(
     onset_min: float | None,
     misfit: bool,
     notes: _Notes,
+    room_measured: bool = False,
 ) -> bool:
     """``model_ok`` of one fitted sensor; its warnings go to ``notes``. ``misfit``: residuals
     correlated beyond :data:`MISFIT_FACTOR` (and beyond what :func:`estimate_sensor`'s
-    ``misfit_beyond_C`` allows)."""
+    ``misfit_beyond_C`` allows); ``room_measured``: the onset is of the readings less the room."""
     ok = fit.determined and not UNTRUSTING_CODES & set(notes.codes)
     if onset_min is not None:
+        flat = "flat against the room" if room_measured else "flat"
         notes.add(
             "late-start",
-            f"flat until t = {round(onset_min, 1):g} min, within its noise (the heat reached this sensor only then, "
+            f"{flat} until t = {round(onset_min, 1):g} min, within its noise (the heat reached this sensor only then, "
             "as it reaches one far from the heat; the warm-up began after the log; or a partly warm sensor moved too "
             "slowly to show sooner); the modes are counted from there",
         )

@@ -278,7 +278,8 @@ def identify_robust(
         details=RobustDetails(
             estimates=estimates,
             assumptions=tuple(
-                describe_assumptions(settings, room_sensor, reference, name, room_C is not None) for name in log.sensors
+                describe_assumptions(settings, room_sensor, reference, e.sensor, room_C is not None, e.machine_used)
+                for e in estimates
             ),
         ),
     )
