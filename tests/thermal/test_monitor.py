@@ -39,7 +39,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal import identify, minimal_identification_time
-from mtident.thermal.machine_model import ROOM_RESPONSE_LAG_SHARE
+from mtident.thermal.machine_model import ROOM_LAG_SHARE, ROOM_RESPONSE_LAG_SHARE
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
 from mtident.thermal.readings import stuck_since
 from mtident.thermal.reference import MachineReference, learn_reference
@@ -328,7 +328,7 @@ def test_a_learnt_room_response_narrows_a_drift_and_a_cycle_stops_either_way_and
         lag[label] = np.array([c.room_lag_C for c in state.checks])
     assert np.all(half["learnt"] < 0.5 * half["fitted"]), half
     # but the drift's lag keeps its half: the readings cannot tell it
-    drift_lag = 0.1 / 60.0 * max(reference.machine_model.time_constants_min)
+    drift_lag = ROOM_LAG_SHARE * 0.1 / 60.0 * max(reference.machine_model.time_constants_min)
     assert np.all(lag["learnt"] >= 0.95 * ROOM_RESPONSE_LAG_SHARE * drift_lag), (lag, drift_lag)
 
 

@@ -60,9 +60,12 @@ TAU_DEPARTURE_SDS = 1.5 * TAU_BOX_SDS
 does not follow the machine model (:func:`_departed`)."""
 LOOSE_BOX = 0.3
 """A time constant whose box is wider than this is profiled, not linearised."""
-ROOM_LAG_SHARE = 1.0
+ROOM_LAG_SHARE = 0.6
 """The share of the room's rate times the slowest time constant taken as the prior sd of each
-sensor's own lag behind the room (:func:`_lag_variance`): what the readings cannot tell of it."""
+sensor's own lag behind the room (:func:`_lag_variance`): what the readings cannot tell of it. A
+machine lags a drifting room by the rate times each sensor's mean delay, ``C·(−A)⁻¹·1``, which
+``benchmarks/study_room_lag.py`` finds between 0.30 and 2.47 of the slowest time constant over the
+development machines' sensors (median 1.01): within 2.5 sd of one time constant at this share."""
 ROOM_TRUNCATION_SHARE = 0.5
 """And at most this share of it for the model's truncation, within the whole (the lag's variance and
 this no more than the square of the rate times the slowest time constant): a model of fewer modes
