@@ -666,13 +666,14 @@ def _with_room_wander(
         # each end moves out by what the room adds to its distance from T∞ in quadrature (a low
         # end lifted above a T∞ that comes down, to where the sensor already is, by the room's part itself)
         below, above = max(fit.steady_C - lo, 0.0), max(hi - fit.steady_C, 0.0)
-        out[q] = (fit.steady_C - _in_quadrature(below, extra), fit.steady_C + _in_quadrature(above, extra))
+        out[q] = (lo - _widening(below, extra), hi + _widening(above, extra))
     return out
 
 
-def _in_quadrature(distance: float, extra: float) -> float:
-    """An interval end's distance from T∞ with ``extra`` added in quadrature (an open end stays open)."""
-    return float(np.hypot(distance, extra)) if np.isfinite(distance) else distance
+def _widening(distance: float, extra: float) -> float:
+    """How far an interval end at ``distance`` from T∞ moves out with ``extra`` added in quadrature
+    (an open end stays where it is)."""
+    return float(np.hypot(distance, extra) - distance) if np.isfinite(distance) else 0.0
 
 
 def room_wander_half_width(slowest_time_constant_min: float, level: float, settings: RobustSettings) -> float:
