@@ -106,6 +106,39 @@ def test_combined_estimate_takes_the_overlap_or_holds_both_where_they_disagree()
     assert disputed.warnings[-1].startswith(f"s: the machine model puts T∞ at {hi + 1.0:.2f} °C, outside")
 
 
+def test_a_machine_model_that_puts_a_heated_sensor_below_the_room_is_not_held():
+    """A new user's early check: the machine model put a column sensor's T∞ 2 °C below the room,
+    and the sensor's interval was widened to hold it, a value no warm-up reaches. The sensor keeps
+    its own answer, and says why."""
+    t = np.arange(0.0, 60.0, 0.5)
+    rng = np.random.default_rng(2)
+    room = 20.0 + rng.normal(0.0, 0.01, len(t))
+    own = estimate_sensor("s", t, 20.0 + 5.0 * (1.0 - np.exp(-t / 10.0)) + rng.normal(0, 0.01, len(t)), room)
+    assert own.fit is not None and own.fit.room_level_C is not None and own.steady_C > own.fit.room_level_C
+    below = MachineFit(
+        np.array([18.5]),
+        {0.95: np.array([0.2]), 0.99: np.array([0.3])},
+        np.array([True]),
+        (),
+        np.ones(1),
+        ((Mode(10.0, -5.0),),),
+    )
+    kept = combined_estimate(own, below, 0, {})
+    assert not kept.machine_used and kept.interval_C == own.interval_C and kept.steady_C == own.steady_C
+    assert kept.warning_codes[-1] == "machine-disagrees"
+    assert kept.warnings[-1] == (
+        "s: the machine model puts T∞ at 18.50 °C (below the room, 20.00 °C, where a heated machine does not "
+        "settle), outside this sensor's own interval: this sensor's answer is its own fit's"
+    )
+    # reaching above the room, its part above the room is held (the low end widened to the room's level)
+    reaching = replace(below, half_width_C={0.95: np.array([1.4]), 0.99: np.array([1.6])})
+    held = combined_estimate(own, reaching, 0, {})
+    room = own.fit.room_level_C
+    assert held.interval_C[0.99] == (room, own.interval_C[0.99][1])
+    assert held.interval_C[0.95] == own.interval_C[0.95]  # 18.5 + 1.4 is below the room
+    assert held.warnings[-1].endswith("its interval holds both above the room")
+
+
 def test_a_direction_the_readings_leave_open_keeps_its_variance():
     """Two columns the readings cannot tell apart: a pseudo-inverse would call both known."""
     from mtident.thermal.machine_model import _least_squares

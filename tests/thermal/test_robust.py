@@ -492,7 +492,7 @@ def test_a_late_start_against_the_room_says_so():
 
 
 def test_two_temperatures_are_said_to_as_many_decimals_as_tell_them_apart():
-    """"below where it already is": T∞ 20.79 °C below 20.79 °C, in a new user's trial."""
+    """A new user's trial said "below where it already is" of T∞ 20.79 °C below 20.79 °C."""
     from mtident.thermal.robust import _apart
 
     assert _apart(20.7912, 20.7937) == ("20.791", "20.794")

@@ -5,6 +5,7 @@ it (:func:`combined_estimate`) where the two agree, or widened to hold both wher
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from mtident._threads import one_blas_thread
@@ -56,7 +57,9 @@ def combined_estimate(
     lag or a room path), and the sensor keeps its own T∞ with each interval the hull of the two,
     and says so. Its own T∞ need not lie in the machine model's interval: it is the less certain
     of the two. ``wander`` widens the machine model's half-widths by the room's unmeasured wander
-    per level.
+    per level. Where the sensor's own fit puts T∞ above a measured room's level, the machine
+    model's interval is held only above that level, where a heated machine settles
+    (:func:`_disputed`).
     """
     if fit is None or estimate.fit is None or not fit.used[s] or _CONTRADICTED & set(estimate.warning_codes):
         return estimate
@@ -96,16 +99,29 @@ def _disputed(estimate: SensorEstimate, steady: float, half: dict[float, float])
     """The sensor's own answer where the machine model's T∞ lies outside its interval: each
     interval widened to hold the machine model's too (a PT100 behind its own lag, fitted alone in
     a room read in coarse steps, said "may stop" 0.22 °C off while the machine model held the
-    truth), and said."""
+    truth), and said.
+
+    Where the sensor's own fit puts T∞ above a measured room's level, only the part of the machine
+    model's interval above that level is held: a heated machine settles above its room (every
+    equilibrium is the room's level plus ``(−A)⁻¹`` times a heat input, both non-negative), and a
+    new user's early check held a column sensor's test open for a T∞ 2 °C below the room. Where
+    no part is above it, the sensor's interval is its own."""
     assert estimate.fit is not None  # combined_estimate's caller has a fit
-    intervals = {
-        level: (min(lo, steady - half[level]), max(hi, steady + half[level]))
-        for level, (lo, hi) in estimate.interval_C.items()
-    }
-    text = (
-        f"{estimate.sensor}: the machine model puts T∞ at {steady:.2f} °C, outside this sensor's own interval: "
-        "its interval holds both"
-    )
+    room = estimate.fit.room_level_C
+    floor = room if room is not None and estimate.steady_C > room else -math.inf
+    intervals = {}
+    for level, (lo, hi) in estimate.interval_C.items():
+        low, high = max(steady - half[level], floor), steady + half[level]
+        intervals[level] = (min(lo, low), max(hi, high)) if high >= low else (lo, hi)
+    below = f" (below the room, {room:.2f} °C, where a heated machine does not settle)" if steady < floor else ""
+    if intervals == estimate.interval_C:
+        held = "this sensor's answer is its own fit's"
+    elif math.isfinite(floor) and steady - max(half.values()) < floor:
+        held = "its interval holds both above the room"
+    else:
+        held = "its interval holds both"
+    text = f"{estimate.sensor}: the machine model puts T∞ at {steady:.2f} °C{below}, outside this sensor's own "
+    text += f"interval: {held}"
     own = estimate.fit
     ends = {level: _ends(own.modes, own.steady_C, lo, hi) for level, (lo, hi) in intervals.items()}
     return replace(
