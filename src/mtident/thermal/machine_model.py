@@ -1169,11 +1169,11 @@ def _interval(
 ) -> tuple[FloatArray, dict[float, FloatArray]]:
     """Each sensor's level and its half-width per level: the covariance's, scaled by the sensor's
     χ² per degree of freedom where above one and by its residuals' correlation factor; the part
-    the readings set widened for the model's own error (:data:`MODEL_ERROR_FACTOR`,
-    :data:`~mtident.thermal.readings.ROOM_LEVEL_FLOOR_C`); the room's lag not, nor, in a model of one mode, the part the
-    room factors carry (:attr:`_Solved.room_factor_var`): where the readings cannot tell the room's
-    path (a drift), their prior and the later paths the hull holds already say how far it may be
-    off."""
+    the readings set widened for the model's own error (:data:`MODEL_ERROR_FACTOR`) and kept above
+    the room's level error (:data:`~mtident.thermal.readings.ROOM_LEVEL_FLOOR_C`); the room's lag
+    not, nor, in a model of one mode, the part the room factors carry
+    (:attr:`_Solved.room_factor_var`): where the readings cannot tell the room's path (a drift),
+    their prior and the later paths the hull holds already say how far it may be off."""
     S = len(bins)
     steady = solved.coef[:S]
     dof_scale = np.maximum(1.0, solved.chi2_per_sensor / np.maximum(solved.rows_per_sensor - 3, 1)) * solved.corr

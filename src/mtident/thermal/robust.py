@@ -245,7 +245,7 @@ def estimate_sensor(
     _say_a_fall(t[onset:], _above_room(y, room_in)[onset:], noise, rounding, room, notes)
     # the floor lifts the low end, never above T∞ itself (the fit's own interval stays around it)
     readings = {q: (min(max(lo, floor), fit.steady_C), hi) for q, (lo, hi) in fit.interval_C.items()}
-    intervals = _nested(_with_room_wander(fit, readings, room_C is not None, settings))
+    intervals = _nested(_with_room_error(fit, readings, room_C is not None, settings))
     misfit = fit.correlation_factor > MISFIT_FACTOR and (
         misfit_beyond_C <= 0.0 or _systematic_C(fit, binned, noise) > misfit_beyond_C
     )
@@ -647,7 +647,7 @@ def overshoot_floor_C(
     return warm_up_floor_C(fit.steady_C, *readings, noise_C, rounding_C)
 
 
-def _with_room_wander(
+def _with_room_error(
     fit: SteadyState, readings: dict[float, tuple[float, float]], room_measured: bool, settings: RobustSettings
 ) -> dict[float, tuple[float, float]]:
     """The intervals the readings give, widened by what the room adds that they cannot narrow: an
