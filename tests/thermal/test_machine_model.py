@@ -347,3 +347,36 @@ def test_the_room_factors_part_of_a_level_is_what_holding_them_takes_away(monkey
         assert np.all(free.room_factor_var > 0.5 * level)
     else:
         assert np.all(free.room_factor_var < 0.01 * level)
+
+
+def test_a_drifting_rooms_path_is_bounded_by_the_physics_not_counted_twice(monkeypatch):
+    """The chain's reference in a steady room (slowest mode 268 min), its test in a room rising
+    0.05 °C an hour for 600 min. A drift's readings cannot tell the room's path: the room factors
+    kept their whole prior (widened for the model's error) and each sensor's own lag its prior too,
+    the same unknown twice. The physics bounds the whole: the lag behind the room's ramp is the
+    slowest mode's, give or take ``ROOM_LAG_SHARE`` of it (and wherever the fit put the path). Every
+    95 % interval is then at most four fifths of the unbounded one's (about half in the mean),
+    holds the truth, and never counts less than the physics' sd for the room."""
+    from helpers import _run_in_room
+
+    import mtident.thermal.machine_model as mm
+    from mtident.io.logs import TemperatureLog
+    from mtident.thermal.reference import learn_reference
+
+    t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, lambda t: np.full_like(t, ROOM_C), seed=21)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), room)
+    model = reference.machine_model
+    assert model is not None and not model.room_gains
+    split, power, rate = (0.5, 0.5), 0.9, 0.05 / 60.0
+    t, y, room = _run_in_room(split, power, np.zeros(3), 600.0, lambda t: ROOM_C + rate * t, seed=22, dt=2.0)
+    truth = _truth(split, power) + rate * t[-1]
+    bounded = fit_readings(model, SENSORS, t, y, room, (0.95, 0.99))
+    monkeypatch.setattr(mm, "_path_bound", lambda bins, *_: {lv: np.full(len(bins), np.inf) for lv in (0.95, 0.99)})
+    unbounded = fit_readings(model, SENSORS, t, y, room, (0.95, 0.99))
+    assert isinstance(bounded, MachineFit) and isinstance(unbounded, MachineFit)
+    half = bounded.half_width_C[0.95]
+    ratio = half / unbounded.half_width_C[0.95]
+    assert np.all(ratio <= 0.8) and np.mean(ratio) <= 0.6, ratio
+    assert np.all(np.abs(bounded.steady_C - truth) <= half), (bounded.steady_C - truth, half)
+    assert bounded.room_lag_C is not None
+    assert np.all(bounded.room_lag_C >= mm.ROOM_LAG_SHARE * rate * max(model.time_constants_min) * 0.99)

@@ -300,7 +300,8 @@ def test_a_learnt_room_response_narrows_a_drift_and_a_cycle_stops_either_way_and
     learnt response's allowances for its scale and a drift's lag count no more than the readings
     ask: with the whole of them it stopped at 994 min, the fitted one at 502). In a room drifting
     0.1 °C an hour they cannot (a drift's lag looks like a lower T∞): the learnt response leaves
-    each interval less than half as wide as the fitted."""
+    each interval at most three quarters as wide as the fitted, whose room's path only the physics
+    bounds (the slowest mode's lag, give or take ``ROOM_LAG_SHARE`` of it)."""
     from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
 
     t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, _daily(0.3), seed=13)
@@ -326,7 +327,7 @@ def test_a_learnt_room_response_narrows_a_drift_and_a_cycle_stops_either_way_and
         state, _ = monitor_step(new_state(list(SENSORS), with_room=True), t, y, room, settings)
         half[label] = np.array([c.half_width_C for c in state.checks])
         lag[label] = np.array([c.room_lag_C for c in state.checks])
-    assert np.all(half["learnt"] < 0.5 * half["fitted"]), half
+    assert np.all(half["learnt"] < 0.75 * half["fitted"]), half
     # but the drift's lag keeps its half: the readings cannot tell it
     drift_lag = ROOM_LAG_SHARE * 0.1 / 60.0 * max(reference.machine_model.time_constants_min)
     assert np.all(lag["learnt"] >= 0.95 * ROOM_RESPONSE_LAG_SHARE * drift_lag), (lag, drift_lag)
@@ -350,8 +351,9 @@ def test_a_one_mode_machine_in_a_drifting_room_stops_once_its_room_path_is_held_
     """A one-mode machine's interval holds its room path delayed by up to two time constants (the
     later paths a chain gives): the part of its level's variance the room factors carry is not
     widened again for the model's error. Learnt in a steady room, the test in a room drifting
-    0.08 °C an hour stops by 30 min (1.5 time constants; widened twice: 73 min), every T∞ within
-    0.03 °C and inside its 99 % interval."""
+    0.08 °C an hour stops by 20 min (one time constant; widened twice: 73 min), every T∞ within
+    0.04 °C and inside its 99 % interval: the room's path, bounded by the physics
+    (:func:`~mtident.thermal.machine_model._path_bound`), costs no more than its lag's prior."""
     names = [f"S{i}" for i in range(1, 7)]
     t, y, room, _ = _one_body_in_a_drift(300.0, 0.0, 1)
     reference, _ = learn_reference(TemperatureLog(t, tuple(names), y, (), "ref.csv"), room)
@@ -359,10 +361,10 @@ def test_a_one_mode_machine_in_a_drifting_room_stops_once_its_room_path_is_held_
     t, y, room, truth = _one_body_in_a_drift(90.0, 0.08, 2)
     settings = MonitorSettings(tolerance_C=0.2, reference=reference, room_sensor="room")
     state, _ = monitor_step(new_state(names, with_room=True), t, y, room, settings)
-    assert state.stopped and state.stop_time_min <= 30.0
+    assert state.stopped and state.stop_time_min <= 20.0
     at = int(np.searchsorted(t, state.stop_time_min))
     error = np.array([c.steady_C for c in state.checks]) - truth[at]
-    assert np.all(np.abs(error) <= 0.03), error
+    assert np.all(np.abs(error) <= 0.04), error
     assert np.all(np.abs(error) <= np.array([c.half_width_C for c in state.checks]))
     assert all(c.machine_used for c in state.checks)
 

@@ -29,6 +29,7 @@ its own fit.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
@@ -241,8 +242,8 @@ class MachineFit:
         (another machine's reference, or a changed machine).
     room_lag_C : ndarray (S,), optional
         The part of each sensor's interval that is its lag behind a moving room (one sd, °C: its
-        own lag as the fit counts it with the truncation's share, or a learnt response's error),
-        0 where none.
+        own lag as the fit counts it with the truncation's share, or a learnt response's error;
+        where the physics bounds it tighter, :func:`_path_bound`'s), 0 where none.
     """
 
     steady_C: FloatArray
@@ -647,7 +648,9 @@ def _fit_tied(
         if excess[worst] <= chdtri(max(int((~own).sum()), 1), REJECT_P):
             break
         rejected.append(used[worst])
-    solved, steady, half = _profiled(bins, gains[used], noise[used], model, solved, levels, own, lag_share, known_lag)
+    solved, steady, half, bounded = _profiled(
+        bins, gains[used], noise[used], model, solved, levels, own, lag_share, known_lag, lag_sd if room_lag else None
+    )
     if _departed(solved.taus, taus, tau_sd):
         return None
     # the tie holds (the shapes), but the time constants do not: a machine of other time constants
@@ -664,7 +667,16 @@ def _fit_tied(
             for j, s in enumerate(used)
         ]
     )
-    half = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag) for level, h in half.items()}
+    stated = {level: np.hypot(h, ndtri(0.5 + level / 2.0) * lag) for level, h in half.items()}
+    # the physics bounds the whole of the room's path, the truncation's share with it
+    half = {level: np.minimum(h, bounded[level]) for level, h in stated.items()}
+    path_sd = np.hypot(lag, np.sqrt(solved.lag_var + solved.room_factor_var))
+    if room_lag:
+        widest = max(levels)
+        off, sd = _path_lag_bound(solved, lag_sd)
+        path_sd = np.where(
+            bounded[widest] < stated[widest], np.minimum(path_sd, sd + off / ndtri(0.5 + widest / 2.0)), path_sd
+        )
     room_gains = [
         known[s].room_gains if s in known else row for s, row in zip(used, _room_gains_of(solved), strict=True)
     ]
@@ -679,7 +691,7 @@ def _fit_tied(
         placed.rows(_modes_of(solved), ()),
         placed.rows(room_gains, ()) if room_C is not None else (),
         origin_min,
-        room_lag_C=placed.values(np.hypot(lag, np.sqrt(solved.lag_var + solved.room_factor_var)), 0.0),
+        room_lag_C=placed.values(path_sd, 0.0),
     )
 
 
@@ -841,6 +853,12 @@ class _Solved:
     response_shift: FloatArray
     room_factors: slice
     """The room factors' columns of ``coef`` and ``cov`` (none without a room)."""
+    path_lag: FloatArray
+    """Per sensor, how far behind the room's latest level the fit's path into the machine puts it
+    (°C; 0 without a room)."""
+    slowest_lag: FloatArray
+    """Per sensor, how far behind it the room through the slowest mode alone is (°C): the middle of
+    the lags a machine's physics allows (:func:`_path_bound`)."""
 
     @cached_property
     def room_factor_var(self) -> FloatArray:
@@ -902,12 +920,15 @@ def _profiled(
     own: np.ndarray,
     lag_share: float,
     known_lag: dict[int, tuple[FloatArray, FloatArray]],
-) -> tuple[_Solved, FloatArray, dict[float, FloatArray]]:
+    lag_sd: float | None,
+) -> tuple[_Solved, FloatArray, dict[float, FloatArray], dict[float, FloatArray]]:
     """The fit and its intervals with each loose time constant (a box wider than ``LOOSE_BOX``,
     too wide to linearise) profiled: held in turn at points across its box, the interval the hull
     of those of every point whose χ² is within the decision's threshold of the best. The room's
     path is profiled too (:data:`ROOM_PATH_DELAYS`), in the hull but never the point: the model's
-    modes are the path the answer states."""
+    modes are the path the answer states. The intervals twice: as the fit states them
+    (:func:`_interval`), and with the room's path bounded by the physics (:func:`_path_bound`;
+    ``lag_sd`` None: not bounded, the reference run itself)."""
     taus, tau_sd = _centres(model)
     loose = [k for k, box in enumerate(model.box) if box > LOOSE_BOX]
     candidates = [best]
@@ -928,17 +949,31 @@ def _profiled(
                 candidates.append(solved[1])
     chi2 = np.array([c.chi2_per_sensor.sum() / max(float(np.max(c.corr)), 1.0) for c in candidates])
     point = candidates[int(np.argmin(chi2[:stated]))]
-    steady, half = _interval(bins, point, levels)
-    low = {lv: steady - h for lv, h in half.items()}
-    high = {lv: steady + h for lv, h in half.items()}
+    steady = point.coef[: len(bins)]
     best = chi2[:stated].min()
-    for i, (c, value) in enumerate(zip(candidates, chi2, strict=True)):
-        for lv in levels:
-            if i >= stated or value - best <= chdtri(1, 1.0 - lv):
-                other, other_half = _interval(bins, c, (lv,))
-                low[lv] = np.minimum(low[lv], other - other_half[lv])
-                high[lv] = np.maximum(high[lv], other + other_half[lv])
-    return point, steady, {lv: np.maximum(steady - low[lv], high[lv] - steady) for lv in levels}
+    within = {
+        lv: [c for i, c in enumerate(candidates) if i >= stated or chi2[i] - best <= chdtri(1, 1.0 - lv)]
+        for lv in levels
+    }
+    stated_half = _hull(steady, within, lambda c: _interval(bins, c, levels)[1])
+    if lag_sd is None:
+        return point, steady, stated_half, {lv: np.full(len(bins), np.inf) for lv in levels}
+    return point, steady, stated_half, _hull(steady, within, lambda c: _path_bound(bins, c, levels, lag_sd))
+
+
+def _hull(
+    steady: FloatArray, within: dict[float, list[_Solved]], width: Callable[[_Solved], dict[float, FloatArray]]
+) -> dict[float, FloatArray]:
+    """Per level, the half-width about ``steady`` that holds the interval (``width``) of every fit
+    within that level's threshold."""
+    out = {}
+    for lv, fits in within.items():
+        low, high = steady.copy(), steady.copy()
+        for c in fits:
+            centre, half = c.coef[: len(steady)], width(c)[lv]
+            low, high = np.minimum(low, centre - half), np.maximum(high, centre + half)
+        out[lv] = np.maximum(steady - low, high - steady)
+    return out
 
 
 def _centres(model: MachineModel) -> tuple[FloatArray, FloatArray]:
@@ -982,6 +1017,9 @@ def _penalised(
     blocks, targets = [], []
     lag_columns: dict[int, tuple[FloatArray, float]] = {}
     response_columns: dict[int, tuple[FloatArray, float]] = {}
+    latest_path = np.zeros((S, K))
+    known_path = np.zeros(S)
+    slowest_lag = np.zeros(S)
     for s, b in enumerate(bins):
         u = b.time_min
         X = np.zeros((len(u), n_col))
@@ -994,11 +1032,16 @@ def _penalised(
         if b.room_C is not None:
             room = _room_columns(b, taus, room_delay_min)
             X[:, i_eta : i_eta + K] = room * gains[s][None, :]
+            latest_path[s] = -room[-1] * gains[s]
+            undelayed = room if room_delay_min == 0 else _room_columns(b, taus)
+            slowest_lag[s] = -float(undelayed[-1, int(np.argmax(taus))])
             if lag_share > 0:
                 lag_columns[s] = (room[:, int(np.argmax(taus))] * w, lag_share)
         elif lag_share > 0 and known_lag and s in known_lag:
             lag_columns[s] = (known_lag[s][0] * w, ROOM_RESPONSE_LAG_SHARE * lag_share)
             response_columns[s] = (known_lag[s][1] * w, ROOM_RESPONSE_SHARE)
+            known_path[s] = -float(known_lag[s][1][-1])
+            slowest_lag[s] = -float(known_lag[s][0][-1])
         if linearised is not None:
             # d/d(log τ) of −a·e^(−u/τ); the room's lags move less and are left at the model's τ
             X[:, i_tau : i_tau + K] = -linearised[0][s][None, :] * e * (u[:, None] / taus[None, :])
@@ -1055,6 +1098,8 @@ def _penalised(
         *_lag_variance(blocks, targets, coef, lag_columns, cov, S),
         *_lag_variance(blocks, targets, coef, response_columns, cov, S),
         slice(i_eta, i_tau),
+        known_path + latest_path @ eta,
+        slowest_lag,
     )
 
 
@@ -1164,26 +1209,56 @@ def _excess(
     return out
 
 
+def _level_sds(bins: list[Binned], solved: _Solved) -> tuple[FloatArray, FloatArray]:
+    """Each sensor's level's sd in two parts: the heat's and the room's path's.
+
+    Each is the covariance's, scaled by the sensor's χ² per degree of freedom where above one and
+    by its residuals' correlation factor. The heat's part, set by the readings, is widened for the
+    model's own error (:data:`MODEL_ERROR_FACTOR`) and kept above the room's level error
+    (:data:`~mtident.thermal.readings.ROOM_LEVEL_FLOOR_C`). The path's part is the room factors'
+    (:attr:`_Solved.room_factor_var`), widened likewise in a model of several modes, whose factors
+    are the only freedom the path has and off as its heat is, and not in a model of one, whose hull
+    holds later paths too (:data:`ROOM_PATH_DELAYS`); and the room's lag, a prior's, not the
+    readings'."""
+    S = len(bins)
+    dof_scale = np.maximum(1.0, solved.chi2_per_sensor / np.maximum(solved.rows_per_sensor - 3, 1)) * solved.corr
+    factors = solved.room_factor_var
+    readings = np.clip(np.diag(solved.cov)[:S] - factors, 0, None) * dof_scale
+    heat = np.hypot(MODEL_ERROR_FACTOR * np.sqrt(readings), ROOM_LEVEL_FLOOR_C)
+    widened = 1.0 if len(solved.taus) == 1 else MODEL_ERROR_FACTOR**2
+    return heat, np.sqrt(factors * dof_scale * widened + solved.lag_var)
+
+
 def _interval(
     bins: list[Binned], solved: _Solved, levels: tuple[float, ...]
 ) -> tuple[FloatArray, dict[float, FloatArray]]:
-    """Each sensor's level and its half-width per level: the covariance's, scaled by the sensor's
-    χ² per degree of freedom where above one and by its residuals' correlation factor; the part
-    the readings set widened for the model's own error (:data:`MODEL_ERROR_FACTOR`) and kept above
-    the room's level error (:data:`~mtident.thermal.readings.ROOM_LEVEL_FLOOR_C`); the room's lag
-    not, nor, in a model of one mode, the part the room factors carry
-    (:attr:`_Solved.room_factor_var`): where the readings cannot tell the room's path (a drift),
-    their prior and the later paths the hull holds already say how far it may be off."""
-    S = len(bins)
-    steady = solved.coef[:S]
-    dof_scale = np.maximum(1.0, solved.chi2_per_sensor / np.maximum(solved.rows_per_sensor - 3, 1)) * solved.corr
-    # one mode's room path is held in the hull at later paths too (ROOM_PATH_DELAYS); with more,
-    # the factors are the only freedom the path has, and a truncated model's path is off as its heat's
-    path = solved.room_factor_var if len(solved.taus) == 1 else np.zeros(S)
-    se = np.sqrt(np.clip(np.diag(solved.cov)[:S] - path, 0, None) * dof_scale)
-    # the room's lag is a prior's, not the readings': no model error on it
-    se = np.hypot(np.hypot(MODEL_ERROR_FACTOR * se, ROOM_LEVEL_FLOOR_C), np.sqrt(path * dof_scale + solved.lag_var))
-    return steady, {lv: ndtri(0.5 + lv / 2.0) * se for lv in levels}
+    """Each sensor's level and its half-width per level (:func:`_level_sds`)."""
+    heat, path = _level_sds(bins, solved)
+    se = np.hypot(heat, path)
+    return solved.coef[: len(bins)], {lv: ndtri(0.5 + lv / 2.0) * se for lv in levels}
+
+
+def _path_bound(
+    bins: list[Binned], solved: _Solved, levels: tuple[float, ...], lag_sd: float
+) -> dict[float, FloatArray]:
+    """Each sensor's half-width per level with the room's path bounded by the physics instead of by
+    the fit's room factors and lags: a machine lags a drifting room by the rate times each sensor's
+    mean delay ``C·(−A)⁻¹·1``, about one slowest time constant (``benchmarks/study_room_lag.py``),
+    with an sd of :data:`ROOM_LAG_SHARE` of it. Where the readings cannot tell the path (a drift),
+    the fit's room factors keep their whole prior and the lag's column its own besides, twice the
+    same unknown; this holds the lag the physics allows, wherever the fit put the path (its
+    distance from the slowest mode's lag is added whole), and no more. ``lag_sd``: the room's
+    rate times the slowest time constant, times the share (:func:`_room_lag_sd`)."""
+    heat, _ = _level_sds(bins, solved)
+    off, sd = _path_lag_bound(solved, lag_sd)
+    return {lv: np.hypot(ndtri(0.5 + lv / 2.0) * heat, off + ndtri(0.5 + lv / 2.0) * sd) for lv in levels}
+
+
+def _path_lag_bound(solved: _Solved, lag_sd: float) -> tuple[FloatArray, FloatArray]:
+    """Per sensor, how far the fit's lag behind the room is from the slowest mode's (°C), and the
+    sd the physics allows about the latter (:func:`_path_bound`): ``lag_sd``, or the share of the
+    slowest mode's lag where larger (a room that moved before the rate's span)."""
+    return np.abs(solved.path_lag - solved.slowest_lag), np.maximum(lag_sd, ROOM_LAG_SHARE * np.abs(solved.slowest_lag))
 
 
 # ----------------------------------------------------------------------------------------------
