@@ -498,3 +498,60 @@ def test_two_temperatures_are_said_to_as_many_decimals_as_tell_them_apart():
     assert _apart(20.7912, 20.7937) == ("20.791", "20.794")
     assert _apart(20.5, 20.79) == ("20.50", "20.79")
     assert _apart(20.79001, 20.79002) == ("20.7900", "20.7900")
+
+
+def _bearing_in_a_drift(minutes: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """A new user's five-node spindle and column (time constants 2.9-179 min), the front bearing
+    read behind a 1.5-min lag, 10 % warm, at 28.8 and 43.2 W in a room rising 0.05 °C an hour
+    (σ 0.015 °C, to 0.01 °C, every minute, their 900-min log): the times, the bearing's and the
+    room's readings to ``minutes``, and its T∞ at the room's level then."""
+    from scipy.linalg import expm
+
+    cap = np.array([1500.0, 8000.0, 9000.0, 25000.0, 140000.0])
+    links = {(0, 1): 6.0, (1, 2): 2.5, (1, 4): 2.0, (2, 3): 3.0, (3, 4): 3.0, (2, 4): 1.5}
+    to_room = np.array([1.5, 0.0, 0.0, 7.0, 11.0])
+    conductance = np.diag(to_room)
+    for (i, j), g in links.items():
+        conductance[[i, j], [i, j]] += g
+        conductance[i, j] = conductance[j, i] = -g
+    A = np.zeros((6, 6))
+    A[:5, :5] = -60.0 * conductance / cap[:, None]
+    A[5, 1], A[5, 5] = 1 / 1.5, -1 / 1.5
+    B = np.zeros((6, 3))
+    B[1, 0], B[3, 1] = 60.0 / cap[1], 60.0 / cap[3]
+    B[:5, 2] = 60.0 * to_room / cap
+    power = np.array([28.8, 43.2])
+    t = np.arange(0.0, 900.5)
+    room = 20.0 + 0.05 / 60.0 * t
+    M = np.zeros((12, 12))
+    M[:6, :6], M[:6, 6:9], M[6:9, 9:] = A, B, np.eye(3)
+    E = expm(M)
+    step, hold, ramp = E[:6, :6], E[:6, 6:9], E[:6, 9:]
+    rise = np.linalg.solve(-A[:5, :5], B[:5, :2] @ power)
+    x = np.concatenate([room[0] + 0.1 * rise, [room[0] + 0.1 * rise[1]]])
+    bearing = np.empty(len(t))
+    for k in range(len(t)):
+        bearing[k] = x[5]
+        if k + 1 < len(t):
+            u, u_next = np.append(power, room[k]), np.append(power, room[k + 1])
+            x = step @ x + hold @ u + ramp @ (u_next - u)
+    rng = np.random.default_rng(2)
+    noise = rng.normal(0.0, 0.015, (len(t), 6))
+    room_read = np.round(room + rng.normal(0.0, 0.015, len(t)), 2)
+    kept = t <= minutes
+    return t[kept], np.round(bearing + noise[:, 1], 2)[kept], room_read[kept], float(room[kept][-1] + rise[1])
+
+
+def test_an_interval_the_floor_brings_near_a_decision_is_searched_in_full():
+    """With a tolerance, the search takes shortcuts where the interval is far from it (no
+    refinement, no wider family). The warm-up's floor then lifted the low end of a new user's
+    bearing (in a drifting room, 443 min) into the tolerance with its high end still the
+    shortcut's: "may stop, T∞ 28.44 °C, 99 % interval 28.34 to 28.63 °C", the truth 28.75. Where
+    the floor brings an interval near a decision, the fit is made again in full: the answer is
+    the full search's, and holds the truth."""
+    t, y, room, truth = _bearing_in_a_drift(443.0)
+    quick = estimate_sensor("fbear", t, y, room, refine_within=0.2)
+    full = estimate_sensor("fbear", t, y, room)
+    assert quick.interval_C == full.interval_C
+    low, high = quick.interval_C[0.99]
+    assert low <= truth <= high and high - quick.steady_C > 0.2, (low, truth, high)

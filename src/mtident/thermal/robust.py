@@ -293,8 +293,18 @@ def _fit_above_floor(
     A fit with the reference that puts T∞ below the floor is made again without it.
     ``readings``: the times, readings and room since the warm-up began; ``interval``: the log's
     sampling interval (min); ``rise``: the rise so far (an interval wider says nothing)."""
-    fit, reference_used = _modal_fit(binned, noise, interval, settings, reference, notes, refine_within)
+    tried = _Notes(notes.sensor)
+    fit, reference_used = _modal_fit(binned, noise, interval, settings, reference, tried, refine_within)
     floor = overshoot_floor_C(fit, readings, noise, rounding)
+    if _floor_brings_near(fit, floor, settings, refine_within):
+        # the search's shortcuts judged the interval far from a decision before the floor lifted its
+        # low end: a high end left unrefined, or a wider family left unsearched, would then decide
+        # (a new user's bearing sensor in a drifting room said "may stop" 0.31 °C low, its 99 %
+        # high end 28.63 °C where the full search finds 29.38)
+        tried = _Notes(notes.sensor)
+        fit, reference_used = _modal_fit(binned, noise, interval, settings, reference, tried, None)
+        floor = overshoot_floor_C(fit, readings, noise, rounding)
+    notes.extend(tried)
     if reference_used and _below_floor(fit, floor):
         # the reference's modes make this warm-up come down to its T∞: they are not this sensor's
         steady, already = _apart(fit.steady_C, floor)
@@ -323,6 +333,16 @@ def _fit_above_floor(
         )
         floor = -np.inf
     return fit, reference_used, floor
+
+
+def _floor_brings_near(fit: SteadyState, floor: float, settings: RobustSettings, refine_within: float | None) -> bool:
+    """Whether the fit's interval was far from a decision (the search took its shortcuts,
+    :func:`_near_decision`) but is near one with its low end lifted to ``floor``."""
+    if refine_within is None or not fit.determined or _near_decision(fit, settings, refine_within):
+        return False
+    lo, hi = fit.interval_C[max(settings.levels)]
+    floored = max(fit.steady_C - max(lo, floor), hi - fit.steady_C)
+    return floored <= DECISION_MARGIN * refine_within
 
 
 def _apart(low: float, high: float) -> tuple[str, str]:
@@ -732,6 +752,10 @@ class _Notes:
     def add(self, code: WarningCode, text: str) -> None:
         self.codes.append(code)
         self.texts.append(f"{self.sensor}: {text}")
+
+    def extend(self, other: _Notes) -> None:
+        self.codes += other.codes
+        self.texts += other.texts
 
     def said(self) -> tuple[tuple[str, ...], tuple[WarningCode, ...]]:
         return tuple(self.texts), tuple(self.codes)
