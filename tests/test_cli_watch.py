@@ -837,3 +837,22 @@ def test_a_replay_that_stops_reads_the_whole_log_again_once_for_its_picture_and_
     assert code == 0, err
     assert "can stop" in out and "Against the rest of the log" in out
     assert len(reads) == 1 and drawn["after"][0][-1] == t[-1]
+
+
+def test_an_expected_stop_with_a_logged_room_says_it_holds_the_room_still(tmp_path):
+    """A new user's test in a drifting room said 'Expected stop: … t ≈ 1035 min' while the drift
+    went on and the room's allowance held every sensor open: the forecast holds a logged room at
+    its latest level, and now says so."""
+    t = np.arange(0.0, 60.0, 0.5)
+    room = 20.0 + 0.05 / 60.0 * t
+    log = tmp_path / "drift.csv"
+    curve = room + 6.0 * (1.0 - np.exp(-t / 15.0))
+    log.write_text(csv_text(t, {"S": noisy(curve, 3, sigma=0.01), "room": np.round(room, 2)}))
+    code, out, err = mtident(
+        "thermal", "watch", str(log), "--ambient", "room", "--replay", "--state", str(tmp_path / "s.npz")
+    )
+    assert code == 0, err
+    text = " ".join(out.split())
+    assert "Not yet" in text and "Expected stop: t ≈" in text, text
+    said = "the room held at its latest level (a slower mode that still fits, or a room that keeps moving, moves"
+    assert f"on the best model's course, {said} it later)" in text, text

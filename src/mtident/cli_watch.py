@@ -852,9 +852,15 @@ def _answer(
         console.print(str(outcome.reason), highlight=False)
     expected = outcome.expected_stop_time_min
     if expected is not None and math.isfinite(expected):
+        # the forecast holds a logged room at its latest level: a room that keeps drifting keeps its
+        # lag's allowance, which no course of the machine narrows
+        room = state.readings.room_C is not None
         console.print(
-            f"Expected stop: t ≈ {minutes(round(expected))} on the best model's course (a slower mode that still "
-            "fits moves it later).",
+            f"Expected stop: t ≈ {minutes(round(expected))} on the best model's course"
+            + (", the room held at its latest level" if room else "")
+            + " (a slower mode that still fits"
+            + (", or a room that keeps moving," if room else "")
+            + " moves it later).",
             highlight=False,
         )
     elif expected is not None and outcome.decision != "stop":
