@@ -967,10 +967,13 @@ def _hull(
     """Per level, the half-width about ``steady`` that holds the interval (``width``) of every fit
     within that level's threshold."""
     out = {}
+    widths: dict[int, dict[float, FloatArray]] = {}
     for lv, fits in within.items():
         low, high = steady.copy(), steady.copy()
         for c in fits:
-            centre, half = c.coef[: len(steady)], width(c)[lv]
+            if id(c) not in widths:
+                widths[id(c)] = width(c)
+            centre, half = c.coef[: len(steady)], widths[id(c)][lv]
             low, high = np.minimum(low, centre - half), np.maximum(high, centre + half)
         out[lv] = np.maximum(steady - low, high - steady)
     return out

@@ -290,21 +290,27 @@ def _fit_above_floor(
 ) -> tuple[SteadyState, bool, float]:
     """The sensor's fit (:func:`_modal_fit`), whether it used the reference, and the floor a
     warm-up does not come down below (``-inf`` where the fit's T∞ lies below it: not trusted).
-    A fit with the reference that puts T∞ below the floor is made again without it.
+    A fit with the reference that puts T∞ below the floor is made again without it; a fit whose
+    interval the floor brings near a decision, again without the search's shortcuts.
     ``readings``: the times, readings and room since the warm-up began; ``interval``: the log's
     sampling interval (min); ``rise``: the rise so far (an interval wider says nothing)."""
-    tried = _Notes(notes.sensor)
-    fit, reference_used = _modal_fit(binned, noise, interval, settings, reference, tried, refine_within)
-    floor = overshoot_floor_C(fit, readings, noise, rounding)
-    if _floor_brings_near(fit, floor, settings, refine_within):
-        # the search's shortcuts judged the interval far from a decision before the floor lifted its
-        # low end: a high end left unrefined, or a wider family left unsearched, would then decide
-        # (a new user's bearing sensor in a drifting room said "may stop" 0.31 °C low, its 99 %
-        # high end 28.63 °C where the full search finds 29.38)
+
+    def searched(modes: SensorModes | None) -> tuple[SteadyState, bool, float]:
         tried = _Notes(notes.sensor)
-        fit, reference_used = _modal_fit(binned, noise, interval, settings, reference, tried, None)
+        fit, used = _modal_fit(binned, noise, interval, settings, modes, tried, refine_within)
         floor = overshoot_floor_C(fit, readings, noise, rounding)
-    notes.extend(tried)
+        if _floor_brings_near(fit, floor, settings, refine_within):
+            # the search's shortcuts judged the interval far from a decision before the floor lifted
+            # its low end: a high end left unrefined, or a wider family left unsearched, would then
+            # decide (a new user's bearing sensor in a drifting room said "may stop" 0.31 °C low,
+            # its 99 % high end 28.63 °C where the full search finds 29.38)
+            tried = _Notes(notes.sensor)
+            fit, used = _modal_fit(binned, noise, interval, settings, modes, tried, None)
+            floor = overshoot_floor_C(fit, readings, noise, rounding)
+        notes.extend(tried)
+        return fit, used, floor
+
+    fit, reference_used, floor = searched(reference)
     if reference_used and _below_floor(fit, floor):
         # the reference's modes make this warm-up come down to its T∞: they are not this sensor's
         steady, already = _apart(fit.steady_C, floor)
@@ -314,8 +320,7 @@ def _fit_above_floor(
             "more than the fit's own error, and a warm-up does not come down: has the machine changed, or is the "
             "reference another machine's? This answer does not use it",
         )
-        fit, reference_used = _modal_fit(binned, noise, interval, settings, None, notes, refine_within)
-        floor = overshoot_floor_C(fit, readings, noise, rounding)
+        fit, reference_used, floor = searched(None)
     steady, already = _apart(fit.steady_C, floor)
     if _below_floor(fit, floor, rise) and _wider_than(fit, rise):
         notes.add(
