@@ -442,10 +442,22 @@ def test_the_other_sensors_expected_stops_read_as_one_or_a_range():
     """A newcomer's trial read 'the others' come at t ≈ 913 min to 913 min' of one sensor."""
     from mtident.cli_watch import _others_stops
 
-    assert _others_stops([]) == ""
-    assert _others_stops([913]) == "; the other's comes at t ≈ 913 min"
-    assert _others_stops([913, 913]) == "; the others' come at t ≈ 913 min"
-    assert _others_stops([800, 913]) == "; the others' come at t ≈ 800 min to 913 min"
+    assert _others_stops([], 500.0) == ""
+    assert _others_stops([913], 500.0) == "; the other's comes at t ≈ 913 min"
+    assert _others_stops([913, 913], 500.0) == "; the others' come at t ≈ 913 min"
+    assert _others_stops([800, 913], 500.0) == "; the others' come at t ≈ 800 min to 913 min"
+
+
+def test_the_other_sensors_that_may_stop_already_are_not_said_to_come():
+    """A new user read "the others' come at t ≈ 861 min to 1190 min" at 900 min: a sensor that may
+    stop has its expected stop at the time it became ready, which is past."""
+    from mtident.cli_watch import _others_stops
+
+    assert (
+        _others_stops([861, 1190], 900.0)
+        == "; the other's comes at t ≈ 1190 min; one other may stop already (since t ≈ 861 min)"
+    )
+    assert _others_stops([700, 861], 900.0) == "; 2 others may stop already (since t ≈ 700 min)"
 
 
 @pytest.mark.slow

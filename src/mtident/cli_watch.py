@@ -869,23 +869,30 @@ def _answer(
         status = {s.sensor: s.status for s in waited}
         none = [f"{name} ({status[name]})" for name, stop in stops.items() if not math.isfinite(stop)]
         found = sorted(round(stop) for stop in stops.values() if math.isfinite(stop))
+        now = state.readings.latest_min
         who = f"{', '.join(none)} {'has' if len(none) == 1 else 'have'}" if none else "a sensor waited for has"
         console.print(
             f"Expected stop: none found; {who} none on the best model's course (the interval does not come "
-            f"within the tolerance there, or the status gives no course to go on){_others_stops(found)}.",
+            f"within the tolerance there, or the status gives no course to go on){_others_stops(found, now)}.",
             highlight=False,
         )
 
 
-def _others_stops(found: list[int]) -> str:
-    """Where the other sensors waited for expect their stops (``found``: sorted minutes)."""
-    if not found:
-        return ""
-    if len(found) == 1:
-        return f"; the other's comes at t ≈ {minutes(found[0])}"
-    if found[0] == found[-1]:
-        return f"; the others' come at t ≈ {minutes(found[0])}"
-    return f"; the others' come at t ≈ {minutes(found[0])} to {minutes(found[-1])}"
+def _others_stops(found: list[int], now: float) -> str:
+    """Where the other sensors waited for expect their stops (``found``: sorted minutes): those to
+    come, and those that may stop already (their expected stop is the time they became ready)."""
+    come = [t for t in found if t > now]
+    ready = [t for t in found if t <= now]
+    words = ""
+    if len(come) == 1:
+        words += f"; the other's comes at t ≈ {minutes(come[0])}"
+    elif come:
+        span = minutes(come[0]) if come[0] == come[-1] else f"{minutes(come[0])} to {minutes(come[-1])}"
+        words += f"; the others' come at t ≈ {span}"
+    if ready:
+        who = "one other" if len(ready) == 1 else f"{len(ready)} others"
+        words += f"; {who} may stop already (since t ≈ {minutes(ready[0])})"
+    return words
 
 
 def _status_table(session: WatchSession, path: Path) -> Table:

@@ -491,6 +491,22 @@ def test_a_late_start_against_the_room_says_so():
     assert [w for w in alone.warnings if w.startswith("bed: flat until t = ")], alone.warnings
 
 
+def test_a_late_start_says_how_flat_it_was():
+    """A new user's column was "flat against the room until t = 35 min, within its noise" where it
+    had risen 0.09 °C, six times its noise: the flat start is judged against 0.1 °C or six times
+    the noise, whichever is larger, and the words now say which."""
+    t = np.arange(0.0, 300.0)
+    rng = np.random.default_rng(7)
+    creep = np.where(t < 60.0, 0.0009 * t, 0.054 + 2.0 * (1.0 - np.exp(-np.maximum(t - 60.0, 0.0) / 40.0)))
+    quiet = estimate_sensor("column", t, np.round(20.0 + creep + rng.normal(0.0, 0.005, t.size), 2))
+    said = [w for w in quiet.warnings if w.startswith("column: flat until t = ")]
+    assert said and "within 0.1 °C of its first level (the larger of 0.1 °C and six times its noise)" in said[0]
+    assert "within its noise" not in said[0]
+    noisy = estimate_sensor("column", t, np.round(20.0 + 3 * creep + rng.normal(0.0, 0.03, t.size), 2))
+    said = [w for w in noisy.warnings if w.startswith("column: flat until t = ")]
+    assert said and f"within {6 * noisy.noise_C:.2g} °C of its first level" in said[0], noisy.warnings
+
+
 def test_two_temperatures_are_said_to_as_many_decimals_as_tell_them_apart():
     """A new user's trial said "below where it already is" of T∞ 20.79 °C below 20.79 °C."""
     from mtident.thermal.robust import _apart

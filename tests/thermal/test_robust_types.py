@@ -87,6 +87,46 @@ def test_the_ends_say_what_is_left_of_their_slowest_mode_and_of_the_others():
     assert text.startswith("low end") and "; high end" in text and "of rise" in text.split("; ")[1]
 
 
+def test_in_a_drifting_room_the_ends_say_the_floor_and_the_rooms_share():
+    """A first-order sensor (40 min, 6 °C) in a room drifting 0.1 °C/h, logged, read for 360 min
+    without a reference: the low end is the warm-up's floor, not a model that still falls; the high
+    end's distance from T∞ is its modes' course and the room's share, which add up to it (a new
+    user read "0.01 °C of rise still to come" beside an end 0.2 °C away)."""
+    import math
+    import re
+
+    import numpy as np
+
+    from mtident.thermal.robust import estimate_sensor
+
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 360.0)
+    room = 20.0 + 0.1 * t / 60.0
+    sensor = np.full(t.size, 20.0)
+    decay = math.exp(-1.0 / 40.0)
+    for i in range(1, t.size):
+        sensor[i] = sensor[i - 1] * decay + (1.0 - decay) * (room[i - 1] + 6.0)
+    y = np.round(sensor + rng.normal(0.0, 0.01, t.size), 2)
+    estimate = estimate_sensor("S", t, y, np.round(room + rng.normal(0.0, 0.01, t.size), 2))
+    assert estimate.fit is not None
+    low, high = estimate.interval_C[0.99]
+    low_words, high_words = estimate.what_sets_the_ends(0.99).split("; ")
+    assert low_words == f"low end {low:.2f} °C: where the sensor already is, less its noise (a warm-up does not fall)"
+    assert low > estimate.fit.ends[0.99][0].steady_C
+    said = re.search(
+        r"with ([0-9.]+) °C of (rise|fall) still to come after t = 359 min"
+        r"(?: \(faster modes (rising|falling) ([0-9.]+) °C meanwhile\))?, and ([0-9.]+) °C more from the room",
+        high_words,
+    )
+    assert said is not None, high_words
+    own = float(said.group(1)) * (1.0 if said.group(2) == "rise" else -1.0)
+    others = 0.0 if said.group(3) is None else float(said.group(4)) * (1.0 if said.group(3) == "rising" else -1.0)
+    elapsed = estimate.last_min - estimate.fit.origin_min
+    best_left = sum(-m.amplitude_C * math.exp(-elapsed / m.time_constant_min) for m in estimate.fit.modes)
+    assert own + others - best_left + float(said.group(5)) == pytest.approx(high - estimate.steady_C, abs=0.02)
+    assert float(said.group(5)) > 0.1
+
+
 def test_a_wide_box_is_said_as_its_range_not_as_a_measurement():
     """learn showed a mode it could not pin down as "152 ±98 %": the middle of 3-300 min, which reads
     as a measurement."""

@@ -173,7 +173,11 @@ def cramer_rao_bound(
     return np.linalg.inv(jac.T @ jac / sigma_C**2)
 
 
-def rise_threshold(sigma: FloatArray, min_rise_C: float = 0.1) -> FloatArray:
+MIN_RISE_C = 0.1
+"""The smallest change from a sensor's first level taken as its warm-up's start (°C), or 6σ."""
+
+
+def rise_threshold(sigma: FloatArray, min_rise_C: float = MIN_RISE_C) -> FloatArray:
     """A change that is a rise, not noise: ``min_rise_C``, or 6σ if larger.
 
     Parameters
@@ -192,7 +196,11 @@ def rise_threshold(sigma: FloatArray, min_rise_C: float = 0.1) -> FloatArray:
 
 
 def flat_lead(
-    time_min: FloatArray, values: FloatArray, sigma: FloatArray, min_rise_C: float = 0.1, min_flat_min: float = 10.0
+    time_min: FloatArray,
+    values: FloatArray,
+    sigma: FloatArray,
+    min_rise_C: float = MIN_RISE_C,
+    min_flat_min: float = 10.0,
 ) -> IntArray:
     """Per sensor, the index of the last sample at the first level, where a late warm-up begins.
 

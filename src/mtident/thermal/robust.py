@@ -21,7 +21,7 @@ import numpy as np
 from scipy.special import chdtri, ndtri
 
 from mtident._typing import FloatArray
-from mtident.thermal.lsq import flat_lead
+from mtident.thermal.lsq import MIN_RISE_C, flat_lead, rise_threshold
 from mtident.thermal.measured import fall_from_highest, warm_up_floor_C
 from mtident.thermal.modes import (
     Binned,
@@ -249,7 +249,8 @@ def estimate_sensor(
     misfit = fit.correlation_factor > MISFIT_FACTOR and (
         misfit_beyond_C <= 0.0 or _systematic_C(fit, binned, noise) > misfit_beyond_C
     )
-    ok = _verdict(fit, intervals, rise, threshold, float(t[onset]) if onset else None, misfit, notes, room is not None)
+    late = (float(t[onset]), float(rise_threshold(np.array([noise]))[0])) if onset else None
+    ok = _verdict(fit, intervals, rise, threshold, late, misfit, notes, room is not None)
     return SensorEstimate(
         sensor,
         "estimated",
@@ -777,22 +778,26 @@ def _verdict(
     intervals: dict[float, tuple[float, float]],
     rise: float,
     threshold: float,
-    onset_min: float | None,
+    late_start: tuple[float, float] | None,
     misfit: bool,
     notes: _Notes,
     room_measured: bool = False,
 ) -> bool:
     """``model_ok`` of one fitted sensor; its warnings go to ``notes``. ``misfit``: residuals
     correlated beyond :data:`MISFIT_FACTOR` (and beyond what :func:`estimate_sensor`'s
-    ``misfit_beyond_C`` allows); ``room_measured``: the onset is of the readings less the room."""
+    ``misfit_beyond_C`` allows); ``late_start``: where a late warm-up began (min) and how far from its
+    first level the readings stayed till then (°C); ``room_measured``: those are the readings less
+    the room's."""
     ok = fit.determined and not UNTRUSTING_CODES & set(notes.codes)
-    if onset_min is not None:
+    if late_start is not None:
         flat = "flat against the room" if room_measured else "flat"
+        onset_min, within = late_start
         notes.add(
             "late-start",
-            f"{flat} until t = {round(onset_min, 1):g} min, within its noise (the heat reached this sensor only then, "
-            "as it reaches one far from the heat; the warm-up began after the log; or a partly warm sensor moved too "
-            "slowly to show sooner); the modes are counted from there",
+            f"{flat} until t = {round(onset_min, 1):g} min, within {within:.2g} °C of its first level (the larger of "
+            f"{MIN_RISE_C:g} °C and six times its noise): the heat reached this sensor only then, as it reaches one "
+            "far from the heat; the warm-up began after the log; or a partly warm sensor moved too slowly to show "
+            "sooner. The modes are counted from there",
         )
     if misfit:
         ok = False

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from mtident.exceptions import InputError
-from mtident.thermal.modal_types import MAX_MODES, interval_half_width
+from mtident.thermal.modal_types import MAX_MODES, IntervalEnd, Mode, interval_half_width
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN, SteadyState
 
 __all__ = [
@@ -293,14 +293,19 @@ class SensorEstimate:
         ends = zip(self.fit.ends[level], ("low", "high"), self.interval_C[level], strict=True)
         elapsed = max(self.last_min - self.fit.origin_min, 0.0) if math.isfinite(self.last_min) else 0.0
         after = f" after t = {self.last_min:.0f} min" if math.isfinite(self.last_min) else ""
+        best_left = sum(_left(m, elapsed) for m in self.fit.modes)
         for end, label, value in ends:
             slowest = end.slowest()
+            if label == "low" and value > end.steady_C + 1e-9:
+                # the warm-up's floor lifted this end above every model's that goes lower
+                words.append(
+                    f"low end {value:.2f} °C: where the sensor already is, less its noise (a warm-up does not fall)"
+                )
+                continue
             if slowest is None:
                 continue
-            # T = T∞ + a·e^(−t/τ): what is left of a mode, counted as a rise, is −a·e^(−t/τ)
-            left = [-m.amplitude_C * math.exp(-elapsed / m.time_constant_min) for m in end.modes]
-            own = -slowest.amplitude_C * math.exp(-elapsed / slowest.time_constant_min)
-            others = sum(left) - own
+            own = _left(slowest, elapsed)
+            others = sum(_left(m, elapsed) for m in end.modes) - own
             course = "rise" if own > 0 else "fall"
             meanwhile = (
                 f" (faster modes {'falling' if others < 0 else 'rising'} {abs(others):.2f} °C meanwhile)"
@@ -310,8 +315,27 @@ class SensorEstimate:
             words.append(
                 f"{label} end {value:.2f} °C: a mode of about {slowest.time_constant_min:.0f} min still fits, "
                 f"with {abs(own):.2f} °C of {course} still to come{after}{meanwhile}"
+                + self._rooms_share(value, end, own + others - best_left)
             )
         return "; ".join(words)
+
+    def _rooms_share(self, value: float, end: IntervalEnd, modes_beyond: float) -> str:
+        """Words for the part of an end's distance from T∞ that its modes' course does not make: the
+        room's. A logged room's: the path its moves take into the sensor, and its level's error
+        (both models fit the readings, so they stand alike now; what is left of the distance is
+        where they put the room). An unlogged room's: its wander, by which the end was widened."""
+        assert self.fit is not None
+        logged = self.fit.room_level_C is not None
+        share = value - self.fit.steady_C - modes_beyond if logged else value - end.steady_C
+        if abs(share) < 0.01 or share * (value - self.fit.steady_C) <= 0:
+            return ""
+        why = "the path its moves take into the sensor, and its level's error" if logged else "its unlogged wander"
+        return f", and {abs(share):.2f} °C more from the room ({why})"
+
+
+def _left(mode: Mode, elapsed_min: float) -> float:
+    """What is left of a mode after ``elapsed_min``, counted as a rise (T = T∞ + a·e^(−t/τ))."""
+    return -mode.amplitude_C * math.exp(-elapsed_min / mode.time_constant_min)
 
 
 _END_MODE = re.compile(r"a mode of about (\d+(?:\.\d+)?) min")
