@@ -255,3 +255,32 @@ def test_a_workbooks_report_names_the_workbook_its_sheet_and_a_room_column(tmp_p
         "mtident: note: 'Umgebung' is named as a room sensor and reported as a machine sensor; if it measures the "
         "room, --ambient Umgebung makes it the input of each sensor's heat balance"
     ) in err
+
+
+def test_the_report_answers_as_a_replayed_watch_does_from_every_sensor_checked_at_the_logs_end(tmp_path):
+    """A new user's report of a log that did not stop gave other T∞ and intervals than watch of the
+    same log (front_brg 24.72 [24.69, 25.01] against 24.71 [24.64, 24.95] °C): watch checks every
+    sensor on every reading where the log ends, the report answered from checks spaced out before
+    the end, and watch's state file did not keep its last checks."""
+    import json
+
+    t = np.arange(0.0, 151.0)
+    log = tmp_path / "long.csv"
+    log.write_text(
+        csv_text(
+            t,
+            {"A": noisy(first_order(t, rate=1 / 80.0), 31), "B": noisy(first_order(t, steady=29.0, rate=1 / 45.0), 32)},
+        )
+    )
+    code, out, err = mtident("thermal", "watch", str(log), "--replay", "--json", "--state", str(tmp_path / "w.npz"))
+    assert code == 0, err
+    watched = {s["sensor"]: s for s in json.loads(out)["sensors"]}
+    assert watched["A"]["steady_state_ci95_C"][1] - watched["A"]["steady_state_ci95_C"][0] > 0.4  # no stop
+    for state in ("fresh.npz", "w.npz"):  # a report of its own, and one that starts from watch's state
+        page = tmp_path / f"{state}.html"
+        code, _, err = mtident("thermal", "report", str(log), "--state", str(tmp_path / state), "-o", str(page))
+        assert code == 0, err
+        text = page.read_text(encoding="utf-8")
+        for name, cells in zip(_cells(text, 0), zip(_cells(text, 2), _cells(text, 3), strict=True), strict=True):
+            low, high = watched[name]["steady_state_ci95_C"]
+            assert cells == (f"{watched[name]['steady_state_C']:.2f}", f"{low:.2f} to {high:.2f}"), (state, name)

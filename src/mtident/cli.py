@@ -41,6 +41,7 @@ _OPTION_OF = {
     "max_time_constant_min": "--max-time-constant",
     "ambient_C": "--ambient",
     "room_C": "--ambient",
+    "room_sensor": "--ambient",
     "method": "--method",
     "preset": "--preset",
     "pseudo_measurement_seed": "--pseudo-seed",
@@ -62,7 +63,7 @@ def as_options(text: str) -> str:
         A message from the library. Each parameter it names in backticks, alone or with a quoted
         value or a bracketed list, is replaced where the command line has an option for it
         (``time_unit``, ``temperature_unit``, ``time_col``, ``sensors``, ``sheet``, ``window_min``,
-        ``max_time_constant_min``, ``ambient_C``, ``method``, ``preset``, ``pseudo_measurement_seed``,
+        ``max_time_constant_min``, ``ambient_C``, ``room_sensor``, ``method``, ``preset``, ``pseudo_measurement_seed``,
         ``reference``, ``room_wander_C_per_h``, ``free_fast_modes``); other words in backticks are kept as they
         are.
 

@@ -221,6 +221,11 @@ def test_a_room_far_outside_a_workshops_range_read_as_celsius_is_said(write_csv)
     assert said and "'room' reads 69 to 69.58" in said[0] and "°F" in said[0] and "units row" in said[0], log.notes
     converted = read_temperature_log(write_csv("time_min,spindle,room\nmin,°F,°F\n" + rows, "stated.csv"))
     assert not any("workshop" in note for note in converted.notes)
+    # a log in °C converted from a stated °F: the converted range is said to four digits, not to six
+    celsius = "".join(f"{m},{20 + 5 * (1 - np.exp(-m / 40)):.2f},{20 + m / 100:.2f}\n" for m in range(0, 60, 2))
+    misread = read_temperature_log(write_csv("time_min,spindle,room\n" + celsius, "c.csv"), temperature_unit="F")
+    said = [note for note in misread.notes if "far outside any workshop's range" in note]
+    assert said and "'room' reads -6.667 to -6.344 as the room" in said[0], misread.notes
 
 
 def test_every_column_far_above_a_workshops_range_read_as_celsius_is_said(write_csv):

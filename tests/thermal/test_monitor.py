@@ -511,6 +511,29 @@ def test_a_reference_most_sensors_contradict_is_used_for_none():
     assert all(s["assumptions"]["reference"] is None for s in answer["sensors"])
     # a reference was given: the way on is to learn it again, not to give one
     assert "learn the reference again" in answer["reason"] and "give a reference run" not in answer["reason"]
+    # a reference learnt without a room: the causes do not name one
+    assert not [e for e in events if "does not log" in e.text]
+
+
+def test_a_reference_dropped_in_a_test_without_its_room_sensor_names_the_room_first():
+    """A new user forgot the room sensor (`--ambient`) in a daily room: the right machine's
+    reference was dropped, and the causes named another machine, a changed machine or the times'
+    unit, not the room the reference had learnt as an input."""
+    from mtident.cli import as_options
+    from mtident.thermal.monitor import _reference_dropped
+    from mtident.thermal.reference import MachineReference
+
+    modes = SensorModes((8.0, 60.0), (0.1, 0.1), (-4.0, -6.0), None)
+    learnt = MachineReference("ref.csv", "2026-11-20", 300.0, "a room sensor, an input of every mode", {"A": modes})
+    assert learnt.room_measured
+    words = _reference_dropped(MonitorSettings(reference=learnt), 291.5, "is rejected", ["A"]).text
+    assert "(a room that moved and that this test does not log (the reference was learnt with a room sensor: " in words
+    assert "`room_sensor`), another machine's reference" in words
+    assert "as the room sensor, --ambient), another machine's" in as_options(words)
+    logged = MonitorSettings(reference=learnt, room_sensor="room")
+    assert "does not log" not in _reference_dropped(logged, 291.5, "is rejected", ["A"]).text
+    unlearnt = replace(learnt, room="not measured")
+    assert "does not log" not in _reference_dropped(MonitorSettings(reference=unlearnt), 291.5, "x", ["A"]).text
 
 
 def test_a_sensor_that_falls_silent_holds_the_test_and_says_why(spindle_reference):

@@ -464,10 +464,12 @@ def scale_note(
     rooms = [k for k in spans if room_named(sensors[k]) and not low <= spans[k][1] <= high]
     every = spans and len(spans) == len(sensors)
     if rooms:
-        which = "; ".join(f"{sensors[k]!r} reads {spans[k][0]:g} to {spans[k][2]:g}" for k in rooms) + " as the room"
+        which = (
+            "; ".join(f"{sensors[k]!r} reads {spans[k][0]:.4g} to {spans[k][2]:.4g}" for k in rooms) + " as the room"
+        )
     elif every and stated is None and all(span[0] > high for span in spans.values()):
         which = (
-            f"every column reads above {high:g} °C (the lowest {min(span[0] for span in spans.values()):g}), "
+            f"every column reads above {high:g} °C (the lowest {min(span[0] for span in spans.values()):.4g}), "
             "none near the room"
         )
     elif every and stated is not None and all(span[2] < low for span in spans.values()):

@@ -255,6 +255,11 @@ METHOD = (
     "assumed. A sensor may stop when its interval at the decision's confidence lies within the tolerance of its "
     "T∞ at two checks in a row; the test may stop when every sensor may."
 )
+# the warnings' heading: each said at its check, not the answer at the end
+WARNINGS_NOTE = (
+    "As said during the test, each at its time (t = …): a later check may have withdrawn it. The table above is "
+    "the answer at the end."
+)
 # the table's terms, said under it
 T_EQ_NOTE = (
     "t_eq: when the best model's curve comes within 5 % of its total rise from T∞ (min from t = 0). "
@@ -328,6 +333,9 @@ def build_report(
         session.poll(progress)
         if session.last_rows == 0:
             break
+    # as a replayed watch answers: where the log ends before a stop, from every sensor checked on
+    # every reading (not from checks spaced out before the end, which watch and report then differed by)
+    session.catch_up()
     state = session.state
     if state is None:
         msg = f"{session.shown}: no data rows to report on"
@@ -781,6 +789,7 @@ def write_html(report: WarmupReport, path: str | Path) -> Path:
         rows=list(zip(rows, [line.within_tolerance is False for line in report.lines], strict=True)),
         notes=[T_EQ_NOTE] + ([SETTLED_NOTE] if _settled(report) else []),
         figure=base64.b64encode(report.figure_png).decode("ascii"),
+        warnings_note=WARNINGS_NOTE,
     )
     out = Path(path)
     out.write_text(page, encoding="utf-8")
@@ -952,6 +961,7 @@ def summary_pages(report: WarmupReport) -> list[Figure]:
     _curves(pages, report)
     if report.warnings:
         pages.heading("Warnings", keep=0.03)
+        pages.text(WARNINGS_NOTE, 7.5)
         for warning in report.warnings:
             pages.bullet(warning, 7.5)
     pages.heading("What the answer assumes", keep=0.03)

@@ -365,11 +365,20 @@ def _failed_after_words(check: SensorCheck, stuck: bool, since_min: float) -> st
 def _reference_dropped(settings: MonitorSettings, now: float, why: str, sensors: Sequence[str]) -> Event:
     """The warning that the reference is used for no sensor from now on, and why."""
     assert settings.reference is not None
+    # a room that moves and is not logged takes every sensor off a reference learnt with the room as
+    # an input: the likeliest cause where the test names no room sensor
+    unlogged = settings.room_sensor is None and settings.reference.room_measured
+    room = (
+        "a room that moved and that this test does not log (the reference was learnt with a room sensor: name "
+        "the test's room column as the room sensor, `room_sensor`), "
+        if unlogged
+        else ""
+    )
     return Event(
         "warning",
         now,
         f"the reference ({settings.reference.identity}) {why} ({', '.join(sensors)}): it is not used for any "
-        "sensor from now on (another machine's reference, this machine changed since its run, or the test's "
+        f"sensor from now on ({room}another machine's reference, this machine changed since its run, or the test's "
         "times in another unit than the reference run's; learn the reference again, or give the times' unit "
         "(`time_unit`))",
     )

@@ -172,6 +172,11 @@ class MachineReference:
             )
         raise InputError(msg)
 
+    @property
+    def room_measured(self) -> bool:
+        """Whether the reference run was learnt with a room sensor (the room an input of every mode)."""
+        return self.room == _ROOM_MEASURED
+
     def modes(self, sensor: str) -> SensorModes | None:
         """The modes of ``sensor`` (None if the reference does not know it).
 
@@ -306,7 +311,7 @@ def reference_for_log(
             f"{', '.join(repr(n) for n in reference.sensors)}; a renamed column keeps its modes only under its old "
             "name)"
         )
-    if not with_room and reference.room == _ROOM_MEASURED:
+    if not with_room and reference.room_measured:
         notes.append(
             f"the reference ({reference.source}) was learnt with a room sensor, and this test has none: its answer "
             "assumes the room's stated wander; the room's column, where it was logged, keeps a drifting room out"

@@ -562,8 +562,11 @@ class WatchSession:
         """
         if self.state is None or self.stopped:
             return []
+        before = self.state
         self.state, events = check_every_sensor(self.state, self.settings, cancel)
-        if events and self.persist:
+        # the checks at the log's end are saved though they said nothing: a report or a resumed
+        # watch of the same log then answers from them, not from the checks spaced out before
+        if self.state is not before and self.persist:
             self.save()
         return events
 
