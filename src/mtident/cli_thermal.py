@@ -34,6 +34,7 @@ from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
 from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
 from mtident.thermal.assumptions import MACHINE_MARK
 from mtident.thermal.identification import SensorAnswer
+from mtident.thermal.measured import SETTLED_MOVE_C
 from mtident.thermal.min_time import MinTimeAnswer, MinTimeResult
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
 from mtident.thermal.robust_types import MAX_FREE_FAST, RobustSettings
@@ -353,6 +354,19 @@ class _ColumnLayout(TypedDict, total=False):
     overflow: Literal["fold", "crop", "ellipsis", "ignore"]
     min_width: int
     max_width: int
+
+
+def _not_settled_note(slowest_min: float) -> str:
+    """The table's "*": by which rule a sensor had not settled by the log's end, with an example of
+    the second (a newcomer read a last quarter that moved 0.05 °C as against the first alone)."""
+    half = SETTLED_MOVE_C / 2.0
+    left = half / math.expm1(90.0 / slowest_min)
+    return (
+        f"* not settled by the log's end: its last quarter moved {SETTLED_MOVE_C:g} °C or more, or enough that a "
+        f"mode as slow as {slowest_min:g} min would still bring more than {half:g} °C (at that pace a move of {half:g} "
+        f"°C in 90 min leaves {left:.2f} °C to come). Its last level and 95 %-rise time may be short of where it "
+        "settles."
+    )
 
 
 def _column_layout(column: str) -> _ColumnLayout:
@@ -703,14 +717,10 @@ def _identify_table(
         )
     console = table_console()
     console.print(table)
-    if any(a.measured_settled is False for a in answers):
-        console.print(
-            "* the log's last quarter still moved 0.1 °C or more, or enough to leave more than 0.05 °C to come "
-            "with a mode as slow as the largest time constant: it may not have settled, and its last level and "
-            "95 %-rise time may be short of where it settles.",
-            highlight=False,
-        )
     assumed = answers[0].method_answer.assumptions
+    if any(a.measured_settled is False for a in answers):
+        slowest = assumed.max_time_constant_min if robust else DEFAULT_MAX_TIME_CONSTANT_MIN
+        console.print(_not_settled_note(slowest), highlight=False)
     if not robust:
         console.print(f"Assumes: {assumed.model}.", highlight=False)
         return

@@ -109,3 +109,19 @@ def test_a_panel_shows_the_rest_of_the_log_its_band_and_decision_level_beneath_n
     model = [line for line in ax.get_lines() if line.get_label().startswith("best model")]
     after = [line for line in ax.get_lines() if line.get_label() == "after the stop"]
     assert model and after and model[0].get_zorder() > after[0].get_zorder()
+
+
+def test_a_log_that_runs_on_unsettled_is_said_as_watch_says_it_with_the_rule():
+    """A new user's report said "no sensor settled by its end" where watch gave the rule (moving
+    less than half the tolerance over the last quarter, a quarter of it still to come at the pace
+    of the slowest mode): the user's own settle time, within the tolerance, came earlier."""
+    from mtident.report.test_report import _hindsight_verdict
+    from mtident.thermal.hindsight import check_decision
+
+    t = np.arange(0.0, 361.0)
+    rising = 20.0 + 5.0 * (1.0 - np.exp(-t / 180.0))
+    hindsight = check_decision(("S",), np.array([25.0]), 200.0, t, rising[:, None], 0.2, None, [((180.0, -5.0),)])
+    words = _hindsight_verdict(hindsight)
+    assert words.startswith("The log runs on to 360 min. The log ends before its sensors settled (settled: moving ")
+    assert "less than 0.1 °C over the log's last quarter, with under 0.05 °C still to come" in words
+    assert words.endswith(": nothing to check T∞ against.")

@@ -36,6 +36,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import log_name
 from mtident.report.plots import draw_monitor_panel, plot_monitor
 from mtident.thermal.hindsight import Hindsight
+from mtident.thermal.hindsight_words import no_level_words
 from mtident.thermal.monitor import MonitorSettings, MonitorState, SensorCheck, assumptions, minutes
 from mtident.thermal.monitor_answer import SensorStatus, silent_words
 from mtident.thermal.session import WatchSession
@@ -612,9 +613,9 @@ def _hindsight_verdict(hindsight: Hindsight) -> str:
     failed = f" Stuck at one value before settling (nothing to check): {', '.join(stuck)}." if stuck else ""
     verdict = hindsight.verdict_words()
     if not verdict:
-        following = hindsight.settle_time_min is not None and bool(np.isfinite(hindsight.settle_time_min).any())
-        why = "its readings keep following the room to its end" if following else "no sensor settled by its end"
-        return f"The log runs on to {minutes(log_end_min)}, but {why}: no settled level to check T∞ against.{failed}"
+        # as watch says it: which sensors the log ends before, by what rule, and which follow the room
+        why = no_level_words(hindsight, hindsight.not_settled, bool(hindsight.following_room.any()), "")
+        return f"The log runs on to {minutes(log_end_min)}. {why}: nothing to check T∞ against.{failed}"
     unsettled = hindsight.not_settled
     late = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
     return f"Against the rest of the log (to {minutes(log_end_min)}): {verdict}{late}.{failed}"
