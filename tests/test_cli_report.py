@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 import re
 
 import numpy as np
@@ -284,3 +285,28 @@ def test_the_report_answers_as_a_replayed_watch_does_from_every_sensor_checked_a
         for name, cells in zip(_cells(text, 0), zip(_cells(text, 2), _cells(text, 3), strict=True), strict=True):
             low, high = watched[name]["steady_state_ci95_C"]
             assert cells == (f"{watched[name]['steady_state_C']:.2f}", f"{low:.2f} to {high:.2f}"), (state, name)
+
+
+def test_the_report_says_what_reading_the_log_said_though_a_watch_read_its_first_rows(tmp_path):
+    """A log in °F with no unit stated was reported with T∞ 82.40 "°C" and no word of the unit, the
+    gap or the readings left out: the watch says them while it reads, and the report (which resumes
+    from the watch's state) dropped them. It says them on stderr and in the page, from its own read
+    of the whole log; and it draws how the intervals narrowed, check by check."""
+    t = np.arange(0.0, 120.0)
+    keep = (t < 60) | (t >= 75)
+    fahrenheit = {name: first_order(t[keep], steady=s) * 9 / 5 + 32 for name, s in (("A", 26.7), ("B", 29.0))}
+    fahrenheit["room"] = np.full(keep.sum(), 68.0)
+    log = tmp_path / "f.csv"
+    log.write_text(csv_text(t[keep], fahrenheit))
+    code, _, err = mtident("thermal", "watch", str(log), "--replay", "--ambient", "room")
+    assert code == 0 and "far outside any workshop's range" in err
+    out = tmp_path / "f.html"
+    code, _, err = mtident("thermal", "report", str(log), "--ambient", "room", "-o", str(out))
+    assert code == 0 and "resuming from" in err
+    assert "warning: readings taken as °C (the log states no unit)" in err and "--unit F" in err
+    assert "note: a gap of 16 min in the readings after t = 59 min" in err
+    page = html.unescape(" ".join(out.read_text(encoding="utf-8").split()))
+    assert "<h2>Read with warnings</h2>" in page and "far outside any workshop's range" in page
+    assert "--unit F" in page and "temperature_unit" not in page
+    assert "<h2>How the log was read</h2>" in page and "a gap of 16 min" in page
+    assert "<h2>How the intervals narrowed</h2>" in page and page.count('src="data:image/png;base64,') == 2

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import make_log
+from conftest import first_order, make_log
 from fuzz_logs_helpers import EXPORTS, Export, exports
-from helpers import Outcome, mtident, two_mode, workbook_of_runs
+from helpers import Outcome, csv_text, mtident, noisy, two_mode, workbook_of_runs
 
 import mtident.cli_thermal as cli_thermal
 from mtident.exceptions import InputError
@@ -821,3 +821,16 @@ def test_inspect_says_that_watch_reads_a_log_it_refuses_for_a_bad_row(tmp_path):
     assert "row 7: 'CH1?' is not a number (identify, learn and report refuse the log too; watch" in out.stderr
     missing = mtident("thermal", "inspect", str(tmp_path / "none.csv"))
     assert missing.returncode == 2 and "reads on" not in missing.stderr
+
+
+def test_identify_and_watch_say_a_room_column_that_warms_like_a_machine_sensor(tmp_path):
+    """--ambient named a sensor on the machine: every sensor's warm-up was read as the room's."""
+    t = np.arange(0.0, 200.0)
+    columns = {name: noisy(first_order(t, steady=s), k) for k, (name, s) in enumerate((("A", 26.7), ("B", 24.0)))}
+    columns["room"] = noisy(20.0 + 5.0 * (1.0 - np.exp(-t / 30.0)), 9)
+    log = tmp_path / "log.csv"
+    log.write_text(csv_text(t, columns))
+    code, _, err = mtident("thermal", "identify", str(log), "--window", "120", "--ambient", "room")
+    assert code == 0 and "warning: the room sensor 'room' warmed 4." in err and "--ambient" in err
+    code, _, err = mtident("thermal", "watch", str(log), "--replay", "--ambient", "room")
+    assert code == 0 and err.count("the room sensor 'room' warmed") == 1

@@ -13,6 +13,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from conftest import first_order, wait_until
 from helpers import (
@@ -283,6 +284,23 @@ def test_ctrl_c_inside_compiled_code_is_an_interruption_not_a_traceback(tmp_path
     monkeypatch.setattr(WatchSession, "poll", broken)
     with pytest.raises(SystemError, match="a fault of our own"):
         mtident("thermal", "watch", str(log), "--replay")
+
+
+def test_a_replay_interrupted_says_that_resuming_it_takes_resume(tmp_path, monkeypatch):
+    """Ctrl-C in a replay said "the same command resumes from there"; the same command started
+    afresh and overwrote the state. A replay resumes with --resume, and says so."""
+    log = tmp_path / "done.csv"
+    log.write_text(csv_text(T[:30], {"A": noisy(first_order(T[:30]), 19)}))
+    original = WatchSession.poll
+
+    def poll(session, redraw=None, cancel=None):  # noqa: ANN001, ANN202
+        original(session, redraw, cancel)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(WatchSession, "poll", poll)
+    code, _, err = mtident("thermal", "watch", str(log), "--replay")
+    assert code == 130 and "interrupted (Ctrl-C) at t = 29 min" in err
+    assert "the same command with --resume resumes from there" in err
 
 
 def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypatch):
@@ -868,3 +886,61 @@ def test_an_expected_stop_with_a_logged_room_says_it_holds_the_room_still(tmp_pa
     assert "Not yet" in text and "Expected stop: t ≈" in text, text
     said = "the room held at its latest level (a slower mode that still fits, or a room that keeps moving, moves"
     assert f"on the best model's course, {said} it later)" in text, text
+
+
+def test_the_timeline_csv_holds_every_check_and_a_resumed_replay_writes_the_same(tmp_path):
+    """An engineer wanted to see how the answer narrowed to the stop, check by check, in a
+    spreadsheet: --timeline writes one row per sensor checked, its last row the answer's own
+    numbers. The checks live in the state file: a replay resumed half-way keeps those made before."""
+    save_reference(one_mode_reference("A", "B"), tmp_path / "machine.toml")
+    columns = {"A": noisy(first_order(T[:101]), 18), "B": noisy(first_order(T[:101], steady=25.0), 19)}
+    full = tmp_path / "full.csv"
+    full.write_text(csv_text(T[:101], columns))
+    fast = ("--reference", str(tmp_path / "machine.toml"), "--free-fast-modes", "0")
+    whole = tmp_path / "whole.csv"
+    code, out, err = mtident("thermal", "watch", str(full), "--replay", "--json", "--timeline", str(whole), *fast)
+    assert code == 0, err
+    answer = json.loads(out)
+    assert answer["decision"] == "stop"
+    table = pd.read_csv(whole)
+    assert list(table.columns) == [
+        "checked_at_min",
+        "sensor",
+        "status",
+        "steady_state_C",
+        "ci95_low_C",
+        "ci95_high_C",
+        "decision_low_C",
+        "decision_high_C",
+    ]
+    assert set(table["sensor"]) == {"A", "B"} and np.all(np.diff(table["checked_at_min"]) >= 0)
+    for sensor in answer["sensors"]:
+        last = table[table["sensor"] == sensor["sensor"]].iloc[-1]
+        assert last["checked_at_min"] == pytest.approx(sensor["checked_at_min"])
+        assert last["status"] == sensor["status"] == "may stop"
+        assert last["steady_state_C"] == pytest.approx(sensor["steady_state_C"], abs=1e-4)
+        assert [last["decision_low_C"], last["decision_high_C"]] == pytest.approx(
+            sensor["decision_interval_C"], abs=1e-4
+        )
+    # the early checks have no interval: blank cells, not "inf"
+    assert "inf" not in whole.read_text()
+
+    part = tmp_path / "part.csv"
+    lines = full.read_text().splitlines(keepends=True)
+    part.write_text("".join(lines[:40]))
+    state, resumed = str(tmp_path / "state.npz"), tmp_path / "resumed.csv"
+    code, _, err = mtident(
+        "thermal", "watch", str(part), "--replay", "--state", state, "--timeline", str(resumed), *fast
+    )
+    assert code == 0, err
+    before = pd.read_csv(resumed)
+    part.write_text("".join(lines))
+    code, _, err = mtident(
+        "thermal", "watch", str(part), "--replay", "--resume", "--state", state, "--timeline", str(resumed), *fast
+    )
+    assert code == 0, err
+    again = pd.read_csv(resumed)
+    # the checks before the resume are kept, none twice, and the run goes on to the stop
+    pd.testing.assert_frame_equal(again.iloc[: len(before)], before)
+    assert len(again) > len(before) and not again.duplicated(["checked_at_min", "sensor"]).any()
+    assert list(again.groupby("sensor")["status"].last()) == ["may stop", "may stop"]

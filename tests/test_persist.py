@@ -7,6 +7,7 @@ import signal
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from conftest import first_order, wait_until
 from helpers import T, csv_text, noisy
@@ -70,7 +71,7 @@ def test_a_state_file_from_before_a_field_with_a_default_was_added_loads_with_it
     """A check that gained a field (the room gains its picture needs) still resumes a state file
     written without it; a file that lacks a field with no default, or holds one the class does not
     have, is refused by name."""
-    from dataclasses import dataclass
+    from dataclasses import dataclass, field
 
     from mtident.persist import StateFileError
 
@@ -91,8 +92,16 @@ def test_a_state_file_from_before_a_field_with_a_default_was_added_loads_with_it
         steady_C: float
         rise_C: float
 
+    @dataclass(frozen=True)
+    class Kept:
+        sensor: str
+        steady_C: float
+        timeline: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
+
     save_dataclass(tmp_path / "before.npz", Before("T1", 26.7))
     assert load_dataclass(tmp_path / "before.npz", After) == After("T1", 26.7, ())
+    # an array field added since (the monitor's checks) loads empty
+    assert load_dataclass(tmp_path / "before.npz", Kept).timeline.shape == (0, 3)
     with pytest.raises(StateFileError, match="rise_C"):
         load_dataclass(tmp_path / "before.npz", Needs)
     save_dataclass(tmp_path / "after.npz", After("T1", 26.7, (0.5,)))
@@ -104,7 +113,6 @@ def test_monitor_states_compare_without_raising_their_readings_by_value():
     """Two monitor states compare (== raised on their readings' arrays): the readings of a state
     read back from its file equal the ones saved, NaN equal to NaN; a state with one reading more
     differs. A check's NaN fields follow float's rule (NaN differs from itself)."""
-    import numpy as np
     from conftest import through_state_file
 
     from mtident.thermal.monitor import monitor_step, new_state
@@ -115,6 +123,7 @@ def test_monitor_states_compare_without_raising_their_readings_by_value():
     state, _ = monitor_step(new_state(["A", "B"], with_room=True), T[:40], values, np.full(40, 20.0), MonitorSettings())
     loaded = through_state_file(state)
     assert loaded.readings is not state.readings and loaded.readings == state.readings
-    assert state == state
+    assert state == state and np.array_equal(loaded.timeline, state.timeline, equal_nan=True)
+    assert len(state.timeline) > 0
     later, _ = monitor_step(loaded, T[40:41], values[-1:], np.array([20.0]), MonitorSettings())
     assert later != state and later.readings != state.readings

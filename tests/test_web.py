@@ -235,7 +235,9 @@ def _following(session, log: Path, page: LivePage, replay: bool) -> threading.Th
     from mtident.thermal.session import FollowSettings
 
     thread = threading.Thread(
-        target=_follow, args=(session, log, FollowSettings(replay, 0.05, None), None, False, None, page), daemon=True
+        target=_follow,
+        args=(session, log, FollowSettings(replay, 0.05, None), (None, None), False, None, page),
+        daemon=True,
     )
     thread.start()
     return thread

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
 import click
 
-from mtident.cli import thermal, user_errors
+from mtident.cli import as_options, thermal, user_errors
 from mtident.cli_options import file_option, output_option
 from mtident.cli_thermal import _say_room_candidates, asked_sensors, log_options, log_path, stderr, unread_rooms_of
 from mtident.cli_watch import _workbook_as_replayed_csv, decision_options, monitor_settings, state_file
@@ -88,6 +89,21 @@ def report_command(**options: Any) -> None:
                 status.update(f"deciding: t = {minutes(current.state.readings.latest_min)} of the log")
 
         report = build_report(session, progress, options["machine"])
+    # the page says the command line's options, as its stderr does, not the library's parameters
+    report = dataclasses.replace(
+        report,
+        log_warnings=tuple(map(as_options, report.log_warnings)),
+        log_notes=tuple(map(as_options, report.log_notes)),
+        warnings=tuple(map(as_options, report.warnings)),
+        holding=tuple(map(as_options, report.holding)),
+        ways_on=None if report.ways_on is None else as_options(report.ways_on),
+        reason=None if report.reason is None else as_options(report.reason),
+    )
+    # what reading the log said, as a watch says it (the report holds it too)
+    for note in report.log_notes:
+        stderr.print(f"mtident: note: {note}", highlight=False)
+    for warning in report.log_warnings:
+        stderr.print(f"mtident: warning: {warning}", highlight=False)
     if settings.room_sensor is None:  # as watch says it: a room column was reported as a machine sensor, or not read
         unread = unread_rooms_of(read, session.sensors) if session.asked is not None else []
         _say_room_candidates(session.sensors, "reported as a machine sensor", unread=unread)

@@ -76,6 +76,7 @@ from mtident.thermal.session import (
     WatchSession,
     default_state_path,
 )
+from mtident.thermal.timeline import write_timeline
 
 if TYPE_CHECKING:
     from mtident.web import LivePage, Served
@@ -232,6 +233,10 @@ class WatchRequest:
         --json.
     serve_address : str or None
         --serve.
+    exit_code : bool
+        --exit-code.
+    timeline_path : str or None
+        --timeline.
     """
 
     log: LogRequest
@@ -244,6 +249,7 @@ class WatchRequest:
     as_json: bool
     serve_address: str | None
     exit_code: bool = False
+    timeline_path: str | None = None
 
 
 def watch_request(options: Mapping[str, Any]) -> WatchRequest:
@@ -268,6 +274,7 @@ def watch_request(options: Mapping[str, Any]) -> WatchRequest:
         as_json=options["as_json"],
         serve_address=options["serve_address"],
         exit_code=options["exit_code"],
+        timeline_path=options["timeline_path"],
     )
 
 
@@ -297,6 +304,13 @@ UNDECIDED_EXIT = 3
     "so that `watch ... --exit-code && next-step` goes on only after a stop.",
 )
 @plot_option("Keep a picture (PNG; .svg or .pdf by the suffix) of measured and predicted curves up to date.")
+@click.option(
+    "--timeline",
+    "timeline_path",
+    type=OutputPath(),
+    help="Keep a CSV of every check up to date: one row per sensor checked, with its status, T∞ and its 95 % and "
+    "decision intervals (how the answer narrowed to the stop).",
+)
 @click.option(
     "--json",
     "as_json",
@@ -436,6 +450,8 @@ def watch(request: WatchRequest) -> None:
         whole = session.whole_log() if session.state.stopped and (request.plot_path or follow.replay) else None
         if request.plot_path:
             _plot(session, request.plot_path, whole)
+        if request.timeline_path:
+            write_timeline(session.state, request.timeline_path)
         # interrupted: the answer without the expected stops, whose forecasts take seconds
         _answer(
             session,
@@ -512,7 +528,7 @@ def _follow_served(
     recording = None if recorder is None else RecordingThread(recorder, request.follow.poll_s)
     try:
         fetch = None if recording is None else recording.fetch
-        return _follow(session, path, request.follow, request.plot_path, live, fetch, page)
+        return _follow(session, path, request.follow, (request.plot_path, request.timeline_path), live, fetch, page)
     finally:
         if on_main:
             signal.signal(signal.SIGTERM, previous)
@@ -527,38 +543,41 @@ def _follow(
     session: WatchSession,
     path: Path,
     follow: FollowSettings,
-    plot_path: str | None,
+    kept: tuple[str | None, str | None],
     live: bool,
     fetch: Callable[[], list[str]] | None = None,
     page: LivePage | None = None,
 ) -> bool:
     """Render :meth:`WatchSession.run` until it ends; True if Ctrl-C or SIGTERM ended it (the
     state file then holds the last rows fed). A live log's newest readings reach the page from a
-    thread of their own, while this one runs the checks."""
+    thread of their own, while this one runs the checks. ``kept``: the --plot picture and the
+    --timeline CSV kept up to date (None: not asked for)."""
     from rich.live import Live
 
     tail = None if page is None or follow.replay else RecordTail(session, page.record, follow.poll_s)
     run = None
     try:
         with Live(console=OptionConsole(), auto_refresh=False, transient=False) if live else _Nothing() as view:
-            shown = _Shown(path, follow.timeout_s, plot_path, view if live else None, page, follow.replay)
+            shown = _Shown(path, follow.timeout_s, kept, view if live else None, page, follow.replay)
             if page is not None and session.state is not None:
                 shown.publish(session, forecast=False)  # a resumed state: at once
             run = session.run(follow, shown.progress, _terminating.is_set, fetch)
             for event in run:
                 if isinstance(event, Ended) and event.reason == "cancelled":
-                    return _say_interrupted(KeyboardInterrupt() if _interrupting.is_set() else _Terminated(), session)
+                    return _say_interrupted(
+                        KeyboardInterrupt() if _interrupting.is_set() else _Terminated(), session, follow.replay
+                    )
                 shown.show(session, event)
             return False
     except KeyboardInterrupt as stop:
         _close(run)  # a poll cut short fed rows the state file does not hold: the run takes up the saved state
-        return _say_interrupted(stop, session)
+        return _say_interrupted(stop, session, follow.replay)
     except SystemError as error:
         interrupt = carried_interrupt(error)
         if interrupt is None:
             raise
         _close(run)
-        return _say_interrupted(interrupt, session)
+        return _say_interrupted(interrupt, session, follow.replay)
     finally:
         if tail is not None:
             tail.close()
@@ -579,8 +598,8 @@ class _Shown:
         The log followed.
     timeout_s : float or None
         --timeout (s).
-    plot_path : str or None
-        --plot.
+    kept : tuple of (str or None, str or None)
+        --plot and --timeline.
     view : rich.live.Live or None
         Where the table is redrawn (None: not a terminal, or JSON).
     page : LivePage or None
@@ -594,14 +613,14 @@ class _Shown:
         self,
         path: Path,
         timeout_s: float | None,
-        plot_path: str | None,
+        kept: tuple[str | None, str | None],
         view: Any,
         page: LivePage | None,
         replay: bool = False,
     ) -> None:
         self.path = path
         self.timeout_s = math.nan if timeout_s is None else timeout_s
-        self.plot_path = plot_path
+        self.plot_path, self.timeline_path = kept
         self.view = view
         self.page = page
         self.replay = replay
@@ -664,6 +683,8 @@ class _Shown:
             if self.plot_path and not drawn_after and (time.monotonic() - self.last_plot > _PLOT_S or event.stopped):
                 _plot(session, self.plot_path)
                 self.last_plot = time.monotonic()
+            if self.timeline_path and session.state is not None and event.rows:
+                write_timeline(session.state, self.timeline_path)
         elif isinstance(event, Waiting):
             stderr.print(
                 f"mtident: waiting for new rows: none for {event.idle_s:g} s (a finished log is replayed "
@@ -677,8 +698,9 @@ class _Shown:
             )
 
 
-def _say_interrupted(stop: KeyboardInterrupt, session: WatchSession) -> bool:
-    """Where the watch was stopped, and what it kept; True (interrupted)."""
+def _say_interrupted(stop: KeyboardInterrupt, session: WatchSession, replay: bool = False) -> bool:
+    """Where the watch was stopped, and what it kept; True (interrupted). A replay resumes with
+    --resume: the same command starts afresh, and overwrote the state it was told to resume from."""
     how = "terminated (SIGTERM)" if isinstance(stop, _Terminated) else "interrupted (Ctrl-C)"
     where = (
         "before the first sample"
@@ -686,7 +708,8 @@ def _say_interrupted(stop: KeyboardInterrupt, session: WatchSession) -> bool:
         else f"at t = {minutes(session.state.readings.latest_min)}"
     )
     kept = (
-        f"the state is in {session.state_path}; the same command resumes from there"
+        f"the state is in {session.state_path}; "
+        + ("the same command with --resume resumes from there" if replay else "the same command resumes from there")
         if session.state_path.is_file()
         else "nothing was saved"
     )

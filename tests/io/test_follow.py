@@ -466,6 +466,26 @@ def test_follower_and_watch_refuse_two_columns_of_one_name(tmp_path):
     assert "the column name 'T1' appears twice" in err
 
 
+def test_follower_and_watch_refuse_a_log_without_a_header(tmp_path):
+    """A logger's export without its header line: watch named the sensors "20.003" and "20.020"
+    after the first readings, lost those, and said "20.003: may stop"."""
+    path = tmp_path / "log.csv"
+    path.write_text("".join(f"{t},{20 + t / 100:.3f},{20.02 + t / 90:.3f}\n" for t in range(30)))
+    with pytest.raises(InputError, match=r"the header \(0, 20.000, 20.020\) holds readings, not column names"):
+        LogFollower(path).poll()
+    code, _, err = mtident("thermal", "watch", str(path), "--replay")
+    assert code == 2 and "Traceback" not in err and "add one, or export the log with its header" in err
+
+
+def test_follower_refuses_a_time_with_thousands_grouped_under_decimal_commas(tmp_path):
+    """'960' then '1.020' (s): read as 1.02 s, the time went back, and a live log's rows after
+    960 s would have been skipped as out of order, the grouping unsaid."""
+    path = tmp_path / "log.csv"
+    path.write_text("Zeit [s];T1\n900;20,0\n960;20,2\n1.020;20,4\n1.080;20,5\n")
+    with pytest.raises(InputError, match=r"holds '1.020' in a log written with decimal commas: the point groups"):
+        LogFollower(path).poll()
+
+
 def test_follower_handles_a_replaced_log_without_double_counting(tmp_path):
     path = tmp_path / "log.csv"
     stamps = [f"2026-11-22T08:{m:02d}:00" for m in range(10)]

@@ -93,6 +93,30 @@ def test_the_exports_cover_what_users_produce():
             {},
             r"the column name 'A' appears twice \(columns 2 and 3\)",
         ),
+        # a log exported without its header: its first readings were sensors named "20.003", its first row lost
+        (
+            "0,20.003,20.020\n1,20.1,20.2\n2,20.2,20.3\n3,20.3,20.4\n4,20.3,20.4\n",
+            {},
+            r"the header \(0, 20.003, 20.020\) holds readings, not column names: a log needs a header naming its "
+            r"columns above the readings \(time_min,T1,T2,...\)",
+        ),
+        # thousands grouped with points under decimal commas: 1000-13000 s read as a log of 0.2 min
+        (
+            "Zeit [s];T1\n1.000;20,0\n1.060;20,2\n1.120;20,4\n1.180;20,5\n1.240;20,6\n",
+            {},
+            r"time column 'Zeit \[s\]' holds '1.000' in a log written with decimal commas: the point groups "
+            r"thousands there \(1.000 = 1000\)",
+        ),
+        (
+            "Zeit [s];T1\n900;20,0\n960;20,2\n1.020;20,4\n1.080;20,5\n1.140;20,6\n",
+            {},
+            r"holds '1.020' in a log written with decimal commas",
+        ),
+        (
+            "22.11.2026 08:00:00;20,003;20,020\n22.11.2026 08:01:00;20,1;20,2\n22.11.2026 08:02:00;20,2;20,3\n",
+            {},
+            r"the header \(22.11.2026 08:00:00, 20,003, 20,020\) holds readings",
+        ),
     ],
 )
 def test_bad_logs_are_refused_with_a_message_naming_the_problem(write_csv, text, kwargs, message):
@@ -301,3 +325,19 @@ def test_a_header_written_again_with_more_columns_is_named_as_one(tmp_path):
     path.write_text("time_min,A,B\n" + body + "time_min,A,C,B\n60,20.60,25.00,21.60\n")
     with pytest.raises(InputError, match=r"line 62 is a header written again with more columns .* \(watch refuses"):
         read_temperature_log(path)
+
+
+def test_a_time_column_named_as_such_is_the_time_though_another_column_comes_first(write_csv):
+    """room,time_min,T1: the room's readings were taken for the time and the log refused as a
+    "duplicate time 19.997", with no word of the time column. Both readers take the column named
+    as the time, and say that the first is read as a sensor."""
+    from mtident.io.follow import LogFollower
+
+    text = "room,time_min,T1\n" + "".join(f"{20 + (k % 2) / 100:.2f},{k},{20 + k / 10:.1f}\n" for k in range(12))
+    path = write_csv(text)
+    log = read_temperature_log(path)
+    np.testing.assert_allclose(log.time_min, np.arange(12.0))
+    assert log.sensors == ("room", "T1") and log.temperature_C[3, 1] == pytest.approx(20.3)
+    assert any("the time is 'time_min', the column named as the time; 'room' before it" in n for n in log.notes)
+    rows = LogFollower(path).poll()
+    np.testing.assert_allclose(rows.time_min, np.arange(12.0))

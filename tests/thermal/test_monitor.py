@@ -108,6 +108,7 @@ def test_the_decision_does_not_depend_on_how_the_readings_are_batched(cuts):
         if len(part):
             state, _ = monitor_step(state, t[part], y[part], None, options)
     assert state.stop_time_min == whole.stop_time_min and state.checks == whole.checks
+    assert np.array_equal(state.timeline, whole.timeline, equal_nan=True)
 
 
 @pytest.mark.xdist_group("one whole monitor run")

@@ -198,3 +198,23 @@ def test_a_spike_beside_a_skipped_reading_is_a_spike_and_a_one_sided_end_is_not_
     y[18:21] = np.nan  # three missing in a row before it: no neighbours that side
     y[21] = 85.0
     assert not spikes(y, 0.01, 0.0)[21]
+
+
+def test_a_room_that_warms_like_a_machine_is_said_and_a_real_rooms_course_is_not():
+    """A bearing's column named as the room (up 4.7 °C like a warm-up) gave time constants of 13
+    to 424 min for a 120-min truth, without a word. A workshop's air on a daily cycle and drifting
+    2.5 °C over a day is said nothing of; a spike is no level."""
+    from mtident.thermal.readings import warming_room_warning
+
+    t = np.arange(0.0, 600.0)
+    bearing = 20.0 + 5.0 * (1.0 - np.exp(-t / 30.0))
+    said = warming_room_warning(bearing, "room")
+    assert said is not None and said.startswith(
+        "the room sensor 'room' warmed 4.7 °C from its first level (20.32 to 25.00 °C)"
+    )
+    assert "`room_sensor`" in said
+    air = 20.0 + 0.5 * np.sin(2 * np.pi * t / 1440.0) + 2.5 * t / 1440.0
+    spiked = air.copy()
+    spiked[300] = 35.0
+    assert warming_room_warning(air, "room") is None and warming_room_warning(spiked, "room") is None
+    assert warming_room_warning(bearing[:8], "room") is None  # too few readings to tell

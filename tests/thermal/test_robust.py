@@ -571,3 +571,21 @@ def test_an_interval_the_floor_brings_near_a_decision_is_searched_in_full():
     assert quick.interval_C == full.interval_C
     low, high = quick.interval_C[0.99]
     assert low <= truth <= high and high - quick.steady_C > 0.2, (low, truth, high)
+
+
+def test_a_sensor_off_its_reference_in_a_moving_room_is_not_said_to_be_another_machines_first():
+    """In rooms drifting 1 °C in 8 h or cycling ±0.4 °C the right machine's reference was dropped
+    for a sensor with "has the machine changed, or is the reference another machine's?": the
+    room's path into the sensor, which a steady reference run did not show, comes first."""
+    from mtident.thermal.robust import _why_off_reference
+
+    drifting = 20.0 + np.linspace(0.0, 0.6, 300)
+    said = _why_off_reference(drifting)
+    assert said.startswith("the room moved 0.60 °C since this warm-up began, and its moves may reach this sensor")
+    assert said.endswith("or has the machine changed, or is the reference another machine's")
+    steady = np.full(300, 20.0)
+    assert (
+        _why_off_reference(steady)
+        == _why_off_reference(None)
+        == "has the machine changed, or is the reference another machine's"
+    )

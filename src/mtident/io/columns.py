@@ -11,6 +11,7 @@ here, so that a live log and the finished file have the same sensors.
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Protocol
 
@@ -37,6 +38,7 @@ __all__ = [
     "event_named",
     "temperature_columns",
     "sensor_unit",
+    "check_header_names",
     "check_unique_names",
     "room_named",
     "unread_rooms",
@@ -178,13 +180,25 @@ def choose_time_column(
     """
     counter = time_col is None and counter_before_time(header, first_row, dialect)
     text_before = 0 if time_col is not None or counter else text_before_stamps(first_row)
-    name = time_col or header[1 if counter else text_before]
+    named = None if time_col is not None or counter or text_before else _named_time_after_first(header, first_row)
+    name = time_col or (named if named is not None else header[1 if counter else text_before])
     # pandas names an unnamed column "Unnamed: 0", the follower ""
     first = header[0] if header[0].strip() and not header[0].startswith("Unnamed: ") else "the unnamed first column"
     notes = [f"left out, a row counter: {first}; the time is {name!r}"] if counter else []
     if text_before:
         notes.append(f"the time is {name!r}, the first column of time stamps")
+    if named is not None:
+        notes.append(f"the time is {name!r}, the column named as the time; {first!r} before it is read as a sensor")
     return name, counter, notes
+
+
+def _named_time_after_first(header: list[str], first_row: list[str]) -> str | None:
+    """A column named as the time after a first column of numbers that is not (a log whose first
+    column is the room: its readings were taken for the time, and refused as a "duplicate time
+    19.997" with no word of the time column); None where the first column is the time's or none is."""
+    if not header or time_named(header[0]) or not first_row or not is_number(first_row[0].strip()):
+        return None
+    return next((name for name in header[1:] if time_named(name)), None)
 
 
 def millisecond_column(header: list[str], last_time_column: int) -> int | None:
@@ -495,6 +509,47 @@ def temperature_columns(
         )
         raise InputError(msg)
     return kept, notes
+
+
+_STAMP_LIKE = re.compile(r"^\s*\d{1,4}([-./:]\d{1,4})+([ T]\d{1,2}(:\d{1,2})+)?\s*$")
+
+
+def check_header_names(header: list[str], number: Callable[[str], float], source: str | Path) -> None:
+    """InputError where the header holds readings, not names (a log written without its header
+    line: its first readings became column names, "20.003" a sensor, and the first row was lost),
+    or two columns share a name (:func:`check_unique_names`).
+
+    Parameters
+    ----------
+    header : list of str
+        The column names, in file order.
+    number : callable
+        The log's number reader (its decimal mark): raises ValueError for a cell that is none.
+    source : str or Path
+        The log, named in the message.
+
+    Raises
+    ------
+    InputError
+        Every name a number but perhaps the first, itself a number or a time stamp.
+    """
+
+    def is_number(cell: str) -> bool:
+        try:
+            number(cell)
+        except ValueError:
+            return False
+        return True
+
+    named = [cell for cell in header if cell.strip()]
+    if len(named) >= 2 and all(map(is_number, named[1:])) and (is_number(named[0]) or _STAMP_LIKE.match(named[0])):
+        shown = ", ".join(named[:4]) + (", ..." if len(named) > 4 else "")
+        msg = (
+            f"{source}: the header ({shown}) holds readings, not column names: a log needs a header naming its "
+            "columns above the readings (time_min,T1,T2,...); add one, or export the log with its header"
+        )
+        raise InputError(msg)
+    check_unique_names(header, source)
 
 
 def check_unique_names(header: list[str], source: str | Path) -> None:

@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mtident.exceptions import InputError
-from mtident.io.columns import check_unique_names, event_named
+from mtident.io.columns import check_header_names, event_named
 from mtident.io.units import (
     carried_unit,
     is_from_humidity,
@@ -724,7 +724,7 @@ def read_lines(
         whole_characters = file.read_bytes()[:-1]
         if dialect.complete_length(whole_characters):
             data = whole_characters
-    check_unique_names(dialect.header(_header_line(head, dialect)), path)
+    check_header_names(dialect.header(_header_line(head, dialect)), dialect.number, path)
     text = _checked_text(file.read_bytes() if data is None else data, head, dialect, path, notes)
     return _LINE_BREAK.split(text)[dialect.preamble_lines :], replace(dialect, sheet=sheet_read)
 

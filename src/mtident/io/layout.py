@@ -11,6 +11,7 @@ units the time and the readings are converted from. The file reader
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +21,7 @@ import numpy as np
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.columns import (
-    check_unique_names,
+    check_header_names,
     choose_time_column,
     millisecond_column,
     missing_column,
@@ -33,7 +34,7 @@ from mtident.io.stamps import date_and_clock
 from mtident.io.time_notes import time_unit_assumed, time_unit_factor, unit_overridden_note
 from mtident.io.units import celsius_conversion
 
-__all__ = ["LogLayout", "time_columns", "layout_of_head"]
+__all__ = ["LogLayout", "time_columns", "layout_of_head", "refuse_grouped_time"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,6 +113,38 @@ class LogLayout:
         )
 
 
+_GROUPED = re.compile(r"^\s*[1-9]\d{0,2}(\.\d{3})+\s*$")
+
+
+def refuse_grouped_time(cell: str, decimal: str, name: str, source: str | Path) -> None:
+    """InputError for a time cell written with a thousands separator under a decimal comma ("1.000"
+    for 1000 s): read with its point as a decimal mark, 1000-13000 s was a log of 0.2 min.
+
+    Parameters
+    ----------
+    cell : str
+        A time cell as written.
+    decimal : str
+        The log's decimal mark.
+    name : str
+        The time column's name.
+    source : str or Path
+        The log, for the message.
+
+    Raises
+    ------
+    InputError
+        The cell groups thousands with points in a log with decimal commas.
+    """
+    if decimal == "," and _GROUPED.match(cell):
+        msg = (
+            f"{source}: time column {name!r} holds {cell.strip()!r} in a log written with decimal commas: the point "
+            f"groups thousands there ({cell.strip()} = {cell.strip().replace('.', '')}), which mtident does not "
+            "read; export the time without a thousands separator"
+        )
+        raise InputError(msg)
+
+
 def time_columns(
     header: list[str], first_row: Sequence[object], dialect: CsvDialect, time_col: str | None, source: str | Path
 ) -> tuple[tuple[int, int | None, int | None], list[str], list[str]]:
@@ -151,6 +184,9 @@ def time_columns(
         msg = f"{source}: no time column {time_name!r}; the columns are: {', '.join(header)}"
         raise InputError(msg)
     at = header.index(time_name)
+    cell = first_row[at] if at < len(first_row) else None
+    if isinstance(cell, str):
+        refuse_grouped_time(cell, dialect.decimal, time_name, source)
     following = at + 1
     clock = None
     if following < min(len(header), len(first_row)):
@@ -217,7 +253,7 @@ def layout_of_head(
             f"found: {', '.join(header)}"
         )
         raise InputError(msg)
-    check_unique_names(header, source)
+    check_header_names(header, dialect.number, source)
     first = rows[0] if rows else []
     (at, clock, milliseconds), not_sensors, notes = time_columns(header, first, dialect, time_col, source)
     names = [h for h in header if h not in (*not_sensors, "")]  # "": a delimiter at the end of the line

@@ -32,7 +32,7 @@ from mtident.exceptions import InputError
 from mtident.io import stamps
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, numbers, split_rows
 from mtident.io.dialect import cut_short_words, rows_cut_short
-from mtident.io.layout import LogLayout
+from mtident.io.layout import LogLayout, refuse_grouped_time
 from mtident.io.time_notes import gap_said, names_a_date, serial_date_hint, serial_date_note
 from mtident.io.whole import MAX_BAD_FRACTION, read_whole
 
@@ -345,6 +345,7 @@ def _parse_time(
     cell; what it finds out about the time column (serial dates read as days) goes to ``notes``."""
     try:
         raw = layout.dialect.number(text)
+        refuse_grouped_time(text, layout.dialect.decimal, layout.time_name, source)
         scale, assumed = (stamps.MINUTES_PER_DAY, False) if state.serial_days else numeric_scale
         stamp = raw * scale
     except ValueError:

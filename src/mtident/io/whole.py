@@ -27,7 +27,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, empty_cells, numbers, plain_numbers
 from mtident.io.dialect import header_again_words
-from mtident.io.layout import LogLayout
+from mtident.io.layout import LogLayout, refuse_grouped_time
 from mtident.io.stamps import (
     CLOCK_DAY_ZERO_MIN,
     IMPLAUSIBLE_STEP_MIN,
@@ -306,6 +306,8 @@ def _times(
     stated = None if layout.clock_column is not None else layout.dialect.time_unit(time.name)
     plain = None if layout.clock_column is not None else _plain_time(time)
     if plain is not None:
+        for cell in time.cells:
+            refuse_grouped_time(cell, layout.dialect.decimal, time.name, source)
         read = _numeric_time(plain, time.name, layout.time_unit, stated, source, notes)
     else:
         read = _stamped_time(time, layout.time_unit, number, source, notes)

@@ -31,6 +31,8 @@ __all__ = [
     "plot_identification",
     "plot_min_time",
     "plot_monitor",
+    "plot_timeline",
+    "draw_timeline",
     "plot_responses",
     "plot_feed_drive_identification",
     "grid",
@@ -533,3 +535,63 @@ def draw_monitor_panel(
         low = max(min([low, *edges]), low - span)
         high = min(max([high, *edges]), high + span)
         ax.set_ylim(low - 0.05 * span, high + 0.05 * span)
+
+
+@overload
+def plot_timeline(state: MonitorState, settings: MonitorSettings, path: None = None) -> Figure: ...
+
+
+@overload
+def plot_timeline(state: MonitorState, settings: MonitorSettings, path: str | Path) -> Path: ...
+
+
+def plot_timeline(state: MonitorState, settings: MonitorSettings, path: str | Path | None = None) -> Path | Figure:
+    """How each sensor's interval narrowed to the tolerance: :func:`draw_timeline` as a picture.
+
+    Parameters
+    ----------
+    state : MonitorState
+        Its checks so far (:attr:`~mtident.thermal.monitor_types.MonitorState.timeline`).
+    settings : MonitorSettings
+        The settings ``state`` was decided with (the tolerance drawn).
+    path : str or Path, optional
+        Where to write the picture, as for :func:`plot_identification`.
+
+    Returns
+    -------
+    Path or Figure
+        As :func:`plot_identification` returns (and raises) for ``path``.
+    """
+    fig = Figure(figsize=(8.0, 3.6))
+    draw_timeline(fig.subplots(), state, settings)
+    return _save(fig, path, 100)
+
+
+def draw_timeline(ax: Axes, state: MonitorState, settings: MonitorSettings) -> None:
+    """At each check, how far the decision's interval reaches from T∞ (its larger half-width), per
+    sensor, on a log scale down to the tolerance a sensor must come within; the stop.
+
+    Parameters
+    ----------
+    ax : Axes
+        Where to draw.
+    state : MonitorState
+    settings : MonitorSettings
+    """
+    from mtident.thermal.monitor import minutes
+    from mtident.thermal.timeline import check_timeline
+
+    table = check_timeline(state)
+    steady = table["steady_state_C"]
+    reach = np.fmax(steady - table["decision_low_C"], table["decision_high_C"] - steady)
+    for name in state.sensors:
+        mine = (table["sensor"] == name).to_numpy() & np.isfinite(reach.to_numpy())
+        ax.plot(table["checked_at_min"][mine], reach[mine], ".-", ms=3, lw=1, label=name)
+    ax.axhline(settings.tolerance_C, color="k", lw=1, ls="--", label=f"tolerance {settings.tolerance_C:g} °C")
+    if state.stopped:
+        ax.axvline(state.stop_time_min, color="k", lw=1, ls=":", label=f"stop at {minutes(state.stop_time_min)}")
+    ax.set_yscale("log")
+    ax.set_xlabel("time of the check (min)")
+    ax.set_ylabel(f"T∞ interval's reach at {settings.decision_level * 100:g} % (°C)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=6, ncol=max(1, math.ceil((len(state.sensors) + 2) / 8)), loc="upper right")

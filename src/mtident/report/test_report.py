@@ -34,10 +34,10 @@ from matplotlib.transforms import Bbox
 from mtident import __version__
 from mtident.exceptions import InputError
 from mtident.io.logs import log_name
-from mtident.report.plots import draw_monitor_panel, plot_monitor
+from mtident.report.plots import draw_monitor_panel, draw_timeline, plot_monitor, plot_timeline
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.hindsight_words import no_level_words
-from mtident.thermal.monitor import MonitorSettings, MonitorState, SensorCheck, assumptions, minutes
+from mtident.thermal.monitor import Event, MonitorSettings, MonitorState, SensorCheck, assumptions, minutes
 from mtident.thermal.monitor_answer import SensorStatus, silent_words
 from mtident.thermal.session import WatchSession
 
@@ -189,6 +189,13 @@ class WarmupReport:
         The software and when the report was made.
     curves : Curves or None
         What the PDF draws its curves from (as vectors, two to a row); None: it places ``figure_png``.
+    timeline_png : bytes
+        How each sensor's interval narrowed to the tolerance, check by check
+        (:func:`~mtident.report.plots.plot_timeline`); empty where the state kept no checks.
+    log_warnings, log_notes : tuple of str
+        What reading the log said, as a watch says it: a unit taken for want of one, readings far
+        outside a workshop's range, a reference of another machine (warnings); gaps, readings
+        left out, units converted (notes).
     """
 
     source: str
@@ -222,6 +229,9 @@ class WarmupReport:
     version: str
     created: str
     curves: Curves | None = field(default=None, repr=False, compare=False)
+    timeline_png: bytes = field(default=b"", repr=False)
+    log_warnings: tuple[str, ...] = ()
+    log_notes: tuple[str, ...] = ()
 
     @property
     def title(self) -> str:
@@ -255,6 +265,12 @@ METHOD = (
     "temperature T∞ covers every such model the readings cannot exclude, up to the largest time constant "
     "assumed. A sensor may stop when its interval at the decision's confidence lies within the tolerance of its "
     "T∞ at two checks in a row; the test may stop when every sensor may."
+)
+# under the picture of the checks
+TIMELINE_WORDS = (
+    "At each check, how far T∞'s interval at the decision's level reached from T∞, per sensor (log scale): a "
+    "sensor may stop once it stays within the tolerance (dashed) at two checks in a row. The watch's "
+    "--timeline option writes the same checks as CSV."
 )
 # the warnings' heading: each said at its check, not the answer at the end
 WARNINGS_NOTE = (
@@ -330,27 +346,35 @@ def build_report(
     -------
     WarmupReport
     """
+    said: list[Event] = []
     while True:
-        session.poll(progress)
+        said += session.poll(progress)
         if session.last_rows == 0:
             break
     # as a replayed watch answers: where the log ends before a stop, from every sensor checked on
     # every reading (not from checks spaced out before the end, which watch and report then differed by)
-    session.catch_up()
+    said += session.catch_up()
     state = session.state
     if state is None:
         msg = f"{session.shown}: no data rows to report on"
         raise InputError(msg)
     settings = session.settings
     outcome = session.answer(with_forecast=False)
-    whole = session.whole_log()
+    # read whole again: what reading it says is the report's too, though a watch's state held its first rows
+    whole, read_warnings, read_notes = session.read_whole_log()
     hindsight = session.hindsight(whole)
     time_min, values, _ = whole
     lines = tuple(
         _line(sensor, state.readings.values_C[:, s], hindsight, s) for s, sensor in enumerate(outcome.sensors)
     )
-    said = assumptions(settings, state.sensors[0], state.readings.room_C is not None)
-    assumed = f"{said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}"
+    of_log = [e for e in said if e.sensor is None]
+    log_warnings = (*session.log_warnings, *read_warnings, *(e.text for e in of_log if e.kind == "warning"))
+    log_notes = (*read_notes, *(e.text for e in of_log if e.kind == "note"))
+    said_assumed = assumptions(settings, state.sensors[0], state.readings.room_C is not None)
+    assumed = (
+        f"{said_assumed.model}, time constants up to {said_assumed.max_time_constant_min:g} min; "
+        f"room {said_assumed.room}"
+    )
     references: dict[str, list[str]] = {}
     for sensor in state.sensors:
         reference = assumptions(settings, sensor).reference
@@ -384,7 +408,7 @@ def build_report(
         started=None if start is None else _when(start),
         started_from=started_from,
         test_date=None if start is None or isinstance(start, dt.time) else _day(start),
-        room=said.room,
+        room=said_assumed.room,
         samples=len(time_min),
         sampling_interval_min=float(np.median(np.diff(time_min))) if len(time_min) > 1 else math.nan,
         log_end_min=float(time_min[-1]) if len(time_min) else math.nan,
@@ -408,6 +432,9 @@ def build_report(
         version=__version__,
         created=_when(dt.datetime.now().astimezone().replace(second=0, microsecond=0)),
         curves=Curves(state, settings, time_min, values),
+        timeline_png=_png(plot_timeline(state, settings)) if len(state.timeline) else b"",
+        log_warnings=tuple(dict.fromkeys(log_warnings)),
+        log_notes=tuple(dict.fromkeys(log_notes)),
     )
 
 
@@ -790,6 +817,8 @@ def write_html(report: WarmupReport, path: str | Path) -> Path:
         rows=list(zip(rows, [line.within_tolerance is False for line in report.lines], strict=True)),
         notes=[T_EQ_NOTE] + ([SETTLED_NOTE] if _settled(report) else []),
         figure=base64.b64encode(report.figure_png).decode("ascii"),
+        timeline=base64.b64encode(report.timeline_png).decode("ascii"),
+        timeline_words=TIMELINE_WORDS,
         warnings_note=WARNINGS_NOTE,
     )
     out = Path(path)
@@ -873,6 +902,14 @@ class _Pages:
                 cell.set_facecolor("#eeeeee")
         self.y -= height
 
+    def wide_panel(self) -> Axes:
+        """Axes the page's width and one row of curves high."""
+        self.room(_ROW_HEIGHT)
+        bottom = self.y - _ROW_HEIGHT + 0.045
+        ax = self.page.add_axes((_LEFT + 0.04, bottom, _RIGHT - _LEFT - 0.04, _ROW_HEIGHT - 0.075))
+        self.y -= _ROW_HEIGHT
+        return ax
+
     def panels(self, count: int) -> list[Axes]:
         """Axes for ``count`` curves, two to a row, on this page and on as many more as they need."""
         axes: list[Axes] = []
@@ -934,6 +971,10 @@ def summary_pages(report: WarmupReport) -> list[Figure]:
         pages.text(saved, 9.0)
     if report.hindsight:
         pages.text(report.hindsight, 8.5)
+    if report.log_warnings:
+        pages.heading("Read with warnings", keep=0.03)
+        for line in report.log_warnings:
+            pages.bullet(line, 8.0)
     if report.holding:
         pages.heading("Why not yet", keep=0.03)
         for line in report.holding:
@@ -960,11 +1001,23 @@ def summary_pages(report: WarmupReport) -> list[Figure]:
         keep=_ROW_HEIGHT,
     )
     _curves(pages, report)
+    if report.curves is not None and len(report.curves.state.timeline):
+        pages.heading("How the intervals narrowed", keep=_ROW_HEIGHT)
+        pages.text(TIMELINE_WORDS, 7.5, keep=_ROW_HEIGHT)
+        ax = pages.wide_panel()
+        draw_timeline(ax, report.curves.state, report.curves.settings)
+        ax.xaxis.label.set_fontsize(7.5)
+        ax.yaxis.label.set_fontsize(7.5)
+        ax.tick_params(labelsize=7)
     if report.warnings:
         pages.heading("Warnings", keep=0.03)
         pages.text(WARNINGS_NOTE, 7.5)
         for warning in report.warnings:
             pages.bullet(warning, 7.5)
+    if report.log_notes:
+        pages.heading("How the log was read", keep=0.03)
+        for line in report.log_notes:
+            pages.bullet(line, 7.5)
     pages.heading("What the answer assumes", keep=0.03)
     pages.text(report.assumptions, 7.5)
     pages.heading("Method", keep=0.03)

@@ -35,6 +35,8 @@ from mtident.thermal.modes import Mode, model_curve
 from mtident.thermal.monitor_answer import assumptions, failure_words, result, room_silent_words, silent_words
 from mtident.thermal.monitor_types import (
     REPORT_LEVEL,
+    STATUSES,
+    TIMELINE_COLUMNS,
     Event,
     EventKind,
     MonitorSettings,
@@ -294,10 +296,12 @@ def _check_due(
         dropped, used, machine = True, replace(settings, reference=None), None
         checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
     wander = unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels))
+    checked_now: set[int] = set()
 
     def check_sensor(s: int) -> None:
         if cancel is not None and cancel():
             raise _Cancelled
+        checked_now.add(s)
         estimate = combined_estimate(sensor_estimate(fitted, s, state.sensors[s], used), machine, s, wander)
         before, checks[s] = (
             checks[s],
@@ -349,9 +353,23 @@ def _check_due(
                 f"test can stop at t = {minutes(now)}",
             )
         )
+    timeline = np.concatenate([state.timeline, _timeline_rows(checks, sorted(checked_now), now)])
     return MonitorState(
-        state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped, state.warned
+        state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped, state.warned, timeline
     ), events
+
+
+def _timeline_rows(checks: Sequence[SensorCheck], checked: Sequence[int], now: float) -> FloatArray:
+    """The rows of :attr:`MonitorState.timeline` of the sensors ``checked`` at ``now``: a sensor
+    checked twice (a reference dropped between) once, as it ended."""
+    return np.array(
+        [
+            (now, s, STATUSES.index(c.status), c.steady_C, c.low95_C, c.high95_C, c.low_C, c.high_C)
+            for s in checked
+            for c in (checks[s],)
+        ],
+        dtype=float,
+    ).reshape(-1, len(TIMELINE_COLUMNS))
 
 
 def _failed_after_words(check: SensorCheck, stuck: bool, since_min: float) -> str:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 
@@ -61,8 +61,10 @@ __all__ = [
     "MonitorSettings",
     "MonitorState",
     "Readings",
+    "STATUSES",
     "SensorCheck",
     "Status",
+    "TIMELINE_COLUMNS",
     "minutes",
 ]
 
@@ -81,6 +83,17 @@ Status = Literal[
     "silent",
     "stuck",
 ]
+STATUSES: tuple[str, ...] = get_args(Status)
+"""The statuses in order: a check's status in :attr:`MonitorState.timeline` is its index here."""
+
+TIMELINE_COLUMNS = ("checked_min", "sensor", "status", "steady_C", "low95_C", "high95_C", "low_C", "high_C")
+"""The columns of :attr:`MonitorState.timeline`, one row per check of a sensor: when, the sensor (its
+index in ``sensors``), its status (its index in :data:`STATUSES`), T∞ and its intervals at 95 % and at
+the decision's level (°C, infinite without one)."""
+
+
+def _no_checks() -> FloatArray:
+    return np.empty((0, len(TIMELINE_COLUMNS)))
 
 
 # what an event of the monitor (and of a watch session) says
@@ -394,6 +407,9 @@ class MonitorState:
     warned : tuple of (str, str)
         Each warning said of a sensor so far, as (sensor, text): its answer lists them, where its
         latest check may no longer have them.
+    timeline : ndarray, shape (M, len(TIMELINE_COLUMNS))
+        Every check so far, one row per sensor checked (:data:`TIMELINE_COLUMNS`): how T∞ and its
+        interval narrowed to the stop (:func:`~mtident.thermal.timeline.check_timeline`).
     """
 
     sensors: tuple[str, ...]
@@ -403,6 +419,22 @@ class MonitorState:
     said: tuple[str, ...] = ()
     reference_dropped: bool = False
     warned: tuple[tuple[str, str], ...] = ()
+    timeline: FloatArray = field(default_factory=_no_checks)
+
+    # the timeline's array compares elementwise, as the readings' do
+    __hash__ = None  # type: ignore[assignment]
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, MonitorState):
+            return NotImplemented
+        mine, theirs = np.asarray(self.timeline), np.asarray(other.timeline)
+        return (
+            (self.sensors, self.readings, self.checks, self.said, self.reference_dropped, self.warned)
+            == (other.sensors, other.readings, other.checks, other.said, other.reference_dropped, other.warned)
+            and (self.stop_time_min == other.stop_time_min or (self.stopped, other.stopped) == (False, False))
+            and mine.shape == theirs.shape
+            and np.array_equal(mine, theirs, equal_nan=True)
+        )
 
     @property
     def stopped(self) -> bool:

@@ -27,6 +27,7 @@ __all__ = [
     "sampling_interval_min",
     "coarse_room_step_C",
     "room_error_C",
+    "warming_room_warning",
     "room_input",
     "room_noise_C",
     "spikes",
@@ -380,6 +381,51 @@ def coarse_room_warning(step_C: float, consequence: str) -> str:
         f"the room is read in steps of {step_C:.2g} °C: it moves within a step unseen, and its readings jump as it "
         f"crosses one, an error every sensor's fit shares ({consequence}). Log the room at 0.01 °C"
     )
+
+
+ROOM_WARMING_C = 3.0
+"""A room sensor whose readings rise more than this from their first level (°C) warms more than a
+workshop's air does in a test: a sensor on the machine named as the room, most likely."""
+
+
+def warming_room_warning(room_C: FloatArray, name: str | None) -> str | None:
+    """What to say of a room sensor that warms like a machine's (up by more than
+    :data:`ROOM_WARMING_C` from its first level): a bearing named as the room took every sensor's
+    warm-up as the room's, and their time constants came out 13 to 424 min for a 120-min truth,
+    without a word. None for a room that does not.
+
+    Parameters
+    ----------
+    room_C : ndarray, shape (N,)
+        The room's readings (°C, NaN: missing).
+    name : str or None
+        The room sensor's column, for the words.
+
+    Returns
+    -------
+    str or None
+    """
+    valid = np.asarray(room_C, dtype=float)
+    valid = valid[np.isfinite(valid)]
+    if len(valid) < 10:
+        return None
+    first, highest = float(np.median(valid[:5])), float(np.max(_running_median(valid, 5)))
+    if highest - first <= ROOM_WARMING_C:
+        return None
+    column = f"the room sensor {name!r}" if name else "the room sensor"
+    return (
+        f"{column} warmed {highest - first:.1f} °C from its first level ({first:.2f} to {highest:.2f} °C), more than "
+        f"a workshop's air moves in a test ({ROOM_WARMING_C:g} °C): is it a sensor on the machine? The room is an "
+        "input of every sensor's fit, so a machine sensor taken for it bends every answer; name the air's own column "
+        "as the room (`room_sensor`)"
+    )
+
+
+def _running_median(values: FloatArray, width: int) -> FloatArray:
+    """The median of each ``width`` readings in a row (a spike is no level)."""
+    windows = np.lib.stride_tricks.sliding_window_view(values, width)
+    running: FloatArray = np.median(windows, axis=1)
+    return running
 
 
 def _window_sums(time_min: FloatArray, valid: np.ndarray, window_min: float, *columns: FloatArray) -> list[FloatArray]:

@@ -318,8 +318,8 @@ def _fit_above_floor(
         notes.add(
             "reference-disagrees",
             f"with the reference's modes its T∞ would be {steady} °C, below where it already is ({already} °C) by "
-            "more than the fit's own error, and a warm-up does not come down: has the machine changed, or is the "
-            "reference another machine's? This answer does not use it",
+            f"more than the fit's own error, and a warm-up does not come down: {_why_off_reference(readings[2])}? "
+            "This answer does not use it",
         )
         fit, reference_used, floor = searched(None)
     steady, already = _apart(fit.steady_C, floor)
@@ -339,6 +339,25 @@ def _fit_above_floor(
         )
         floor = -np.inf
     return fit, reference_used, floor
+
+
+# a logged room that moved this much (°C) since the warm-up began may be why a test leaves its reference
+_ROOM_MOVED_C = 0.1
+
+
+def _why_off_reference(room_C: FloatArray | None) -> str:
+    """What may have taken a sensor off its reference, likeliest first: a room that moved reaches a
+    sensor through its modes, and a reference learnt in a steadier room did not see that path (in
+    rooms drifting or on a daily cycle the right machine's reference was said to be perhaps another's)."""
+    valid = np.empty(0) if room_C is None else room_C[np.isfinite(room_C)]
+    moved = float(np.ptp(valid)) if len(valid) else 0.0
+    machine = "has the machine changed, or is the reference another machine's"
+    if moved < _ROOM_MOVED_C:
+        return machine
+    return (
+        f"the room moved {moved:.2f} °C since this warm-up began, and its moves may reach this sensor by another path "
+        f"than the reference run showed; or {machine}"
+    )
 
 
 def _floor_brings_near(fit: SteadyState, floor: float, settings: RobustSettings, refine_within: float | None) -> bool:

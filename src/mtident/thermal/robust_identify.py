@@ -23,6 +23,7 @@ from mtident.thermal.machine_answer import combined_estimate, fit_readings, unme
 from mtident.thermal.measured import measured_and_settled, minutes_given, rmse, window_samples
 from mtident.thermal.modal_types import Mode
 from mtident.thermal.modes import fitted_curve
+from mtident.thermal.readings import warming_room_warning
 from mtident.thermal.reference import MachineReference, reference_for_log
 from mtident.thermal.robust import estimate_sensor, with_fragility
 from mtident.thermal.robust_types import Assumptions, RobustSettings, SensorEstimate
@@ -210,6 +211,8 @@ def identify_robust(
         msg = f"the room sensor has {len(room_C)} readings for {len(t)} samples"
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
+    warming = None if room_C is None else warming_room_warning(room_C, room_sensor)
+    room_said = () if warming is None else (warming,)
     unfit: list[str] = []
     if reference is not None:
         reference, unfit = reference_for_log(reference, log.sensors, room_C is not None, room_sensor)
@@ -274,7 +277,7 @@ def identify_robust(
         measured_final_C=final,
         measured_equilibrium_time_min=equilibrium,
         measured_settled=settled,
-        notes=(*log.notes, *unfit, *(w for e in estimates for w in e.warnings)),
+        notes=(*log.notes, *unfit, *room_said, *(w for e in estimates for w in e.warnings)),
         details=RobustDetails(
             estimates=estimates,
             assumptions=tuple(

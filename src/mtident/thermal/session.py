@@ -43,7 +43,7 @@ from mtident.thermal.monitor import (
     new_state,
 )
 from mtident.thermal.monitor_answer import WatchAnswer, answer
-from mtident.thermal.readings import coarse_room_step_C, coarse_room_warning
+from mtident.thermal.readings import coarse_room_step_C, coarse_room_warning, warming_room_warning
 from mtident.thermal.reference import reference_for_log
 
 __all__ = [
@@ -334,7 +334,7 @@ class WatchSession:
         self.notes: list[str] = []
         self.last_rows = 0
         self.cancelled = False
-        self._room_step_said = False
+        self._room_step_said = self._room_warming_said = False
         self.log_warnings: list[str] = []
         room = settings.room_sensor
         self._asked = None if sensors is None else [*[n for n in sensors if n != room], *([room] if room else [])]
@@ -542,6 +542,7 @@ class WatchSession:
             if progress is not None:
                 progress(self)
         events.extend(self._coarse_room())
+        events.extend(self._warming_room())
         if self.persist:
             self.save()
         return events
@@ -569,6 +570,18 @@ class WatchSession:
         if self.state is not before and self.persist:
             self.save()
         return events
+
+    def _warming_room(self) -> list[Event]:
+        """Once per session, a warning where the room sensor warms like a machine's sensor
+        (:func:`~mtident.thermal.readings.warming_room_warning`), as soon as it has."""
+        readings = None if self.state is None else self.state.readings
+        if self._room_warming_said or readings is None or readings.room_C is None:
+            return []
+        text = warming_room_warning(readings.room_C, self.settings.room_sensor)
+        if text is None:
+            return []
+        self._room_warming_said = True
+        return [Event("warning", np.nan, text)]
 
     def _coarse_room(self) -> list[Event]:
         """Once per session, a warning where the room sensor reads in coarse steps (as soon as its
@@ -811,8 +824,23 @@ class WatchSession:
         room_C : ndarray, shape (T,) or None
             The room sensor's readings (°C).
         """
+        return self.read_whole_log()[0]
+
+    def read_whole_log(
+        self,
+    ) -> tuple[tuple[FloatArray, FloatArray, FloatArray | None], tuple[str, ...], tuple[str, ...]]:
+        """:meth:`whole_log`, with the warnings and notes of reading it: a report made from a saved
+        state has not read the log's first rows itself, and must still say a unit taken for want of
+        one, a gap, readings left out.
+
+        Returns
+        -------
+        tuple
+            As :meth:`whole_log` returns it.
+        warnings, notes : tuple of str
+        """
         if self.state is None:
-            return np.empty(0), np.empty((0, 0)), None
+            return (np.empty(0), np.empty((0, 0)), None), (), ()
         room = self.settings.room_sensor
         columns = [*self.state.sensors, *([room] if room else [])]
         rows = LogFollower(
@@ -825,8 +853,8 @@ class WatchSession:
             shown_as=self.shown,
         ).poll()
         if room:
-            return rows.time_min, rows.temperature_C[:, :-1], rows.temperature_C[:, -1]
-        return rows.time_min, rows.temperature_C, None
+            return (rows.time_min, rows.temperature_C[:, :-1], rows.temperature_C[:, -1]), rows.warnings, rows.notes
+        return (rows.time_min, rows.temperature_C, None), rows.warnings, rows.notes
 
 
 class RecordTail:
