@@ -146,11 +146,3 @@ def test_learn_reads_back_the_file_it_wrote_and_says_a_fault_of_its_own(tmp_path
     assert out.returncode == 1
     said = " ".join(out.stderr.split())
     assert "does not read back, a fault of mtident's (please report it, with the log)" in said and "2.75" in said
-
-
-def test_a_box_as_wide_as_its_mode_is_said_as_a_range_not_as_more_than_a_hundred_percent():
-    """'2.78 ±106% min': a time constant cannot go below zero."""
-    from mtident.cli_learn import _with_box
-
-    assert _with_box(2.78, 1.06) == "2.78 (up to 5.73, not pinned down)"
-    assert _with_box(38.8, 0.05) == "38.8 ±5%"

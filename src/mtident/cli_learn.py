@@ -282,7 +282,7 @@ def _learn_table(reference: MachineReference) -> None:
     table_console().print(table)
     model = reference.machine_model
     if model is not None:
-        taus = ", ".join(_with_box(t, b) for t, b in zip(model.time_constants_min, model.box, strict=True))
+        taus = SensorModes(model.time_constants_min, model.box).box_words()
         stderr.print(
             f"mtident: machine model: {len(model.time_constants_min)} modes shared by {len(model.sensors)} sensors "
             f"({taus} min); later tests fit every sensor together, each mode's amplitudes in this run's proportions"
@@ -317,11 +317,3 @@ def _exit_if_none_used(reference: MachineReference) -> None:
     teaches nothing (the file is written, to be read)."""
     if all(m.doubt is not None for m in reference.sensors.values()):
         sys.exit(1)
-
-
-def _with_box(tau: float, box: float) -> str:
-    """A time constant and its box in words: a box as wide as the mode or wider as its range from
-    nothing (a time constant is never below zero: "2.78 ±106%" read as one)."""
-    if box >= 1.0:
-        return f"{tau:.3g} (up to {tau * (1.0 + box):.3g}, not pinned down)"
-    return f"{tau:.3g} ±{box:.0%}"

@@ -142,3 +142,5 @@ def test_a_wide_box_is_said_as_its_range_not_as_a_measurement():
     modes = SensorModes((6.02, 151.5, 136.0), (0.10, 0.98, 0.26))
     assert modes.box_words() == "6.02 ±10%, 3.03-300, 136 ±26%"
     assert modes.box_words(" min") == "6.02 min ±10%, 3.03-300 min, 136 min ±26%"
+    # a box as wide as its mode or wider: a machine model's "2.78 ±106%" (a time constant is never below zero)
+    assert SensorModes((2.78,), (1.06,)).box_words() == "up to 5.73"

@@ -147,7 +147,8 @@ class SensorModes:
 
     def box_words(self, unit: str = "") -> str:
         """The time constants with their boxes, in words: ``6.03 ±10%``, and a wide box as the range
-        it is (``3-300``), whose middle is no measurement.
+        it is (``3-300``), whose middle is no measurement; a box as wide as its mode or wider as how
+        far it reaches (``up to 5.73``: a time constant is never below zero).
 
         Parameters
         ----------
@@ -158,10 +159,13 @@ class SensorModes:
         -------
         str
         """
-        return ", ".join(
-            f"{t * (1 - b):.3g}-{t * (1 + b):.3g}{unit}" if b >= WIDE_BOX else f"{t:.3g}{unit} ±{b:.0%}"
-            for t, b in zip(self.time_constants_min, self.box, strict=True)
-        )
+
+        def words(t: float, b: float) -> str:
+            if b >= 1.0:
+                return f"up to {t * (1 + b):.3g}{unit}"
+            return f"{t * (1 - b):.3g}-{t * (1 + b):.3g}{unit}" if b >= WIDE_BOX else f"{t:.3g}{unit} ±{b:.0%}"
+
+        return ", ".join(words(t, b) for t, b in zip(self.time_constants_min, self.box, strict=True))
 
 
 @dataclass(frozen=True)
@@ -317,11 +321,21 @@ class SensorEstimate:
                 f"with {abs(own):.2f} °C of {course} still to come{after}{meanwhile}"
                 + self._rooms_share(value, end, own + others - best_left)
             )
-        return "; ".join(words)
+        said = "; ".join(words)
+        # what the room's part is, once for both ends (a test's reason said it eight times over)
+        if "more from the room" not in said:
+            return said
+        logged = self.fit.room_level_C is not None
+        return said + (
+            " (the room's part: the path its moves take into the sensor, and its level's error)"
+            if logged
+            else " (the room's part: its unlogged wander)"
+        )
 
     def _rooms_share(self, value: float, end: IntervalEnd, modes_beyond: float) -> str:
         """Words for the part of an end's distance from T∞ that its modes' course does not make: the
-        room's. A logged room's: the path its moves take into the sensor, and its level's error
+        room's (what it is, :meth:`what_sets_the_ends` says once). A logged room's: the path its moves
+        take into the sensor, and its level's error
         (both models fit the readings, so they stand alike now; what is left of the distance is
         where they put the room). An unlogged room's: its wander, by which the end was widened."""
         assert self.fit is not None
@@ -329,8 +343,7 @@ class SensorEstimate:
         share = value - self.fit.steady_C - modes_beyond if logged else value - end.steady_C
         if abs(share) < 0.01 or share * (value - self.fit.steady_C) <= 0:
             return ""
-        why = "the path its moves take into the sensor, and its level's error" if logged else "its unlogged wander"
-        return f", and {abs(share):.2f} °C more from the room ({why})"
+        return f", and {abs(share):.2f} °C more from the room"
 
 
 def _left(mode: Mode, elapsed_min: float) -> float:
