@@ -10,11 +10,14 @@ in on T∞ from it; ``watch --timeline`` writes it as CSV.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from mtident.thermal.monitor_types import STATUSES, TIMELINE_COLUMNS, MonitorState
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["check_timeline", "write_timeline"]
 
@@ -41,6 +44,8 @@ def check_timeline(state: MonitorState) -> pd.DataFrame:
     >>> check_timeline(new_state(("T1",))).columns.tolist()[:3]
     ['checked_at_min', 'sensor', 'status']
     """
+    import pandas as pd  # only for the table: a watch without --timeline starts without it
+
     rows = np.asarray(state.timeline, dtype=float).reshape(-1, len(TIMELINE_COLUMNS))
 
     def column(name: str) -> np.ndarray:
