@@ -834,3 +834,23 @@ def test_identify_and_watch_say_a_room_column_that_warms_like_a_machine_sensor(t
     assert code == 0 and "warning: the room sensor 'room' warmed 4." in err and "--ambient" in err
     code, _, err = mtident("thermal", "watch", str(log), "--replay", "--ambient", "room")
     assert code == 0 and err.count("the room sensor 'room' warmed") == 1
+
+
+def test_a_sensor_whose_channel_froze_for_half_an_hour_is_said_and_fitted_without_the_repeats(tmp_path):
+    """A new user's T2 froze from 80 to 110 min: identify called it a misfit, T∞ 26.17 [25.91,
+    37.70] for a truth of 26.00. The repeats are left out with a warning, once in a watch."""
+    t = np.arange(0.0, 200.0)
+    rng = np.random.default_rng(3)
+    columns = {
+        name: np.round(20.0 + rise * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
+        for name, rise in (("T1", 8.0), ("T2", 6.0))
+    }
+    columns["T2"][80:111] = columns["T2"][80]
+    log = tmp_path / "log.csv"
+    log.write_text(csv_text(t, columns))
+    code, out, err = mtident("thermal", "identify", str(log), "--window", "200", "--json")
+    assert code == 0 and "warning: sensor 'T2': its readings froze at one value (t = 81 to 110 min)" in err
+    t2 = next(s for s in json.loads(out)["sensors"] if s["sensor"] == "T2")
+    assert t2["model_ok"] and abs(t2["steady_state_C"] - 26.0) < 0.05
+    code, _, err = mtident("thermal", "watch", str(log), "--replay")
+    assert code == 0 and err.count("T2: its readings froze at one value (t = 81 to 110 min)") == 1

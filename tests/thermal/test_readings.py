@@ -218,3 +218,26 @@ def test_a_room_that_warms_like_a_machine_is_said_and_a_real_rooms_course_is_not
     spiked[300] = 35.0
     assert warming_room_warning(air, "room") is None and warming_room_warning(spiked, "room") is None
     assert warming_room_warning(bearing[:8], "room") is None  # too few readings to tell
+
+
+def test_a_stretch_that_froze_and_read_on_is_left_out_and_a_coarse_displays_repeats_are_not():
+    """A logger channel repeated its last reading for 30 min and then read on: its repeats were
+    fitted, and the sensor came out a misfit, T∞ 26.17 [25.91, 37.70] for a truth of 26.00. The
+    stretch is found (from its second reading: the first is a real one) and left out; a settled
+    sensor on a 0.1 °C display repeats its reading by the hour, which is no freeze; a channel stuck
+    to the end is stuck_since's, not a stretch."""
+    from mtident.thermal.readings import frozen_stretches, frozen_words, without_stuck
+
+    t = np.arange(0.0, 200.0)
+    rng = np.random.default_rng(3)
+    y = np.round(20.0 + 6.0 * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
+    y[80:111] = y[80]
+    assert frozen_stretches(t, y) == [(81.0, 110.0)]
+    values, since = without_stuck(t, y[:, None])
+    assert np.isnan(since[0]) and np.isnan(values[81:111, 0]).all() and np.isfinite(values[[80, 111], 0]).all()
+    assert frozen_words("T2", [(81.0, 110.0)]).startswith("T2: its readings froze at one value (t = 81 to 110 min)")
+    coarse = np.round(20.0 + 6.0 * (1.0 - np.exp(-t / 20.0)) + rng.normal(0.0, 0.01, t.size), 1)
+    assert frozen_stretches(t, coarse) == []
+    stuck = y.copy()
+    stuck[150:] = stuck[150]
+    assert frozen_stretches(t, stuck) == [(81.0, 110.0)]

@@ -38,7 +38,7 @@ from mtident.thermal.measured import (
     rmse,
     window_samples,
 )
-from mtident.thermal.readings import without_stuck
+from mtident.thermal.readings import frozen_stretches, frozen_words, without_stuck
 from mtident.thermal.robust_identify import identify_robust
 from mtident.thermal.robust_types import RobustSettings
 from mtident.thermal.settings import DEFAULT_METHOD, IDENTIFY_METHODS, METHODS, ROBUST_METHOD
@@ -68,7 +68,8 @@ __all__ = [
 
 
 def without_stuck_readings(log: TemperatureLog) -> TemperatureLog:
-    """The log with each sensor's stuck readings at its end (:func:`~mtident.thermal.readings.stuck_since`)
+    """The log with each sensor's stuck readings at its end (:func:`~mtident.thermal.readings.stuck_since`),
+    and those of a stretch that froze and moved on (:func:`~mtident.thermal.readings.frozen_stretches`),
     left out, and a note naming them: a failed channel's 0.00 °C from 150 min on was read as where
     the sensor settled (its measured final temperature 0.00, "settled", its RMSE 23 °C).
 
@@ -87,6 +88,10 @@ def without_stuck_readings(log: TemperatureLog) -> TemperatureLog:
         for name, start in zip(log.sensors, since, strict=True)
         if not math.isnan(start)
     ]
+    # a channel that froze for a while and read on: its repeats made the sensor a misfit, untrusted
+    for s, name in enumerate(log.sensors):
+        if stretches := frozen_stretches(log.time_min, log.temperature_C[:, s]):
+            notes.append(frozen_words(f"sensor {name!r}", stretches))
     return replace(log, temperature_C=values, notes=(*log.notes, *notes)) if notes else log
 
 

@@ -34,6 +34,8 @@ __all__ = [
     "step_from_grid",
     "stuck_since",
     "without_stuck",
+    "frozen_stretches",
+    "frozen_words",
 ]
 
 ROOM_TREND_MIN = 120.0
@@ -658,23 +660,58 @@ def stuck_since(time_min: FloatArray, values: FloatArray) -> float:
     y = values[at]
     differs = np.flatnonzero(y != y[-1])
     start = int(differs[-1]) + 1 if len(differs) else 0
-    alike = len(y) - start
-    if start < _NOISE_BEFORE or alike < STUCK_READINGS or time_min[at[-1]] - time_min[at[start]] < STUCK_MIN:
-        return math.nan
+    return float(time_min[at[start]]) if _no_chance(time_min[at], y, start, len(y)) else math.nan
+
+
+def _no_chance(time_min: FloatArray, y: FloatArray, start: int, stop: int) -> bool:
+    """Whether the valid readings ``y[start:stop]``, one and the same value, are too many and too
+    long alike for the noise of the readings before them (:data:`STUCK_CHANCE`)."""
+    alike = stop - start
+    if start < _NOISE_BEFORE or alike < STUCK_READINGS or time_min[stop - 1] - time_min[start] < STUCK_MIN:
+        return False
     before = slice(max(start - 10 * _NOISE_BEFORE, 0), start)
-    sigma = float(noise_sigma(y[before, None], time_min[at[before]])[0])
+    sigma = float(noise_sigma(y[before, None], time_min[before])[0])
     step = float(display_resolution(y[:, None])[0])
     # the noise beyond the rounding's own (q/√12): a smooth settled curve, rounded, repeats its
     # reading by the hundred, and the rounding's share of σ says nothing of how often
     beyond = math.sqrt(max(sigma**2 - step**2 / 12.0, 0.0))
     if beyond <= 0.0 or beyond < _STUCK_NOISE_STEPS * step:
-        return math.nan
+        return False
     # the most readings of noise σ about a level can share is one step about it; and the readings
     # before, as often as they repeated themselves then
     in_one_step = math.erf(step / (2.0 * math.sqrt(2.0) * beyond))
     repeated = float(np.mean(np.diff(y[before]) == 0.0))
-    chance = max(in_one_step, repeated) ** (alike - 1)
-    return float(time_min[at[start]]) if chance < STUCK_CHANCE else math.nan
+    return bool(max(in_one_step, repeated) ** (alike - 1) < STUCK_CHANCE)
+
+
+def frozen_stretches(time_min: FloatArray, values: FloatArray) -> list[tuple[float, float]]:
+    """The stretches inside a column's readings that froze at one value and moved on again (a
+    logger channel that repeated its last reading for half an hour): as many readings alike as
+    :func:`stuck_since` takes for no chance, followed by readings that differ. Each as (the time of
+    its second reading, the time of its last): its first reading is a real one.
+
+    Parameters
+    ----------
+    time_min : ndarray, shape (N,)
+    values : ndarray, shape (N,)
+        The column's readings (°C, NaN: missing).
+
+    Returns
+    -------
+    list of (float, float)
+    """
+    at = np.flatnonzero(np.isfinite(values))
+    if len(at) < STUCK_READINGS + _NOISE_BEFORE:
+        return []
+    t, y = time_min[at], values[at]
+    # runs of equal neighbours; the last run, reaching the end, is stuck_since's
+    edges = np.flatnonzero(np.diff(y) != 0.0) + 1
+    starts, stops = np.r_[0, edges], np.r_[edges, len(y)]
+    return [
+        (float(t[a + 1]), float(t[b - 1]))
+        for a, b in zip(starts[:-1], stops[:-1], strict=True)
+        if b - a >= STUCK_READINGS and _no_chance(t, y, int(a), int(b))
+    ]
 
 
 def without_stuck(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, list[float]]:
@@ -694,11 +731,24 @@ def without_stuck(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray,
     since : list of float
         Per column, when its repeats began (NaN: not stuck).
     """
-    since = [stuck_since(time_min, column) for column in np.asarray(values).T]
-    if all(math.isnan(s) for s in since):
+    columns = np.asarray(values).T
+    since = [stuck_since(time_min, column) for column in columns]
+    frozen = [frozen_stretches(time_min, column) for column in columns]
+    if all(math.isnan(s) for s in since) and not any(frozen):
         return values, since
     out = np.array(values, dtype=float)
     for s, start in enumerate(since):
         if not math.isnan(start):
             out[time_min >= start, s] = np.nan
+        for first, last in frozen[s]:
+            out[(time_min >= first) & (time_min <= last), s] = np.nan
     return out, since
+
+
+def frozen_words(name: str, stretches: list[tuple[float, float]]) -> str:
+    """What to say of a sensor's frozen stretches (:func:`frozen_stretches`), left out of its fit."""
+    spans = ", ".join(f"t = {first:g} to {last:g} min" for first, last in stretches)
+    return (
+        f"{name}: its readings froze at one value ({spans}), more alike than its noise leaves to chance (a logger "
+        "channel that repeated its last reading?): those repeats are left out"
+    )
