@@ -298,9 +298,11 @@ def test_a_replay_interrupted_says_that_resuming_it_takes_resume(tmp_path, monke
         raise KeyboardInterrupt
 
     monkeypatch.setattr(WatchSession, "poll", poll)
-    code, _, err = mtident("thermal", "watch", str(log), "--replay")
+    code, out, err = mtident("thermal", "watch", str(log), "--replay")
     assert code == 130 and "interrupted (Ctrl-C) at t = 29 min" in err
     assert "the same command with --resume resumes from there" in err
+    # the replay's log does not end where it was interrupted
+    assert "where the replay was interrupted (--resume continues it)" in out and "the log ends at" not in out
 
 
 def test_watch_waits_for_a_log_the_logger_has_not_created_yet(tmp_path, monkeypatch):

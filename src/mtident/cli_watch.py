@@ -462,6 +462,7 @@ def watch(request: WatchRequest) -> None:
             forecast=not interrupted,
             cancel=terminated.is_set,
             whole=whole,
+            interrupted=interrupted,
         )
     if terminated.is_set() and not interrupted:
         stderr.print(
@@ -803,13 +804,18 @@ def _answer(
     forecast: bool = True,
     cancel: Callable[[], bool] | None = None,
     whole: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None,
+    interrupted: bool = False,
 ) -> None:
     """The decision: the JSON object, or the table, the verdict and what it rests on (with the
     expected stops where ``forecast``, unless ``cancel`` stops them); ``whole``: the log already
-    read again whole (:meth:`WatchSession.whole_log`), for the replay's hindsight."""
+    read again whole (:meth:`WatchSession.whole_log`), for the replay's hindsight; ``interrupted``:
+    Ctrl-C ended the watch (a replay's log does not end there)."""
     outcome = session.answer(with_forecast=forecast, cancel=cancel)
-    # the comparison with the rest of a replayed log fits again: not after a SIGTERM
-    hindsight = session.hindsight(whole) if replay and not (cancel is not None and cancel()) else None
+    # the comparison with the rest of a replayed log fits again: not after a SIGTERM, nor of a replay
+    # interrupted before its log's end
+    hindsight = (
+        session.hindsight(whole) if replay and not interrupted and not (cancel is not None and cancel()) else None
+    )
     if hindsight is not None:
         outcome = replace(
             outcome,
@@ -863,6 +869,12 @@ def _answer(
         console.print(
             "(--ambient COLUMN names the room sensor's column; --room-wander states the room's wander in °C an hour)"
         )
+    elif replay and interrupted:
+        console.print(
+            f"[bold yellow]Not yet at t = {minutes(state.readings.latest_min)}, where the replay was interrupted "
+            "(--resume continues it).[/]"
+        )
+        console.print(str(outcome.reason), highlight=False)
     elif replay:
         # a replayed log is whole: there is no running test to keep on
         console.print(

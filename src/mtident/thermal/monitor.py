@@ -411,8 +411,8 @@ def _reference_dropped(settings: MonitorSettings, now: float, why: str, sensors:
         now,
         f"the reference ({settings.reference.identity}) {why} ({', '.join(sensors)}): it is not used for any "
         f"sensor from now on ({room}another machine's reference, this machine changed since its run, or the test's "
-        "times in another unit than the reference run's; learn the reference again, or give the times' unit "
-        "(`time_unit`))",
+        "times or temperatures in another unit than the reference run's; learn the reference again, or give the "
+        "unit (`time_unit`, `temperature_unit`))",
     )
 
 

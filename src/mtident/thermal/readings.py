@@ -390,7 +390,7 @@ ROOM_WARMING_C = 3.0
 workshop's air does in a test: a sensor on the machine named as the room, most likely."""
 
 
-def warming_room_warning(room_C: FloatArray, name: str | None) -> str | None:
+def warming_room_warning(room_C: FloatArray, name: str | None, time_min: FloatArray | None = None) -> str | None:
     """What to say of a room sensor that warms like a machine's (up by more than
     :data:`ROOM_WARMING_C` from its first level): a bearing named as the room took every sensor's
     warm-up as the room's, and their time constants came out 13 to 424 min for a 120-min truth,
@@ -402,19 +402,28 @@ def warming_room_warning(room_C: FloatArray, name: str | None) -> str | None:
         The room's readings (°C, NaN: missing).
     name : str or None
         The room sensor's column, for the words.
+    time_min : ndarray, shape (N,), optional
+        The readings' times (min): the words say by when it had warmed that much (a replay says its
+        warnings after the checks that read the same rows).
 
     Returns
     -------
     str or None
     """
-    valid = np.asarray(room_C, dtype=float)
-    valid = valid[np.isfinite(valid)]
+    room = np.asarray(room_C, dtype=float)
+    ok = np.isfinite(room)
+    valid = room[ok]
     if len(valid) < 10:
         return None
-    first, highest = float(np.median(valid[:5])), float(np.max(_running_median(valid, 5)))
+    levels = _running_median(valid, 5)
+    first, highest = float(np.median(valid[:5])), float(np.max(levels))
     if highest - first <= ROOM_WARMING_C:
         return None
     column = f"the room sensor {name!r}" if name else "the room sensor"
+    if time_min is not None:
+        # a level is its window's middle reading's
+        beyond = int(np.argmax(levels > first + ROOM_WARMING_C)) + 2
+        column += f" (by t = {float(np.asarray(time_min)[ok][beyond]):g} min)"
     return (
         f"{column} warmed {highest - first:.1f} °C from its first level ({first:.2f} to {highest:.2f} °C), more than "
         f"a workshop's air moves in a test ({ROOM_WARMING_C:g} °C): is it a sensor on the machine? The room is an "

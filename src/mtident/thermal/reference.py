@@ -387,7 +387,7 @@ def learn_reference(
     warnings.extend(said)
     if room_step > 0:
         warnings.append(coarse_room_warning(room_step, "learnt modes explain only what lies beyond it"))
-    warming = None if room_C is None else warming_room_warning(room_C, None)
+    warming = None if room_C is None else warming_room_warning(room_C, None, log.time_min)
     warnings.extend([] if warming is None else [warming])
     room = _ROOM_MEASURED if room_C is not None else "not measured"
     return MachineReference(

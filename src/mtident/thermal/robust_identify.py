@@ -211,7 +211,7 @@ def identify_robust(
         msg = f"the room sensor has {len(room_C)} readings for {len(t)} samples"
         raise InputError(msg)
     room_window = None if room_C is None else room_C[:n]
-    warming = None if room_C is None else warming_room_warning(room_C, room_sensor)
+    warming = None if room_C is None else warming_room_warning(room_C, room_sensor, t)
     room_said = () if warming is None else (warming,)
     unfit: list[str] = []
     if reference is not None:
@@ -223,8 +223,9 @@ def identify_robust(
         unfit.append(
             f"the reference ({reference.identity}): its machine model is rejected by {len(machine.rejected)} of the "
             f"sensors it knows ({', '.join(machine.rejected)}): the reference is not used for any sensor (another "
-            "machine's reference, this machine changed since its run, or the test's times in another unit than the "
-            "reference run's; learn the reference again, or give the times' unit (`time_unit`))"
+            "machine's reference, this machine changed since its run, or the test's times or temperatures in another "
+            "unit than the reference run's; learn the reference again, or give the unit (`time_unit`, "
+            "`temperature_unit`))"
         )
         reference, model, machine = None, None, None
     estimates = tuple(

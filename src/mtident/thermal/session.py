@@ -577,7 +577,7 @@ class WatchSession:
         readings = None if self.state is None else self.state.readings
         if self._room_warming_said or readings is None or readings.room_C is None:
             return []
-        text = warming_room_warning(readings.room_C, self.settings.room_sensor)
+        text = warming_room_warning(readings.room_C, self.settings.room_sensor, readings.time_min)
         if text is None:
             return []
         self._room_warming_said = True
