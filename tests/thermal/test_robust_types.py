@@ -144,3 +144,26 @@ def test_a_wide_box_is_said_as_its_range_not_as_a_measurement():
     assert modes.box_words(" min") == "6.02 min ±10%, 3.03-300 min, 136 min ±26%"
     # a box as wide as its mode or wider: a machine model's "2.78 ±106%" (a time constant is never below zero)
     assert SensorModes((2.78,), (1.06,)).box_words() == "up to 5.73"
+
+
+def test_pooling_says_that_a_later_runs_room_path_is_not_kept():
+    """A run in a daily-cycling room pooled into a steady-room reference: its learnt room path was
+    left out without a word."""
+    from mtident.thermal.machine_model import MachineModel
+    from mtident.thermal.pooling import pool_references
+
+    steady = MachineModel(("A", "B"), (100.0, 20.0), (0.1, 0.1), ((1.0, 0.5), (0.8, 0.2)))
+    cycling = replace(
+        steady,
+        room_gains=((0.6, 0.4), (0.7, 0.3)),
+        room_gain_cov=(((0.01, 0.0), (0.0, 0.01)), ((0.01, 0.0), (0.0, 0.01))),
+    )
+    modes = {"A": SensorModes((100.0, 20.0), (0.1, 0.1)), "B": SensorModes((100.0, 20.0), (0.1, 0.1))}
+
+    def run(model: MachineModel) -> MachineReference:
+        return MachineReference("run.csv", "2026-11-29", 300.0, "measured", modes, machine_model=model)
+
+    pooled, said = pool_references(run(steady), run(cycling))
+    assert pooled.machine_model is not None and not pooled.machine_model.room_gains
+    assert any("the later run learnt the room's path into every sensor" in s for s in said), said
+    assert not any("room's path" in s for s in pool_references(run(cycling), run(steady))[1])

@@ -99,7 +99,15 @@ def _pooled_model(a: MachineModel | None, b: MachineModel | None) -> tuple[Machi
     if a.sensors != b.sensors or len(a.time_constants_min) != len(b.time_constants_min):
         return a, ["the runs' machine models differ in their sensors or modes: the first's is kept"]
     centres, boxes, apart = _pooled_boxes(a.time_constants_min, a.box, b.time_constants_min, b.box, TAU_BOX_MIN)
-    return replace(a, time_constants_min=centres, box=boxes), [f"machine model: {text}" for text in apart]
+    said = [f"machine model: {text}" for text in apart]
+    if b.room_gains and not a.room_gains:
+        # a run in a moving room pooled into one in a steady room: its path is not kept without a word
+        said.append(
+            f"machine model: the later run learnt the room's path into {b.learnt_room_sensors()}, which the "
+            "reference so far has not (its room was steady or not logged); the pooled reference keeps the first's "
+            "shapes and so no room path: learn from the run in the moving room first, then pool the other into it"
+        )
+    return replace(a, time_constants_min=centres, box=boxes), said
 
 
 def _pooled_boxes(
