@@ -672,15 +672,16 @@ def stuck_since(time_min: FloatArray, values: FloatArray) -> float:
     return float(time_min[at[start]]) if _no_chance(time_min[at], y, start, len(y)) else math.nan
 
 
-def _no_chance(time_min: FloatArray, y: FloatArray, start: int, stop: int) -> bool:
+def _no_chance(time_min: FloatArray, y: FloatArray, start: int, stop: int, step_C: float = 0.0) -> bool:
     """Whether the valid readings ``y[start:stop]``, one and the same value, are too many and too
-    long alike for the noise of the readings before them (:data:`STUCK_CHANCE`)."""
+    long alike for the noise of the readings before them (:data:`STUCK_CHANCE`); ``step_C``: a
+    step the readings come in that their display's resolution does not show (a converter's)."""
     alike = stop - start
     if start < _NOISE_BEFORE or alike < STUCK_READINGS or time_min[stop - 1] - time_min[start] < STUCK_MIN:
         return False
     before = slice(max(start - 10 * _NOISE_BEFORE, 0), start)
     sigma = float(noise_sigma(y[before, None], time_min[before])[0])
-    step = float(display_resolution(y[:, None])[0])
+    step = max(float(display_resolution(y[:, None])[0]), step_C)
     # the noise beyond the rounding's own (q/√12): a smooth settled curve, rounded, repeats its
     # reading by the hundred, and the rounding's share of σ says nothing of how often
     beyond = math.sqrt(max(sigma**2 - step**2 / 12.0, 0.0))
@@ -716,11 +717,12 @@ def frozen_stretches(time_min: FloatArray, values: FloatArray) -> list[tuple[flo
     # runs of equal neighbours; the last run, reaching the end, is stuck_since's
     edges = np.flatnonzero(np.diff(y) != 0.0) + 1
     starts, stops = np.r_[0, edges], np.r_[edges, len(y)]
-    return [
-        (float(t[a + 1]), float(t[b - 1]))
-        for a, b in zip(starts[:-1], stops[:-1], strict=True)
-        if b - a >= STUCK_READINGS and _no_chance(t, y, int(a), int(b))
-    ]
+    long = [(int(a), int(b)) for a, b in zip(starts[:-1], stops[:-1], strict=True) if b - a >= STUCK_READINGS]
+    if not long:
+        return []
+    # a 10-bit converter's 0.32 °C steps hold a slowly rising reading for half an hour: no freeze
+    step = quantisation_step(y)
+    return [(float(t[a + 1]), float(t[b - 1])) for a, b in long if _no_chance(t, y, a, b, step)]
 
 
 def without_stuck(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, list[float]]:
