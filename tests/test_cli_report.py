@@ -310,3 +310,29 @@ def test_the_report_says_what_reading_the_log_said_though_a_watch_read_its_first
     assert "--unit F" in page and "temperature_unit" not in page
     assert "<h2>How the log was read</h2>" in page and "a gap of 16 min" in page
     assert "<h2>How the intervals narrowed</h2>" in page and page.count('src="data:image/png;base64,') == 2
+
+
+def test_the_reports_warnings_carry_their_times_in_the_order_said(tmp_path):
+    """The report listed the latest check's warnings first, without their times ("column: flat
+    against the room ..."), and the earlier ones, with theirs, after them: as the watch said them."""
+    t = np.arange(0.0, 200.0)
+    rng = np.random.default_rng(3)
+    columns = {
+        name: np.round(20.0 + rise * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
+        for name, rise in (("T1", 8.0), ("T2", 6.0))
+    }
+    columns["T2"][80:111] = columns["T2"][80]
+    late = np.clip(t - 35.0, 0.0, None)
+    columns["T3"] = np.round(20.0 + 5.0 * (1.0 - np.exp(-late / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
+    columns["room"] = np.round(20.0 + rng.normal(0.0, 0.01, t.size), 3)
+    log = tmp_path / "log.csv"
+    log.write_text(csv_text(t, columns))
+    out = tmp_path / "r.html"
+    code, _, err = mtident("thermal", "report", str(log), "--ambient", "room", "-o", str(out))
+    assert code == 0, err
+    page = html.unescape(out.read_text(encoding="utf-8"))
+    said = re.findall(r"<li>(.*?)</li>", page.split("<h2>Warnings</h2>", 1)[1].split("</ul>", 1)[0], re.S)
+    assert said and all(w.startswith("t = ") for w in said), said
+    times = [float(w.split("t = ", 1)[1].split(" ", 1)[0]) for w in said]
+    assert times == sorted(times) and any("T2: its readings froze at one value" in w for w in said)
+    assert any("T3: flat against the room until" in w for w in said), said

@@ -422,7 +422,7 @@ def build_report(
         holding=holding,
         ways_on=ways,
         lines=lines,
-        warnings=tuple(dict.fromkeys(w for sensor in outcome.sensors for w in sensor.warnings)),
+        warnings=_in_time_order(state, outcome.sensors),
         assumptions=assumed,
         method=METHOD,
         hindsight=None if hindsight is None else _hindsight_verdict(hindsight),
@@ -668,6 +668,21 @@ def saved_words(report: WarmupReport) -> str | None:
     if saved >= 0:
         return f"{settled}: the stop at {minutes(report.stop_time_min)} saved {saved:.0f} min."
     return f"{settled}, {-saved:.0f} min before the stop at {minutes(report.stop_time_min)}."
+
+
+def _in_time_order(state: MonitorState, sensors: tuple[SensorStatus, ...]) -> tuple[str, ...]:
+    """The sensors' warnings as the watch said them, each with its time, in the order said; then
+    those of the latest checks not said so, with their checks' times (the report listed the
+    latest check's first, without their times, and the earlier ones after them)."""
+    said = [text for _, text in state.warned]
+    bare = {text.split(": ", 1)[-1] for text in said}
+    rest = sorted(
+        (sensor.checked_at_min, w)
+        for sensor in sensors
+        for w in sensor.warnings
+        if w not in said and w not in bare and not w.startswith("t = ")
+    )
+    return tuple(dict.fromkeys([*said, *(f"t = {minutes(at)}: {w}" for at, w in rest)]))
 
 
 def _png(figure: Figure) -> bytes:
