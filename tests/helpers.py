@@ -287,3 +287,14 @@ def followed_in_pieces(live: Path, data: bytes, cuts: list[int]):  # noqa: ANN20
         assert not polled.warnings
         times.extend(polled.time_min)
     return follower, times
+
+
+def frozen_channel(t: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """T1 and T2 warming by 8 and 6 °C (τ 40 min, σ 0.01 °C, read to 0.001 °C), T2's channel frozen
+    at its reading at index 80 through index 110 (a logger that repeated it, then read on)."""
+    columns = {
+        name: np.round(20.0 + rise * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
+        for name, rise in (("T1", 8.0), ("T2", 6.0))
+    }
+    columns["T2"][80:111] = columns["T2"][80]
+    return columns

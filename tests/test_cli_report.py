@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 from conftest import first_order
-from helpers import T, csv_text, mtident, noisy, one_mode_reference, workbook_of_runs
+from helpers import T, csv_text, frozen_channel, mtident, noisy, one_mode_reference, workbook_of_runs
 
 from mtident.thermal.reference import save_reference
 
@@ -317,11 +317,7 @@ def test_the_reports_warnings_carry_their_times_in_the_order_said(tmp_path):
     against the room ..."), and the earlier ones, with theirs, after them: as the watch said them."""
     t = np.arange(0.0, 200.0)
     rng = np.random.default_rng(3)
-    columns = {
-        name: np.round(20.0 + rise * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
-        for name, rise in (("T1", 8.0), ("T2", 6.0))
-    }
-    columns["T2"][80:111] = columns["T2"][80]
+    columns = frozen_channel(t, rng)
     late = np.clip(t - 35.0, 0.0, None)
     columns["T3"] = np.round(20.0 + 5.0 * (1.0 - np.exp(-late / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
     columns["room"] = np.round(20.0 + rng.normal(0.0, 0.01, t.size), 3)

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from conftest import first_order, make_log
 from fuzz_logs_helpers import EXPORTS, Export, exports
-from helpers import Outcome, csv_text, mtident, noisy, two_mode, workbook_of_runs
+from helpers import Outcome, csv_text, frozen_channel, mtident, noisy, two_mode, workbook_of_runs
 
 import mtident.cli_thermal as cli_thermal
 from mtident.exceptions import InputError
@@ -843,11 +843,7 @@ def test_a_sensor_whose_channel_froze_for_half_an_hour_is_said_and_fitted_withou
     37.70] for a truth of 26.00. The repeats are left out with a warning, once in a watch."""
     t = np.arange(0.0, 200.0)
     rng = np.random.default_rng(3)
-    columns = {
-        name: np.round(20.0 + rise * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
-        for name, rise in (("T1", 8.0), ("T2", 6.0))
-    }
-    columns["T2"][80:111] = columns["T2"][80]
+    columns = frozen_channel(t, rng)
     log = tmp_path / "log.csv"
     log.write_text(csv_text(t, columns))
     code, out, err = mtident("thermal", "identify", str(log), "--window", "200", "--json")

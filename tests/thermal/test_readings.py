@@ -236,7 +236,8 @@ def test_a_stretch_that_froze_and_read_on_is_left_out_and_a_coarse_displays_repe
     y = np.round(20.0 + 6.0 * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.01, t.size), 3)
     y[80:111] = y[80]
     assert frozen_stretches(t, y) == [(81.0, 110.0)]
-    values, since = without_stuck(t, y[:, None])
+    values, since, frozen = without_stuck(t, y[:, None])
+    assert frozen == [[(81.0, 110.0)]]
     assert np.isnan(since[0]) and np.isnan(values[81:111, 0]).all() and np.isfinite(values[[80, 111], 0]).all()
     assert frozen_words("T2", [(81.0, 110.0)]).startswith("T2: its readings froze at one value (t = 81 to 110 min)")
     coarse = np.round(20.0 + 6.0 * (1.0 - np.exp(-t / 20.0)) + rng.normal(0.0, 0.01, t.size), 1)

@@ -451,7 +451,7 @@ def check_decision(
     """
     # a stuck sensor's repeats are no temperature: a channel that failed after the stop at its
     # last value was taken as where the sensor settled, and the stop blamed for 1.16 °C
-    values, stuck = without_stuck(time_min, values)
+    values, stuck, _ = without_stuck(time_min, values)
     # a sensor still moving by half the tolerance, or with more than a quarter of it still to come
     # at the pace of its slowest mode, is not settled to the precision the check needs
     slowest_min = np.array(

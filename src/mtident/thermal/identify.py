@@ -38,7 +38,7 @@ from mtident.thermal.measured import (
     rmse,
     window_samples,
 )
-from mtident.thermal.readings import frozen_stretches, frozen_words, without_stuck
+from mtident.thermal.readings import frozen_words, without_stuck
 from mtident.thermal.robust_identify import identify_robust
 from mtident.thermal.robust_types import RobustSettings
 from mtident.thermal.settings import DEFAULT_METHOD, IDENTIFY_METHODS, METHODS, ROBUST_METHOD
@@ -81,7 +81,7 @@ def without_stuck_readings(log: TemperatureLog) -> TemperatureLog:
     -------
     TemperatureLog
     """
-    values, since = without_stuck(log.time_min, log.temperature_C)
+    values, since, frozen = without_stuck(log.time_min, log.temperature_C)
     notes = [
         f"sensor {name!r}: every reading from t = {start:g} min to the log's end is the same value, which its "
         "noise makes no chance (a stuck sensor or a failed channel?): they are left out"
@@ -89,9 +89,11 @@ def without_stuck_readings(log: TemperatureLog) -> TemperatureLog:
         if not math.isnan(start)
     ]
     # a channel that froze for a while and read on: its repeats made the sensor a misfit, untrusted
-    for s, name in enumerate(log.sensors):
-        if stretches := frozen_stretches(log.time_min, log.temperature_C[:, s]):
-            notes.append(frozen_words(f"sensor {name!r}", stretches))
+    notes += [
+        frozen_words(f"sensor {name!r}", stretches)
+        for name, stretches in zip(log.sensors, frozen, strict=True)
+        if stretches
+    ]
     return replace(log, temperature_C=values, notes=(*log.notes, *notes)) if notes else log
 
 

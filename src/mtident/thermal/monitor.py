@@ -47,7 +47,7 @@ from mtident.thermal.monitor_types import (
     last_valid,
     minutes,
 )
-from mtident.thermal.readings import frozen_stretches, frozen_words, sampling_interval_min, without_stuck
+from mtident.thermal.readings import frozen_words, sampling_interval_min, without_stuck
 from mtident.thermal.reference import reference_for_log
 from mtident.thermal.robust import estimate_sensor
 from mtident.thermal.robust_types import SensorEstimate
@@ -283,10 +283,10 @@ def _check_due(
     dropped = state.reference_dropped
     used = replace(settings, reference=None) if dropped else settings
     # a stuck sensor's repeats say nothing of its temperature: its fits leave them out
-    values, since = without_stuck(readings.time_min, readings.values_C)
+    values, since, frozen = without_stuck(readings.time_min, readings.values_C)
     fitted = readings if values is readings.values_C else replace(readings, values_C=values)
     last, silent, stuck = _last_readings(readings, since)
-    events.extend(_frozen_events(readings, state.sensors, said, now))
+    events.extend(_frozen_events(frozen, state.sensors, said, now))
     # every sensor fitted together once a check; the sensors checked take their part of it
     machine = machine_fit(fitted, state.sensors, used)
     if machine is not None and machine.contradicted:
@@ -373,12 +373,13 @@ def _timeline_rows(checks: Sequence[SensorCheck], checked: Sequence[int], now: f
     ).reshape(-1, len(TIMELINE_COLUMNS))
 
 
-def _frozen_events(readings: Readings, sensors: tuple[str, ...], said: set[str], now: float) -> list[Event]:
-    """A warning per sensor for each stretch of its readings that froze and moved on again, once
-    (``said`` keeps them): its fits leave the repeats out."""
+def _frozen_events(
+    frozen: list[list[tuple[float, float]]], sensors: tuple[str, ...], said: set[str], now: float
+) -> list[Event]:
+    """A warning per sensor for each stretch of its readings that froze and moved on again
+    (``frozen``, per sensor), once (``said`` keeps them): its fits leave the repeats out."""
     events = []
-    for s, name in enumerate(sensors):
-        stretches = frozen_stretches(readings.time_min, readings.values_C[:, s])
+    for name, stretches in zip(sensors, frozen, strict=True):
         new = [(first, last) for first, last in stretches if f"frozen: {name}: {first:g}" not in said]
         if new:
             said.update(f"frozen: {name}: {first:g}" for first, _ in new)

@@ -725,9 +725,12 @@ def frozen_stretches(time_min: FloatArray, values: FloatArray) -> list[tuple[flo
     return [(float(t[a + 1]), float(t[b - 1])) for a, b in long if _no_chance(t, y, a, b, step)]
 
 
-def without_stuck(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray, list[float]]:
-    """The readings with each column's stuck repeats (:func:`stuck_since` on) missing: they say
-    nothing of its temperature (a failed channel's 0.00 °C was fitted as where it settled).
+def without_stuck(
+    time_min: FloatArray, values: FloatArray
+) -> tuple[FloatArray, list[float], list[list[tuple[float, float]]]]:
+    """The readings with each column's stuck repeats (:func:`stuck_since` on) and the repeats of
+    its frozen stretches (:func:`frozen_stretches`) missing: they say nothing of its temperature (a
+    failed channel's 0.00 °C was fitted as where it settled).
 
     Parameters
     ----------
@@ -741,19 +744,21 @@ def without_stuck(time_min: FloatArray, values: FloatArray) -> tuple[FloatArray,
         The readings, the stuck repeats NaN (the same array where none is stuck).
     since : list of float
         Per column, when its repeats began (NaN: not stuck).
+    frozen : list of list of (float, float)
+        Per column, its frozen stretches (for the words, :func:`frozen_words`).
     """
     columns = np.asarray(values).T
     since = [stuck_since(time_min, column) for column in columns]
     frozen = [frozen_stretches(time_min, column) for column in columns]
     if all(math.isnan(s) for s in since) and not any(frozen):
-        return values, since
+        return values, since, frozen
     out = np.array(values, dtype=float)
     for s, start in enumerate(since):
         if not math.isnan(start):
             out[time_min >= start, s] = np.nan
         for first, last in frozen[s]:
             out[(time_min >= first) & (time_min <= last), s] = np.nan
-    return out, since
+    return out, since, frozen
 
 
 def frozen_words(name: str, stretches: list[tuple[float, float]]) -> str:
