@@ -865,7 +865,7 @@ def _answer(
         console.print(
             f"[bold yellow]Not yet, and a longer test does not bring {', '.join(bound)} within the tolerance.[/]"
         )
-        console.print(str(outcome.reason), highlight=False)
+        _print_reason(console, outcome.reason_lines or ())
         console.print(
             "(--ambient COLUMN names the room sensor's column; --room-wander states the room's wander in °C an hour)"
         )
@@ -874,17 +874,17 @@ def _answer(
             f"[bold yellow]Not yet at t = {minutes(state.readings.latest_min)}, where the replay was interrupted "
             "(--resume continues it).[/]"
         )
-        console.print(str(outcome.reason), highlight=False)
+        _print_reason(console, outcome.reason_lines or ())
     elif replay:
         # a replayed log is whole: there is no running test to keep on
         console.print(
             f"[bold yellow]Not yet: the log ends at t = {minutes(state.readings.latest_min)}, before the test may "
             "stop.[/]"
         )
-        console.print(str(outcome.reason), highlight=False)
+        _print_reason(console, outcome.reason_lines or ())
     else:
         console.print("[bold yellow]Not yet: keep the test running.[/]")
-        console.print(str(outcome.reason), highlight=False)
+        _print_reason(console, outcome.reason_lines or ())
     expected = outcome.expected_stop_time_min
     if expected is not None and math.isfinite(expected):
         # the forecast holds a logged room at its latest level: a room that keeps drifting keeps its
@@ -1001,6 +1001,14 @@ def _span(values: np.ndarray) -> str:
     """``+0.06 to +0.07``, or one value where they round alike."""
     low, high = f"{float(values.min()):+.2f}", f"{float(values.max()):+.2f}"
     return low if low == high else f"{low} to {high}"
+
+
+def _print_reason(console: OptionConsole, lines: tuple[str, ...]) -> None:
+    """Why the test cannot stop yet, a line for each sensor that holds it (a machine's eight sensors
+    read as one paragraph of 3,000 characters), then the ways on."""
+    for line in lines:
+        indent = "" if line.startswith("Ways on:") or len(lines) == 1 else "  "
+        console.print(f"{indent}{line}", highlight=False)
 
 
 def _print_hindsight(hindsight: Hindsight) -> None:

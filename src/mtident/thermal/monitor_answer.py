@@ -16,9 +16,19 @@ from mtident.thermal.hindsight import HindsightAnswer
 from mtident.thermal.modal_types import Mode
 from mtident.thermal.monitor_types import MonitorSettings, MonitorState, Readings, SensorCheck
 from mtident.thermal.robust import room_wander_half_width
-from mtident.thermal.robust_types import Assumptions, ends_at_the_largest
+from mtident.thermal.robust_types import ROOMS_PART_LOGGED, ROOMS_PART_UNLOGGED, Assumptions, ends_at_the_largest
 
-__all__ = ["SensorStatus", "WatchAnswer", "answer", "assumptions", "failure_words", "result", "silent_words"]
+__all__ = [
+    "SensorStatus",
+    "WatchAnswer",
+    "answer",
+    "assumptions",
+    "failure_words",
+    "reason_lines",
+    "reason_text",
+    "result",
+    "silent_words",
+]
 
 
 def assumptions(
@@ -139,6 +149,9 @@ class WatchAnswer:
         What this session said of the log and the test as a whole as it read them (readings lost
         or misread, a coarse room sensor, the reference's fit to the log), each once; left out
         where none was said.
+    reason_lines : tuple of str or None
+        ``reason`` a line at a time (:func:`reason_lines`): the room sensor's and each holding
+        sensor's, then the ways on; left out where the test may stop.
     """
 
     sensor: str
@@ -163,6 +176,7 @@ class WatchAnswer:
     expected_stop_time_min: float | None = json_optional()
     hindsight: HindsightAnswer | None = json_optional()
     log_warnings: tuple[str, ...] | None = json_optional()
+    reason_lines: tuple[str, ...] | None = json_optional()
 
 
 def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, float] | None = None) -> WatchAnswer:
@@ -198,13 +212,14 @@ def answer(state: MonitorState, settings: MonitorSettings, expected: dict[str, f
     else:
         key = max(waited, key=lambda c: c.half_width_C)
     lead = sensors[state.checks.index(key)]
+    holding = [c for c in waited if not c.may_stop]
+    lines = None if stopped else reason_lines(holding, settings, state.readings, state.reference_dropped)
     stops = None if expected is None else [expected.get(c.sensor, math.nan) for c in waited]
     return WatchAnswer(
         stop_time_min=state.stop_time_min if stopped else None,
         decision="stop" if stopped else "continue",
-        reason=None
-        if stopped
-        else _reason([c for c in waited if not c.may_stop], settings, state.readings, state.reference_dropped),
+        reason=None if lines is None else reason_text(lines),
+        reason_lines=lines,
         # the single-sensor keys: those of the sensor the test waits for
         sensor=lead.sensor,
         steady_state_C=lead.steady_state_C,
@@ -305,12 +320,47 @@ def failure_words(stuck: bool, since_min: float) -> str:
     return f"no reading since t = {since_min:.0f} min while the others read on (a failed sensor or a lost channel?)"
 
 
-def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Readings, dropped: bool = False) -> str:
-    """Why the test cannot stop yet, and the two ways on."""
+def reason_text(lines: tuple[str, ...]) -> str:
+    """:func:`reason_lines` as one text, the JSON's ``reason``: what holds each sensor, then the ways on.
+
+    Parameters
+    ----------
+    lines : tuple of str
+
+    Returns
+    -------
+    str
+    """
+    if len(lines) == 1:
+        return lines[0]
+    return "; ".join(lines[:-1]) + ". " + lines[-1]
+
+
+def reason_lines(
+    waiting: list[SensorCheck], settings: MonitorSettings, readings: Readings, dropped: bool = False
+) -> tuple[str, ...]:
+    """Why the test cannot stop yet, a line for the room sensor and for each sensor that holds it,
+    and the last line the ways on ("Ways on: ..."); one line where nothing holds it but the
+    confirming check or a silent room sensor. What "more from the room" means is said at the
+    first sensor only (a machine's reason said it at each of its eight sensors).
+
+    Parameters
+    ----------
+    waiting : list of SensorCheck
+        The sensors the test waits for that may not stop yet.
+    settings : MonitorSettings
+    readings : Readings
+    dropped : bool, optional
+        The reference was dropped (the test contradicted it).
+
+    Returns
+    -------
+    tuple of str
+    """
     since = readings.room_silent_since()
     silent_room = [room_silent_words(since, settings)] if math.isfinite(since) else []
     if not waiting:
-        return silent_room[0] if silent_room else "every sensor may stop; confirming at the next check"
+        return (silent_room[0] if silent_room else "every sensor may stop; confirming at the next check",)
     parts = silent_room
     for c in waiting:
         if c.status in ("silent", "stuck"):
@@ -366,7 +416,7 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Rea
         f"{'it' if len(failed) == 1 else 'them'} out of the sensors the test waits for (`wait_for` the others)"
     )
     if not waiting:
-        return "; ".join(parts) + f". Ways on: {mend}."
+        return (*_rooms_part_once(parts), f"Ways on: {mend}.")
     ways = "continue the test" + ("" if settings.reference is not None else learn)
     largest = settings.robust.max_time_constant_min
     if settings.reference is None and any(ends_at_the_largest(c.ends, largest) for c in waiting):
@@ -393,7 +443,19 @@ def _reason(waiting: list[SensorCheck], settings: MonitorSettings, readings: Rea
         ways += f"; for {', '.join(slow)}, also {room}"
     if failed:
         ways += f"; {mend}"
-    return "; ".join(parts) + f". Ways on: {ways}."
+    return (*_rooms_part_once(parts), f"Ways on: {ways}.")
+
+
+def _rooms_part_once(parts: list[str]) -> list[str]:
+    """The parts with what the room's part of an interval's end is said at its first only."""
+    out, said = [], set()
+    for part in parts:
+        for words in (ROOMS_PART_LOGGED, ROOMS_PART_UNLOGGED):
+            if words in part:
+                part = part.replace(words, "") if words in said else part
+                said.add(words)
+        out.append(part)
+    return out
 
 
 def _room_lag_clause(check: SensorCheck, settings: MonitorSettings) -> str:

@@ -112,6 +112,10 @@ class RobustSettings:
             raise InputError(msg)
 
 
+ROOMS_PART_LOGGED = " (the room's part: the path its moves take into the sensor, and its level's error)"
+ROOMS_PART_UNLOGGED = " (the room's part: its unlogged wander)"
+"""What "more from the room" in an interval end's words means, said once after a sensor's ends."""
+
 WIDE_BOX = 0.5
 """A box this wide (relative half-width) or wider is said as its range, not as a centre ± a share."""
 
@@ -325,12 +329,7 @@ class SensorEstimate:
         # what the room's part is, once for both ends (a test's reason said it eight times over)
         if "more from the room" not in said:
             return said
-        logged = self.fit.room_level_C is not None
-        return said + (
-            " (the room's part: the path its moves take into the sensor, and its level's error)"
-            if logged
-            else " (the room's part: its unlogged wander)"
-        )
+        return said + (ROOMS_PART_LOGGED if self.fit.room_level_C is not None else ROOMS_PART_UNLOGGED)
 
     def _rooms_share(self, value: float, end: IntervalEnd, modes_beyond: float) -> str:
         """Words for the part of an end's distance from T∞ that its modes' course does not make: the
