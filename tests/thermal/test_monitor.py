@@ -798,3 +798,26 @@ def test_a_sensor_named_with_a_unit_keeps_the_reference_runs_modes(spindle_refer
     assert renamed.checks[0].reference_used
     assert spindle_reference.named_as(("S [°C]", "S")) is spindle_reference  # the name as it is wins
     assert set(spindle_reference.named_as(("S/°C",)).sensors) == {"S/°C"}
+
+
+def test_a_machine_s_reason_is_a_line_per_holding_sensor_and_says_the_room_s_part_once():
+    """A machine's eight sensors read as one paragraph of about 3,000 characters, each saying what
+    "more from the room" means: a line per sensor that holds the test, the ways on last, and the
+    room's part explained at the first sensor only (the JSON's ``reason`` the lines joined)."""
+    from mtident.thermal.monitor import SensorCheck
+    from mtident.thermal.monitor_answer import reason_lines, reason_text
+    from mtident.thermal.robust_types import ROOMS_PART_LOGGED
+
+    ends = "low end 21.70 °C: ..., and 0.30 °C more from the room" + ROOMS_PART_LOGGED
+    checks = [
+        SensorCheck(name, status="narrowing", steady_C=22.0, low_C=21.7, high_C=22.3, ends=ends, model_ok=True)
+        for name in ("S1", "S2", "S3")
+    ]
+    lines = reason_lines(checks, MonitorSettings(), new_state(["S1", "S2", "S3"]).readings)
+    assert len(lines) == 4 and lines[-1].startswith("Ways on: continue the test")
+    assert [line.split(":")[0] for line in lines[:3]] == ["S1", "S2", "S3"]
+    assert ROOMS_PART_LOGGED in lines[0] and not any(ROOMS_PART_LOGGED in line for line in lines[1:])
+    assert reason_text(lines) == "; ".join(lines[:3]) + ". " + lines[3]
+    assert reason_text(reason_lines([], MonitorSettings(), new_state(["S1"]).readings)) == (
+        "every sensor may stop; confirming at the next check"
+    )
