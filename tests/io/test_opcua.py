@@ -64,7 +64,10 @@ class Machine:
         self.publish(*(last or (-1.0, (20.0, 20.0))))
         self.last = last
         if self.history:
-            server.tloop.post(server.aio_obj.historize_node_data_change([v.aio_obj for v in self.variables]))
+            # kept without a period: the stamps are of a fixed past day, and asyncua's default of seven
+            # days would drop them as too old once the calendar passes it
+            nodes = [v.aio_obj for v in self.variables]
+            server.tloop.post(server.aio_obj.historize_node_data_change(nodes, period=None))
 
     def stop(self) -> None:
         assert self.server is not None
