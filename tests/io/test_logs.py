@@ -50,7 +50,11 @@ def test_the_exports_cover_what_users_produce():
     ("text", "kwargs", "message"),
     [
         ("time_min,A\n0,20\n1,abc\n2,21\n3,21\n4,21\n", {}, r"sensor 'A', row 3: 'abc' is not a number"),
-        ("time_min,A\n0,20\n1,20\n1,21\n3,21\n4,21\n", {}, r"row 4: duplicate time"),
+        (
+            "time_min,A\n0,20\n1,20\n1,21\n3,21\n4,21\n",
+            {},
+            r"row 4: duplicate time 1, the time of row 3 too, with other readings; each reading needs its own time",
+        ),
         ("time_min,A\n0,20\n2,20\n1,21\n3,21\n4,21\n", {}, r"row 4: time goes back"),
         ("time_min,A\n0,20\n1,20\n", {}, r"2 samples; at least 5 are needed"),
         ("time_min\n0\n1\n2\n3\n4\n", {}, r"need a time column and at least one sensor column"),

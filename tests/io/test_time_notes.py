@@ -119,6 +119,25 @@ def test_a_time_column_in_hours_read_as_minutes_gets_a_hint(write_csv, tmp_path)
     assert sum("time_unit='h'" in w for w in follower.poll().warnings) == 1
 
 
+@pytest.mark.parametrize("header", ["time_min", "Time [min]"])
+def test_decimal_clock_hours_under_a_name_that_states_minutes_get_a_hint(write_csv, tmp_path, header):
+    """A trial's log held decimal clock hours (8.0 to 20.0, a reading a minute) in a column named
+    ``time_min``: read as 12 minutes as its name states, with no word that it may be hours."""
+    from mtident.io.follow import LogFollower
+
+    rows = "".join(f"{8 + k / 60:.4f},{20 + 8 * (1 - np.exp(-k / 60)):.2f}\n" for k in range(721))
+    text = f"{header},T1\n" + rows
+    said = [n for n in read_temperature_log(write_csv(text)).notes if "time_unit='h'" in n]
+    assert len(said) == 1 and said[0].startswith(f"time column {header!r} is read as minutes, as its name")
+    assert "runs only to 12 min with a reading every 1 s" in said[0]
+    assert not any("time_unit='h'" in n for n in read_temperature_log(write_csv(text), time_unit="min").notes)
+    minutes = f"{header},T1\n" + "".join(f"{k},{20 + k / 100:.2f}\n" for k in range(721))
+    assert not any("time_unit='h'" in n for n in read_temperature_log(write_csv(minutes)).notes)
+    live = tmp_path / "live.csv"
+    live.write_text(text)
+    assert sum("time_unit='h'" in w for w in LogFollower(live).poll().warnings) == 1
+
+
 def test_a_gap_in_the_readings_and_a_unit_given_for_time_stamps_are_said(write_csv, tmp_path):
     """A newcomer's log with 40 minutes missing: inspect still said 'a step of 30 s', and neither
     identify nor watch mentioned the gap; --time-unit s given for a stamp column was ignored silently."""

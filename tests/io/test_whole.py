@@ -82,3 +82,16 @@ def test_a_reading_limit_that_means_nothing_is_refused(write_csv):
         read_temperature_log(path, min_samples=-1)
     with pytest.raises(InputError, match=r"max_bad_fraction must be a share between 0 and 1, not 2"):
         read_temperature_log(path, max_bad_fraction=2)
+
+
+def test_a_sensor_that_failed_for_good_is_read_up_to_its_last_reading(write_csv):
+    """A sensor silent from t = 350 min to the end of a 600-min log was refused as "249 of 600
+    samples are empty", though `identify --window 300` needs none of them. Gaps within its readings
+    still count against it."""
+    rows = "".join(f"{k},{20 + k / 100:.2f},{'' if k > 350 else f'{21 + k / 100:.2f}'}\n" for k in range(600))
+    log = read_temperature_log(write_csv("time_min,A,B\n" + rows))
+    assert np.isnan(log.temperature_C[351:, 1]).all() and np.isfinite(log.temperature_C[:351]).all()
+    assert log.notes == ("sensor 'B': skipped 249 empty/NaN sample(s) (rows 353-601)",)
+    holes = "".join(f"{k},{20 + k / 100:.2f},{'' if k % 5 == 0 else f'{21 + k / 100:.2f}'}\n" for k in range(600))
+    with pytest.raises(InputError, match="sensor 'B': 120 of 601 samples are empty"):
+        read_temperature_log(write_csv("time_min,A,B\n" + holes + "600,26.00,27.00\n"))

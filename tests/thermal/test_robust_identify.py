@@ -124,3 +124,22 @@ def test_readings_the_log_lost_are_among_the_sensors_warnings(write_csv):
     result = identify(log, window_min=100)
     assert [w for w in result.warnings[0] if "skipped 20 open-circuit" in w]
     assert not [w for w in result.warnings[1] if "skipped" in w]
+
+
+@pytest.mark.parametrize(
+    ("interval", "said"),
+    [
+        ((-np.inf, np.inf), "S: T∞ not determined yet (its 95 % interval not yet bounded)"),
+        ((20.0, 31.5), "S: T∞ not determined yet (95 % interval 20.00 to 31.50 °C, wider than the rise so far)"),
+    ],
+)
+def test_an_interval_the_fits_do_not_bound_is_said_in_words(interval, said):
+    """A seconds column read as minutes gave "95 % interval -inf to inf °C" in a warning."""
+    from types import SimpleNamespace
+
+    from mtident.thermal.robust import _Notes, _verdict
+
+    notes = _Notes("S")
+    fit = SimpleNamespace(determined=True)
+    assert not _verdict(fit, {0.95: interval}, 8.0, 0.1, None, False, notes)  # type: ignore[arg-type]
+    assert notes.texts == [said]

@@ -36,7 +36,7 @@ from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialec
 from mtident.io.layout import LogLayout, layout_of_head
 from mtident.io.logs import scale_note
 from mtident.io.parse import TimeState, parse_lines
-from mtident.io.time_notes import SPARSE_HINT_ROWS, unit_hint
+from mtident.io.time_notes import SPARSE_HINT_ROWS, hours_hint, unit_hint
 
 __all__ = ["FollowPosition", "LogFollower", "Rows"]
 
@@ -298,12 +298,18 @@ class LogFollower:
         layout = self._at.layout
         if not times or self._unit_said or layout is None or self._at.time.time_format is not None:
             return
-        if self._at.time.serial_days or not layout.time_scale()[1]:
+        per_unit, assumed = layout.time_scale()
+        named_minutes = not assumed and layout.time_unit is None and per_unit == 1.0
+        if self._at.time.serial_days or not (assumed or named_minutes):
             return
         self._rows_taken += len(times)
         # times count from the first sample's: the last is the span
         self._first_times = (self._first_times + times)[:SPARSE_HINT_ROWS]
-        hint = unit_hint(layout.time_name, np.array(self._first_times), times[-1], self._rows_taken)
+        hint = (
+            hours_hint(layout.time_name, times[-1], self._rows_taken, named_minutes=True)
+            if named_minutes
+            else unit_hint(layout.time_name, np.array(self._first_times), times[-1], self._rows_taken)
+        )
         if hint is not None:
             warnings.append(f"{self.source}: {hint}")
             self._unit_said = True

@@ -369,10 +369,10 @@ def unit_hint(header: str, first_times_min: FloatArray, last_min: float, samples
     return hours_hint(header, last_min, samples)
 
 
-def hours_hint(header: str, span_min: float, samples: int) -> str | None:
-    """What a reader says when a time column read as minutes, for want of a stated unit, holds at
-    least ``HOURS_HINT_SAMPLES`` readings over at most an hour, a second or less apart: a warm-up
-    logged so densely for so short a time is more likely a column in hours. None otherwise.
+def hours_hint(header: str, span_min: float, samples: int, named_minutes: bool = False) -> str | None:
+    """What a reader says when a time column read as minutes holds at least ``HOURS_HINT_SAMPLES``
+    readings over at most an hour, a second or less apart: a warm-up logged so densely for so short
+    a time is more likely a column in hours. None otherwise.
 
     Parameters
     ----------
@@ -382,6 +382,10 @@ def hours_hint(header: str, span_min: float, samples: int) -> str | None:
         The last time read (min).
     samples : int
         How many readings that span holds.
+    named_minutes : bool, optional
+        The log states minutes (``time_min``, ``Time [min]``): decimal clock hours written under such
+        a name are read as minutes as stated, and the hint says the name may be wrong. False: no unit
+        is stated, and minutes were assumed.
 
     Returns
     -------
@@ -398,8 +402,13 @@ def hours_hint(header: str, span_min: float, samples: int) -> str | None:
     # a minute written in hours to four places (0.0167) is a step of 1.002 s: a second, as written
     if samples < HOURS_HINT_SAMPLES or span_min > 60.0 or span_min / (samples - 1) > 1.05 / 60.0:
         return None
+    opening = (
+        f"time column {header!r} is read as minutes, as its name or units row states,"
+        if named_minutes
+        else read_as_minutes(header)
+    )
     return (
-        f"{read_as_minutes(header)} and runs only to {span_min:g} min with a reading every "
+        f"{opening} and runs only to {span_min:g} min with a reading every "
         f"{60.0 * span_min / (samples - 1):.2g} s: if it is in hours, give "
         "`time_unit='h'`"
     )

@@ -85,6 +85,9 @@ MISSING_TEXT = frozenset(
 )
 # Above this share of bad samples a sensor is refused rather than bridged.
 MAX_BAD_FRACTION = 0.1
+# readings a sensor must have given before it fell silent for good, for its silence to the log's end
+# to count as a failure after the fact rather than a column that never worked
+MIN_READINGS_BEFORE_FAILURE = 10
 
 _STAMP_EXAMPLES = "(ISO 8601, 22.11.2026 08:00:00, 11/22/2026 08:00:00 AM or 08:00:00)"
 
@@ -473,7 +476,14 @@ def _check_increasing(values: FloatArray, time: _Column, number: np.ndarray, sou
     steps = np.diff(values)
     if np.any(steps == 0):
         row = int(np.argmax(steps == 0)) + 1
-        msg = f"{source}: time column {time.name!r}, row {number[row]}: duplicate time {time.quoted(row)}"
+        repeats = int(np.count_nonzero(steps == 0))
+        more = f" ({repeats} rows repeat the time before them)" if repeats > 1 else ""
+        msg = (
+            f"{source}: time column {time.name!r}, row {number[row]}: duplicate time {time.quoted(row)}, the time "
+            f"of row {number[row - 1]} too, with other readings{more}; each reading needs its own time: give a time "
+            "column that resolves the logging (seconds where it logs several rows a minute), or remove the row that "
+            "is wrong (`watch` keeps the first of such rows and says so)"
+        )
         raise InputError(msg)
     if np.any(steps < 0):
         row = int(np.argmax(steps < 0)) + 1
@@ -495,6 +505,11 @@ def _unit_notes(layout: LogLayout, time: _Column, time_min: FloatArray, stated: 
         if time_min[-1] > UNLIKELY_MINUTES:
             notes.append(seconds_hint(time.name, float(time_min[-1])))
         elif (hint := hours_hint(time.name, span, len(time_min)) or sparse_hint(time.name, time_min)) is not None:
+            notes.append(hint)
+    elif time.numbers is not None and layout.time_unit is None and time_unit_factor(time.name, None, stated) == 1.0:
+        # decimal clock hours under a name that states minutes: read as stated, and said
+        span = float(time_min[-1] - time_min[0])
+        if (hint := hours_hint(time.name, span, len(time_min), named_minutes=True)) is not None:
             notes.append(hint)
 
 
@@ -546,12 +561,16 @@ def _sensor_readings(
     missing = np.isnan(values) & ~marked_open
     open_circuit = (values > OPEN_CIRCUIT_HIGH_C) | (values < OPEN_CIRCUIT_LOW_C) | marked_open
     bad = missing | open_circuit
-    if np.mean(bad) > MAX_BAD_FRACTION:
+    # a sensor that failed and stayed silent to the log's end is judged on the readings it gave: the
+    # stretch it was alive for may be all that a window of the log needs (its silence is said)
+    given = np.flatnonzero(~bad)
+    alive = bad[: given[-1] + 1] if len(given) >= MIN_READINGS_BEFORE_FAILURE else bad
+    if np.mean(alive) > MAX_BAD_FRACTION:
         as_written = (written >= OPEN_CIRCUIT_LOW_C) & (written <= OPEN_CIRCUIT_HIGH_C)
         # a log in °C read as K is -253 °C: the unit the user stated, not the wiring
         stated = layout.temperature_unit is not None and not layout.dialect.unit_of(name).strip()
         converted = stated and (scale, offset) != (1.0, 0.0) and np.mean(~as_written | missing) <= MAX_BAD_FRACTION
-        if not converted and np.mean(bad) <= max_bad_fraction:
+        if not converted and np.mean(alive) <= max_bad_fraction:
             return _said_bad(name, values, bad, missing, open_circuit, number, notes)
         msg = (
             f"{source}: sensor {name!r}: {int(bad.sum())} of {len(values)} samples are empty, NaN or "

@@ -209,8 +209,9 @@ class Identification(SensorAnswers, Generic[DetailsT]):
         for s, name in enumerate(self.sensors):
             lo, hi = self.steady_state_ci95_C[s]
             verdict = "" if self.model_ok[s] else ", not trusted:"
+            interval = f"95 % interval {lo:.2f} to {hi:.2f} °C" if np.isfinite(hi - lo) else "no 95 % interval"
             lines.append(
-                f"  {name}: T∞ {self.steady_state_C[s]:.2f} °C, 95 % interval {lo:.2f} to {hi:.2f} °C, "
+                f"  {name}: T∞ {self.steady_state_C[s]:.2f} °C, {interval}, "
                 f"t_eq {self.equilibrium_time_min[s]:.0f} min, RMSE {self.rmse_C[s]:.3f} °C{verdict}"
             )
             lines += [] if self.model_ok[s] else [f"    - {warning}" for warning in self.warnings[s]]

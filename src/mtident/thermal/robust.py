@@ -831,10 +831,12 @@ def _verdict(
     # an interval as wide as the whole rise so far does not say where the sensor settles
     if not np.isfinite(hi - lo) or hi - lo > max(rise, threshold):
         ok = False
-        notes.add(
-            "undetermined",
-            f"T∞ not determined yet ({level * 100:g} % interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far)",
+        interval = (
+            f"{level * 100:g} % interval {lo:.2f} to {hi:.2f} °C, wider than the rise so far"
+            if np.isfinite(hi - lo)
+            else f"its {level * 100:g} % interval not yet bounded"
         )
+        notes.add("undetermined", f"T∞ not determined yet ({interval})")
     return ok
 
 
