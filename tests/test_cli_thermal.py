@@ -406,6 +406,27 @@ def test_thermal_identify_with_a_room_column(tmp_path):
     assert json.loads(out.stdout)["min_identification_time_min"] > 0
 
 
+def test_a_column_named_without_its_unit_is_the_column(tmp_path):
+    """A trial's `--ambient Room` was refused for a log whose column is ``Room [°C]`` ("did you mean
+    'Room [°C]'?"): a name that is one column's without its unit means that column, and is said so.
+    One that fits two columns, or none, is still refused."""
+    t = np.arange(0.0, 120.0)
+    spindle = 20.0 + 6.0 * (1.0 - np.exp(-t / 25.0))
+    path = tmp_path / "log.csv"
+    path.write_text(csv_text(t, {"Spindle [°C]": spindle, "Room [°C]": np.full(t.size, 20.0)}))
+    out = mtident("thermal", "identify", str(path), "--ambient", "room", "--sensor", "spindle", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["sensor"] == "Spindle [°C]"
+    assert "mtident: note: --ambient 'room' is the column 'Room [°C]'" in out.stderr
+    out = mtident("thermal", "watch", str(path), "--replay", "--ambient", "Room", "--wait-for", "Spindle", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["waited_for"] == ["Spindle [°C]"]
+    twice = tmp_path / "twice.csv"
+    twice.write_text(csv_text(t, {"T [°C]": spindle, "T [K]": spindle + 273.15, "room": np.full(t.size, 20.0)}))
+    out = mtident("thermal", "identify", str(twice), "--sensor", "T", "--ambient", "room")
+    assert out.returncode == 2 and "no sensor column 'T'" in out.stderr
+
+
 def test_a_room_column_that_sensor_leaves_unread_is_pointed_out(tmp_path):
     """--sensor naming the machine's sensors left a room column unread without a word (the note on a
     room column came only where it was read as a sensor): the room was an assumption unawares."""

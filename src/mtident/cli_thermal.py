@@ -27,7 +27,7 @@ from mtident.cli import (
 )
 from mtident.cli_options import ambient_option, file_option, json_option, plot_option
 from mtident.exceptions import InputError
-from mtident.io.columns import room_named, unread_rooms
+from mtident.io.columns import column_named, room_named, unread_rooms
 from mtident.io.logs import SAMPLES, TemperatureLog, read_temperature_log, sample_log_path
 from mtident.io.time_notes import TIME_UNITS
 from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
@@ -84,9 +84,44 @@ def asked_sensors(sensors: tuple[str, ...], path: Path, sheet: str | None = None
     """
     from mtident.io.dialect import header_names
 
-    columns = set(header_names(path, sheet)) if sensors and path.is_file() else set()
+    header = header_names(path, sheet) if sensors and path.is_file() else []
+    columns = set(header)
     names = (name.strip() for entry in sensors for name in ([entry] if entry.strip() in columns else entry.split(",")))
-    return list(dict.fromkeys(name for name in names if name and name != "all"))
+    return list(dict.fromkeys(column_named(name, header) for name in names if name and name != "all"))
+
+
+def named_column(name: str | None, file: str, sheet: str | None, option: str) -> str | None:
+    """The column of FILE that a --ambient or --wait-for name means (:func:`~mtident.io.columns.column_named`:
+    "Room" for ``Room [°C]``), said on stderr where it is not the name as given; the name itself where
+    FILE is no file yet (a live log still to come, a network source).
+
+    Parameters
+    ----------
+    name : str or None
+        The name given; None: the option was not given.
+    file : str
+        FILE as given.
+    sheet : str or None
+        --sheet.
+    option : str
+        The option, for the note ("--ambient").
+
+    Returns
+    -------
+    str or None
+    """
+    from mtident.io.dialect import header_names
+
+    path = log_path(file)
+    if name is None or not path.is_file():
+        return name
+    try:
+        column = column_named(name, header_names(path, sheet))
+    except InputError:  # the reader says what is wrong with the log
+        return name
+    if column != name:
+        stderr.print(f"mtident: note: {option} {name!r} is the column {column!r}", highlight=False)
+    return column
 
 
 @dataclass(frozen=True, slots=True)
@@ -163,7 +198,8 @@ def command_request(request_type: type[RequestT], options: Mapping[str, Any], **
     -------
     RequestT
     """
-    given = {"log": log_request(options), "room_col": options["ambient_col"], **settings}
+    room = named_column(options["ambient_col"], options["file"], options["sheet"], "--ambient")
+    given = {"log": log_request(options), "room_col": room, **settings}
     return request_type(
         **{
             field.name: given[field.name] if field.name in given else options[field.name]

@@ -51,6 +51,7 @@ from mtident.cli_thermal import (
     log_request,
     machine_option,
     max_time_constant_option,
+    named_column,
     reference_lines,
     reference_option,
     stderr,
@@ -189,8 +190,10 @@ def monitor_settings(options: Mapping[str, Any]) -> MonitorSettings:
             free_fast_modes=options["free_fast_modes"],
         ),
         reference=load_reference_file(options["reference_path"], options["machine"]),
-        room_sensor=options["ambient_col"],
-        wait_for=tuple(options["wait_for"]),
+        room_sensor=named_column(options["ambient_col"], options["file"], options["sheet"], "--ambient"),
+        wait_for=tuple(
+            str(named_column(name, options["file"], options["sheet"], "--wait-for")) for name in options["wait_for"]
+        ),
     )
 
 

@@ -579,6 +579,40 @@ def check_unique_names(header: list[str], source: str | Path) -> None:
         seen[name] = position
 
 
+def _without_unit(name: str) -> str:
+    """A column's name as compared by :func:`column_named`: its unit ("[°C]", "/K") left off."""
+    unit = unit_in_name(name)
+    return unit_key(name[: name.rfind(unit)] if unit else name)
+
+
+def column_named(name: str, header: list[str] | tuple[str, ...]) -> str:
+    """The column a user's name means: itself where the log has it, else the one column whose name
+    is it with a unit ("Room" for ``Room [°C]``, "t1" for ``T1 / K``), else the name as given (the
+    reader then says that the log has no such column, and which it has).
+
+    Parameters
+    ----------
+    name : str
+        A column's name as the user gave it (--sensor, --ambient, --wait-for).
+    header : list of str or tuple of str
+        The log's column names.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> column_named("Room", ["Time [min]", "T1 [°C]", "Room [°C]"]), column_named("T", ["T1 [°C]", "T2 [°C]"])
+    ('Room [°C]', 'T')
+    """
+    if name in header:
+        return name
+    bare = _without_unit(name)
+    matches = [column for column in header if _without_unit(column) == bare]
+    return matches[0] if len(matches) == 1 else name
+
+
 def missing_column(source: object, name: str, available: list[str] | tuple[str, ...]) -> str:
     """The message for a column the log does not have: the columns it has, and the nearest one
     where the name differs only a little (a capital letter, a typing slip).
