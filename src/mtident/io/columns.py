@@ -28,6 +28,7 @@ from mtident.io.units import (
 )
 
 __all__ = [
+    "column_named",
     "missing_column",
     "text_only_cells",
     "choose_time_column",
