@@ -27,6 +27,7 @@ from mtident.io.units import name_without_unit
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import (
     MachineModel,
+    MachineReadings,
     fit_test,
     learn_machine_model,
     loose_slow_modes,
@@ -449,19 +450,47 @@ def _learn_machine(
     model = learn_machine_model(readings, settings.max_time_constant_min)
     if model is None:
         return None, []
+    kept, said, missing = _judged(model, readings, log, room_C)
+    # a sensor whose run shows a mode the shared ones lack: one shared mode more, where that keeps more
+    # sensors (the BIC prices a mode for every sensor, where one sensor's readings ask for it)
+    while missing:
+        more = learn_machine_model(readings, settings.max_time_constant_min, more_than=model)
+        if more is None:
+            break
+        more_kept, more_said, more_missing = _judged(more, readings, log, room_C)
+        if more_kept is None or len(more_kept.sensors) <= (0 if kept is None else len(kept.sensors)):
+            break
+        model, kept, said, missing = more, more_kept, more_said, more_missing
+    return kept, said
+
+
+def _judged(
+    model: MachineModel, readings: MachineReadings, log: TemperatureLog, room_C: FloatArray | None
+) -> tuple[MachineModel | None, list[str], dict[str, tuple[float, float]]]:
+    """The learnt model of the sensors it pins down together (None where fewer than two, or where
+    the run leaves its slow modes loose or builds a sensor from cancelling modes), what the warnings
+    say of it, and the sensors left out for a mode the shared ones lack."""
     if loose := loose_slow_modes(model):
-        return None, [
-            f"the run does not pin down the slow modes its sensors share ({', '.join(loose)}): later tests use "
-            f"each sensor's modes alone ({loose_mode_advice(room_C)})"
-        ]
+        return (
+            None,
+            [
+                f"the run does not pin down the slow modes its sensors share ({', '.join(loose)}): later tests use "
+                f"each sensor's modes alone ({loose_mode_advice(room_C)})"
+            ],
+            {},
+        )
     gains = np.array(model.gains_C)
     cancelling = np.abs(gains).sum(axis=1) / np.maximum(np.abs(gains.sum(axis=1)), 1e-9)
     if np.max(cancelling) > MAX_CANCELLING:
         worst = log.sensors[int(np.argmax(cancelling))]
-        return None, [
-            f"the machine model would build {worst}'s rise from modes {np.max(cancelling):.0f} times larger that "
-            "cancel: too fragile to extrapolate a test with; later tests use each sensor's modes alone"
-        ]
+        return (
+            None,
+            [
+                f"the machine model would build {worst}'s rise from modes {np.max(cancelling):.0f} times larger "
+                "that cancel: too fragile to extrapolate a test with; later tests use each sensor's modes alone"
+            ],
+            {},
+        )
     itself = fit_test(model, readings, (0.95,), room_lag=False)
     pinned = (
         []
@@ -478,10 +507,14 @@ def _learn_machine(
     ]
     pinned = [name for name in pinned if name not in missing]
     if len(pinned) < 2:
-        return None, [
-            *lacking,
-            "the run does not pin down two or more sensors together: later tests use each sensor's modes alone",
-        ]
+        return (
+            None,
+            [
+                *lacking,
+                "the run does not pin down two or more sensors together: later tests use each sensor's modes alone",
+            ],
+            missing,
+        )
     left = [name for name in log.sensors if name not in pinned and name not in missing]
     said = (
         [
@@ -492,7 +525,7 @@ def _learn_machine(
         if left
         else []
     )
-    return model.of(pinned), [*lacking, *said]
+    return model.of(pinned), [*lacking, *said], missing
 
 
 @dataclass(frozen=True)
