@@ -873,3 +873,35 @@ def test_a_sensor_whose_channel_froze_for_half_an_hour_is_said_and_fitted_withou
     assert t2["model_ok"] and abs(t2["steady_state_C"] - 26.0) < 0.05
     code, _, err = mtident("thermal", "watch", str(log), "--replay")
     assert code == 0 and err.count("T2: its readings froze at one value (t = 81 to 110 min)") == 1
+
+
+def test_identify_of_one_sensor_fits_the_machine_model_with_the_others(tmp_path):
+    """`--sensor` picks what is reported; the reference's machine model still fits the log's other
+    sensors it knows, says so, and gives the sensor the answer it gets beside them."""
+    from helpers import SENSORS, _noisy_chain
+
+    from mtident.thermal.reference import learn_reference
+
+    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=6)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
+    save_reference(reference, tmp_path / "m.toml")
+    t, y = _noisy_chain((0.5, 0.5), 0.8, np.zeros(3), 400.0, seed=7)
+    (tmp_path / "test.csv").write_text(csv_text(t, dict(zip(SENSORS, y.T, strict=True))))
+    args = (
+        "thermal",
+        "identify",
+        str(tmp_path / "test.csv"),
+        "--window",
+        "60",
+        "--reference",
+        str(tmp_path / "m.toml"),
+    )
+    every = json.loads(mtident(*args, "--json").stdout)["sensors"]
+    alone = mtident(*args, "--sensor", SENSORS[1], "--json")
+    assert alone.returncode == 0, alone.stderr
+    assert f"the machine model also fits {SENSORS[0]}, {SENSORS[2]}, {SENSORS[3]} (not asked for" in alone.stderr
+    answer = json.loads(alone.stdout)
+    assert answer["sensor"] == SENSORS[1]
+    # the same fit, the log's columns in another order
+    assert answer["steady_state_C"] == pytest.approx(every[1]["steady_state_C"], abs=1e-6)
+    assert answer["steady_state_ci95_C"] == pytest.approx(every[1]["steady_state_ci95_C"], abs=1e-6)

@@ -679,7 +679,10 @@ def run_identify(request: IdentifyRequest) -> None:
         As :func:`identify_command`.
     """
     log, room = load_log_with_room(request.log, request.room_col)
-    with stderr.status(f"fitting {len(log.sensors)} sensor(s)…"):
+    reference = load_reference_file(request.reference_path, request.machine)
+    asked = list(log.sensors)
+    log, room = _with_machine_sensors(request, log, room, reference)
+    with stderr.status(f"fitting {len(asked)} sensor(s)…"):
         result = identify(
             log,
             request.window_min,
@@ -689,8 +692,9 @@ def run_identify(request: IdentifyRequest) -> None:
             request.pseudo_seed,
             room,
             settings=request.robust,
-            reference=load_reference_file(request.reference_path, request.machine),
+            reference=reference,
             room_sensor=request.room_col,
+            sensors=asked,
         )
     if request.method != ROBUST_METHOD:
         stderr.print(
@@ -724,6 +728,54 @@ def run_identify(request: IdentifyRequest) -> None:
         print_json(answers[0] if len(answers) == 1 else several)
         return
     _identify_table(log.source, request, result.window_min, answers)
+
+
+def _with_machine_sensors(
+    request: IdentifyRequest,
+    log: TemperatureLog,
+    room: np.ndarray | None,
+    reference: MachineReference | None,
+) -> tuple[TemperatureLog, np.ndarray | None]:
+    """The log with the reference's machine-model sensors that --sensor left out, where the log has
+    them: they pin the shared modes of the sensors asked for (one sensor alone has none to share
+    them with, and its answer would not be the one it gets beside them). The log as read where
+    there are none, or where they cannot be read (said)."""
+    model = None if reference is None else reference.machine_model
+    if model is None or request.method != ROBUST_METHOD:
+        return log, room
+    header = _header_or_none(request.log)
+    companions = [name for name in model.sensors if name not in log.sensors and name in header]
+    if not companions:
+        return log, room
+    wider = replace(request.log, sensors=(*log.sensors, *companions))
+    try:
+        fuller, fuller_room = load_log_with_room(wider, request.room_col, say_rooms=False)
+    except InputError as error:
+        stderr.print(
+            f"mtident: note: the machine model's other sensors ({', '.join(companions)}) could not be read, so it "
+            f"pins the sensors asked for on their readings alone: {error}",
+            highlight=False,
+        )
+        return log, room
+    stderr.print(
+        f"mtident: note: the machine model also fits {', '.join(companions)} (not asked for, not reported): they pin "
+        "the shared modes",
+        highlight=False,
+    )
+    return fuller, fuller_room
+
+
+def _header_or_none(request: LogRequest) -> list[str]:
+    """The log file's column names; none for a source that is no file (a server) or cannot be read."""
+    from mtident.io.dialect import header_names
+
+    path = log_path(request.file)
+    if not path.is_file():
+        return []
+    try:
+        return header_names(path, request.sheet)
+    except InputError:
+        return []
 
 
 def _identify_table(

@@ -147,6 +147,25 @@ def test_identify_uses_the_machine_model_and_says_so():
     assert np.nanmax(np.abs(answer.curve_C[: answer.n_window] - y[: answer.n_window])) < 0.1
 
 
+def test_one_sensor_identified_with_a_machine_model_gets_the_answer_it_gets_beside_the_others():
+    """A new user's `identify --sensor bearing --reference` got 32.4 to 55.2 °C, untrusted, where the
+    same sensor beside the others got 34.8 to 36.2, trusted: alone it had no sensor to share the
+    machine model's modes with. The log's other sensors now pin the model, and are not reported."""
+    from mtident.thermal import identify
+
+    t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=6)
+    reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))
+    t, y = _noisy_chain((0.5, 0.5), 0.8, np.zeros(3), 400.0, seed=7)
+    log = TemperatureLog(t, SENSORS, y, (), "test.csv")
+    every = identify(log, 60.0, reference=reference)
+    alone = identify(log, 60.0, reference=reference, sensors=[SENSORS[1]])
+    assert alone.sensors == (SENSORS[1],) and alone.measured_C.shape[1] == 1
+    assert alone.details.estimates[0].machine_used
+    assert alone.answer(0) == every.answer(1)
+    with pytest.raises(InputError, match="T9"):
+        identify(log, 60.0, reference=reference, sensors=["T9"])
+
+
 def test_a_run_that_leaves_a_slow_mode_loose_gives_no_machine_model():
     t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 160.0, seed=8)
     reference, warnings = learn_reference(TemperatureLog(t, SENSORS, y, (), "short.csv"))

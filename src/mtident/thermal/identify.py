@@ -44,6 +44,8 @@ from mtident.thermal.robust_types import RobustSettings
 from mtident.thermal.settings import DEFAULT_METHOD, IDENTIFY_METHODS, METHODS, ROBUST_METHOD
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from mtident.thermal.reference import MachineReference
 
 __all__ = [
@@ -109,6 +111,7 @@ def identify(
     settings: RobustSettings | None = None,
     reference: MachineReference | None = None,
     room_sensor: str | None = None,
+    sensors: Sequence[str] | None = None,
 ) -> Identification[MethodDetails]:
     """Identify every sensor of ``log`` from its first ``window_min`` minutes, then predict.
 
@@ -145,6 +148,9 @@ def identify(
         The model-robust estimate: a reference run of the same machine.
     room_sensor : str, optional
         The model-robust estimate: the room sensor's name, for the assumptions.
+    sensors : sequence of str, optional
+        The sensors to identify (default: every sensor of ``log``). With a reference, the log's
+        other sensors still pin its machine model (:func:`~mtident.thermal.robust_identify.identify_robust`).
 
     Returns
     -------
@@ -173,7 +179,9 @@ def identify(
                 f"or {METHODS[-1]} with it"
             )
             raise InputError(msg)
-        return identify_robust(log, window_min, ambient_C, settings, reference, horizon_min, room_sensor)
+        return identify_robust(
+            log, window_min, ambient_C, settings, reference, horizon_min, room_sensor, sensors=sensors
+        )
     if reference is not None:
         msg = (
             "`reference` needs the model-robust method (`method='robust'`): the first-order filters have one mode "
@@ -187,4 +195,5 @@ def identify(
             "the first-order filters take theirs from `preset`"
         )
         raise InputError(msg)
+    log = log.select(list(sensors) if sensors is not None else None)
     return identify_first_order(log, window_min, method, preset, horizon_min, pseudo_measurement_seed, ambient_C)

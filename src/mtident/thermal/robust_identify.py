@@ -9,6 +9,7 @@ is the envelope of the best model and the two models that set the interval's end
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -172,6 +173,8 @@ def identify_robust(
     reference: MachineReference | None = None,
     horizon_min: float | None = None,
     room_sensor: str | None = None,
+    *,
+    sensors: Sequence[str] | None = None,
 ) -> Identification[RobustDetails]:
     """Identify every sensor of ``log`` from its first ``window_min`` minutes with the
     model-robust estimate, and predict its course.
@@ -191,6 +194,10 @@ def identify_robust(
         Predict to this time (default: the log's end, or further to show the approach).
     room_sensor : str, optional
         The room sensor's name, for the assumptions.
+    sensors : sequence of str, optional
+        The sensors to identify (default: all). The log's others still pin the reference's machine
+        model: one sensor fitted with a machine model alone has no other sensor to share its modes'
+        proportions with, and its answer would not be the one it gets beside them.
 
     Returns
     -------
@@ -228,6 +235,7 @@ def identify_robust(
             "`temperature_unit`))"
         )
         reference, model, machine = None, None, None
+    asked = log.select(list(sensors) if sensors is not None else None).sensors
     estimates = tuple(
         combined_estimate(
             with_fragility(
@@ -239,8 +247,10 @@ def identify_robust(
             s,
             unmeasured_wander(model, room_C is not None, settings),
         )
-        for s, name in enumerate(log.sensors)
+        for s, name in ((log.sensors.index(name), name) for name in asked)
     )
+    log = log.select(list(asked))
+    y = log.temperature_C
     times = _prediction_times(t, n, estimates, horizon_min)
     room_all = None if room_C is None else np.concatenate([room_C, np.full(len(times) - len(t), np.nan)])[: len(times)]
     curve, low, high = (np.full((len(times), len(estimates)), np.nan) for _ in range(3))
