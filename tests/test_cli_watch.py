@@ -366,10 +366,11 @@ def test_the_hindsight_table_adds_the_rooms_move_to_the_column_it_compares(capsy
     )
     text = _printed_hindsight(hindsight, capsys)
     assert (
-        "the room moved +0.05 °C from the stop to the end; each sensor follows the room late, through its modes (its "
-        "moves before the stop too), +0.05 °C added to T∞ at the stop" in text
+        "the room moved +0.05 °C from the stop to the end, but each sensor follows the room late, through its modes, "
+        "and still follows its moves before the stop: +0.05 °C added to T∞ at the stop, to where the room, as the "
+        "sensor follows it, stands at the log's end" in text
     )
-    assert "T∞ at stop + room (°C)" in text
+    assert "T∞ at stop, room followed (°C)" in text
     # 30.50 + 0.05 shown beside 30.40: the difference of the two columns, 0.15
     assert re.search(r"│ T1 +│ +30\.55 │ +30\.40 │ +0\.15 │ +251 │", text), text
     assert "stayed within ±0.2 °C of where they settled from t = 251 min: the stop saved 18 min" in text
@@ -383,7 +384,7 @@ def test_the_hindsight_table_says_a_sensors_late_following_of_the_room_though_th
         ("T1",), 435.0, 480.0, np.array([48.95]), np.array([np.nan]), np.array([np.nan]), 0.0, 0.2, np.array([-0.02])
     )
     text = _printed_hindsight(hindsight, capsys)
-    assert "T∞ at stop + room (°C)" in text and "-0.02 °C added to T∞ at the stop" in text
+    assert "T∞ at stop, room followed (°C)" in text and "-0.02 °C added to T∞ at the stop" in text
     assert re.search(r"│ T1 +│ +48\.93 │", text), text
 
 

@@ -1021,14 +1021,15 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     # a room level again at the end can still have moved the sensors, which follow it late
     moved = bool(len(added) and np.any(added != 0.0))
     room = (
-        f"; the room moved {shift:+.2f} °C from the stop to the end; each sensor follows the room late, through "
-        f"its modes (its moves before the stop too), {_span(added)} °C added to T∞ at the stop"
+        f"; the room moved {shift:+.2f} °C from the stop to the end, but each sensor follows the room late, "
+        f"through its modes, and still follows its moves before the stop: {_span(added)} °C added to T∞ at the "
+        "stop, to where the room, as the sensor follows it, stands at the log's end"
         if moved
         else ""
     )
     table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}")
     # with the room's move added in the column itself, the difference is the next two columns'
-    stop_column = "T∞ at stop + room (°C)" if moved else "T∞ at stop (°C)"
+    stop_column = "T∞ at stop, room followed (°C)" if moved else "T∞ at stop (°C)"
     for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "settled by (min)"):
         table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
     settled = hindsight.checked

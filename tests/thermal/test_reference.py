@@ -818,7 +818,7 @@ def test_a_sensors_mode_reaching_the_limit_is_one_line_where_the_machine_model_p
     model = MachineModel(("motor", "column"), (246.3, 104.9, 26.8), (0.05, 0.05, 0.08), ((-1.0,) * 3,) * 2)
     words = _reaching_words(reaching, model, 300.0)
     assert words[0] == "spare: (raise)" and len(words) == 2
-    assert words[1].startswith("motor, column: their own fit leaves the slowest mode loose up to the largest time")
+    assert words[1].startswith("motor, column: their own fit leaves the slowest mode loose up to, or at, the largest")
     assert "the machine model pins it at 246 min ±5%" in words[1] and "raise" not in words[1]
     # a model whose slowest box reaches the limit, or none: each sensor's own warning
     loose = MachineModel(("motor", "column"), (290.0, 104.9), (0.05, 0.05), ((-1.0,) * 2,) * 2)

@@ -368,7 +368,7 @@ def learn_reference(
             warnings.append(f"{name}: {doubt}. Later tests will not use this sensor's modes: {way_on}")
         limit = settings.max_time_constant_min
         if max(m.time_constant_min for m in fit.modes) >= AT_LIMIT_SHARE * limit:
-            warnings.append(
+            reaching[name] = (
                 f"{name}: a mode at the largest time constant searched ({limit:g} min): the "
                 "machine may have a slower one (raise `max_time_constant_min`)"
             )
@@ -402,7 +402,7 @@ def _ceiling_min(centres: tuple[float, ...], boxes: tuple[float, ...]) -> float:
 
 
 def _reaching_words(reaching: dict[str, str], model: MachineModel | None, limit_min: float) -> list[str]:
-    """The warnings of sensors whose own slowest mode's box reaches the largest time constant
+    """The warnings of sensors whose own slowest mode, or its box, reaches the largest time constant
     searched; those the machine model holds, where it pins its slowest mode below that limit, in
     one line: the model's modes are what a test uses, and the machine has no slower mode that the
     run shows (a newcomer's clean run gave four such warnings, each advising a larger limit, for a
@@ -412,8 +412,8 @@ def _reaching_words(reaching: dict[str, str], model: MachineModel | None, limit_
     held = [name for name in reaching if name in model.sensors]
     slowest = int(np.argmax(model.time_constants_min))
     pinned = (
-        f"{', '.join(held)}: {'its' if len(held) == 1 else 'their'} own fit leaves the slowest mode loose up to the "
-        f"largest time constant searched ({limit_min:g} min), but the machine model pins it at "
+        f"{', '.join(held)}: {'its' if len(held) == 1 else 'their'} own fit leaves the slowest mode loose up to, or "
+        f"at, the largest time constant searched ({limit_min:g} min), but the machine model pins it at "
         f"{model.time_constants_min[slowest]:.3g} min ±{model.box[slowest]:.0%}; a test uses the model (the sensor's "
         "own modes, their box held, only where a test falls back on them)"
     )
