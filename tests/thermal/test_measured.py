@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import first_order, make_log
+from scipy.signal import lfilter
 
 from mtident.thermal import identify
 from mtident.thermal.identify import measured_equilibrium, rmse
+from mtident.thermal.measured import warm_up_floor_C
 
 
 def test_a_log_settled_in_display_steps_counts_as_settled_and_one_still_rising_does_not():
@@ -49,3 +51,40 @@ def test_a_sensor_with_no_curve_has_no_rmse_not_a_perfect_one():
     flat = 20.0 + 0.02 * np.random.default_rng(0).standard_normal(len(t))
     result = identify(make_log(t, {"flat": flat, "heating": first_order(t)}), 30.0)
     assert np.isnan(result.rmse_C[0]) and result.summary(0)["rmse_C"] is None
+
+
+def _through_a_lag(room: np.ndarray, tau_min: float) -> np.ndarray:
+    """The room as a sensor behind a first-order path of ``tau_min`` follows it (1-min steps)."""
+    decay = np.exp(-1.0 / tau_min)
+    return lfilter([1.0 - decay], [1.0, -decay], room - room[0]) + room[0]
+
+
+def test_a_warm_up_that_came_down_with_a_falling_room_keeps_a_floor_below_its_equilibrium():
+    """A daily room falling 0.4 °C late in a warm-up brings the readings down with it: the readings
+    less the room's highest level until then still bound the heat's part, so the floor holds
+    (it gave none, a low end 1.5 °C below the readings left standing) and stays below T∞; over
+    random rooms, paths and warm-ups it is never above T∞."""
+    t = np.arange(0.0, 400.0)
+    room = 20.0 + 0.4 * np.sin(2.0 * np.pi * t / 1440.0 + 0.8)
+    readings = 6.0 * (1.0 - np.exp(-t / 25.0)) + _through_a_lag(room, 40.0)
+    assert readings[-1] < readings.max() - 0.1  # it came down
+    truth = 6.0 + room[-1]
+    floor = warm_up_floor_C(truth + 1.0, t, readings, room, 0.01, 0.0)
+    assert truth - 0.2 < floor < truth
+    rng = np.random.default_rng(3)
+    for _ in range(100):
+        room = 20.0 + rng.uniform(0.1, 0.6) * np.sin(2.0 * np.pi * t / 1440.0 + rng.uniform(0.0, 2.0 * np.pi))
+        rise, tau = rng.uniform(2.0, 10.0), rng.uniform(10.0, 120.0)
+        clean = rise * (1.0 - np.exp(-t / tau)) + _through_a_lag(room, rng.uniform(20.0, 300.0))
+        noisy = np.round(clean + rng.normal(0.0, 0.01, t.size), 2)
+        floor = warm_up_floor_C(rise + room[-1] + 1.0, t, noisy, room + rng.normal(0.0, 0.005, t.size), 0.01, 0.01)
+        assert np.isfinite(floor) and floor < rise + room[-1]
+
+
+def test_a_heat_part_that_fell_more_than_the_room_explains_sets_no_floor():
+    """Readings that fell 0.5 °C while the room moved 0.1 °C: the heat input fell, and a warm-up's
+    floor says nothing of where it settles now."""
+    t = np.arange(0.0, 300.0)
+    room = 20.0 + 0.1 * (t > 150.0)
+    heat = np.where(t < 200.0, 6.0 * (1.0 - np.exp(-t / 25.0)), 6.0 - 0.5 * (1.0 - np.exp(-(t - 200.0) / 20.0)))
+    assert warm_up_floor_C(25.0, t, heat + room, room, 0.01, 0.0) == -np.inf

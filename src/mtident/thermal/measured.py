@@ -226,17 +226,23 @@ def warm_up_floor_C(
     noise_C: float,
     rounding_C: float,
 ) -> float:
-    """The lowest T∞ a warm-up that does not overshoot allows: its latest level, less the noise
-    and, with a room sensor, the most the room has stood above its latest level since the warm-up
-    began (a passive structure follows a room that fell only late, with a static gain of one).
+    """The lowest T∞ a warm-up that does not overshoot allows: its latest level less the noise and,
+    with a room sensor, the highest it stood above the room's highest level until then, at the
+    room's latest level (a passive structure follows a room that fell only late, with a static gain
+    of one).
 
     With constant heat, every temperature of a structure started at rest, or partly warm and
     still below its equilibrium, stays at or below its equilibrium (for a conductance network
     e^(At) is elementwise non-negative; for a continuous body, the maximum principle): a model
     whose T∞ lies below where the sensor already is describes a curve that came down from above,
-    which such a warm-up cannot make. Where the sensor does not rise to its fit's T∞, or its
-    latest readings lie below its highest by more than the noise (it cooled: an earlier heating
-    at more power, a heat input that fell), nothing is assumed: −inf.
+    which such a warm-up cannot make. A room's part in a reading is a weighted mean of the room's
+    levels until then (its impulse response is non-negative and integrates to one), so never above
+    the room's highest level so far: the reading less that bounds the heat's part from below, at
+    every time, and T∞ is the heat's final part at the room's latest level. Where the sensor does
+    not rise to its fit's T∞, or its heat's part fell for certain (its latest reading less the
+    room's lowest level lies below that bound at an earlier time by more than the noise: it cooled,
+    an earlier heating at more power, a heat input that fell), nothing is assumed: −inf. Without a
+    room sensor, the latest level alone (an unmeasured room may have stood higher earlier).
 
     Parameters
     ----------
@@ -261,16 +267,21 @@ def warm_up_floor_C(
         return -np.inf
     # levels as medians of a few readings, so that one noisy reading neither sets nor breaks the floor
     levels = _levels(values[ok])
-    latest, highest, first = float(levels[-1]), float(levels.max()), float(levels[0])
+    latest, first = float(levels[-1]), float(levels[0])
     margin = _FLOOR_NOISES * noise_C + rounding_C
-    heated = steady_C > first and latest > first + margin
-    if not heated or latest < highest - margin:
+    if not (steady_C > first and latest > first + margin):
         return -np.inf
-    excursion = 0.0
-    if room_C is not None:
-        room = room_C[ok]
-        excursion = max(float(np.max(room)) - float(room[-1]), 0.0)
-    return latest - margin - excursion
+    if room_C is None:
+        # an unmeasured room may have stood higher earlier: the latest level alone
+        return latest - margin if latest >= float(levels.max()) - margin else -np.inf
+    room = room_C[ok]
+    # the room's highest and lowest levels until the last reading of each level's window
+    highest = np.maximum.accumulate(room)[_LATEST_READINGS - 1 :]
+    lowest = float(np.min(room))
+    heat_at_least = levels - highest
+    if latest - lowest < float(np.max(heat_at_least)) - margin:
+        return -np.inf
+    return float(np.max(heat_at_least)) + float(room[-1]) - margin
 
 
 @dataclass(frozen=True)
