@@ -129,6 +129,19 @@ def table_console(min_width: int = 100) -> OptionConsole:
     return OptionConsole(width=max(probe.width, min_width, 0 if probe.is_terminal else 200))
 
 
+def prose_console() -> OptionConsole:
+    """A console for the sentences around a table: wrapped at the terminal's own width (a table's
+    console is laid out at least 100 wide, and its sentences ran past an 80-column terminal's
+    edge); writing to a file or a pipe, a line per sentence, unwrapped, as a reader's editor or
+    ``grep`` takes it.
+
+    Returns
+    -------
+    OptionConsole
+    """
+    return OptionConsole(soft_wrap=not OptionConsole().is_terminal)
+
+
 def print_json(payload: object) -> None:
     """Exactly one JSON object on stdout (the library's parameters said as options).
 

@@ -21,6 +21,7 @@ from mtident.cli import (
     as_options,
     number_option,
     print_json,
+    prose_console,
     table_console,
     thermal,
     user_errors,
@@ -803,8 +804,8 @@ def _identify_table(
             "yes" if a.model_ok else "[yellow]no[/]",
             measured,
         )
-    console = table_console()
-    console.print(table)
+    table_console().print(table)
+    console = prose_console()
     assumed = answers[0].method_answer.assumptions
     if any(a.measured_settled is False for a in answers):
         slowest = assumed.max_time_constant_min if robust else DEFAULT_MAX_TIME_CONSTANT_MIN

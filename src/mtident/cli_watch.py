@@ -32,6 +32,7 @@ from mtident.cli import (
     carried_interrupt,
     number_option,
     print_json,
+    prose_console,
     table_console,
     thermal,
     user_errors,
@@ -834,8 +835,8 @@ def _answer(
     if as_json:
         print_json(outcome)
         return
-    console = table_console()
-    console.print(_status_table(session, path))
+    table_console().print(_status_table(session, path))
+    console = prose_console()
     state = session.state
     assert state is not None
     said = assumptions(session.settings, state.sensors[0], state.readings.room_C is not None)
@@ -1027,7 +1028,10 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         if moved
         else ""
     )
-    table = Table(title=f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}")
+    prose_console().print(
+        f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}:", highlight=False
+    )
+    table = Table()
     # with the room's move added in the column itself, the difference is the next two columns'
     stop_column = "T∞ at stop, room followed (°C)" if moved else "T∞ at stop (°C)"
     for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "settled by (min)"):
@@ -1071,13 +1075,13 @@ def _print_hindsight(hindsight: Hindsight) -> None:
         )
     table_console().print(table)
     if followed.any():
-        OptionConsole().print(
+        prose_console().print(
             "(room): the readings keep following the room; where their rise above the room, as they follow it "
             "through the sensor's modes at the stop, settled, at the room's course at the log's end.",
             highlight=False,
         )
     if with_room.any():
-        OptionConsole().print(
+        prose_console().print(
             "with the room: the readings keep following the room; from the time shown they stayed within the "
             "tolerance of their equilibrium at the room's level (or, where they lag the room by more than that to "
             "the log's end, their rise above the room as they follow it did): no settled level to check T∞ against.",
@@ -1093,7 +1097,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     if not settled.any():
         # readings that keep following a moving room have not failed to settle: the log can be long
         why = no_level_words(hindsight, hindsight.not_settled, bool(with_room.any()), stuck_words)
-        OptionConsole().print(
+        prose_console().print(
             f"{why}: nothing to check the decision against" + (f"; {timing}." if timing else "."), highlight=False
         )
         return
@@ -1101,7 +1105,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     verdict = hindsight.verdict_words()
     not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
     failed = f"; {stuck_words}" if stuck_words else ""
-    OptionConsole().print(
+    prose_console().print(
         f"{verdict[0].upper()}{verdict[1:]}" + (f"; {timing}" if timing else "") + f"{not_settled}{failed}.",
         highlight=False,
     )

@@ -521,6 +521,28 @@ def test_decimal_commas_in_a_comma_separated_export_are_refused_with_the_reason(
         read_temperature_log(path)
 
 
+def test_a_name_split_by_the_delimiter_is_refused_by_every_reader(write_csv):
+    """An unquoted name with the delimiter in it split the header in two: the room's readings were
+    read under the name's second half ('channel 3)') and the room itself as a column with none."""
+    from mtident.io.follow import LogFollower
+
+    rows = "".join(f"{m},{20 + m / 100:.2f},20.0\n" for m in range(60))
+    path = write_csv("time_min,Bearing (PT100, channel 3),room\n" + rows)
+    said = (
+        r"log\.csv: the header has 4 names and its data rows no more than 3 cells: the name "
+        r"'Bearing \(PT100, channel 3\)' holds the delimiter ',', .* in double quotes"
+    )
+    with pytest.raises(InputError, match=said):
+        read_temperature_log(path)
+    with pytest.raises(InputError, match=said):
+        LogFollower(path).poll()
+    # quoted, it is one name; a last column no row fills (an event column) is left out with a note
+    quoted = read_temperature_log(write_csv('time_min,"Bearing (PT100, channel 3)",room\n' + rows))
+    assert quoted.sensors == ("Bearing (PT100, channel 3)", "room")
+    events = read_temperature_log(write_csv("time_min,Bearing (PT100),room,event\n" + rows))
+    assert events.sensors == ("Bearing (PT100)", "room") and "left out, no readings in them: event" in events.notes
+
+
 def test_a_row_longer_than_the_header_after_the_first_is_refused_with_the_reason(write_csv):
     rows = "".join(f"{m},{20 + m / 10:.1f}\n" for m in range(8)) + "8,21.3,5\n"
     with pytest.raises(InputError, match=r"line 10 has 3 cells where the header has 2 \(time_min, A\)"):

@@ -51,6 +51,7 @@ __all__ = [
     "sniff_dialect",
     "header_names",
     "read_csv",
+    "refuse_split_name",
     "read_lines",
     "binary_kind",
     "workbook_as_csv",
@@ -900,6 +901,52 @@ def read_csv(path: str | Path, notes: list[str] | None = None) -> tuple[pd.DataF
     return frame.drop(columns=unnamed), dialect
 
 
+def refuse_split_name(header_line: str, widest: int, delimiter: str, path: str | Path) -> None:
+    """Refuse a header whose name holds the delimiter, unquoted, where no row has as many cells as
+    the header: ``T (PT100, ch 3)`` split in two moved every later name one column left (the room's
+    readings under ``ch 3)``, the room's own name left with none). Only a name whose brackets the
+    split leaves open is taken as split; a header whose last names have no cells (an event column)
+    stays readable.
+
+    Parameters
+    ----------
+    header_line : str
+        The header as written.
+    widest : int
+        The most cells of any data row (0: no rows yet).
+    delimiter : str
+        The log's delimiter.
+    path : str or Path
+        The log, as the message names it.
+
+    Raises
+    ------
+    InputError
+        Where a name is split so.
+    """
+    header = next(csv.reader([header_line], delimiter=delimiter), [])
+    extra = len(header) - widest
+    if widest == 0 or extra <= 0:
+        return
+    for i, name in enumerate(header[:widest]):
+        if _open_brackets(name) <= 0:
+            continue
+        joined = delimiter.join(header[i : i + extra + 1]).strip()
+        if _open_brackets(joined) != 0:
+            continue
+        msg = (
+            f"{path}: the header has {len(header)} names and its data rows no more than {widest} cells: the name {joined!r} "
+            f"holds the delimiter {delimiter!r}, which splits it, and every later name would stand over the wrong "
+            f'column\'s readings; put that name in double quotes in the header ("{joined}") or write it without '
+            f"{delimiter!r}"
+        )
+        raise InputError(msg)
+
+
+def _open_brackets(text: str) -> int:
+    return sum(text.count(a) - text.count(b) for a, b in ("()", "[]", "{}"))
+
+
 _TOML_GIVEN = "{path}: a TOML file (name = value lines), not a CSV file of readings; give the CSV log here"
 # a line quoted in a message is cut to this many characters
 _QUOTED_LINE = 80
@@ -922,9 +969,11 @@ def _check_rows(text: str, dialect: CsvDialect, path: str | Path) -> str | None:
     rows = csv.reader(lines[dialect.head_lines :], delimiter=dialect.delimiter)
     last: list[str] = []
     before: list[str] = []
+    widest = 0
     for row in rows:
         if not row:
             continue
+        widest = max(widest, len(row))
         if len(row) > count and any(cell.strip() for cell in row[count:]):
             number = dialect.head_lines + rows.line_num
             line = lines[number - 1]
@@ -943,6 +992,7 @@ def _check_rows(text: str, dialect: CsvDialect, path: str | Path) -> str | None:
                 )
             raise InputError(msg)
         previous, last, before = len(last) or previous, row, last
+    refuse_split_name(lines[dialect.preamble_lines], widest, dialect.delimiter, path)
     ended = text.endswith(("\n", "\r"))
     if ended or not lines[-1].strip() or len(lines) <= dialect.head_lines:
         return None

@@ -32,7 +32,7 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
+from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, refuse_split_name, sniff_dialect
 from mtident.io.layout import LogLayout, layout_of_head
 from mtident.io.logs import scale_note
 from mtident.io.parse import TimeState, parse_lines
@@ -359,6 +359,7 @@ class LogFollower:
         rows_so_far = [
             cells for cells in csv.reader(lines, delimiter=dialect.delimiter) if any(c.strip() for c in cells)
         ]
+        refuse_split_name(header_line, max(map(len, rows_so_far), default=0), dialect.delimiter, self.source)
         return layout_of_head(
             header_line,
             rows_so_far,
