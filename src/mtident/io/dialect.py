@@ -935,10 +935,10 @@ def refuse_split_name(header_line: str, widest: int, delimiter: str, path: str |
         if _open_brackets(joined) != 0:
             continue
         msg = (
-            f"{path}: the header has {len(header)} names and its data rows no more than {widest} cells: the name {joined!r} "
-            f"holds the delimiter {delimiter!r}, which splits it, and every later name would stand over the wrong "
-            f'column\'s readings; put that name in double quotes in the header ("{joined}") or write it without '
-            f"{delimiter!r}"
+            f"{path}: the header has {len(header)} names and its data rows no more than {widest} cells: the name "
+            f"{joined!r} holds the delimiter {delimiter!r}, which splits it, and every later name would stand over "
+            f"the wrong column's readings; put that name in double quotes in the header "
+            f'("{joined}") or write it without {delimiter!r}'
         )
         raise InputError(msg)
 
