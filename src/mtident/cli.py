@@ -49,6 +49,7 @@ _OPTION_OF = {
     "room_wander_C_per_h": "--room-wander",
     "free_fast_modes": "--free-fast-modes",
     "wait_for": "--wait-for",
+    "heat_enters_at": "--heat-enters-at",
 }
 _PARAMETER = re.compile(r"`(\w+)(?:=(?:'([^']*)'|\[([^\]]*)\]))?`")
 

@@ -469,6 +469,16 @@ max_time_constant_option = click.option(
     "data cannot exclude: "
     "a machine's bed or column warms with 1-5 h time constants.",
 )
+heat_enters_option = click.option(
+    "--heat-enters-at",
+    "heat_enters_at",
+    multiple=True,
+    metavar="NAME",
+    help="A sensor that sits where the heat enters (on the spindle's bearing, the motor's housing), without a lag "
+    "of its own; repeat. Fitted without a reference, its every mode rises: a slow mode not yet seen must already "
+    "show in its rise, which bounds T∞ early. Yours to know: the answer states it, and readings that contradict "
+    "it are fitted as any other sensor's, said so.",
+)
 
 
 def load_reference_file(reference_path: str | None, machine: str | None = None) -> MachineReference | None:
@@ -527,6 +537,7 @@ def load_reference_file(reference_path: str | None, machine: str | None = None) 
 )
 @preset_option
 @max_time_constant_option
+@heat_enters_option
 @reference_option
 @machine_option
 @free_fast_option
@@ -642,7 +653,23 @@ def identify_request(options: Mapping[str, Any]) -> IdentifyRequest:
             max_time_constant_min=options["max_tau_min"],
             room_wander_C_per_h=options["room_wander"],
             free_fast_modes=options["free_fast_modes"],
+            heat_enters_at=heat_enters_names(options),
         ),
+    )
+
+
+def heat_enters_names(options: Mapping[str, Any]) -> tuple[str, ...]:
+    """The log's columns that --heat-enters-at names (a name without its unit matches, as
+    --ambient's does).
+
+    Raises
+    ------
+    InputError
+        A name that is no column of the log, or fits two.
+    """
+    return tuple(
+        str(named_column(name, options["file"], options["sheet"], "--heat-enters-at"))
+        for name in options.get("heat_enters_at", ())
     )
 
 

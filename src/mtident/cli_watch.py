@@ -46,6 +46,8 @@ from mtident.cli_thermal import (
     _say_room_candidates,
     asked_sensors,
     free_fast_option,
+    heat_enters_names,
+    heat_enters_option,
     load_reference_file,
     log_options,
     log_path,
@@ -93,8 +95,8 @@ _PIPE_PROGRESS_S = 15.0
 
 def decision_options(func: F) -> F:
     """The options of the stop decision, shared by watch and report: ``func``, the command's callback, with
-    --tolerance, --confidence, --max-time-constant, --reference, --machine, --free-fast-modes, --ambient,
-    --room-wander and --wait-for (added as :func:`~mtident.cli_thermal.log_options` adds a log's)."""
+    --tolerance, --confidence, --max-time-constant, --heat-enters-at, --reference, --machine, --free-fast-modes,
+    --ambient, --room-wander and --wait-for (added as :func:`~mtident.cli_thermal.log_options` adds a log's)."""
     options = [
         number_option(
             "--tolerance",
@@ -113,6 +115,7 @@ def decision_options(func: F) -> F:
             max=0.999,
         ),
         max_time_constant_option,
+        heat_enters_option,
         reference_option,
         machine_option,
         free_fast_option,
@@ -189,6 +192,7 @@ def monitor_settings(options: Mapping[str, Any]) -> MonitorSettings:
             max_time_constant_min=options["max_tau_min"],
             room_wander_C_per_h=options["room_wander"],
             free_fast_modes=options["free_fast_modes"],
+            heat_enters_at=heat_enters_names(options),
         ),
         reference=load_reference_file(options["reference_path"], options["machine"]),
         room_sensor=named_column(options["ambient_col"], options["file"], options["sheet"], "--ambient"),

@@ -13,6 +13,7 @@ from conftest import (
 )
 from helpers import replay
 
+from mtident.exceptions import InputError
 from mtident.thermal import RobustSettings
 from mtident.thermal.readings import room_error_C
 from mtident.thermal.reference import learn_reference
@@ -593,3 +594,50 @@ def test_a_sensor_off_its_reference_in_a_moving_room_is_not_said_to_be_another_m
         == _why_off_reference(None)
         == "has the machine changed, or is the reference another machine's"
     )
+
+
+def _papers_curve(end_min: float, lag_min: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """The papers' kind of warm-up: first order, τ 59 min, 10 °C, σ 0.01 °C, read each minute and
+    shown to 0.01 °C; with ``lag_min``, read through a sensor's own first-order lag."""
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, end_min + 0.5, 1.0)
+    if lag_min:
+        rise = 1.0 - (59.0 * np.exp(-t / 59.0) - lag_min * np.exp(-t / lag_min)) / (59.0 - lag_min)
+    else:
+        rise = 1.0 - np.exp(-t / 59.0)
+    return t, np.round(20.0 + 10.0 * rise + 0.01 * rng.standard_normal(t.size), 2)
+
+
+def test_where_the_heat_enters_a_slow_mode_must_already_show_in_the_rise():
+    """Without a reference, a mode of 300 min still fits the papers' curve at 180 min (its t95)
+    with a 99 % interval reaching 33.5 °C: a slow pair whose modes cancel, or one that comes late.
+    Where every mode rises (the sensor sits where the heat enters), a slow mode would already lift
+    the readings: the interval closes to within the tolerance of the truth, 30 °C, and holds it."""
+    t, y = _papers_curve(180.0)
+    free = estimate_sensor("T", t, y, settings=RobustSettings(room_wander_C_per_h=0.0))
+    heated = estimate_sensor("T", t, y, settings=RobustSettings(room_wander_C_per_h=0.0, heat_enters_at=("T",)))
+    assert free.interval_C[0.99][1] > 33.0 and not free.fit.family.every_mode_rises
+    low, high = heated.interval_C[0.99]
+    assert heated.fit.family.every_mode_rises and low <= 30.0 <= high and high - low < 0.2
+    assert all(m.amplitude_C <= 0.0 for m in heated.fit.modes)
+    assert not any("heat enters" in w for w in heated.warnings)
+
+
+def test_readings_with_a_lag_of_their_own_contradict_every_mode_rising():
+    """A sensor behind its own 4-min lag has a mode that falls (the lag's): stated as where the
+    heat enters, its readings fit better beyond chance without that, and the answer is the free
+    fit's, said so."""
+    t, y = _papers_curve(180.0, lag_min=4.0)
+    settings = RobustSettings(room_wander_C_per_h=0.0)
+    free = estimate_sensor("T", t, y, settings=settings)
+    heated = estimate_sensor("T", t, y, settings=replace(settings, heat_enters_at=("T",)))
+    assert not heated.fit.family.every_mode_rises
+    assert heated.interval_C == free.interval_C
+    assert "heat-enters-contradicted" in heated.warning_codes
+    assert any("stated as where the heat enters, its readings fit better beyond chance" in w for w in heated.warnings)
+
+
+def test_the_heat_is_said_to_enter_only_at_the_logs_sensors():
+    with pytest.raises(InputError, match=r"the heat cannot be said to enter at 'bearing': not among the log's "):
+        RobustSettings(heat_enters_at=("bearing",)).unknown_heat_sensors(("spindle", "motor"))
+    RobustSettings(heat_enters_at=("motor",)).unknown_heat_sensors(("spindle", "motor"))

@@ -5,6 +5,8 @@
 
 from __future__ import annotations
 
+import functools
+
 from mtident.thermal.reference import MachineReference
 from mtident.thermal.robust import free_fast
 from mtident.thermal.robust_types import Assumptions, RobustSettings
@@ -51,15 +53,12 @@ def describe_assumptions(
         room = f"not measured; taken to wander as a random walk of {settings.room_wander_C_per_h:g} °C in an hour"
     else:
         room = "not measured; taken as steady"
+    said = _said(settings)
     if reference is None or sensor not in reference.sensors:
-        return Assumptions(
-            settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor)
-        )
+        return said(settings.max_time_constant_min, room, None if reference is None else reference.describe(sensor))
     modes = reference.sensors[sensor]
     if modes.doubt is not None:
-        return Assumptions(
-            settings.max_time_constant_min, room, f"{reference.describe(sensor)}; not used: {modes.doubt}"
-        )
+        return said(settings.max_time_constant_min, room, f"{reference.describe(sensor)}; not used: {modes.doubt}")
     extra = free_fast(modes, settings)
     if extra:
         faster = f"up to {extra} free mode{'s' if extra > 1 else ''} faster than the slowest of these" + (
@@ -71,10 +70,22 @@ def describe_assumptions(
         faster = "no mode faster than these (assumed: the reference says it holds every mode)"
     else:
         faster = "no mode faster than these (assumed)"
-    return Assumptions(
+    return said(
         settings.max_time_constant_min,
         room,
         f"{reference.describe(sensor)}; {faster}{_machine_words(reference, sensor) if machine_used else ''}",
+    )
+
+
+def _said(settings: RobustSettings) -> type[Assumptions] | functools.partial[Assumptions]:
+    """Assumptions whose model words name the sensors the engineer said the heat enters at."""
+    if not settings.heat_enters_at:
+        return Assumptions
+    names = ", ".join(settings.heat_enters_at)
+    return functools.partial(
+        Assumptions,
+        model=f"{Assumptions.model}; where the heat enters ({names}, as stated), every mode of a warm-up fitted "
+        "without a reference rises, unless its readings contradict it (said where they do)",
     )
 
 

@@ -423,13 +423,17 @@ class _RssObjective:
 class _EndObjective:
     """Minimised by the model that reaches furthest in T∞ towards ``sign`` within ``threshold``;
     beyond it, rising with the excess (``gap``: the threshold over the best fit), so that a
-    search crossing the edge is led back."""
+    search crossing the edge is led back. ``rising``: a model whose end has a mode that does not
+    rise is no model (infinite)."""
 
-    def __init__(self, threshold: float, sign: float, gap: float) -> None:
-        self.threshold, self.sign, self.gap = threshold, sign, gap
+    def __init__(self, threshold: float, sign: float, gap: float, rising: bool = False) -> None:
+        self.threshold, self.sign, self.gap, self.rising = threshold, sign, gap, rising
 
     def __call__(self, fits: Fits) -> FloatArray:
-        return end_values(fits.rss, fits.var_steady, fits.steady, self.threshold, self.sign, self.gap)
+        values = end_values(fits.rss, fits.var_steady, fits.steady, self.threshold, self.sign, self.gap)
+        if self.rising:
+            values = np.where(rising_at_end(fits, self.threshold, self.sign), values, np.inf)
+        return values
 
     def compiled(self, log_mode_ratio: float) -> tuple[float, float, float, float, float]:
         """The objective as :func:`~mtident.thermal.modal_kernel.refine_log_tau` takes it."""
@@ -613,7 +617,62 @@ def profile_bounds(fits: Fits, threshold: float) -> tuple[FloatArray, FloatArray
     return fits.steady - half, fits.steady + half
 
 
-def grid_half_width(candidates: list[Fits], threshold: float, steady: float) -> float:
+# an amplitude this close to zero (°C) counts as rising: a mode a model holds at zero
+_RISING_SLACK_C = 1e-9
+
+
+def rising_at_end(fits: Fits, threshold: float, sign: float) -> np.ndarray:
+    """Per model, whether every mode rises (its amplitude, of e^(−t/τ), at most zero) at the end
+    of its profile towards ``sign`` within ``threshold``. The furthest T∞ of models whose modes
+    all rise is exactly the furthest such end over a family that holds each model's sub-models
+    (with some amplitudes held at zero), as the grid's counts of modes do: where the constraint
+    binds, the best model drops the modes it holds at zero.
+
+    Parameters
+    ----------
+    fits : Fits
+    threshold : float
+        The largest residual sum of squares allowed.
+    sign : float
+        −1 for the low end, +1 for the high end.
+
+    Returns
+    -------
+    ndarray of bool, shape (T,)
+    """
+    k = fits.tau.shape[1]
+    slack = np.maximum(threshold - fits.rss, 0.0)
+    step = sign * np.sqrt(slack / np.maximum(fits.var_steady, 1e-300))
+    amplitudes = fits.theta[:, 1 : 1 + k] + step[:, None] * fits.direction[:, 1 : 1 + k]
+    rising: np.ndarray = np.all(amplitudes <= _RISING_SLACK_C, axis=1)
+    return rising
+
+
+def rising_best(candidates: list[Fits]) -> Fits | None:
+    """The best-fitting model whose modes all rise at its best fit (the least-squares fit with
+    every amplitude at most zero, over a family that holds each model's sub-models), or None.
+
+    Parameters
+    ----------
+    candidates : list of Fits
+
+    Returns
+    -------
+    Fits or None
+    """
+    best: Fits | None = None
+    for fits in candidates:
+        k = fits.tau.shape[1]
+        rss = np.where(np.all(fits.theta[:, 1 : 1 + k] <= _RISING_SLACK_C, axis=1), fits.rss, np.inf)
+        if not len(rss) or not np.isfinite(rss).any():
+            continue
+        i = int(np.argmin(rss))
+        if best is None or rss[i] < best.rss[0]:
+            best = fits.take(i)
+    return best
+
+
+def grid_half_width(candidates: list[Fits], threshold: float, steady: float, rising: bool = False) -> float:
     """The hull's half-width over the models searched so far (the grid's and the best fits):
     never wider than the refined hull's.
 
@@ -631,6 +690,14 @@ def grid_half_width(candidates: list[Fits], threshold: float, steady: float) -> 
         The larger distance from ``steady`` to an end (°C).
     """
     ends = [profile_bounds(f, threshold) for f in candidates]
+    if rising:
+        ends = [
+            (
+                np.where(rising_at_end(f, threshold, -1.0), lo, np.nan),
+                np.where(rising_at_end(f, threshold, 1.0), hi, np.nan),
+            )
+            for f, (lo, hi) in zip(candidates, ends, strict=True)
+        ]
     lo = min((float(np.nanmin(lo, initial=np.inf)) for lo, _ in ends), default=steady)
     hi = max((float(np.nanmax(hi, initial=-np.inf)) for _, hi in ends), default=steady)
     return max(steady - lo, hi - steady)
@@ -677,7 +744,7 @@ def hull_end(
     Fits
         One model.
     """
-    objective = _EndObjective(threshold, sign, gap)
+    objective = _EndObjective(threshold, sign, gap, problem.family.every_mode_rises)
     # the furthest any model searched so far reaches within the threshold (the best fit's own
     # profile at least): a local search from there can wander just beyond the threshold and be
     # discarded, so the end found is never short of it
@@ -695,7 +762,7 @@ def hull_end(
     best_value = float(objective(best)[0])
     for fits, i in polish:
         refined = _refine(problem, fits, i, objective)
-        if refined.rss[0] > threshold:
+        if refined.rss[0] > threshold or not np.isfinite(objective(refined)[0]):
             continue
         value = float(objective(refined)[0])
         if value < best_value:

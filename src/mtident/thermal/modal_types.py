@@ -54,6 +54,11 @@ class ModeFamily:
         box. A reference run pins a machine's slow modes; a fast one (a sensor's lag, a local
         transient, a mode the run could not resolve) left out would take a slow mode's place in
         the fit and pin T∞ falsely.
+    every_mode_rises : bool
+        Only models in which every mode rises toward T∞: the warm-up of a sensor where the heat
+        enters, in a network of conductances (its response to the heat is a sum of decaying
+        exponentials with positive weights), started cold or warm from the same heat, without a
+        lag of its own. The engineer's to state; the readings can contradict it, not prove it.
     """
 
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
@@ -61,6 +66,7 @@ class ModeFamily:
     reference_min: tuple[float, ...] | None = None
     reference_box: tuple[float, ...] = ()
     free_fast: int = 0
+    every_mode_rises: bool = False
 
     def without_reference(self) -> ModeFamily:
         """The same family without the reference's boxes.
@@ -68,9 +74,10 @@ class ModeFamily:
         Returns
         -------
         ModeFamily
-            The same largest time constant and number of modes, with no reference.
+            The same largest time constant, number of modes and sign of the modes, with no
+            reference.
         """
-        return ModeFamily(self.max_time_constant_min, self.max_modes)
+        return ModeFamily(self.max_time_constant_min, self.max_modes, every_mode_rises=self.every_mode_rises)
 
 
 @dataclass(frozen=True)

@@ -32,10 +32,11 @@ projection method and its applications. Inverse Problems 19(2), R1-R26.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from scipy.special import stdtrit
+from scipy.special import chdtri, stdtrit
 
 from mtident._threads import one_blas_thread
 from mtident._typing import FloatArray
@@ -54,6 +55,7 @@ from mtident.thermal.modal_search import (
     modes_of,
     profile_bounds,
     refined_per_count,
+    rising_best,
     room_lag,
     weighted_residuals,
 )
@@ -88,6 +90,9 @@ __all__ = [
 
 # with a tolerance to meet, the grid's hull alone answers where it is this many times wider
 _ROUGH_MARGIN = 2.0
+# the level at which readings fitted better with a mode that does not rise contradict every mode
+# rising (a likelihood-ratio test)
+RISING_LEVEL = 0.99
 
 
 # ---------------------------------------------------------------------------------------------
@@ -175,6 +180,18 @@ def _steady_state(
     full = min(best.values(), key=lambda f: float(f.rss[0]))
     chosen = choose_count(best, len(binned)) if point is None else point
     candidates = [*candidates, *best.values()]
+    if family.every_mode_rises and point is not None:
+        candidates.append(point)  # the grid's shortcut's own refined model, which may be the rising one
+    # the grid's coarse best fits can differ by more than chance where the refined ones would not:
+    # only a refined search judges whether the readings contradict every mode rising
+    rising = _rising_fit(problem, candidates, full, judge=refine) if family.every_mode_rises else None
+    if rising is not None:
+        chosen = rising
+    elif family.every_mode_rises:
+        # the readings contradict every mode rising: the answer is the free family's, and says so
+        family = replace(family, every_mode_rises=False)
+        problem = replace(problem, family=family)
+    base = full if rising is None else rising
     shift = problem.centre + (0.0 if binned.room_C is None else float(binned.room_C[-1]))
     modes = modes_of(chosen)
     # the fit is of the readings less the room: the start is at the room's first level
@@ -217,15 +234,17 @@ def _steady_state(
     widest_refined: bool | None = None
     ends_models: tuple[Fits, Fits] = (full, full)
     for q in sorted(levels, reverse=True):
-        threshold = float(full.rss[0]) + sigma2 * float(stdtrit(dof, 0.5 + q / 2.0)) ** 2
-        gap = threshold - float(full.rss[0])
+        threshold = float(base.rss[0]) + sigma2 * float(stdtrit(dof, 0.5 + q / 2.0)) ** 2
+        gap = threshold - float(base.rss[0])
         # the grid's hull is within the true one: where the widest level's is already wider than
         # asked, the refinement (most of the cost) cannot change the answer to "is it within?",
         # and the narrower levels are refined only along with the widest
         refine_level = refine
         if refine and refine_within is not None:
             if widest_refined is None:
-                widest_refined = grid_half_width(candidates, threshold, float(chosen.steady[0])) <= refine_within
+                widest_refined = (
+                    grid_half_width(candidates, threshold, float(chosen.steady[0]), rising is not None) <= refine_within
+                )
             refine_level = widest_refined
         # a narrower level's end is polished from the wider level's end model too (the same ridges
         # set both, and a reference family's one start can miss their basin); with a tolerance the
@@ -237,9 +256,9 @@ def _steady_state(
             or max(steady - intervals[max(intervals)][0], intervals[max(intervals)][1] - steady) <= refine_within
         )
         seeds = [ends_models[0]] if intervals else None
-        low = hull_end(problem, candidates, threshold, -1.0, gap, full, refine_level, seeds, not near)
+        low = hull_end(problem, candidates, threshold, -1.0, gap, base, refine_level, seeds, not near)
         seeds = [ends_models[1]] if intervals else None
-        high = hull_end(problem, candidates, threshold, +1.0, gap, full, refine_level, seeds, not near)
+        high = hull_end(problem, candidates, threshold, +1.0, gap, base, refine_level, seeds, not near)
         ends_models = (low, high)
         low_end, high_end = (low, threshold), (high, threshold)
         if float(chosen.rss[0]) > threshold:
@@ -260,6 +279,22 @@ def _steady_state(
         refined=refined,
         **common,
     )
+
+
+def _rising_fit(problem: Problem, candidates: list[Fits], full: Fits, judge: bool = True) -> Fits | None:
+    """The best fit whose modes all rise (:func:`~mtident.thermal.modal_search.rising_best`),
+    where it fits no worse than the best free fit within chance (a likelihood-ratio test at
+    :data:`RISING_LEVEL`, of as many degrees of freedom as the free fit has parameters more, at
+    least one; not ``judge``: any); None where the readings
+    contradict every mode rising (a sensor's own lag, a second heat path, a fall)."""
+    rising = rising_best(candidates)
+    if rising is None or not judge:
+        return rising
+    dof = max(len(problem.binned) - full.n_params, 1)
+    sigma2 = max(float(full.rss[0]) / dof, problem.sigma2) * correlation_factor(weighted_residuals(problem, full))
+    statistic = (float(rising.rss[0]) - float(full.rss[0])) / sigma2
+    extra = max(full.n_params - rising.n_params, 1)
+    return rising if statistic <= float(chdtri(extra, 1.0 - RISING_LEVEL)) else None
 
 
 def _with_own_class(

@@ -194,6 +194,7 @@ def monitor_step(
             f"({', '.join(state.sensors)})"
         )
         raise InputError(msg)
+    settings.robust.unknown_heat_sensors(state.sensors)
     settings = _named_reference(settings, state.sensors, room is not None)
     events: list[Event] = []
     start = 0

@@ -421,7 +421,8 @@ def _modal_fit(
 ) -> tuple[SteadyState, bool]:
     """The fit within the reference's boxes where the test follows them, else over every model up
     to the largest time constant; and whether the reference was used."""
-    family = ModeFamily(settings.max_time_constant_min, settings.max_modes)
+    rising = notes.sensor in settings.heat_enters_at
+    family = ModeFamily(settings.max_time_constant_min, settings.max_modes, every_mode_rises=rising)
 
     def fit_of(family: ModeFamily) -> SteadyState:
         return fit_steady_state(
@@ -481,6 +482,12 @@ def _modal_fit(
             f"machine changed, {missed} This answer does not use it",
         )
     fit, unheld = _widened_while_used(fit_of, family, settings, refine_within)
+    if rising and not fit.family.every_mode_rises:
+        notes.add(
+            "heat-enters-contradicted",
+            "stated as where the heat enters, its readings fit better beyond chance with a mode that does not rise (a "
+            "lag of its own, a second path of the heat, a change of heat or a fall): it is fitted as any other sensor",
+        )
     slower = (
         _slower_than_allowed(binned, noise, interval, fit) if _near_decision(fit, settings, refine_within) else None
     )

@@ -211,6 +211,7 @@ def identify_robust(
     """
     log = as_temperature_log(log, "identify")
     settings = settings or RobustSettings()
+    settings.unknown_heat_sensors(log.sensors)
     window_min = minutes_given("window_min", window_min, "a positive number of minutes", strictly=True)
     n = window_samples(log, window_min)
     t, y = log.time_min, log.temperature_C

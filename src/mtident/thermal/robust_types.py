@@ -44,6 +44,7 @@ WarningCode = Literal[
     "machine-disagrees",
     "below-floor",
     "came-down",
+    "heat-enters-contradicted",
     "too-few-readings",
     "no-data",
     "no-rise",
@@ -82,6 +83,11 @@ class RobustSettings:
         With a reference: at most this many free modes faster than its slowest box (below or
         between its other boxes), which a reference run can miss (0 assumes the reference holds
         every mode of the machine: the earliest stops, and an assumption every answer then states).
+    heat_enters_at : tuple of str
+        The sensors that sit where the heat enters, as the engineer states: fitted without a
+        reference, their models have every mode rising (``ModeFamily.every_mode_rises``), which
+        bounds a slow mode not yet seen by the rise it would already show. Readings that
+        contradict it are fitted as any other sensor's, and the answer says so.
     """
 
     max_time_constant_min: float = DEFAULT_MAX_TIME_CONSTANT_MIN
@@ -90,6 +96,28 @@ class RobustSettings:
     max_modes: int = DEFAULT_MAX_MODES
     free_fast_modes: int = MAX_FREE_FAST
     more_modes_when_used: bool = True
+    heat_enters_at: tuple[str, ...] = ()
+
+    def unknown_heat_sensors(self, sensors: tuple[str, ...] | list[str]) -> None:
+        """Refuse ``heat_enters_at`` names that are not among ``sensors``.
+
+        Parameters
+        ----------
+        sensors : tuple or list of str
+            The sensors of the log.
+
+        Raises
+        ------
+        InputError
+            A name that is not one of them.
+        """
+        unknown = [name for name in self.heat_enters_at if name not in sensors]
+        if unknown:
+            msg = (
+                f"the heat cannot be said to enter at {', '.join(map(repr, unknown))}: not among the log's sensors "
+                f"({', '.join(sensors)})"
+            )
+            raise InputError(msg)
 
     def __post_init__(self) -> None:
         # a notebook builds these directly: a negative time constant overflowed deep in the search

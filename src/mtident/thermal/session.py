@@ -255,6 +255,8 @@ def _settings_key(
     fields = dataclasses.asdict(settings)
     if not settings.wait_for:
         del fields["wait_for"]  # waiting for every sensor, as before the option: such a state resumes
+    if not settings.robust.heat_enters_at:
+        del fields["robust"]["heat_enters_at"]  # as before the option: such a state resumes
     fields["reference"] = (
         None
         if settings.reference is None
