@@ -87,6 +87,15 @@ class Problem:
     family: ModeFamily
 
     @property
+    def rising_slack_C(self) -> float:
+        """How far a mode may fall and still count as rising (°C): a logged room's range over the
+        log. A room that moved before the log left the machine off its equilibrium with the
+        room's first level, the start the room's columns assume, and that history decays through
+        the modes with either sign."""
+        room = self.binned.room_C
+        return _RISING_SLACK_C + (0.0 if room is None else float(np.ptp(room)))
+
+    @property
     def with_room(self) -> bool:
         return self.binned.room_C is not None
 
@@ -423,16 +432,16 @@ class _RssObjective:
 class _EndObjective:
     """Minimised by the model that reaches furthest in T∞ towards ``sign`` within ``threshold``;
     beyond it, rising with the excess (``gap``: the threshold over the best fit), so that a
-    search crossing the edge is led back. ``rising``: a model whose end has a mode that does not
-    rise is no model (infinite)."""
+    search crossing the edge is led back. ``rising``: a model whose end has a mode that falls by
+    more than ``slack`` (°C) is no model (infinite)."""
 
-    def __init__(self, threshold: float, sign: float, gap: float, rising: bool = False) -> None:
-        self.threshold, self.sign, self.gap, self.rising = threshold, sign, gap, rising
+    def __init__(self, threshold: float, sign: float, gap: float, rising: bool = False, slack: float = 0.0) -> None:
+        self.threshold, self.sign, self.gap, self.rising, self.slack = threshold, sign, gap, rising, slack
 
     def __call__(self, fits: Fits) -> FloatArray:
         values = end_values(fits.rss, fits.var_steady, fits.steady, self.threshold, self.sign, self.gap)
         if self.rising:
-            values = np.where(rising_at_end(fits, self.threshold, self.sign), values, np.inf)
+            values = np.where(rising_at_end(fits, self.threshold, self.sign, self.slack), values, np.inf)
         return values
 
     def compiled(self, log_mode_ratio: float) -> tuple[float, float, float, float, float]:
@@ -621,7 +630,7 @@ def profile_bounds(fits: Fits, threshold: float) -> tuple[FloatArray, FloatArray
 _RISING_SLACK_C = 1e-9
 
 
-def rising_at_end(fits: Fits, threshold: float, sign: float) -> np.ndarray:
+def rising_at_end(fits: Fits, threshold: float, sign: float, slack: float = _RISING_SLACK_C) -> np.ndarray:
     """Per model, whether every mode rises (its amplitude, of e^(−t/τ), at most zero) at the end
     of its profile towards ``sign`` within ``threshold``. The furthest T∞ of models whose modes
     all rise is exactly the furthest such end over a family that holds each model's sub-models
@@ -635,26 +644,30 @@ def rising_at_end(fits: Fits, threshold: float, sign: float) -> np.ndarray:
         The largest residual sum of squares allowed.
     sign : float
         −1 for the low end, +1 for the high end.
+    slack : float
+        How far a mode may fall and still count (°C, :attr:`Problem.rising_slack_C`).
 
     Returns
     -------
     ndarray of bool, shape (T,)
     """
     k = fits.tau.shape[1]
-    slack = np.maximum(threshold - fits.rss, 0.0)
-    step = sign * np.sqrt(slack / np.maximum(fits.var_steady, 1e-300))
+    spare = np.maximum(threshold - fits.rss, 0.0)
+    step = sign * np.sqrt(spare / np.maximum(fits.var_steady, 1e-300))
     amplitudes = fits.theta[:, 1 : 1 + k] + step[:, None] * fits.direction[:, 1 : 1 + k]
-    rising: np.ndarray = np.all(amplitudes <= _RISING_SLACK_C, axis=1)
+    rising: np.ndarray = np.all(amplitudes <= slack, axis=1)
     return rising
 
 
-def rising_best(candidates: list[Fits]) -> Fits | None:
+def rising_best(candidates: list[Fits], slack: float = _RISING_SLACK_C) -> Fits | None:
     """The best-fitting model whose modes all rise at its best fit (the least-squares fit with
     every amplitude at most zero, over a family that holds each model's sub-models), or None.
 
     Parameters
     ----------
     candidates : list of Fits
+    slack : float
+        How far a mode may fall and still count (°C).
 
     Returns
     -------
@@ -663,7 +676,7 @@ def rising_best(candidates: list[Fits]) -> Fits | None:
     best: Fits | None = None
     for fits in candidates:
         k = fits.tau.shape[1]
-        rss = np.where(np.all(fits.theta[:, 1 : 1 + k] <= _RISING_SLACK_C, axis=1), fits.rss, np.inf)
+        rss = np.where(np.all(fits.theta[:, 1 : 1 + k] <= slack, axis=1), fits.rss, np.inf)
         if not len(rss) or not np.isfinite(rss).any():
             continue
         i = int(np.argmin(rss))
@@ -672,7 +685,9 @@ def rising_best(candidates: list[Fits]) -> Fits | None:
     return best
 
 
-def grid_half_width(candidates: list[Fits], threshold: float, steady: float, rising: bool = False) -> float:
+def grid_half_width(
+    candidates: list[Fits], threshold: float, steady: float, rising: bool = False, slack: float = _RISING_SLACK_C
+) -> float:
     """The hull's half-width over the models searched so far (the grid's and the best fits):
     never wider than the refined hull's.
 
@@ -683,6 +698,9 @@ def grid_half_width(candidates: list[Fits], threshold: float, steady: float, ris
         The largest residual sum of squares allowed.
     steady : float
         The best model's T∞ (centred).
+    rising : bool
+        Only the ends whose modes all rise (:func:`rising_at_end`), within ``slack`` (°C).
+    slack : float
 
     Returns
     -------
@@ -693,8 +711,8 @@ def grid_half_width(candidates: list[Fits], threshold: float, steady: float, ris
     if rising:
         ends = [
             (
-                np.where(rising_at_end(f, threshold, -1.0), lo, np.nan),
-                np.where(rising_at_end(f, threshold, 1.0), hi, np.nan),
+                np.where(rising_at_end(f, threshold, -1.0, slack), lo, np.nan),
+                np.where(rising_at_end(f, threshold, 1.0, slack), hi, np.nan),
             )
             for f, (lo, hi) in zip(candidates, ends, strict=True)
         ]
@@ -744,7 +762,7 @@ def hull_end(
     Fits
         One model.
     """
-    objective = _EndObjective(threshold, sign, gap, problem.family.every_mode_rises)
+    objective = _EndObjective(threshold, sign, gap, problem.family.every_mode_rises, problem.rising_slack_C)
     # the furthest any model searched so far reaches within the threshold (the best fit's own
     # profile at least): a local search from there can wander just beyond the threshold and be
     # discarded, so the end found is never short of it

@@ -243,7 +243,10 @@ def _steady_state(
         if refine and refine_within is not None:
             if widest_refined is None:
                 widest_refined = (
-                    grid_half_width(candidates, threshold, float(chosen.steady[0]), rising is not None) <= refine_within
+                    grid_half_width(
+                        candidates, threshold, float(chosen.steady[0]), rising is not None, problem.rising_slack_C
+                    )
+                    <= refine_within
                 )
             refine_level = widest_refined
         # a narrower level's end is polished from the wider level's end model too (the same ridges
@@ -287,7 +290,7 @@ def _rising_fit(problem: Problem, candidates: list[Fits], full: Fits, judge: boo
     :data:`RISING_LEVEL`, of as many degrees of freedom as the free fit has parameters more, at
     least one; not ``judge``: any); None where the readings
     contradict every mode rising (a sensor's own lag, a second heat path, a fall)."""
-    rising = rising_best(candidates)
+    rising = rising_best(candidates, problem.rising_slack_C)
     if rising is None or not judge:
         return rising
     dof = max(len(problem.binned) - full.n_params, 1)
