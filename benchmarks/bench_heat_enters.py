@@ -20,7 +20,7 @@ Recorded per replay: the stop, the waited sensors' worst T∞ error against the 
 (the latest settle time of the waited sensors on the noiseless curve, where finite).
 
 Seeds: development 36000-36199 may be looked at; held-out blocks of ``bench_machines.py``'s range
-(37000-40999) are for evaluating a change once: 39700-39799 was spent on this option.
+(37000-40999) are for evaluating a change once: 39700-39739 was spent on this option.
 
 Run: python benchmarks/bench_heat_enters.py --cases 40 --first-seed 36000 --out heat.jsonl [--shard 1/2]
      python benchmarks/bench_heat_enters.py --report heat.jsonl

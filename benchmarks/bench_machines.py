@@ -21,8 +21,8 @@ curve. Where a slow machine lags a daily room cycle or a drift by more than the 
 
 Seeds: the development blocks 36000-36199 may be looked at. The held-out blocks (37000-40999) must
 NOT be run while the monitor's rules are being changed, nor by whoever built this benchmark: each
-is for the evaluation of a change, once. 36500-36799 and 37000-39649 are spent (every seed
-evaluated a change, or was started to); the next evaluation starts at 39650.
+is for the evaluation of a change, once. 36500-36799 and 37000-39739 are spent (every seed
+evaluated a change, or was started to); the next evaluation starts at 39740.
 
 Run: python benchmarks/bench_machines.py --cases 100 --out dev.jsonl [--shard 1/2]
      python benchmarks/bench_machines.py --report dev.jsonl [--markdown]
