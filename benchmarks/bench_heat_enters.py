@@ -147,6 +147,10 @@ def report(paths: list[Path]) -> dict[str, object]:
             "beyond": sum(x["beyond"] for x in stops),
             "worst_error_C": max((x["worst_error_C"] or 0.0 for x in stops), default=None),
             "covered95_at_stop": (sum(covered) / len(covered)) if covered else None,
+            "covered95_at_stop_or_end": float(np.mean([p["covered95"] for x in runs for p in x["sensors"]]))
+            if runs
+            else None,
+            "worst_error_at_stop_or_end_C": max((x["worst_error_C"] or 0.0 for x in runs), default=None),
             "median_stop_over_settle": float(np.median(ratios)) if ratios else None,
             "p90_stop_over_settle": float(np.percentile(ratios, 90)) if ratios else None,
             "contradicted_sensors": sum(p["contradicted"] for x in runs for p in x["sensors"]),
