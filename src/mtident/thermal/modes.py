@@ -288,8 +288,8 @@ def _rising_fit(problem: Problem, candidates: list[Fits], full: Fits, judge: boo
     """The best fit whose modes all rise (:func:`~mtident.thermal.modal_search.rising_best`),
     where it fits no worse than the best free fit within chance (a likelihood-ratio test at
     :data:`RISING_LEVEL`, of as many degrees of freedom as the free fit has parameters more, at
-    least one; not ``judge``: any); None where the readings
-    contradict every mode rising (a sensor's own lag, a second heat path, a fall)."""
+    least one; not ``judge``: any); None where the readings contradict every mode rising (a
+    sensor's own lag, a second heat path, a fall)."""
     rising = rising_best(candidates, problem.rising_slack_C)
     if rising is None or not judge:
         return rising
