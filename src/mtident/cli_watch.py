@@ -1024,7 +1024,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
     shift = hindsight.room_shift_C
     added = hindsight.shift_C[np.isfinite(hindsight.shift_C)]
     # a room level again at the end can still have moved the sensors, which follow it late
-    moved = bool(len(added) and np.any(added != 0.0))
+    moved = bool(len(added) and np.any(np.abs(added) >= 0.005))  # as the sentence shows it, two decimals
     room = (
         f"; the room moved {shift:+.2f} °C from the stop to the end, but each sensor follows the room late, "
         f"through its modes, and still follows its moves before the stop: {_span(added)} °C added to T∞ at the "

@@ -641,3 +641,17 @@ def test_the_heat_is_said_to_enter_only_at_the_logs_sensors():
     with pytest.raises(InputError, match=r"the heat cannot be said to enter at 'bearing': not among the log's "):
         RobustSettings(heat_enters_at=("bearing",)).unknown_heat_sensors(("spindle", "motor"))
     RobustSettings(heat_enters_at=("motor",)).unknown_heat_sensors(("spindle", "motor"))
+
+
+def test_in_a_moving_room_every_mode_rising_is_not_assumed():
+    """A room that moved leaves the machine off the start the room's columns assume, and its moves
+    reach the sensor through modes of either sign: stated as where the heat enters, the sensor in a
+    room that rose 0.3 °C is fitted as any other, said so."""
+    t, y = _papers_curve(180.0)
+    room = 20.0 + 0.3 * t / t[-1]
+    settings = RobustSettings(heat_enters_at=("T",))
+    moved = estimate_sensor("T", t, y + 0.3 * t / t[-1], room, settings)
+    free = estimate_sensor("T", t, y + 0.3 * t / t[-1], room, replace(settings, heat_enters_at=()))
+    assert not moved.fit.family.every_mode_rises and moved.interval_C == free.interval_C
+    assert "heat-enters-room-moved" in moved.warning_codes
+    assert any("the logged room moved 0.30 °C over the log" in w for w in moved.warnings)

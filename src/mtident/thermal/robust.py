@@ -341,6 +341,10 @@ def _fit_above_floor(
     return fit, reference_used, floor
 
 
+# a logged room whose course moves more than this over the log (°C) is no still room: where the heat
+# enters, every mode rising is assumed only in a still room
+ROOM_STILL_C = 0.05
+
 # a logged room that moved this much (°C) since the warm-up began may be why a test leaves its reference
 _ROOM_MOVED_C = 0.1
 
@@ -480,6 +484,16 @@ def _modal_fit(
             "reference-disagrees",
             f"this test does not follow the reference's modes ({_taus(reference.time_constants_min)}; {why}): has the "
             f"machine changed, {missed} This answer does not use it",
+        )
+    moved = 0.0 if binned.room_C is None else float(np.ptp(binned.room_C))
+    if rising and moved > ROOM_STILL_C:
+        # a moving room's earlier moves reach the sensor through its modes with either sign, and
+        # the room's columns assume a machine at the room's first level: the intervals missed
+        rising, family = False, replace(family, every_mode_rises=False)
+        notes.add(
+            "heat-enters-room-moved",
+            f"stated as where the heat enters, but the logged room moved {moved:.2f} °C over the log: its moves "
+            "reach the sensor through modes of either sign, so every mode rising is not assumed",
         )
     fit, unheld = _widened_while_used(fit_of, family, settings, refine_within)
     if rising and not fit.family.every_mode_rises:

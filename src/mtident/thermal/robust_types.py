@@ -45,6 +45,7 @@ WarningCode = Literal[
     "below-floor",
     "came-down",
     "heat-enters-contradicted",
+    "heat-enters-room-moved",
     "too-few-readings",
     "no-data",
     "no-rise",
