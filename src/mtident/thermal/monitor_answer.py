@@ -422,10 +422,13 @@ def reason_lines(
     if settings.reference is None and any(ends_at_the_largest(c.ends, largest) for c in waiting):
         ways += (
             f"; where a mode of about {largest:g} min sets an end, and this machine has none that slow, say the "
-            "slowest it has (`max_time_constant_min`): the answer then assumes it; or, for a sensor that sits where "
-            "the heat enters, without a lag of its own, say so (`heat_enters_at`): a slow mode must then already show "
-            "in its rise"
+            "slowest it has (`max_time_constant_min`): the answer then assumes it"
         )
+        if not settings.robust.heat_enters_at:
+            ways += (
+                "; or, for a sensor that sits where the heat enters, without a lag of its own, in a still room, say so "
+                "(`heat_enters_at`): a slow mode must then already show in its rise"
+            )
     room = (
         "state a smaller room wander if the room is steadier than assumed (0 for a steady room), or log the room "
         "beside the sensors and name it as the room sensor (the fit then follows the room instead of assuming it; "

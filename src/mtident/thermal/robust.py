@@ -492,8 +492,9 @@ def _modal_fit(
         rising, family = False, replace(family, every_mode_rises=False)
         notes.add(
             "heat-enters-room-moved",
-            f"stated as where the heat enters, but the logged room moved {moved:.2f} °C over the log: its moves "
-            "reach the sensor through modes of either sign, so every mode rising is not assumed",
+            f"stated as where the heat enters, but the logged room moved {moved:.3f} °C over the log, more than "
+            f"{ROOM_STILL_C:g} °C: its moves reach the sensor through modes of either sign, so every mode rising is "
+            "not assumed",
         )
     fit, unheld = _widened_while_used(fit_of, family, settings, refine_within)
     if rising and not fit.family.every_mode_rises:
