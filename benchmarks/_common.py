@@ -58,3 +58,16 @@ def shard_seeds(args: argparse.Namespace) -> list[int]:
         for s in range(args.first_seed, args.first_seed + args.cases)
         if (s - args.first_seed) % n == k - 1 and s not in done
     ]
+
+
+def run_seeds(args: argparse.Namespace, run_one: Callable[[int], dict[str, object]]) -> None:
+    """Each of this shard's seeds not yet in ``args.out`` run by ``run_one``, its row (with the
+    case's seconds) appended to ``args.out`` as a JSON line as soon as it is done, so that a long
+    run resumes where it stopped."""
+    for seed in shard_seeds(args):
+        started = time.perf_counter()
+        row = run_one(seed)
+        row["case_seconds"] = time.perf_counter() - started
+        with args.out.open("a") as out:
+            out.write(json.dumps(row, default=float) + "\n")
+        print(f"seed {seed}: {row['case_seconds']:.1f} s", flush=True)

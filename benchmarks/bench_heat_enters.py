@@ -39,7 +39,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _common import seeded_run_parser, shard_seeds  # noqa: E402
+from _common import run_seeds, seeded_run_parser  # noqa: E402
 from _machines import TOLERANCE_C, Case, draw_case, simulate  # noqa: E402
 
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state  # noqa: E402
@@ -165,13 +165,7 @@ def main() -> None:
     if args.report:
         print(json.dumps(report(args.report), indent=2))
         return
-    for seed in shard_seeds(args):
-        started = time.perf_counter()
-        row = run_case(draw_case(seed), seed)
-        row["case_seconds"] = time.perf_counter() - started
-        with args.out.open("a") as out:
-            out.write(json.dumps(row, default=float) + "\n")
-        print(f"seed {seed}: {row['case_seconds']:.1f} s", flush=True)
+    run_seeds(args, lambda seed: run_case(draw_case(seed), seed))
 
 
 if __name__ == "__main__":

@@ -42,7 +42,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _common import seeded_run_parser, shard_seeds  # noqa: E402
+from _common import run_seeds, seeded_run_parser  # noqa: E402
 from _machines import (  # noqa: E402
     TOLERANCE_C,
     Case,
@@ -396,16 +396,13 @@ def main() -> None:
                 out.write(json.dumps(row, default=float) + "\n")
             print(json.dumps(row, default=float)[:3000], flush=True)
         return
-    for seed in shard_seeds(args):
+
+    def run_one(seed: int) -> dict[str, object]:
         if seed in HELD_OUT:
             print(f"seed {seed} is in the held-out block 37000-40999: run only to evaluate a change, once", flush=True)
-        started = time.perf_counter()
-        case = draw_case(seed)
-        row = run_case(case, seed, not args.with_reference_only)
-        row["case_seconds"] = time.perf_counter() - started
-        with args.out.open("a") as out:
-            out.write(json.dumps(row, default=float) + "\n")
-        print(f"seed {seed}: {row['case_seconds']:.1f} s", flush=True)
+        return run_case(draw_case(seed), seed, not args.with_reference_only)
+
+    run_seeds(args, run_one)
 
 
 if __name__ == "__main__":

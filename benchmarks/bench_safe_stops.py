@@ -40,7 +40,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from _common import seeded_run_parser, shard_seeds  # noqa: E402
+from _common import run_seeds, seeded_run_parser  # noqa: E402
 
 from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.testing.warmups import modal_amplitudes, random_warmup, reference_run  # noqa: E402
@@ -329,18 +329,8 @@ def main() -> None:
         summary = report(args.report)
         print(markdown(summary) if args.markdown else json.dumps(summary, indent=2))
         return
-    seeds = shard_seeds(args)
-    for seed in seeds:
-        started = time.perf_counter()
-        case = run_case(
-            seed,
-            "without" if args.without_reference_only else "with" if args.with_reference_only else None,
-            args.stated_assumptions,
-        )
-        case["case_seconds"] = time.perf_counter() - started
-        with args.out.open("a") as out:
-            out.write(json.dumps(case, default=float) + "\n")
-        print(f"seed {seed}: {case['case_seconds']:.1f} s", flush=True)
+    only = "without" if args.without_reference_only else "with" if args.with_reference_only else None
+    run_seeds(args, lambda seed: run_case(seed, only, args.stated_assumptions))
 
 
 if __name__ == "__main__":

@@ -653,24 +653,15 @@ def identify_request(options: Mapping[str, Any]) -> IdentifyRequest:
             max_time_constant_min=options["max_tau_min"],
             room_wander_C_per_h=options["room_wander"],
             free_fast_modes=options["free_fast_modes"],
-            heat_enters_at=heat_enters_names(options),
+            heat_enters_at=named_columns(options, "heat_enters_at", "--heat-enters-at"),
         ),
     )
 
 
-def heat_enters_names(options: Mapping[str, Any]) -> tuple[str, ...]:
-    """The log's columns that --heat-enters-at names (a name without its unit matches, as
-    --ambient's does).
-
-    Raises
-    ------
-    InputError
-        A name that is no column of the log, or fits two.
-    """
-    return tuple(
-        str(named_column(name, options["file"], options["sheet"], "--heat-enters-at"))
-        for name in options.get("heat_enters_at", ())
-    )
+def named_columns(options: Mapping[str, Any], key: str, option: str) -> tuple[str, ...]:
+    """The log's columns that a repeated option (--wait-for, --heat-enters-at) names, each as
+    :func:`named_column` reads it (a name without its unit matches); ``key``: its click name."""
+    return tuple(str(named_column(name, options["file"], options["sheet"], option)) for name in options[key])
 
 
 @dataclass(frozen=True, slots=True)

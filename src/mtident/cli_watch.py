@@ -46,7 +46,6 @@ from mtident.cli_thermal import (
     _say_room_candidates,
     asked_sensors,
     free_fast_option,
-    heat_enters_names,
     heat_enters_option,
     load_reference_file,
     log_options,
@@ -55,6 +54,7 @@ from mtident.cli_thermal import (
     machine_option,
     max_time_constant_option,
     named_column,
+    named_columns,
     reference_lines,
     reference_option,
     stderr,
@@ -192,13 +192,11 @@ def monitor_settings(options: Mapping[str, Any]) -> MonitorSettings:
             max_time_constant_min=options["max_tau_min"],
             room_wander_C_per_h=options["room_wander"],
             free_fast_modes=options["free_fast_modes"],
-            heat_enters_at=heat_enters_names(options),
+            heat_enters_at=named_columns(options, "heat_enters_at", "--heat-enters-at"),
         ),
         reference=load_reference_file(options["reference_path"], options["machine"]),
         room_sensor=named_column(options["ambient_col"], options["file"], options["sheet"], "--ambient"),
-        wait_for=tuple(
-            str(named_column(name, options["file"], options["sheet"], "--wait-for")) for name in options["wait_for"]
-        ),
+        wait_for=named_columns(options, "wait_for", "--wait-for"),
     )
 
 

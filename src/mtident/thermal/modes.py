@@ -226,8 +226,7 @@ def _steady_state(
             determined=False,
             **common,
         )
-    factor = correlation_factor(weighted_residuals(problem, full))
-    sigma2 = max(float(full.rss[0]) / dof, problem.sigma2) * factor
+    factor, sigma2 = _residual_variance(problem, full)
     intervals: dict[float, tuple[float, float]] = {}
     ends: dict[float, tuple[IntervalEnd, IntervalEnd]] = {}
     refined: dict[float, bool] = {}
@@ -284,6 +283,15 @@ def _steady_state(
     )
 
 
+def _residual_variance(problem: Problem, full: Fits) -> tuple[float, float]:
+    """How much the residuals' correlation widens a variance, and the variance of a reading the
+    intervals and tests count with: the best fit's residual variance, at least the noise's, so
+    widened."""
+    dof = max(len(problem.binned) - full.n_params, 1)
+    factor = correlation_factor(weighted_residuals(problem, full))
+    return factor, max(float(full.rss[0]) / dof, problem.sigma2) * factor
+
+
 def _rising_fit(problem: Problem, candidates: list[Fits], full: Fits, judge: bool = True) -> Fits | None:
     """The best fit whose modes all rise (:func:`~mtident.thermal.modal_search.rising_best`),
     where it fits no worse than the best free fit within chance (a likelihood-ratio test at
@@ -293,9 +301,7 @@ def _rising_fit(problem: Problem, candidates: list[Fits], full: Fits, judge: boo
     rising = rising_best(candidates, problem.rising_slack_C)
     if rising is None or not judge:
         return rising
-    dof = max(len(problem.binned) - full.n_params, 1)
-    sigma2 = max(float(full.rss[0]) / dof, problem.sigma2) * correlation_factor(weighted_residuals(problem, full))
-    statistic = (float(rising.rss[0]) - float(full.rss[0])) / sigma2
+    statistic = (float(rising.rss[0]) - float(full.rss[0])) / _residual_variance(problem, full)[1]
     extra = max(full.n_params - rising.n_params, 1)
     return rising if statistic <= float(chdtri(extra, 1.0 - RISING_LEVEL)) else None
 
