@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -90,15 +89,7 @@ def report_command(**options: Any) -> None:
 
         report = build_report(session, progress, options["machine"])
     # the page says the command line's options, as its stderr does, not the library's parameters
-    report = dataclasses.replace(
-        report,
-        log_warnings=tuple(map(as_options, report.log_warnings)),
-        log_notes=tuple(map(as_options, report.log_notes)),
-        warnings=tuple(map(as_options, report.warnings)),
-        holding=tuple(map(as_options, report.holding)),
-        ways_on=None if report.ways_on is None else as_options(report.ways_on),
-        reason=None if report.reason is None else as_options(report.reason),
-    )
+    report = report.reworded(as_options)
     # what reading the log said, as a watch says it (the report holds it too)
     for note in report.log_notes:
         stderr.print(f"mtident: note: {note}", highlight=False)

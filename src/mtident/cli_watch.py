@@ -65,7 +65,7 @@ from mtident.io.logs import SAMPLES, log_name
 from mtident.io.record import RecordingThread
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.hindsight_words import no_level_words, settle_timing, stuck_sensors
-from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes
+from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes, said_at
 from mtident.thermal.monitor_types import SensorCheck
 from mtident.thermal.robust import RobustSettings
 from mtident.thermal.session import (
@@ -797,8 +797,8 @@ def _say(events: list[Event]) -> None:
     for event in events:
         if event.kind in _SAID:
             prefix = "warning: " if event.kind == "warning" else "note: " if event.kind == "note" else ""
-            when = f"t = {minutes(event.time_min)}: " if math.isfinite(event.time_min) else ""
-            stderr.print(f"mtident: {prefix}{when}{event.text}", highlight=False)
+            said = said_at(event.time_min, event.text) if math.isfinite(event.time_min) else event.text
+            stderr.print(f"mtident: {prefix}{said}", highlight=False)
 
 
 def _answer(

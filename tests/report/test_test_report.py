@@ -125,3 +125,26 @@ def test_a_log_that_runs_on_unsettled_is_said_as_watch_says_it_with_the_rule():
     assert words.startswith("The log runs on to 360 min. The log ends before its sensors settled (settled: moving ")
     assert "less than 0.1 °C over the log's last quarter, with under 0.05 °C still to come" in words
     assert words.endswith(": nothing to check T∞ against.")
+
+
+def test_every_message_of_the_report_is_reworded_and_nothing_else():
+    import dataclasses
+
+    from mtident.report.test_report import MESSAGE_FIELDS, WarmupReport
+
+    names = {f.name: f for f in dataclasses.fields(WarmupReport)}
+    assert set(MESSAGE_FIELDS) <= set(names)
+    blank = {name: ("x" if f.type == "str" else ()) for name, f in names.items()}
+    report = WarmupReport(**{**blank, "reason": "give `reference`", "warnings": ("a `sensors`",), "ways_on": None})
+    worded = report.reworded(str.upper)
+    assert worded.reason == "GIVE `REFERENCE`" and worded.warnings == ("A `SENSORS`",) and worded.ways_on is None
+    assert worded.source == "x" and worded.assumptions == "x"
+
+
+def test_a_message_said_at_a_time_reads_back_without_it():
+    from mtident.thermal.monitor import said_at, without_time
+
+    said = said_at(230.0, "the reference: not followed")
+    assert said == "t = 230 min: the reference: not followed"
+    assert without_time(said) == "the reference: not followed"
+    assert without_time("the reference: not followed") == "the reference: not followed"

@@ -20,7 +20,7 @@ import math
 import re
 import textwrap
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +37,16 @@ from mtident.io.logs import log_name
 from mtident.report.plots import draw_monitor_panel, draw_timeline, plot_monitor, plot_timeline
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.hindsight_words import no_level_words
-from mtident.thermal.monitor import Event, MonitorSettings, MonitorState, SensorCheck, assumptions, minutes
+from mtident.thermal.monitor import (
+    Event,
+    MonitorSettings,
+    MonitorState,
+    SensorCheck,
+    assumptions,
+    minutes,
+    said_at,
+    without_time,
+)
 from mtident.thermal.monitor_answer import SensorStatus, silent_words
 from mtident.thermal.session import WatchSession
 
@@ -254,6 +263,23 @@ class WarmupReport:
         if self.started is None:
             return f"the log's first reading ({self.started_from})"
         return f"{self.started} ({self.started_from})"
+
+    def reworded(self, word: Callable[[str], str]) -> WarmupReport:
+        """The report with each of its messages to the user (:data:`MESSAGE_FIELDS`) passed
+        through ``word``: the command line says them with its options, not the library's
+        parameters."""
+        changed: dict[str, Any] = {name: _reworded(getattr(self, name), word) for name in MESSAGE_FIELDS}
+        return replace(self, **changed)
+
+
+#: The report's fields that are messages to the user, worded by the caller (:meth:`WarmupReport.reworded`)
+MESSAGE_FIELDS = ("log_warnings", "log_notes", "warnings", "holding", "ways_on", "reason")
+
+
+def _reworded(value: str | tuple[str, ...] | None, word: Callable[[str], str]) -> str | tuple[str, ...] | None:
+    if value is None or isinstance(value, str):
+        return value if value is None else word(value)
+    return tuple(map(word, value))
 
 
 # a stretch without readings longer than this many sampling intervals is said in the report
@@ -675,14 +701,14 @@ def _in_time_order(state: MonitorState, sensors: tuple[SensorStatus, ...]) -> tu
     those of the latest checks not said so, with their checks' times (the report listed the
     latest check's first, without their times, and the earlier ones after them)."""
     said = [text for _, text in state.warned]
-    bare = {text.split(": ", 1)[-1] for text in said}
+    bare = set(map(without_time, said))
     rest = sorted(
         (sensor.checked_at_min, w)
         for sensor in sensors
         for w in sensor.warnings
-        if w not in said and w not in bare and not w.startswith("t = ")
+        if w not in bare and without_time(w) == w
     )
-    return tuple(dict.fromkeys([*said, *(f"t = {minutes(at)}: {w}" for at, w in rest)]))
+    return tuple(dict.fromkeys([*said, *(said_at(at, w) for at, w in rest)]))
 
 
 def _png(figure: Figure) -> bytes:

@@ -46,6 +46,8 @@ from mtident.thermal.monitor_types import (
     Status,
     last_valid,
     minutes,
+    said_at,
+    without_time,
 )
 from mtident.thermal.readings import frozen_words, sampling_interval_min, without_stuck
 from mtident.thermal.reference import reference_for_log
@@ -63,7 +65,18 @@ __all__ = [
     "sensor_estimate",
 ]
 # the types the monitor takes and gives (from monitor_types) are its names too: a caller imports the monitor alone
-__all__ += ["Event", "EventKind", "MonitorSettings", "MonitorState", "Readings", "SensorCheck", "Status", "minutes"]
+__all__ += [
+    "Event",
+    "EventKind",
+    "MonitorSettings",
+    "MonitorState",
+    "Readings",
+    "SensorCheck",
+    "Status",
+    "minutes",
+    "said_at",
+    "without_time",
+]
 
 # a check falls due this little before its time (min): 60 µs, far below any logging interval
 _DUE_SLACK_MIN = 1e-6
@@ -264,9 +277,7 @@ def _named_reference(settings: MonitorSettings, sensors: tuple[str, ...], with_r
 def _with_warned(state: MonitorState, events: list[Event]) -> MonitorState:
     """The state with the check's warnings of a sensor kept (an answer says them per sensor)."""
     warned = tuple(
-        (e.sensor, f"t = {minutes(e.time_min)}: {e.text}")
-        for e in events
-        if e.kind == "warning" and e.sensor is not None
+        (e.sensor, said_at(e.time_min, e.text)) for e in events if e.kind == "warning" and e.sensor is not None
     )
     return replace(state, warned=state.warned + warned) if warned else state
 

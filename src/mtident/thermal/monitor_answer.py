@@ -14,7 +14,7 @@ from mtident._json import json_optional, to_json_value
 from mtident.thermal.assumptions import describe_assumptions
 from mtident.thermal.hindsight import HindsightAnswer
 from mtident.thermal.modal_types import Mode
-from mtident.thermal.monitor_types import MonitorSettings, MonitorState, Readings, SensorCheck
+from mtident.thermal.monitor_types import MonitorSettings, MonitorState, Readings, SensorCheck, without_time
 from mtident.thermal.robust import room_wander_half_width
 from mtident.thermal.robust_types import ROOMS_PART_LOGGED, ROOMS_PART_UNLOGGED, Assumptions, ends_at_the_largest
 
@@ -509,7 +509,7 @@ def _said_of(check: SensorCheck, warned: tuple[tuple[str, str], ...]) -> tuple[s
     no longer has, with when it was said (as stderr said it): a warning its latest answer no longer
     bears (the reference not followed at 230 min, followed again since) reads as of its time."""
     current = set(check.warnings)
-    earlier = [text for name, text in warned if name == check.sensor and text.split(": ", 1)[-1] not in current]
+    earlier = [text for name, text in warned if name == check.sensor and without_time(text) not in current]
     return tuple(dict.fromkeys([*check.warnings, *earlier]))
 
 

@@ -66,6 +66,8 @@ __all__ = [
     "Status",
     "TIMELINE_COLUMNS",
     "minutes",
+    "said_at",
+    "without_time",
 ]
 
 # a sensor's status at its latest check, as a table and the JSON show it
@@ -502,3 +504,13 @@ def minutes(value: float) -> str:
     if abs(value - round(value)) < 1e-6:
         return f"{round(value):d} min"
     return f"{value:.1f} min" if abs(value) >= 1 else f"{value * 60:.0f} s"
+
+
+def said_at(time_min: float, text: str) -> str:
+    """A message as said at a time of the test: ``"t = 230 min: text"``."""
+    return f"t = {minutes(time_min)}: {text}"
+
+
+def without_time(said: str) -> str:
+    """A message said at a time (:func:`said_at`) without its time; any other as it is."""
+    return said.split(": ", 1)[1] if said.startswith("t = ") else said
