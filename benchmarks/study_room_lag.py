@@ -1,6 +1,6 @@
 """How far behind a drifting room can a machine's sensor be, in its slowest time constants? A study
 of the physics behind the machine model's prior on a sensor's lag behind a moving room
-(``machine_model.ROOM_LAG_SHARE``; issue 36, "the room's static gain is one").
+(``machine_fit.ROOM_LAG_SHARE``; issue 36, "the room's static gain is one").
 
 A machine in a room that drifts at a constant rate settles behind it: each state lags the room by
 the rate times its mean delay ``d = (−A)⁻¹·1`` (min; the first moment of its step response to the

@@ -141,11 +141,11 @@ def test_a_machine_model_that_puts_a_heated_sensor_below_the_room_is_not_held():
 
 def test_a_direction_the_readings_leave_open_keeps_its_variance():
     """Two columns the readings cannot tell apart: a pseudo-inverse would call both known."""
-    from mtident.thermal.machine_model import _least_squares
+    from mtident.thermal.machine_model import least_squares
 
     u = np.linspace(0.0, 1.0, 50)
     X = np.column_stack([np.ones_like(u), u, u * (1.0 + 1e-13)])
-    _, cov = _least_squares(X, 1.0 + 2.0 * u)
+    _, cov = least_squares(X, 1.0 + 2.0 * u)
     assert cov[1, 1] > 1e6 and cov[2, 2] > 1e6
     assert cov[0, 0] < 1.0  # the level is still known
 
@@ -213,7 +213,7 @@ def test_a_fast_mode_whose_shape_the_run_got_wrong_is_untied_not_the_reference_d
     has its learnt amplitude at the housing the other way round: the tie of every mode rejects the
     housing;
     with the fast mode untied (each sensor's amplitude its own) it holds, and every T∞ is right."""
-    from mtident.thermal.machine_model import _fit_tied
+    from mtident.thermal.machine_fit import _fit_tied
 
     model = _model()
     fast = int(np.argmin(model.time_constants_min))
@@ -341,11 +341,12 @@ def test_the_room_factors_part_of_a_level_is_what_holding_them_takes_away(monkey
     steady room none of it."""
     from helpers import _run_in_room
 
-    import mtident.thermal.machine_model as mm
+    import mtident.thermal.machine_fit as mm
+    from mtident.thermal.machine_model import machine_readings
 
     model = _model()
     t, y, room = _run_in_room((0.45, 0.55), 1.2, np.zeros(3), 90.0, lambda t: ROOM_C + rate_C_per_h / 60.0 * t, 5)
-    readings = mm.machine_readings(SENSORS, t, y, room)
+    readings = machine_readings(SENSORS, t, y, room)
     bins = list(readings.binned)
     args = (bins, model.gains(SENSORS), np.maximum(readings.noise_C, 1e-4), *mm._centres(model)[:1])
     own = np.zeros(len(model.time_constants_min), bool)
@@ -373,7 +374,7 @@ def test_a_drifting_rooms_path_is_bounded_by_the_physics_not_counted_twice(monke
     holds the truth, and never counts less than the physics' sd for the room."""
     from helpers import _run_in_room
 
-    import mtident.thermal.machine_model as mm
+    import mtident.thermal.machine_fit as mm
     from mtident.io.logs import TemperatureLog
     from mtident.thermal.reference import learn_reference
 

@@ -39,7 +39,7 @@ from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.persist import load_dataclass, save_dataclass
 from mtident.thermal import identify, minimal_identification_time
-from mtident.thermal.machine_model import ROOM_LAG_SHARE, ROOM_RESPONSE_LAG_SHARE
+from mtident.thermal.machine_fit import ROOM_LAG_SHARE, ROOM_RESPONSE_LAG_SHARE
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
 from mtident.thermal.readings import stuck_since
 from mtident.thermal.reference import MachineReference, learn_reference
@@ -354,7 +354,7 @@ def test_a_one_mode_machine_in_a_drifting_room_stops_once_its_room_path_is_held_
     widened again for the model's error. Learnt in a steady room, the test in a room drifting
     0.08 °C an hour stops by 20 min (one time constant; widened twice: 73 min), every T∞ within
     0.04 °C and inside its 99 % interval: the room's path, bounded by the physics
-    (:func:`~mtident.thermal.machine_model._path_bound`), costs no more than its lag's prior."""
+    (:func:`~mtident.thermal.machine_fit._path_bound`), costs no more than its lag's prior."""
     names = [f"S{i}" for i in range(1, 7)]
     t, y, room, _ = _one_body_in_a_drift(300.0, 0.0, 1)
     reference, _ = learn_reference(TemperatureLog(t, tuple(names), y, (), "ref.csv"), room)

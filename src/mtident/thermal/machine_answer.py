@@ -10,7 +10,8 @@ from dataclasses import replace
 
 from mtident._threads import one_blas_thread
 from mtident._typing import FloatArray
-from mtident.thermal.machine_model import MachineFit, MachineModel, fit_test, machine_readings
+from mtident.thermal.machine_fit import fit_test
+from mtident.thermal.machine_model import MachineFit, MachineModel, machine_readings
 from mtident.thermal.modal_types import IntervalEnd, Mode
 from mtident.thermal.modes import equilibrium_time
 from mtident.thermal.robust import RobustSettings, SensorEstimate, room_wander_half_width

@@ -24,11 +24,11 @@ from mtident.exceptions import InputError
 from mtident.io.columns import room_named
 from mtident.io.logs import TemperatureLog
 from mtident.io.units import name_without_unit
+from mtident.thermal.machine_fit import fit_test
 from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import (
     MachineModel,
     MachineReadings,
-    fit_test,
     learn_machine_model,
     loose_slow_modes,
     machine_readings,
