@@ -332,3 +332,45 @@ def test_the_reports_warnings_carry_their_times_in_the_order_said(tmp_path):
     times = [float(w.split("t = ", 1)[1].split(" ", 1)[0]) for w in said]
     assert times == sorted(times) and any("T2: its readings froze at one value" in w for w in said)
     assert any("T3: flat against the room until" in w for w in said), said
+
+
+def test_a_dropped_reference_is_said_by_the_report_and_a_resumed_watch_and_assumed_by_neither(tmp_path):
+    """A new user's trial: the reference was dropped at the log's end (most sensors contradicting
+    it), which watch said on stderr only; a resumed watch's JSON then lost it, and the report listed
+    every sensor's reference among what the answer assumes. Another machine's reference here (every
+    time constant x0.45 of this one's)."""
+    import json
+
+    from mtident.thermal.reference import MachineReference
+    from mtident.thermal.robust_types import SensorModes
+
+    modes = SensorModes((8.0, 60.0), (0.1, 0.1), (-4.0, -6.0), None)
+    reference = tmp_path / "small.toml"
+    save_reference(
+        MachineReference("small.csv", "2026-11-20", 300.0, "not measured", {n: modes for n in "ABCD"}), reference
+    )
+    t = np.arange(0.0, 120.0, 0.5)
+    rng = np.random.default_rng(3)
+
+    def sensor(fast: float, slow: float) -> np.ndarray:
+        return 30.0 - 4.0 * np.exp(-t / slow) - 6.0 * np.exp(-t / fast) + rng.normal(0.0, 0.01, t.size)
+
+    log = tmp_path / "test.csv"
+    columns = [sensor(8.0 / 0.45, 60.0 / 0.45)] * 3 + [sensor(8.0, 60.0)]
+    log.write_text(csv_text(t, dict(zip("ABCD", columns, strict=True))))
+    code, out, err = mtident("thermal", "watch", str(log), "--replay", "--reference", str(reference), "--json")
+    assert code == 0, err
+    dropped = [w for w in json.loads(out)["log_warnings"] if "contradicted by 3 of the 4" in w]
+    assert len(dropped) == 1 and dropped[0] in err
+    code, out, err = mtident(
+        "thermal", "watch", str(log), "--replay", "--resume", "--reference", str(reference), "--json"
+    )
+    assert code == 0 and "resuming from" in err, err
+    assert json.loads(out)["log_warnings"] == [dropped[0]]
+    page_path = tmp_path / "test.html"
+    code, _, err = mtident("thermal", "report", str(log), "--reference", str(reference), "-o", str(page_path))
+    assert code == 0 and "resuming from" in err, err
+    page = html.unescape(page_path.read_text(encoding="utf-8"))
+    assert "contradicted by 3 of the 4 sensors it knows (A, B, C)" in page
+    assumed = page[page.index("What the answer assumes") :][:2000]
+    assert "reference for" not in assumed and "small.csv" not in assumed

@@ -433,7 +433,8 @@ def watch(request: WatchRequest) -> None:
         stderr.print(f"mtident: {note}", highlight=False)
     for note in sheet_notes:  # the sheet a workbook's readings came from: the JSON answer carries it too
         stderr.print(f"mtident: warning: {note}", highlight=False)
-        session.log_warnings.append(note)
+        if note not in session.log_warnings:  # a resumed watch has it from its state file
+            session.log_warnings.append(note)
     if recorder is not None:
         stderr.print(f"mtident: recording {file} to {path}", highlight=False)
     elif not path.is_file():

@@ -107,7 +107,7 @@ def test_a_state_file_of_an_older_version_is_not_resumed_but_started_afresh(tmp_
         monitor: MonitorState
 
     older = {"offset": 120, "dialect": [",", ".", 0, "utf-8-sig"], "origin": 0.0, "last_time": 59.0}
-    fields = {f.name: getattr(saved, f.name) for f in dataclasses.fields(saved)}
+    fields = {f.name: getattr(saved, f.name) for f in dataclasses.fields(OlderSavedWatch)}
     save_dataclass(first.state_path, OlderSavedWatch(**{**fields, "position": json.dumps(older)}))
     session = WatchSession(log, MonitorSettings())
     assert session.state is None

@@ -396,14 +396,16 @@ def build_report(
     of_log = [e for e in said if e.sensor is None]
     log_warnings = (*session.log_warnings, *read_warnings, *(e.text for e in of_log if e.kind == "warning"))
     log_notes = (*read_notes, *(e.text for e in of_log if e.kind == "note"))
-    said_assumed = assumptions(settings, state.sensors[0], state.readings.room_C is not None)
+    # a dropped reference: the answers rest on none, and what they assume says so, as watch's do
+    resting_on = replace(settings, reference=None) if state.reference_dropped else settings
+    said_assumed = assumptions(resting_on, state.sensors[0], state.readings.room_C is not None)
     assumed = (
         f"{said_assumed.model}, time constants up to {said_assumed.max_time_constant_min:g} min; "
         f"room {said_assumed.room}"
     )
     references: dict[str, list[str]] = {}
     for sensor in state.sensors:
-        reference = assumptions(settings, sensor).reference
+        reference = assumptions(resting_on, sensor).reference
         if reference:
             references.setdefault(reference, []).append(sensor)
     for reference, named in references.items():

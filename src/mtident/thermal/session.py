@@ -189,6 +189,9 @@ class SavedWatch:
     position : FollowPosition
         The follower's position in the log.
     monitor : MonitorState
+    log_warnings : tuple of str
+        The warnings said so far of the log or the test as a whole (a coarse room sensor, the
+        reference dropped): a resumed watch, and a report made from the state, say them too.
     """
 
     log: str
@@ -197,6 +200,7 @@ class SavedWatch:
     settings_key: str
     position: FollowPosition
     monitor: MonitorState
+    log_warnings: tuple[str, ...] = ()
 
 
 def default_state_path(log: Path) -> Path:
@@ -386,6 +390,7 @@ class WatchSession:
             self.path, saved.position, time_col, time_unit, self.follower.temperature_unit, shown_as=self.shown
         )
         self.state = self._saved = saved.monitor
+        self.log_warnings = list(saved.log_warnings)
         self._fingerprint = (saved.fingerprint, saved.fingerprint_bytes)
         self.notes.append(f"resuming from {self.state_path} at t = {minutes(saved.monitor.readings.latest_min)}")
 
@@ -405,7 +410,15 @@ class WatchSession:
             self._fingerprint = log_fingerprint(self.path)
         position = self.follower.position() if position_before is None else position_before
         save_dataclass(
-            self.state_path, SavedWatch(str(self.shown.resolve()), *self._fingerprint, self._key, position, self.state)
+            self.state_path,
+            SavedWatch(
+                str(self.shown.resolve()),
+                *self._fingerprint,
+                self._key,
+                position,
+                self.state,
+                tuple(self.log_warnings),
+            ),
         )
         self._saved = self.state
 
@@ -476,11 +489,15 @@ class WatchSession:
             The log has no sensor column besides the room sensor's, or the reference knows none of its sensors.
         """
         events = self._read(progress, cancel)
+        self._keep_test_warnings(events)
+        return events
+
+    def _keep_test_warnings(self, events: list[Event]) -> None:
+        """Keep the warnings said of the log or the test as a whole (a JSON reader, a report and a
+        resumed watch see what the terminal said: they are saved with the state)."""
         for e in events:
-            # a JSON reader sees what the terminal said of the log or the test as a whole
             if e.kind == "warning" and e.sensor is None and e.text not in self.log_warnings:
                 self.log_warnings.append(e.text)
-        return events
 
     def _read(self, progress: Callable[[WatchSession], None] | None, cancel: Callable[[], bool] | None) -> list[Event]:
         """:meth:`poll`'s work: the follower's rows fed to the monitor, and what was said."""
@@ -545,6 +562,7 @@ class WatchSession:
                 progress(self)
         events.extend(self._coarse_room())
         events.extend(self._warming_room())
+        self._keep_test_warnings(events)
         if self.persist:
             self.save()
         return events
@@ -567,6 +585,7 @@ class WatchSession:
             return []
         before = self.state
         self.state, events = check_every_sensor(self.state, self.settings, cancel)
+        self._keep_test_warnings(events)  # the reference dropped at the log's end, say
         # the checks at the log's end are saved though they said nothing: a report or a resumed
         # watch of the same log then answers from them, not from the checks spaced out before
         if self.state is not before and self.persist:
