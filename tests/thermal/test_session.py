@@ -163,9 +163,12 @@ def test_expected_stops_end_when_asked_within_a_forecast(tmp_path):
     session.poll()
     asked = []
     assert session.expected_stops(cancel=lambda: asked.append(1) or True) is None and 1 <= len(asked) <= 2
-    assert all(np.isfinite(v) for v in (session.expected_stops() or {"none": math.nan}).values())
     cancelled = session.result(cancel=lambda: True)["sensors"]
     assert all(s.get("expected_stop_time_min") is None for s in cancelled)  # type: ignore[union-attr]
+    assert all(np.isfinite(v) for v in (session.expected_stops() or {"none": math.nan}).values())
+    # once made, the same state's forecast is answered from, with nothing left to cancel
+    answered = session.result(cancel=lambda: True)["sensors"]
+    assert all(s.get("expected_stop_time_min") is not None for s in answered)  # type: ignore[union-attr]
 
 
 def test_a_long_replay_shows_the_test_from_its_first_checks(tmp_path):
@@ -257,3 +260,33 @@ def test_a_replay_that_ends_before_the_stop_answers_on_every_reading(tmp_path):
     ended = [e for e in session.run(FollowSettings(replay=True)) if isinstance(e, Ended)]
     assert ended[-1].reason == "replayed" and not session.stopped
     assert session.state is not None and all(c.checked_min == 240.0 for c in session.state.checks)
+
+
+def test_a_forecast_is_saved_with_its_state_and_answered_from_by_a_resumed_session(tmp_path, monkeypatch):
+    """A report made after a watch of the same log forecast every sensor's stop again (85 s of a
+    new user's 88 s); the forecast is saved with the state it was made of and answered from while
+    that state stands, and made again once a reading is fed."""
+    import mtident.thermal.session as session_module
+
+    log = tmp_path / "run.csv"
+    log.write_text(
+        csv_text(T[:90], {"A": noisy(first_order(T[:90]), 31), "B": noisy(first_order(T[:90], steady=29.0), 32)})
+    )
+    first = WatchSession(log, MonitorSettings())
+    first.poll()
+    made = first.expected_stops()
+    assert made is not None and set(made) == {"A", "B"}
+    assert load_dataclass(first.state_path, SavedWatch).forecast is not None
+
+    def forecast_again(*_: object, **__: object) -> float:
+        raise AssertionError("forecast made again for the state it was saved with")
+
+    monkeypatch.setattr(session_module, "expected_stop", forecast_again)
+    resumed = WatchSession(log, MonitorSettings())
+    assert resumed.state is not None
+    np.testing.assert_equal(resumed.expected_stops(), made)
+    with log.open("a") as f:
+        f.write("90,35.000,34.000\n")
+    resumed.poll()
+    monkeypatch.setattr(session_module, "expected_stop", lambda *_, **__: 123.0)
+    assert resumed.expected_stops() == {"A": 123.0, "B": 123.0}

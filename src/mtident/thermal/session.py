@@ -49,6 +49,7 @@ from mtident.thermal.reference import reference_for_log
 __all__ = [
     "Ended",
     "FollowSettings",
+    "Forecast",
     "Polled",
     "RecordTail",
     "SavedWatch",
@@ -172,6 +173,29 @@ WatchEvent = Event | Watching | Polled | SourceNote | Waiting | Ended
 
 
 @dataclass(frozen=True)
+class Forecast:
+    """Each sensor's expected stop (:meth:`WatchSession.expected_stops`) and the state it was made
+    of: its latest reading's time and its number of checks. Saved with the state, so that a
+    resumed watch or a report of the same log answers from it instead of forecasting again (each
+    sensor's forecast takes seconds).
+
+    Attributes
+    ----------
+    latest_min : float
+    checks : int
+    stops : dict of str to float
+    """
+
+    latest_min: float
+    checks: int
+    stops: dict[str, float]
+
+    def is_of(self, state: MonitorState) -> bool:
+        """Whether this is the forecast of ``state``."""
+        return self.latest_min == state.readings.latest_min and self.checks == len(state.timeline)
+
+
+@dataclass(frozen=True)
 class SavedWatch:
     """What the state file holds: which log and settings it belongs to, where the follower is,
     and the monitor's state.
@@ -192,6 +216,8 @@ class SavedWatch:
     log_warnings : tuple of str
         The warnings said so far of the log or the test as a whole (a coarse room sensor, the
         reference dropped): a resumed watch, and a report made from the state, say them too.
+    forecast : Forecast or None
+        The latest expected stops, where they were made.
     """
 
     log: str
@@ -201,6 +227,7 @@ class SavedWatch:
     position: FollowPosition
     monitor: MonitorState
     log_warnings: tuple[str, ...] = ()
+    forecast: Forecast | None = None
 
 
 def default_state_path(log: Path) -> Path:
@@ -341,6 +368,7 @@ class WatchSession:
         self.last_rows = 0
         self.cancelled = False
         self._room_step_said = self._room_warming_said = False
+        self._forecast: Forecast | None = None
         self.log_warnings: list[str] = []
         room = settings.room_sensor
         self._asked = None if sensors is None else [*[n for n in sensors if n != room], *([room] if room else [])]
@@ -391,6 +419,7 @@ class WatchSession:
         )
         self.state = self._saved = saved.monitor
         self.log_warnings = list(saved.log_warnings)
+        self._forecast = saved.forecast
         self._fingerprint = (saved.fingerprint, saved.fingerprint_bytes)
         self.notes.append(f"resuming from {self.state_path} at t = {minutes(saved.monitor.readings.latest_min)}")
 
@@ -418,6 +447,7 @@ class WatchSession:
                 position,
                 self.state,
                 tuple(self.log_warnings),
+                self._forecast,
             ),
         )
         self._saved = self.state
@@ -750,14 +780,20 @@ class WatchSession:
             Per sensor, the expected stop (min); empty before the log's header is read; None
             where ``cancel`` stopped them.
         """
-        if self.state is None:
+        state = self.state
+        if state is None:
             return {}
+        if self._forecast is not None and self._forecast.is_of(state):
+            return dict(self._forecast.stops)
         out = {}
-        for s, name in enumerate(self.state.sensors):
-            out[name] = expected_stop(self.state, self.settings, s, cancel=cancel)
+        for s, name in enumerate(state.sensors):
+            out[name] = expected_stop(state, self.settings, s, cancel=cancel)
             if cancel is not None and cancel():
                 return None
-        return out
+        self._forecast = Forecast(state.readings.latest_min, len(state.timeline), out)
+        if self.persist and self.state is state:
+            self.save()
+        return dict(out)
 
     def answer(self, with_forecast: bool = True, cancel: Callable[[], bool] | None = None) -> WatchAnswer:
         """The answer (:func:`~mtident.thermal.monitor_answer.answer`), its fields the JSON's keys.
