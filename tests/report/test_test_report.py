@@ -148,3 +148,15 @@ def test_a_message_said_at_a_time_reads_back_without_it():
     assert said == "t = 230 min: the reference: not followed"
     assert without_time(said) == "the reference: not followed"
     assert without_time("the reference: not followed") == "the reference: not followed"
+
+
+def test_a_holding_line_says_when_t_inf_would_be_known_not_when_the_readings_settle():
+    """A new user's six sensors were within 0.2 °C of their equilibrium from 345 min; the report
+    said each "settles by about t = 793 min", its expected stop: when T∞ would be known."""
+    from mtident.report.test_report import _holding_line
+    from mtident.thermal.monitor import MonitorSettings, SensorCheck
+
+    check = SensorCheck("S", status="narrowing", steady_C=33.37, low_C=33.04, high_C=33.61)
+    line = _holding_line(check, MonitorSettings(), 793.5)
+    assert line.endswith("On its present course its T∞ would be known within ±0.2 °C by about t = 794 min.")
+    assert "settles" not in line and "t = " not in _holding_line(check, MonitorSettings(), float("nan"))

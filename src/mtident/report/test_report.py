@@ -596,10 +596,14 @@ def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float
     )
     slow = [float(m) for m in re.findall(r"about (\d+(?:\.\d+)?) min", c.ends)]
     cause = f": a slower warming (time constant about {max(slow):.0f} min) still fits the readings" if slow else ""
-    settle = (
-        f" On its present course it settles by about t = {expected_min:.0f} min." if math.isfinite(expected_min) else ""
+    # the expected stop: when T∞ would be known within the tolerance, not when the readings settle,
+    # which may be long before (a new user's sensors were within 0.2 °C from 345 min; expected 793)
+    known = (
+        f" On its present course its T∞ would be known within {tolerance} by about t = {expected_min:.0f} min."
+        if math.isfinite(expected_min)
+        else ""
     )
-    return f"{c.sensor}: T∞ {c.steady_C:.2f} °C, but {span}, wider than {tolerance}{cause}.{settle}"
+    return f"{c.sensor}: T∞ {c.steady_C:.2f} °C, but {span}, wider than {tolerance}{cause}.{known}"
 
 
 # ---- the pieces ----------------------------------------------------------------------------------
