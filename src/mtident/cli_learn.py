@@ -278,7 +278,9 @@ def _learn_table(reference: MachineReference) -> None:
     for name, m in reference.sensors.items():
         taus = m.box_words()
         used = "no" if m.doubt else "yes, no faster mode (--every-mode)" if m.free_fast_modes == 0 else "yes"
-        table.add_row(name, taus, ", ".join(f"{a:+.2f}" for a in m.amplitudes_C), used)
+        # a mode split in two (a merge of two of the machine's) has no amplitude of its own: "—"
+        amplitudes = ", ".join(f"{a:+.2f}" if math.isfinite(a) else "—" for a in m.amplitudes_C)
+        table.add_row(name, taus, amplitudes, used)
     table_console().print(table)
     model = reference.machine_model
     if model is not None:

@@ -550,11 +550,12 @@ def test_learn_splits_a_mode_that_merges_two_of_the_machines_modes():
         sleeve.time_constants_min[0] * (1 - sleeve.box[0]) <= 99.0
         and sleeve.time_constants_min[1] * (1 + sleeve.box[1]) >= 286.0
     )
-    assert sleeve.amplitudes_C == (-2.5, -2.5)
+    # the run measured one amplitude for the two: neither is known alone (halves read as measured)
+    assert len(sleeve.amplitudes_C) == 2 and bool(np.all(np.isnan(sleeve.amplitudes_C)))
     assert split["bearing"] == sensors["bearing"] and split["housing"] == sensors["housing"]
     assert (
         len(warnings) == 1
-        and "sleeve: its mode of 170 min (±10%) lies between the machine's modes of 109" in (warnings[0])
+        and "sleeve: its mode of 170 min (±10%, -5.00 °C) lies between the machine's modes of 109" in (warnings[0])
     )
     # a mode whose box holds a machine mode, or one alone with no machine mode either side, stays
     alone = {"a": SensorModes((170.0,), (0.1,)), "b": SensorModes((160.0,), (0.1,))}
@@ -641,7 +642,7 @@ def test_learn_splits_a_merged_mode_where_only_the_machine_model_pins_the_two_do
     assert split["pt100"].time_constants_min == pytest.approx((1.5, 113.0, 280.0))
     assert split["bearing"] == sensors["bearing"]
     assert len(warnings) == 1 and warnings[0].startswith(
-        "pt100: its mode of 189 min (±10%) lies between the machine's modes of 113 and 280 min that the machine "
+        "pt100: its mode of 189 min (±10%, -5.00 °C) lies between the machine's modes of 113 and 280 min that the machine "
         "model pins down (bearing, pt100), and its box holds neither"
     )
     assert split_merged_modes(sensors) == (sensors, [])  # the sensors alone pin neither down

@@ -725,8 +725,9 @@ def _split_once(
         witnesses = low.sensors | high.sensors
         by = "the machine model pins down" if _MODEL in witnesses else "other sensors pin down"
         who = ", ".join(sorted(witnesses - {_MODEL}))
+        of = f", {amplitude:+.2f} °C" if math.isfinite(amplitude) else ""
         said = (
-            f"{name}: its mode of {tau:.3g} min (±{box:.0%}) lies between the machine's modes of "
+            f"{name}: its mode of {tau:.3g} min (±{box:.0%}{of}) lies between the machine's modes of "
             f"{low.time_constant_min:.3g} and {high.time_constant_min:.3g} min that {by} ({who}), and its box "
             "holds neither: the run may have merged the two into one. Later tests search "
         )
@@ -739,7 +740,9 @@ def _split_once(
                 f"{said}{centre:.3g} ±{wide:.0%} ({lowest:.3g}-{highest:.3g} min), holding both, for this sensor (it "
                 f"has {len(modes)} modes already, the most a sensor's fit takes)"
             )
-        split = [(low.time_constant_min, low.box, amplitude / 2.0), (high.time_constant_min, high.box, amplitude / 2.0)]
+        # the run measured the two modes' amplitudes as one: neither is known on its own (halves, shown in
+        # learn's table, read as measured)
+        split = [(low.time_constant_min, low.box, math.nan), (high.time_constant_min, high.box, math.nan)]
         return _with_modes(m, modes[:i] + split + modes[i + 1 :]), (
             f"{said}both ({low.time_constant_min:.3g} ±{max(low.box, MIN_REFERENCE_BOX):.0%}, "
             f"{high.time_constant_min:.3g} ±{max(high.box, MIN_REFERENCE_BOX):.0%}) for this sensor"
