@@ -367,6 +367,7 @@ def test_a_dropped_reference_is_said_by_the_report_and_a_resumed_watch_and_assum
     )
     assert code == 0 and "resuming from" in err, err
     assert json.loads(out)["log_warnings"] == [dropped[0]]
+    assert f"mtident: warning: (said before) {dropped[0]}" in " ".join(err.split())
     page_path = tmp_path / "test.html"
     code, _, err = mtident("thermal", "report", str(log), "--reference", str(reference), "-o", str(page_path))
     assert code == 0 and "resuming from" in err, err
@@ -374,3 +375,4 @@ def test_a_dropped_reference_is_said_by_the_report_and_a_resumed_watch_and_assum
     assert "contradicted by 3 of the 4 sensors it knows (A, B, C)" in page
     assumed = page[page.index("What the answer assumes") :][:2000]
     assert "reference for" not in assumed and "small.csv" not in assumed
+    assert "reference: not used (the test contradicted it; see the warnings)" in assumed

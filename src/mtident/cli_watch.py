@@ -431,6 +431,8 @@ def watch(request: WatchRequest) -> None:
     )
     for note in session.notes:
         stderr.print(f"mtident: {note}", highlight=False)
+    for said in session.log_warnings:  # a resumed watch's, from its state file: its answer refers to them
+        stderr.print(f"mtident: warning: (said before) {said}", highlight=False)
     for note in sheet_notes:  # the sheet a workbook's readings came from: the JSON answer carries it too
         stderr.print(f"mtident: warning: {note}", highlight=False)
         if note not in session.log_warnings:  # a resumed watch has it from its state file

@@ -411,6 +411,8 @@ def build_report(
     for reference, named in references.items():
         whom = "every sensor" if len(named) == len(state.sensors) > 1 else ", ".join(named)
         assumed += f"; reference for {whom}: {reference}"
+    if state.reference_dropped and settings.reference is not None:
+        assumed += "; reference: not used (the test contradicted it; see the warnings)"
     # the reference names the machine where the decision rested on it (one most sensors contradicted may be another's)
     used = settings.reference if settings.reference is not None and not state.reference_dropped else None
     sidecar_words, recorder_start = _recorder(session.path)
