@@ -159,4 +159,8 @@ def test_a_holding_line_says_when_t_inf_would_be_known_not_when_the_readings_set
     check = SensorCheck("S", status="narrowing", steady_C=33.37, low_C=33.04, high_C=33.61)
     line = _holding_line(check, MonitorSettings(), 793.5)
     assert line.endswith("On its present course its T∞ would be known within ±0.2 °C by about t = 794 min.")
-    assert "settles" not in line and "t = " not in _holding_line(check, MonitorSettings(), float("nan"))
+    none = _holding_line(check, MonitorSettings(), float("nan"))
+    assert "settles" not in line and "t = " not in none
+    assert none.endswith(
+        "No stop is found on its best model's course (its interval does not come within the tolerance there)."
+    )

@@ -603,7 +603,7 @@ def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float
     known = (
         f" On its present course its T∞ would be known within {tolerance} by about t = {expected_min:.0f} min."
         if math.isfinite(expected_min)
-        else ""
+        else " No stop is found on its best model's course (its interval does not come within the tolerance there)."
     )
     return f"{c.sensor}: T∞ {c.steady_C:.2f} °C, but {span}, wider than {tolerance}{cause}.{known}"
 
