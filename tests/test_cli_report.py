@@ -207,7 +207,9 @@ def test_why_not_yet_is_a_short_line_per_sensor_that_holds_the_test(tmp_path):
         text = item.split("</li>")[0]
         assert len(text) < 300, text
         assert "still possible" in text and "wider than ±0.2 °C" in text and "still fits the readings" in text
-    assert "<strong>Ways on:</strong> continue the test; a reference run of this machine" in page
+    # the ways on are watch's, said with the command line's options
+    assert "<strong>Ways on:</strong> continue the test, or give a reference run of this machine" in page
+    assert "(--max-time-constant)" in html.unescape(page)
     assert "Why not yet:</strong>" not in page
 
 

@@ -427,7 +427,9 @@ def build_report(
         for s, ax in enumerate(figure.axes[: values.shape[1]]):
             _draw_rest_of_log(ax, time_min, values[:, s], state.stop_time_min, legend=s == 0)
     stopped = state.stopped
-    holding, ways = ((), None) if stopped else _holding(state, settings, session.expected_stops() or {})
+    holding, ways = (
+        ((), None) if stopped else _holding(state, settings, session.expected_stops() or {}, outcome.reason_lines)
+    )
     settle = math.nan if hindsight is None else hindsight.test_settle_time_min
     saved = None if hindsight is None else hindsight.time_saved_min
     return WarmupReport(
@@ -549,24 +551,21 @@ def _recorder(log: Path) -> tuple[str | None, dt.datetime | None]:
 # ---- why not yet ---------------------------------------------------------------------------------
 
 
-def _holding(state: MonitorState, settings: MonitorSettings, expected: dict[str, float]) -> tuple[tuple[str, ...], str]:
-    """Why the test could not stop, a line per sensor that holds it, and the ways on."""
-    from mtident.thermal.monitor_answer import _room_bound
-
+def _holding(
+    state: MonitorState, settings: MonitorSettings, expected: dict[str, float], reason: tuple[str, ...] | None
+) -> tuple[tuple[str, ...], str]:
+    """Why the test could not stop, a line per sensor that holds it, and the ways on: watch's
+    (the last of its ``reason`` lines), so that the page and the terminal offer the same."""
     waiting = [c for c in state.checks if settings.waits_for(c.sensor) and not c.may_stop]
     if not waiting:
         return ("Every sensor is within the tolerance; the stop is confirmed at the next check.",), "continue the test"
     lines = [_holding_line(c, settings, expected.get(c.sensor, math.nan)) for c in waiting]
-    room_bound = [c.sensor for c in waiting if _room_bound(c, settings)]
-    ways = ["continue the test"]
-    if room_bound:
-        ways = [
-            f"for {', '.join(room_bound)}, log the room beside the sensors and name it (--ambient), or state a "
-            "smaller room wander (--room-wander) if the room is steadier than assumed: a longer test does not help"
-        ] + (["for the others, continue the test"] if len(room_bound) < len(waiting) else [])
-    if settings.reference is None:
-        ways.append("a reference run of this machine (mtident thermal learn) lets later tests stop far earlier")
-    return tuple(lines), "; ".join(ways)
+    last = reason[-1] if reason else ""
+    ways = last.removeprefix(_WAYS_ON).removesuffix(".") if last.startswith(_WAYS_ON) else "continue the test"
+    return tuple(lines), ways
+
+
+_WAYS_ON = "Ways on: "
 
 
 def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float) -> str:
