@@ -364,12 +364,14 @@ def test_a_dropped_reference_is_said_by_the_report_and_a_resumed_watch_and_assum
     assert code == 0, err
     dropped = [w for w in json.loads(out)["log_warnings"] if "contradicted by 3 of the 4" in w]
     assert len(dropped) == 1 and dropped[0] in err
+    assert "forecasting each sensor's expected stop (4 sensors" in err  # the minute it may take is said
     code, out, err = mtident(
         "thermal", "watch", str(log), "--replay", "--resume", "--reference", str(reference), "--json"
     )
     assert code == 0 and "resuming from" in err, err
     assert json.loads(out)["log_warnings"] == [dropped[0]]
     assert f"mtident: warning: (said before) {dropped[0]}" in " ".join(err.split())
+    assert "forecasting" not in err  # saved with the state
     page_path = tmp_path / "test.html"
     code, _, err = mtident("thermal", "report", str(log), "--reference", str(reference), "-o", str(page_path))
     assert code == 0 and "resuming from" in err, err

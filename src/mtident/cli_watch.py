@@ -819,6 +819,13 @@ def _answer(
     expected stops where ``forecast``, unless ``cancel`` stops them); ``whole``: the log already
     read again whole (:meth:`WatchSession.whole_log`), for the replay's hindsight; ``interrupted``:
     Ctrl-C ended the watch (a replay's log does not end there)."""
+    state = session.state
+    if forecast and state is not None and not state.stopped and not session.forecast_made:
+        # seconds a sensor, a minute or more for a machine: said, or the terminal falls silent
+        stderr.print(
+            f"mtident: forecasting each sensor's expected stop ({len(state.sensors)} sensors, seconds each)",
+            highlight=False,
+        )
     outcome = session.answer(with_forecast=forecast, cancel=cancel)
     # the comparison with the rest of a replayed log fits again: not after a SIGTERM, nor of a replay
     # interrupted before its log's end

@@ -766,6 +766,11 @@ class WatchSession:
 
     # -- answers -----------------------------------------------------------------------------
 
+    @property
+    def forecast_made(self) -> bool:
+        """Whether the expected stops of the state as it is are made (saved with it, or made since)."""
+        return self.state is not None and self._forecast is not None and self._forecast.is_of(self.state)
+
     def expected_stops(self, cancel: Callable[[], bool] | None = None) -> dict[str, float] | None:
         """Each sensor's expected stop on its best model's course (NaN: not foreseeable).
 
@@ -783,7 +788,7 @@ class WatchSession:
         state = self.state
         if state is None:
             return {}
-        if self._forecast is not None and self._forecast.is_of(state):
+        if self.forecast_made and self._forecast is not None:
             return dict(self._forecast.stops)
         out = {}
         for s, name in enumerate(state.sensors):
