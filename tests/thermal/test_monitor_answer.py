@@ -134,3 +134,20 @@ def test_readings_in_steps_as_coarse_as_the_tolerance_never_stop_within_it():
     reason = str(result(state, MonitorSettings(reference=one_mode_reference("S"), robust=fast))["reason"])
     assert "its readings come in steps of 0.32 °C, no finer than the tolerance" in reason
     assert replay({"S": y}, reference=one_mode_reference("S"), robust=fast, tolerance_C=0.4).stopped
+
+
+def test_a_warning_said_again_with_other_figures_is_listed_once_as_of_now():
+    """A new user's column: "flat against the room until t = 56.5 min, within 0.15 °C" said at 81
+    min, and at 600 min its latest check said "within 0.13 °C": the answer listed both. An earlier
+    warning the latest check no longer has at all is kept, with its time."""
+    from mtident.thermal.monitor_answer import _said_of
+    from mtident.thermal.monitor_types import SensorCheck
+
+    now = "column: flat against the room until t = 56.5 min, within 0.13 °C of its first level"
+    check = SensorCheck("column", warnings=(now,))
+    warned = (
+        ("column", "t = 81 min: column: flat against the room until t = 56.5 min, within 0.15 °C of its first level"),
+        ("column", "t = 230 min: column: the reference is not followed"),
+        ("other", "t = 90 min: other: something else"),
+    )
+    assert _said_of(check, warned) == (now, "t = 230 min: column: the reference is not followed")
