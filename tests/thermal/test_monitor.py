@@ -506,6 +506,14 @@ def test_a_reference_most_sensors_contradict_is_used_for_none():
     assert state.reference_dropped
     said = [e.text for e in events if "contradicted by" in e.text]
     assert len(said) == 1 and "contradicted by 3 of the 4 sensors it knows (A, B, C)" in said[0]
+    # the statuses said are those of the checks without the reference (a new user's terminal said
+    # "off reference" where the timeline and the answer said "narrowing")
+    statuses = [e.text for e in events if e.kind in ("ready", "not ready", "check")]
+    assert not [text for text in statuses if "off reference" in text], statuses
+    for check in state.checks:
+        assert [t for t in statuses if t.startswith(f"{check.sensor}: ")][-1].startswith(
+            f"{check.sensor}: {check.status}"
+        )
     assert not any(c.reference_used for c in state.checks)
     answer = result(state, settings)
     assert answer["reference_dropped"] is True

@@ -311,7 +311,8 @@ def _check_due(
     wander = unmeasured_wander(_model_of(used), readings.room_C is not None, replace(used.robust, levels=used.levels))
     checked_now: set[int] = set()
 
-    def check_sensor(s: int) -> None:
+    def check_sensor(s: int, since: SensorCheck | None = None) -> None:
+        """Check sensor ``s``; its status's change is said against ``since`` (default: its check so far)."""
         if cancel is not None and cancel():
             raise _Cancelled
         checked_now.add(s)
@@ -320,7 +321,8 @@ def _check_due(
             checks[s],
             _checked(checks[s], estimate, now, readings, used, (last[s], silent[s], stuck[s])),
         )
-        events.extend(_check_events(before, checks[s], estimate, said, now, settings.decision_level))
+        said_against = before if since is None else since
+        events.extend(_check_events(said_against, checks[s], estimate, said, now, settings.decision_level))
 
     waited = [s for s, name in enumerate(state.sensors) if settings.waits_for(name)]
     for s, check in enumerate(checks):
@@ -339,10 +341,13 @@ def _check_due(
         dropped, used = True, replace(settings, reference=None)
         machine, wander = None, {}
         why = f"is contradicted by {len(contradicting)} of the {known} sensors it knows"
+        # the checks on the reference said statuses the checks without it replace: a sensor said "off
+        # reference" at the drop was recorded as "narrowing" (a new user's terminal and timeline disagreed)
+        events[:] = [e for e in events if e.kind not in _STATUS_KINDS]
         events.append(_reference_dropped(settings, now, why, contradicting))
         checks = [replace(c, passes=0, ready_since_min=math.nan) for c in checks]
         for s in range(len(checks)):
-            check_sensor(s)
+            check_sensor(s, since=state.checks[s])
     if all(checks[s].may_stop for s in waited):
         # a sensor that may stop waits for the others at a longer spacing: before the test stops,
         # each is checked again on every reading so far
@@ -370,6 +375,10 @@ def _check_due(
     return MonitorState(
         state.sensors, readings, tuple(checks), stop, tuple(sorted(said)), dropped, state.warned, timeline
     ), events
+
+
+_STATUS_KINDS = ("ready", "not ready", "check")
+"""The kinds of event that say a sensor's status changed."""
 
 
 def _timeline_rows(checks: Sequence[SensorCheck], checked: Sequence[int], now: float) -> FloatArray:
