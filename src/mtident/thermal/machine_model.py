@@ -405,10 +405,29 @@ def learn_machine_model(
     return model if readings.room_C is None else _with_room_response(model, keep, bins, noise)
 
 
-def loose_slow_modes(model: MachineModel) -> list[str]:
+def loose_slow(model: MachineModel) -> list[tuple[float, float]]:
     """The machine model's slow shared modes (at least :data:`FAST_SHARE` of the slowest) that the
-    run pins down only within more than :data:`MAX_MACHINE_BOX`, in words ("239 min ±172%"): a
-    model with any is not kept.
+    run pins down only within more than :data:`MAX_MACHINE_BOX`, as (time constant, box): a model
+    with any is not kept.
+
+    Parameters
+    ----------
+    model : MachineModel
+
+    Returns
+    -------
+    list of (float, float)
+    """
+    slowest = max(model.time_constants_min)
+    return [
+        (tau, box)
+        for tau, box in zip(model.time_constants_min, model.box, strict=True)
+        if box > MAX_MACHINE_BOX and tau >= FAST_SHARE * slowest
+    ]
+
+
+def loose_slow_modes(model: MachineModel) -> list[str]:
+    """:func:`loose_slow` in words ("239 min ±172%").
 
     Parameters
     ----------
@@ -418,12 +437,7 @@ def loose_slow_modes(model: MachineModel) -> list[str]:
     -------
     list of str
     """
-    slowest = max(model.time_constants_min)
-    return [
-        f"{tau:.3g} min ±{box:.0%}"
-        for tau, box in zip(model.time_constants_min, model.box, strict=True)
-        if box > MAX_MACHINE_BOX and tau >= FAST_SHARE * slowest
-    ]
+    return [f"{tau:.3g} min ±{box:.0%}" for tau, box in loose_slow(model)]
 
 
 def missing_modes(model: MachineModel, readings: MachineReadings) -> dict[str, tuple[float, float]]:

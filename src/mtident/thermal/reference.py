@@ -25,17 +25,16 @@ from mtident.io.columns import room_named
 from mtident.io.logs import TemperatureLog
 from mtident.io.units import name_without_unit
 from mtident.thermal.machine_fit import fit_test
+from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.machine_model import (
-    FAST_SHARE,
-    MAX_MACHINE_BOX,
     MachineModel,
     MachineReadings,
     learn_machine_model,
+    loose_slow,
     loose_slow_modes,
     machine_readings,
     missing_modes,
 )
-from mtident.thermal.machine_model import MAX_MODES as MACHINE_MAX_MODES
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
 from mtident.thermal.readings import coarse_room_step_C, coarse_room_warning, room_input, warming_room_warning
@@ -480,16 +479,12 @@ def _hidden_slow_words(
     a test then finds only when its readings contradict the reference."""
     span = float(time_min[-1] - time_min[0]) if len(time_min) else 0.0
     searched = AT_LIMIT_SHARE * min(0.5 * span, max_time_constant_min)
-    slow = [
-        (tau, box)
-        for tau, box in zip(model.time_constants_min, model.box, strict=True)
-        if box > MAX_MACHINE_BOX and tau >= FAST_SHARE * max(model.time_constants_min) and tau < searched
-    ]
+    slow = [(tau, box) for tau, box in loose_slow(model) if tau < searched]
     if not slow:
         return []
     tau, box = max(slow)
     below = {
-        name: max(c * (1.0 + b) for c, b in zip(m.time_constants_min, m.box, strict=True))
+        name: _ceiling_min(m.time_constants_min, m.box)
         for name, m in sensors.items()
         if m.doubt is None and m.time_constants_min
     }

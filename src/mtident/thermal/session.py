@@ -788,8 +788,9 @@ class WatchSession:
         state = self.state
         if state is None:
             return {}
-        if self.forecast_made and self._forecast is not None:
-            return dict(self._forecast.stops)
+        made = self._forecast
+        if made is not None and made.is_of(state):
+            return dict(made.stops)
         out = {}
         for s, name in enumerate(state.sensors):
             out[name] = expected_stop(state, self.settings, s, cancel=cancel)
