@@ -47,7 +47,7 @@ from mtident.thermal.monitor import (
     said_at,
     without_time,
 )
-from mtident.thermal.monitor_answer import SensorStatus, silent_words
+from mtident.thermal.monitor_answer import WAYS_ON, SensorStatus, silent_words
 from mtident.thermal.session import WatchSession
 
 __all__ = [
@@ -561,11 +561,8 @@ def _holding(
         return ("Every sensor is within the tolerance; the stop is confirmed at the next check.",), "continue the test"
     lines = [_holding_line(c, settings, expected.get(c.sensor, math.nan)) for c in waiting]
     last = reason[-1] if reason else ""
-    ways = last.removeprefix(_WAYS_ON).removesuffix(".") if last.startswith(_WAYS_ON) else "continue the test"
+    ways = last.removeprefix(WAYS_ON).removesuffix(".") if last.startswith(WAYS_ON) else "continue the test"
     return tuple(lines), ways
-
-
-_WAYS_ON = "Ways on: "
 
 
 def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float) -> str:
@@ -1028,7 +1025,7 @@ def summary_pages(report: WarmupReport) -> list[Figure]:
         for line in report.holding:
             pages.bullet(line, 8.0)
         if report.ways_on:
-            pages.text(f"Ways on: {report.ways_on}.", 8.0, weight="bold")
+            pages.text(f"{WAYS_ON}{report.ways_on}.", 8.0, weight="bold")
     pages.heading("Setup", keep=0.03)
     for term, words in _setup(report):
         pages.text(f"{term}: {words}", 8.0)

@@ -417,7 +417,7 @@ def reason_lines(
         f"{'it' if len(failed) == 1 else 'them'} out of the sensors the test waits for (`wait_for` the others)"
     )
     if not waiting:
-        return (*_rooms_part_once(parts), f"Ways on: {mend}.")
+        return (*_rooms_part_once(parts), f"{WAYS_ON}{mend}.")
     ways = "continue the test" + ("" if settings.reference is not None else learn)
     largest = settings.robust.max_time_constant_min
     if settings.reference is None and any(ends_at_the_largest(c.ends, largest) for c in waiting):
@@ -449,7 +449,11 @@ def reason_lines(
         ways += f"; for {', '.join(slow)}, also {room}"
     if failed:
         ways += f"; {mend}"
-    return (*_rooms_part_once(parts), f"Ways on: {ways}.")
+    return (*_rooms_part_once(parts), f"{WAYS_ON}{ways}.")
+
+
+WAYS_ON = "Ways on: "
+"""How the last of :func:`reason_lines` begins: the ways on follow it (a report takes them from there)."""
 
 
 def _rooms_part_once(parts: list[str]) -> list[str]:
