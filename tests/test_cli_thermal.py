@@ -18,6 +18,7 @@ from conftest import first_order, make_log
 from fuzz_logs_helpers import EXPORTS, Export, exports
 from helpers import Outcome, csv_text, frozen_channel, mtident, noisy, two_mode, workbook_of_runs
 
+import mtident.cli_logs as cli_logs
 import mtident.cli_thermal as cli_thermal
 from mtident.exceptions import InputError
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog, read_temperature_log
@@ -71,18 +72,18 @@ def _check_refusal(out: Outcome, where: str) -> list[str]:
 def _logs_read() -> Iterator[list[TemperatureLog]]:
     """The logs the commands read, as their fits get them."""
     read: list[TemperatureLog] = []
-    original = cli_thermal.load_log
+    original = cli_logs.load_log
 
     def recording(*args: Any, **kwargs: Any) -> TemperatureLog:
         log = original(*args, **kwargs)
         read.append(log)
         return log
 
-    cli_thermal.load_log = recording
+    cli_logs.load_log = recording
     try:
         yield read
     finally:
-        cli_thermal.load_log = original
+        cli_logs.load_log = original
 
 
 def check_export(export: Export, path: Path, robust: bool = False) -> tuple[list[str], bool]:
@@ -647,7 +648,6 @@ def test_identify_marks_a_measured_level_the_log_had_not_settled_to(tmp_path):
 def test_ctrl_c_inside_compiled_code_aborts_like_ctrl_c_and_other_system_errors_pass(monkeypatch):
     """A Ctrl-C that reaches Python from compiled code is the interrupted call's SystemError: it
     aborts as Ctrl-C does, without numba's traceback."""
-    import mtident.cli_thermal as cli_thermal
 
     def interrupted(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
         raise SystemError("<numba function> returned a result with an exception set") from KeyboardInterrupt()

@@ -29,7 +29,7 @@ from helpers import (
     workbook_of_runs,
 )
 
-from mtident.cli_watch import _print_hindsight, _status_words
+from mtident.cli_watch_answer import _print_hindsight, _status_words
 from mtident.persist import load_dataclass
 from mtident.thermal.hindsight import Hindsight
 from mtident.thermal.monitor import new_state
@@ -461,7 +461,7 @@ def test_watch_says_when_no_expected_stop_was_found(tmp_path):
 
 def test_the_other_sensors_expected_stops_read_as_one_or_a_range():
     """A newcomer's trial read 'the others' come at t ≈ 913 min to 913 min' of one sensor."""
-    from mtident.cli_watch import _others_stops
+    from mtident.cli_watch_answer import _others_stops
 
     assert _others_stops([], 500.0) == ""
     assert _others_stops([913], 500.0) == "; the other's comes at t ≈ 913 min"
@@ -472,7 +472,7 @@ def test_the_other_sensors_expected_stops_read_as_one_or_a_range():
 def test_the_other_sensors_that_may_stop_already_are_not_said_to_come():
     """A new user read "the others' come at t ≈ 861 min to 1190 min" at 900 min: a sensor that may
     stop has its expected stop at the time it became ready, which is past."""
-    from mtident.cli_watch import _others_stops
+    from mtident.cli_watch_answer import _others_stops
 
     assert (
         _others_stops([861, 1190], 900.0)

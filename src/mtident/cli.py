@@ -13,7 +13,7 @@ import re
 import sys
 from collections.abc import Callable
 from functools import wraps
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, Literal, TypedDict, TypeVar
 
 import click
 from rich.console import Console
@@ -438,3 +438,35 @@ def thermal() -> None:
 @main.group(cls=LazyGroup, commands_modules=("mtident.cli_feeddrive",))
 def feeddrive() -> None:
     """Ball-screw feed drive: 4-DOF model, modes, simulation, identification."""
+
+
+stderr = OptionConsole(stderr=True, soft_wrap=True)
+
+
+class ColumnLayout(TypedDict, total=False):
+    no_wrap: bool
+    overflow: Literal["fold", "crop", "ellipsis", "ignore"]
+    min_width: int
+    max_width: int
+
+
+def column_layout(column: str) -> ColumnLayout:
+    """Numbers on one line; a long sensor name (a building-management point's, HOBOware's with
+    its serial numbers) folded over several lines of 14 to 32 characters, so that it neither
+    squeezes the numbers to "…" nor is squeezed to two letters in an 80-column terminal."""
+    if column == "sensor":
+        return {"overflow": "fold", "min_width": 14, "max_width": 32}
+    if column == "status":  # words: wrapped at a space when the table is too wide
+        return {"min_width": 9}
+    if column.endswith("interval"):  # "low to high": wrapped after "to" in a narrow terminal
+        return {"min_width": 8}
+    return {"no_wrap": True}
+
+
+def cell_text(value: object, digits: int = 2) -> str:
+    """A number for a table's cell, ``digits`` after the point; "—" where there is none."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "—"  # no estimate yet (still collecting, or no steady state)
+    if isinstance(value, float):
+        return f"{value:.{digits}f}"
+    return str(value)

@@ -14,17 +14,9 @@ import numpy as np
 from rich.table import Table
 
 from mtident._json import fields_of, json_inline
-from mtident.cli import print_json, table_console, thermal, user_errors
-from mtident.cli_options import ambient_option, file_option, json_option, output_option
-from mtident.cli_thermal import (
-    CommandRequest,
-    _column_layout,
-    command_request,
-    load_log_with_room,
-    log_options,
-    max_time_constant_option,
-    stderr,
-)
+from mtident.cli import column_layout, print_json, stderr, table_console, thermal, user_errors
+from mtident.cli_logs import CommandRequest, command_request, load_log_with_room, log_options
+from mtident.cli_options import ambient_option, file_option, json_option, max_time_constant_option, output_option
 from mtident.exceptions import InputError
 from mtident.thermal.robust_types import RobustSettings, SensorModes
 
@@ -274,7 +266,7 @@ def _earlier_reference(path: str, machine: str) -> MachineReference:
 def _learn_table(reference: MachineReference) -> None:
     table = Table(title=f"{reference.identity}: modes learnt (time constants with their box)")
     for column in ("sensor", "time constants (min)", "amplitudes (°C)", "used by later tests"):
-        table.add_column(column, justify="left" if column == "sensor" else "right", **_column_layout(column))
+        table.add_column(column, justify="left" if column == "sensor" else "right", **column_layout(column))
     for name, m in reference.sensors.items():
         taus = m.box_words()
         used = "no" if m.doubt else "yes, no faster mode (--every-mode)" if m.free_fast_modes == 0 else "yes"

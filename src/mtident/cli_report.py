@@ -7,9 +7,9 @@ from typing import Any
 
 import click
 
-from mtident.cli import as_options, thermal, user_errors
+from mtident.cli import as_options, stderr, thermal, user_errors
+from mtident.cli_logs import asked_sensors, log_options, log_path, say_room_candidates, unread_rooms_of
 from mtident.cli_options import file_option, output_option
-from mtident.cli_thermal import _say_room_candidates, asked_sensors, log_options, log_path, stderr, unread_rooms_of
 from mtident.cli_watch import _workbook_as_replayed_csv, decision_options, monitor_settings, state_file
 from mtident.exceptions import InputError
 from mtident.thermal.monitor import minutes
@@ -97,7 +97,7 @@ def report_command(**options: Any) -> None:
         stderr.print(f"mtident: warning: {warning}", highlight=False)
     if settings.room_sensor is None:  # as watch says it: a room column was reported as a machine sensor, or not read
         unread = unread_rooms_of(read, session.sensors) if session.asked is not None else []
-        _say_room_candidates(session.sensors, "reported as a machine sensor", unread=unread)
+        say_room_candidates(session.sensors, "reported as a machine sensor", unread=unread)
     written = write_pdf(report, output) if output.suffix.lower() == ".pdf" else write_html(report, output)
     verdict = (
         f"the test could stop at t = {minutes(report.stop_time_min)}"

@@ -3,394 +3,67 @@
 from __future__ import annotations
 
 import math
-import shlex
 from collections.abc import Mapping
-from dataclasses import dataclass, fields, replace
-from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, TypedDict, TypeVar
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import click
 import numpy as np
 from rich.table import Table
 
 from mtident.cli import (
-    F,
     FiniteFloatRange,
     OptionConsole,
     OutputPath,
     as_options,
+    cell_text,
+    column_layout,
     number_option,
     print_json,
     prose_console,
+    stderr,
     table_console,
     thermal,
     user_errors,
 )
-from mtident.cli_options import ambient_option, file_option, json_option, plot_option
+from mtident.cli_logs import (
+    CommandRequest,
+    LogRequest,
+    asked_sensors,
+    command_request,
+    load_log_with_room,
+    load_reference_file,
+    log_options,
+    log_path,
+    named_columns,
+    say_room_candidates,
+    unread_rooms_of,
+)
+from mtident.cli_options import (
+    ambient_option,
+    free_fast_option,
+    heat_enters_option,
+    json_option,
+    machine_option,
+    max_time_constant_option,
+    plot_option,
+    preset_option,
+    reference_option,
+)
 from mtident.exceptions import InputError
-from mtident.io.columns import column_named, room_named, unread_rooms
-from mtident.io.logs import SAMPLES, TemperatureLog, read_temperature_log, sample_log_path
-from mtident.io.time_notes import TIME_UNITS
-from mtident.io.units import TEMPERATURE_UNIT_OPTIONS
-from mtident.thermal import DEFAULT_METHOD, METHODS, PRESETS, identify, minimal_identification_time
+from mtident.io.logs import TemperatureLog
+from mtident.thermal import DEFAULT_METHOD, METHODS, identify, minimal_identification_time
 from mtident.thermal.assumptions import MACHINE_MARK
 from mtident.thermal.identification import SensorAnswer
 from mtident.thermal.measured import SETTLED_MOVE_C
 from mtident.thermal.min_time import MinTimeAnswer, MinTimeResult
 from mtident.thermal.modes import DEFAULT_MAX_TIME_CONSTANT_MIN
-from mtident.thermal.robust_types import MAX_FREE_FAST, RobustSettings
+from mtident.thermal.robust_types import RobustSettings
 from mtident.thermal.settings import IDENTIFY_METHODS, ROBUST_METHOD
 
 if TYPE_CHECKING:
     from mtident.io.describe import LogDescription
     from mtident.thermal.reference import MachineReference
-
-stderr = OptionConsole(stderr=True, soft_wrap=True)
-
-
-def log_path(file: str) -> Path:
-    """FILE as given, or the shipped log it names (@sample, @sample-room).
-
-    Parameters
-    ----------
-    file : str
-        The FILE argument: a path, or a shipped log's @-name.
-
-    Returns
-    -------
-    Path
-    """
-    return sample_log_path(file) if file in SAMPLES else Path(file)
-
-
-def asked_sensors(sensors: tuple[str, ...], path: Path, sheet: str | None = None) -> list[str]:
-    """The --sensor names, repeated or comma-separated, each once; empty for all ("all" or none given).
-
-    An entry that is a column of the log as it stands is one name, commas and
-    all ("Temp, Spindel", as some loggers name their channels).
-
-    Parameters
-    ----------
-    sensors : tuple of str
-        The --sensor values as given.
-    path : Path
-        The log: a --sensor value that names one of its columns is one name, commas and all.
-    sheet : str or None, optional
-        --sheet: the sheet of a workbook whose columns those are.
-
-    Returns
-    -------
-    list of str
-        The names in the order given.
-    """
-    from mtident.io.dialect import header_names
-
-    header = header_names(path, sheet) if sensors and path.is_file() else []
-    columns = set(header)
-    names = (name.strip() for entry in sensors for name in ([entry] if entry.strip() in columns else entry.split(",")))
-    return list(dict.fromkeys(column_named(name, header) for name in names if name and name != "all"))
-
-
-def named_column(name: str | None, file: str, sheet: str | None, option: str) -> str | None:
-    """The column of FILE that a --ambient or --wait-for name means (:func:`~mtident.io.columns.column_named`:
-    "Room" for ``Room [°C]``), said on stderr where it is not the name as given; the name itself where
-    FILE is no file yet (a live log still to come, a network source).
-
-    Parameters
-    ----------
-    name : str or None
-        The name given; None: the option was not given.
-    file : str
-        FILE as given.
-    sheet : str or None
-        --sheet.
-    option : str
-        The option, for the note ("--ambient").
-
-    Returns
-    -------
-    str or None
-    """
-    from mtident.io.dialect import header_names
-
-    path = log_path(file)
-    if name is None or not path.is_file():
-        return name
-    try:
-        column = column_named(name, header_names(path, sheet))
-    except InputError:  # the reader says what is wrong with the log
-        return name
-    if column != name:
-        stderr.print(f"mtident: note: {option} {name!r} is the column {column!r}", highlight=False)
-    return column
-
-
-@dataclass(frozen=True, slots=True)
-class LogRequest:
-    """FILE and how its columns are read (:func:`log_options`).
-
-    Attributes
-    ----------
-    file : str
-        FILE as given: a log, a shipped log's @-name, an MTConnect agent's URL or an OPC UA server's.
-    sensors : tuple of str
-        --sensor (empty: all).
-    time_col, time_unit, temperature_unit : str or None
-        --time-col, --time-unit and --unit.
-    sheet : str or None
-        --sheet: an Excel workbook's sheet, by name or number from 1 (None: its first with a table).
-    """
-
-    file: str
-    sensors: tuple[str, ...]
-    time_col: str | None
-    time_unit: str | None
-    temperature_unit: str | None
-    sheet: str | None = None
-
-
-def log_request(options: Mapping[str, Any]) -> LogRequest:
-    """The options of :func:`log_options`, read from a command's (a mapping by click's names), as one
-    :class:`LogRequest`."""
-    return LogRequest(
-        options["file"],
-        options["sensors"],
-        options["time_col"],
-        options["time_unit"],
-        options["temperature_unit"],
-        options["sheet"],
-    )
-
-
-@dataclass(frozen=True, slots=True)
-class CommandRequest:
-    """What a command that reads a log with a room column was asked: the fields its request shares.
-
-    Attributes
-    ----------
-    log : LogRequest
-        FILE and how its columns are read.
-    room_col : str or None
-        --ambient: the room sensor's column.
-    """
-
-    log: LogRequest
-    room_col: str | None
-
-
-RequestT = TypeVar("RequestT", bound=CommandRequest)
-
-
-def command_request(request_type: type[RequestT], options: Mapping[str, Any], **settings: Any) -> RequestT:
-    """A command's options, by click's names, grouped into its request: ``log`` and ``room_col``
-    from :func:`log_request` and --ambient, the fields ``settings`` gives, every other field from
-    the option of its name.
-
-    Parameters
-    ----------
-    request_type : type
-        The command's request, a :class:`CommandRequest`.
-    options : mapping
-        The command's options (their help is the command's ``--help``).
-    **settings
-        The fields not one option of the same name: settings grouped or read from options.
-
-    Returns
-    -------
-    RequestT
-    """
-    room = named_column(options["ambient_col"], options["file"], options["sheet"], "--ambient")
-    given = {"log": log_request(options), "room_col": room, **settings}
-    return request_type(
-        **{
-            field.name: given[field.name] if field.name in given else options[field.name]
-            for field in fields(request_type)
-        }
-    )
-
-
-def load_log(request: LogRequest) -> TemperatureLog:
-    """The log FILE names, read as the options say; its notes said on stderr.
-
-    Parameters
-    ----------
-    request : LogRequest
-        FILE, --sensor (empty: all), --time-col, --time-unit, --unit and --sheet.
-
-    Returns
-    -------
-    TemperatureLog
-        As :func:`~mtident.io.logs.read_temperature_log` reads it.
-
-    Raises
-    ------
-    InputError
-        A log that cannot be read as asked.
-    """
-    path = log_path(request.file)
-    log = read_temperature_log(
-        path,
-        time_col=request.time_col,
-        time_unit=request.time_unit,
-        sensors=asked_sensors(request.sensors, path, request.sheet) or None,
-        temperature_unit=request.temperature_unit,
-        sheet=request.sheet,
-    )
-    for note in log.notes:
-        stderr.print(f"mtident: note: {note}", highlight=False)
-    return log
-
-
-def load_log_with_room(
-    request: LogRequest, room_col: str | None, say_rooms: bool = True
-) -> tuple[TemperatureLog, np.ndarray | None]:
-    """The log's sensors, and the room column split off from them when one is named; without one,
-    a note on columns named as a room sensor (``say_rooms``: where the command does not say it).
-
-    Parameters
-    ----------
-    request : LogRequest
-        FILE and how its columns are read; the room's column is read in the unit --unit says too.
-    room_col : str or None
-        The --ambient option: the room sensor's column; None without one.
-    say_rooms : bool, optional
-        Say columns named as a room sensor, read as sensors, where none is given (a room column that
-        --sensor left unread is said regardless).
-
-    Returns
-    -------
-    log : TemperatureLog
-        The sensors, without the room column.
-    room : ndarray, shape (N,) or None
-        The room column's readings (°C).
-
-    Raises
-    ------
-    InputError
-        A log that cannot be read as asked, or no sensor column besides the room column.
-    """
-    if room_col is None:
-        log = load_log(request)
-        # a room column --sensor left unread is said here whatever the command says of the sensors
-        named = any(name.strip() not in ("", "all") for entry in request.sensors for name in entry.split(","))
-        unread = unread_rooms_of(log_path(request.file), log.sensors, request.sheet) if named else []
-        _say_room_candidates(log.sensors if say_rooms else (), "identified as a machine sensor", unread=unread)
-        return log, None
-    asked = asked_sensors(request.sensors, log_path(request.file), request.sheet)
-    # only the asked-for columns and the room are read: a dead column elsewhere does not matter
-    every = load_log(replace(request, sensors=tuple(dict.fromkeys([*asked, room_col])) if asked else ()))
-    log, room = every.split_room(room_col)
-    return log.select([name for name in asked if name != room_col] or None), room
-
-
-def unread_rooms_of(path: Path, read: tuple[str, ...] | list[str], sheet: str | None = None) -> list[str]:
-    """The columns of the log at ``path`` named as a room sensor and not among ``read``, the sensors
-    --sensor named (:func:`~mtident.io.columns.unread_rooms`); none where its header cannot be read.
-
-    Parameters
-    ----------
-    path : Path
-        The log (a workbook's sheet by ``sheet``).
-    read : tuple of str or list of str
-        The sensor columns read.
-    sheet : str or None, optional
-        --sheet.
-
-    Returns
-    -------
-    list of str
-    """
-    from mtident.io.dialect import header_names
-
-    if not path.is_file():
-        return []
-    try:
-        header = header_names(path, sheet)
-    except InputError:  # the reader has said what is wrong with the log
-        return []
-    return unread_rooms(header, read)
-
-
-def _say_room_candidates(
-    sensors: tuple[str, ...] | list[str], taken_as: str, commands: str = "", unread: list[str] | None = None
-) -> None:
-    """A note on columns named as a room sensor when no --ambient was given: the room is then an
-    assumption (steady, or wandering by --room-wander), and a drifting one biases T∞. ``commands``
-    names the commands that take --ambient where the caller is not one of them; ``unread`` are such
-    columns that --sensor left unread (:func:`unread_rooms_of`)."""
-    rooms = [name for name in sensors if room_named(name)]
-    if rooms and len(rooms) < len(sensors):
-        _say_rooms(rooms, taken_as, commands)
-    if unread:
-        _say_rooms(unread, "not read (--sensor names the sensors read)", commands)
-
-
-def _say_rooms(rooms: list[str], taken_as: str, commands: str) -> None:
-    stderr.print(
-        f"mtident: note: {', '.join(repr(r) for r in rooms)} {'is' if len(rooms) == 1 else 'are'} named as a room "
-        f"sensor and {taken_as}; "
-        f"if it measures the room, --ambient {shlex.quote(rooms[0])}{commands} makes it the input of each "
-        "sensor's heat balance (a drifting room then stays out of T∞)",
-        highlight=False,
-    )
-
-
-def log_options(func: F) -> F:
-    """Add a log's argument and options to a command: FILE, --sensor, --time-col, --time-unit, --unit and --sheet.
-
-    Parameters
-    ----------
-    func : callable
-        The command's callback.
-
-    Returns
-    -------
-    callable
-        ``func`` with the argument and the options.
-    """
-    func = click.option(
-        "--sheet",
-        metavar="NAME|N",
-        help=(
-            "Excel workbook: the sheet to read, by name or number (from 1). Default: the first sheet that holds a "
-            "table; a workbook with other sheets gets a note naming the sheet read and the others."
-        ),
-    )(func)
-    func = click.option(
-        "--unit",
-        "temperature_unit",
-        type=click.Choice(list(TEMPERATURE_UNIT_OPTIONS), case_sensitive=False),
-        metavar=f"[{'|'.join(TEMPERATURE_UNIT_OPTIONS)}]",
-        help=(
-            "Unit of the temperature columns that state none (no units row, no unit in the name): C, F or K, "
-            "converted to °C (default: °C). A column whose own unit differs is refused."
-        ),
-    )(func)
-    func = click.option(
-        "--time-unit",
-        type=click.Choice(list(TIME_UNITS)),
-        help=(
-            "Unit of a numeric time column (default: from its name, Time_s or Time [s], or a units row; else min). d: "
-            "days, as spreadsheet serial dates (46348.33 = 22.11.2026 08:00)."
-        ),
-    )(func)
-    func = click.option("--time-col", metavar="NAME", help="Time column (default: the first column).")(func)
-    func = click.option(
-        "--sensor",
-        "sensors",
-        multiple=True,
-        metavar="NAME",
-        help="Sensor column(s) to use; repeat or comma-separate (default: all).",
-    )(func)
-    func = click.argument("file", metavar="FILE")(func)
-    return func
-
-
-class _ColumnLayout(TypedDict, total=False):
-    no_wrap: bool
-    overflow: Literal["fold", "crop", "ellipsis", "ignore"]
-    min_width: int
-    max_width: int
 
 
 def _not_settled_note(slowest_min: float) -> str:
@@ -404,115 +77,6 @@ def _not_settled_note(slowest_min: float) -> str:
         f"°C in 90 min leaves {left:.2f} °C to come). Its last level and 95 %-rise time may be short of where it "
         "settles."
     )
-
-
-def _column_layout(column: str) -> _ColumnLayout:
-    """Numbers on one line; a long sensor name (a building-management point's, HOBOware's with
-    its serial numbers) folded over several lines of 14 to 32 characters, so that it neither
-    squeezes the numbers to "…" nor is squeezed to two letters in an 80-column terminal."""
-    if column == "sensor":
-        return {"overflow": "fold", "min_width": 14, "max_width": 32}
-    if column == "status":  # words: wrapped at a space when the table is too wide
-        return {"min_width": 9}
-    if column.endswith("interval"):  # "low to high": wrapped after "to" in a narrow terminal
-        return {"min_width": 8}
-    return {"no_wrap": True}
-
-
-def _fmt(value: object, digits: int = 2) -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "—"  # no estimate yet (still collecting, or no steady state)
-    if isinstance(value, float):
-        return f"{value:.{digits}f}"
-    return str(value)
-
-
-# options several commands share (click decorators)
-reference_option = file_option(
-    "--reference",
-    "reference_path",
-    help="A reference run of this machine (from `mtident thermal learn`): each sensor's time constants are "
-    "searched only near those it learnt, "
-    "which lets a test stop far earlier; a test that does not follow them is said to and decided without them.",
-)
-machine_option = click.option(
-    "--machine",
-    "machine",
-    metavar="NAME",
-    help="The machine this test is of: a --reference learnt on another (learn --machine) is refused.",
-)
-free_fast_option = click.option(
-    "--free-fast-modes",
-    "free_fast_modes",
-    type=click.IntRange(0, MAX_FREE_FAST),
-    default=MAX_FREE_FAST,
-    show_default=True,
-    help="With --reference: how many free modes faster than the reference's slowest a test may add (a "
-    "reference run can miss a mode; one more where the readings use them all). "
-    "0 assumes the reference holds every mode of the machine: the earliest stops, resting on that assumption, "
-    "which the answer states.",
-)
-preset_option = click.option(
-    "--preset",
-    type=click.Choice(PRESETS),
-    default="data",
-    show_default=True,
-    help="First-order filters: initial values and tuning from the data, or a paper's exactly.",
-)
-max_time_constant_option = click.option(
-    "--max-time-constant",
-    "max_tau_min",
-    type=FiniteFloatRange(min=1.0),
-    default=DEFAULT_MAX_TIME_CONSTANT_MIN,
-    show_default=True,
-    help="The slowest thermal mode the machine may have (min). The interval covers every mode up to this that the "
-    "data cannot exclude: "
-    "a machine's bed or column warms with 1-5 h time constants.",
-)
-heat_enters_option = click.option(
-    "--heat-enters-at",
-    "heat_enters_at",
-    multiple=True,
-    metavar="NAME",
-    help="A sensor that sits where the heat enters (on the spindle's bearing, the motor's housing), without a lag "
-    "of its own; repeat. Fitted without a reference, its every mode rises: a slow mode not yet seen must already "
-    "show in its rise, which bounds T∞ early. Yours to know: the answer states it, and readings that contradict "
-    "it are fitted as any other sensor's, said so.",
-)
-
-
-def load_reference_file(reference_path: str | None, machine: str | None = None) -> MachineReference | None:
-    """The reference run named by --reference, read (None where none is given).
-
-    Parameters
-    ----------
-    reference_path : str or None
-        The --reference option: a file, or a shipped reference's @-name.
-    machine : str or None
-        The --machine option: the machine the test says it is of.
-
-    Returns
-    -------
-    MachineReference or None
-
-    Raises
-    ------
-    InputError
-        No such file, a file that is no reference, or a reference of another machine than --machine.
-    """
-    if reference_path is None:
-        return None
-    from mtident.thermal.reference import load_reference
-
-    if reference_path in SAMPLES:
-        return load_reference(sample_log_path(reference_path)).for_machine(machine)
-    if not Path(reference_path).is_file():
-        msg = (
-            f"--reference {reference_path}: no such file (learn one with `mtident thermal learn FULL_LOG -o "
-            f"{Path(reference_path).name}`)"
-        )
-        raise InputError(msg)
-    return load_reference(reference_path).for_machine(machine)
 
 
 @thermal.command("identify")
@@ -658,12 +222,6 @@ def identify_request(options: Mapping[str, Any]) -> IdentifyRequest:
     )
 
 
-def named_columns(options: Mapping[str, Any], key: str, option: str) -> tuple[str, ...]:
-    """The log's columns that a repeated option (--wait-for, --heat-enters-at) names, each as
-    :func:`named_column` reads it (a name without its unit matches); ``key``: its click name."""
-    return tuple(str(named_column(name, options["file"], options["sheet"], option)) for name in options[key])
-
-
 @dataclass(frozen=True, slots=True)
 class IdentifiedSensors:
     """The JSON answer of ``thermal identify`` for more than one sensor.
@@ -804,21 +362,21 @@ def _identify_table(
     how = "model-robust: up to four modes" if robust else f"{request.method}, preset {request.preset}: first order"
     table = Table(title=f"{source}: identified from the first {window_min:g} min ({how})")
     for column in ("sensor", "T∞ (°C)", "95 % interval", "t_eq (min)", "RMSE (°C)", "trusted", "measured T / t_eq"):
-        table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
+        table.add_column(column, justify="right" if column != "sensor" else "left", **column_layout(column))
     for a in answers:
         lo, hi = a.steady_state_ci95_C
         measured = (
             "—"
             if not math.isfinite(a.measured_final_C)
-            else f"{a.measured_final_C:.2f} / {_fmt(a.measured_equilibrium_time_min, 0)}"
+            else f"{a.measured_final_C:.2f} / {cell_text(a.measured_equilibrium_time_min, 0)}"
             + (" *" if a.measured_settled is False else "")
         )
         table.add_row(
             a.sensor,
-            _fmt(a.steady_state_C),
-            f"{_fmt(lo)} to {_fmt(hi)}",
-            _fmt(a.equilibrium_time_min, 0),
-            _fmt(a.rmse_C, 3),
+            cell_text(a.steady_state_C),
+            f"{cell_text(lo)} to {cell_text(hi)}",
+            cell_text(a.equilibrium_time_min, 0),
+            cell_text(a.rmse_C, 3),
             "yes" if a.model_ok else "[yellow]no[/]",
             measured,
         )
@@ -1149,22 +707,28 @@ def _inspect_table(file: str, info: LogDescription, unread: list[str] | None = N
         + (
             "1 sample so far"
             if step is None
-            else f"{time.samples} samples over {_fmt(time.span_min, 1)} min, a step of "
-            + (f"{step * 60:g} s" if step < 1 else f"{_fmt(step, 2)} min")
+            else f"{time.samples} samples over {cell_text(time.span_min, 1)} min, a step of "
+            + (f"{step * 60:g} s" if step < 1 else f"{cell_text(step, 2)} min")
         ),
         highlight=False,
     )
     table = Table()
     for column in ("sensor", "unit", "missing", "first °C", "last °C", "min °C", "max °C"):
-        table.add_column(column, justify="left" if column in ("sensor", "unit") else "right", **_column_layout(column))
+        table.add_column(column, justify="left" if column in ("sensor", "unit") else "right", **column_layout(column))
     for d in info.sensors:
         table.add_row(
-            d.sensor, as_options(d.unit), str(d.missing), _fmt(d.first_C), _fmt(d.last_C), _fmt(d.min_C), _fmt(d.max_C)
+            d.sensor,
+            as_options(d.unit),
+            str(d.missing),
+            cell_text(d.first_C),
+            cell_text(d.last_C),
+            cell_text(d.min_C),
+            cell_text(d.max_C),
         )
     console.print(table)
     for note in info.notes:
         console.print(f"note: {note}", highlight=False)
-    _say_room_candidates(
+    say_room_candidates(
         [d.sensor for d in info.sensors],
         "read as a sensor column",
         " (with identify, watch, learn or report)",

@@ -15,13 +15,12 @@ import threading
 import time
 from collections.abc import Callable, Generator, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import click
 import numpy as np
-from rich.table import Table
 
 from mtident._json import finite_or_none
 from mtident.cli import (
@@ -31,42 +30,38 @@ from mtident.cli import (
     OutputPath,
     carried_interrupt,
     number_option,
-    print_json,
-    prose_console,
-    table_console,
+    stderr,
     thermal,
     user_errors,
 )
-from mtident.cli_options import ambient_option, file_option, plot_option
-from mtident.cli_sources import Recorder, network_recorder
-from mtident.cli_thermal import (
+from mtident.cli_logs import (
     LogRequest,
-    _column_layout,
-    _fmt,
-    _say_room_candidates,
     asked_sensors,
-    free_fast_option,
-    heat_enters_option,
     load_reference_file,
     log_options,
     log_path,
     log_request,
-    machine_option,
-    max_time_constant_option,
     named_column,
     named_columns,
-    reference_lines,
-    reference_option,
-    stderr,
+    say_room_candidates,
     unread_rooms_of,
 )
+from mtident.cli_options import (
+    ambient_option,
+    file_option,
+    free_fast_option,
+    heat_enters_option,
+    machine_option,
+    max_time_constant_option,
+    plot_option,
+    reference_option,
+)
+from mtident.cli_sources import Recorder, network_recorder
+from mtident.cli_watch_answer import print_answer, status_table
 from mtident.exceptions import InputError
-from mtident.io.logs import SAMPLES, log_name
+from mtident.io.logs import SAMPLES
 from mtident.io.record import RecordingThread
-from mtident.thermal.hindsight import Hindsight
-from mtident.thermal.hindsight_words import no_level_words, settle_timing, stuck_sensors
-from mtident.thermal.monitor import Event, MonitorSettings, assumptions, minutes, said_at
-from mtident.thermal.monitor_types import SensorCheck
+from mtident.thermal.monitor import Event, MonitorSettings, minutes, said_at
 from mtident.thermal.robust import RobustSettings
 from mtident.thermal.session import (
     Ended,
@@ -96,7 +91,7 @@ _PIPE_PROGRESS_S = 15.0
 def decision_options(func: F) -> F:
     """The options of the stop decision, shared by watch and report: ``func``, the command's callback, with
     --tolerance, --confidence, --max-time-constant, --heat-enters-at, --reference, --machine, --free-fast-modes,
-    --ambient, --room-wander and --wait-for (added as :func:`~mtident.cli_thermal.log_options` adds a log's)."""
+    --ambient, --room-wander and --wait-for (added as :func:`~mtident.cli_logs.log_options` adds a log's)."""
     options = [
         number_option(
             "--tolerance",
@@ -462,7 +457,7 @@ def watch(request: WatchRequest) -> None:
         if request.timeline_path:
             write_timeline(session.state, request.timeline_path)
         # interrupted: the answer without the expected stops, whose forecasts take seconds
-        _answer(
+        print_answer(
             session,
             path,
             follow.replay,
@@ -647,7 +642,7 @@ class _Shown:
             if session.settings.room_sensor is None:
                 # the followed file: a workbook's sheet is followed as the CSV it holds
                 unread = unread_rooms_of(session.path, session.sensors) if session.asked is not None else []
-                _say_room_candidates(session.sensors, "watched as a machine sensor", unread=unread)
+                say_room_candidates(session.sensors, "watched as a machine sensor", unread=unread)
 
     def publish(self, session: WatchSession, forecast: bool = True, picture: bool = True) -> None:
         assert self.page is not None
@@ -658,7 +653,7 @@ class _Shown:
         curves, which cost a picture, at most every ``_PAGE_PROGRESS_S``."""
         self.say_rooms(session)
         if self.view is not None:
-            self.view.update(_status_table(session, self.path), refresh=True)
+            self.view.update(status_table(session, self.path), refresh=True)
         elif self.replay and session.state is not None and time.monotonic() - self.last_line > _PIPE_PROGRESS_S:
             self.last_line = time.monotonic()
             ready, count = sum(check.may_stop for check in session.state.checks), len(session.state.checks)
@@ -804,198 +799,6 @@ def _say(events: list[Event]) -> None:
             stderr.print(f"mtident: {prefix}{said}", highlight=False)
 
 
-def _answer(
-    session: WatchSession,
-    path: Path,
-    replay: bool,
-    as_json: bool,
-    live: bool,
-    forecast: bool = True,
-    cancel: Callable[[], bool] | None = None,
-    whole: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None,
-    interrupted: bool = False,
-) -> None:
-    """The decision: the JSON object, or the table, the verdict and what it rests on (with the
-    expected stops where ``forecast``, unless ``cancel`` stops them); ``whole``: the log already
-    read again whole (:meth:`WatchSession.whole_log`), for the replay's hindsight; ``interrupted``:
-    Ctrl-C ended the watch (a replay's log does not end there)."""
-    state = session.state
-    if forecast and state is not None and not state.stopped and not session.forecast_made:
-        # seconds a sensor, a minute or more for a machine: said, or the terminal falls silent
-        stderr.print(
-            f"mtident: forecasting each sensor's expected stop ({len(state.sensors)} sensors, seconds each)",
-            highlight=False,
-        )
-    outcome = session.answer(with_forecast=forecast, cancel=cancel)
-    # the comparison with the rest of a replayed log fits again: not after a SIGTERM, nor of a replay
-    # interrupted before its log's end
-    hindsight = (
-        session.hindsight(whole) if replay and not interrupted and not (cancel is not None and cancel()) else None
-    )
-    if hindsight is not None:
-        outcome = replace(
-            outcome,
-            time_saved_min=hindsight.time_saved_min,
-            settle_time_min=hindsight.test_settle_time_min,
-            hindsight=hindsight.answer(),
-        )
-        stderr.print(
-            f"mtident: the log runs on to t = {minutes(hindsight.log_end_min)}: comparing the decision with how "
-            "it went on",
-            highlight=False,
-        )
-    if as_json:
-        print_json(outcome)
-        return
-    table_console().print(_status_table(session, path))
-    console = prose_console()
-    state = session.state
-    assert state is not None
-    said = assumptions(session.settings, state.sensors[0], state.readings.room_C is not None)
-    console.print(
-        f"Assumes: {said.model}, time constants up to {said.max_time_constant_min:g} min; room {said.room}",
-        highlight=False,
-    )
-    if session.settings.reference is not None and state.reference_dropped:
-        console.print("  reference: not used (the test contradicted it; see the warning above)", highlight=False)
-    elif session.settings.reference is not None:
-        # each sensor has its own modes in the reference, or none, or doubtful ones
-        taken = [(name, assumptions(session.settings, name).reference or "") for name in state.sensors]
-        for line in reference_lines(taken):
-            console.print(line, highlight=False)
-    if state.stopped:
-        saved = outcome.time_saved_min
-        gain = (
-            f"; {minutes(saved)} before the readings settled within the tolerance"
-            if saved is not None and saved > 0
-            else ""
-        )
-        console.print(f"[bold green]The test can stop at t = {minutes(state.stop_time_min)}{gain}.[/]")
-        if live:
-            console.bell()  # the engineer may be at the other end of the machine
-        if hindsight is not None:
-            _print_hindsight(hindsight)
-        return
-    bound = outcome.room_bound_sensors
-    if bound:
-        console.print(
-            f"[bold yellow]Not yet, and a longer test does not bring {', '.join(bound)} within the tolerance.[/]"
-        )
-        _print_reason(console, outcome.reason_lines or ())
-        console.print(
-            "(--ambient COLUMN names the room sensor's column; --room-wander states the room's wander in °C an hour)"
-        )
-    elif replay and interrupted:
-        console.print(
-            f"[bold yellow]Not yet at t = {minutes(state.readings.latest_min)}, where the replay was interrupted "
-            "(--resume continues it).[/]"
-        )
-        _print_reason(console, outcome.reason_lines or ())
-    elif replay:
-        # a replayed log is whole: there is no running test to keep on
-        console.print(
-            f"[bold yellow]Not yet: the log ends at t = {minutes(state.readings.latest_min)}, before the test may "
-            "stop.[/]"
-        )
-        _print_reason(console, outcome.reason_lines or ())
-    else:
-        console.print("[bold yellow]Not yet: keep the test running.[/]")
-        _print_reason(console, outcome.reason_lines or ())
-    expected = outcome.expected_stop_time_min
-    if expected is not None and math.isfinite(expected):
-        # the forecast holds a logged room at its latest level: a room that keeps drifting keeps its
-        # lag's allowance, which no course of the machine narrows
-        room = state.readings.room_C is not None
-        console.print(
-            f"Expected stop: t ≈ {minutes(round(expected))} on the best model's course"
-            + (", the room held at its latest level" if room else "")
-            + " (a slower mode that still fits"
-            + (", or a room that keeps moving," if room else "")
-            + " moves it later).",
-            highlight=False,
-        )
-    elif expected is not None and outcome.decision != "stop":
-        waited = [s for s in outcome.sensors if s.waited_for]
-        stops = {s.sensor: s.expected_stop_time_min or math.nan for s in waited}
-        status = {s.sensor: s.status for s in waited}
-        none = [f"{name} ({status[name]})" for name, stop in stops.items() if not math.isfinite(stop)]
-        found = sorted(round(stop) for stop in stops.values() if math.isfinite(stop))
-        now = state.readings.latest_min
-        who = f"{', '.join(none)} {'has' if len(none) == 1 else 'have'}" if none else "a sensor waited for has"
-        console.print(
-            f"Expected stop: none found; {who} none on the best model's course (the interval does not come "
-            f"within the tolerance there, or the status gives no course to go on){_others_stops(found, now)}.",
-            highlight=False,
-        )
-
-
-def _others_stops(found: list[int], now: float) -> str:
-    """Where the other sensors waited for expect their stops (``found``: sorted minutes): those to
-    come, and those that may stop already (their expected stop is the time they became ready)."""
-    come = [t for t in found if t > now]
-    ready = [t for t in found if t <= now]
-    words = ""
-    if len(come) == 1:
-        words += f"; the other's comes at t ≈ {minutes(come[0])}"
-    elif come:
-        span = minutes(come[0]) if come[0] == come[-1] else f"{minutes(come[0])} to {minutes(come[-1])}"
-        words += f"; the others' come at t ≈ {span}"
-    if ready:
-        who = "one other" if len(ready) == 1 else f"{len(ready)} others"
-        words += f"; {who} may stop already (since t ≈ {minutes(ready[0])})"
-    return words
-
-
-def _status_table(session: WatchSession, path: Path) -> Table:
-    """Per sensor: the latest reading (°C), when it was last checked (min: a sensor is checked when
-    it falls due, not at every reading), T∞ with its 95 % interval and the decision's, t_eq,
-    status."""
-    state = session.state
-    where = "before the first sample" if state is None else f"at t = {minutes(state.readings.latest_min)}"
-    table = Table(title=f"{log_name(path.name, session.sheet)}: {where} (temperatures in °C, times in min)")
-    level = f"{session.settings.decision_level * 100:g} %"
-    columns = ("sensor", "latest", "checked", "T∞", "95 % interval", f"{level} interval", "t_eq")
-    for column in (*columns, "status"):
-        table.add_column(
-            column, justify="left" if column in ("sensor", "status") else "right", **_column_layout(column)
-        )
-    if state is None:
-        return table
-    values = state.readings.values_C
-    for s, check in enumerate(state.checks):
-        readings = values[:, s]
-        finite = readings[np.isfinite(readings)]
-        latest = float(finite[-1]) if finite.size else math.nan
-        colour = (
-            "green"
-            if check.may_stop
-            else "yellow"
-            if check.status in ("confirming", "narrowing")
-            else "red"
-            if check.status in ("misfit", "silent")
-            else "white"
-        )
-        table.add_row(
-            check.sensor,
-            _fmt(latest),
-            _fmt(check.checked_min, 0),
-            _fmt(check.steady_C),
-            f"{_fmt(check.low95_C)} to {_fmt(check.high95_C)}",
-            f"{_fmt(check.low_C)} to {_fmt(check.high_C)}",
-            _fmt(check.equilibrium_time_min, 0),
-            f"[{colour}]{_status_words(check)}[/]",
-        )
-    return table
-
-
-def _status_words(check: SensorCheck) -> str:
-    """The status, and for a sensor that failed since when: its "latest" reading is a stuck
-    sensor's repeat, or a silent one's last, not where the sensor is now."""
-    if check.status in ("stuck", "silent") and math.isfinite(check.last_reading_min):
-        return f"{check.status} from {minutes(check.last_reading_min)}"
-    return check.status
-
-
 def _plot(
     session: WatchSession, plot_path: str, whole: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None
 ) -> None:
@@ -1011,116 +814,6 @@ def _plot(
         later = time_min > state.stop_time_min
         after = (time_min[later], values[later]) if later.any() else None
     plot_monitor(state, session.settings, plot_path, after=after)
-
-
-def _span(values: np.ndarray) -> str:
-    """``+0.06 to +0.07``, or one value where they round alike."""
-    low, high = f"{float(values.min()):+.2f}", f"{float(values.max()):+.2f}"
-    return low if low == high else f"{low} to {high}"
-
-
-def _print_reason(console: OptionConsole, lines: tuple[str, ...]) -> None:
-    """Why the test cannot stop yet, a line for each sensor that holds it (a machine's eight sensors
-    read as one paragraph of 3,000 characters), then the ways on."""
-    for line in lines:
-        indent = "" if line.startswith("Ways on:") or len(lines) == 1 else "  "
-        console.print(f"{indent}{line}", highlight=False)
-
-
-def _print_hindsight(hindsight: Hindsight) -> None:
-    """The table of the decision against the rest of the log, and what it comes to."""
-    shift = hindsight.room_shift_C
-    added = hindsight.shift_C[np.isfinite(hindsight.shift_C)]
-    # a room level again at the end can still have moved the sensors, which follow it late
-    moved = bool(len(added) and np.any(np.abs(added) >= 0.005))  # as the sentence shows it, two decimals
-    room = (
-        f"; the room moved {shift:+.2f} °C from the stop to the end, but each sensor follows the room late, "
-        f"through its modes, and still follows its moves before the stop: {_span(added)} °C added to T∞ at the "
-        "stop, to where the room, as the sensor follows it, stands at the log's end"
-        if moved
-        else ""
-    )
-    prose_console().print(
-        f"Against the rest of the log (to t = {minutes(hindsight.log_end_min)}){room}:", highlight=False
-    )
-    table = Table()
-    # with the room's move added in the column itself, the difference is the next two columns'
-    stop_column = "T∞ at stop, room followed (°C)" if moved else "T∞ at stop (°C)"
-    for column in ("sensor", stop_column, "settled (°C)", "difference (°C)", "settled by (min)"):
-        table.add_column(column, justify="right" if column != "sensor" else "left", **_column_layout(column))
-    settled = hindsight.checked
-    settle_times = (
-        np.full(len(hindsight.sensors), math.nan)
-        if hindsight.settle_time_min is None
-        else np.asarray(hindsight.settle_time_min, dtype=float)
-    )
-    # the settle time is read off the readings less the room, which settle where the readings
-    # themselves keep following a moving room: checked against their rise above the room as they
-    # follow it where the sensor's modes at the stop give that course, else no level to check
-    followed = hindsight.settled_with_room
-    with_room = hindsight.following_room
-    # a sensor that stuck before it settled has no level: its failure, not the log's length
-    stuck = ~settled & np.isfinite(hindsight.stuck_since) & ~with_room
-    for i, name in enumerate(hindsight.sensors):
-        error = hindsight.error_C[i]
-        shown = _fmt(float(error)) if settled[i] else "—"
-        if settled[i] and not hindsight.within[i]:
-            shown = f"[yellow]{shown}[/]"
-        level = float(hindsight.settled_C[i])
-        cell = (
-            f"{_fmt(level)} (room)"
-            if followed[i]
-            else _fmt(level)
-            if math.isfinite(level)
-            else "with the room"
-            if with_room[i]
-            else f"stuck from {hindsight.stuck_since[i]:.0f} min"
-            if stuck[i]
-            else "not yet"
-        )
-        table.add_row(
-            name,
-            _fmt(float(hindsight.steady_state_C[i] + hindsight.shift_C[i])),
-            cell,
-            shown,
-            _fmt(float(settle_times[i]), 0),
-        )
-    table_console().print(table)
-    if followed.any():
-        prose_console().print(
-            "(room): the readings keep following the room; where their rise above the room, as they follow it "
-            "through the sensor's modes at the stop, settled, at the room's course at the log's end.",
-            highlight=False,
-        )
-    if with_room.any():
-        prose_console().print(
-            "with the room: the readings keep following the room; from the time shown they stayed within the "
-            "tolerance of their equilibrium at the room's level (or, where they lag the room by more than that to "
-            "the log's end, their rise above the room as they follow it did): no settled level to check T∞ against.",
-            highlight=False,
-        )
-    timing = settle_timing(hindsight)
-    stuck_words = (
-        "stuck at one value before they settled (their repeats say nothing of the temperature): "
-        + ", ".join(f"{name} from t = {minutes(float(since))}" for name, since in stuck_sensors(hindsight, stuck))
-        if stuck.any()
-        else ""
-    )
-    if not settled.any():
-        # readings that keep following a moving room have not failed to settle: the log can be long
-        why = no_level_words(hindsight, hindsight.not_settled, bool(with_room.any()), stuck_words)
-        prose_console().print(
-            f"{why}: nothing to check the decision against" + (f"; {timing}." if timing else "."), highlight=False
-        )
-        return
-    unsettled = hindsight.not_settled
-    verdict = hindsight.verdict_words()
-    not_settled = f"; not settled by the log's end: {', '.join(unsettled)}" if unsettled else ""
-    failed = f"; {stuck_words}" if stuck_words else ""
-    prose_console().print(
-        f"{verdict[0].upper()}{verdict[1:]}" + (f"; {timing}" if timing else "") + f"{not_settled}{failed}.",
-        highlight=False,
-    )
 
 
 class _Nothing:
