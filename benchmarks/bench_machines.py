@@ -9,8 +9,9 @@ warm-up), in a steady room, a daily cycle of ±0.1-0.6 °C or a linear drift, th
 room sensor; sampling 10 s-2 min, σ 0.005-0.05 °C per sensor, readings rounded to 0.01 °C.
 
 Per case the monitor replays the test with the room sensor as the ambient input, without a
-reference and with the reference learnt (:func:`mtident.thermal.reference.learn_reference`, with
-its room sensor) from the reference run. Recorded: whether it stopped and when, stop/t_settle,
+reference and with the reference learnt
+(:func:`mtident.thermal.reference_learning.learn_reference`, with its room sensor) from the
+reference run. Recorded: whether it stopped and when, stop/t_settle,
 every sensor's T∞ error against the truth (its equilibrium at the room's level at the stop, the
 room's static gain one) and whether the 95 % interval covers it, each sensor's status and what
 sets its interval's ends, and for a test that did not stop the monitor's reason.
@@ -56,7 +57,8 @@ from _machines import (  # noqa: E402
 from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.testing.warmups import _network  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state, result  # noqa: E402
-from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
+from mtident.thermal.reference import MachineReference  # noqa: E402
+from mtident.thermal.reference_learning import learn_reference  # noqa: E402
 from mtident.thermal.robust_types import ends_at_the_largest  # noqa: E402
 
 FIRST_SEED = 36000

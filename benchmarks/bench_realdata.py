@@ -22,7 +22,7 @@ from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.testing.warmups import load_real_curves  # noqa: E402
 from mtident.thermal.identify import identify  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state  # noqa: E402
-from mtident.thermal.reference import learn_reference  # noqa: E402
+from mtident.thermal.reference_learning import learn_reference  # noqa: E402
 from mtident.thermal.robust_identify import identify_robust  # noqa: E402
 
 TOLERANCE_C = 0.2

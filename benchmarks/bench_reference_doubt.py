@@ -23,7 +23,7 @@ import numpy as np
 from bench_safe_stops import TOLERANCE_C, _log, _replay
 
 from mtident.testing.warmups import random_warmup, reference_run
-from mtident.thermal.reference import learn_reference
+from mtident.thermal.reference_learning import learn_reference
 from mtident.thermal.robust import RobustSettings, estimate_sensor
 
 THRESHOLDS_C = (0.1, 0.2, 0.3, 0.5)

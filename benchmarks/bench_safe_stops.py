@@ -46,7 +46,8 @@ from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.testing.warmups import modal_amplitudes, random_warmup, reference_run  # noqa: E402
 from mtident.thermal.identify import identify  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state  # noqa: E402
-from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
+from mtident.thermal.reference import MachineReference  # noqa: E402
+from mtident.thermal.reference_learning import learn_reference  # noqa: E402
 from mtident.thermal.robust import RobustSettings  # noqa: E402
 from mtident.thermal.robust_identify import identify_robust  # noqa: E402
 

@@ -30,7 +30,8 @@ import make_sample_warmup  # noqa: E402 - the sample's generator, for its true s
 from mtident.io import read_temperature_log, sample_log_path  # noqa: E402
 from mtident.io.logs import TemperatureLog  # noqa: E402
 from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state  # noqa: E402
-from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
+from mtident.thermal.reference import MachineReference  # noqa: E402
+from mtident.thermal.reference_learning import learn_reference  # noqa: E402
 from mtident.thermal.robust import RobustSettings, SensorModes  # noqa: E402
 
 TOLERANCE = 0.2

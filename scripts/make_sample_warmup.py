@@ -150,7 +150,8 @@ def write_reference(out: Path) -> None:
     """The machine's modes learnt from an earlier, complete warm-up at 70 % of the heat (the
     ``@sample-machine`` reference), with its room sensor as an input."""
     from mtident.io.logs import TemperatureLog
-    from mtident.thermal.reference import learn_reference, save_reference
+    from mtident.thermal.reference import save_reference
+    from mtident.thermal.reference_learning import learn_reference
 
     rng = np.random.default_rng(REFERENCE_SEED)
     times = np.arange(0.0, REFERENCE_DURATION_MIN + 1.0)

@@ -358,7 +358,8 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
 # Imported last: helpers imports this module.
 from helpers import two_mode  # noqa: E402
 
-from mtident.thermal.reference import MachineReference, learn_reference  # noqa: E402
+from mtident.thermal.reference import MachineReference  # noqa: E402
+from mtident.thermal.reference_learning import learn_reference  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -880,7 +880,7 @@ def test_identify_of_one_sensor_fits_the_machine_model_with_the_others(tmp_path)
     sensors it knows, says so, and gives the sensor the answer it gets beside them."""
     from helpers import SENSORS, _noisy_chain
 
-    from mtident.thermal.reference import learn_reference
+    from mtident.thermal.reference_learning import learn_reference
 
     t, y = _noisy_chain((0.6, 0.4), 1.0, np.zeros(3), 1500.0, seed=6)
     reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"))

@@ -194,7 +194,8 @@ def run_learn(request: LearnRequest) -> None:
         As :func:`learn_command`.
     """
     from mtident.thermal.pooling import pool_references
-    from mtident.thermal.reference import learn_reference, load_reference, save_reference
+    from mtident.thermal.reference import load_reference, save_reference
+    from mtident.thermal.reference_learning import learn_reference
 
     earlier = None if request.update_path is None else _earlier_reference(request.update_path, request.machine)
     # learn_reference says a column named as a room sensor itself

@@ -318,7 +318,7 @@ def test_a_learnt_room_path_the_test_rejects_is_fitted_again_not_the_reference_r
     the learnt path is rejected, the test is fitted again with the room's path its own, and kept
     where fewer sensors reject it."""
     from mtident.io.logs import TemperatureLog
-    from mtident.thermal.reference import learn_reference
+    from mtident.thermal.reference_learning import learn_reference
 
     names = ("nose", "front_brg", "rear_brg", "motor_pt100", "rb_col", "column")
     t, y, room, _ = _five_nodes((2.0, 1.2), 1440.0, 20.0, 0.2, 1.0, np.zeros(6), seed=11)
@@ -376,7 +376,7 @@ def test_a_drifting_rooms_path_is_bounded_by_the_physics_not_counted_twice(monke
 
     import mtident.thermal.machine_fit as mm
     from mtident.io.logs import TemperatureLog
-    from mtident.thermal.reference import learn_reference
+    from mtident.thermal.reference_learning import learn_reference
 
     t, y, room = _run_in_room((0.6, 0.4), 1.0, np.zeros(3), 1500.0, lambda t: np.full_like(t, ROOM_C), seed=21)
     reference, _ = learn_reference(TemperatureLog(t, SENSORS, y, (), "ref.csv"), room)

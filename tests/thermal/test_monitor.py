@@ -42,7 +42,8 @@ from mtident.thermal import identify, minimal_identification_time
 from mtident.thermal.machine_fit import ROOM_LAG_SHARE, ROOM_RESPONSE_LAG_SHARE
 from mtident.thermal.monitor import MonitorSettings, MonitorState, is_within, monitor_step, new_state, result
 from mtident.thermal.readings import stuck_since
-from mtident.thermal.reference import MachineReference, learn_reference
+from mtident.thermal.reference import MachineReference
+from mtident.thermal.reference_learning import learn_reference
 from mtident.thermal.robust import SensorModes, estimate_sensor
 
 

@@ -32,7 +32,8 @@ from helpers import (
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog
 from mtident.thermal.monitor import MonitorSettings
-from mtident.thermal.reference import MachineReference, learn_reference, load_reference, save_reference
+from mtident.thermal.reference import MachineReference, load_reference, save_reference
+from mtident.thermal.reference_learning import learn_reference
 from mtident.thermal.robust import SensorModes, estimate_sensor
 from mtident.thermal.session import (
     WatchSession,
@@ -510,7 +511,7 @@ def test_a_run_no_model_describes_is_not_told_to_run_longer():
     """A new user's sensor behind its own lag, in a complete 900-min run, was doubted for misfit and
     told to "learn from a run that reaches equilibrium, logged densely enough": the run it had
     given. A misfit now points at the heat input and the sensor's mounting instead."""
-    from mtident.thermal.reference import _way_on
+    from mtident.thermal.reference_learning import _way_on
     from mtident.thermal.robust import estimate_sensor
 
     t = np.arange(0.0, 400.0, 0.5)
@@ -524,7 +525,7 @@ def test_a_run_no_model_describes_is_not_told_to_run_longer():
 
 
 def test_the_wide_boxes_a_run_leaves_are_named_slowest_first():
-    from mtident.thermal.reference import _spans
+    from mtident.thermal.reference_learning import _spans
 
     assert _spans((100.0, 250.0, 10.0), (0.5, 0.8, 0.05), 1) == "50-450 min, 50-150 min"
 
@@ -532,7 +533,7 @@ def test_the_wide_boxes_a_run_leaves_are_named_slowest_first():
 def test_learn_splits_a_mode_that_merges_two_of_the_machines_modes():
     """A new user's machine: 110 and 260 min, learnt at one sensor as one mode of 170 min ±10 % (a box
     holding neither), while other sensors pin both down. The sensor keeps both, and it is said."""
-    from mtident.thermal.reference import machine_modes, split_merged_modes
+    from mtident.thermal.reference_learning import machine_modes, split_merged_modes
     from mtident.thermal.robust import SensorModes
 
     sensors = {
@@ -566,7 +567,7 @@ def test_a_merged_mode_of_a_sensor_with_four_modes_gets_a_box_holding_both():
     """Two new users' PT100s behind their own lag: four modes already (the lag, two fast ones and
     170 min between the machine's 77 and 241), so no room to split; the 170 min ±10 % stayed, said
     nothing, and a test's T∞ came 0.22 °C off with "may stop". The box now holds both, and it is said."""
-    from mtident.thermal.reference import split_merged_modes
+    from mtident.thermal.reference_learning import split_merged_modes
     from mtident.thermal.robust import SensorModes
 
     sensors = {
@@ -590,7 +591,8 @@ def test_a_box_holding_two_merged_modes_reaches_no_time_constant_below_zero(tmp_
     over a range from both modes' boxes, its centre moved to hold it with a box below one, and the
     file reads back."""
     from mtident.thermal.machine_model import MachineModel
-    from mtident.thermal.reference import MachineReference, load_reference, save_reference, split_merged_modes
+    from mtident.thermal.reference import MachineReference, load_reference, save_reference
+    from mtident.thermal.reference_learning import split_merged_modes
     from mtident.thermal.robust import SensorModes
 
     sensors = {
@@ -630,7 +632,7 @@ def test_learn_splits_a_merged_mode_where_only_the_machine_model_pins_the_two_do
     slowest box wide), the machine model did (±10 %, ±13 %); the PT100 kept one mode of 189 min
     ±10 %, holding neither, without a word. The machine model's modes count as the machine's."""
     from mtident.thermal.machine_model import MachineModel
-    from mtident.thermal.reference import split_merged_modes
+    from mtident.thermal.reference_learning import split_merged_modes
     from mtident.thermal.robust import SensorModes
 
     sensors = {
@@ -656,7 +658,7 @@ def test_sensors_that_merged_the_same_two_modes_do_not_vouch_for_each_other():
     witnesses: each sensor gets a box holding both (four modes already), and both merges of a
     sensor are said."""
     from mtident.thermal.machine_model import MachineModel
-    from mtident.thermal.reference import split_merged_modes
+    from mtident.thermal.reference_learning import split_merged_modes
     from mtident.thermal.robust import SensorModes
 
     sensors = {
@@ -735,7 +737,7 @@ def test_loose_slow_modes_advice_names_a_room_that_moved_during_the_run():
     """Where a run leaves the slow modes loose, the advice names the room's move where it moved
     (its path into the slow modes trades against their rise) and asks for a steady room; a steady
     room, or none logged, gets the general advice."""
-    from mtident.thermal.reference import ROOM_MOVED_C, loose_mode_advice
+    from mtident.thermal.reference_learning import ROOM_MOVED_C, loose_mode_advice
 
     t = np.linspace(0.0, 900.0, 901)
     daily = 21.0 + 0.25 * np.sin(2 * np.pi * t / 1440.0)
@@ -771,7 +773,7 @@ def test_a_mode_beside_a_machine_mode_no_other_of_its_modes_holds_is_searched_to
     held none of the machine's slowest mode (a test then found a slower mode fitting better beyond
     chance). The mode is searched over a range that reaches 246 min, and it is said."""
     from mtident.thermal.machine_model import MachineModel
-    from mtident.thermal.reference import split_merged_modes
+    from mtident.thermal.reference_learning import split_merged_modes
     from mtident.thermal.robust import SensorModes
 
     sensors = {
@@ -813,7 +815,7 @@ def test_a_sensors_mode_reaching_the_limit_is_one_line_where_the_machine_model_p
     """A newcomer's clean run of a machine whose slowest mode is 239 min: four sensors' own fits
     each advised a larger limit, while the machine model pinned the mode at 232 min."""
     from mtident.thermal.machine_model import MachineModel
-    from mtident.thermal.reference import _reaching_words
+    from mtident.thermal.reference_learning import _reaching_words
 
     reaching = {"motor": "motor: a mode ... (raise)", "column": "column: a mode ... (raise)", "spare": "spare: (raise)"}
     model = MachineModel(("motor", "column"), (246.3, 104.9, 26.8), (0.05, 0.05, 0.08), ((-1.0,) * 3,) * 2)
@@ -830,7 +832,7 @@ def test_a_sensors_mode_reaching_the_limit_is_one_line_where_the_machine_model_p
 def test_sensors_whose_run_pins_down_too_few_modes_are_said_in_one_warning():
     """A clean six-sensor run printed one such warning per sensor among thirteen: a new user read
     a good reference as a list of alarms. One sensor keeps its own line; several share one."""
-    from mtident.thermal.reference import _loose_modes_words
+    from mtident.thermal.reference_learning import _loose_modes_words
 
     assert _loose_modes_words({}) == []
     (one,) = _loose_modes_words({"bed": (2, 1, "37.8-176 min")})
@@ -850,7 +852,7 @@ def test_sensors_whose_slowest_mode_is_faster_than_a_loose_shared_one_are_said_t
     A mode at the slowest searched (half the run, or the largest time constant) is not such a mode:
     the search, not the machine, sets it."""
     from mtident.thermal.machine_model import MachineModel
-    from mtident.thermal.reference import _hidden_slow_words
+    from mtident.thermal.reference_learning import _hidden_slow_words
 
     sensors = {
         "spindle": SensorModes((6.79, 30.3, 104.0), (0.1, 0.1, 0.1)),

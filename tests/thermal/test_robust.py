@@ -16,7 +16,7 @@ from helpers import replay
 from mtident.exceptions import InputError
 from mtident.thermal import RobustSettings
 from mtident.thermal.readings import room_error_C
-from mtident.thermal.reference import learn_reference
+from mtident.thermal.reference_learning import learn_reference
 from mtident.thermal.robust import SensorModes, estimate_sensor
 
 

@@ -12,7 +12,8 @@ from mtident.thermal.min_time import MinTimeResult, minimal_identification_time
 from mtident.thermal.model import equilibrium_time, rise_curve, rise_transition
 from mtident.thermal.monitor import MonitorSettings, MonitorState, monitor_step, new_state
 from mtident.thermal.monitor_types import Event, EventKind, SensorCheck, Status
-from mtident.thermal.reference import MachineReference, learn_reference, load_reference, save_reference
+from mtident.thermal.reference import MachineReference, load_reference, save_reference
+from mtident.thermal.reference_learning import learn_reference
 from mtident.thermal.robust import RobustSettings
 from mtident.thermal.robust_identify import identify_robust
 from mtident.thermal.session import WatchSession

@@ -3,8 +3,8 @@
 A machine's time constants belong to its structure, not to one run: every complete warm-up of
 the same machine (a reference run, or a test that ran on until its sensors settled) measures
 them again. Where two runs agree, their boxes pool as two independent measurements of the same
-log time constant (each box is :data:`~mtident.thermal.reference.BOX_SDS` standard deviations
-either side); where they do not, the pooled box holds both, and the answer says so.
+log time constant (each box is :data:`~mtident.thermal.reference_learning.BOX_SDS` standard
+deviations either side); where they do not, the pooled box holds both, and the answer says so.
 """
 
 from __future__ import annotations
