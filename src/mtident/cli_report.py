@@ -79,7 +79,8 @@ def report_command(**options: Any) -> None:
         stderr.print(f"mtident: {note}", highlight=False)
     for note in sheet_notes:
         stderr.print(f"mtident: warning: {note}", highlight=False)
-    from mtident.report.test_report import build_report, write_html, write_pdf
+    from mtident.report.report_render import write_html, write_pdf
+    from mtident.report.test_report import build_report
 
     with stderr.status("reading the log…") as status:
 

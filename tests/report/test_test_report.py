@@ -44,7 +44,8 @@ def test_log_start_reads_every_kind_of_time_stamp():
 
 def test_the_pdf_uses_its_pages_the_curves_two_to_a_row(tmp_path):
     # today: page 2 holds one small picture of the three panels in a row, on an otherwise empty page
-    from mtident.report.test_report import build_report, summary_pages
+    from mtident.report.report_render import summary_pages
+    from mtident.report.test_report import build_report
     from mtident.thermal.monitor import MonitorSettings
     from mtident.thermal.session import WatchSession
 
@@ -62,7 +63,7 @@ def test_the_pdf_uses_its_pages_the_curves_two_to_a_row(tmp_path):
     texts = [text.get_text() for text in pages[1].texts]
     assert "Method" in texts and any("page 2 of 2" in text for text in texts)
     out = tmp_path / "three.pdf"
-    from mtident.report.test_report import write_pdf
+    from mtident.report.report_render import write_pdf
 
     write_pdf(built, out)
     data = out.read_bytes()
