@@ -12,6 +12,7 @@ from helpers import UNITS_LOG
 
 from mtident.exceptions import InputError
 from mtident.io import read_temperature_log
+from mtident.io.follow import LogFollower
 
 
 def test_minutes_seconds_hours_and_timestamps(write_csv):
@@ -177,16 +178,26 @@ def test_the_note_on_a_room_read_as_celsius_names_the_unit_option(write_csv):
 @pytest.mark.parametrize(
     ("to_unit", "said"), [(lambda c: c * 1.8 + 32, "(in °F: 20.0 °C)"), (lambda c: c + 273.15, "(in K: 20.0 °C)")]
 )
-def test_one_column_in_another_unit_among_celsius_ones_is_said(write_csv, to_unit, said):
+def test_one_column_in_another_unit_among_celsius_ones_is_refused(write_csv, to_unit, said):
     """A user's log with one sensor in °F among °C ones, no unit stated anywhere: T2 was read as
-    starting at 68 °C and its T∞ of 77 °C trusted without a word (only a room or every column far
-    out was said). A column that converted from °F (or K) would start with the others is said."""
+    starting at 68 °C and a stop with its T∞ of 77 °C trusted, the unit said only in a note. Such a
+    log is refused, the message naming the column, what it would read converted, and both fixes;
+    with every column stated to be in °C it is read."""
     rows = "".join(f"{m},{20 + 0.3 * m:.2f},{to_unit(20 + 0.2 * m):.2f},20.0\n" for m in range(30))
-    log = read_temperature_log(write_csv("time_min,T1,T2,room\n" + rows))
-    notes = [n for n in log.notes if "where the other columns start near 20.0 °C" in n]
-    assert len(notes) == 1 and "'T2' starts at" in notes[0] and said in notes[0], log.notes
-    assert "the unit in its name (T2 [°F])" in notes[0]
-    # a part already hot in °C (45 °C, which in °F would be 7.2 °C): nothing said
+    path = write_csv("time_min,T1,T2,room\n" + rows)
+    with pytest.raises(InputError, match="where the other columns start near 20.0 °C") as refused:
+        read_temperature_log(path)
+    assert "'T2' starts at" in str(refused.value) and said in str(refused.value)
+    unit = said[4:6].strip(":")
+    assert f"the unit in its name (T2 [{unit}])" in str(refused.value) and "`temperature_unit='C'`" in str(
+        refused.value
+    )
+    stated = read_temperature_log(path, temperature_unit="C")
+    assert stated.temperature_C[0, 1] == pytest.approx(to_unit(20.0), abs=0.01)
+    # the same log followed as it grows is refused alike
+    with pytest.raises(InputError, match="'T2' starts at"):
+        LogFollower(path).poll()
+    # a part already hot in °C (45 °C, which in °F would be 7.2 °C): read, nothing said
     plain = "".join(f"{m},{20 + 0.3 * m:.2f},{45 + 0.2 * m:.2f},20.0\n" for m in range(30))
     assert not [
         n
@@ -264,3 +275,18 @@ def test_a_column_whose_own_unit_puts_it_out_of_range_is_not_blamed_on_a_stated_
     with pytest.raises(InputError, match="check the wiring") as refused:
         read_temperature_log(path)
     assert "leave the unit out" not in str(refused.value)
+
+
+def test_columns_named_as_another_quantity_are_left_out_with_a_note(write_csv):
+    """A new user's log with a power and a speed channel beside the temperatures ("P_kW",
+    "Drehzahl", "Spindle speed"): each was read as a °C sensor, held the stop for good ("no rise")
+    or refused the whole log (8000 "°C"). They are left out by their names, said in a note; a name
+    that also says it is a temperature is kept, and a column asked for by name is read."""
+    header = "time_min,T1,P_kW,Drehzahl,Spindle speed,Speed side bearing temp,Bearing load side\n"
+    rows = "".join(f"{m},{20 + 0.1 * m:.2f},3.5,8000,8000,{20 + 0.05 * m:.2f},{20 + 0.02 * m:.2f}\n" for m in range(30))
+    path = write_csv(header + rows)
+    log = read_temperature_log(path)
+    assert log.sensors == ("T1", "Speed side bearing temp", "Bearing load side")
+    said = [n for n in log.notes if n.startswith("left out, named as another quantity")]
+    assert said and said[0].endswith(": P_kW, Drehzahl, Spindle speed"), log.notes
+    assert read_temperature_log(path, sensors=["P_kW"]).sensors == ("P_kW",)

@@ -215,7 +215,10 @@ def test_a_room_that_warms_like_a_machine_is_said_and_a_real_rooms_course_is_not
     assert "`room_sensor`" in said
     # by when: a replay says it after the checks that read the same rows
     timed = warming_room_warning(bearing, "room", t)
-    assert timed is not None and timed.startswith("the room sensor 'room' (by t = 33 min) warmed 4.7 °C")
+    assert timed is not None and timed.startswith(
+        "the room sensor 'room' warmed 4.7 °C from its first level (20.32 to 25.00 °C), up by more than 3 °C by "
+        "t = 33 min,"
+    )
     air = 20.0 + 0.5 * np.sin(2 * np.pi * t / 1440.0) + 2.5 * t / 1440.0
     spiked = air.copy()
     spiked[300] = 35.0

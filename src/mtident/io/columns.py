@@ -22,6 +22,7 @@ from mtident.io.units import (
     is_from_humidity,
     is_humidity,
     is_number,
+    names_other_quantity,
     stated_temperature_unit,
     unit_in_name,
     unit_key,
@@ -440,7 +441,7 @@ def temperature_columns(
         ``temperature_unit`` is no unit of temperature, or a column's own unit contradicts it.
     """
     stated = stated_temperature_unit(temperature_unit)
-    kept, notes, other, times, events, computed, by_option = [], [], [], [], [], [], []
+    kept, notes, other, times, events, computed, by_option, quantities = [], [], [], [], [], [], [], []
     for name in names:
         if not asked and time_named(name):
             times.append(name)
@@ -454,6 +455,9 @@ def temperature_columns(
         by = dialect.units_source if dict(dialect.units).get(name, "").strip() else "its name"
         written = dialect.unit_of(name)
         unit = written.strip().strip("[]()").strip()  # as written, without brackets
+        if not unit and not asked and names_other_quantity(name):
+            quantities.append(name)
+            continue
         if not unit and is_humidity(name):
             if asked:
                 msg = f"{source}: sensor {name!r} is a humidity by its name, not a temperature (°C, K or °F)"
@@ -495,9 +499,15 @@ def temperature_columns(
         )
     if other:
         notes.append(f"left out, not temperatures by {by}: {', '.join(other)}")
+    if quantities:
+        notes.append(
+            "left out, named as another quantity (a power, a speed, a torque, a pressure; `sensors` reads one all "
+            f"the same): {', '.join(quantities)}"
+        )
     if not kept:
         left_out = [
             *(f"{n} (named as a time)" for n in times),
+            *(f"{n} (named as another quantity)" for n in quantities),
             *(f"{n} (the logger's own record)" for n in events),
             *(f"{n} (computed from the humidity)" for n in computed),
         ]

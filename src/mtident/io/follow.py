@@ -34,7 +34,7 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, refuse_split_name, sniff_dialect
 from mtident.io.layout import LogLayout, layout_of_head
-from mtident.io.logs import scale_note
+from mtident.io.logs import another_unit_error, scale_note
 from mtident.io.parse import TimeState, parse_lines
 from mtident.io.time_notes import SPARSE_HINT_ROWS, hours_hint, unit_hint
 
@@ -263,6 +263,11 @@ class LogFollower:
         if not self._scale_said and len(rows.time_min):
             # as the file reader says it: readings far outside any workshop's range in the unit taken,
             # judged once every column has a reading
+            odd = another_unit_error(
+                list(layout.sensors), rows.temperature_C, layout.dialect, self.source, self.temperature_unit
+            )
+            if odd is not None:
+                raise InputError(odd)
             said = scale_note(list(layout.sensors), rows.temperature_C, layout.dialect, self.temperature_unit)
             self._scale_said = said is not None or bool(np.all(np.isfinite(rows.temperature_C).any(axis=0)))
             # readings that may be misread: a warning, which the watch's answer carries (log_warnings)

@@ -334,6 +334,10 @@ def read_temperature_log(
     whole = WholeLog(table.first_row, max_bad_fraction)
     _, rows = parse_lines(layout, TimeState(), table.lines, table.source, whole=whole)
     notes.extend(rows.notes)
+    if odd := another_unit_error(
+        list(layout.sensors), rows.temperature_C, table.dialect, table.source, temperature_unit
+    ):
+        raise InputError(odd)
     scale = scale_note(list(layout.sensors), rows.temperature_C, table.dialect, temperature_unit)
     clock = "" if layout.clock_column is None else f" + {layout.header[layout.clock_column]}"
     return TemperatureLog(
@@ -396,27 +400,55 @@ _START_AGREES_C = 5.0
 that unit."""
 
 
-def _another_unit(sensors: list[str], values: FloatArray, assumed: list[int]) -> str | None:
-    """A note on the columns read as °C that start far above any workshop's range while the
-    others start in it, and that converted from °F (or K) would start with them: a log with one
-    sensor in °F (T2 starting at 68) was read as °C, and its T∞ of 77 °C trusted."""
+def another_unit_error(
+    sensors: list[str], values: FloatArray, dialect: CsvDialect, source: str, temperature_unit: str | None = None
+) -> str | None:
+    """Why a log cannot be read as it is, where a column read as °C for want of a stated unit starts
+    far above any workshop's range while the others start in it, and converted from °F (or K) would
+    start with them: a log with one sensor in °F (T3 starting at 68) was read as °C, and a stop with its
+    T∞ of 71.6 °C trusted, the column's unit said only in a note. None where the user stated a unit
+    (``temperature_unit``: every column without one of its own is in it) or no column reads so.
+
+    Parameters
+    ----------
+    sensors : list of str
+        The sensor columns' names.
+    values : ndarray, shape (N, S)
+        Their readings as read (°C where a unit was stated, else the numbers as written; NaN: missing).
+    dialect : CsvDialect
+        The log's dialect, which says which columns state their unit.
+    source : str
+        The log, named in the message.
+    temperature_unit : str or None, optional
+        The unit the user stated for the columns without one.
+
+    Returns
+    -------
+    str or None
+        The message of the error to raise.
+    """
+    if stated_temperature_unit(temperature_unit) is not None:
+        return None
     low, high = WORKSHOP_ROOM_C
+    assumed = [k for k, name in enumerate(sensors) if not dialect.unit_of(name).strip()]
     first = np.array([_first_valid(values[:, k]) for k in range(values.shape[1])])
     usual = [k for k in range(len(sensors)) if low <= first[k] <= high]
     if not usual:
         return None
     start = float(np.median(first[usual]))
-    odd = []
+    odd, named = [], ""
     for k in assumed:
         for unit, celsius in (("°F", (first[k] - 32.0) / 1.8), ("K", first[k] - 273.15)):
             if first[k] > high and abs(celsius - start) <= _START_AGREES_C:
                 odd.append(f"{sensors[k]!r} starts at {first[k]:g} (in {unit}: {celsius:.1f} °C)")
+                named = named or f"{sensors[k]} [{unit}]"
     if not odd:
         return None
     return (
-        f"readings taken as °C (the log states no unit), but {'; '.join(odd)}, where the other columns start near "
-        f"{start:.1f} °C: if a column is in °F (or K), state its unit, and it is converted: a units row under the "
-        "header (min;°C;°F) or the unit in its name (T2 [°F])"
+        f"{source}: the log states no unit, so its readings would be taken as °C, but {'; '.join(odd)}, where the "
+        f"other columns start near {start:.1f} °C. State the column's unit, and it is converted: a units row under "
+        f"the header or the unit in its name ({named}); or, if every column is in °C, say so "
+        "(`temperature_unit='C'`)"
     )
 
 
@@ -474,8 +506,6 @@ def scale_note(
         )
     elif every and stated is not None and all(span[2] < low for span in spans.values()):
         which = f"every column reads below {low:g} °C (the highest {max(span[2] for span in spans.values()):.3g})"
-    elif stated is None and (odd := _another_unit(sensors, values, assumed)):
-        return odd
     else:
         return None
     if stated is not None:

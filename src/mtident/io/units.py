@@ -305,6 +305,50 @@ def is_from_humidity(name: str) -> bool:
     return any(word in key for word in _FROM_HUMIDITY_WORDS)
 
 
+# Words that name a logger's other channels without a unit in brackets ("P_kW", "Drehzahl",
+# "Spindle speed"): such a column is no temperature, unless its name also says it is one
+# ("Speed-side bearing temp"). Whole words only: "load" and "current" name bearings and readings too.
+_OTHER_QUANTITY_WORDS = frozenset(
+    (
+        "drehzahl",
+        "leistung",
+        "power",
+        "speed",
+        "rpm",
+        "torque",
+        "drehmoment",
+        "strom",
+        "voltage",
+        "spannung",
+        "pressure",
+        "druck",
+        "vorschub",
+        "feedrate",
+        "kw",
+    )
+)
+_TEMPERATURE_WORDS = ("temp", "thermo", "pt100", "pt1000", "°c", "degc", "celsius")
+
+
+def names_other_quantity(name: str) -> bool:
+    """Whether a column's name says it is a logger's other channel, not a temperature: a word such as
+    "Drehzahl", "power", "speed" or "kW" in it ("P_kW", "Spindle speed"), and no word that says it is a
+    temperature ("temp", "Pt100", "°C").
+
+    Parameters
+    ----------
+    name : str
+        The column name as written.
+
+    Returns
+    -------
+    bool
+    """
+    lower = name.lower()
+    words = set(re.split(r"[^a-zäöüß0-9]+", lower))
+    return bool(words & _OTHER_QUANTITY_WORDS) and not any(word in lower for word in _TEMPERATURE_WORDS)
+
+
 def unit_in_name(column: str) -> str:
     """The unit at the end of a column's name, as written ("Time [s]": "s"), if it is one this
     module knows; "" without one ("T (spindle)" names a place, not a unit; "Date/Time" no unit either).

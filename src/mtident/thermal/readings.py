@@ -420,13 +420,15 @@ def warming_room_warning(room_C: FloatArray, name: str | None, time_min: FloatAr
     if highest - first <= ROOM_WARMING_C:
         return None
     column = f"the room sensor {name!r}" if name else "the room sensor"
+    when = ""
     if time_min is not None:
-        # a level is its window's middle reading's
+        # a level is its window's middle reading's; the figures are of the readings so far, the time
+        # when they first rose beyond the limit
         beyond = int(np.argmax(levels > first + ROOM_WARMING_C)) + 2
-        column += f" (by t = {float(np.asarray(time_min)[ok][beyond]):g} min)"
+        when = f", up by more than {ROOM_WARMING_C:g} °C by t = {float(np.asarray(time_min)[ok][beyond]):g} min"
     return (
-        f"{column} warmed {highest - first:.1f} °C from its first level ({first:.2f} to {highest:.2f} °C), more than "
-        f"a workshop's air moves in a test ({ROOM_WARMING_C:g} °C): is it a sensor on the machine? The room is an "
+        f"{column} warmed {highest - first:.1f} °C from its first level ({first:.2f} to {highest:.2f} °C){when}, "
+        f"more than a workshop's air moves in a test ({ROOM_WARMING_C:g} °C): is it a sensor on the machine? The room is an "
         "input of every sensor's fit, so a machine sensor taken for it bends every answer; name the air's own column "
         "as the room (`room_sensor`)"
     )
