@@ -88,6 +88,13 @@ def test_watch_replays_a_workbook(tmp_path):
     assert out.returncode == 0, out.stderr
     result = json.loads(out.stdout)
     assert result["decision"] == "stop" and abs(result["steady_state_C"] - 26.7) < 0.05
+    # resumed, the workbook is copied again, to a new file: the same log, not "truncated or replaced"
+    again = mtident(
+        "thermal", "watch", str(book), "--replay", "--resume", "--room-wander", "0", "--state",
+        str(tmp_path / "state.json"), "--json",
+    )  # fmt: skip
+    assert again.returncode == 0 and "replaced" not in again.stderr, again.stderr
+    assert json.loads(again.stdout).get("log_warnings") == result.get("log_warnings")
     for extra in ((), ("--ambient", "Time")):  # with --ambient the header was read first, as garbage
         live = mtident("thermal", "watch", str(book), "--timeout", "1", "--state", str(tmp_path / "live.json"), *extra)
         assert (

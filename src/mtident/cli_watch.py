@@ -429,8 +429,8 @@ def watch(request: WatchRequest) -> None:
     for said in session.log_warnings:  # a resumed watch's, from its state file: its answer refers to them
         stderr.print(f"mtident: warning: (said before) {said}", highlight=False)
     for note in sheet_notes:  # the sheet a workbook's readings came from: the JSON answer carries it too
-        stderr.print(f"mtident: warning: {note}", highlight=False)
-        if note not in session.log_warnings:  # a resumed watch has it from its state file
+        if note not in session.log_warnings:  # a resumed watch has it from its state file, and said it above
+            stderr.print(f"mtident: warning: {note}", highlight=False)
             session.log_warnings.append(note)
     if recorder is not None:
         stderr.print(f"mtident: recording {file} to {path}", highlight=False)

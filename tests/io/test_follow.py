@@ -492,12 +492,30 @@ def test_follower_handles_a_replaced_log_without_double_counting(tmp_path):
     path.write_text("stamp,A\n" + "".join(f"{s},{20 + i / 10}\n" for i, s in enumerate(stamps[:5])))
     follower = LogFollower(path)
     assert follower.poll().time_min.size == 5
-    replacement = tmp_path / "new.csv"  # the logger restarts and rewrites the whole file
-    replacement.write_text("stamp,A\n" + "".join(f"{s},{20 + i / 10}\n" for i, s in enumerate(stamps[:8])))
+    replacement = tmp_path / "new.csv"  # the logger restarts and rewrites the whole file, its readings anew
+    replacement.write_text("stamp,A\n" + "".join(f"{s},{21 + i / 10}\n" for i, s in enumerate(stamps[:8])))
     os.replace(replacement, path)
     rows = follower.poll()
     np.testing.assert_allclose(rows.time_min, [5, 6, 7])
     assert any("truncated or replaced" in w for w in rows.warnings)
+
+
+def test_follower_takes_its_log_written_anew_as_the_same_log(tmp_path):
+    """A logger that writes a longer copy and renames it over the log (a new inode at every write),
+    or a workbook's sheet copied again for a resumed replay: the same bytes before where the follower
+    had read, so it reads on from there without a word (a resumed replay of an Excel workbook said "the
+    log was truncated or replaced", and the report carried it)."""
+    path = tmp_path / "log.csv"
+    text = "time_min,A\n" + "".join(f"{m},{20 + m / 10:.2f}\n" for m in range(12))
+    path.write_text(text[: text.index("5,")])
+    follower = LogFollower(path)
+    assert follower.poll().time_min.size == 5
+    copy = tmp_path / "copy.csv"
+    copy.write_text(text)
+    os.replace(copy, path)
+    rows = follower.poll()
+    np.testing.assert_allclose(rows.time_min, np.arange(5.0, 12.0))
+    assert not rows.warnings
 
 
 def test_follower_never_writes_to_the_log(tmp_path):

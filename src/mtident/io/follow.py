@@ -65,6 +65,10 @@ class Rows:
     notes: tuple[str, ...] = ()
 
 
+TAIL_BYTES = 64
+"""How many of the last bytes read a follower keeps, to know its log written anew from another."""
+
+
 @dataclass(frozen=True, slots=True)
 class FollowPosition:
     """Where a follower is in its log: everything needed to resume (the state file keeps it).
@@ -75,7 +79,12 @@ class FollowPosition:
         Bytes of the file read so far (the next poll reads from there).
     identity : tuple of int or None
         (device, inode) of the file when it was last read: another file under the same name, or a
-        shorter one, is read again from the start.
+        shorter one, is read again from the start, but for one whose bytes before ``offset`` end as
+        ``tail`` does (the same log written anew: a logger that replaces its file with a longer copy,
+        or a workbook's sheet copied again for a resumed replay).
+    tail : str
+        The last bytes read (up to :data:`TAIL_BYTES`, as hexadecimal; "" before any, and in a state
+        file from before it was kept).
     layout : LogLayout or None
         How the rows are read, once the header line and a data row were read.
     time : TimeState
@@ -89,6 +98,7 @@ class FollowPosition:
 
     offset: int = 0
     identity: tuple[int, int] | None = None
+    tail: str = ""
     layout: LogLayout | None = None
     time: TimeState = TimeState()
     sensors: tuple[str, ...] | None = None
@@ -329,13 +339,15 @@ class LogFollower:
             return None
         identity = (stat.st_dev, stat.st_ino)
         at = self._at
-        restarted = at.identity is not None and (identity != at.identity or stat.st_size < at.offset)
+        restarted = at.identity is not None and (
+            stat.st_size < at.offset or (identity != at.identity and not self._same_log(at))
+        )
         if restarted:
             warnings.append(
                 f"{self.source}: the log was truncated or replaced (logger restarted?); reading it again from the "
                 "start, skipping rows already counted"
             )
-            at = replace(at, offset=0)
+            at = replace(at, offset=0, tail="")
         self._at = at = replace(at, identity=identity)
         with open(self.path, "rb") as handle:
             dialect = self.dialect if at.layout is not None else self._sniff(handle.read(HEAD_BYTES))
@@ -356,8 +368,18 @@ class LogFollower:
                 self.sensors = list(layout.sensors)
                 at = replace(at, layout=layout)
                 notes.extend(said)
-        self._at = replace(at, offset=at.offset + end)
+        tail = (bytes.fromhex(at.tail) + chunk[:end])[-TAIL_BYTES:]
+        self._at = replace(at, offset=at.offset + end, tail=tail.hex())
         return lines, restarted
+
+    def _same_log(self, at: FollowPosition) -> bool:
+        """Whether the file now under the log's name is the log read so far written anew: its bytes
+        before ``at.offset`` end as the ones read last did."""
+        if not at.tail or at.offset < len(at.tail) // 2:
+            return False
+        with open(self.path, "rb") as handle:
+            handle.seek(at.offset - len(at.tail) // 2)
+            return handle.read(len(at.tail) // 2).hex() == at.tail
 
     def _layout(self, header_line: str, lines: list[str], dialect: CsvDialect) -> tuple[LogLayout, list[str]]:
         """The layout by the header line and the data lines written so far, and its notes."""

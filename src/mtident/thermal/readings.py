@@ -428,9 +428,9 @@ def warming_room_warning(room_C: FloatArray, name: str | None, time_min: FloatAr
         when = f", up by more than {ROOM_WARMING_C:g} °C by t = {float(np.asarray(time_min)[ok][beyond]):g} min"
     return (
         f"{column} warmed {highest - first:.1f} °C from its first level ({first:.2f} to {highest:.2f} °C){when}, "
-        f"more than a workshop's air moves in a test ({ROOM_WARMING_C:g} °C): is it a sensor on the machine? The room is an "
-        "input of every sensor's fit, so a machine sensor taken for it bends every answer; name the air's own column "
-        "as the room (`room_sensor`)"
+        f"more than a workshop's air moves in a test ({ROOM_WARMING_C:g} °C): is it a sensor on the machine? The room "
+        "is an input of every sensor's fit, so a machine sensor taken for it bends every answer; name the air's own "
+        "column as the room (`room_sensor`)"
     )
 
 
