@@ -61,7 +61,7 @@ def asked_sensors(sensors: tuple[str, ...], path: Path, sheet: str | None = None
     list of str
         The names in the order given.
     """
-    from mtident.io.dialect import header_names
+    from mtident.io.log_file import header_names
 
     header = header_names(path, sheet) if sensors and path.is_file() else []
     columns = set(header)
@@ -89,7 +89,7 @@ def named_column(name: str | None, file: str, sheet: str | None, option: str) ->
     -------
     str or None
     """
-    from mtident.io.dialect import header_names
+    from mtident.io.log_file import header_names
 
     path = log_path(file)
     if name is None or not path.is_file():
@@ -278,7 +278,7 @@ def unread_rooms_of(path: Path, read: tuple[str, ...] | list[str], sheet: str | 
     -------
     list of str
     """
-    from mtident.io.dialect import header_names
+    from mtident.io.log_file import header_names
 
     if not path.is_file():
         return []

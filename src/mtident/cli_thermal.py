@@ -344,7 +344,7 @@ def _with_machine_sensors(
 
 def _header_or_none(request: LogRequest) -> list[str]:
     """The log file's column names; none for a source that is no file (a server) or cannot be read."""
-    from mtident.io.dialect import header_names
+    from mtident.io.log_file import header_names
 
     path = log_path(request.file)
     if not path.is_file():

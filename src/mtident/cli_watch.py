@@ -832,14 +832,15 @@ class _Nothing:
 def _workbook_as_replayed_csv(path: Path, sheet: str | None = None) -> tuple[Path, str, list[str]]:
     """``path``, or for an Excel workbook the CSV its sheet holds (``sheet``, --sheet, else its first
     with a table), written to a temporary folder to be replayed
-    (:func:`~mtident.io.dialect.workbook_as_csv`); the sheet read, where the workbook has several
+    (:func:`~mtident.io.log_file.workbook_as_csv`); the sheet read, where the workbook has several
     (else ""); and the reader's notes: which sheet of several was read. InputError for a sheet the
     workbook lacks, or one named for a CSV log."""
     import atexit
     import shutil
     import tempfile
 
-    from mtident.io.dialect import binary_kind, no_sheets, workbook_as_csv
+    from mtident.io.dialect import binary_kind
+    from mtident.io.log_file import no_sheets, workbook_as_csv
 
     with path.open("rb") as handle:
         if binary_kind(handle.read(8)) not in ("xlsx", "xls"):

@@ -1,5 +1,6 @@
-"""Tests of :mod:`mtident.io.dialect`: delimiters, decimal marks, preambles, encodings, line ends,
-the header and the rows under it, and a last line cut by a logger still writing.
+"""Tests of :mod:`mtident.io.dialect` and :mod:`mtident.io.log_file`: delimiters, decimal marks,
+preambles, encodings, line ends, the header and the rows under it, and a last line cut by a logger
+still writing.
 """
 
 from __future__ import annotations
@@ -396,7 +397,7 @@ def test_a_workbook_of_several_sheets_says_the_sheet_it_read_and_reads_the_one_n
     """A workbook's first sheet with a table was read without a word: a user whose readings were
     on its second sheet got the first's answer. The sheet read, the others and how to pick one are
     said; a sheet is named by name (case aside) or number from 1."""
-    from mtident.io.dialect import header_names
+    from mtident.io.log_file import header_names
 
     book = tmp_path / "runs.xlsx"
     _, _, b = workbook_of_runs(book)

@@ -9,8 +9,8 @@ from mtident.io import read_temperature_log
 
 def test_the_file_reader_reads_its_lines_with_the_followers_function(write_csv):
     """One log reader: the rows of a whole log are parse_lines' over the layout, read as a whole log."""
-    from mtident.io.dialect import read_lines
     from mtident.io.layout import layout_of_head
+    from mtident.io.log_file import read_lines
     from mtident.io.parse import TimeState, WholeLog, parse_lines
 
     rows = "".join(

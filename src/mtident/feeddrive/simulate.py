@@ -240,7 +240,7 @@ def read_response(path: str | Path) -> Response:
     """
     import pandas as pd
 
-    from mtident.io.dialect import read_csv
+    from mtident.io.log_file import read_csv
 
     frame, dialect = read_csv(path)
     first_row = 1 + dialect.head_lines  # the row number of the first data line in messages

@@ -15,7 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mtident.io.dialect import CsvDialect, binary_kind, read_lines
+from mtident.io.dialect import CsvDialect, binary_kind
+from mtident.io.log_file import read_lines
 from mtident.io.logs import read_temperature_log
 from mtident.io.time_notes import TIME_UNITS, time_unit_assumed, time_unit_factor
 from mtident.io.units import is_number, stated_temperature_unit

@@ -32,8 +32,9 @@ import numpy as np
 
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
-from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, refuse_split_name, sniff_dialect
+from mtident.io.dialect import HEAD_BYTES, CsvDialect, binary_kind, sniff_dialect
 from mtident.io.layout import LogLayout, layout_of_head
+from mtident.io.log_file import refuse_split_name
 from mtident.io.logs import another_unit_error, scale_note
 from mtident.io.parse import TimeState, parse_lines
 from mtident.io.time_notes import SPARSE_HINT_ROWS, hours_hint, unit_hint

@@ -43,8 +43,9 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, empty_cell, iter_rows
 from mtident.io.columns import check_unique_names, missing_column, room_named, temperature_columns
-from mtident.io.dialect import CsvDialect, read_lines
+from mtident.io.dialect import CsvDialect
 from mtident.io.layout import LogLayout, time_columns
+from mtident.io.log_file import read_lines
 from mtident.io.parse import TimeState, WholeLog, parse_lines
 from mtident.io.time_notes import read_as_minutes
 from mtident.io.units import is_number, stated_temperature_unit

@@ -31,8 +31,8 @@ from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io import stamps
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, numbers, split_rows
-from mtident.io.dialect import cut_short_words, rows_cut_short
 from mtident.io.layout import LogLayout, refuse_grouped_time
+from mtident.io.log_file import cut_short_words, rows_cut_short
 from mtident.io.time_notes import gap_said, names_a_date, serial_date_hint, serial_date_note
 from mtident.io.whole import MAX_BAD_FRACTION, read_whole
 
@@ -191,7 +191,7 @@ def _without_wide_rows(
     layout: LogLayout, rows: list[list[str]], source: str | Path
 ) -> tuple[list[list[str]], list[str]]:
     """The rows less those with more cells than the header where the cells past it hold something
-    (the file reader refuses the log: :func:`~mtident.io.dialect.read_lines`), and one warning for
+    (the file reader refuses the log: :func:`~mtident.io.log_file.read_lines`), and one warning for
     them: read to the header's width, a comma-separated row with decimal commas fed one sensor's
     integer parts as its readings and its decimals as the next sensor's."""
     width = len(layout.header)

@@ -26,8 +26,8 @@ import numpy as np
 from mtident._typing import FloatArray
 from mtident.exceptions import InputError
 from mtident.io.cells import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, column, empty_cells, numbers, plain_numbers
-from mtident.io.dialect import header_again_words
 from mtident.io.layout import LogLayout, refuse_grouped_time
+from mtident.io.log_file import header_again_words
 from mtident.io.stamps import (
     CLOCK_DAY_ZERO_MIN,
     IMPLAUSIBLE_STEP_MIN,
