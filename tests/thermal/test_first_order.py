@@ -1,4 +1,4 @@
-"""Tests of :mod:`mtident.thermal.first_order`."""
+"""Tests of :mod:`mtident.thermal.first_order` and :mod:`mtident.thermal.first_order_filter`."""
 
 from __future__ import annotations
 
@@ -454,10 +454,10 @@ def test_one_sensors_broken_down_filter_does_not_stop_the_others():
 def test_a_sensor_whose_filter_breaks_down_in_the_window_is_left_out_and_said(monkeypatch):
     """The window's filter raised for one sensor and stopped every other's answer: it is run again
     without that sensor's readings, which gets no estimate and the error's words."""
-    import mtident.thermal.first_order as first_order_module
+    import mtident.thermal.first_order_filter as first_order_filter
     from mtident.exceptions import CovarianceError
 
-    real = first_order_module.filter_window
+    real = first_order_filter.filter_window
     calls: list[int] = []
 
     def breaks_once(time_min, values, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
@@ -466,7 +466,7 @@ def test_a_sensor_whose_filter_breaks_down_in_the_window_is_left_out_and_said(mo
             raise CovarianceError("update: gain", (1,), -1e-3, step=7, filter_name="ukf")
         return real(time_min, values, *args, **kwargs)
 
-    monkeypatch.setattr(first_order_module, "filter_window", breaks_once)
+    monkeypatch.setattr(first_order_filter, "filter_window", breaks_once)
     log = sample_log().select(["T1", "T9"])
     result = identify(log, window_min=60, method="ukf")
     assert calls == [0, 1]

@@ -21,13 +21,11 @@ from mtident.io.logs import TemperatureLog, as_temperature_log
 from mtident.thermal.first_order import (
     FIRST_ORDER_ASSUMPTIONS,
     Z95,
-    filter_window,
     first_order_suffices,
     identify_first_order,
     model_check,
-    room_input,
-    room_rates,
 )
+from mtident.thermal.first_order_filter import filter_window, room_input, room_rates
 from mtident.thermal.identification import Identification, MethodDetails, sensor_notes
 from mtident.thermal.measured import (
     MIN_WINDOW_SAMPLES,

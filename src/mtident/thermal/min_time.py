@@ -29,7 +29,8 @@ from mtident._json import SensorAnswers, json_optional
 from mtident._typing import FloatArray, IntArray
 from mtident.exceptions import InputError
 from mtident.io.logs import TemperatureLog, as_temperature_log
-from mtident.thermal.first_order import FIRST_ORDER_ASSUMPTIONS, filter_window, room_input
+from mtident.thermal.first_order import FIRST_ORDER_ASSUMPTIONS
+from mtident.thermal.first_order_filter import filter_window, room_input
 from mtident.thermal.lsq import first_level, fit_rise, late_onset, rise_threshold
 from mtident.thermal.measured import MIN_WINDOW_SAMPLES, rmse
 from mtident.thermal.model import heat_balance_path, rise_curve
