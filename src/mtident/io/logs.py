@@ -402,7 +402,7 @@ that unit."""
 
 
 def another_unit_error(
-    sensors: list[str], values: FloatArray, dialect: CsvDialect, source: str, temperature_unit: str | None = None
+    sensors: list[str], values: FloatArray, dialect: CsvDialect, source: str | Path, temperature_unit: str | None = None
 ) -> str | None:
     """Why a log cannot be read as it is, where a column read as °C for want of a stated unit starts
     far above any workshop's range while the others start in it, and converted from °F (or K) would
@@ -418,7 +418,7 @@ def another_unit_error(
         Their readings as read (°C where a unit was stated, else the numbers as written; NaN: missing).
     dialect : CsvDialect
         The log's dialect, which says which columns state their unit.
-    source : str
+    source : str or Path
         The log, named in the message.
     temperature_unit : str or None, optional
         The unit the user stated for the columns without one.
