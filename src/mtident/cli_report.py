@@ -10,7 +10,7 @@ import click
 from mtident.cli import as_options, stderr, thermal, user_errors
 from mtident.cli_logs import asked_sensors, log_options, log_path, say_room_candidates, unread_rooms_of
 from mtident.cli_options import file_option, output_option
-from mtident.cli_watch import _workbook_as_replayed_csv, decision_options, monitor_settings, state_file
+from mtident.cli_watch import decision_options, monitor_settings, state_file, workbook_as_replayed_csv
 from mtident.exceptions import InputError
 from mtident.thermal.monitor import minutes
 from mtident.thermal.session import WatchSession
@@ -62,7 +62,7 @@ def report_command(**options: Any) -> None:
         msg = f"{path}: no such file"
         raise InputError(msg)
     settings = monitor_settings(options)
-    read, sheet_read, sheet_notes = _workbook_as_replayed_csv(path, options["sheet"])
+    read, sheet_read, sheet_notes = workbook_as_replayed_csv(path, options["sheet"])
     session = WatchSession(
         read,
         settings,

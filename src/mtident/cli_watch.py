@@ -411,7 +411,7 @@ def watch(request: WatchRequest) -> None:
             "logger writes, which has no sheets"
         )
         raise InputError(msg)
-    read, sheet_read, sheet_notes = _workbook_as_replayed_csv(path, sheet) if follow.replay else (path, "", [])
+    read, sheet_read, sheet_notes = workbook_as_replayed_csv(path, sheet) if follow.replay else (path, "", [])
     session = WatchSession(
         read,
         request.decision,
@@ -829,7 +829,7 @@ class _Nothing:
         return None
 
 
-def _workbook_as_replayed_csv(path: Path, sheet: str | None = None) -> tuple[Path, str, list[str]]:
+def workbook_as_replayed_csv(path: Path, sheet: str | None = None) -> tuple[Path, str, list[str]]:
     """``path``, or for an Excel workbook the CSV its sheet holds (``sheet``, --sheet, else its first
     with a table), written to a temporary folder to be replayed
     (:func:`~mtident.io.log_file.workbook_as_csv`); the sheet read, where the workbook has several

@@ -90,7 +90,7 @@ def test_a_panel_shows_the_rest_of_the_log_its_band_and_decision_level_beneath_n
     from matplotlib.figure import Figure
 
     from mtident.report.plots import draw_monitor_panel
-    from mtident.report.test_report import _draw_rest_of_log
+    from mtident.report.test_report import draw_rest_of_log
     from mtident.thermal.monitor import MonitorSettings, monitor_step, new_state
     from mtident.thermal.robust_types import RobustSettings
 
@@ -104,7 +104,7 @@ def test_a_panel_shows_the_rest_of_the_log_its_band_and_decision_level_beneath_n
     check = state.checks[0]
     low, high = ax.get_ylim()
     assert low <= check.low_C and check.high_C <= high
-    _draw_rest_of_log(ax, t, y, 199.0, legend=False)
+    draw_rest_of_log(ax, t, y, 199.0, legend=False)
     low, high = ax.get_ylim()
     assert low <= y.min() and y.max() <= high
     model = [line for line in ax.get_lines() if line.get_label().startswith("best model")]

@@ -55,7 +55,7 @@ _TIME_WORDS = frozenset(
 )
 # Line ends as pandas reads them: CRLF (Windows), LF, and a lone CR (old Macs, some instruments'
 # serial loggers), which inside a line made the csv module fail with a traceback.
-_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
 _DECIMAL_POINT = re.compile(r"^\s*[+-]?\d*\.\d+(?:[eE][+-]?\d+)?\s*$")
 # 1,500: a thousands' grouping as much as a decimal comma
@@ -298,7 +298,7 @@ def sniff_dialect(head: bytes, wait_for_row: bool = False, whole: bool = False) 
         # to the last LF where there is one; a row taken as complete here was not there to tell the
         # time's columns). A log of lone CRs waits a row longer for it.
         text = text.removesuffix("\r")
-    lines = _LINE_BREAK.split(text)
+    lines = LINE_BREAK.split(text)
     complete = lines if whole else lines[:-1]  # the last piece has no newline yet
     preamble, stated = 0, None
     while preamble < len(complete):
@@ -461,7 +461,7 @@ def _table_start(lines: list[str], first: int, stated: str | None, wait_for_row:
     if delimiter is not None and _data_row_below(lines, first, delimiter):
         return first
     for k in range(first + 1, len(lines)):
-        if _blank_like(lines[k]) or _data_like(lines[k]):
+        if _blank_like(lines[k]) or data_like(lines[k]):
             continue
         delimiter = _table_delimiter(lines, k, stated)
         # a line inside a table (a bad first row below its header) heads none
@@ -556,7 +556,7 @@ def _extra_rows(lines: list[str], k: int, delimiter: str) -> int | None:
 def _data_row(cells: list[str]) -> bool:
     """Cells that begin like a data row: with a number or a date, or with text before a time
     stamp (a wireless logger's receiver and transmitter names before the date)."""
-    if cells and _data_like(cells[0]):
+    if cells and data_like(cells[0]):
         return True
     return len(cells) >= 3 and bool(cells[0]) and any(_STAMP_LIKE.search(c) for c in cells[1:4])
 
@@ -568,7 +568,7 @@ def _describes(cells: list[str]) -> bool:
     return not any(is_number(c) for c in cells if c) or not all(cells[:2])
 
 
-def _data_like(line: str) -> bool:
+def data_like(line: str) -> bool:
     """A line that begins like a data row: with a number or a date (a digit, a sign or a point)."""
     text = line.strip().lstrip('"')
     return text[:1].isdigit() or (text[:1] in "+-." and text[1:2].isdigit())

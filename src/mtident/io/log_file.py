@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 from mtident.exceptions import InputError
 from mtident.io.columns import check_header_names
-from mtident.io.dialect import _LINE_BREAK, HEAD_BYTES, CsvDialect, _data_like, binary_kind, sniff_dialect
+from mtident.io.dialect import HEAD_BYTES, LINE_BREAK, CsvDialect, binary_kind, data_like, sniff_dialect
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -73,7 +73,7 @@ def header_names(file: Path, sheet: str | int | None = None) -> list[str]:
 
 
 def _header_line(head: bytes, dialect: CsvDialect) -> str:
-    return _LINE_BREAK.split(dialect.decode(head))[dialect.preamble_lines]
+    return LINE_BREAK.split(dialect.decode(head))[dialect.preamble_lines]
 
 
 def read_lines(
@@ -147,7 +147,7 @@ def read_lines(
             data = whole_characters
     check_header_names(dialect.header(_header_line(head, dialect)), dialect.number, path)
     text = _checked_text(file.read_bytes() if data is None else data, head, dialect, path, notes)
-    return _LINE_BREAK.split(text)[dialect.preamble_lines :], replace(dialect, sheet=sheet_read)
+    return LINE_BREAK.split(text)[dialect.preamble_lines :], replace(dialect, sheet=sheet_read)
 
 
 def _checked_text(data: bytes, head: bytes, dialect: CsvDialect, path: str | Path, notes: list[str] | None) -> str:
@@ -179,7 +179,7 @@ def _without_stray_rows(text: str, dialect: CsvDialect, notes: list[str] | None)
     """The text without its data lines cut short (:func:`rows_cut_short`) or repeating the header
     (two logs joined: its time name read as a time made the whole column fail at its first row),
     said in ``notes``."""
-    lines = _LINE_BREAK.split(text)
+    lines = LINE_BREAK.split(text)
     short = set(rows_cut_short(lines, dialect, dialect.head_lines))
     header_line = lines[dialect.preamble_lines]
     header = dialect.cells(header_line)
@@ -382,7 +382,7 @@ def _check_rows(text: str, dialect: CsvDialect, path: str | Path) -> str | None:
     :class:`~mtident.io.follow.LogFollower` waits for), which the reader leaves out; None if none.
     A last line without its line end is cut short too where its last cell is (:func:`_cut_short`):
     ``...;29,3`` for ``...;29,35``, or ``2`` for ``22,41``, was read as a reading, wrong and trusted."""
-    lines = _LINE_BREAK.split(text)
+    lines = LINE_BREAK.split(text)
     header = dialect.cells(lines[dialect.preamble_lines])
     count = len(header)
     previous = count
@@ -518,7 +518,7 @@ def workbook_as_csv(
         return out.getvalue()
 
     texts = {str(name): text(frame) for name, frame in sheets.items()}
-    tables = [name for name, t in texts.items() if sum(_data_like(line) for line in t.splitlines()[:200]) >= 2]
+    tables = [name for name, t in texts.items() if sum(data_like(line) for line in t.splitlines()[:200]) >= 2]
     if sheet is not None:
         name = _named_sheet(list(texts), sheet, path)
         if tables and name not in tables:

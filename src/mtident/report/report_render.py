@@ -22,7 +22,7 @@ from matplotlib.figure import Figure
 from matplotlib.transforms import Bbox
 
 from mtident.report.plots import draw_monitor_panel, draw_timeline
-from mtident.report.test_report import WarmupReport, _draw_rest_of_log, status_words
+from mtident.report.test_report import WarmupReport, draw_rest_of_log, status_words
 from mtident.thermal.monitor import minutes
 from mtident.thermal.monitor_answer import WAYS_ON
 
@@ -439,6 +439,6 @@ def _curves(pages: _Pages, report: WarmupReport) -> None:
         ax.yaxis.label.set_fontsize(7.5)
         ax.tick_params(labelsize=7)
         if state.stopped and s < curves.values_C.shape[1]:
-            _draw_rest_of_log(ax, curves.time_min, curves.values_C[:, s], state.stop_time_min, legend=False)
+            draw_rest_of_log(ax, curves.time_min, curves.values_C[:, s], state.stop_time_min, legend=False)
         if s == 0:
             ax.legend(fontsize=6, loc="lower right")

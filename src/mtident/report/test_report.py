@@ -395,7 +395,7 @@ def build_report(
     figure = plot_monitor(state, settings)
     if state.stopped:
         for s, ax in enumerate(figure.axes[: values.shape[1]]):
-            _draw_rest_of_log(ax, time_min, values[:, s], state.stop_time_min, legend=s == 0)
+            draw_rest_of_log(ax, time_min, values[:, s], state.stop_time_min, legend=s == 0)
     stopped = state.stopped
     holding, ways = (
         ((), None) if stopped else _holding(state, settings, session.expected_stops() or {}, outcome.reason_lines)
@@ -577,7 +577,7 @@ def _holding_line(c: SensorCheck, settings: MonitorSettings, expected_min: float
 # ---- the pieces ----------------------------------------------------------------------------------
 
 
-def _draw_rest_of_log(ax: Axes, time_min: np.ndarray, values: np.ndarray, stop_min: float, legend: bool) -> None:
+def draw_rest_of_log(ax: Axes, time_min: np.ndarray, values: np.ndarray, stop_min: float, legend: bool) -> None:
     """The readings after the stop, which the decision did not see."""
     after = time_min > stop_min
     if not after.any():

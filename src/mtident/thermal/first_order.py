@@ -17,11 +17,11 @@ from scipy.special import fdtri, stdtrit
 from mtident._typing import BoolArray, FloatArray
 from mtident.io.logs import OPEN_CIRCUIT_HIGH_C, OPEN_CIRCUIT_LOW_C, TemperatureLog
 from mtident.thermal.first_order_filter import (
-    _PRESET_HINT,
-    _best_rss,
-    _Course,
-    _filtered_course,
-    _least_squares_course,
+    PRESET_HINT,
+    FirstOrderCourse,
+    best_rss,
+    filtered_course,
+    least_squares_course,
     room_input,
 )
 from mtident.thermal.identification import Identification, sensor_notes
@@ -179,8 +179,8 @@ def first_order_suffices(time_min: FloatArray, values: FloatArray, level: float 
     bool
         True where the ramp term is not significant at ``level``.
     """
-    rss_null = _best_rss(time_min, values, with_drift=False)
-    rss_alt = _best_rss(time_min, values, with_drift=True)
+    rss_null = best_rss(time_min, values, with_drift=False)
+    rss_alt = best_rss(time_min, values, with_drift=True)
     floor = len(values) * (1e-4) ** 2  # residuals of a noise-free curve are rounding error
     f_stat = (rss_null - rss_alt) / max(rss_alt, floor) * (len(values) - 4)
     return bool(
@@ -347,7 +347,7 @@ def _verdicts(
     tw: FloatArray,
     method: str,
     preset: str,
-    course: _Course,
+    course: FirstOrderCourse,
     chi2: FloatArray,
     autocorr: FloatArray,
     fits: np.ndarray,
@@ -363,7 +363,7 @@ def _verdicts(
         notes.append(
             f"sensor {log.sensors[s]!r}: the {method} filter's final estimate does not describe the window's "
             f"readings (its curve back over the window: residual χ²/dof {chi2[s]:.3g}): its answer says nothing of "
-            "the model or of T∞" + ("; " + _PRESET_HINT.format(preset=preset) if preset != "data" else "")
+            "the model or of T∞" + ("; " + PRESET_HINT.format(preset=preset) if preset != "data" else "")
         )
     for s in np.flatnonzero(~fits & ~diverged & ~ran_away).tolist():
         notes.append(
@@ -393,11 +393,7 @@ def _verdicts(
         notes.append(
             f"sensor {log.sensors[s]!r}: the {method} filter diverged (its estimate is no number by t = {tw[-1]:g} "
             "min): no T∞"
-            + (
-                "; " + _PRESET_HINT.format(preset=preset)
-                if preset != "data"
-                else ", and its readings may be no warm-up"
-            )
+            + ("; " + PRESET_HINT.format(preset=preset) if preset != "data" else ", and its readings may be no warm-up")
         )
     for s in np.flatnonzero(no_steady & ~diverged).tolist():
         notes.append(
@@ -449,9 +445,9 @@ def _identify(
     # the data tuning has the noise level already (its R); the papers' R is a setting, not the noise
     sigma = np.sqrt(tuning.emission_cov[:, 0, 0]) if preset == "data" else noise_sigma(yw, tw)
     if method == "lsq":
-        course = _least_squares_course(t, tw, yw, tuning, window_min, horizon_min)
+        course = least_squares_course(t, tw, yw, tuning, window_min, horizon_min)
     else:
-        course = _filtered_course(
+        course = filtered_course(
             t, tw, yw, method, preset, tuning, window_min, horizon_min, pseudo_measurement_seed, room_rate
         )
     chi2, autocorr, fits = model_check(tw, yw, yw - course.window_fit, sigma)

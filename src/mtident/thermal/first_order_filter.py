@@ -42,7 +42,7 @@ __all__ = [
 ]
 
 # a papers' preset is their noise covariances, set for their sampling and rise
-_PRESET_HINT = (
+PRESET_HINT = (
     "the '{preset}' preset's noise covariances were set for the paper's readings, not these: preset 'data' "
     "takes them from the readings"
 )
@@ -62,7 +62,7 @@ def _profile_rss(time_min: FloatArray, values: FloatArray, rates: FloatArray, wi
     return answer
 
 
-def _best_rss(time_min: FloatArray, values: FloatArray, with_drift: bool) -> float:
+def best_rss(time_min: FloatArray, values: FloatArray, with_drift: bool) -> float:
     """Smallest RSS over λ by three rounds of a zooming log-spaced grid (no local-minimum trap)."""
     span = max(float(time_min[-1] - time_min[0]), 1e-9)
     lo, hi = np.log(0.01 / span), np.log(100.0 / span)
@@ -229,7 +229,7 @@ def room_rates(time_min: FloatArray, room_C: FloatArray) -> FloatArray:
 
 
 @dataclass(frozen=True)
-class _Course:
+class FirstOrderCourse:
     """A first-order identification's course: the curve over the window and on, its variance,
     the parameters' history over the window and their final mean and covariance."""
 
@@ -271,21 +271,21 @@ def _filter_each_sensor(
             if where is None or yw.shape[1] - len(failed) <= 1 or any(s == where for s, _ in failed):
                 if preset == "data":
                     raise
-                raise exc.hinted(_PRESET_HINT.format(preset=preset)) from None
+                raise exc.hinted(PRESET_HINT.format(preset=preset)) from None
             failed.append((int(where), str(exc)))
             values[:, where] = np.nan
 
 
-def _least_squares_course(
+def least_squares_course(
     t: FloatArray, tw: FloatArray, yw: FloatArray, tuning: ThermalTuning, window_min: float, horizon_min: float | None
-) -> _Course:
+) -> FirstOrderCourse:
     fit = fit_rise(tw, yw, tuning.initial_mean)
     params, cov = fit.params, fit.cov
     times = np.concatenate([tw, _future_times(t, len(tw), window_min, horizon_min, params[:, 1])])
     mean_curve = rise_curve(times[:, None], params[:, 0], params[:, 1], params[:, 2])
     jac = _rise_jacobian(times[:, None], params)
     n, sensors = len(tw), yw.shape[1]
-    return _Course(
+    return FirstOrderCourse(
         times=times,
         mean_curve=mean_curve,
         curve_var=np.einsum("nsi,sij,nsj->ns", jac, cov, jac),
@@ -297,7 +297,7 @@ def _least_squares_course(
     )
 
 
-def _filtered_course(
+def filtered_course(
     t: FloatArray,
     tw: FloatArray,
     yw: FloatArray,
@@ -308,7 +308,7 @@ def _filtered_course(
     horizon_min: float | None,
     pseudo_measurement_seed: int | None,
     room_rate: FloatArray | None,
-) -> _Course:
+) -> FirstOrderCourse:
     n, sensors = len(tw), yw.shape[1]
     t_future = _future_times(t, n, window_min, horizon_min, tuning.initial_mean[:, 1])
     config = filter_config(method, tuning)
@@ -324,7 +324,7 @@ def _filtered_course(
     if preset == "data":
         for s in range(sensors):
             ok = np.isfinite(yw[:, s])
-            fit_var = _best_rss(tw[ok], yw[ok, s], with_drift=False) / max(int(ok.sum()) - 3, 1)
+            fit_var = best_rss(tw[ok], yw[ok, s], with_drift=False) / max(int(ok.sum()) - 3, 1)
             variance_factor[s] = np.clip(fit_var / tuning.emission_cov[s, 0, 0], 0.25, 25.0)
     history_sd = history_sd * np.sqrt(variance_factor)[:, None]
     final_mean, final_cov = history[-1], history_cov[-1] * variance_factor[:, None, None]
@@ -336,7 +336,7 @@ def _filtered_course(
         window_fit = rise_curve(tw[:, None] - tw[-1], final_mean[:, 0], final_mean[:, 1], final_mean[:, 2])
     else:
         window_fit = _curve_with_room(tw, yw, room_rate[:n], final_mean)
-    return _Course(
+    return FirstOrderCourse(
         times=np.concatenate([tw, t_future]),
         mean_curve=np.concatenate([history[:, :, 0], future_mean]),
         curve_var=np.concatenate([history_sd[:, :, 0] ** 2, future_var * variance_factor]),

@@ -35,7 +35,7 @@ __all__ = [
 ]
 
 # how a reference learnt with a room sensor says so in its file
-_ROOM_MEASURED = "a room sensor, an input of every mode"
+ROOM_MEASURED = "a room sensor, an input of every mode"
 _HEADER = """# mtident reference run: each sensor's thermal modes, learnt from a warm-up that ran to
 # equilibrium. `mtident thermal identify|watch LOG --reference THIS_FILE` searches each sensor's
 # time constants only within ±box of these (relative), with free amplitudes, and says so when a
@@ -137,7 +137,7 @@ class MachineReference:
     @property
     def room_measured(self) -> bool:
         """Whether the reference run was learnt with a room sensor (the room an input of every mode)."""
-        return self.room == _ROOM_MEASURED
+        return self.room == ROOM_MEASURED
 
     def modes(self, sensor: str) -> SensorModes | None:
         """The modes of ``sensor`` (None if the reference does not know it).

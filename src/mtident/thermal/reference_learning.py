@@ -31,7 +31,7 @@ from mtident.thermal.machine_model import (
 from mtident.thermal.modal_search import room_lag
 from mtident.thermal.modes import SteadyState, bin_samples, log_time_constant_sd
 from mtident.thermal.readings import coarse_room_step_C, coarse_room_warning, room_input, warming_room_warning
-from mtident.thermal.reference import _ROOM_MEASURED, MachineReference
+from mtident.thermal.reference import ROOM_MEASURED, MachineReference
 from mtident.thermal.robust import DISAGREEMENT_LEVEL, MIN_REFERENCE_BOX, UNTRUSTING_CODES, estimate_sensor
 from mtident.thermal.robust_types import DEFAULT_MAX_MODES, RobustSettings, SensorEstimate, SensorModes
 
@@ -131,7 +131,7 @@ def learn_reference(
         warnings.append(coarse_room_warning(room_step, "learnt modes explain only what lies beyond it"))
     warming = None if room_C is None else warming_room_warning(room_C, None, log.time_min)
     warnings.extend([] if warming is None else [warming])
-    room = _ROOM_MEASURED if room_C is not None else "not measured"
+    room = ROOM_MEASURED if room_C is not None else "not measured"
     return MachineReference(
         log.source, dt.date.today().isoformat(), settings.max_time_constant_min, room, sensors, machine_model=model
     ), warnings
