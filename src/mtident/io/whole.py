@@ -604,7 +604,17 @@ def _said_bad(
             kinds.append(f"{int(missing.sum())} empty/NaN")
         if open_circuit.any():
             kinds.append(f"{int(open_circuit.sum())} open-circuit")
-        notes.append(f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows {rows})")
+        given = np.flatnonzero(~bad)
+        if len(given) and given[-1] < len(bad) - 2:
+            # bad to the log's end: a sensor that failed, not a few lost readings (a note of skipped
+            # samples alone was read past, beside a learnt reference that rested on the readings before)
+            notes.append(
+                f"sensor {name!r} failed at row {int(number[given[-1] + 1])} and gave no reading to the log's end "
+                f"(skipped {' and '.join(kinds)} sample(s), rows {rows}): what it is answered from, and learnt "
+                "from, ends there"
+            )
+        else:
+            notes.append(f"sensor {name!r}: skipped {' and '.join(kinds)} sample(s) (rows {rows})")
         values = np.where(bad, np.nan, values)
     return values
 
