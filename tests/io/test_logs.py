@@ -116,6 +116,19 @@ def test_the_exports_cover_what_users_produce():
             {},
             r"holds '1.020' in a log written with decimal commas",
         ),
+        # thousands grouped with commas (an English spreadsheet's export): the whole column was refused as
+        # "row 2: '0' is neither a number nor a time stamp"; under semicolons and decimal commas, as "time goes back"
+        (
+            'time_s,T1\n"900",20.0\n"960",20.2\n"1,020",20.4\n"1,080",20.5\n"1,140",20.6\n',
+            {},
+            r"time column 'time_s' holds '1,020' in a log written with decimal points: the comma groups thousands "
+            r"there \(1,020 = 1020\)",
+        ),
+        (
+            "time_s;T1\n900;20,0\n960;20,2\n1,020;20,4\n1,080;20,5\n1,140;20,6\n",
+            {},
+            r"holds '1,020' in a log written with decimal commas, yet it follows '960': the comma groups thousands",
+        ),
         (
             "22.11.2026 08:00:00;20,003;20,020\n22.11.2026 08:01:00;20,1;20,2\n22.11.2026 08:02:00;20,2;20,3\n",
             {},

@@ -11,6 +11,7 @@ units the time and the readings are converted from. The file reader
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -114,11 +115,15 @@ class LogLayout:
 
 
 _GROUPED = re.compile(r"^\s*[1-9]\d{0,2}(\.\d{3})+\s*$")
+_COMMA_GROUPED = re.compile(r"^\s*[1-9]\d{0,2}(,\d{3})+\s*$")
 
 
-def refuse_grouped_time(cell: str, decimal: str, name: str, source: str | Path) -> None:
-    """InputError for a time cell written with a thousands separator under a decimal comma ("1.000"
-    for 1000 s): read with its point as a decimal mark, 1000-13000 s was a log of 0.2 min.
+def refuse_grouped_time(cell: str, decimal: str, name: str, source: str | Path, previous: str | None = None) -> None:
+    """InputError for a time cell written with a thousands separator: a point under a decimal comma
+    ("1.000" for 1000 s: read with its point as a decimal mark, 1000-13000 s was a log of 0.2 min),
+    or a comma under a decimal point ("1,020", an English spreadsheet's export: the whole column was
+    refused as "row 2: '0' is neither a number nor a time stamp"), or a comma under a decimal comma
+    where it makes the time go back after ``previous`` ("960" then "1,020": 1.02 s).
 
     Parameters
     ----------
@@ -130,19 +135,37 @@ def refuse_grouped_time(cell: str, decimal: str, name: str, source: str | Path) 
         The time column's name.
     source : str or Path
         The log, for the message.
+    previous : str, optional
+        The time cell before it, where the time went back at ``cell``.
 
     Raises
     ------
     InputError
-        The cell groups thousands with points in a log with decimal commas.
+        The cell groups thousands.
     """
+    text = cell.strip()
     if decimal == "," and _GROUPED.match(cell):
-        msg = (
-            f"{source}: time column {name!r} holds {cell.strip()!r} in a log written with decimal commas: the point "
-            f"groups thousands there ({cell.strip()} = {cell.strip().replace('.', '')}), which mtident does not "
-            "read; export the time without a thousands separator"
-        )
-        raise InputError(msg)
+        mark, marks = "point", "decimal commas"
+    elif _COMMA_GROUPED.match(cell) and (
+        decimal != "," or (previous is not None and _plain_float(previous) < float(text.replace(",", "")))
+    ):
+        mark = "comma"
+        marks = "decimal points" if decimal != "," else f"decimal commas, yet it follows {previous!r}"
+    else:
+        return
+    msg = (
+        f"{source}: time column {name!r} holds {text!r} in a log written with {marks}: the {mark} groups thousands "
+        f"there ({text} = {text.replace('.', '').replace(',', '')}), which mtident does not read; export the time "
+        "without a thousands separator"
+    )
+    raise InputError(msg)
+
+
+def _plain_float(cell: str) -> float:
+    try:
+        return float(cell.strip().replace(",", "."))
+    except ValueError:
+        return math.inf
 
 
 def time_columns(

@@ -308,9 +308,9 @@ def _times(
     column and the time of day in the next; what was assumed or found goes to ``notes``."""
     stated = None if layout.clock_column is not None else layout.dialect.time_unit(time.name)
     plain = None if layout.clock_column is not None else _plain_time(time)
+    for cell in time.cells if layout.clock_column is None else ():
+        refuse_grouped_time(cell, layout.dialect.decimal, time.name, source)
     if plain is not None:
-        for cell in time.cells:
-            refuse_grouped_time(cell, layout.dialect.decimal, time.name, source)
         read = _numeric_time(plain, time.name, layout.time_unit, stated, source, notes)
     else:
         read = _stamped_time(time, layout.time_unit, number, source, notes)
@@ -487,6 +487,7 @@ def _check_increasing(values: FloatArray, time: _Column, number: np.ndarray, sou
         raise InputError(msg)
     if np.any(steps < 0):
         row = int(np.argmax(steps < 0)) + 1
+        refuse_grouped_time(time.cells[row], ",", time.name, source, previous=time.cells[row - 1])
         msg = (
             f"{source}: time column {time.name!r}, row {number[row]}: time goes back ({time.quoted(row - 1)} "
             f"then {time.quoted(row)}); time must increase: sort the rows by time, or, after a logger's "
