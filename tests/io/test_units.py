@@ -290,3 +290,16 @@ def test_columns_named_as_another_quantity_are_left_out_with_a_note(write_csv):
     said = [n for n in log.notes if n.startswith("left out, named as another quantity")]
     assert said and said[0].endswith(": P_kW, Drehzahl, Spindle speed"), log.notes
     assert read_temperature_log(path, sensors=["P_kW"]).sensors == ("P_kW",)
+
+
+def test_readings_that_carry_their_unit_are_read_by_it_column_by_column(write_csv):
+    """A new user's log with one column whose cells carry "°F" beside plain °C columns: the column was
+    left out as having "no numbers in them"; it is read, converted. A reading carrying another unit than
+    its column's ("23.1 °F" among "°C" cells, read as 23.1 °C without a word) is refused by its row."""
+    rows = "".join(f"{m},{20 + 0.1 * m:.2f},{(20 + 0.1 * m) * 1.8 + 32:.2f} °F\n" for m in range(30))
+    log = read_temperature_log(write_csv("time_min,T1,T3\n" + rows))
+    assert log.sensors == ("T1", "T3")
+    np.testing.assert_allclose(log.temperature_C[:, 1], log.temperature_C[:, 0], atol=0.01)
+    mixed = "".join(f"{m},{20 + 0.1 * m:.2f} °C\n" if m != 7 else f"{m},23.1 °F\n" for m in range(30))
+    with pytest.raises(InputError, match=r"sensor 'T1', row 9: '23.1 °F' carries another unit than the column's"):
+        read_temperature_log(write_csv("time_min,T1\n" + mixed, name="mixed.csv"))

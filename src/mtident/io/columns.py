@@ -23,6 +23,7 @@ from mtident.io.units import (
     is_humidity,
     is_number,
     names_other_quantity,
+    number_without_unit,
     stated_temperature_unit,
     unit_in_name,
     unit_key,
@@ -75,10 +76,11 @@ def text_only_cells(cells: list[str]) -> bool:
     Returns
     -------
     bool
-        True where at least one cell holds something other than NaN and none of them is a number.
+        True where at least one cell holds something other than NaN and none of them is a number (a
+        number with its unit after it, "68.00 °F", counts: such a column among plain ones was left out).
     """
     written = [c.strip() for c in cells if c.strip() and c.strip().lower() != "nan"]
-    return bool(written) and not any(is_number(c) for c in written)
+    return bool(written) and not any(is_number(number_without_unit(c)) for c in written)
 
 
 # A first column that counts the rows (Graphtec's "NO.", Keysight's "Scan", "Nr.", "Index"), before the time column.

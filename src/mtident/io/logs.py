@@ -48,7 +48,7 @@ from mtident.io.layout import LogLayout, time_columns
 from mtident.io.log_file import read_lines
 from mtident.io.parse import TimeState, WholeLog, parse_lines
 from mtident.io.time_notes import read_as_minutes
-from mtident.io.units import is_number, stated_temperature_unit
+from mtident.io.units import is_number, number_without_unit, stated_temperature_unit
 from mtident.io.whole import MAX_BAD_FRACTION
 
 if TYPE_CHECKING:
@@ -706,7 +706,7 @@ def _column_contents(table: _LogTable, columns: list[int]) -> tuple[set[int], se
             text = row[k].strip()
             if text.lower() != "nan":
                 texts.add(k)
-                if is_number(text):
+                if is_number(number_without_unit(text)):  # "68.00 °F" too
                     numbers.add(k)
         if len(numbers & valued) == len(columns):
             break

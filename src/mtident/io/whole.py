@@ -54,6 +54,7 @@ from mtident.io.time_notes import (
     time_unit_factor,
     unit_overridden_note,
 )
+from mtident.io.units import carried_unit, celsius_conversion
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -546,6 +547,8 @@ def _sensor_readings(
     or open-circuit cell (said in ``notes``); an error naming the first cell that is no number, or
     a column mostly bad."""
     scale, offset = float(conversion[0]), float(conversion[1])
+    if layout.dialect.units_in_cells:
+        _refuse_other_units(name, cells, (scale, offset), number, source)
     written = numbers(cells, layout.dialect)
     values: FloatArray = scale * written + offset
     marked_open = np.zeros(len(cells), dtype=bool)
@@ -585,6 +588,24 @@ def _sensor_readings(
         )
         raise InputError(msg)
     return _said_bad(name, values, bad, missing, open_circuit, number, notes)
+
+
+def _refuse_other_units(
+    name: str, cells: list[str], conversion: tuple[float, float], number: np.ndarray, source: str
+) -> None:
+    """InputError for a reading that carries a temperature unit other than its column's ("23.1 °F" among
+    "°C" cells: read as 23.1 °C, without a word)."""
+    for row, cell in enumerate(cells):
+        unit = carried_unit(cell)
+        if unit is None or (own := celsius_conversion(unit)) is None:
+            continue
+        if own != conversion:
+            msg = (
+                f"{source}: sensor {name!r}, row {number[row]}: {cell.strip()!r} carries another unit than the "
+                "column's other readings; a column must be in one unit (export it again, or give the column in that "
+                "unit alone)"
+            )
+            raise InputError(msg)
 
 
 def _said_bad(
