@@ -933,3 +933,15 @@ def test_heat_enters_at_a_sensor_closes_the_papers_curve_without_a_reference(wri
     refused = mtident("thermal", "identify", path, "--ambient", "Room", "--heat-enters-at", "bearing")
     assert refused.returncode != 0
     assert "the heat cannot be said to enter at 'bearing': not among the log's sensors (Spindle [°C])" in refused.stderr
+
+
+def test_names_with_brackets_are_printed_as_written(tmp_path):
+    """A new user's columns "Zeit [h]", "T1 [degC]" and "spindle [front]": inspect printed "Zeit ", "T1"
+    and "spindle" (rich took the brackets for markup), and a user who copied the name shown got "no
+    sensor column 'spindle'"; "Spindle speed (rpm)" was said as "Spindle speed (rpm) (rpm)"."""
+    log = tmp_path / "br.csv"
+    rows = "".join(f"{m / 10:g},{20 + m / 10:.2f},{20 + m / 8:.2f},8000\n" for m in range(8))
+    log.write_text("Zeit [h],T1 [degC],spindle [front],Spindle speed (rpm)\n" + rows)
+    code, out, err = mtident("thermal", "inspect", str(log))
+    assert code == 0 and "'Zeit [h]'" in out + err and "T1 [degC]" in out, out + err
+    assert "spindle" in out and "[front]" in out and "Spindle speed (rpm) (rpm)" not in out + err

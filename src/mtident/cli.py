@@ -17,6 +17,9 @@ from typing import TYPE_CHECKING, Any, Literal, TypedDict, TypeVar
 
 import click
 from rich.console import Console
+from rich.errors import StyleSyntaxError
+from rich.markup import escape
+from rich.style import Style
 
 from mtident import __version__
 from mtident.exceptions import MtidentError
@@ -110,7 +113,34 @@ class OptionConsole(Console):
         **kwargs
             Passed on to ``rich.console.Console.print``.
         """
-        super().print(*(as_options(o) if isinstance(o, str) else o for o in objects), **kwargs)
+        super().print(*(_unknown_tags_kept(as_options(o)) if isinstance(o, str) else o for o in objects), **kwargs)
+
+
+_TAG = re.compile(r"(?<!\\)\[([^\[\]]*)\]")
+
+
+def _unknown_tags_kept(text: str) -> str:
+    """``text`` with every bracketed part that is no rich style escaped, so that it is printed as
+    written: a user's column "Zeit [h]" or "spindle [front]" was printed as "Zeit " and "spindle"
+    (rich took "[h]" for markup), while the messages' own "[bold green]" and "[/]" style them."""
+
+    def kept(match: re.Match[str]) -> str:
+        tag = match.group(1)
+        if tag.startswith("/"):
+            return match.group(0)
+        try:
+            Style.parse(tag)
+        except StyleSyntaxError:
+            return "\\" + match.group(0)
+        return match.group(0)
+
+    return _TAG.sub(kept, text)
+
+
+def plain(text: str) -> str:
+    """A user's text (a sensor's or a column's name) for a rich table's cell, printed as written
+    ("spindle [front]", not "spindle")."""
+    return escape(text)
 
 
 def table_console(min_width: int = 100) -> OptionConsole:

@@ -14,7 +14,7 @@ import numpy as np
 from rich.table import Table
 
 from mtident._json import fields_of, json_inline
-from mtident.cli import column_layout, print_json, stderr, table_console, thermal, user_errors
+from mtident.cli import column_layout, plain, print_json, stderr, table_console, thermal, user_errors
 from mtident.cli_logs import CommandRequest, command_request, load_log_with_room, log_options
 from mtident.cli_options import ambient_option, file_option, json_option, max_time_constant_option, output_option
 from mtident.exceptions import InputError
@@ -273,7 +273,7 @@ def _learn_table(reference: MachineReference) -> None:
         used = "no" if m.doubt else "yes, no faster mode (--every-mode)" if m.free_fast_modes == 0 else "yes"
         # a mode split in two (a merge of two of the machine's) has no amplitude of its own: "—"
         amplitudes = ", ".join(f"{a:+.2f}" if math.isfinite(a) else "—" for a in m.amplitudes_C)
-        table.add_row(name, taus, amplitudes, used)
+        table.add_row(plain(name), taus, amplitudes, used)
     table_console().print(table)
     model = reference.machine_model
     if model is not None:

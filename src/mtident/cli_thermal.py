@@ -19,6 +19,7 @@ from mtident.cli import (
     cell_text,
     column_layout,
     number_option,
+    plain,
     print_json,
     prose_console,
     stderr,
@@ -372,7 +373,7 @@ def _identify_table(
             + (" *" if a.measured_settled is False else "")
         )
         table.add_row(
-            a.sensor,
+            plain(a.sensor),
             cell_text(a.steady_state_C),
             f"{cell_text(lo)} to {cell_text(hi)}",
             cell_text(a.equilibrium_time_min, 0),
@@ -615,7 +616,7 @@ def _min_time_table(source: str, method: str, result: MinTimeResult, answers: tu
         minimal = answer.min_identification_time_min
         best = [f"{round(float(b), 1):g}" for b in result.best_per_period_min[:, i]]
         table.add_row(
-            answer.sensor,
+            plain(answer.sensor),
             f"{round(minimal, 1):g}" if math.isfinite(minimal) else "—",
             *best,
             "yes" if answer.periods_agree else "[yellow]no[/]",
@@ -717,8 +718,8 @@ def _inspect_table(file: str, info: LogDescription, unread: list[str] | None = N
         table.add_column(column, justify="left" if column in ("sensor", "unit") else "right", **column_layout(column))
     for d in info.sensors:
         table.add_row(
-            d.sensor,
-            as_options(d.unit),
+            plain(d.sensor),
+            plain(as_options(d.unit)),
             str(d.missing),
             cell_text(d.first_C),
             cell_text(d.last_C),

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from rich.table import Table
 
-from mtident.cli import OptionConsole, cell_text, column_layout, print_json, prose_console, stderr, table_console
+from mtident.cli import OptionConsole, cell_text, column_layout, plain, print_json, prose_console, stderr, table_console
 from mtident.cli_thermal import reference_lines
 from mtident.io.logs import log_name
 from mtident.thermal.hindsight import Hindsight
@@ -210,7 +210,7 @@ def status_table(session: WatchSession, path: Path) -> Table:
             else "white"
         )
         table.add_row(
-            check.sensor,
+            plain(check.sensor),
             cell_text(latest),
             cell_text(check.checked_min, 0),
             cell_text(check.steady_C),
@@ -296,7 +296,7 @@ def _print_hindsight(hindsight: Hindsight) -> None:
             else "not yet"
         )
         table.add_row(
-            name,
+            plain(name),
             cell_text(float(hindsight.steady_state_C[i] + hindsight.shift_C[i])),
             cell,
             shown,

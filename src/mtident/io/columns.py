@@ -471,7 +471,7 @@ def temperature_columns(
             if asked:
                 msg = f"{source}: sensor {name!r} is in {unit!r} by {by}, not a temperature (°C, K or °F)"
                 raise InputError(msg)
-            other.append(f"{name} ({unit})")
+            other.append(name if unit_in_name(name) else f"{name} ({unit})")  # "Speed (rpm)", not "(rpm) (rpm)"
             continue
         if stated is not None and unit and conversion != celsius_conversion(stated):
             msg = (
