@@ -424,6 +424,32 @@ def test_a_check_far_from_the_tolerance_puts_t_inf_where_the_readings_go_not_bel
     assert low >= y[-5:].mean() - 0.2 and low <= 26.7 <= high
 
 
+def test_readings_that_jump_to_a_new_level_are_said_to_be_no_warm_up():
+    """A new user's sensor went from 23.9 to 85 °C in one step at 200 min (a DS18B20 that lost power
+    reads 85 °C) and stayed: the answer said only that the fit was poor, with T∞ 76.5 °C. A warning
+    now says where it jumped, by how much, and asks whether the sensor was unplugged; a warm-up whose
+    first step is its largest (a 3-min mode read every minute) and one with an isolated spike get none."""
+    t = np.arange(0.0, 300.0)
+    rng = np.random.default_rng(4)
+    y = 20.0 + 4.0 * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.02, t.size)
+    y[200:] = 85.0 + rng.normal(0.0, 0.02, 100)
+    estimate = estimate_sensor("T2", t, y)
+    said = [w for w, code in zip(estimate.warnings, estimate.warning_codes, strict=True) if code == "jumped"]
+    assert (
+        len(said) == 1
+        and said[0].startswith(
+            "T2: its readings jumped +61.",
+        )
+        and "from t = 199 to 200 min" in said[0]
+    )
+    assert "was the sensor unplugged, replaced or rewired? (85 °C is a DS18B20's power-on reading)" in said[0]
+    fast = 20.0 + 10.0 * (1.0 - np.exp(-t / 3.0)) + 2.0 * (1.0 - np.exp(-t / 60.0)) + rng.normal(0.0, 0.02, t.size)
+    assert "jumped" not in estimate_sensor("A", t, fast).warning_codes
+    spiked = 20.0 + 4.0 * (1.0 - np.exp(-t / 40.0)) + rng.normal(0.0, 0.02, t.size)
+    spiked[150] += 30.0
+    assert "jumped" not in estimate_sensor("A", t, spiked).warning_codes
+
+
 def test_readings_that_came_down_from_their_highest_are_said_to_be_no_warm_up():
     """A spindle stopped at 120 min: the readings fall back 5.4 °C, and the fit of the whole log
     said only that its interval was wide. Now a warning says the readings came down, from where

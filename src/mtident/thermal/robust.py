@@ -243,6 +243,7 @@ def estimate_sensor(
         max(rise, threshold),
     )
     _say_a_fall(t[onset:], _above_room(y, room_in)[onset:], noise, rounding, room, notes)
+    _say_a_jump(t, y, noise, rounding, notes)
     # the floor lifts the low end, never above T∞ itself (the fit's own interval stays around it)
     readings = {q: (min(max(lo, floor), fit.steady_C), hi) for q, (lo, hi) in fit.interval_C.items()}
     intervals = _nested(_with_room_error(fit, readings, room_C is not None, settings))
@@ -411,6 +412,40 @@ def _say_a_fall(
         f"its readings came down {fall.fall_C:.2f} °C from their highest ({fall.highest_C:.2f} °C at t = "
         f"{fall.highest_min:.0f} min): a warm-up at constant heat does not; did the heat input fall (the spindle "
         f"stopped or slowed){room}? The answer fits these readings as they are, not a warm-up",
+    )
+
+
+# a step between two readings said as a jump: at least this (°C), this many times the other steps' 99th
+# percentile, and beyond the noise; a warm-up's own first steps stay far within the second
+_JUMP_C = 1.0
+_JUMP_STEPS = 20.0
+# the power-on reading of the common DS18B20 sensor: a sensor that lost power and came back reads it
+_POWER_ON_C = 85.0
+
+
+def _say_a_jump(time_min: FloatArray, values: FloatArray, noise: float, rounding: float, notes: _Notes) -> None:
+    """A warning where the readings jump between two readings and stay at the new level (a sensor
+    unplugged, replaced or rewired): a new user's sensor went from 23.9 to 85 °C in one step, and the
+    answer said only that the fit was poor, with a T∞ of 76.5 °C."""
+    ok = np.isfinite(values)
+    t, y = time_min[ok], values[ok]
+    if len(y) < 10:
+        return
+    steps = np.diff(y)
+    k = int(np.argmax(np.abs(steps)))
+    jump = float(steps[k])
+    typical = float(np.quantile(np.abs(np.delete(steps, k)), 0.99))
+    if abs(jump) < max(_JUMP_C, _JUMP_STEPS * typical, 30.0 * noise + 2.0 * rounding):
+        return
+    after = y[k + 1 : k + 6]
+    if abs(float(np.median(after)) - y[k + 1]) > 0.1 * abs(jump):
+        return  # a spike that came back, not a new level
+    reset = f" ({_POWER_ON_C:g} °C is a DS18B20's power-on reading)" if abs(y[k + 1] - _POWER_ON_C) < 0.1 else ""
+    notes.add(
+        "jumped",
+        f"its readings jumped {jump:+.2f} °C from t = {t[k]:g} to {t[k + 1]:g} min ({y[k]:.2f} to {y[k + 1]:.2f} °C) "
+        f"and stayed there: a warm-up does not; was the sensor unplugged, replaced or rewired?{reset} The answer "
+        "fits these readings as they are",
     )
 
 
