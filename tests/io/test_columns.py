@@ -160,7 +160,7 @@ def test_a_log_of_nothing_but_left_out_columns_says_what_it_left_out(write_csv):
     """With every column left out, the message listed nothing: 'no temperature column: its name gives '."""
     with pytest.raises(
         InputError,
-        match=r"no temperature column; left out: Status \(the logger's own record\); by its name: RH/% \(%\) \(`sensors=\[NAME\]`",
+        match=r"no temperature column; left out: Status \(the logger.s own record\); by its name: RH/% \(`sensors=\[NAME\]`",
     ):
         read_temperature_log(write_csv("time,Status,RH/%\n" + "".join(f"{k},1,50\n" for k in range(6))))
 

@@ -303,3 +303,19 @@ def test_readings_that_carry_their_unit_are_read_by_it_column_by_column(write_cs
     mixed = "".join(f"{m},{20 + 0.1 * m:.2f} °C\n" if m != 7 else f"{m},23.1 °F\n" for m in range(30))
     with pytest.raises(InputError, match=r"sensor 'T1', row 9: '23.1 °F' carries another unit than the column's"):
         read_temperature_log(write_csv("time_min,T1\n" + mixed, name="mixed.csv"))
+
+
+def test_units_the_log_states_against_each_other_or_its_readings_are_refused(write_csv):
+    """A time column named 'time_min' over a units row of 'h' was read as minutes without a word,
+    and a units row of °F over a column in °C put it at −6.6 °C beside 20 °C ones: each is refused,
+    saying what disagrees and how to mend it; the time unit given settles the first."""
+    rows = "".join(
+        f"{m / 10:g};{20 + m / 10:.2f};{20 + m / 20:.2f};{20 + m / 15:.2f}\n".replace(".", ",") for m in range(8)
+    )
+    times = write_csv("time_min;T1;T2;T3\nh;°C;°C;°C\n" + rows, name="times.csv")
+    with pytest.raises(InputError, match=r"time column 'time_min': its name says 'min', but the log states 'h'"):
+        read_temperature_log(times)
+    assert read_temperature_log(times, time_unit="h").time_min[1] == pytest.approx(6.0)
+    wrong = write_csv("time_min;T1;T2;T3\nmin;°C;°C;°F\n" + rows, name="wrong.csv")
+    with pytest.raises(InputError, match=r"'T3' is in °F by the units row, which starts it at -6.7 °C, where the"):
+        read_temperature_log(wrong)

@@ -48,7 +48,7 @@ from mtident.io.layout import LogLayout, time_columns
 from mtident.io.log_file import read_lines
 from mtident.io.parse import TimeState, WholeLog, parse_lines
 from mtident.io.time_notes import read_as_minutes
-from mtident.io.units import is_number, number_without_unit, stated_temperature_unit
+from mtident.io.units import celsius_conversion, is_number, number_without_unit, stated_temperature_unit
 from mtident.io.whole import MAX_BAD_FRACTION
 
 if TYPE_CHECKING:
@@ -428,10 +428,12 @@ def another_unit_error(
     str or None
         The message of the error to raise.
     """
-    if stated_temperature_unit(temperature_unit) is not None:
-        return None
     low, high = WORKSHOP_ROOM_C
-    assumed = [k for k, name in enumerate(sensors) if not dialect.unit_of(name).strip()]
+    assumed = (
+        []
+        if stated_temperature_unit(temperature_unit) is not None
+        else [k for k, name in enumerate(sensors) if not dialect.unit_of(name).strip()]
+    )
     first = np.array([_first_valid(values[:, k]) for k in range(values.shape[1])])
     usual = [k for k in range(len(sensors)) if low <= first[k] <= high]
     if not usual:
@@ -444,12 +446,37 @@ def another_unit_error(
                 odd.append(f"{sensors[k]!r} starts at {first[k]:g} (in {unit}: {celsius:.1f} °C)")
                 named = named or f"{sensors[k]} [{unit}]"
     if not odd:
-        return None
+        return _own_unit_error(sensors, values, dialect, source, first, start)
     return (
         f"{source}: the log states no unit, so its readings would be taken as °C, but {'; '.join(odd)}, where the "
         f"other columns start near {start:.1f} °C. State the column's unit, and it is converted: a units row under "
         f"the header or the unit in its name ({named}); or, if every column is in °C, say so "
         "(`temperature_unit='C'`)"
+    )
+
+
+def _own_unit_error(
+    sensors: list[str], values: FloatArray, dialect: CsvDialect, source: str | Path, first: FloatArray, start: float
+) -> str | None:
+    """Why a log cannot be read as it is, where a column converted from the unit the log states for it
+    starts far below any workshop's range, and as written would start with the others (near
+    ``start``, °C): a units row of °F over a column in °C put a sensor at −6.7 °C beside 20 °C ones,
+    without a word."""
+    low, _ = WORKSHOP_ROOM_C
+    odd = []
+    for k, name in enumerate(sensors):
+        unit = dialect.unit_of(name).strip()
+        conversion = celsius_conversion(unit) if unit else None
+        if conversion is None or conversion == (1.0, 0.0) or not first[k] < low:
+            continue
+        written = (first[k] - conversion[1]) / conversion[0]
+        if abs(written - start) <= _START_AGREES_C:
+            odd.append(f"{name!r} is in {unit} by {dialect.units_source}, which starts it at {first[k]:.1f} °C")
+    if not odd:
+        return None
+    return (
+        f"{source}: {'; '.join(odd)}, where the other columns start near {start:.1f} °C, as it does read as "
+        "written: if it is in °C, mend its unit in the log"
     )
 
 

@@ -74,7 +74,16 @@ def time_unit_factor(header: str, time_unit: str | None, stated: str | None = No
             msg = f"time unit {time_unit!r} is not one of: {', '.join(TIME_UNITS)}"
             raise InputError(msg)
         return TIME_UNITS[time_unit]
-    unit = _suffix_unit(header) or stated
+    suffix = _suffix_unit(header)
+    if suffix is not None and stated is not None and TIME_UNITS[suffix] != TIME_UNITS[stated]:
+        # "time_min" over a units row of "h": read as minutes, without a word, sixty times too fast
+        msg = (
+            f"time column {header!r}: its name says {suffix!r}, but the log states {stated!r} for it (under the "
+            f"header or in brackets), and which is right cannot be told; give the unit (`time_unit='{stated}'` or "
+            f"`time_unit='{suffix}'`), or mend the header"
+        )
+        raise InputError(msg)
+    unit = suffix or stated
     return TIME_UNITS[unit] if unit is not None else 1.0
 
 

@@ -44,6 +44,7 @@ WarningCode = Literal[
     "machine-disagrees",
     "below-floor",
     "came-down",
+    "jumped",
     "heat-enters-contradicted",
     "heat-enters-room-moved",
     "too-few-readings",
