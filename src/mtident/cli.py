@@ -113,7 +113,9 @@ class OptionConsole(Console):
         **kwargs
             Passed on to ``rich.console.Console.print``.
         """
-        super().print(*(_unknown_tags_kept(as_options(o)) if isinstance(o, str) else o for o in objects), **kwargs)
+        markup = kwargs.get("markup", self._markup) is not False
+        said = (as_options(o) if isinstance(o, str) else o for o in objects)
+        super().print(*(_unknown_tags_kept(o) if markup and isinstance(o, str) else o for o in said), **kwargs)
 
 
 _TAG = re.compile(r"(?<!\\)\[([^\[\]]*)\]")
